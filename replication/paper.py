@@ -1,0 +1,92 @@
+"""The paper's published numbers (``data/paper/``): the comparison target, never a result.
+
+Every loader validates its file (columns, numbers, no NaN, expected rows) and
+raises ``ValueError`` naming the file and the problem.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .so3 import nearest_rotation
+
+__all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims"]
+
+TABLE1_ITERATIONS = (2, 5, 10, 15, 20, 30, 50)
+TABLE1_METHODS = ("optimization", "ours_right", "ours_left")
+TABLE2_ANGLES = ("roll", "pitch", "yaw")
+TABLE2_METHODS = ("optimization", "ours_right", "ours_left", "sensor_frame")
+
+
+def data_dir() -> Path:
+    """``data/`` of this project; ``$REPLICATION_DATA_DIR`` overrides it."""
+    env = os.environ.get("REPLICATION_DATA_DIR")
+    return Path(env) if env else Path(__file__).resolve().parent.parent / "data"
+
+
+def _read(name: str, columns: list[str], numeric: list[str]) -> pd.DataFrame:
+    path = data_dir() / "paper" / name
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: paper data file not found")
+    df = pd.read_csv(path)
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise ValueError(f"{path}: missing columns {missing}; expected {columns}")
+    for col in numeric:
+        values = pd.to_numeric(df[col], errors="coerce")
+        bad = values.isna()
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0]) + 2  # header is line 1
+            raise ValueError(f"{path}: line {row}, column {col!r}: not a number ({df[col].iloc[row - 2]!r})")
+        df[col] = values.astype(float)
+    return df[columns]
+
+
+def load_r0() -> np.ndarray:
+    """R0 of the simulation as printed in Sec. III-A (4 decimals, not exactly orthogonal), (3, 3)."""
+    df = _read("r0.csv", ["row", "col0", "col1", "col2"], ["col0", "col1", "col2"])
+    if len(df) != 3:
+        raise ValueError(f"{data_dir() / 'paper' / 'r0.csv'}: expected 3 rows, got {len(df)}")
+    return df[["col0", "col1", "col2"]].to_numpy()
+
+
+def r0_camera_from_sensor() -> np.ndarray:
+    """The printed R0 projected onto SO(3) by eqs. (16)-(17): the simulation's ground truth."""
+    return nearest_rotation(load_r0())
+
+
+def _check_grid(df: pd.DataFrame, name: str, keys: dict) -> pd.DataFrame:
+    expected = pd.MultiIndex.from_product(list(keys.values()), names=list(keys))
+    got = pd.MultiIndex.from_frame(df[list(keys)])
+    if got.has_duplicates or set(got) != set(expected):
+        missing = sorted(set(expected) - set(got))
+        extra = sorted(set(got) - set(expected))
+        raise ValueError(
+            f"{data_dir() / 'paper' / name}: expected one row per {tuple(keys)} in "
+            f"{list(keys.values())}; missing {missing}, unexpected {extra}, "
+            f"duplicates {got.has_duplicates}"
+        )
+    return df.set_index(list(keys)).sort_index()
+
+
+def load_table1() -> pd.DataFrame:
+    """Table I: ``||R0_hat - R0||_F`` mean and std, indexed by (iteration, method)."""
+    df = _read("table1.csv", ["iteration", "method", "mean", "std"], ["iteration", "mean", "std"])
+    df["iteration"] = df["iteration"].astype(int)
+    return _check_grid(df, "table1.csv", {"iteration": TABLE1_ITERATIONS, "method": TABLE1_METHODS})
+
+
+def load_table2() -> pd.DataFrame:
+    """Table II: RMS, mean, SD (deg) and correlation, indexed by (angle, method)."""
+    cols = ["angle", "method", "rms_deg", "mean_deg", "sd_deg", "correlation"]
+    df = _read("table2.csv", cols, cols[2:])
+    return _check_grid(df, "table2.csv", {"angle": TABLE2_ANGLES, "method": TABLE2_METHODS})
+
+
+def load_claims() -> pd.Series:
+    """Numeric claims of the text (iteration counts, run times), indexed by claim name."""
+    df = _read("claims.csv", ["claim", "value", "unit", "where"], ["value"])
+    return df.set_index("claim")["value"]
