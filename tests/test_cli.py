@@ -1,0 +1,33 @@
+import subprocess
+import sys
+
+import nbformat
+
+
+def test_reproduce_executes_notebooks_in_order_and_writes_results(tmp_path):
+    nbdir, results = tmp_path / "nb", tmp_path / "results"
+    nbdir.mkdir()
+    for name, code in [
+        ("01_a.ipynb", "from replication.notebook import save_table\nimport pandas as pd\n"
+                       "save_table(pd.DataFrame({'x': [1]}), 'first')"),
+        ("02_b.ipynb", "from replication.notebook import results_dir\n"
+                       "assert (results_dir() / 'tables' / 'first.csv').exists()\nprint('ok')"),
+    ]:
+        nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+        nb.metadata["kernelspec"] = {"name": "someone-elses-kernel", "display_name": "x", "language": "python"}
+        nbformat.write(nb, nbdir / name)
+    out = subprocess.run(
+        [sys.executable, "-m", "replication", "reproduce", "--notebooks", str(nbdir), "--results", str(results)],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert out.returncode == 0, out.stderr
+    assert (results / "tables" / "first.csv").exists() and (results / "tables" / "first.md").exists()
+    nb = nbformat.read(nbdir / "02_b.ipynb", as_version=4)
+    assert nb.cells[0].outputs[0]["text"] == "ok\n"  # executed in place, outputs stored
+    assert nb.metadata["kernelspec"]["name"] == "python3"  # kernelspec normalised
+
+
+def test_reproduce_without_notebooks_fails_clearly(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "replication", "reproduce", "--notebooks", str(tmp_path)],
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode != 0 and "no numbered notebooks" in out.stderr

@@ -1,0 +1,102 @@
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from replication import handeye, so3
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(1, 12), st.integers(0, 2**32 - 1))
+def test_v2h_h2v_are_inverse_layouts(J, seed):
+    M = np.random.default_rng(seed).normal(size=(3 * J, 3))
+    H = handeye.v2h(M)
+    assert H.shape == (3, 3 * J)
+    assert np.array_equal(handeye.h2v(H), M)
+    assert np.array_equal(H[:, 3:6] if J > 1 else H, M[3:6] if J > 1 else M)
+
+
+def test_operators_equal_the_literal_pseudo_inverse_formulas(problem, rng):
+    _, A, B = problem
+    H1, H2 = handeye.stack_H1(A), handeye.stack_H2(B)
+    X, Y = rng.normal(size=(2, 3, 3))
+    assert np.allclose(handeye.v2h(H1 @ X) @ np.linalg.pinv(H2), handeye.operator_T(A, B, X))  # eq. (14)
+    assert np.allclose(np.linalg.pinv(H1) @ handeye.h2v(Y @ H2), handeye.operator_T_adjoint(A, B, Y))  # (15)
+    K = handeye.kronecker_operator(A, B)
+    assert np.allclose(K @ handeye.vec(X), handeye.vec(handeye.operator_T(A, B, X)))
+    assert np.allclose(handeye.unvec(handeye.vec(X)), X)
+
+
+def test_cost_zero_at_truth_and_kron_form_exact_for_any_matrix(problem, rng):
+    R0, A, B = problem
+    assert handeye.handeye_cost(R0, A, B) < 1e-25
+    X = rng.normal(size=(5, 3, 3))
+    K = handeye.kronecker_operator(A, B)
+    assert np.allclose(handeye.handeye_cost_kron(X, K, len(A)), handeye.handeye_cost(X, A[None], B[None]))
+
+
+@pytest.mark.parametrize("convention", ["body_from_world", "world_from_body"])
+def test_relative_rotations_satisfy_eq7(rng, convention):
+    R0 = so3.random_rotations(rng, ())
+    I = so3.random_rotations(rng, 8)
+    C = R0 @ I  # eq. (1), body-from-world
+    if convention == "world_from_body":
+        C, I = np.swapaxes(C, -1, -2), np.swapaxes(I, -1, -2)
+    A = handeye.relative_rotations(C, convention=convention)
+    B = handeye.relative_rotations(I, convention=convention)
+    assert A.shape == (7, 3, 3)
+    assert np.abs(A @ R0 - R0 @ B).max() < 1e-12
+
+
+def test_relative_rotations_rejects():
+    with pytest.raises(ValueError, match="convention"):
+        handeye.relative_rotations(np.eye(3)[None].repeat(2, 0), convention="nope")
+    with pytest.raises(ValueError, match="N >= 2"):
+        handeye.relative_rotations(np.eye(3)[None])
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda A, B: (A, B[:-1]), "same shape"),
+        (lambda A, B: (A[:1], B[:1]), r"at least 2 motion pairs"),
+        (lambda A, B: (A[0], B[0]), r"\(\.\.\., J, 3, 3\)"),
+        (lambda A, B: (np.where(np.arange(20)[:, None, None] == 3, np.nan, A), B), "NaN"),
+        (lambda A, B: (A * 1.1, B), r"A \(camera relative rotations\) is not a rotation"),
+        (lambda A, B: (A, -B), r"B \(sensor relative rotations\).*reflection"),
+    ],
+)
+def test_check_motion_pairs_rejects(problem, make, message):
+    _, A, B = problem
+    with pytest.raises(ValueError, match=message):
+        handeye.check_motion_pairs(*make(A, B))
+
+
+def test_single_axis_and_no_motion_are_degenerate(rng):
+    R0 = so3.random_rotations(rng, ())
+    A = Rotation.from_rotvec(np.outer(rng.uniform(0.1, 1.5, 10), [0, 1, 0])).as_matrix()
+    with pytest.raises(ValueError, match="degenerate motion: the camera rotations all share one"):
+        handeye.check_observable(A, R0.T @ A @ R0)
+    obs = handeye.motion_observability(A, R0.T @ A @ R0)
+    assert np.isclose(obs.two_step_rate, 1.0) and np.isclose(obs.kron_singular_values[2], 1.0)
+    eye = np.broadcast_to(np.eye(3), (5, 3, 3))
+    with pytest.raises(ValueError, match="degenerate motion"):
+        handeye.check_observable(eye, eye)
+
+
+def test_degenerate_batch_member_is_named(rng, problem):
+    R0, A, B = problem
+    A_bad = Rotation.from_rotvec(np.outer(np.linspace(0.1, 1, 20), [0, 0, 1])).as_matrix()
+    AA = np.stack([A, A_bad, A])
+    BB = np.swapaxes(R0, -1, -2) @ AA @ R0
+    with pytest.raises(ValueError, match=r"batch index \(1,\)"):
+        handeye.check_observable(AA, BB)
+
+
+def test_observability_of_generic_motion(problem):
+    R0, A, B = problem
+    obs = handeye.check_observable(A, B)
+    assert np.isclose(obs.kron_singular_values[0], 1.0) and obs.spectral_ratio < 0.9
+    assert obs.camera_axis_spread_deg > 10 and obs.two_step_rate < 0.9
+    assert 0 < obs.iterations_for(1e-6) < 100

@@ -1,0 +1,125 @@
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from replication import handeye, so3
+from replication.solvers import ConvergenceWarning, two_step, two_step_fixed_point
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_noise_free_recovery_from_any_valid_start(seed):
+    """Any rotation start (the corrected variant accepts all) recovers R0 to 1e-9 Frobenius."""
+    rng = np.random.default_rng(seed)
+    R0, init = so3.random_rotations(rng, 2)
+    A = so3.random_rotations(rng, 20)
+    res = two_step(A, R0.T @ A @ R0, iterations=100, init=init)
+    assert so3.frobenius_error(res.R_right, R0) < 1e-9
+    assert so3.frobenius_error(res.R_left, R0) < 1e-9
+
+
+def test_result_shapes_and_costs(problem):
+    R0, A, B = problem
+    AA, BB = np.stack([A] * 6).reshape(2, 3, 20, 3, 3), np.stack([B] * 6).reshape(2, 3, 20, 3, 3)
+    res = two_step(AA, BB, iterations=7)
+    for name in ("right", "left", "right_raw", "left_raw"):
+        assert getattr(res, name).shape == (2, 3, 7, 3, 3)
+    assert res.cost_right.shape == (2, 3, 7) and res.R_left.shape == (2, 3, 3, 3)
+    assert np.allclose(res.cost_left, handeye.handeye_cost(res.left, AA[..., None, :, :, :], BB[..., None, :, :, :]))
+    assert np.all(np.diff(res.cost_left[0, 0]) <= 1e-12)  # noise-free: the cost falls every iteration
+
+
+def test_batched_equals_looped(rng):
+    R0 = so3.random_rotations(rng, 5)
+    A = so3.random_rotations(rng, (5, 20))
+    B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
+    B = so3.noise_rotations(so3.sample_ball(rng, (5, 20), 0.02)) @ B
+    batched = two_step(A, B, iterations=30)
+    for n in range(5):
+        one = two_step(A[n], B[n], iterations=30)
+        assert np.allclose(batched.right[n], one.right, atol=1e-13)
+        assert np.allclose(batched.cost_left[n], one.cost_left, atol=1e-12)
+
+
+def test_deterministic(problem):
+    _, A, B = problem
+    a, b = two_step(A, B, iterations=20), two_step(A, B, iterations=20)
+    assert np.array_equal(a.left, b.left) and np.array_equal(a.cost_right, b.cost_right)
+
+
+def test_raw_iterates_follow_eqs_14_15_literally(problem):
+    _, A, B = problem
+    H1, H2 = handeye.stack_H1(A), handeye.stack_H2(B)
+    init = so3.random_rotations(np.random.default_rng(3), ())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        res = two_step(A, B, iterations=4, init=init)
+    Rl = init
+    for n in range(4):
+        Rr = handeye.v2h(H1 @ Rl) @ np.linalg.pinv(H2)
+        Rl = np.linalg.pinv(H1) @ handeye.h2v(Rr @ H2)
+        assert np.allclose(res.right_raw[n], Rr, atol=1e-13) and np.allclose(res.left_raw[n], Rl, atol=1e-13)
+
+
+def test_negative_start_fails_as_printed_and_is_corrected(problem):
+    R0, A, B = problem
+    init = R0 @ Rotation.from_rotvec([0, 0, np.radians(170)]).as_matrix()
+    paper = two_step(A, B, iterations=60, init=init, variant="paper")
+    fixed = two_step(A, B, iterations=60, init=init)
+    assert np.isclose(np.linalg.det(paper.R_right), -1) and so3.frobenius_error(paper.R_right, R0) > 3
+    assert so3.frobenius_error(fixed.R_right, R0) < 1e-9
+
+
+def test_noisy_iterates_converge_to_the_fixed_point(problem, rng):
+    R0, A, B = problem
+    An = so3.noise_rotations(so3.sample_ball(rng, 20, 0.02)) @ A
+    Bn = so3.noise_rotations(so3.sample_ball(rng, 20, 0.02)) @ B
+    res = two_step(An, Bn, iterations=80)
+    right, left = two_step_fixed_point(An, Bn)
+    assert so3.angle_between_deg(res.R_right, right) < 1e-8 and so3.angle_between_deg(res.R_left, left) < 1e-8
+    assert 0.001 < so3.angle_between_deg(res.R_right, R0) < 2
+
+
+def test_small_motions_warn(rng):
+    R0 = so3.random_rotations(rng, ())
+    A = so3.random_rotations(rng, 20, angle_range_deg=(0, 2))
+    with pytest.warns(ConvergenceWarning, match="need about"):
+        two_step(A, R0.T @ A @ R0, iterations=50)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"iterations": 0}, "positive integer"),
+        ({"iterations": 2.5}, "positive integer"),
+        ({"iterations": 5, "init": np.eye(4)}, r"init must have shape"),
+        ({"iterations": 5, "init": 2 * np.eye(3)}, "init is not a rotation"),
+        ({"iterations": 5, "init": np.ones((7, 3, 3)) / 3}, "init is not a rotation"),
+        ({"iterations": 5, "variant": "fast"}, "variant must be one of"),
+    ],
+)
+def test_bad_arguments(problem, kwargs, message):
+    _, A, B = problem
+    with pytest.raises(ValueError, match=message):
+        two_step(A, B, **kwargs)
+
+
+def test_init_batch_mismatch(problem):
+    _, A, B = problem
+    init = np.broadcast_to(np.eye(3), (4, 3, 3))
+    with pytest.raises(ValueError, match="broadcast to the batch shape"):
+        two_step(np.stack([A, A]), np.stack([B, B]), iterations=3, init=init)
+
+
+def test_too_few_motions_and_nan(problem):
+    _, A, B = problem
+    with pytest.raises(ValueError, match="at least 2 motion pairs"):
+        two_step(A[:1], B[:1], iterations=3)
+    A = A.copy()
+    A[2, 0, 0] = np.nan
+    with pytest.raises(ValueError, match="NaN"):
+        two_step(A, B, iterations=3)
