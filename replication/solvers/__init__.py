@@ -12,6 +12,7 @@ Add a baseline with :func:`register`::
         return R0_estimate  # (..., 3, 3)
 """
 from ._registry import SolverInfo, available, register, solve, solver_info
+from .sqp import SQPResult, sqp
 from .two_step import ConvergenceWarning, TwoStepResult, two_step, two_step_fixed_point
 
 __all__ = [
@@ -24,4 +25,6 @@ __all__ = [
     "two_step_fixed_point",
     "TwoStepResult",
     "ConvergenceWarning",
+    "sqp",
+    "SQPResult",
 ]

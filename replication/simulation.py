@@ -1,0 +1,132 @@
+"""Monte Carlo generator of the paper's simulation study (Sec. III-A).
+
+The paper fixes ``R0`` (printed), ``J = 20`` relative motions, ``Delta R_i = R0^T Delta R_c R0``
+and the noise model ``delta R = proj([v x] + U)`` with ``||v|| < 0.02`` on both sides
+(:func:`replication.so3.noise_rotations`). It leaves open how the motions and
+the noise vectors are drawn; those are the fields of :class:`SimulationSettings`,
+each with its default and the reason for it.
+
+Every run draws from its own stream (``numpy.random.SeedSequence(seed).spawn``),
+so run ``k`` is the same whatever the number of runs; the maths is one
+vectorised call over all runs.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .paper import r0_camera_from_sensor
+from .so3 import noise_rotations, random_rotations, sample_ball
+
+__all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg"]
+
+
+def noise_bound_for_angle_deg(angle_deg: float) -> float:
+    """``||v||`` bound whose noise rotation angle is ``angle_deg``: ``tan(angle)`` (see ``noise_rotations``)."""
+    if not 0 <= angle_deg < 90:
+        raise ValueError(f"angle_deg must be in [0, 90), got {angle_deg}")
+    return float(np.tan(np.radians(angle_deg)))
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    """Settings of one Monte Carlo study; every field the paper leaves open has a stated default.
+
+    Attributes
+    ----------
+    n_motions : int, default 20
+        ``J``; the paper's "20 different orientations".
+    motion_angle_range_deg : None or (float, float), default None
+        How each camera motion ``Delta R_c`` is drawn. Not stated in the paper
+        ("randomly selected ... orientations"); ``None`` = uniform (Haar) on
+        SO(3), the literal reading of a random orientation. ``(lo, hi)``: axis
+        uniform, angle uniform in ``[lo, hi]`` degrees.
+    noise_camera, noise_sensor : float, default 0.02
+        Bound on ``||v||`` of the noise on ``Delta R_c`` and ``Delta R_i`` (the
+        paper's 0.02 on both sides; ``noise_bound_for_angle_deg`` converts an angle).
+    noise_distribution : str, default "uniform"
+        How ``v`` is drawn inside the ball (``sample_ball``). Not stated in the
+        paper ("a random selected 3x1 vector with less than 0.02 magnitude");
+        ``"uniform"`` = uniform in the ball's volume.
+    random_R0 : bool, default False
+        ``False``: the paper's printed ``R0`` (projected onto SO(3)) in every
+        run; ``True``: a Haar-random ``R0`` per run.
+    """
+
+    n_motions: int = 20
+    motion_angle_range_deg: tuple | None = None
+    noise_camera: float = 0.02
+    noise_sensor: float = 0.02
+    noise_distribution: str = "uniform"
+    random_R0: bool = False
+
+    def __post_init__(self):
+        if int(self.n_motions) != self.n_motions or self.n_motions < 2:
+            raise ValueError(f"n_motions must be an integer >= 2, got {self.n_motions}")
+        for name in ("noise_camera", "noise_sensor"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0:
+                raise ValueError(f"{name} must be finite and >= 0, got {value}")
+
+
+@dataclass(frozen=True)
+class SimulatedProblems:
+    """``n_runs`` simulated calibration problems.
+
+    Attributes
+    ----------
+    A : ndarray, shape (n_runs, J, 3, 3)
+        Noisy camera relative rotations ``delta R_c Delta R_c``.
+    B : ndarray, shape (n_runs, J, 3, 3)
+        Noisy sensor relative rotations ``delta R_i R0^T Delta R_c R0``.
+    R0 : ndarray, shape (n_runs, 3, 3)
+        Ground truth camera_from_sensor.
+    settings : SimulationSettings
+    seed : int
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    R0: np.ndarray
+    settings: SimulationSettings = field(repr=False)
+    seed: int = 0
+
+
+def simulate(seed: int, n_runs: int, settings: SimulationSettings | None = None, **overrides) -> SimulatedProblems:
+    """Draw ``n_runs`` problems of the paper's simulation (Sec. III-A).
+
+    Parameters
+    ----------
+    seed : int
+        Root seed; run ``k`` uses ``SeedSequence(seed).spawn(n_runs)[k]``.
+    n_runs : int
+    settings : SimulationSettings, optional
+        Defaults to ``SimulationSettings()``.
+    **overrides
+        Fields of :class:`SimulationSettings` to replace, e.g. ``noise_sensor=0.05``.
+
+    Returns
+    -------
+    SimulatedProblems
+    """
+    settings = replace(settings or SimulationSettings(), **overrides)
+    if int(n_runs) != n_runs or n_runs < 1:
+        raise ValueError(f"n_runs must be a positive integer, got {n_runs}")
+    J = settings.n_motions
+    streams = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(int(n_runs))]
+    A0, v_c, v_i, R0 = [], [], [], []
+    for rng in streams:  # draws only; the maths below is vectorised over runs
+        A0.append(random_rotations(rng, J, angle_range_deg=settings.motion_angle_range_deg))
+        v_c.append(sample_ball(rng, J, settings.noise_camera, settings.noise_distribution))
+        v_i.append(sample_ball(rng, J, settings.noise_sensor, settings.noise_distribution))
+        if settings.random_R0:
+            R0.append(random_rotations(rng, ()))
+    A0 = np.stack(A0)
+    R0 = np.stack(R0) if settings.random_R0 else np.broadcast_to(r0_camera_from_sensor(), (int(n_runs), 3, 3))
+    R0 = np.ascontiguousarray(R0)
+    R0_t = np.swapaxes(R0, -1, -2)[:, None]
+    B0 = R0_t @ A0 @ R0[:, None]  # Delta R_i = R0^T Delta R_c R0
+    A = noise_rotations(np.stack(v_c)) @ A0  # Delta R_c <- delta R_c Delta R_c
+    B = noise_rotations(np.stack(v_i)) @ B0  # Delta R_i <- delta R_i Delta R_i
+    return SimulatedProblems(A=A, B=B, R0=R0, settings=settings, seed=int(seed))

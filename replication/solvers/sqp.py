@@ -1,0 +1,194 @@
+"""SQP baseline: problem (8)-(10) solved by SciPy's SLSQP, with per-iteration history.
+
+The paper compares its iteration with "the SQP algorithm [30]" on the
+constrained problem (8)-(10) but does not say which implementation, start,
+gradients or tolerances it used. Our choices:
+
+* variables: the 9 entries of ``R`` (``vec``, column-major), as in (8)-(10);
+* objective: eq. (8), evaluated exactly as ``2J(||R||^2 - vec(R)^T K vec(R))``
+  (:func:`replication.handeye.handeye_cost_kron`), with its analytic gradient
+  ``2J(2x - (K + K^T) x)``;
+* constraints (default ``"orthonormal"``): eq. (9) ``R R^T = U`` as its 6
+  independent entries, analytic Jacobian; eq. (10) ``det R = 1`` is kept by
+  starting in SO(3) (its connected component). ``constraints="paper"`` adds
+  eq. (10) literally; but at a rotation the gradient of eq. (10), the cofactor
+  matrix ``= R``, lies in the span of those of eq. (9) (``sum_a d(RR^T)_aa/dR = 2R``),
+  so the 7 constraints are linearly dependent (LICQ fails) and SLSQP stalls
+  (notebook 03 measures how often);
+* start: the same ``init`` as the two-step method (identity by default);
+* SciPy's ``method="SLSQP"`` with ``ftol`` and ``maxiter`` exposed; one SLSQP
+  major iteration is one "iteration" of the history.
+
+The iterates are *not* projected: SQP iterates need not be feasible, and their
+``||R - R0||_F`` can exceed ``2 sqrt 2`` (the largest distance between two
+rotations). ``SQPResult.projected`` holds their projections for comparison.
+SciPy's SLSQP solves one problem per call; batches are looped in Python.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..handeye import check_motion_pairs, check_observable, handeye_cost_kron, kronecker_operator, unvec, vec
+from ..so3 import check_rotation_matrices, nearest_rotation
+from ._registry import register
+
+__all__ = ["SQPResult", "sqp"]
+
+REFERENCE = (
+    "Problem (8)-(10) of Z.-Q. Zhang's paper, solved by sequential quadratic programming "
+    "(D. Kraft, 'A software package for sequential quadratic programming', DFVLR-FB 88-28, 1988; "
+    "scipy.optimize.minimize(method='SLSQP'))"
+)
+_UPPER = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
+
+
+@dataclass(frozen=True)
+class SQPResult:
+    """History of :func:`sqp`; iteration ``n = 1 .. N`` is index ``n - 1``.
+
+    Attributes
+    ----------
+    iterates : ndarray, shape (..., N, 3, 3)
+        SLSQP's iterate after each major iteration (raw, possibly infeasible).
+        A run that stopped after ``n < N`` iterations repeats its last iterate.
+    projected : ndarray, shape (..., N, 3, 3)
+        ``nearest_rotation(iterates)``.
+    cost : ndarray, shape (..., N)
+        Eq. (8) at the raw iterates.
+    n_iterations, n_evaluations : ndarray of int, shape (...)
+        Major iterations and objective evaluations SLSQP used.
+    success : ndarray of bool, shape (...)
+        SLSQP's own convergence flag.
+    """
+
+    iterates: np.ndarray
+    projected: np.ndarray
+    cost: np.ndarray
+    n_iterations: np.ndarray
+    n_evaluations: np.ndarray
+    success: np.ndarray
+
+    @property
+    def R(self) -> np.ndarray:
+        """Final estimate, projected onto SO(3), shape (..., 3, 3)."""
+        return self.projected[..., -1, :, :]
+
+
+def _constraints(kind: str):
+    def orth(x):
+        R = unvec(x)
+        M = R @ R.T - np.eye(3)
+        return np.array([M[a, b] for a, b in _UPPER])  # eq. (9)
+
+    def orth_jac(x):
+        R = unvec(x)
+        jac = np.zeros((6, 9))
+        for row, (a, b) in enumerate(_UPPER):
+            G = np.zeros((3, 3))  # d (R R^T)_ab / dR = e_a R_b + e_b R_a (rows)
+            G[a] += R[b]
+            G[b] += R[a]
+            jac[row] = vec(G)
+        return jac
+
+    def det(x):
+        return np.array([np.linalg.det(unvec(x)) - 1.0])  # eq. (10)
+
+    def det_jac(x):
+        R = unvec(x)
+        cof = np.stack([np.cross(R[1], R[2]), np.cross(R[2], R[0]), np.cross(R[0], R[1])])
+        return vec(cof)[None, :]
+
+    cons = [{"type": "eq", "fun": orth, "jac": orth_jac}]
+    if kind == "paper":
+        cons.append({"type": "eq", "fun": det, "jac": det_jac})
+    return cons
+
+
+def _sqp_one(K, J, init, max_iterations, ftol, cons):
+    sym = K + K.T
+
+    def f(x):
+        return 2.0 * J * (x @ x - x @ K @ x)  # eq. (8)
+
+    def grad(x):
+        return 2.0 * J * (2.0 * x - sym @ x)
+
+    history = []
+    out = minimize(
+        f, vec(init), jac=grad, method="SLSQP", constraints=cons,
+        callback=lambda xk: history.append(np.array(xk, dtype=float)),
+        options={"maxiter": max_iterations, "ftol": ftol},
+    )
+    if not history:
+        history = [np.asarray(out.x, dtype=float)]
+    n_it = len(history)
+    history += [history[-1]] * (max_iterations - n_it)
+    return np.stack(history[:max_iterations]), n_it, int(out.nfev), bool(out.success)
+
+
+def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
+        constraints: str = "orthonormal") -> SQPResult:
+    """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
+
+    Parameters
+    ----------
+    A : array_like, shape (..., J, 3, 3)
+        Camera relative rotations ``Delta R_c``.
+    B : array_like, shape (..., J, 3, 3)
+        Sensor relative rotations ``Delta R_i``.
+    init : None or array_like, shape (3, 3) or (..., 3, 3)
+        Start, a rotation; ``None`` = identity (as for the two-step method).
+    max_iterations : int
+        SLSQP ``maxiter``; the history has this length.
+    ftol : float
+        SLSQP ``ftol`` (precision goal on the objective).
+    constraints : {"orthonormal", "paper"}
+        ``"orthonormal"`` (default): eq. (9) only; ``"paper"``: eqs. (9) and (10)
+        literally (linearly dependent at rotations; see the module notes).
+
+    Returns
+    -------
+    SQPResult
+
+    Raises
+    ------
+    ValueError
+        Malformed or degenerate input, bad ``init``, ``max_iterations < 1``,
+        unknown ``constraints``.
+    """
+    A, B = check_motion_pairs(A, B)
+    check_observable(A, B)
+    if constraints not in ("paper", "orthonormal"):
+        raise ValueError(f"constraints must be 'paper' or 'orthonormal', got {constraints!r}")
+    if int(max_iterations) != max_iterations or max_iterations < 1:
+        raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    max_iterations = int(max_iterations)
+    K = kronecker_operator(A, B)
+    batch, J = K.shape[:-2], A.shape[-3]
+    if init is None:
+        init = np.eye(3)
+    init = check_rotation_matrices(init, "init")
+    try:
+        init = np.broadcast_to(init, batch + (3, 3))
+    except ValueError:
+        raise ValueError(f"init must broadcast to {batch + (3, 3)}, got {init.shape}") from None
+    cons = _constraints(constraints)
+    flat_K, flat_init = K.reshape(-1, 9, 9), init.reshape(-1, 3, 3)
+    runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons) for n in range(len(flat_K))]
+    iterates = unvec(np.stack([r[0] for r in runs])).reshape(batch + (max_iterations, 3, 3))
+    return SQPResult(
+        iterates=iterates,
+        projected=nearest_rotation(iterates),
+        cost=handeye_cost_kron(iterates, K[..., None, :, :], J),
+        n_iterations=np.array([r[1] for r in runs]).reshape(batch),
+        n_evaluations=np.array([r[2] for r in runs]).reshape(batch),
+        success=np.array([r[3] for r in runs]).reshape(batch),
+    )
+
+
+@register("sqp", reference=REFERENCE)
+def _solve_sqp(A, B, **options):
+    return sqp(A, B, **options).R
