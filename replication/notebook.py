@@ -54,20 +54,21 @@ def results_dir() -> Path:
     return Path(env) if env else Path(__file__).resolve().parent.parent / "results"
 
 
-def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> Path:
-    """Write ``df`` as ``results/tables/<name>.csv`` and ``<name>.md``; return the CSV path."""
+def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:
+    """Write ``df`` as ``results/tables/<name>.csv`` and ``<name>.md``.
+
+    Returns nothing, so that a notebook cell ending in it shows no (machine-dependent) path.
+    """
     out = results_dir() / "tables"
     out.mkdir(parents=True, exist_ok=True)
     csv = out / f"{name}.csv"
     df.to_csv(csv)
     (out / f"{name}.md").write_text(df.to_markdown(floatfmt=floatfmt) + "\n")
-    return csv
 
 
-def save_figure(fig, name: str) -> Path:
-    """Write ``fig`` as ``results/figures/<name>.png``; return the path."""
+def save_figure(fig, name: str) -> None:
+    """Write ``fig`` as ``results/figures/<name>.png`` (returns nothing, like :func:`save_table`)."""
     out = results_dir() / "figures"
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{name}.png"
     fig.savefig(path, bbox_inches="tight", metadata={"Software": None})
-    return path
