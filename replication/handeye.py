@@ -306,7 +306,12 @@ def _axis_spread_deg(R: np.ndarray) -> np.ndarray:
 def motion_observability(A, B) -> MotionObservability:
     """Observability diagnostics of motion pairs (see :class:`MotionObservability`)."""
     A, B = check_motion_pairs(A, B, min_motions=1)
-    sv = np.linalg.svd(kronecker_operator(A, B), compute_uv=False)
+    return _observability(A, B, kronecker_operator(A, B))
+
+
+def _observability(A: np.ndarray, B: np.ndarray, K: np.ndarray) -> MotionObservability:
+    """:func:`motion_observability` for validated arrays and their operator ``K``."""
+    sv = np.linalg.svd(K, compute_uv=False)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
     rate = np.maximum(
@@ -337,7 +342,12 @@ def check_observable(A, B, *, min_axis_spread_deg: float = 1e-6) -> MotionObserv
     -------
     MotionObservability
     """
-    obs = motion_observability(A, B)
+    A, B = check_motion_pairs(A, B, min_motions=1)
+    return _check_observable(_observability(A, B, kronecker_operator(A, B)), min_axis_spread_deg)
+
+
+def _check_observable(obs: MotionObservability, min_axis_spread_deg: float = 1e-6) -> MotionObservability:
+    """:func:`check_observable` on computed diagnostics."""
     for side, spread in (("camera", obs.camera_axis_spread_deg), ("sensor", obs.sensor_axis_spread_deg)):
         bad = np.asarray(spread) < min_axis_spread_deg
         if bad.any():

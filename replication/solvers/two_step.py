@@ -34,10 +34,10 @@ import numpy as np
 
 from ..handeye import (
     MotionObservability,
+    _check_observable,
+    _observability,
     check_motion_pairs,
-    check_observable,
     handeye_cost_kron,
-    motion_observability,
     kronecker_operator,
     unvec,
     vec,
@@ -246,10 +246,11 @@ def two_step(
     if int(iterations) != iterations or iterations < 1:
         raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
     iterations = int(iterations)
-    # the paper has no guard against degenerate motion; keep it so for variant="paper"
-    observability = (check_observable if variant == "corrected" else motion_observability)(A, B)
-
     K = kronecker_operator(A, B)  # vec(V2H(H1 X) H2^+) = K vec(X)
+    observability = _observability(A, B, K)
+    if variant == "corrected":  # the paper has no guard against degenerate motion; keep it so for "paper"
+        _check_observable(observability)
+
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
     init = _check_init(init, K.shape[:-2])
 
