@@ -63,7 +63,11 @@ def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:
     out.mkdir(parents=True, exist_ok=True)
     csv = out / f"{name}.csv"
     df.to_csv(csv)
-    (out / f"{name}.md").write_text(df.to_markdown(floatfmt=floatfmt) + "\n")
+    flat = df.copy()
+    if isinstance(flat.columns, pd.MultiIndex):  # ("ours_right", "mean") -> "ours_right mean"
+        flat.columns = [" ".join(str(part) for part in col) for col in flat.columns]
+    flat = flat.reset_index() if any(name is not None for name in flat.index.names) else flat
+    (out / f"{name}.md").write_text(flat.to_markdown(floatfmt=floatfmt, index=False) + "\n")
 
 
 def save_figure(fig, name: str) -> None:
