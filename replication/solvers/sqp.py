@@ -32,8 +32,9 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ..handeye import check_motion_pairs, check_observable, handeye_cost_kron, kronecker_operator, unvec, vec
-from ..so3 import check_rotation_matrices, nearest_rotation
+from ..so3 import nearest_rotation
 from ._registry import register
+from .two_step import _check_init
 
 __all__ = ["SQPResult", "sqp"]
 
@@ -168,13 +169,7 @@ def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     max_iterations = int(max_iterations)
     K = kronecker_operator(A, B)
     batch, J = K.shape[:-2], A.shape[-3]
-    if init is None:
-        init = np.eye(3)
-    init = check_rotation_matrices(init, "init")
-    try:
-        init = np.broadcast_to(init, batch + (3, 3))
-    except ValueError:
-        raise ValueError(f"init must broadcast to {batch + (3, 3)}, got {init.shape}") from None
+    init = _check_init(init, batch)
     cons = _constraints(constraints)
     flat_K, flat_init = K.reshape(-1, 9, 9), init.reshape(-1, 3, 3)
     runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons) for n in range(len(flat_K))]
