@@ -40,6 +40,7 @@ __all__ = [
     "MotionObservability",
     "motion_observability",
     "check_observable",
+    "prepare_motions",
 ]
 
 
@@ -303,14 +304,29 @@ def _axis_spread_deg(R: np.ndarray) -> np.ndarray:
     return np.degrees(s[..., 1] / np.sqrt(J))
 
 
-def motion_observability(A, B) -> MotionObservability:
-    """Observability diagnostics of motion pairs (see :class:`MotionObservability`)."""
-    A, B = check_motion_pairs(A, B, min_motions=1)
-    return _observability(A, B, kronecker_operator(A, B))
+def prepare_motions(A, B, *, min_motions: int = 2, require_observable: bool = True,
+                    min_axis_spread_deg: float = 1e-6):
+    """Validate motion pairs once and compute what every solver needs.
 
+    Parameters
+    ----------
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera / sensor relative rotations.
+    min_motions : int
+        Fewest motion pairs accepted (see :func:`check_motion_pairs`).
+    require_observable : bool
+        Raise ``ValueError`` for degenerate motion (see :func:`check_observable`).
+    min_axis_spread_deg : float
+        Degeneracy threshold (see :func:`check_observable`).
 
-def _observability(A: np.ndarray, B: np.ndarray, K: np.ndarray) -> MotionObservability:
-    """:func:`motion_observability` for validated arrays and their operator ``K``."""
+    Returns
+    -------
+    (A, B, K, observability)
+        Validated float arrays, :func:`kronecker_operator` ``K`` of shape
+        (..., 9, 9), and :class:`MotionObservability`.
+    """
+    A, B = check_motion_pairs(A, B, min_motions=min_motions)
+    K = kronecker_operator(A, B)
     sv = np.linalg.svd(K, compute_uv=False)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
@@ -318,7 +334,15 @@ def _observability(A: np.ndarray, B: np.ndarray, K: np.ndarray) -> MotionObserva
         np.linalg.norm(A.mean(axis=-3), ord=2, axis=(-2, -1)),
         np.linalg.norm(B.mean(axis=-3), ord=2, axis=(-2, -1)),
     ) ** 2
-    return MotionObservability(sv, ratio, rate, _axis_spread_deg(A), _axis_spread_deg(B))
+    obs = MotionObservability(sv, ratio, rate, _axis_spread_deg(A), _axis_spread_deg(B))
+    if require_observable:
+        _check_observable(obs, min_axis_spread_deg)
+    return A, B, K, obs
+
+
+def motion_observability(A, B) -> MotionObservability:
+    """Observability diagnostics of motion pairs (see :class:`MotionObservability`)."""
+    return prepare_motions(A, B, min_motions=1, require_observable=False)[3]
 
 
 def check_observable(A, B, *, min_axis_spread_deg: float = 1e-6) -> MotionObservability:
@@ -342,12 +366,11 @@ def check_observable(A, B, *, min_axis_spread_deg: float = 1e-6) -> MotionObserv
     -------
     MotionObservability
     """
-    A, B = check_motion_pairs(A, B, min_motions=1)
-    return _check_observable(_observability(A, B, kronecker_operator(A, B)), min_axis_spread_deg)
+    return prepare_motions(A, B, min_motions=1, min_axis_spread_deg=min_axis_spread_deg)[3]
 
 
-def _check_observable(obs: MotionObservability, min_axis_spread_deg: float = 1e-6) -> MotionObservability:
-    """:func:`check_observable` on computed diagnostics."""
+def _check_observable(obs: MotionObservability, min_axis_spread_deg: float) -> None:
+    """Raise for degenerate motion (see :func:`check_observable`), given computed diagnostics."""
     for side, spread in (("camera", obs.camera_axis_spread_deg), ("sensor", obs.sensor_axis_spread_deg)):
         bad = np.asarray(spread) < min_axis_spread_deg
         if bad.any():
@@ -359,4 +382,3 @@ def _check_observable(obs: MotionObservability, min_axis_spread_deg: float = 1e-
                 f"{min_axis_spread_deg:g} deg); R0 is then not unique: at least two motions "
                 f"with non-parallel rotation axes are needed"
             )
-    return obs

@@ -6,7 +6,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..handeye import check_motion_pairs, check_observable
+from ..handeye import prepare_motions
 
 __all__ = ["SolverInfo", "register", "available", "solver_info", "solve"]
 
@@ -105,6 +105,5 @@ def solve(method: str, A, B, **options) -> np.ndarray:
         the solver needs, or degenerate motion (all axes parallel).
     """
     info = solver_info(method)
-    A, B = check_motion_pairs(A, B, min_motions=info.min_motions)
-    check_observable(A, B)
+    A, B, _, _ = prepare_motions(A, B, min_motions=info.min_motions)
     return info.func(A, B, **options)

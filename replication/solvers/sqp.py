@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from ..handeye import check_motion_pairs, check_observable, handeye_cost_kron, kronecker_operator, unvec, vec
+from ..handeye import handeye_cost_kron, prepare_motions, unvec, vec
 from ..so3 import nearest_rotation
 from ._registry import register
 from .two_step import _check_init
@@ -112,7 +112,7 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons):
     sym = K + K.T
 
     def f(x):
-        return 2.0 * J * (x @ x - x @ K @ x)  # eq. (8)
+        return float(handeye_cost_kron(unvec(x), K, J))  # eq. (8)
 
     def grad(x):
         return 2.0 * J * (2.0 * x - sym @ x)
@@ -160,14 +160,12 @@ def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         Malformed or degenerate input, bad ``init``, ``max_iterations < 1``,
         unknown ``constraints``.
     """
-    A, B = check_motion_pairs(A, B)
-    check_observable(A, B)
+    A, B, K, _ = prepare_motions(A, B)
     if constraints not in ("paper", "orthonormal"):
         raise ValueError(f"constraints must be 'paper' or 'orthonormal', got {constraints!r}")
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
     max_iterations = int(max_iterations)
-    K = kronecker_operator(A, B)
     batch, J = K.shape[:-2], A.shape[-3]
     init = _check_init(init, batch)
     cons = _constraints(constraints)

@@ -32,16 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..handeye import (
-    MotionObservability,
-    _check_observable,
-    _observability,
-    check_motion_pairs,
-    handeye_cost_kron,
-    kronecker_operator,
-    unvec,
-    vec,
-)
+from ..handeye import MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
 from ..so3 import check_rotation_matrices, frobenius_error, nearest_rotation
 from ._registry import register
 
@@ -159,9 +150,8 @@ def two_step_fixed_point(A, B, init=None, *, variant: str = "corrected"):
         Limits of ``R^r_{0,n}`` and ``R^l_{0,n}``: the projections of the top
         left (``u1``) and right (``v1``) singular vectors of ``K``.
     """
-    A, B = check_motion_pairs(A, B)
     _check_variant(variant)
-    K = kronecker_operator(A, B)
+    _, _, K, _ = prepare_motions(A, B, require_observable=False)
     init = _check_init(init, K.shape[:-2])
     return _fixed_point(K, init, variant)
 
@@ -241,15 +231,12 @@ def two_step(
     >>> bool(np.linalg.norm(res.R_right - R0) < 1e-9)
     True
     """
-    A, B = check_motion_pairs(A, B, min_motions=2)
     _check_variant(variant)
     if int(iterations) != iterations or iterations < 1:
         raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
     iterations = int(iterations)
-    K = kronecker_operator(A, B)  # vec(V2H(H1 X) H2^+) = K vec(X)
-    observability = _observability(A, B, K)
-    if variant == "corrected":  # the paper has no guard against degenerate motion; keep it so for "paper"
-        _check_observable(observability)
+    # K: vec(V2H(H1 X) H2^+) = K vec(X). The paper has no guard against degenerate motion; nor has "paper".
+    A, B, K, observability = prepare_motions(A, B, require_observable=(variant == "corrected"))
 
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
     init = _check_init(init, K.shape[:-2])
