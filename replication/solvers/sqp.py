@@ -112,7 +112,9 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons):
     sym = K + K.T
 
     def f(x):
-        return float(handeye_cost_kron(unvec(x), K, J))  # eq. (8)
+        # eq. (8) as in handeye_cost_kron, written out on the flat vector: it runs in SLSQP's inner
+        # loop, and the recorded histories (chaotic when SQP diverges) depend on its rounding
+        return 2.0 * J * (x @ x - x @ K @ x)
 
     def grad(x):
         return 2.0 * J * (2.0 * x - sym @ x)
