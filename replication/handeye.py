@@ -190,11 +190,18 @@ def unvec(x) -> np.ndarray:
     return np.swapaxes(x.reshape(x.shape[:-1] + (3, 3)), -1, -2)
 
 
-def kronecker_operator(A, B) -> np.ndarray:
+def kronecker_operator(A, B, weights=None) -> np.ndarray:
     """The 9x9 matrix ``K = (1/J) sum_j B_j kron A_j`` with ``vec(T(X)) = K vec(X)``.
 
     Each ``B_j kron A_j`` is orthogonal, so ``||K||_2 <= 1``; noise-free,
     ``K vec(R0) = vec(R0)`` (eq. (7)) and ``sigma_1(K) = 1``.
+
+    Parameters
+    ----------
+    A, B : array_like, shape (..., J, 3, 3)
+    weights : None or array_like, shape (..., J)
+        Non-negative pair weights: ``K_w = sum_j w_j B_j kron A_j / sum_j w_j``
+        (used by robust re-weighting). ``None``: equal weights.
 
     Returns
     -------
@@ -203,7 +210,11 @@ def kronecker_operator(A, B) -> np.ndarray:
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
     kron = np.einsum("...jab,...jcd->...jacbd", B, A)
-    return kron.reshape(A.shape[:-3] + (A.shape[-3], 9, 9)).mean(axis=-3)
+    kron = kron.reshape(A.shape[:-3] + (A.shape[-3], 9, 9))
+    if weights is None:
+        return kron.mean(axis=-3)
+    w = np.asarray(weights, dtype=float)
+    return np.einsum("...j,...jab->...ab", w, kron) / w.sum(axis=-1)[..., None, None]
 
 
 def handeye_cost(R, A, B) -> np.ndarray:

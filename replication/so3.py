@@ -28,6 +28,10 @@ __all__ = [
     "frobenius_error",
     "angle_between_deg",
     "rotation_angle_deg",
+    "log_map",
+    "exp_map",
+    "as_quaternion",
+    "quaternion_to_matrix",
 ]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
@@ -294,3 +298,52 @@ def angle_between_deg(R_est, R_true) -> np.ndarray:
     R_est = check_matrices(R_est, "R_est")
     R_true = check_matrices(R_true, "R_true")
     return rotation_angle_deg(np.swapaxes(R_true, -1, -2) @ R_est)
+
+
+def _batched(func, X, tail_in, tail_out):
+    """Apply a SciPy ``Rotation`` conversion to an array batched over leading dimensions."""
+    lead = X.shape[: X.ndim - len(tail_in)]
+    flat = X.reshape((-1,) + tail_in)
+    out = func(flat) if len(flat) else np.empty((0,) + tail_out)
+    return out.reshape(lead + tail_out)
+
+
+def log_map(R) -> np.ndarray:
+    """Rotation vectors ``w`` (radians, ``|w| <= pi``) with ``R = exp([w]x)``, batched.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+        Rotation matrices (not validated; callers validate).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3)
+    """
+    R = np.asarray(R, dtype=float)
+    return _batched(lambda m: Rotation.from_matrix(m).as_rotvec(), R, (3, 3), (3,))
+
+
+def exp_map(w) -> np.ndarray:
+    """Rotation matrices ``exp([w]x)`` from rotation vectors (radians), batched: (..., 3) -> (..., 3, 3)."""
+    w = np.asarray(w, dtype=float)
+    return _batched(lambda v: Rotation.from_rotvec(v).as_matrix(), w, (3,), (3, 3))
+
+
+def as_quaternion(R) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)``, scalar first, with ``w >= 0``, batched: (..., 3, 3) -> (..., 4).
+
+    ``R`` rotates by ``theta`` about the unit axis ``n`` and
+    ``q = (cos(theta/2), sin(theta/2) n)``. The sign is fixed by ``w >= 0``
+    (SciPy's canonical form), which is ambiguous only at ``theta = 180`` deg.
+    """
+    R = np.asarray(R, dtype=float)
+    return _batched(
+        lambda m: Rotation.from_matrix(m).as_quat(canonical=True, scalar_first=True), R, (3, 3), (4,)
+    )
+
+
+def quaternion_to_matrix(q) -> np.ndarray:
+    """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first), batched."""
+    q = np.asarray(q, dtype=float)
+    return _batched(lambda v: Rotation.from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))

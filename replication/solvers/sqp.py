@@ -184,6 +184,6 @@ def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     )
 
 
-@register("sqp", reference=REFERENCE)
+@register("sqp", reference=REFERENCE, local=True)
 def _solve_sqp(A, B, **options):
     return sqp(A, B, **options).R

@@ -1,0 +1,110 @@
+"""OpenCV's ``cv2.calibrateHandEye`` as rotation-only solvers of ``A X = X B``.
+
+``cv2.calibrateHandEye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method)``
+takes *absolute* poses ``Hg_i`` (gripper to base) and ``Hc_i`` (target to
+camera) and forms, for every pair ``i < j`` of poses (OpenCV's
+``calibration_handeye.cpp``), ``Hg_ij = Hg_j^{-1} Hg_i`` and
+``Hc_ij = Hc_j Hc_i^{-1}``; it then solves ``Hg_ij X = X Hc_ij`` with
+``X = cam2gripper``. Our ``A`` (camera motion) takes the place of ``Hg_ij`` and
+our ``B`` (sensor motion) that of ``Hc_ij``, so ``X = R0 = camera_from_sensor``.
+
+Frame conventions of the wrapper: from ``J`` relative pairs we build a chain of
+``J + 1`` poses, ``Hg_0 = Hc_0 = I``, ``Hg_{k+1} = Hg_k A_k^T`` and
+``Hc_{k+1} = B_k Hc_k``, so that the consecutive pairs OpenCV forms are exactly
+``(A_k, B_k)``; translations are zero. OpenCV also uses every non-consecutive
+pair ``(i, j)`` (products of our motions): noise-free the solution is the same,
+with noise OpenCV weights the data differently from the other solvers here.
+
+Unusable for rotation-only data (they estimate rotation and translation
+together, and zero translations leave them without a solution):
+
+* ``CALIB_HAND_EYE_ANDREFF`` — the homogeneous 12-unknown system's null vector
+  has a zero translation scale; OpenCV raises "determinant(R) is null";
+* ``CALIB_HAND_EYE_DANIILIDIS`` — the dual parts of the dual quaternions are
+  zero and the SVD step returns NaN.
+
+With made-up non-zero translations both return a wrong rotation (the
+translations are then inconsistent with the rotations); see
+``tests/test_baselines.py``. They are not registered.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._registry import register
+
+__all__ = ["calibrate_hand_eye", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
+
+#: Registered OpenCV methods: registry name -> (``cv2`` constant, the paper it implements).
+OPENCV_METHODS = {
+    "opencv_tsai": ("CALIB_HAND_EYE_TSAI", "Tsai & Lenz 1989"),
+    "opencv_park": ("CALIB_HAND_EYE_PARK", "Park & Martin 1994"),
+    "opencv_horaud": ("CALIB_HAND_EYE_HORAUD", "Horaud & Dornaika 1995"),
+}
+#: OpenCV methods that need translations and fail on rotation-only data.
+UNUSABLE_FOR_ROTATION_ONLY = ("CALIB_HAND_EYE_ANDREFF", "CALIB_HAND_EYE_DANIILIDIS")
+
+
+def _cv2():
+    try:
+        import cv2
+    except ImportError as err:  # pragma: no cover - opencv is a dependency
+        raise ImportError(
+            "the opencv_* solvers need opencv-python-headless<5 (OpenCV 5 wheels lack calibrateHandEye)"
+        ) from err
+    if not hasattr(cv2, "calibrateHandEye"):  # pragma: no cover
+        raise ImportError(f"OpenCV {cv2.__version__} has no calibrateHandEye; install opencv-python-headless<5")
+    return cv2
+
+
+def _chain(A, B):
+    """Absolute poses whose consecutive relative motions are ``(A_k, B_k)`` (see the module notes)."""
+    J = A.shape[0]
+    Hg = np.empty((J + 1, 3, 3))
+    Hc = np.empty((J + 1, 3, 3))
+    Hg[0] = Hc[0] = np.eye(3)
+    for k in range(J):
+        Hg[k + 1] = Hg[k] @ A[k].T  # Hg_{k+1}^{-1} Hg_k = A_k
+        Hc[k + 1] = B[k] @ Hc[k]  # Hc_{k+1} Hc_k^{-1} = B_k
+    return Hg, Hc
+
+
+def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI") -> np.ndarray:
+    """``R0`` from ``cv2.calibrateHandEye`` on the pose chain of ``(A, B)``, one call per problem.
+
+    Parameters
+    ----------
+    A, B : ndarray, shape (..., J, 3, 3)
+        Validated camera / sensor relative rotations.
+    method : str
+        Name of a ``cv2.CALIB_HAND_EYE_*`` constant.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``camera_from_sensor`` (OpenCV's ``R_cam2gripper``).
+    """
+    cv2 = _cv2()
+    flag = getattr(cv2, method)
+    lead, J = A.shape[:-3], A.shape[-3]
+    flatA, flatB = A.reshape((-1, J, 3, 3)), B.reshape((-1, J, 3, 3))
+    zeros = [np.zeros((3, 1))] * (J + 1)
+    out = np.empty((len(flatA), 3, 3))
+    for n in range(len(flatA)):  # OpenCV has no batched interface
+        Hg, Hc = _chain(flatA[n], flatB[n])
+        out[n], _ = cv2.calibrateHandEye(list(Hg), zeros, list(Hc), zeros, method=flag)
+    return out.reshape(lead + (3, 3))
+
+
+def _register(name: str, constant: str, paper: str):
+    @register(name, reference=f"OpenCV cv2.calibrateHandEye({constant}): {paper}",
+              equivariant=constant != "CALIB_HAND_EYE_TSAI")
+    def solver(A, B):
+        return calibrate_hand_eye(A, B, constant)
+
+    solver.__doc__ = f"``cv2.calibrateHandEye`` with ``{constant}`` ({paper}); see :func:`calibrate_hand_eye`."
+    return solver
+
+
+for _name, (_constant, _paper) in OPENCV_METHODS.items():
+    _register(_name, _constant, _paper)

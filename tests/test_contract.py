@@ -1,0 +1,110 @@
+"""The contract every registered solver must meet, parametrised over ``available()``.
+
+A new baseline added with ``@register`` is picked up here automatically.
+"""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from replication import so3
+from replication.simulation import simulate
+from replication.solvers import available, solve, solver_info
+
+ALL = available()
+
+
+def _start_options(method, R0):
+    """A local solver gets a start 45 deg from ``R0``; global ones get nothing."""
+    if not solver_info(method).local:
+        return {}
+    tilt = Rotation.from_rotvec(np.radians(45) * np.array([1.0, 2.0, 2.0]) / 3).as_matrix()
+    return {"init": R0 @ tilt}
+
+
+@pytest.fixture(scope="module")
+def noisy():
+    """Three noisy problems from the paper's simulation (J = 20, ||v|| < 0.02)."""
+    sim = simulate(7, 3)
+    return sim.R0, sim.A, sim.B
+
+
+def test_registry_holds_the_required_solvers():
+    required = {
+        "two_step_right", "two_step_left", "sqp", "park_martin", "horaud_dornaika", "andreff",
+        "tsai_lenz", "chordal_optimal", "opencv_tsai", "opencv_park", "opencv_horaud", "robust",
+    }
+    assert required <= set(ALL)
+    for name in ALL:
+        assert solver_info(name).reference, name
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_output_is_a_rotation(method, noisy):
+    R0, A, B = noisy
+    R = solve(method, A, B, **_start_options(method, R0))
+    assert R.shape == (3, 3, 3)
+    so3.check_rotation_matrices(R, atol=1e-10)
+    assert np.all(np.linalg.det(R) > 0)
+    # a sane estimate: the paper's noise (<= 1.15 deg per rotation) moves R0 by well under 2 deg
+    assert so3.angle_between_deg(R, R0).max() < 2.0
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_noise_free_recovery_of_a_random_R0(method, rng):
+    R0 = so3.random_rotations(rng, ())
+    A = so3.random_rotations(rng, 12)
+    B = R0.T @ A @ R0  # eq. (7) exactly
+    R = solve(method, A, B, **_start_options(method, R0))
+    assert so3.frobenius_error(R, R0) < 1e-8
+
+
+@pytest.mark.parametrize("method", ALL)
+@pytest.mark.parametrize("side", ["camera", "sensor"])
+def test_equivariance_under_a_change_of_frame(method, side, noisy):
+    """Re-expressing the camera (or sensor) frame by ``G`` must move the estimate by ``G``."""
+    R0, A, B = noisy
+    G = Rotation.from_rotvec([0.3, -1.1, 0.7]).as_matrix()
+    options = _start_options(method, R0)
+    R = solve(method, A, B, **options)
+    if side == "camera":  # A' = G A G^T, R0' = G R0
+        options2 = {k: G @ v for k, v in options.items()}
+        R2 = solve(method, G @ A @ G.T, B, **options2)
+        expected = G @ R
+    else:  # B' = G B G^T, R0' = R0 G^T
+        options2 = {k: v @ G.T for k, v in options.items()}
+        R2 = solve(method, A, G @ B @ G.T, **options2)
+        expected = R @ G.T
+    gap = so3.frobenius_error(R2, expected).max()
+    if solver_info(method).equivariant:
+        assert gap < 1e-6
+    else:  # the registry's flag must be true: a non-equivariant solver visibly moves
+        assert gap > 1e-4
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_batched_equals_looped(method, noisy):
+    R0, A, B = noisy
+    options = _start_options(method, R0)
+    batched = solve(method, A.reshape(3, 1, 20, 3, 3), B.reshape(3, 1, 20, 3, 3),
+                    **{k: v.reshape(3, 1, 3, 3) for k, v in options.items()})
+    assert batched.shape == (3, 1, 3, 3)
+    looped = np.stack([solve(method, A[n], B[n], **{k: v[n] for k, v in options.items()})
+                       for n in range(3)])
+    np.testing.assert_allclose(batched[:, 0], looped, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_too_few_motions_is_refused(method, problem):
+    R0, A, B = problem
+    need = solver_info(method).min_motions
+    assert need >= 2  # one motion never determines R0
+    with pytest.raises(ValueError, match=f"at least {need} motion pairs"):
+        solve(method, A[: need - 1], B[: need - 1], **_start_options(method, R0))
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_degenerate_motion_is_refused(method, rng):
+    R0 = so3.random_rotations(rng, ())
+    A = Rotation.from_rotvec(np.outer(np.linspace(0.2, 1.5, 10), [0.0, 0.6, 0.8])).as_matrix()
+    with pytest.raises(ValueError, match="degenerate motion"):
+        solve(method, A, R0.T @ A @ R0, **_start_options(method, R0))
