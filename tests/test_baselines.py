@@ -9,10 +9,11 @@ from scipy.spatial.transform import Rotation
 from replication import handeye, so3
 from replication.simulation import simulate
 from replication.solvers import (
-    ObservabilityWarning, Solution, andreff, chordal_optimal, pair_residual_deg, park_martin, robust,
+    ObservabilityWarning, Solution, andreff, chordal_optimal, horaud_dornaika, pair_residual_deg,
+    park_martin, robust,
     solve, two_step,
 )
-from replication.solvers.opencv import UNUSABLE_FOR_ROTATION_ONLY, _chain
+from replication.solvers.opencv import UNUSABLE_FOR_ROTATION_ONLY, _chain, all_pairs
 from replication.solvers.optimal import chordal_newton
 
 
@@ -122,3 +123,24 @@ def test_weighted_kronecker_operator(problem):
     w[:5] = 0
     np.testing.assert_allclose(handeye.kronecker_operator(A, B, weights=w),
                                handeye.kronecker_operator(A[5:], B[5:]), atol=1e-15)
+
+
+@pytest.mark.parametrize("cv_name, ours", [("opencv_park", park_martin), ("opencv_horaud", horaud_dornaika)])
+def test_opencv_wrappers_equal_our_solver_on_the_pairs_opencv_forms(paper_sim, cv_name, ours):
+    """Checks the wrappers' frame conventions on noisy data: same data, same answer."""
+    _, A, B = paper_sim
+    R_cv = solve(cv_name, A[:5], B[:5])
+    R_ours = np.stack([ours(*all_pairs(A[n], B[n])) for n in range(5)])
+    assert so3.frobenius_error(R_cv, R_ours).max() < 1e-10
+
+
+@pytest.mark.parametrize("method", ["opencv_park", "opencv_tsai"])
+def test_opencv_silent_failures_are_caught(method):
+    """J = 3: OpenCV's Park returns reflections, its Tsai gives up and returns the identity."""
+    sim = simulate(6000, 150, n_motions=3)
+    with pytest.raises(ValueError, match=r"calibrateHandEye\(CALIB_HAND_EYE_.*\) failed on \d+ of 150"):
+        solve(method, sim.A, sim.B)
+    R = solve(method, sim.A, sim.B, on_failure="nan")
+    failed = np.isnan(R).any(axis=(-2, -1))
+    assert 0 < failed.sum() < 150
+    so3.check_rotation_matrices(R[~failed])

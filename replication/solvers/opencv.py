@@ -32,8 +32,9 @@ from __future__ import annotations
 import numpy as np
 
 from ._registry import register
+from .robust import pair_residual_deg
 
-__all__ = ["calibrate_hand_eye", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
+__all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
 
 #: Registered OpenCV methods: registry name -> (``cv2`` constant, the paper it implements).
 OPENCV_METHODS = {
@@ -69,8 +70,16 @@ def _chain(A, B):
     return Hg, Hc
 
 
-def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI") -> np.ndarray:
+def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure: str = "raise") -> np.ndarray:
     """``R0`` from ``cv2.calibrateHandEye`` on the pose chain of ``(A, B)``, one call per problem.
+
+    OpenCV's own log messages are silenced during the call; its output is checked
+    instead. ``CALIB_HAND_EYE_TSAI`` (OpenCV 4.14) sometimes gives up ("Not enough
+    informative motions", seen with J = 3) and returns its initial value, the
+    identity; an exact identity is treated as a failure unless the median pair
+    residual under it is below 5 deg. ``CALIB_HAND_EYE_PARK`` computes ``(M^T M)^{-1/2} M^T`` without a
+    determinant check and returns a *reflection* (det -1) when few noisy motions
+    make ``det M < 0`` (seen with J = 3 at the paper's noise level).
 
     Parameters
     ----------
@@ -78,29 +87,77 @@ def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI") -> np.ndarray:
         Validated camera / sensor relative rotations.
     method : str
         Name of a ``cv2.CALIB_HAND_EYE_*`` constant.
+    on_failure : {"raise", "nan"}
+        What to do when OpenCV's result is not a rotation (NaN or det -1):
+        raise ``ValueError`` naming the problem, or return NaN for that problem
+        (for studies that count failures).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor`` (OpenCV's ``R_cam2gripper``).
     """
+    if on_failure not in ("raise", "nan"):
+        raise ValueError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
     cv2 = _cv2()
     flag = getattr(cv2, method)
     lead, J = A.shape[:-3], A.shape[-3]
     flatA, flatB = A.reshape((-1, J, 3, 3)), B.reshape((-1, J, 3, 3))
     zeros = [np.zeros((3, 1))] * (J + 1)
     out = np.empty((len(flatA), 3, 3))
-    for n in range(len(flatA)):  # OpenCV has no batched interface
-        Hg, Hc = _chain(flatA[n], flatB[n])
-        out[n], _ = cv2.calibrateHandEye(list(Hg), zeros, list(Hc), zeros, method=flag)
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        for n in range(len(flatA)):  # OpenCV has no batched interface
+            Hg, Hc = _chain(flatA[n], flatB[n])
+            out[n], _ = cv2.calibrateHandEye(list(Hg), zeros, list(Hc), zeros, method=flag)
+    finally:
+        cv2.utils.logging.setLogLevel(level)
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(out).all(axis=(-2, -1)) | ~(np.linalg.det(np.nan_to_num(out)) > 0.5)
+    # OpenCV's Tsai gives up with only a log line ("Not enough informative motions") and returns its
+    # initial value, the exact identity; accept an identity only if the data agree with it
+    identity = np.all(out == np.eye(3), axis=(-2, -1))
+    if identity.any():
+        disagree = np.median(pair_residual_deg(np.eye(3), flatA, flatB), axis=-1) > 5.0
+        bad |= identity & disagree
+    if bad.any():
+        if on_failure == "raise":
+            first = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), lead)) if lead else ()
+            raise ValueError(
+                f"cv2.calibrateHandEye({method}) failed on {int(bad.sum())} of {bad.size} problems, first at "
+                f"batch index {first}: it returned NaN, a reflection (det -1), or gave up and returned "
+                f"its initial identity"
+            )
+        out[bad] = np.nan
     return out.reshape(lead + (3, 3))
+
+
+def all_pairs(A, B):
+    """The ``J (J + 1) / 2`` relative pairs OpenCV forms from the pose chain of ``(A, B)``.
+
+    Pair ``(i, j)``, ``i < j``, is ``(Hg_j^{-1} Hg_i, Hc_j Hc_i^{-1})``, i.e.
+    ``(A_{j-1} ... A_i, B_{j-1} ... B_i)``. Any solver run on these pairs sees
+    the same data as ``cv2.calibrateHandEye`` (used to check the wrappers).
+
+    Parameters
+    ----------
+    A, B : ndarray, shape (J, 3, 3)
+
+    Returns
+    -------
+    (A_all, B_all) : ndarray, shape (J (J + 1) / 2, 3, 3)
+    """
+    Hg, Hc = _chain(np.asarray(A, dtype=float), np.asarray(B, dtype=float))
+    i, j = np.triu_indices(len(Hg), k=1)
+    return np.swapaxes(Hg[j], -1, -2) @ Hg[i], Hc[j] @ np.swapaxes(Hc[i], -1, -2)
 
 
 def _register(name: str, constant: str, paper: str):
     @register(name, reference=f"OpenCV cv2.calibrateHandEye({constant}): {paper}",
               equivariant=constant != "CALIB_HAND_EYE_TSAI")
-    def solver(A, B):
-        return calibrate_hand_eye(A, B, constant)
+    def solver(A, B, *, on_failure="raise"):
+        return calibrate_hand_eye(A, B, constant, on_failure=on_failure)
 
     solver.__doc__ = f"``cv2.calibrateHandEye`` with ``{constant}`` ({paper}); see :func:`calibrate_hand_eye`."
     return solver
