@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from replication import handeye, so3
+from replication.so3 import random_rotations
 from replication.solvers import ConvergenceWarning, two_step, two_step_fixed_point
 
 
@@ -123,3 +124,17 @@ def test_too_few_motions_and_nan(problem):
     A[2, 0, 0] = np.nan
     with pytest.raises(ValueError, match="NaN"):
         two_step(A, B, iterations=3)
+
+
+def test_no_underflow_when_sigma1_is_well_below_one(rng):
+    """Inconsistent pairs make sigma_1(K) < 1: the printed iterates shrink like sigma_1^(2n).
+
+    Without rescaling they reach 0 after a few hundred iterations and the projection returns garbage.
+    """
+    A = random_rotations(rng, (2, 20))
+    B = random_rotations(rng, (2, 20))  # unrelated: sigma_1(K) around 0.5
+    res = two_step(A, B, iterations=2000, convergence_tol_deg=180)
+    assert np.all(res.left_raw[..., -1, :, :] == 0)  # the printed iteration has underflowed
+    so3.check_rotation_matrices(res.R_left)
+    fixed = two_step_fixed_point(A, B)[1]
+    assert so3.angle_between_deg(res.R_left, fixed).max() < 1e-6

@@ -241,18 +241,31 @@ def two_step(
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
     init = _check_init(init, K.shape[:-2])
 
+    # The printed iteration never rescales: its iterates shrink like sigma_1(K)^(2n) and, with
+    # inconsistent data (sigma_1 well below 1, e.g. outlier pairs), underflow to 0 after a few hundred
+    # iterations. We iterate on unit vectors and carry the scale separately; the projections (16)-(19)
+    # are scale-invariant, and the recorded raw iterates are the printed ones (scale * unit vector).
     x_l = vec(init)  # R^l_{0,0}: step 1, n = 1
-    right_raw, left_raw = [], []
+    scale = np.ones(K.shape[:-2])
+    unit_r, unit_l, scales_r, scales_l = [], [], [], []
     for _ in range(iterations):
         x_r = np.einsum("...ab,...b->...a", K, x_l)  # eq. (14): R^r_n = V2H(H1 R^l_{n-1}) H2^+
+        n_r = np.linalg.norm(x_r, axis=-1)
+        x_r, scale = x_r / n_r[..., None], scale * n_r
+        unit_r.append(x_r)
+        scales_r.append(scale)
         x_l = np.einsum("...ab,...b->...a", Kt, x_r)  # eq. (15): R^l_n = H1^+ H2V(R^r_n H2)
-        right_raw.append(x_r)
-        left_raw.append(x_l)
-    right_raw = unvec(np.stack(right_raw, axis=-2))
-    left_raw = unvec(np.stack(left_raw, axis=-2))
+        n_l = np.linalg.norm(x_l, axis=-1)
+        x_l, scale = x_l / n_l[..., None], scale * n_l
+        unit_l.append(x_l)
+        scales_l.append(scale)
+    unit_r = unvec(np.stack(unit_r, axis=-2))
+    unit_l = unvec(np.stack(unit_l, axis=-2))
+    right_raw = unit_r * np.stack(scales_r, axis=-1)[..., None, None]
+    left_raw = unit_l * np.stack(scales_l, axis=-1)[..., None, None]
 
-    right = _project(right_raw, variant)  # eqs. (16)-(18)
-    left = _project(left_raw, variant)  # eqs. (16), (17), (19)
+    right = _project(unit_r, variant)  # eqs. (16)-(18)
+    left = _project(unit_l, variant)  # eqs. (16), (17), (19)
     K_it, J = K[..., None, :, :], A.shape[-3]
     fp_right, fp_left = _fixed_point(K, init, variant)
     result = TwoStepResult(
