@@ -4,7 +4,9 @@ Modules
 -------
 so3       rotation validators, SVD projection (eqs. (16)-(17)), noise model, sampling, error metrics
 handeye   the rotation-only problem A X = X B of Sec. II: H1/H2/V2H/H2V, the operator K, cost (8)
-solvers   the two-step iteration (eqs. (11)-(19)) and the solver registry: solve(), available()
+solvers   the solver registry (solve(), available()): the two-step iteration (eqs. (11)-(19)), SQP,
+          classic baselines, the exact minimiser of eq. (8), robust and OpenCV solvers
+baselines every registered solver on the same Monte Carlo data (notebook 06)
 paper     the paper's published numbers (data/paper/), the comparison target only
 """
 __version__ = "0.1.0"

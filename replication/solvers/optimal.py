@@ -56,7 +56,7 @@ class ChordalResult:
     iterations : ndarray of int, shape (...)
         Newton iterations used.
     local_minimum : ndarray of bool, shape (...)
-        Certificate: ``gradient_norm <= gradient_tol`` and ``hessian_min_eigenvalue > 0``
+        Certificate: ``gradient_norm <= 2 gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol``
         (first- and second-order sufficient conditions for a strict local minimum).
     observability : MotionObservability or None
     """
