@@ -8,25 +8,16 @@ Targets from issue 5: batched closed-form solvers >= 10,000/s, chordal_optimal >
 both faster per calibration than a per-call cv2.calibrateHandEye.
 """
 import argparse
-import time
 import warnings
 
 import pandas as pd
+from bench_solvers import best_of  # same directory: run as a script
 
 from replication.simulation import simulate
 from replication.solvers import ConvergenceWarning, available, solve
 
 #: Solvers that loop over problems in Python: timed on fewer problems.
 LOOPED = {"sqp": 100, "opencv_tsai": 500, "opencv_park": 500, "opencv_horaud": 500}
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main():

@@ -57,25 +57,19 @@ def park_martin(A, B):
     return nearest_rotation(M)  # eq. (15): X = (M^T M)^{-1/2} M^T, as the SO(3) Procrustes solution
 
 
-def _left_matrix(q):
-    """``L(q)`` with ``q * p = L(q) p`` for scalar-first quaternions, batched (..., 4) -> (..., 4, 4)."""
+def _multiplication_matrix(q, side: str):
+    """``L(q)`` with ``q * p = L(q) p`` (``side="left"``) or ``W(q)`` with ``p * q = W(q) p`` (``"right"``).
+
+    Scalar-first quaternions, batched: (..., 4) -> (..., 4, 4). The two differ only in the sign of
+    the cross-product block (Horaud & Dornaika's ``Q`` and ``W``, their Appendix A).
+    """
     w, x, y, z = np.moveaxis(q, -1, 0)
+    s = 1.0 if side == "left" else -1.0
     return np.stack([
         np.stack([w, -x, -y, -z], -1),
-        np.stack([x, w, -z, y], -1),
-        np.stack([y, z, w, -x], -1),
-        np.stack([z, -y, x, w], -1),
-    ], -2)
-
-
-def _right_matrix(q):
-    """``W(q)`` with ``p * q = W(q) p`` for scalar-first quaternions, batched (..., 4) -> (..., 4, 4)."""
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([w, -x, -y, -z], -1),
-        np.stack([x, w, z, -y], -1),
-        np.stack([y, -z, w, x], -1),
-        np.stack([z, y, -x, w], -1),
+        np.stack([x, w, -s * z, s * y], -1),
+        np.stack([y, s * z, w, -s * x], -1),
+        np.stack([z, -s * y, s * x, w], -1),
     ], -2)
 
 
@@ -107,7 +101,8 @@ def horaud_dornaika(A, B):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    C = _left_matrix(as_quaternion(A)) - _right_matrix(as_quaternion(B))  # a_j * x - x * b_j = C_j x
+    C = _multiplication_matrix(as_quaternion(A), "left") - _multiplication_matrix(as_quaternion(B), "right")
+    # eqs. (33)-(39): a_j * x - x * b_j = C_j x
     S = np.einsum("...jki,...jkl->...il", C, C)  # eq. (40): sum_j C_j^T C_j
     _, vecs = np.linalg.eigh(S)
     x = vecs[..., :, 0]  # eq. (41): eigenvector of the smallest eigenvalue
