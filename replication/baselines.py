@@ -62,12 +62,7 @@ def corrupt_pairs(B, fraction: float, rng: np.random.Generator):
 
 def two_step_iterations(A, B, *, reduction: float = 1e-10, cap: int = 20000) -> int:
     """Iterations the two-step method needs to reach its fixed point on every problem."""
-    obs = motion_observability(A, B)
-    # the projected error's rate (noise-free analysis) and the raw iterate's (sigma_2 / sigma_1)^2,
-    # which governs inconsistent data such as outlier pairs
-    rate = np.maximum(obs.two_step_rate, obs.spectral_ratio ** 2)
-    with np.errstate(divide="ignore"):
-        need = np.where(rate < 1.0, np.log(reduction) / np.log(np.clip(rate, 1e-300, None)), np.inf)
+    need = motion_observability(A, B).iterations_for(reduction, inconsistent=True)  # outlier pairs too
     return int(np.clip(np.ceil(np.max(need)), 50, cap))
 
 

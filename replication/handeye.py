@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .so3 import check_matrices, check_rotation_matrices
+from .so3 import check_matrices, check_rotation_matrices, chordal_to_angle_deg
 
 __all__ = [
     "check_motion_pairs",
@@ -37,6 +37,7 @@ __all__ = [
     "unvec",
     "handeye_cost",
     "handeye_cost_kron",
+    "pair_residual_deg",
     "MotionObservability",
     "motion_observability",
     "check_observable",
@@ -237,12 +238,33 @@ def handeye_cost(R, A, B) -> np.ndarray:
     Fig. 4's caption and text print the cost without the square; eq. (8) squares
     it. This function implements eq. (8).
     """
-    R = np.asarray(R, dtype=float)
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
-    Rj = R[..., None, :, :]
-    diff = A @ Rj - Rj @ B
+    diff = _pair_differences(R, A, B)
     return np.einsum("...jab,...jab->...", diff, diff)
+
+
+def _pair_differences(R, A, B) -> np.ndarray:
+    """``A_j R - R B_j`` for every pair, shape (..., J, 3, 3); ``R`` broadcast as in :func:`handeye_cost`."""
+    Rj = np.asarray(R, dtype=float)[..., None, :, :]
+    return np.asarray(A, dtype=float) @ Rj - Rj @ np.asarray(B, dtype=float)
+
+
+def pair_residual_deg(R, A, B) -> np.ndarray:
+    """Per-pair residual angle in degrees: the angle of ``R^T A_j R B_j^T``.
+
+    It is 0 when pair ``j`` satisfies eq. (7) exactly, and relates to the pair's
+    term of eq. (8) by ``||A_j R - R B_j||_F = 2 sqrt(2) sin(angle / 2)``.
+
+    Parameters
+    ----------
+    R : array_like, shape (..., 3, 3)
+    A, B : array_like, shape (..., J, 3, 3)
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., J)
+    """
+    diff = _pair_differences(R, A, B)
+    return chordal_to_angle_deg(np.sqrt(np.einsum("...ab,...ab->...", diff, diff)))
 
 
 def handeye_cost_kron(R, K, n_motions: int) -> np.ndarray:
@@ -300,9 +322,16 @@ class MotionObservability:
     camera_axis_spread_deg: np.ndarray
     sensor_axis_spread_deg: np.ndarray
 
-    def iterations_for(self, reduction: float = 1e-6) -> np.ndarray:
-        """Iterations for the two-step estimate's error to shrink by ``reduction``."""
-        rate = np.clip(self.two_step_rate, 1e-300, None)
+    def iterations_for(self, reduction: float = 1e-6, *, inconsistent: bool = False) -> np.ndarray:
+        """Iterations for the two-step estimate's error to shrink by ``reduction``.
+
+        ``inconsistent=False`` uses ``two_step_rate`` (the noise-free analysis);
+        ``inconsistent=True`` the slower of that and the raw iterate's
+        ``spectral_ratio**2``, which governs data far from any exact solution
+        (e.g. outlier pairs).
+        """
+        rate = np.maximum(self.two_step_rate, self.spectral_ratio ** 2) if inconsistent else self.two_step_rate
+        rate = np.clip(rate, 1e-300, None)
         with np.errstate(divide="ignore"):
             return np.where(rate < 1.0, np.log(reduction) / np.log(rate), np.inf)
 

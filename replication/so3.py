@@ -27,6 +27,8 @@ __all__ = [
     "random_rotations",
     "frobenius_error",
     "angle_between_deg",
+    "chordal_to_angle_deg",
+    "nearest_rotation_up_to_sign",
     "rotation_angle_deg",
     "log_map",
     "exp_map",
@@ -170,6 +172,18 @@ def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
     return U @ At  # eq. (17)
 
 
+def nearest_rotation_up_to_sign(M) -> np.ndarray:
+    """The rotation nearest to ``M`` or to ``-M``: ``nearest_rotation(sign(det M) M)``, batched.
+
+    For a matrix known only up to sign (an eigen- or singular vector reshaped to
+    3x3), ``-M`` is the right candidate when ``det M < 0``: projecting ``M``
+    itself with the det fix would flip only its weakest direction instead.
+    """
+    M = check_matrices(M, "M")
+    s = np.where(np.linalg.det(M) < 0, -1.0, 1.0)
+    return nearest_rotation(M * s[..., None, None])
+
+
 def noise_rotations(v) -> np.ndarray:
     """The paper's small-rotation error model (Sec. III-A).
 
@@ -291,6 +305,16 @@ def rotation_angle_deg(R) -> np.ndarray:
     flat = R.reshape(-1, 3, 3)
     ang = Rotation.from_matrix(flat).magnitude() if len(flat) else np.empty(0)
     return np.degrees(ang).reshape(R.shape[:-2])
+
+
+def chordal_to_angle_deg(distance) -> np.ndarray:
+    """Rotation angle in degrees from a chordal distance: ``2 arcsin(min(1, d / (2 sqrt 2)))``.
+
+    Inverts ``||R1 - R2||_F = 2 sqrt(2) sin(theta / 2)`` (see :func:`frobenius_error`);
+    distances above ``2 sqrt 2`` (only possible for non-rotations) map to 180 deg.
+    """
+    d = np.asarray(distance, dtype=float)
+    return np.degrees(2.0 * np.arcsin(np.minimum(1.0, d / (2.0 * np.sqrt(2.0)))))
 
 
 def angle_between_deg(R_est, R_true) -> np.ndarray:

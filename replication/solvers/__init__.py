@@ -20,7 +20,8 @@ from ._registry import ObservabilityWarning, Solution, SolverInfo, available, re
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
 from .optimal import ChordalResult, chordal_optimal
 from .opencv import calibrate_hand_eye
-from .robust import pair_residual_deg, robust
+from ..handeye import pair_residual_deg
+from .robust import robust
 from .sqp import SQPResult, sqp
 from .two_step import ConvergenceWarning, TwoStepResult, two_step, two_step_fixed_point
 

@@ -20,7 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..handeye import kronecker_operator, unvec
-from ..so3 import as_quaternion, exp_map, log_map, nearest_rotation, quaternion_to_matrix, skew
+from ..so3 import (
+    as_quaternion, exp_map, log_map, nearest_rotation, nearest_rotation_up_to_sign, quaternion_to_matrix, skew,
+)
 from ._registry import register
 
 __all__ = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "relaxed_rotation"]
@@ -124,9 +126,8 @@ def relaxed_rotation(K) -> np.ndarray:
     """
     M = 0.5 * (K + np.swapaxes(K, -1, -2))
     _, vecs = np.linalg.eigh(M)
-    Xr = unvec(vecs[..., :, -1])  # eigenvector of the largest eigenvalue of sym(K)
-    sign = np.where(np.linalg.det(Xr) < 0, -1.0, 1.0)  # eigenvectors have no sign; pick det > 0
-    return nearest_rotation(Xr * sign[..., None, None])
+    # eigenvector of the largest eigenvalue of sym(K); it has no sign, so take the one with det > 0
+    return nearest_rotation_up_to_sign(unvec(vecs[..., :, -1]))
 
 
 @register(

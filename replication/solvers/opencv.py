@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..handeye import pair_residual_deg
 from ._registry import register
-from .robust import pair_residual_deg
 
 __all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
 

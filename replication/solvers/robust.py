@@ -17,39 +17,18 @@ from itertools import combinations
 
 import numpy as np
 
-from ..handeye import kronecker_operator
+from ..handeye import kronecker_operator, pair_residual_deg
 from ..so3 import log_map, nearest_rotation
 from ._registry import register
 from .optimal import chordal_newton
 
-__all__ = ["robust", "pair_residual_deg"]
+__all__ = ["robust"]
 
 REFERENCE = (
     "MSAC (P. H. S. Torr and A. Zisserman, 'MLESAC: a new robust estimator with application to "
     "estimating image geometry', CVIU 78(1), 2000) over two-pair Park & Martin (1994) samples, then "
     "IRLS with Cauchy weights on the exact minimiser of Zhang's weighted eq. (8)"
 )
-
-
-def pair_residual_deg(R, A, B) -> np.ndarray:
-    """Per-pair residual angle in degrees: the angle of ``R^T A_j R B_j^T``.
-
-    It is 0 when pair ``j`` satisfies eq. (7) exactly, and relates to the pair's
-    term of eq. (8) by ``||A_j R - R B_j||_F = 2 sqrt(2) sin(angle / 2)``.
-
-    Parameters
-    ----------
-    R : array_like, shape (..., 3, 3)
-    A, B : array_like, shape (..., J, 3, 3)
-
-    Returns
-    -------
-    numpy.ndarray, shape (..., J)
-    """
-    Rj = np.asarray(R, dtype=float)[..., None, :, :]
-    diff = np.asarray(A) @ Rj - Rj @ np.asarray(B)
-    chord = np.sqrt(np.einsum("...ab,...ab->...", diff, diff))
-    return np.degrees(2.0 * np.arcsin(np.clip(chord / (2.0 * np.sqrt(2.0)), 0.0, 1.0)))
 
 
 def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
@@ -69,7 +48,7 @@ def robust(A, B, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, seed:
     1. Hypotheses: Park & Martin's rotation for every pair of motions ``(j, k)``
        (all of them if ``J (J - 1) / 2 <= max_hypotheses``, else a seeded subset).
     2. Score (MSAC): ``sum_j min(r_j, t)^2`` with ``r_j`` the residual angle
-       (:func:`pair_residual_deg`) and ``t = threshold_deg``; keep the best.
+       (:func:`replication.handeye.pair_residual_deg`) and ``t = threshold_deg``; keep the best.
     3. IRLS: weights ``w_j = 1 / (1 + (r_j / c)^2)`` (Cauchy, ``c = threshold_deg / 2``)
        and the exact minimiser of ``sum_j w_j ||A_j R - R B_j||_F^2`` on SO(3),
        ``irls_iterations`` times.

@@ -33,7 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..handeye import MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
-from ..so3 import check_rotation_matrices, frobenius_error, nearest_rotation
+from ..so3 import (
+    check_rotation_matrices, chordal_to_angle_deg, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign,
+)
 from ._registry import register
 
 __all__ = ["TwoStepResult", "ConvergenceWarning", "two_step", "two_step_fixed_point"]
@@ -103,20 +105,15 @@ class TwoStepResult:
             frobenius_error(self.R_right, self.fixed_point_right),
             frobenius_error(self.R_left, self.fixed_point_left),
         )
-        return np.degrees(2.0 * np.arcsin(np.minimum(1.0, dist / (2.0 * np.sqrt(2.0)))))
-
-
-def _signed(X: np.ndarray, variant: str) -> np.ndarray:
-    """Multiply by ``sign(det X)`` in the corrected variant (see module notes)."""
-    if variant == "paper":
-        return X
-    s = np.where(np.linalg.det(X) < 0, -1.0, 1.0)
-    return X * s[..., None, None]
+        return chordal_to_angle_deg(dist)
 
 
 def _project(X: np.ndarray, variant: str) -> np.ndarray:
-    # eqs. (16)-(17); the paper-literal variant keeps eq. (17) as printed (U A^T, no det handling)
-    return nearest_rotation(_signed(X, variant), enforce_det=(variant == "corrected"))
+    # eqs. (16)-(17); the paper-literal variant keeps eq. (17) as printed (U A^T, no det handling);
+    # the corrected one multiplies by sign(det) first (see module notes)
+    if variant == "paper":
+        return nearest_rotation(X, enforce_det=False)
+    return nearest_rotation_up_to_sign(X)
 
 
 def _check_init(init, batch_shape: tuple) -> np.ndarray:
