@@ -7,7 +7,7 @@ estimate against the true ``R0`` in degrees and the time it took.
 
 The two-step solvers are run until they reach their fixed point: the number of
 iterations comes from the motions' observability
-(:meth:`replication.handeye.MotionObservability.iterations_for`), so small
+(:func:`replication.solvers.two_step_iterations`), so small
 motions, which slow the iteration down, are not mistaken for inaccuracy.
 """
 from __future__ import annotations
@@ -18,12 +18,12 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .handeye import handeye_cost, motion_observability
+from .handeye import handeye_cost
 from .simulation import noise_bound_for_angle_deg, simulate
 from .so3 import angle_between_deg, check_rotation_matrices, random_rotations
-from .solvers import ConvergenceWarning, available, solve, two_step_fixed_point
+from .solvers import ConvergenceWarning, available, solve, two_step_fixed_point, two_step_iterations
 
-__all__ = ["corrupt_pairs", "two_step_iterations", "compare", "sweep", "SWEEPS"]
+__all__ = ["corrupt_pairs", "compare", "sweep", "SWEEPS"]
 
 #: The settings a sweep can vary, and how a value maps to simulation overrides.
 SWEEPS = {
@@ -60,12 +60,6 @@ def corrupt_pairs(B, fraction: float, rng: np.random.Generator):
     return B, outlier
 
 
-def two_step_iterations(A, B, *, reduction: float = 1e-10, cap: int = 20000) -> int:
-    """Iterations the two-step method needs to reach its fixed point on every problem."""
-    need = motion_observability(A, B).iterations_for(reduction, inconsistent=True)  # outlier pairs too
-    return int(np.clip(np.ceil(np.max(need)), 50, cap))
-
-
 def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
     """Run solvers on the same problems; one row per solver.
 
@@ -79,7 +73,8 @@ def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
         Default: :func:`replication.solvers.available`.
     options : dict, optional
         ``{method: {option: value}}`` passed to :func:`replication.solvers.solve`.
-        The two-step solvers default to :func:`two_step_iterations`.
+        The two-step solvers default to
+        :func:`replication.solvers.two_step_iterations`.
 
     Returns
     -------

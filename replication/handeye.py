@@ -210,12 +210,16 @@ def kronecker_operator(A, B, weights=None) -> np.ndarray:
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
-    kron = np.einsum("...jab,...jcd->...jacbd", B, A)
-    kron = kron.reshape(A.shape[:-3] + (A.shape[-3], 9, 9))
+    lead, J = A.shape[:-3], A.shape[-3]
     if weights is None:
-        return kron.mean(axis=-3)
-    w = np.asarray(weights, dtype=float)
-    return np.einsum("...j,...jab->...ab", w, kron) / w.sum(axis=-1)[..., None, None]
+        w = np.full(lead + (J,), 1.0 / J)
+    else:
+        w = np.asarray(weights, dtype=float)
+        w = w / w.sum(axis=-1, keepdims=True)
+    # sum_j w_j B_j[a, b] A_j[c, d] as one (9 x J) @ (J x 9) product per problem, no (J, 9, 9) intermediate
+    S = np.swapaxes((B * w[..., None, None]).reshape(lead + (J, 9)), -1, -2) @ A.reshape(lead + (J, 9))
+    # (B kron A)[(a, c), (b, d)] = B[a, b] A[c, d]
+    return np.swapaxes(S.reshape(lead + (3, 3, 3, 3)), -3, -2).reshape(lead + (9, 9))
 
 
 def handeye_cost(R, A, B) -> np.ndarray:

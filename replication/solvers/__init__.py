@@ -23,7 +23,7 @@ from .opencv import calibrate_hand_eye
 from ..handeye import pair_residual_deg
 from .robust import robust
 from .sqp import SQPResult, sqp
-from .two_step import ConvergenceWarning, TwoStepResult, two_step, two_step_fixed_point
+from .two_step import ConvergenceWarning, TwoStepResult, two_step, two_step_fixed_point, two_step_iterations
 
 __all__ = [
     "SolverInfo",
@@ -35,6 +35,7 @@ __all__ = [
     "solver_info",
     "two_step",
     "two_step_fixed_point",
+    "two_step_iterations",
     "TwoStepResult",
     "ConvergenceWarning",
     "sqp",

@@ -38,7 +38,7 @@ from ..so3 import (
 )
 from ._registry import register
 
-__all__ = ["TwoStepResult", "ConvergenceWarning", "two_step", "two_step_fixed_point"]
+__all__ = ["TwoStepResult", "ConvergenceWarning", "two_step", "two_step_fixed_point", "two_step_iterations"]
 
 REFERENCE = (
     "Z.-Q. Zhang, 'Cameras and Inertial/Magnetic Sensor Units Alignment Calibration', "
@@ -151,6 +151,18 @@ def two_step_fixed_point(A, B, init=None, *, variant: str = "corrected"):
     _, _, K, _ = prepare_motions(A, B, require_observable=False)
     init = _check_init(init, K.shape[:-2])
     return _fixed_point(K, init, variant)
+
+
+def two_step_iterations(A, B, *, reduction: float = 1e-10, cap: int = 20000) -> int:
+    """Iterations the two-step method needs to reach its fixed point on every problem of a batch.
+
+    From :meth:`replication.handeye.MotionObservability.iterations_for` with
+    ``inconsistent=True`` (also covers outlier pairs), at least 50 (the paper's count) and
+    at most ``cap``.
+    """
+    obs = prepare_motions(A, B, require_observable=False)[3]
+    need = obs.iterations_for(reduction, inconsistent=True)
+    return int(np.clip(np.ceil(np.max(need)), 50, cap))
 
 
 def _fixed_point(K: np.ndarray, init: np.ndarray, variant: str):
