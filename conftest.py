@@ -1,8 +1,36 @@
-"""Test-session set-up: notebooks run under nbval write results/ into a temporary folder."""
+"""Test-session set-up.
+
+* Notebooks run under nbval write results/ into a temporary folder.
+* Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
+  reason, when the real-data folder (``$REPLICATION_REAL_DATA`` or ``../shared/data/real``)
+  is absent.
+"""
 import os
 import tempfile
+
+import pytest
 
 
 def pytest_configure(config):
     if "REPLICATION_RESULTS_DIR" not in os.environ:
         os.environ["REPLICATION_RESULTS_DIR"] = tempfile.mkdtemp(prefix="replication-results-")
+
+
+def pytest_collection_modifyitems(config, items):
+    from replication.__main__ import needs_real_data
+    from replication.realdata import data_root, real_data_available
+
+    if real_data_available():
+        return
+    try:
+        data_root()
+    except FileNotFoundError as err:
+        reason = f"needs the real recordings: {err}"
+    checked = {}
+    for item in items:
+        path = item.path
+        if path.suffix == ".ipynb":
+            if path not in checked:
+                checked[path] = needs_real_data(path)
+            if checked[path]:
+                item.add_marker(pytest.mark.skip(reason=reason))

@@ -34,6 +34,7 @@ __all__ = [
     "exp_map",
     "as_quaternion",
     "quaternion_to_matrix",
+    "cumulative_product",
 ]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
@@ -371,3 +372,19 @@ def quaternion_to_matrix(q) -> np.ndarray:
     """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first), batched."""
     q = np.asarray(q, dtype=float)
     return _batched(lambda v: Rotation.from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))
+
+
+def cumulative_product(R) -> np.ndarray:
+    """Running products ``P_k = R_0 R_1 ... R_k`` along axis -3, batched: (..., N, 3, 3) -> (..., N, 3, 3).
+
+    A log-depth prefix scan (Hillis & Steele): ``ceil(log2 N)`` batched matrix
+    products instead of a Python loop over ``N``. Each ``P_k`` is the product of
+    ``O(log N)`` partial products, so rounding grows like ``log N``, not ``N``.
+    """
+    P = np.array(check_matrices(R, "R"), dtype=float)
+    n = P.shape[-3]
+    shift = 1
+    while shift < n:
+        P[..., shift:, :, :] = P[..., :-shift, :, :] @ P[..., shift:, :, :]
+        shift *= 2
+    return P

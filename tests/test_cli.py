@@ -1,3 +1,4 @@
+import os
 import subprocess
 import sys
 
@@ -31,3 +32,16 @@ def test_reproduce_without_notebooks_fails_clearly(tmp_path):
     out = subprocess.run([sys.executable, "-m", "replication", "reproduce", "--notebooks", str(tmp_path)],
                          capture_output=True, text=True, timeout=60)
     assert out.returncode != 0 and "no numbered notebooks" in out.stderr
+
+
+def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
+    nbdir = tmp_path / "nb"
+    nbdir.mkdir()
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("raise SystemExit('must not run')")])
+    nb.metadata["replication"] = {"requires_real_data": True}
+    nbformat.write(nb, nbdir / "01_real.ipynb")
+    env = {**os.environ, "REPLICATION_REAL_DATA": str(tmp_path / "nowhere")}
+    out = subprocess.run([sys.executable, "-m", "replication", "reproduce", "--notebooks", str(nbdir),
+                          "--results", str(tmp_path / "results")], capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    assert "skipping 01_real.ipynb" in out.stdout and "nowhere" in out.stdout
