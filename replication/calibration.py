@@ -147,8 +147,8 @@ def _at(stream: OrientationStream, times) -> np.ndarray:
 
 
 def _speed(Q, times) -> np.ndarray:
-    """Angular speed (rad/s) between consecutive orientations."""
-    rel = np.swapaxes(Q[:-1], -1, -2) @ Q[1:]
+    """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading axes."""
+    rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
     return np.linalg.norm(log_map(rel), axis=-1) / np.diff(times)
 
 
@@ -170,7 +170,7 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
 
     def corr(offsets):
         Qs = _at(sensor, (t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
-        sen = np.stack([_speed(q, t) for q in Qs])
+        sen = _speed(Qs, t)
         a = cam - cam.mean()
         b = sen - sen.mean(axis=1, keepdims=True)
         return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
