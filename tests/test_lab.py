@@ -1,0 +1,230 @@
+"""The simulated lab (issue 4): generator, the PnP / ecompass / Madgwick chain, Table II
+statistics, the committed recordings, and the loader's rejection of malformed files."""
+import dataclasses
+import json
+import shutil
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+
+from replication import lab, lab_io, so3
+from replication.handeye import relative_rotations
+
+SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(4, 4), dynamic_seconds=4.0)
+
+
+@pytest.fixture(scope="module")
+def small_dir(tmp_path_factory):
+    return lab_io.write_lab(lab.simulate_lab(SMALL), tmp_path_factory.mktemp("lab") / "rec")
+
+
+@pytest.fixture
+def copy(small_dir, tmp_path):
+    dst = tmp_path / "rec"
+    shutil.copytree(small_dir, dst)
+    return dst
+
+
+# ----------------------------------------------------------------------------- the chain
+
+def test_exact_lab_recovers_r0_and_the_camera_attitude():
+    """With every error source off, the chain is exact up to the AHRS filter's lag."""
+    rec = lab.simulate_lab(dataclasses.replace(lab.LabSettings().exact(), n_sets=3))
+    res = lab.run_lab(rec, {k: v for k, v in lab.TABLE2_SOLVERS.items() if k != "optimization"})
+    assert res.per_set["true_error_deg"].max() < 1e-3
+    t2 = res.table2.xs("ours_right", level="method")
+    assert t2["rms_deg"].max() < 0.3 and t2["correlation"].min() > 0.999
+    assert res.table2.xs("sensor_frame", level="method")["rms_deg"].min() > 5  # R0 is far from identity
+
+
+def test_pnp_recovers_camera_from_wand_exactly():
+    rig = {"camera_matrix": [[450.0, 0, 320], [0, 450.0, 240], [0, 0, 1]], "dist_coeffs": [-0.25, 0.08, 0.001, -0.001, 0],
+           "wand_points": lab.WAND_POINTS}
+    C = lab._look_at(np.array([[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]), np.zeros((2, 3)), np.array([30.0, -20.0]))
+    uv = []
+    for Cp, p in zip(C, [[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]):
+        pts, _ = cv2.projectPoints(lab.WAND_POINTS, cv2.Rodrigues(Cp)[0], -Cp @ np.array(p),
+                                   np.array(rig["camera_matrix"]), np.array(rig["dist_coeffs"]))
+        uv.append(pts[:, 0])
+    np.testing.assert_allclose(lab.camera_orientations(np.array(uv), rig), C, atol=1e-7)
+    with pytest.raises(ValueError, match="image 0: PnP failed .*marker order"):
+        lab.camera_orientations(np.array(uv)[:, [1, 0, 2, 3, 4, 5, 6, 7, 8]], rig)  # two markers swapped
+
+
+def test_ecompass_and_madgwick_give_body_from_world_attitudes():
+    rng = np.random.default_rng(1)
+    I = so3.random_rotations(rng, 2)  # sensor_from_world
+    up, b = np.array([0, 0, 1.0]), np.array([0.0, 20.0, -44.0])
+    est = lab.static_sensor_orientations((I @ (lab.GRAVITY * up)), I @ b)
+    np.testing.assert_allclose(relative_rotations(est), relative_rotations(I), atol=1e-12)
+    # Madgwick on a noise-free constant-rate rotation about the sensor's x axis
+    rate, n = np.deg2rad(20.0), 400
+    t = np.arange(n) / 100.0
+    Q = so3.exp_map(np.outer(rate * t, [1.0, 0, 0]))  # world_from_sensor
+    acc = np.einsum("nji,j->ni", Q, lab.GRAVITY * up)
+    mag = np.einsum("nji,j->ni", Q, b)
+    imu = pd.DataFrame(np.hstack([acc, np.tile([rate, 0, 0], (n, 1)), mag]), columns=lab.IMU_COLUMNS)
+    est = lab.dynamic_sensor_orientations(imu, 100.0)
+    truth = relative_rotations(np.swapaxes(Q, -1, -2), reference=0)
+    err = so3.angle_between_deg(relative_rotations(est, reference=0), truth)
+    assert err.max() < 0.5  # a transposed (world_from_body) reading would be off by up to 2 x 80 deg
+
+
+def test_attitude_statistics_wraps_and_adds_up():
+    ref = np.array([[179.0, 0, 0], [0, 10, 0], [-90, 20, 5], [45, 30, 10]])
+    est = ref + np.array([[2.0, 1, 0], [-1, 1, 0], [0, 1, 0], [1, 1, 0]])
+    est[0, 0] = -179.0  # 179 -> -179 is a +2 deg difference, not -358
+    s = lab.attitude_statistics(est, ref)
+    np.testing.assert_allclose(s.loc["roll", ["mean_deg", "rms_deg"]], [0.5, np.sqrt(1.5)])
+    np.testing.assert_allclose(s["rms_deg"] ** 2, s["mean_deg"] ** 2 + s["sd_deg"] ** 2)
+    assert s.loc["pitch", "sd_deg"] == 0 and s.loc["yaw", "correlation"] == pytest.approx(1.0)
+
+
+def test_euler_rpy_is_intrinsic_zyx():
+    R = so3.exp_map(np.array([0, 0, np.deg2rad(30)])) @ so3.exp_map(np.array([0, np.deg2rad(-20), 0])) \
+        @ so3.exp_map(np.array([np.deg2rad(10), 0, 0]))
+    np.testing.assert_allclose(lab.euler_rpy_deg(R), [10, -20, 30])
+
+
+def test_switching_a_source_off_keeps_every_other_draw():
+    a, b = lab.simulate_lab(SMALL), lab.simulate_lab(SMALL.without("pixel noise"))
+    pd.testing.assert_frame_equal(a.static_imu, b.static_imu)
+    assert not np.allclose(a.static_markers.to_numpy(), b.static_markers.to_numpy())
+    c = lab.simulate_lab(SMALL.without("magnetometer errors"))
+    pd.testing.assert_frame_equal(a.static_markers, c.static_markers)
+    np.testing.assert_array_equal(a.static_imu[["acc_x", "acc_y", "acc_z"]], c.static_imu[["acc_x", "acc_y", "acc_z"]])
+    with pytest.raises(ValueError, match="unknown error source"):
+        SMALL.without("gremlins")
+    assert all(getattr(SMALL.exact(), f) in (0.0, (0.0, 0.0, 0.0)) for s in lab.SOURCES.values() for f in s)
+
+
+def test_dynamic_trial_that_loses_the_wand_is_refused():
+    with pytest.raises(ValueError, match="wand leaves the image"):
+        lab.simulate_lab(dataclasses.replace(SMALL, dynamic_amplitude_deg=(40.0, 30.0, 40.0)))
+
+
+def test_sensitivity_names_its_field():
+    with pytest.raises(ValueError, match="not a LabSettings field"):
+        lab.sensitivity("gremlins", [0])
+
+
+# ----------------------------------------------------------------------------- files
+
+def test_committed_recordings_are_the_generator_output():
+    """data/lab is what simulate_lab() writes (to the written precision)."""
+    loaded, fresh = lab_io.load_lab(), lab.simulate_lab()
+    assert loaded.rig == json.loads(json.dumps(fresh.rig))
+    np.testing.assert_allclose(loaded.truth["camera_from_sensor"], fresh.truth["camera_from_sensor"], atol=1e-11)
+    for name in ("static_imu", "static_markers", "dynamic_imu", "dynamic_markers"):
+        a, b = getattr(loaded, name), getattr(fresh, name)
+        assert list(a.columns) == list(b.columns) and len(a) == len(b)
+        np.testing.assert_allclose(a.to_numpy(float), b.to_numpy(float), atol=6e-4, err_msg=name)
+
+
+def test_write_then_load_round_trip(small_dir):
+    rec = lab_io.load_lab(small_dir)
+    assert sorted(rec.static_imu["set"].unique()) == [0, 1] and rec.static_imu.groupby("set")["pose"].nunique().min() == 4
+    assert not list(small_dir.glob("*.tmp"))
+    res = lab.run_lab(rec)
+    assert set(res.table2.index.get_level_values("method")) == {"optimization", "ours_right", "ours_left", "sensor_frame"}
+
+
+def _edit_csv(path, fn):
+    lines = path.read_text().splitlines()
+    fn(lines)
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _set_cell(line_no, column, value):
+    def fn(lines):
+        header = lines[0].split(",")
+        cells = lines[line_no - 1].split(",")
+        cells[header.index(column)] = value
+        lines[line_no - 1] = ",".join(cells)
+    return fn
+
+
+def _scale_columns(columns, factor):
+    def fn(lines):
+        header = lines[0].split(",")
+        for i in range(1, len(lines)):
+            cells = lines[i].split(",")
+            for c in columns:
+                cells[header.index(c)] = repr(float(cells[header.index(c)]) * factor)
+            lines[i] = ",".join(cells)
+    return fn
+
+
+def _edit_rig(key, value):
+    def fn(path):
+        rig = json.loads(path.read_text())
+        if value is None:
+            del rig[key]
+        else:
+            rig[key] = value
+        path.write_text(json.dumps(rig))
+    return fn
+
+
+ACC = ["acc_x", "acc_y", "acc_z"]
+CSV_CASES = {
+    "missing column": ("static_imu.csv", lambda ls: ls.__setitem__(0, ls[0].replace("mag_z", "mag_w")),
+                       r"static_imu.csv, line 1: missing column\(s\) \['mag_z'\]"),
+    "not a number": ("static_markers.csv", _set_cell(5, "u3", "abc"), r"static_markers.csv, line 5, column 'u3': not a number: 'abc'"),
+    "NaN": ("dynamic_imu.csv", _set_cell(7, "gyr_y", "nan"), r"dynamic_imu.csv, line 7, column 'gyr_y': NaN, empty or inf"),
+    "empty cell": ("static_imu.csv", _set_cell(9, "acc_z", ""), r"static_imu.csv, line 9, column 'acc_z': NaN, empty or inf"),
+    "time goes back": ("dynamic_markers.csv", _set_cell(4, "t", "0.0"), r"dynamic_markers.csv, line 4, column 't': timestamp 0 is not after the previous line's 0.04"),
+    "pose out of order": ("static_imu.csv", _set_cell(3, "pose", "7"), r"static_imu.csv, line 4, column 'pose': pose 0 follows pose 7"),
+    "fractional set": ("static_markers.csv", _set_cell(2, "set", "0.5"), r"static_markers.csv, line 2, column 'set': must be a non-negative integer"),
+    "accelerometer in g": ("static_imu.csv", _scale_columns(ACC, 1 / lab.GRAVITY), r"static_imu.csv, column 'acc_x': median accelerometer norm 1.0\d*; expected about 9.80665 m/s\^2 \(data in g\?\)"),
+    "gyro in deg/s": ("dynamic_imu.csv", _scale_columns(["gyr_x", "gyr_y", "gyr_z"], 57.29578),
+                      r"dynamic_imu.csv, column 'gyr_x': integrating the gyroscope .* \(data in deg/s\?\)"),
+    "gyro beyond range": ("dynamic_imu.csv", _set_cell(3, "gyr_z", "40.0"), r"dynamic_imu.csv, line 3, column 'gyr_z': 40 is outside the sensor's range .* not deg/s"),
+    "magnetometer in gauss": ("static_imu.csv", _scale_columns(["mag_x", "mag_y", "mag_z"], 0.01), r"static_imu.csv, column 'mag_x': median magnetometer norm .*gauss"),
+    "pixel outside image": ("static_markers.csv", _set_cell(6, "v8", "481.5"), r"static_markers.csv, line 6, column 'v8': pixel 481.5 is outside the image \(0..480\)"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CSV_CASES))
+def test_loader_rejects_malformed_csv(copy, case):
+    name, edit, message = CSV_CASES[case]
+    _edit_csv(copy / name, edit)
+    with pytest.raises(ValueError, match=message):
+        lab_io.load_lab(copy)
+
+
+RIG_CASES = {
+    "missing key": (_edit_rig("wand_points", None), r"rig.json: missing key\(s\) \['wand_points'\]"),
+    "camera matrix shape": (_edit_rig("camera_matrix", [[450, 0, 320], [0, 450, 240]]), r"'camera_matrix' must have shape \(3, 3\)"),
+    "coplanar wand": (_edit_rig("wand_points", [[x, y, 0.0] for x in (-1, 0, 1) for y in (-1, 0, 1)]), r"coplanar"),
+    "wand in mm": (_edit_rig("wand_points", (lab.WAND_POINTS * 1000).tolist()), r"expected metres, not mm"),
+    "units": (_edit_rig("units", {**lab.UNITS, "gyr": "deg/s"}), r"key 'units' must be"),
+    "distortion": (_edit_rig("dist_coeffs", [0.1, 0.2, 0.3]), r"4, 5, 8, 12 or 14"),
+    "not json": (lambda p: p.write_text('{"camera_matrix": [1, 2,\n'), r"rig.json, line \d+: not valid JSON"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(RIG_CASES))
+def test_loader_rejects_malformed_rig(copy, case):
+    edit, message = RIG_CASES[case]
+    edit(copy / "rig.json")
+    with pytest.raises(ValueError, match=message):
+        lab_io.load_lab(copy)
+
+
+def test_loader_rejects_protocol_violations(copy):
+    with pytest.raises(ValueError, match=r"set 0, pose 0 is held for 5.2 s, less than min_static_seconds = 6"):
+        lab_io.load_lab(copy, min_static_seconds=6.0)
+    with pytest.raises(ValueError, match=r"set 0 has 4 static orientations, fewer than min_poses = 5"):
+        lab_io.load_lab(copy, min_poses=5)
+    _edit_csv(copy / "static_markers.csv", lambda ls: ls.__setitem__(slice(None), [l for l in ls if not l.startswith("1,3,")]))
+    with pytest.raises(ValueError, match=r"\(set, pose\) \(1, 3\) appears only in static_imu.csv"):
+        lab_io.load_lab(copy)
+
+
+def test_loader_reports_a_missing_file(copy):
+    (copy / "dynamic_markers.csv").unlink()
+    with pytest.raises(FileNotFoundError, match="dynamic_markers.csv: no such file"):
+        lab_io.load_lab(copy)
