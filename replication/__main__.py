@@ -122,6 +122,19 @@ def calibrate_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def generate_lab_command(args: argparse.Namespace) -> int:
+    import time
+
+    from .lab import LabSettings, simulate_lab
+    from .lab_io import default_lab_dir, write_lab
+
+    start = time.perf_counter()
+    settings = LabSettings() if args.seed is None else LabSettings(seed=args.seed)
+    out = write_lab(simulate_lab(settings), args.out or default_lab_dir())
+    print(f"lab recordings (seed {settings.seed}) written to {out} in {time.perf_counter() - start:.1f} s")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m replication", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -144,6 +157,10 @@ def main(argv: list[str] | None = None) -> int:
     cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
     cal.add_argument("--out", help="write a JSON report here")
     cal.set_defaults(func=calibrate_command)
+    gen = sub.add_parser("generate-lab", help="write the simulated lab recordings (default: data/lab)")
+    gen.add_argument("--out", help="output folder (default: data/lab of this project)")
+    gen.add_argument("--seed", type=int, help="LabSettings.seed (default: that of the committed data)")
+    gen.set_defaults(func=generate_lab_command)
     args = parser.parse_args(argv)
     return args.func(args)
 

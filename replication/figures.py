@@ -4,7 +4,7 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure"]
+__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure"]
 
 #: One colour/line style per method, reused in every figure.
 METHOD_STYLE = {
@@ -60,5 +60,62 @@ def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error 
     for ax in list(axes.flat)[len(params):]:
         ax.set_visible(False)
     axes.flat[0].legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return fig
+
+
+#: Fig. 7's colours as the paper describes them: camera red, sensor frame black,
+#: projections cyan / magenta / blue.
+FIG7_STYLE = {
+    "camera": {"color": "tab:red", "label": "camera (PnP)", "lw": 1.6},
+    "sensor_frame": {"color": "black", "label": "sensor frame (uncalibrated)", "lw": 1.0},
+    "ours_right": {"color": "c", "label": "projected, ours $R^r$", "lw": 1.0},
+    "ours_left": {"color": "m", "label": "projected, ours $R^l$", "lw": 1.0, "ls": "--"},
+    "optimization": {"color": "b", "label": "projected, SQP", "lw": 1.0, "ls": ":"},
+}
+ANGLES = ("roll", "pitch", "yaw")
+
+
+def fig6_figure(per_set, *, reference: str = "the true $R_0$"):
+    """Fig. 6: each method's ``R0`` estimate over the data sets, as its deviation from a reference.
+
+    ``per_set`` is :attr:`replication.lab.LabResult.per_set`: the rotation vector of
+    ``R_est R_ref^T`` about the camera's x, y, z axes (deg). (Euler angles would be
+    unreadable here: the mounting puts ``R0`` near pitch -90 deg, gimbal lock.)
+    """
+    fig, axes = plt.subplots(1, 3, figsize=(11, 3.4), sharey=True)
+    for ax, axis in zip(axes, "xyz"):
+        for method, part in per_set.groupby("method", sort=False):
+            style = {"color": FIG7_STYLE[method]["color"], "ls": FIG7_STYLE[method].get("ls", "-")}
+            ax.plot(part["set"] + 1, part[f"dev_{axis}_deg"], marker="o", ms=4, label=METHOD_STYLE[method]["label"], **style)
+        ax.axhline(0.0, color="grey", ls="--", lw=1)
+        ax.set_xlabel("data set")
+        ax.set_title(f"about camera {axis}")
+    axes[0].set_ylabel(f"deviation from {reference} (deg)")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig7_figure(traces):
+    """Fig. 7: (a) relative roll / pitch / yaw traces; (b) their differences to the camera's.
+
+    ``traces`` is :attr:`replication.lab.LabResult.traces`.
+    """
+    sources = [k for k in FIG7_STYLE if f"{k}_roll" in traces]
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    t = traces["t"]
+    for j, angle in enumerate(ANGLES):
+        for src in sources:
+            axes[0, j].plot(t, traces[f"{src}_{angle}"], **FIG7_STYLE[src])
+            if src != "camera":
+                diff = (traces[f"{src}_{angle}"] - traces[f"camera_{angle}"] + 180.0) % 360.0 - 180.0
+                axes[1, j].plot(t, diff, **FIG7_STYLE[src])
+        axes[0, j].set_title(f"(a) {angle}")
+        axes[1, j].set_title(f"(b) {angle}: minus camera")
+        axes[1, j].set_xlabel("time (s)")
+    axes[0, 0].set_ylabel("relative attitude (deg)")
+    axes[1, 0].set_ylabel("difference (deg)")
+    axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     return fig

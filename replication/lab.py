@@ -50,13 +50,13 @@ import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
 from .handeye import relative_rotations
-from .so3 import angle_between_deg, check_rotation_matrices, nearest_rotation, quaternion_to_matrix
+from .so3 import angle_between_deg, log_map, nearest_rotation, quaternion_to_matrix, rotation_angle_deg
 from .solvers import solve
 
 __all__ = [
     "GRAVITY", "WAND_POINTS", "SOURCES", "TABLE2_SOLVERS", "LabSettings", "LabRecording", "LabResult",
     "simulate_lab", "camera_orientations", "static_sensor_orientations", "dynamic_sensor_orientations",
-    "static_motions", "euler_rpy_deg", "attitude_statistics", "run_lab", "summarize", "ablation", "sensitivity",
+    "static_motions", "euler_rpy_deg", "attitude_statistics", "run_lab", "summarize", "ablation", "sensitivity", "table2_versus_paper",
 ]
 
 #: Standard gravity (m/s^2).
@@ -653,12 +653,16 @@ class LabResult:
         Table II column -> the chordal mean of its estimates (used for the dynamic trial).
     per_set : pandas.DataFrame
         One row per set and column: ``set``, ``method``, ``roll_deg``, ``pitch_deg``,
-        ``yaw_deg`` of the estimate, ``from_mean_deg`` (angle to the method's mean) and,
-        if the truth is known, ``true_error_deg``.
+        ``yaw_deg`` of the estimate; ``dev_x_deg``, ``dev_y_deg``, ``dev_z_deg``: the
+        rotation vector of ``R_est R_ref^T`` (degrees, camera axes), ``R_ref`` the true
+        ``R0`` if known, else the method's mean; ``from_mean_deg`` (angle to the
+        method's mean) and, if the truth is known, ``true_error_deg``.
     traces : pandas.DataFrame
         ``t`` and roll/pitch/yaw of ``camera``, ``sensor_frame`` and each projection.
     table2 : pandas.DataFrame
         Rows (angle, method), columns of :func:`attitude_statistics`.
+    truth : numpy.ndarray or None
+        The true ``R0`` if the recording carries one (simulation).
     """
 
     estimates: dict
@@ -666,6 +670,7 @@ class LabResult:
     per_set: pd.DataFrame
     traces: pd.DataFrame
     table2: pd.DataFrame
+    truth: np.ndarray | None = None
 
 
 def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResult:
@@ -701,11 +706,14 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
     rows = []
     for name, R in estimates.items():
         rpy = euler_rpy_deg(R)
+        ref = truth if truth is not None else r0[name]
+        dev = np.degrees(log_map(R @ ref.T))                           # deviation, camera axes
         for i, k in enumerate(sets):
             row = {"set": k, "method": name, "roll_deg": rpy[i, 0], "pitch_deg": rpy[i, 1], "yaw_deg": rpy[i, 2],
-                   "from_mean_deg": angle_between_deg(R[i], r0[name])}
+                   "dev_x_deg": dev[i, 0], "dev_y_deg": dev[i, 1], "dev_z_deg": dev[i, 2],
+                   "from_mean_deg": float(angle_between_deg(R[i], r0[name]))}
             if truth is not None:
-                row["true_error_deg"] = angle_between_deg(R[i], truth)
+                row["true_error_deg"] = float(angle_between_deg(R[i], truth))
             rows.append(row)
     per_set = pd.DataFrame(rows)
 
@@ -734,7 +742,7 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
     for name, tr in traces.items():
         for i, a in enumerate(("roll", "pitch", "yaw")):
             frame[f"{name}_{a}"] = tr[:, i]
-    return LabResult(estimates, r0, per_set, pd.DataFrame(frame), table2)
+    return LabResult(estimates, r0, per_set, pd.DataFrame(frame), table2, truth)
 
 
 def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
@@ -789,3 +797,29 @@ def sensitivity(name: str, values, settings: LabSettings = LabSettings(), solver
     rows = [{name: v, **summarize(run_lab(simulate_lab(dataclasses.replace(settings, **{name: v})), solvers))}
             for v in values]
     return pd.DataFrame(rows).set_index(name)
+
+
+def table2_versus_paper(result: LabResult) -> pd.DataFrame:
+    """Table II of the simulated lab beside the paper's, with each method's true ``R0`` error.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index (angle, method); columns ``paper_*`` and ``ours_*`` for RMS, mean, SD
+        (deg) and correlation, and ``true_r0_error_deg``: the mean angle of the method's
+        per-set estimates to the true ``R0`` (for ``sensor_frame``: the angle of the true
+        ``R0`` itself, the error of assuming aligned frames). NaN if the truth is unknown.
+    """
+    from .paper import TABLE2_ANGLES, TABLE2_METHODS, load_table2
+
+    paper = load_table2()  # indexed by (angle, method)
+    ours = result.table2.reindex(paper.index)
+    out = pd.concat([paper.add_prefix("paper_"), ours.add_prefix("ours_")], axis=1)
+    cols = ["rms_deg", "mean_deg", "sd_deg", "correlation"]
+    out = out[[f"{w}_{c}" for c in cols for w in ("paper", "ours")]]
+    true = {}
+    if result.truth is not None:
+        true = result.per_set.groupby("method")["true_error_deg"].mean().to_dict()
+        true["sensor_frame"] = float(rotation_angle_deg(result.truth))  # ignoring R0 altogether
+    out["true_r0_error_deg"] = [true.get(m, np.nan) for m in out.index.get_level_values("method")]
+    return out.reindex(pd.MultiIndex.from_product([TABLE2_ANGLES, TABLE2_METHODS], names=["angle", "method"]))

@@ -45,3 +45,16 @@ def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
                           "--results", str(tmp_path / "results")], capture_output=True, text=True, timeout=120, env=env)
     assert out.returncode == 0, out.stderr
     assert "skipping 01_real.ipynb" in out.stdout and "nowhere" in out.stdout
+
+
+def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
+    """(That the committed data/lab equal the generator's output is tests/test_lab.py's check.)"""
+    from replication.__main__ import main
+    from replication.lab_io import load_lab
+
+    assert main(["generate-lab", "--out", str(tmp_path / "a"), "--seed", "7"]) == 0
+    assert "seed 7" in capsys.readouterr().out
+    rec = load_lab(tmp_path / "a")
+    assert rec.truth["camera_from_sensor"].shape == (3, 3)
+    assert main(["generate-lab", "--out", str(tmp_path / "b"), "--seed", "8"]) == 0
+    assert (tmp_path / "a" / "static_imu.csv").read_text() != (tmp_path / "b" / "static_imu.csv").read_text()
