@@ -11,8 +11,8 @@ import argparse
 import warnings
 
 import pandas as pd
-from bench_solvers import best_of  # same directory: run as a script
 
+from replication.notebook import best_of
 from replication.simulation import simulate
 from replication.solvers import ConvergenceWarning, available, solve
 

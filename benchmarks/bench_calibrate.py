@@ -7,9 +7,8 @@ Nothing is asserted; the figures go to environment.md.
 import argparse
 import time
 
-from bench_solvers import best_of  # same directory: run as a script
-
 from replication import calibrate, realdata as rd
+from replication.notebook import best_of
 
 
 def main():

@@ -5,22 +5,11 @@ Prints absolute times and ratios; nothing is asserted (figures go to environment
 The paper (Sec. III-A): two-step "less than 0.05 second", SQP "about 2 seconds" per calibration.
 """
 import argparse
-import time
 import warnings
 
-import numpy as np
-
+from replication.notebook import best_of
 from replication.simulation import simulate
 from replication.solvers import ConvergenceWarning, sqp, two_step
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def main():

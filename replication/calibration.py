@@ -25,7 +25,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 from .handeye import MotionObservability, pair_residual_deg
 from .realdata import GyroStream, OrientationStream
@@ -141,11 +141,6 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")
 
 
-def _at(stream: OrientationStream, times) -> np.ndarray:
-    """``world_from_body`` slerp-interpolated at ``times`` (which must lie inside the stream)."""
-    return Slerp(stream.t, Rotation.from_matrix(stream.R))(times).as_matrix()
-
-
 def _speed(Q, times) -> np.ndarray:
     """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading axes."""
     rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
@@ -169,7 +164,7 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
     cam = _speed(camera.R[keep], t)
 
     def corr(offsets):
-        Qs = _at(sensor, (t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
+        Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
         sen = _speed(Qs, t)
         a = cam - cam.mean()
         b = sen - sen.mean(axis=1, keepdims=True)
@@ -203,7 +198,7 @@ def motion_pairs(camera: OrientationStream, sensor: OrientationStream, interval:
     if len(i) < 2:
         raise ValueError(f"fewer than 2 motion pairs at interval {interval:g} s (streams overlap "
                          f"{t[-1] - t[0] if len(t) else 0:.2f} s)")
-    Qs = _at(sensor, t + offset)
+    Qs = sensor.at(t + offset)
     A = np.swapaxes(Qc[j], -1, -2) @ Qc[i]  # eq. (3): C_k C_t^T with C = Q^T
     B = np.swapaxes(Qs[j], -1, -2) @ Qs[i]  # eq. (4)
     return A, B, t[i]

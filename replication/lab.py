@@ -47,9 +47,10 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 import pandas as pd
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
 
 from .handeye import relative_rotations
+from .realdata import OrientationStream
 from .so3 import angle_between_deg, log_map, nearest_rotation, quaternion_to_matrix, rotation_angle_deg
 from .solvers import solve
 
@@ -363,11 +364,25 @@ def _world_field(settings, rng, size=()):
     return _small_rotations(rng, settings.field_deflection_deg, size) @ b
 
 
-IMU_COLUMNS = ["acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z", "mag_x", "mag_y", "mag_z"]
+ACC_COLUMNS, GYR_COLUMNS, MAG_COLUMNS = (["acc_x", "acc_y", "acc_z"], ["gyr_x", "gyr_y", "gyr_z"],
+                                         ["mag_x", "mag_y", "mag_z"])
+IMU_COLUMNS = ACC_COLUMNS + GYR_COLUMNS + MAG_COLUMNS
 
 
 def _marker_columns(n):
     return [f"u{i}" for i in range(n)] + [f"v{i}" for i in range(n)]
+
+
+def marker_pixels(markers: pd.DataFrame, n: int) -> np.ndarray:
+    """Columns ``u0..u{n-1}, v0..v{n-1}`` of a marker table as pixels, shape (M, n, 2)."""
+    uv = markers[_marker_columns(n)].to_numpy(dtype=float)
+    return np.stack([uv[:, :n], uv[:, n:]], axis=-1)
+
+
+def static_hold_seconds(static_imu: pd.DataFrame, imu_rate_hz: float) -> pd.Series:
+    """How long each static orientation was recorded: ``t_last - t_first + 1 / rate``, indexed by (set, pose)."""
+    t = static_imu.groupby(["set", "pose"])["t"]
+    return t.last() - t.first() + 1.0 / imu_rate_hz
 
 
 def _marker_frame(uv):
@@ -572,8 +587,8 @@ def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float) -> np.ndarray
     """
     from ahrs.filters import Madgwick
 
-    cols = imu[IMU_COLUMNS].to_numpy()
-    q = Madgwick(gyr=cols[:, 3:6], acc=cols[:, 0:3], mag=cols[:, 6:9], frequency=rate_hz).Q
+    q = Madgwick(gyr=imu[GYR_COLUMNS].to_numpy(), acc=imu[ACC_COLUMNS].to_numpy(), mag=imu[MAG_COLUMNS].to_numpy(),
+                 frequency=rate_hz).Q
     return np.swapaxes(quaternion_to_matrix(q), -1, -2)  # Madgwick's q is world_from_sensor (w, x, y, z)
 
 
@@ -595,12 +610,9 @@ def static_motions(recording: LabRecording) -> dict:
         set id -> ``(A, B)``, each of shape (poses - 1, 3, 3).
     """
     n = len(recording.rig["wand_points"])
-    ucols, vcols = _marker_columns(n)[:n], _marker_columns(n)[n:]
-    mk = recording.static_markers.groupby(["set", "pose"], sort=True)
-    uv = np.stack([mk[ucols].mean().to_numpy(), mk[vcols].mean().to_numpy()], axis=-1)
-    C = camera_orientations(uv, recording.rig)
-    im = recording.static_imu.groupby(["set", "pose"], sort=True)[IMU_COLUMNS].mean()
-    I = static_sensor_orientations(im[IMU_COLUMNS[:3]].to_numpy(), im[IMU_COLUMNS[6:]].to_numpy())
+    C = camera_orientations(marker_pixels(recording.static_markers.groupby(["set", "pose"]).mean(), n), recording.rig)
+    im = recording.static_imu.groupby(["set", "pose"])[IMU_COLUMNS].mean()
+    I = static_sensor_orientations(im[ACC_COLUMNS].to_numpy(), im[MAG_COLUMNS].to_numpy())
     sets = im.index.get_level_values("set").to_numpy()
     out = {}
     for k in np.unique(sets):
@@ -718,26 +730,23 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
     per_set = pd.DataFrame(rows)
 
     # dynamic trial
-    n = len(recording.rig["wand_points"])
-    ucols, vcols = _marker_columns(n)[:n], _marker_columns(n)[n:]
     dm = recording.dynamic_markers
-    C = camera_orientations(np.stack([dm[ucols].to_numpy(), dm[vcols].to_numpy()], axis=-1), recording.rig)
+    C = camera_orientations(marker_pixels(dm, len(recording.rig["wand_points"])), recording.rig)
     di = recording.dynamic_imu
     I = dynamic_sensor_orientations(di, recording.rig["imu_rate_hz"])
     t_cam, t_imu = dm["t"].to_numpy(), di["t"].to_numpy()
     if t_cam[0] < t_imu[0] or t_cam[-1] > t_imu[-1]:
         raise ValueError(f"dynamic trial: camera times {t_cam[0]:.3f}..{t_cam[-1]:.3f} s are not inside "
                          f"the IMU's {t_imu[0]:.3f}..{t_imu[-1]:.3f} s")
-    I_cam = np.swapaxes(Slerp(t_imu, Rotation.from_matrix(np.swapaxes(I, -1, -2)))(t_cam).as_matrix(), -1, -2)
+    I_cam = np.swapaxes(OrientationStream(t_imu, np.swapaxes(I, -1, -2)).at(t_cam), -1, -2)
     dC = relative_rotations(C, reference=0)
     dI = relative_rotations(I_cam, reference=0)
     traces = {"camera": euler_rpy_deg(dC), "sensor_frame": euler_rpy_deg(dI)}
     for name, R in r0.items():
         traces[name] = euler_rpy_deg(R @ dI @ R.T)                     # the paper's R0 Delta R_i R0^T
     tables = {name: attitude_statistics(tr, traces["camera"]) for name, tr in traces.items() if name != "camera"}
-    table2 = pd.concat(tables, names=["method"]).swaplevel().sort_index(level=0, sort_remaining=False)
     order = list(solvers) + ["sensor_frame"]
-    table2 = table2.reindex(pd.MultiIndex.from_product([["roll", "pitch", "yaw"], order], names=["angle", "method"]))
+    table2 = pd.concat(tables, names=["method"]).swaplevel().reindex(pd.MultiIndex.from_product([["roll", "pitch", "yaw"], order], names=["angle", "method"]))
     frame = {"t": t_cam[1:]}
     for name, tr in traces.items():
         for i, a in enumerate(("roll", "pitch", "yaw")):

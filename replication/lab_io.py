@@ -22,8 +22,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .so3 import cumulative_product, exp_map
-from .lab import GRAVITY, IMU_COLUMNS, UNITS, LabRecording, _marker_columns
+from .calibration import integrate_gyro
+from .lab import (ACC_COLUMNS, GRAVITY, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, UNITS, LabRecording, _marker_columns,
+                  static_hold_seconds)
+from .realdata import GyroStream
 
 __all__ = ["FILES", "write_lab", "load_lab", "default_lab_dir"]
 
@@ -155,9 +157,9 @@ def _load_table(path: Path, columns: list, *, grouped: bool) -> pd.DataFrame:
     for col in columns:
         if not pd.api.types.is_numeric_dtype(df[col]):
             numbers = pd.to_numeric(df[col], errors="coerce")
-            bad = int(np.flatnonzero(numbers.isna() & df[col].notna())[0]) if (numbers.isna() & df[col].notna()).any() else None
-            if bad is not None:
-                _fail(path, f"not a number: {df[col].iloc[bad]!r}", line=bad + 2, column=col)
+            bad = np.flatnonzero(numbers.isna() & df[col].notna())
+            if bad.size:
+                _fail(path, f"not a number: {df[col].iloc[bad[0]]!r}", line=int(bad[0]) + 2, column=col)
             df[col] = numbers
     values = df.to_numpy(dtype=float)
     bad = np.argwhere(~np.isfinite(values))
@@ -200,33 +202,35 @@ def _check_range(path, df, cols, limit, unit_hint):
 
 
 def _check_imu(path, df):
-    _check_range(path, df, IMU_COLUMNS[:3], ACC_LIMIT, "expected m/s^2")
-    _check_range(path, df, IMU_COLUMNS[3:6], GYR_LIMIT, "expected rad/s, not deg/s")
-    _check_range(path, df, IMU_COLUMNS[6:], MAG_LIMIT, "expected micro-tesla")
-    g = np.median(np.linalg.norm(df[IMU_COLUMNS[:3]].to_numpy(), axis=1))
+    _check_range(path, df, ACC_COLUMNS, ACC_LIMIT, "expected m/s^2")
+    _check_range(path, df, GYR_COLUMNS, GYR_LIMIT, "expected rad/s, not deg/s")
+    _check_range(path, df, MAG_COLUMNS, MAG_LIMIT, "expected micro-tesla")
+    g = np.median(np.linalg.norm(df[ACC_COLUMNS].to_numpy(), axis=1))
     if not 0.5 * GRAVITY < g < 1.5 * GRAVITY:
         _fail(path, f"median accelerometer norm {g:.4g}; expected about {GRAVITY} m/s^2 (data in g?)",
               column="acc_x")
-    b = np.median(np.linalg.norm(df[IMU_COLUMNS[6:]].to_numpy(), axis=1))
+    b = np.median(np.linalg.norm(df[MAG_COLUMNS].to_numpy(), axis=1))
     if not 10.0 < b < 100.0:
         _fail(path, f"median magnetometer norm {b:.4g}; expected Earth's field, 25-65 micro-tesla (data in gauss?)",
               column="mag_x")
 
 
-def _check_gyro_units(path, df, rate_hz, window_s=2.0, limit_deg=20.0):
-    """Gyro units by physics: over each ``window_s`` the integrated gyro must carry the
-    first accelerometer direction onto the later ones (up to ``limit_deg``, which leaves
-    room for bias and linear acceleration). deg/s data turn it 57 times too far."""
-    n = max(int(round(window_s * rate_hz)), 2)
-    m = (len(df) // n) * n
-    if m == 0:
-        return
-    gyr = df[IMU_COLUMNS[3:6]].to_numpy()[:m].reshape(-1, n, 3)
-    acc = df[IMU_COLUMNS[:3]].to_numpy()[:m].reshape(-1, n, 3)
+def _check_gyro_units(path, df, window_s=2.0, limit_deg=20.0):
+    """Gyro units by physics, on a continuous recording: the integrated gyroscope
+    (:func:`replication.calibration.integrate_gyro`) must carry the accelerometer's
+    direction at the start of each ``window_s`` onto the one at its end (up to
+    ``limit_deg``, room for bias and linear acceleration). deg/s data turn it 57 times
+    too far. (A static recording cannot show its gyro units: it does not rotate.)"""
+    t = df["t"].to_numpy()
+    Q = integrate_gyro(GyroStream(t, df[GYR_COLUMNS].to_numpy(), str(path))).R
+    acc = df[ACC_COLUMNS].to_numpy()
     acc = acc / np.linalg.norm(acc, axis=-1, keepdims=True)
-    R = cumulative_product(exp_map(gyr / rate_hz))                   # body_k-to-body_0 rotations
-    predicted = np.einsum("wkji,wj->wki", R, acc[:, 0])                # R_k^T a_0
-    err = np.degrees(np.arccos(np.clip(np.sum(predicted[:, -1] * acc[:, -1], axis=-1), -1, 1)))
+    edges = np.searchsorted(t, np.arange(t[0], t[-1], window_s))    # first sample of each window
+    start, end = edges[:-1], edges[1:]
+    if not len(start):
+        return
+    predicted = np.einsum("wji,wj->wi", np.swapaxes(Q[start], -1, -2) @ Q[end], acc[start])  # (Q_s^T Q_e)^T a_s: a_s seen from body_end
+    err = np.degrees(np.arccos(np.clip(np.sum(predicted * acc[end], axis=-1), -1, 1)))
     if np.median(err) > limit_deg:
         _fail(path, f"integrating the gyroscope over {window_s:g} s windows misses the accelerometer's tilt "
               f"by {np.median(err):.3g} deg (median); expected rad/s (data in deg/s?)", column="gyr_x")
@@ -279,7 +283,8 @@ def load_lab(directory=None, *, min_static_seconds: float = 5.0, min_poses: int 
         df = _load_table(path, cols, grouped=grouped)
         if "imu" in name:
             _check_imu(path, df)
-            _check_gyro_units(path, df, rig["imu_rate_hz"])
+            if not grouped:
+                _check_gyro_units(path, df)
         else:
             _check_pixels(path, df, rig)
         tables[name[:-4]] = df
@@ -292,7 +297,7 @@ def load_lab(directory=None, *, min_static_seconds: float = 5.0, min_poses: int 
         where = "static_imu.csv" if only in poses_imu else "static_markers.csv"
         _fail(directory / "static_markers.csv", f"(set, pose) {tuple(map(int, only))} appears only in {where}; "
               "both files must hold the same static orientations")
-    span = imu.groupby(["set", "pose"])["t"].agg(lambda t: t.iloc[-1] - t.iloc[0] + 1.0 / rig["imu_rate_hz"])
+    span = static_hold_seconds(imu, rig["imu_rate_hz"])
     short = span[span < min_static_seconds]
     if len(short):
         (k, p), sec = short.index[0], short.iloc[0]

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
 
 from .so3 import check_rotation_matrices, nearest_rotation, quaternion_to_matrix
 
@@ -64,6 +65,10 @@ class OrientationStream:
     def __post_init__(self):
         R = check_rotation_matrices(self.R, f"{self.source or 'orientation stream'} R", atol=1e-5)
         _validate_stream(self, "R", R, (3, 3))
+
+    def at(self, times) -> np.ndarray:
+        """``world_from_body`` slerp-interpolated at ``times`` (which must lie inside the stream)."""
+        return Slerp(self.t, Rotation.from_matrix(self.R))(times).as_matrix()
 
     def between(self, start: float, stop: float) -> "OrientationStream":
         """The samples with ``start <= t <= stop``."""

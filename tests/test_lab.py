@@ -94,7 +94,7 @@ def test_switching_a_source_off_keeps_every_other_draw():
     assert not np.allclose(a.static_markers.to_numpy(), b.static_markers.to_numpy())
     c = lab.simulate_lab(SMALL.without("magnetometer errors"))
     pd.testing.assert_frame_equal(a.static_markers, c.static_markers)
-    np.testing.assert_array_equal(a.static_imu[["acc_x", "acc_y", "acc_z"]], c.static_imu[["acc_x", "acc_y", "acc_z"]])
+    np.testing.assert_array_equal(a.static_imu[lab.ACC_COLUMNS], c.static_imu[lab.ACC_COLUMNS])
     with pytest.raises(ValueError, match="unknown error source"):
         SMALL.without("gremlins")
     assert all(getattr(SMALL.exact(), f) in (0.0, (0.0, 0.0, 0.0)) for s in lab.SOURCES.values() for f in s)
@@ -168,7 +168,6 @@ def _edit_rig(key, value):
     return fn
 
 
-ACC = ["acc_x", "acc_y", "acc_z"]
 CSV_CASES = {
     "missing column": ("static_imu.csv", lambda ls: ls.__setitem__(0, ls[0].replace("mag_z", "mag_w")),
                        r"static_imu.csv, line 1: missing column\(s\) \['mag_z'\]"),
@@ -178,11 +177,11 @@ CSV_CASES = {
     "time goes back": ("dynamic_markers.csv", _set_cell(4, "t", "0.0"), r"dynamic_markers.csv, line 4, column 't': timestamp 0 is not after the previous line's 0.04"),
     "pose out of order": ("static_imu.csv", _set_cell(3, "pose", "7"), r"static_imu.csv, line 4, column 'pose': pose 0 follows pose 7"),
     "fractional set": ("static_markers.csv", _set_cell(2, "set", "0.5"), r"static_markers.csv, line 2, column 'set': must be a non-negative integer"),
-    "accelerometer in g": ("static_imu.csv", _scale_columns(ACC, 1 / lab.GRAVITY), r"static_imu.csv, column 'acc_x': median accelerometer norm 1.0\d*; expected about 9.80665 m/s\^2 \(data in g\?\)"),
-    "gyro in deg/s": ("dynamic_imu.csv", _scale_columns(["gyr_x", "gyr_y", "gyr_z"], 57.29578),
+    "accelerometer in g": ("static_imu.csv", _scale_columns(lab.ACC_COLUMNS, 1 / lab.GRAVITY), r"static_imu.csv, column 'acc_x': median accelerometer norm 1.0\d*; expected about 9.80665 m/s\^2 \(data in g\?\)"),
+    "gyro in deg/s": ("dynamic_imu.csv", _scale_columns(lab.GYR_COLUMNS, 57.29578),
                       r"dynamic_imu.csv, column 'gyr_x': integrating the gyroscope .* \(data in deg/s\?\)"),
     "gyro beyond range": ("dynamic_imu.csv", _set_cell(3, "gyr_z", "40.0"), r"dynamic_imu.csv, line 3, column 'gyr_z': 40 is outside the sensor's range .* not deg/s"),
-    "magnetometer in gauss": ("static_imu.csv", _scale_columns(["mag_x", "mag_y", "mag_z"], 0.01), r"static_imu.csv, column 'mag_x': median magnetometer norm .*gauss"),
+    "magnetometer in gauss": ("static_imu.csv", _scale_columns(lab.MAG_COLUMNS, 0.01), r"static_imu.csv, column 'mag_x': median magnetometer norm .*gauss"),
     "pixel outside image": ("static_markers.csv", _set_cell(6, "v8", "481.5"), r"static_markers.csv, line 6, column 'v8': pixel 481.5 is outside the image \(0..480\)"),
 }
 
