@@ -57,7 +57,9 @@ from .solvers import solve
 __all__ = [
     "GRAVITY", "WAND_POINTS", "SOURCES", "TABLE2_SOLVERS", "LabSettings", "LabRecording", "LabResult",
     "simulate_lab", "camera_orientations", "static_sensor_orientations", "dynamic_sensor_orientations",
-    "static_motions", "euler_rpy_deg", "attitude_statistics", "run_lab", "summarize", "ablation", "sensitivity", "table2_versus_paper",
+    "ACC_COLUMNS", "GYR_COLUMNS", "MAG_COLUMNS", "IMU_COLUMNS", "UNITS", "marker_pixels", "static_hold_seconds",
+    "static_motions", "euler_rpy_deg", "attitude_statistics", "run_lab", "summarize", "ablation", "sensitivity",
+    "table2_versus_paper",
 ]
 
 #: Standard gravity (m/s^2).
