@@ -33,7 +33,8 @@ from .so3 import (
     angle_between_deg, as_quaternion, check_rotation_matrices, cumulative_product, exp_map, log_map,
     rotation_angle_deg,
 )
-from .solvers import ConvergenceWarning, solve, solver_info, two_step_iterations
+from .handeye import prepare_motions
+from .solvers import ReplicationWarning, solve, solver_info
 
 __all__ = [
     "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
@@ -249,11 +250,10 @@ def every_solver(A, B, reference, *, methods=None, opencv_pairs=None) -> "pandas
     rows = []
     for name in available() if methods is None else methods:
         a, b = opencv_pairs if (opencv_pairs is not None and name.startswith("opencv_")) else (A, B)
-        options = {"iterations": two_step_iterations(a, b)} if name.startswith("two_step") else {}
         start = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ObservabilityWarning)  # reported once per data set instead
-            R = solve(name, a, b, **options)
+            R = solve(name, a, b)
         rows.append({"method": name, "error_deg": float(angle_between_deg(R, np.asarray(reference))),
                      "n_pairs": len(a), "seconds": time.perf_counter() - start})
     return pd.DataFrame(rows).set_index("method")
@@ -355,9 +355,8 @@ def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
 
 def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options):
     """Solve, residuals, moving-block bootstrap; the common end of :func:`calibrate` and :func:`calibrate_poses`."""
-    if method.startswith("two_step"):
-        options.setdefault("iterations", two_step_iterations(A, B))
-    sol = solve(method, A, B, full_output=True, **options)
+    motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
+    sol = solve(method, motions, full_output=True, **options)
     R = sol.R
     res = pair_residual_deg(R, A, B)
     ci = float("nan")
@@ -368,9 +367,10 @@ def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference,
         starts = rng.integers(0, J - block + 1, size=(n_bootstrap, -(-J // block)))
         idx = (starts[..., None] + np.arange(block)).reshape(n_bootstrap, -1)[:, :J]
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            # the resampled pairs were validated by solve() above: call the solver itself
-            R_boot = solver_info(method).func(A[idx], B[idx], **options)
+            # the resampled pairs were validated above: call the solver's core; the replicates' own
+            # warnings would repeat the main solve's
+            warnings.simplefilter("ignore", ReplicationWarning)
+            R_boot = solver_info(method).core(motions.subset(idx), **options)
         ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
     offset, corr, applied = time_offset
     return CalibrationResult(

@@ -19,9 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from .so3 import check_matrices, check_rotation_matrices, chordal_to_angle_deg
+from .so3 import check_matrices, check_rotation_matrices, chordal_to_angle_deg, log_map
 
 __all__ = [
     "check_motion_pairs",
@@ -41,6 +40,7 @@ __all__ = [
     "MotionObservability",
     "motion_observability",
     "check_observable",
+    "Motions",
     "prepare_motions",
 ]
 
@@ -302,14 +302,18 @@ class MotionObservability:
     ----------
     kron_singular_values : ndarray, shape (..., 9)
         Singular values of :func:`kronecker_operator`, descending. Noise-free,
-        ``sigma_1 = 1``; ``R0`` is unique iff ``sigma_2 < 1``.
+        ``sigma_1 = 1``; the fixed point ``K vec(R0) = vec(R0)`` is unique iff the
+        motions are not all about one axis.
     spectral_ratio : ndarray, shape (...)
         ``sigma_2 / sigma_1`` of ``K``. One two-step iteration is a power-method
-        step on ``K^T K``, so the raw iterate's other components shrink by at
-        least ``spectral_ratio**2`` per iteration.
+        step on ``K^T K``, so the raw iterate's other components shrink by
+        ``spectral_ratio**2`` per iteration. A ratio of 1 (a repeated top singular
+        value) leaves the two-step limit undetermined: it always happens with
+        ``J = 2`` pairs, where ``sigma_1`` is triple (see
+        :mod:`replication.solvers.two_step`).
     two_step_rate : ndarray, shape (...)
-        Per-iteration contraction of the *projected* two-step estimate's error:
-        ``max(sigma_max(mean_j A_j), sigma_max(mean_j B_j))**2``. Noise-free,
+        Per-iteration contraction of the *projected* two-step estimate's error,
+        noise-free: ``max(sigma_max(mean_j A_j), sigma_max(mean_j B_j))**2``.
         ``T`` maps the tangent directions ``R0 [w]x`` to ``R0 [(mean_j B_j) w]x``
         and the symmetric directions ``R0 S`` to themselves; the SVD projection
         discards the symmetric part, so only the tangent block sets the rate.
@@ -326,38 +330,154 @@ class MotionObservability:
     camera_axis_spread_deg: np.ndarray
     sensor_axis_spread_deg: np.ndarray
 
-    def iterations_for(self, reduction: float = 1e-6, *, inconsistent: bool = False) -> np.ndarray:
-        """Iterations for the two-step estimate's error to shrink by ``reduction``.
+    def iterations_for(self, reduction: float = 1e-6) -> np.ndarray:
+        """Iterations for the projected two-step error to shrink by ``reduction`` (noise-free analysis).
 
-        ``inconsistent=False`` uses ``two_step_rate`` (the noise-free analysis);
-        ``inconsistent=True`` the slower of that and the raw iterate's
-        ``spectral_ratio**2``, which governs data far from any exact solution
-        (e.g. outlier pairs).
+        From ``two_step_rate``; ``inf`` where it is 1 (all motions about one axis). A diagnostic:
+        :func:`replication.solvers.two_step` decides its iterations itself.
         """
-        rate = np.maximum(self.two_step_rate, self.spectral_ratio ** 2) if inconsistent else self.two_step_rate
-        rate = np.clip(rate, 1e-300, None)
+        rate = np.clip(self.two_step_rate, 1e-300, None)
         with np.errstate(divide="ignore"):
             return np.where(rate < 1.0, np.log(reduction) / np.log(rate), np.inf)
 
 
 def _axis_spread_deg(R: np.ndarray) -> np.ndarray:
-    lead = R.shape[:-3]
-    J = R.shape[-3]
-    w = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_rotvec().reshape(lead + (J, 3))
-    s = np.linalg.svd(w, compute_uv=False)
-    return np.degrees(s[..., 1] / np.sqrt(J))
+    """``s_2 / sqrt(J)`` of the (..., J, 3) rotation vectors, in degrees (see :class:`MotionObservability`)."""
+    w = log_map(R)
+    gram = np.swapaxes(w, -1, -2) @ w  # (..., 3, 3): s_k^2 are its eigenvalues
+    s2 = np.sqrt(np.clip(np.linalg.eigvalsh(gram)[..., 1], 0.0, None))
+    return np.degrees(s2 / np.sqrt(R.shape[-3]))
 
 
-def prepare_motions(A, B, *, min_motions: int = 2, require_observable: bool = True,
-                    min_axis_spread_deg: float = 1e-6):
-    """Validate motion pairs once and compute what every solver needs.
+class Motions:
+    """Validated motion pairs of ``A X = X B`` and what every solver needs, built once.
+
+    The public door of every solver (:func:`replication.solvers.solve` and each exported
+    solver function) turns ``(A, B)`` into a ``Motions`` by :func:`prepare_motions` and hands
+    it to private solver cores, which never validate again. The operator ``K``, its SVD and
+    the observability diagnostic are computed on first use and cached.
+
+    Attributes
+    ----------
+    A : ndarray, shape (..., J, 3, 3)
+        Camera relative rotations ``Delta R_c`` (validated float array; do not modify).
+    B : ndarray, shape (..., J, 3, 3)
+        Sensor relative rotations ``Delta R_i``.
+    """
+
+    __slots__ = ("A", "B", "_cache")
+
+    def __init__(self, A, B, *, atol: float = 1e-6):
+        A, B = check_motion_pairs(A, B, min_motions=1, atol=atol)
+        self._set(A, B)
+
+    def _set(self, A, B):
+        object.__setattr__(self, "A", A)
+        object.__setattr__(self, "B", B)
+        object.__setattr__(self, "_cache", {})
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Motions is read-only")
+
+    @classmethod
+    def _trusted(cls, A: np.ndarray, B: np.ndarray) -> "Motions":
+        """Wrap arrays that come from validated motions (a resample, a sub-batch) without re-validating."""
+        m = object.__new__(cls)
+        m._set(A, B)
+        return m
+
+    def __repr__(self):
+        return f"Motions(batch_shape={self.batch_shape}, J={self.J})"
+
+    @property
+    def J(self) -> int:
+        """Number of motion pairs per problem."""
+        return self.A.shape[-3]
+
+    @property
+    def batch_shape(self) -> tuple:
+        """Leading (batch) dimensions."""
+        return self.A.shape[:-3]
+
+    def _cached(self, key, compute):
+        if key not in self._cache:
+            self._cache[key] = compute()
+        return self._cache[key]
+
+    @property
+    def K(self) -> np.ndarray:
+        """:func:`kronecker_operator` of the pairs, shape (..., 9, 9)."""
+        return self._cached("K", lambda: kronecker_operator(self.A, self.B))
+
+    @property
+    def svd(self):
+        """``(U, s, Vt)`` of ``K`` (descending singular values), batched."""
+        return self._cached("svd", lambda: np.linalg.svd(self.K))
+
+    @property
+    def axis_spread_deg(self):
+        """``(camera, sensor)`` axis spreads in degrees (see :class:`MotionObservability`)."""
+        return self._cached("spread", lambda: (_axis_spread_deg(self.A), _axis_spread_deg(self.B)))
+
+    @property
+    def observability(self) -> MotionObservability:
+        """The :class:`MotionObservability` diagnostic."""
+        def compute():
+            sv = self.svd[1]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
+            rate = np.maximum(
+                np.linalg.norm(self.A.mean(axis=-3), ord=2, axis=(-2, -1)),
+                np.linalg.norm(self.B.mean(axis=-3), ord=2, axis=(-2, -1)),
+            ) ** 2
+            return MotionObservability(sv, ratio, rate, *self.axis_spread_deg)
+        return self._cached("observability", compute)
+
+    def require(self, *, min_motions: int = 2, observable: bool = True,
+                min_axis_spread_deg: float = 1e-6) -> "Motions":
+        """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) the motions are not degenerate.
+
+        Degenerate: on the camera or the sensor side every rotation axis is parallel (axis
+        spread below ``min_axis_spread_deg``); see :func:`check_observable`. Returns ``self``.
+        """
+        if self.J < min_motions:
+            raise ValueError(f"need at least {min_motions} motion pairs (J >= {min_motions}), got J = {self.J}")
+        if observable:
+            for side, spread in zip(("camera", "sensor"), self.axis_spread_deg):
+                bad = np.asarray(spread) < min_axis_spread_deg
+                if bad.any():
+                    idx = tuple(int(i) for i in np.argwhere(bad)[0]) if bad.ndim else ()
+                    where = f" at batch index {idx}" if idx else ""
+                    raise ValueError(
+                        f"degenerate motion: the {side} rotations{where} all share one "
+                        f"rotation axis or do not rotate (axis spread {float(spread[idx]):.3g} deg < "
+                        f"{min_axis_spread_deg:g} deg); R0 is then not unique: at least two motions "
+                        f"with non-parallel rotation axes are needed"
+                    )
+        return self
+
+    def subset(self, index) -> "Motions":
+        """The pairs ``A[..., index, :, :]`` (a resample or a selection), without re-validating."""
+        return Motions._trusted(self.A[..., index, :, :], self.B[..., index, :, :])
+
+    def batch(self, index) -> "Motions":
+        """Problems ``A[index]`` of the batch, without re-validating."""
+        return Motions._trusted(self.A[index], self.B[index])
+
+
+def prepare_motions(A, B=None, *, min_motions: int = 2, require_observable: bool = True,
+                    min_axis_spread_deg: float = 1e-6) -> Motions:
+    """The public door: validate motion pairs once and return a :class:`Motions`.
 
     Parameters
     ----------
-    A, B : array_like, shape (..., J, 3, 3)
-        Camera / sensor relative rotations.
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations ``Delta R_c``; a :class:`Motions` (with ``B=None``) is not
+        validated again, only checked against ``min_motions`` and degeneracy.
+    B : array_like, shape (..., J, 3, 3)
+        Sensor relative rotations ``Delta R_i``.
     min_motions : int
-        Fewest motion pairs accepted (see :func:`check_motion_pairs`).
+        Fewest motion pairs accepted.
     require_observable : bool
         Raise ``ValueError`` for degenerate motion (see :func:`check_observable`).
     min_axis_spread_deg : float
@@ -365,28 +485,28 @@ def prepare_motions(A, B, *, min_motions: int = 2, require_observable: bool = Tr
 
     Returns
     -------
-    (A, B, K, observability)
-        Validated float arrays, :func:`kronecker_operator` ``K`` of shape
-        (..., 9, 9), and :class:`MotionObservability`.
+    Motions
+
+    Raises
+    ------
+    ValueError
+        See :func:`check_motion_pairs` and :meth:`Motions.require`.
     """
-    A, B = check_motion_pairs(A, B, min_motions=min_motions)
-    K = kronecker_operator(A, B)
-    sv = np.linalg.svd(K, compute_uv=False)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
-    rate = np.maximum(
-        np.linalg.norm(A.mean(axis=-3), ord=2, axis=(-2, -1)),
-        np.linalg.norm(B.mean(axis=-3), ord=2, axis=(-2, -1)),
-    ) ** 2
-    obs = MotionObservability(sv, ratio, rate, _axis_spread_deg(A), _axis_spread_deg(B))
-    if require_observable:
-        _check_observable(obs, min_axis_spread_deg)
-    return A, B, K, obs
+    if isinstance(A, Motions):
+        if B is not None:
+            raise ValueError("pass either a Motions object or the arrays A and B, not both")
+        m = A
+    else:
+        if B is None:
+            raise ValueError("B (sensor relative rotations) is missing")
+        m = Motions(A, B)
+    return m.require(min_motions=min_motions, observable=require_observable,
+                     min_axis_spread_deg=min_axis_spread_deg)
 
 
 def motion_observability(A, B) -> MotionObservability:
     """Observability diagnostics of motion pairs (see :class:`MotionObservability`)."""
-    return prepare_motions(A, B, min_motions=1, require_observable=False)[3]
+    return prepare_motions(A, B, min_motions=1, require_observable=False).observability
 
 
 def check_observable(A, B, *, min_axis_spread_deg: float = 1e-6) -> MotionObservability:
@@ -410,19 +530,4 @@ def check_observable(A, B, *, min_axis_spread_deg: float = 1e-6) -> MotionObserv
     -------
     MotionObservability
     """
-    return prepare_motions(A, B, min_motions=1, min_axis_spread_deg=min_axis_spread_deg)[3]
-
-
-def _check_observable(obs: MotionObservability, min_axis_spread_deg: float) -> None:
-    """Raise for degenerate motion (see :func:`check_observable`), given computed diagnostics."""
-    for side, spread in (("camera", obs.camera_axis_spread_deg), ("sensor", obs.sensor_axis_spread_deg)):
-        bad = np.asarray(spread) < min_axis_spread_deg
-        if bad.any():
-            idx = tuple(int(i) for i in np.argwhere(bad)[0]) if bad.ndim else ()
-            where = f" at batch index {idx}" if idx else ""
-            raise ValueError(
-                f"degenerate motion: the {side} rotations{where} all share one "
-                f"rotation axis or do not rotate (axis spread {float(spread[idx]):.3g} deg < "
-                f"{min_axis_spread_deg:g} deg); R0 is then not unique: at least two motions "
-                f"with non-parallel rotation axes are needed"
-            )
+    return prepare_motions(A, B, min_motions=1, min_axis_spread_deg=min_axis_spread_deg).observability

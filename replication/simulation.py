@@ -17,9 +17,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .paper import r0_camera_from_sensor
-from .so3 import noise_rotations, random_rotations, sample_ball
+from .so3 import exp_map, log_map, noise_rotations, random_rotations, sample_ball
 
-__all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg"]
+__all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg",
+           "OpenCVProtocolProblem", "opencv_protocol"]
 
 
 def noise_bound_for_angle_deg(angle_deg: float) -> float:
@@ -130,3 +131,73 @@ def simulate(seed: int, n_runs: int, settings: SimulationSettings | None = None,
     A = noise_rotations(np.stack(v_c)) @ A0  # Delta R_c <- delta R_c Delta R_c
     B = noise_rotations(np.stack(v_i)) @ B0  # Delta R_i <- delta R_i Delta R_i
     return SimulatedProblems(A=A, B=B, R0=R0, settings=settings, seed=int(seed))
+
+
+@dataclass(frozen=True)
+class OpenCVProtocolProblem:
+    """One problem of OpenCV's hand-eye test protocol, as rotation-only motion pairs.
+
+    Attributes
+    ----------
+    R_cam2gripper : ndarray (3, 3)
+        The true ``X`` (our ``R0``: camera motions ``A`` are OpenCV's gripper motions).
+    R_gripper2base, R_target2cam : ndarray (n_poses, 3, 3)
+        The absolute rotations OpenCV's ``calibrateHandEye`` takes.
+    A, B : ndarray (n_poses (n_poses - 1) / 2, 3, 3)
+        Every pair ``i < j`` as OpenCV forms it: ``A = Rg_j^T Rg_i`` (gripper),
+        ``B = Rc_j Rc_i^T`` (camera); ``A X = X B``.
+    A_chain, B_chain : ndarray (n_poses - 1, 3, 3)
+        The consecutive pairs; our ``opencv_*`` wrappers rebuild exactly the recorded poses
+        from them (and OpenCV then forms all pairs itself).
+    """
+
+    R_cam2gripper: np.ndarray
+    R_gripper2base: np.ndarray
+    R_target2cam: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    A_chain: np.ndarray
+    B_chain: np.ndarray
+
+
+def _opencv_pose(rng: np.random.Generator, lo_deg: float, hi_deg: float) -> np.ndarray:
+    # generatePose: axis components uniform in [-1, 1] (not normalised), angle uniform with a random sign
+    axis = rng.uniform(-1.0, 1.0, 3)
+    theta = rng.uniform(np.radians(lo_deg), np.radians(hi_deg)) * np.sign(rng.uniform(-1.0, 1.0))
+    return exp_map(theta * axis)
+
+
+def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool = False) -> OpenCVProtocolProblem:
+    """Rotation part of OpenCV's hand-eye test protocol (``CV_CalibrateHandEyeTest::simulateData``).
+
+    Port of ``opencv/modules/calib3d/test/test_calibration_hand_eye.cpp`` (OpenCV 4.x): the true
+    ``R_cam2gripper`` is drawn with an angle in 10-50 deg, ``R_target2base`` in 5-85 deg, each
+    gripper pose in 5-45 deg (axis components uniform in [-1, 1], so actual angles reach
+    ``sqrt(3)`` times these); ``R_target2cam = R_cam2gripper^T R_gripper2base^T R_target2base``.
+    With ``noise``, Gaussian noise of standard deviation 0.002 rad (camera) and 0.001 rad (gripper)
+    is added to each rotation vector. OpenCV's thresholds on ``||rvec_est - rvec_true||``: 1e-8
+    noise-free, 2e-2 with noise (Tsai, Park, Horaud). Draws come from ``rng`` (not OpenCV's RNG),
+    so the problems are OpenCV's distribution, not its exact numbers.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise ValueError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}")
+    if int(n_poses) != n_poses or n_poses < 3:
+        raise ValueError(f"n_poses must be an integer >= 3, got {n_poses!r}")
+    X = _opencv_pose(rng, 10.0, 50.0)
+    R_target2base = _opencv_pose(rng, 5.0, 85.0)
+    Rg, Rc = [], []
+    for _ in range(int(n_poses)):
+        g = _opencv_pose(rng, 5.0, 45.0)
+        c = X.T @ g.T @ R_target2base  # T_target2cam = T_cam2gripper^-1 T_gripper2base^-1 T_target2base
+        if noise:
+            c = exp_map(log_map(c) + rng.normal(0.0, 0.002, 3))
+            g = exp_map(log_map(g) + rng.normal(0.0, 0.001, 3))
+        Rg.append(g)
+        Rc.append(c)
+    Rg, Rc = np.array(Rg), np.array(Rc)
+    i, j = np.triu_indices(int(n_poses), k=1)
+    k = np.arange(int(n_poses) - 1)
+    pair = lambda a, b: (np.swapaxes(Rg[b], -1, -2) @ Rg[a], Rc[b] @ np.swapaxes(Rc[a], -1, -2))
+    A, B = pair(i, j)
+    A_chain, B_chain = pair(k, k + 1)
+    return OpenCVProtocolProblem(X, Rg, Rc, A, B, A_chain, B_chain)

@@ -3,12 +3,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from replication import so3
+from replication.handeye import Motions
 from replication.solvers import _registry, available, register, solve, solver_info
 
 
 def test_available_lists_the_paper_method():
     assert {"two_step_right", "two_step_left"} <= set(available())
-    assert available() == sorted(available())
     assert "Zhang" in solver_info("two_step_left").reference
 
 
@@ -31,12 +31,20 @@ def test_register_new_solver_and_refuse_duplicates(problem, monkeypatch):
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
     R0, A, B = problem
 
+    seen = []
+
     @register("truth_oracle", reference="test", min_motions=3)
-    def oracle(A_, B_, *, answer):
-        return np.broadcast_to(answer, A_.shape[:-3] + (3, 3))
+    def oracle(motions, *, answer):
+        seen.append(motions)
+        return np.broadcast_to(answer, motions.batch_shape + (3, 3))
 
     assert "truth_oracle" in available()
     assert np.array_equal(solve("truth_oracle", A, B, answer=R0), R0)
+    # the decorator returns the public door: it validates like solve() and hands the core a Motions
+    assert np.array_equal(oracle(A, B, answer=R0), R0)
+    assert all(isinstance(m, Motions) and m.J == 20 for m in seen)
+    with pytest.raises(ValueError, match="not a rotation matrix"):
+        oracle(2 * A, B, answer=R0)
     with pytest.raises(ValueError, match="at least 3 motion pairs"):
         solve("truth_oracle", A[:2], B[:2], answer=R0)
     with pytest.raises(ValueError, match="already registered"):

@@ -4,40 +4,58 @@
 >>> {"two_step_right", "two_step_left", "sqp", "chordal_optimal", "park_martin"} <= set(available())
 True
 
-Add a baseline with :func:`register`::
+Every solver has one public door that validates once (:func:`solve`, or the exported
+function of the same name) and a private core that receives a validated
+:class:`replication.handeye.Motions`. Add a baseline with :func:`register`::
 
     @register("my_method", reference="Author, Title, Year", min_motions=2)
-    def my_method(A, B, **options):
-        ...  # A, B: validated (..., J, 3, 3) arrays
+    def my_method(motions, **options):
+        A, B = motions.A, motions.B  # validated (..., J, 3, 3) arrays; motions.K is cached
         return R0_estimate  # (..., 3, 3)
+
+``my_method(A, B)`` then validates like ``solve("my_method", A, B)``.
 
 Modules: :mod:`.two_step` (the paper's method), :mod:`.sqp` (the paper's
 comparison), :mod:`.classic` (Park & Martin, Horaud & Dornaika, Andreff,
-Tsai & Lenz), :mod:`.optimal` (exact minimiser of eq. (8)), :mod:`.robust`
-(outlier pairs), :mod:`.opencv` (``cv2.calibrateHandEye``).
+Tsai & Lenz), :mod:`.optimal` (the certified global minimiser of eq. (8)),
+:mod:`.robust` (outlier pairs), :mod:`.opencv` (``cv2.calibrateHandEye``).
+Warnings (:mod:`._warnings`) name the measured cause whenever an answer may be wrong.
 """
-from ._registry import ObservabilityWarning, Solution, SolverInfo, available, register, solve, solver_info
+from ..handeye import Motions, pair_residual_deg, prepare_motions
+from ._registry import LOCAL_ANGLE_TOL_DEG, LOCAL_ATOL, LOCAL_RTOL, Solution, SolverInfo, available, register, solve, solver_info
+from ._warnings import (
+    CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, ObservabilityWarning,
+    ReplicationWarning,
+)
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
-from .optimal import ChordalResult, chordal_optimal
 from .opencv import calibrate_hand_eye
-from ..handeye import pair_residual_deg
+from .optimal import GAP_TOL, ChordalResult, chordal_optimal, global_certificate
 from .robust import robust
 from .sqp import SQPResult, sqp
-from .two_step import ConvergenceWarning, TwoStepResult, two_step, two_step_fixed_point, two_step_iterations
+from .two_step import TwoStepResult, two_step, two_step_fixed_point
 
 __all__ = [
+    "Motions",
+    "prepare_motions",
     "SolverInfo",
     "Solution",
-    "ObservabilityWarning",
     "available",
     "register",
     "solve",
     "solver_info",
+    "ReplicationWarning",
+    "ObservabilityWarning",
+    "ConvergenceWarning",
+    "IterationCapWarning",
+    "LocalMinimumWarning",
+    "CertificateWarning",
+    "GAP_TOL",
+    "LOCAL_RTOL",
+    "LOCAL_ATOL",
+    "LOCAL_ANGLE_TOL_DEG",
     "two_step",
     "two_step_fixed_point",
-    "two_step_iterations",
     "TwoStepResult",
-    "ConvergenceWarning",
     "sqp",
     "SQPResult",
     "park_martin",
@@ -46,6 +64,7 @@ __all__ = [
     "tsai_lenz",
     "chordal_optimal",
     "ChordalResult",
+    "global_certificate",
     "robust",
     "pair_residual_deg",
     "calibrate_hand_eye",

@@ -1,20 +1,36 @@
-"""Registry of rotation-only hand-eye solvers: adding a baseline is one decorated function."""
+"""Registry of rotation-only hand-eye solvers: adding a baseline is one decorated function.
+
+Every solver has one public door that validates (:func:`solve`, or the function
+:func:`register` returns) and one private core that receives a validated
+:class:`replication.handeye.Motions` and never validates again (the pattern of
+OpenCV's ``calibration_handeye.cpp``).
+"""
 from __future__ import annotations
 
+import functools
+import warnings
 from dataclasses import dataclass
 from typing import Callable
 
-import warnings
-
 import numpy as np
 
-from ..handeye import MotionObservability, handeye_cost, prepare_motions
+from ..handeye import Motions, MotionObservability, handeye_cost, prepare_motions, vec
+from ._warnings import ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
 
-__all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve"]
+__all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve",
+           "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG"]
 
-
-class ObservabilityWarning(UserWarning):
-    """The motions barely constrain ``R0`` (rotation axes nearly parallel, or tiny rotations)."""
+#: A local solver's answer is flagged (:class:`LocalMinimumWarning`) when its cost (8) exceeds the
+#: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
+#: the excess grows like ``J delta^2`` (``delta`` the angle to the minimiser, radians, times a curvature
+#: of order 2-3), so either term corresponds to about 0.03 deg at the paper's noise: well above
+#: SLSQP's own stopping jitter (0.01 deg seen), far below a wrong stationary point (0.3-43 % of ``f*``
+#: and tens of degrees off).
+LOCAL_RTOL = 1e-3
+LOCAL_ATOL = 1e-6
+#: Within the basin of the global minimum, a local solver's answer farther than this from the certified
+#: minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's objective tolerance).
+LOCAL_ANGLE_TOL_DEG = 1e-4
 
 
 @dataclass(frozen=True)
@@ -25,8 +41,9 @@ class SolverInfo:
     ----------
     name : str
         The ``method`` name given to :func:`solve`.
-    func : callable
-        ``func(A, B, **options) -> (..., 3, 3)``; receives validated float arrays.
+    core : callable
+        ``core(motions, **options) -> (..., 3, 3)``; receives a validated
+        :class:`replication.handeye.Motions`.
     reference : str
         The paper the solver implements.
     min_motions : int
@@ -34,7 +51,8 @@ class SolverInfo:
     local : bool
         ``True`` for a local method whose answer depends on a start ``init``
         (an option it accepts); it may converge to a wrong stationary point
-        from a start far from ``R0``.
+        from a start far from ``R0``. :func:`solve` then checks its answer against
+        the certified global minimum of eq. (8).
     equivariant : bool
         ``True`` if re-expressing the camera frame by ``G`` (``A -> G A G^T``)
         maps the estimate to ``G R``, and likewise for the sensor frame
@@ -43,7 +61,7 @@ class SolverInfo:
     """
 
     name: str
-    func: Callable[..., np.ndarray]
+    core: Callable[..., np.ndarray]
     reference: str
     min_motions: int
     local: bool = False
@@ -64,12 +82,24 @@ class Solution:
     observability : MotionObservability
         How well the motions determine ``R0`` (see
         :class:`replication.handeye.MotionObservability`).
+    lower_bound : ndarray, shape (...)
+        Certified lower bound on the minimum of eq. (8) over SO(3)
+        (:func:`replication.solvers.chordal_optimal`'s certificate).
+    duality_gap : ndarray, shape (...)
+        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8).
+    global_optimum : ndarray of bool, shape (...)
+        ``R`` is certified to be the global minimiser of eq. (8) (``duality_gap`` at most
+        ``GAP_TOL * J``). The paper's two-step method is not, once there is noise: its
+        fixed point is not the minimiser of its own cost.
     """
 
     R: np.ndarray
     method: str
     cost: np.ndarray
     observability: MotionObservability
+    lower_bound: np.ndarray
+    duality_gap: np.ndarray
+    global_optimum: np.ndarray
 
 
 _REGISTRY: dict[str, SolverInfo] = {}
@@ -77,12 +107,17 @@ _REGISTRY: dict[str, SolverInfo] = {}
 
 def register(name: str, *, reference: str, min_motions: int = 2, local: bool = False,
              equivariant: bool = True):
-    """Decorator adding ``func(A, B, **options) -> R0 estimate`` to the registry.
+    """Decorator adding a solver core to the registry; returns its public, validating door.
 
-    The function receives ``A`` (camera relative rotations) and ``B`` (sensor
-    relative rotations), both float arrays of shape ``(..., J, 3, 3)`` already
-    validated by :func:`solve` (rotations, same shape, ``J >= min_motions``,
-    not degenerate), and returns ``camera_from_sensor`` of shape ``(..., 3, 3)``.
+    The decorated ``core(motions, **options)`` receives a
+    :class:`replication.handeye.Motions` already validated by :func:`solve`
+    (rotations, same shape, ``J >= min_motions``, not degenerate): ``motions.A``
+    (camera relative rotations), ``motions.B`` (sensor relative rotations), both
+    ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
+    ``camera_from_sensor`` of shape ``(..., 3, 3)``.
+
+    The decorator returns ``public(A, B, **options) = solve(name, A, B, **options)``,
+    so the exported name validates its input like every other door.
 
     Raises
     ------
@@ -94,12 +129,17 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
     if min_motions < 1:
         raise ValueError(f"min_motions must be >= 1, got {min_motions}")
 
-    def decorate(func):
+    def decorate(core):
         if name in _REGISTRY:
             raise ValueError(f"a solver named {name!r} is already registered")
-        _REGISTRY[name] = SolverInfo(name, func, reference, int(min_motions), bool(local),
-                                     bool(equivariant))
-        return func
+        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant))
+
+        @functools.wraps(core)
+        def public(A, B=None, **options):
+            return solve(name, A, B, **options)
+
+        public.core = core
+        return public
 
     return decorate
 
@@ -119,7 +159,72 @@ def solver_info(method: str) -> SolverInfo:
         ) from None
 
 
-def solve(method: str, A, B, *, full_output: bool = False, warn_axis_spread_deg: float = 1.0,
+def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel: int = 3) -> None:
+    """Issue an :class:`ObservabilityWarning` for nearly single-axis motion (axis spread below the threshold)."""
+    spread = np.minimum(*motions.axis_spread_deg)
+    weak = spread < warn_axis_spread_deg
+    if np.any(weak):
+        warnings.warn(
+            f"{int(np.sum(weak))} of {weak.size} problems have nearly single-axis motion (axis spread "
+            f"down to {float(np.min(spread)):.3g} deg < {warn_axis_spread_deg:g} deg): the rotation about "
+            f"that axis is poorly determined; add motions about other axes",
+            ObservabilityWarning,
+            stacklevel=stacklevel,
+        )
+
+
+def _gap_to_global(motions: Motions, R: np.ndarray):
+    """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
+    from .optimal import global_certificate  # the certificate is itself a registered solver's core
+
+    cert = global_certificate(motions)
+    K, J = motions.K, motions.J
+    x = vec(R)
+    g = np.einsum("...a,...ab,...b->...", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
+    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J * 3
+    gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
+    return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
+
+
+def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
+    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8).
+
+    * :class:`LocalMinimumWarning`: cost (8) above the certified minimum ``f*`` by more than
+      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` (a wrong stationary point, another basin);
+    * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
+      certified minimiser (it stopped short of the minimum).
+
+    Returns the boolean mask of problems flagged either way.
+    """
+    from ..so3 import angle_between_deg
+    from .optimal import global_certificate
+
+    _, lower, gap = _gap_to_global(motions, R)
+    angle = angle_between_deg(R, global_certificate(motions).R)
+    off = gap > LOCAL_RTOL * np.abs(lower) + LOCAL_ATOL * motions.J
+    short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)
+    if np.any(off):
+        warnings.warn(
+            f"{method} did not reach the global minimum of eq. (8) in {int(np.sum(off))} of {off.size} problems: "
+            f"its cost exceeds the certified minimum f* by up to {float(np.max(gap[off])):.3g} (tolerance "
+            f"{LOCAL_RTOL:g} f* + {LOCAL_ATOL:g} J) and its answer is up to {float(np.max(angle[off])):.3g} deg "
+            f"from the certified minimiser; a local method stops on a wrong stationary point from a start far "
+            f"from R0: use chordal_optimal, or a start near R0",
+            LocalMinimumWarning,
+            stacklevel=stacklevel,
+        )
+    if np.any(short):
+        warnings.warn(
+            f"{method} stopped short of the minimum of eq. (8) in {int(np.sum(short))} of {short.size} problems: "
+            f"up to {float(np.max(angle[short])):.3g} deg from the certified minimiser (tolerance "
+            f"{LOCAL_ANGLE_TOL_DEG:g} deg); tighten its tolerance or use chordal_optimal",
+            ConvergenceWarning,
+            stacklevel=stacklevel,
+        )
+    return off | short
+
+
+def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread_deg: float = 1.0,
           **options):
     """Estimate ``R0`` (camera_from_sensor) from pairs ``A_j R0 = R0 B_j`` (eq. (7)).
 
@@ -127,13 +232,15 @@ def solve(method: str, A, B, *, full_output: bool = False, warn_axis_spread_deg:
     ----------
     method : str
         A name from :func:`available`.
-    A : array_like, shape (..., J, 3, 3)
-        Camera relative rotations ``Delta R_c``.
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations ``Delta R_c``; or a
+        :class:`replication.handeye.Motions` prepared once for several solvers (then ``B=None``).
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     full_output : bool
         ``False``: return the rotations. ``True``: return a :class:`Solution`
-        with the cost (8) and the observability diagnostic.
+        with the cost (8), the observability diagnostic and the certified global
+        minimum of eq. (8) (``global_optimum``, ``duality_gap``).
     warn_axis_spread_deg : float
         Issue an :class:`ObservabilityWarning` when the camera or sensor axis
         spread (:class:`replication.handeye.MotionObservability`) of a problem is
@@ -147,6 +254,15 @@ def solve(method: str, A, B, *, full_output: bool = False, warn_axis_spread_deg:
     numpy.ndarray, shape (..., 3, 3), or Solution
         Rotation matrices (det +1).
 
+    Warns
+    -----
+    ObservabilityWarning
+        Nearly single-axis motion.
+    LocalMinimumWarning
+        A ``local`` solver (e.g. ``sqp``) ended above the certified global minimum of eq. (8).
+    IterationCapWarning, ConvergenceWarning, CertificateWarning
+        From the solvers themselves (see each).
+
     Raises
     ------
     ValueError
@@ -155,18 +271,15 @@ def solve(method: str, A, B, *, full_output: bool = False, warn_axis_spread_deg:
         the solver needs, or degenerate motion (all axes parallel).
     """
     info = solver_info(method)
-    A, B, _, obs = prepare_motions(A, B, min_motions=info.min_motions)
-    spread = np.minimum(obs.camera_axis_spread_deg, obs.sensor_axis_spread_deg)
-    weak = spread < warn_axis_spread_deg
-    if np.any(weak):
-        warnings.warn(
-            f"{int(np.sum(weak))} of {weak.size} problems have nearly single-axis motion (axis spread "
-            f"down to {float(np.min(spread)):.3g} deg < {warn_axis_spread_deg:g} deg): the rotation about "
-            f"that axis is poorly determined; add motions about other axes",
-            ObservabilityWarning,
-            stacklevel=2,
-        )
-    R = info.func(A, B, **options)
+    motions = prepare_motions(A, B, min_motions=info.min_motions)
+    warn_if_weak(motions, warn_axis_spread_deg)
+    R = info.core(motions, **options)
+    if info.local:
+        check_local_answer(motions, R, method)
     if not full_output:
         return R
-    return Solution(R=R, method=method, cost=handeye_cost(R, A, B), observability=obs)
+    from .optimal import GAP_TOL
+
+    cost, lower, gap = _gap_to_global(motions, R)
+    return Solution(R=R, method=method, cost=cost, observability=motions.observability, lower_bound=lower,
+                    duality_gap=gap, global_optimum=gap <= GAP_TOL * motions.J)

@@ -4,9 +4,10 @@ Conventions (as everywhere in :mod:`replication`): ``A[..., j] = Delta R_{c,j}``
 are camera relative rotations, ``B[..., j] = Delta R_{i,j}`` the sensor's, and
 ``X = R0 = camera_from_sensor`` solves ``A_j X = X B_j`` (the paper's eq. (7)).
 In the robotics literature's names, ``A`` plays the gripper/hand motion and
-``B`` the camera/eye motion. Every solver takes validated arrays of shape
-``(..., J, 3, 3)`` and returns ``(..., 3, 3)`` rotations (det +1), batched
-without Python loops.
+``B`` the camera/eye motion. Each solver is exported as its public door
+``solver(A, B)`` (validates, like :func:`replication.solvers.solve`); its core,
+written below, receives validated :class:`~replication.handeye.Motions` and returns
+``(..., 3, 3)`` rotations (det +1), batched without Python loops.
 
 Relations used below (all follow from ``A_j = X B_j X^T``):
 
@@ -19,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..handeye import kronecker_operator, unvec
+from ..handeye import unvec
 from ..so3 import (
     as_quaternion, exp_map, log_map, nearest_rotation, nearest_rotation_up_to_sign, quaternion_to_matrix, skew,
 )
@@ -33,7 +34,7 @@ __all__ = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "relaxed_ro
     reference="F. C. Park and B. J. Martin, 'Robot sensor calibration: solving AX = XB on the "
     "Euclidean group', IEEE Trans. Robotics and Automation 10(5), 1994, eqs. (10)-(15)",
 )
-def park_martin(A, B):
+def park_martin(motions):
     """Park & Martin (1994): log map, then orthogonal Procrustes.
 
     ``A_j X = X B_j`` implies ``alpha_j = X beta_j`` for the rotation vectors
@@ -45,16 +46,17 @@ def park_martin(A, B):
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
-        Camera and sensor relative rotations, ``J >= 2`` with non-parallel axes.
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera and sensor relative rotations, ``J >= 2`` with non-parallel axes (or a
+        :class:`~replication.handeye.Motions` as ``A``).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    alpha = log_map(A)  # Park & Martin eq. (10): alpha_j = log A_j
-    beta = log_map(B)  # beta_j = log B_j; then alpha_j = X beta_j
+    alpha = log_map(motions.A)  # Park & Martin eq. (10): alpha_j = log A_j
+    beta = log_map(motions.B)  # beta_j = log B_j; then alpha_j = X beta_j
     M = np.einsum("...ja,...jb->...ab", alpha, beta)  # sum_j alpha_j beta_j^T = M^T of eq. (13)
     return nearest_rotation(M)  # eq. (15): X = (M^T M)^{-1/2} M^T, as the SO(3) Procrustes solution
 
@@ -80,7 +82,7 @@ def _multiplication_matrix(q, side: str):
     reference="R. Horaud and F. Dornaika, 'Hand-eye calibration', Int. J. Robotics Research 14(3), "
     "1995, Sec. 3.2 (unit-quaternion formulation, eqs. (33)-(41))",
 )
-def horaud_dornaika(A, B):
+def horaud_dornaika(motions):
     """Horaud & Dornaika (1995): the rotation as the eigenvector of a 4x4 matrix.
 
     With unit quaternions ``a_j``, ``b_j``, ``x`` of ``A_j``, ``B_j``, ``X``,
@@ -96,14 +98,16 @@ def horaud_dornaika(A, B):
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    C = _multiplication_matrix(as_quaternion(A), "left") - _multiplication_matrix(as_quaternion(B), "right")
+    C = (_multiplication_matrix(as_quaternion(motions.A), "left")
+         - _multiplication_matrix(as_quaternion(motions.B), "right"))
     # eqs. (33)-(39): a_j * x - x * b_j = C_j x
     S = np.einsum("...jki,...jkl->...il", C, C)  # eq. (40): sum_j C_j^T C_j
     _, vecs = np.linalg.eigh(S)
@@ -135,7 +139,7 @@ def relaxed_rotation(K) -> np.ndarray:
     reference="N. Andreff, R. Horaud and B. Espiau, 'Robot hand-eye calibration using "
     "structure-from-motion', Int. J. Robotics Research 20(3), 2001, Sec. 3 (eq. (12), rotation part)",
 )
-def andreff(A, B):
+def andreff(motions):
     """Andreff et al. (2001): Kronecker-product linear system, solved by SVD/eigendecomposition.
 
     Eq. (7) is linear in ``vec(X)``: ``(I_9 - B_j kron A_j) vec(X) = 0`` (Andreff's
@@ -153,14 +157,15 @@ def andreff(A, B):
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    return relaxed_rotation(kronecker_operator(A, B))  # eq. (12): null vector of the stacked I - B kron A
+    return relaxed_rotation(motions.K)  # eq. (12): null vector of the stacked I - B kron A
 
 
 @register(
@@ -169,7 +174,7 @@ def andreff(A, B):
     "robotics hand/eye calibration', IEEE Trans. Robotics and Automation 5(3), 1989, eqs. (12)-(14)",
     equivariant=False,
 )
-def tsai_lenz(A, B):
+def tsai_lenz(motions):
     """Tsai & Lenz (1989): modified Rodrigues parameters and linear least squares.
 
     With ``P = 2 sin(theta/2) n`` for a rotation by ``theta`` about ``n``
@@ -188,15 +193,16 @@ def tsai_lenz(A, B):
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    Pa = 2.0 * as_quaternion(A)[..., 1:]  # Tsai eq. (12): P = 2 sin(theta/2) n
-    Pb = 2.0 * as_quaternion(B)[..., 1:]
+    Pa = 2.0 * as_quaternion(motions.A)[..., 1:]  # Tsai eq. (12): P = 2 sin(theta/2) n
+    Pb = 2.0 * as_quaternion(motions.B)[..., 1:]
     S = skew(Pa + Pb)  # eq. (12): skew(P_a + P_b) p' = P_b - P_a
     d = Pb - Pa
     StS = np.einsum("...jki,...jkl->...il", S, S)

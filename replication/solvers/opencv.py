@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..handeye import pair_residual_deg
+from ..handeye import prepare_motions
 from ._registry import register
 
 __all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
@@ -70,21 +70,23 @@ def _chain(A, B):
     return Hg, Hc
 
 
-def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure: str = "raise") -> np.ndarray:
+def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure: str = "raise") -> np.ndarray:
     """``R0`` from ``cv2.calibrateHandEye`` on the pose chain of ``(A, B)``, one call per problem.
 
     OpenCV's own log messages are silenced during the call; its output is checked
     instead. ``CALIB_HAND_EYE_TSAI`` (OpenCV 4.14) sometimes gives up ("Not enough
-    informative motions", seen with J = 3) and returns its initial value, the
-    identity; an exact identity is treated as a failure unless the median pair
-    residual under it is below 5 deg. ``CALIB_HAND_EYE_PARK`` computes ``(M^T M)^{-1/2} M^T`` without a
+    informative motions", seen with J = 3 and with small motions) and returns its initial
+    value, the identity; an exact identity is treated as a failure unless it is the
+    certified minimum of eq. (8) (within the tolerance of
+    :func:`replication.solvers._registry.check_local_answer`). ``CALIB_HAND_EYE_PARK`` computes ``(M^T M)^{-1/2} M^T`` without a
     determinant check and returns a *reflection* (det -1) when few noisy motions
     make ``det M < 0`` (seen with J = 3 at the paper's noise level).
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
-        Validated camera / sensor relative rotations.
+    A, B : array_like, shape (..., J, 3, 3)
+        Camera / sensor relative rotations (validated here; or a
+        :class:`~replication.handeye.Motions` as ``A``).
     method : str
         Name of a ``cv2.CALIB_HAND_EYE_*`` constant.
     on_failure : {"raise", "nan"}
@@ -97,10 +99,18 @@ def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure:
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor`` (OpenCV's ``R_cam2gripper``).
     """
+    return _calibrate_hand_eye(prepare_motions(A, B), method, on_failure=on_failure)
+
+
+def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise") -> np.ndarray:
+    """:func:`calibrate_hand_eye` on validated motions."""
     if on_failure not in ("raise", "nan"):
         raise ValueError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
     cv2 = _cv2()
+    if not (isinstance(method, str) and method.startswith("CALIB_HAND_EYE_") and hasattr(cv2, method)):
+        raise ValueError(f"method must name a cv2.CALIB_HAND_EYE_* constant, got {method!r}")
     flag = getattr(cv2, method)
+    A, B = motions.A, motions.B
     lead, J = A.shape[:-3], A.shape[-3]
     flatA, flatB = A.reshape((-1, J, 3, 3)), B.reshape((-1, J, 3, 3))
     zeros = [np.zeros((3, 1))] * (J + 1)
@@ -116,11 +126,15 @@ def calibrate_hand_eye(A, B, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure:
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(out).all(axis=(-2, -1)) | ~(np.linalg.det(np.nan_to_num(out)) > 0.5)
     # OpenCV's Tsai gives up with only a log line ("Not enough informative motions") and returns its
-    # initial value, the exact identity; accept an identity only if the data agree with it
+    # initial value, the exact identity; accept an identity only if it is the certified minimum of eq. (8)
     identity = np.all(out == np.eye(3), axis=(-2, -1))
     if identity.any():
-        disagree = np.median(pair_residual_deg(np.eye(3), flatA, flatB), axis=-1) > 5.0
-        bad |= identity & disagree
+        from ..handeye import Motions
+        from ._registry import LOCAL_ATOL, LOCAL_RTOL, _gap_to_global
+
+        sub = Motions._trusted(flatA[identity], flatB[identity])
+        _, lower, gap = _gap_to_global(sub, np.broadcast_to(np.eye(3), sub.batch_shape + (3, 3)))
+        bad[identity] |= gap > LOCAL_RTOL * np.abs(lower) + LOCAL_ATOL * J
     if bad.any():
         if on_failure == "raise":
             first = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), lead)) if lead else ()
@@ -156,8 +170,8 @@ def all_pairs(A, B):
 def _register(name: str, constant: str, paper: str):
     @register(name, reference=f"OpenCV cv2.calibrateHandEye({constant}): {paper}",
               equivariant=constant != "CALIB_HAND_EYE_TSAI")
-    def solver(A, B, *, on_failure="raise"):
-        return calibrate_hand_eye(A, B, constant, on_failure=on_failure)
+    def solver(motions, *, on_failure="raise"):
+        return _calibrate_hand_eye(motions, constant, on_failure=on_failure)
 
     solver.__doc__ = f"``cv2.calibrateHandEye`` with ``{constant}`` ({paper}); see :func:`calibrate_hand_eye`."
     return solver

@@ -1,4 +1,4 @@
-"""The exact minimiser of the paper's cost (8) over SO(3), with an optimality check.
+"""The global minimiser of the paper's cost (8) over SO(3), with a certificate of global optimality.
 
 The paper's eq. (8) is ``f(R) = sum_j ||A_j R - R B_j||_F^2``. On SO(3) it equals
 ``2 J (3 - g(R))`` with ``g(R) = vec(R)^T M vec(R)`` and ``M = (K + K^T)/2``, ``K``
@@ -20,15 +20,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import warnings
+
 import numpy as np
 
-from ..handeye import MotionObservability, prepare_motions, unvec, vec
-from ..so3 import exp_map, skew
+from ..handeye import Motions, MotionObservability, prepare_motions, unvec, vec
+from ..so3 import check_init, exp_map, skew
 from ._registry import register
+from ._sdp import relaxation, upper_bound
+from ._warnings import CertificateWarning
 from .classic import relaxed_rotation
-from .two_step import _check_init
 
-__all__ = ["ChordalResult", "chordal_optimal", "chordal_newton"]
+__all__ = ["ChordalResult", "chordal_optimal", "chordal_newton", "global_certificate", "GAP_TOL"]
+
+#: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8) of
+#: the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
+GAP_TOL = 1e-8
 
 REFERENCE = (
     "Exact minimiser of Zhang's eq. (8) on SO(3) by Riemannian Newton (P.-A. Absil, R. Mahony and "
@@ -54,10 +61,20 @@ class ChordalResult:
     hessian_min_eigenvalue : ndarray, shape (...)
         Smallest eigenvalue of the Riemannian Hessian of eq. (8) at ``R``, divided by ``J``.
     iterations : ndarray of int, shape (...)
-        Newton iterations used.
+        Newton iterations used (from the relaxed start; the fallback's polish not counted).
     local_minimum : ndarray of bool, shape (...)
-        Certificate: ``gradient_norm <= 2 gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol``
+        ``gradient_norm <= 2 gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol``
         (first- and second-order sufficient conditions for a strict local minimum).
+    lower_bound : ndarray, shape (...)
+        A certified lower bound on the minimum of eq. (8) over SO(3) (NaN where no
+        certificate was computed).
+    duality_gap : ndarray, shape (...)
+        ``cost - lower_bound`` (>= 0 up to rounding).
+    global_optimum : ndarray of bool, shape (...)
+        ``duality_gap <= GAP_TOL * J``: ``R`` is certified to be the global minimiser.
+    certificate : ndarray of str, shape (...)
+        How: ``"lagrangian"`` (the fast O(3) dual at the Newton solution), ``"sdp"`` (the
+        semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
     observability : MotionObservability or None
     """
 
@@ -67,7 +84,16 @@ class ChordalResult:
     hessian_min_eigenvalue: np.ndarray
     iterations: np.ndarray
     local_minimum: np.ndarray
+    lower_bound: np.ndarray
+    duality_gap: np.ndarray
+    global_optimum: np.ndarray
+    certificate: np.ndarray
     observability: MotionObservability | None = None
+
+    @property
+    def sdp_used(self) -> np.ndarray:
+        """Problems the fast certificate could not settle (the relaxation was solved)."""
+        return self.certificate != "lagrangian"
 
 
 def _vee_asym(P):
@@ -141,32 +167,112 @@ def chordal_newton(K, init, *, max_iterations: int = 30, gradient_tol: float = 1
     return R, g, grad, hess, iterations
 
 
+def _g(M, R):
+    x = vec(R)
+    return np.einsum("...a,...ab,...b->...", x, M, x)
+
+
+def _lagrangian_upper_bound(M, R):
+    """Upper bound on ``max g`` over O(3) from the multiplier ``Lambda = sym(R^T unvec(M vec R))``."""
+    P = np.swapaxes(R, -1, -2) @ unvec(np.einsum("...ab,...b->...a", M, vec(R)))
+    Lam = 0.5 * (P + np.swapaxes(P, -1, -2))
+    # vec(R Lambda) = (Lambda kron I) vec(R) for symmetric Lambda (column-major vec)
+    S = np.einsum("...ab,ij->...aibj", Lam, np.eye(3)).reshape(Lam.shape[:-2] + (9, 9)) - M
+    # every rotation: g = x^T (Lambda kron I) x - x^T S x <= tr(Lambda) - 3 lambda_min(S)
+    return np.trace(Lam, axis1=-2, axis2=-1) - 3.0 * np.linalg.eigvalsh(S)[..., 0]
+
+
+def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
+                  hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
+    """:func:`chordal_optimal` on validated motions."""
+    K, J = m.K, m.J
+    M = 0.5 * (K + np.swapaxes(K, -1, -2))
+    start = relaxed_rotation(K) if init is None else check_init(init, m.batch_shape)
+    R, g, grad, hess, its = chordal_newton(K, start, max_iterations=max_iterations, gradient_tol=gradient_tol)
+    grad_norm = np.linalg.norm(grad, axis=-1)
+    hmin = np.linalg.eigvalsh(-hess)[..., 0]
+    local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
+    upper = np.full(R.shape[:-2], np.nan)
+    how = np.full(R.shape[:-2], "none", dtype=object)
+    if certify:
+        upper = np.asarray(_lagrangian_upper_bound(M, R), dtype=float)  # step 1 (fast path)
+        ok = 2.0 * J * (upper - g) <= GAP_TOL * J
+        how[ok] = "lagrangian"
+        R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
+    gap = np.clip(2.0 * J * (upper - g), 0.0, None)
+    cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
+    res = ChordalResult(
+        R=R, cost=cost, gradient_norm=2.0 * grad_norm, hessian_min_eigenvalue=2.0 * hmin, iterations=its,
+        local_minimum=local, lower_bound=cost - gap if certify else upper, duality_gap=gap if certify else upper,
+        global_optimum=(gap <= GAP_TOL * J) & certify, certificate=how.astype(str), observability=m.observability,
+    )
+    if certify and not res.global_optimum.all():
+        bad = ~res.global_optimum
+        warnings.warn(
+            f"chordal_optimal could not certify the global minimum of eq. (8) for {int(bad.sum())} of "
+            f"{bad.size} problems: the semidefinite relaxation was not tight (largest duality gap "
+            f"{float(np.nanmax(np.where(bad, gap, np.nan))):.3g} > {GAP_TOL:g} J); the answer is a local "
+            f"minimum that may not be global",
+            CertificateWarning, stacklevel=3,
+        )
+    return res
+
+
+def _sdp_fallback(K, M, J, R, g, upper, how, todo):
+    """Step 2 of the certificate for the problems in ``todo``: relaxation, polish, keep the better minimum."""
+    if not todo.any():
+        return R, g, upper, how
+    R, g, upper, how = (np.array(a) for a in (np.broadcast_to(R, todo.shape + (3, 3)), g, upper, how))
+    idx = [tuple(i) for i in np.argwhere(todo)]
+    solved = [relaxation(M[i]) for i in idx]
+    K_todo = np.stack([K[i] for i in idx])
+    R_sdp, g_sdp = chordal_newton(K_todo, np.stack([r[1] for r in solved]))[:2]  # polish the relaxed answer
+    for n, i in enumerate(idx):
+        if g_sdp[n] > g[i]:
+            R[i], g[i] = R_sdp[n], g_sdp[n]
+        bound = upper_bound(M[i], R[i], solved[n][0])
+        if np.isfinite(bound) and bound < upper[i]:
+            upper[i] = bound
+        if 2.0 * J * (upper[i] - g[i]) <= GAP_TOL * J:
+            how[i] = "sdp"
+    return R, g, upper, how
+
+
+def global_certificate(motions: Motions) -> ChordalResult:
+    """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`."""
+    return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
+
+
 def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
-                    hessian_tol: float = 0.0) -> ChordalResult:
-    """The minimiser of the paper's eq. (8) over SO(3), with an optimality certificate.
+                    hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
+    """The global minimiser of the paper's eq. (8) over SO(3), with a certificate of global optimality.
 
     Solves ``min_{R in SO(3)} sum_j ||A_j R - R B_j||_F^2`` (eq. (8) subject to
     eqs. (9)-(10)) by Riemannian Newton with backtracking, started from the
-    relaxed (Andreff) solution. The result carries the gradient norm and the
-    smallest Hessian eigenvalue: a positive Hessian and a vanishing gradient
-    certify a strict local minimum. Noise-free, the minimum is ``R0`` with cost
-    0 (a global minimum). With noise, ``notebooks/06_baselines.ipynb`` checks
-    against 24 other starts that no lower minimum exists.
+    relaxed (Andreff) solution, and certifies the result globally (see the module
+    notes): ``global_optimum`` and ``duality_gap`` say whether and how tightly.
+    Problems the fast Lagrangian certificate cannot settle go through a semidefinite
+    relaxation (Clarabel), whose solution replaces a non-global Newton minimum.
+    A :class:`~replication.solvers.CertificateWarning` is issued for any problem left
+    uncertified.
 
     Parameters
     ----------
-    A : array_like, shape (..., J, 3, 3)
-        Camera relative rotations ``Delta R_c``.
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations ``Delta R_c`` (or prepared motions, ``B=None``).
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     init : None or array_like, shape (3, 3) or (..., 3, 3)
-        Start; ``None``: the relaxed solution (:func:`replication.solvers.classic.andreff`).
+        Newton start; ``None``: the relaxed solution (:func:`replication.solvers.classic.andreff`).
     max_iterations : int
         Newton iterations at most.
     gradient_tol : float
         Convergence threshold on the gradient of ``vec(R)^T sym(K) vec(R)``.
     hessian_tol : float
         ``local_minimum`` requires ``hessian_min_eigenvalue > hessian_tol``.
+    certify : bool
+        Compute the global certificate (default). ``False`` gives the Newton result alone
+        (``global_optimum`` False, ``lower_bound`` NaN).
 
     Returns
     -------
@@ -177,25 +283,13 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
     ValueError
         Malformed or degenerate input (see :func:`replication.handeye.prepare_motions`).
     """
-    A, B, K, obs = prepare_motions(A, B)
-    J = A.shape[-3]
-    start = relaxed_rotation(K) if init is None else _check_init(init, K.shape[:-2])
-    R, g, grad, hess, its = chordal_newton(K, start, max_iterations=max_iterations,
-                                           gradient_tol=gradient_tol)
-    grad_norm = np.linalg.norm(grad, axis=-1)
-    hmin = np.linalg.eigvalsh(-hess)[..., 0]
-    return ChordalResult(
-        R=R,
-        cost=np.clip(2.0 * J * (3.0 - g), 0.0, None),  # eq. (8) on SO(3)
-        gradient_norm=2.0 * grad_norm,
-        hessian_min_eigenvalue=2.0 * hmin,
-        iterations=its,
-        local_minimum=(grad_norm <= gradient_tol) & (hmin > hessian_tol),
-        observability=obs,
-    )
+    m = prepare_motions(A, B)
+    return _chordal_core(m, init=init, max_iterations=max_iterations, gradient_tol=gradient_tol,
+                         hessian_tol=hessian_tol, certify=certify)
 
 
 @register("chordal_optimal", reference=REFERENCE)
-def _solve_chordal(A, B, **options):
-    return chordal_optimal(A, B, **options).R
-
+def _solve_chordal(motions, **options):
+    if not options:
+        return global_certificate(motions).R
+    return _chordal_core(motions, **options).R

@@ -41,7 +41,7 @@ def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
 
 
 @register("robust", reference=REFERENCE, min_motions=3)
-def robust(A, B, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, seed: int = 0,
+def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, seed: int = 0,
            irls_iterations: int = 10):
     """Outlier-robust ``R0``: MSAC consensus over two-pair samples, then Cauchy IRLS.
 
@@ -58,8 +58,9 @@ def robust(A, B, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, seed:
 
     Parameters
     ----------
-    A, B : ndarray, shape (..., J, 3, 3)
-        ``J >= 3``: with two pairs there is no redundancy to vote with.
+    A, B : array_like, shape (..., J, 3, 3)
+        ``J >= 3``: with two pairs there is no redundancy to vote with (or a
+        :class:`~replication.handeye.Motions` as ``A``).
     threshold_deg : float
         Inlier threshold on the residual angle. The default, 5 deg, is above
         the residual of an inlier in the paper's simulation (camera and sensor
@@ -77,7 +78,11 @@ def robust(A, B, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, seed:
     """
     if not threshold_deg > 0:
         raise ValueError(f"threshold_deg must be positive, got {threshold_deg!r}")
-    J = A.shape[-3]
+    if int(max_hypotheses) != max_hypotheses or max_hypotheses < 1:
+        raise ValueError(f"max_hypotheses must be a positive integer, got {max_hypotheses!r}")
+    if int(irls_iterations) != irls_iterations or irls_iterations < 0:
+        raise ValueError(f"irls_iterations must be a non-negative integer, got {irls_iterations!r}")
+    A, B, J = motions.A, motions.B, motions.J
     idx = _hypotheses(J, int(max_hypotheses), seed)  # (H, 2)
     alpha, beta = log_map(A), log_map(B)  # Park & Martin: alpha_j = R0 beta_j
     M = np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :])

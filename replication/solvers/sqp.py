@@ -31,10 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
-from ..handeye import handeye_cost_kron, prepare_motions, unvec, vec
-from ..so3 import nearest_rotation
-from ._registry import register
-from .two_step import _check_init
+import warnings
+
+from ..handeye import Motions, handeye_cost_kron, prepare_motions, unvec, vec
+from ..so3 import check_init, nearest_rotation
+from ._registry import check_local_answer, register
+from ._warnings import ConvergenceWarning
 
 __all__ = ["SQPResult", "sqp"]
 
@@ -63,6 +65,8 @@ class SQPResult:
         Major iterations and objective evaluations SLSQP used.
     success : ndarray of bool, shape (...)
         SLSQP's own convergence flag.
+    message : ndarray of str, shape (...)
+        SLSQP's exit message.
     """
 
     iterates: np.ndarray
@@ -71,6 +75,7 @@ class SQPResult:
     n_iterations: np.ndarray
     n_evaluations: np.ndarray
     success: np.ndarray
+    message: np.ndarray
 
     @property
     def R(self) -> np.ndarray:
@@ -129,17 +134,24 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons):
         history = [np.asarray(out.x, dtype=float)]
     n_it = len(history)
     history += [history[-1]] * (max_iterations - n_it)
-    return np.stack(history[:max_iterations]), n_it, int(out.nfev), bool(out.success)
+    return np.stack(history[:max_iterations]), n_it, int(out.nfev), bool(out.success), str(out.message)
 
 
-def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
+def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         constraints: str = "orthonormal") -> SQPResult:
     """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
 
+    SQP is a local method: from a start far from ``R0`` it can stop on a wrong
+    stationary point. Its answer is therefore checked against the certified global
+    minimum of eq. (8) (:func:`replication.solvers.chordal_optimal`), and a
+    :class:`~replication.solvers.LocalMinimumWarning` names the problems where it is
+    not that minimum; a :class:`~replication.solvers.ConvergenceWarning` names those
+    where SLSQP itself reports no convergence (e.g. its iteration limit).
+
     Parameters
     ----------
-    A : array_like, shape (..., J, 3, 3)
-        Camera relative rotations ``Delta R_c``.
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations ``Delta R_c`` (or prepared motions, ``B=None``).
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     init : None or array_like, shape (3, 3) or (..., 3, 3)
@@ -162,28 +174,48 @@ def sqp(A, B, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         Malformed or degenerate input, bad ``init``, ``max_iterations < 1``,
         unknown ``constraints``.
     """
-    A, B, K, _ = prepare_motions(A, B)
+    m = prepare_motions(A, B)
+    res = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints)
+    check_local_answer(m, res.R, "sqp", stacklevel=3)
+    return res
+
+
+def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
+              constraints: str = "orthonormal", stacklevel: int = 3) -> SQPResult:
+    """:func:`sqp` on validated motions (without the global-minimum check, which the door does)."""
     if constraints not in ("paper", "orthonormal"):
         raise ValueError(f"constraints must be 'paper' or 'orthonormal', got {constraints!r}")
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
+    if not ftol > 0:
+        raise ValueError(f"ftol must be positive, got {ftol!r}")
     max_iterations = int(max_iterations)
-    batch, J = K.shape[:-2], A.shape[-3]
-    init = _check_init(init, batch)
+    K, batch, J = m.K, m.batch_shape, m.J
+    init = check_init(init, batch)
     cons = _constraints(constraints)
     flat_K, flat_init = K.reshape(-1, 9, 9), init.reshape(-1, 3, 3)
     runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons) for n in range(len(flat_K))]
     iterates = unvec(np.stack([r[0] for r in runs])).reshape(batch + (max_iterations, 3, 3))
-    return SQPResult(
+    res = SQPResult(
         iterates=iterates,
         projected=nearest_rotation(iterates),
         cost=handeye_cost_kron(iterates, K[..., None, :, :], J),
         n_iterations=np.array([r[1] for r in runs]).reshape(batch),
         n_evaluations=np.array([r[2] for r in runs]).reshape(batch),
         success=np.array([r[3] for r in runs]).reshape(batch),
+        message=np.array([r[4] for r in runs]).reshape(batch),
     )
+    if not res.success.all():
+        failed = ~res.success
+        reasons = sorted(set(res.message[failed].ravel().tolist()))
+        warnings.warn(
+            f"SLSQP stopped without converging in {int(failed.sum())} of {failed.size} problems "
+            f"({'; '.join(reasons)}; max_iterations = {max_iterations})",
+            ConvergenceWarning, stacklevel=stacklevel,
+        )
+    return res
 
 
 @register("sqp", reference=REFERENCE, local=True)
-def _solve_sqp(A, B, **options):
-    return sqp(A, B, **options).R
+def _solve_sqp(motions, **options):
+    return _sqp_core(motions, stacklevel=4, **options).R

@@ -23,7 +23,25 @@ What that implies (demonstrated in ``notebooks/01_derivation_check.ipynb``):
 * if ``c < 0`` the raw iterate tends to ``-|c| R0``, whose SVD projection is
   not ``R0`` (Theorem 1 fails); ``variant="corrected"`` multiplies the raw
   iterate by ``sign(det)`` before projecting, which removes the failure;
-* the error components shrink by ``(sigma_2 / sigma_1)^2`` per iteration.
+* the error components shrink by ``(sigma_2 / sigma_1)^2`` per iteration;
+* the limit is unique only if ``sigma_1 > sigma_2``. With ``J = 2`` pairs ``sigma_1`` is
+  *triple*, whatever the motions: ``K^T K v = v`` for every ``v = vec(R0 Y)`` with ``Y`` in
+  ``span{I, c c^T, [c]x}``, ``c`` the axis of ``B_1^T B_2``, so the iteration converges to
+  ``R0 Rot(c, phi)`` with ``phi`` set by the start. The two-step method therefore needs
+  ``J >= 3`` pairs whose relative motions ``B_1^T B_j`` do not all share an axis, more than
+  the classical condition (two non-parallel motions) that :func:`~replication.solvers.chordal_optimal`
+  or :func:`~replication.solvers.park_martin` need.
+
+Two ways to run it:
+
+* ``iterations=N`` (the paper's protocol, notebooks 01-04): exactly ``N`` iterations, every
+  iterate recorded, a :class:`ConvergenceWarning` if the last one is not at the fixed point;
+* ``iterations="auto"`` (the default of :func:`two_step` and of ``solve("two_step_*")``):
+  iterate until the projected estimate is at the iteration's limit (within ``tol``); where
+  that would take more than ``cap`` iterations (``sigma_2 / sigma_1`` of ``K`` close to 1, or
+  a start orthogonal to the limit), finish from the closed-form limit (the SVD of ``K``) and
+  say so with an :class:`IterationCapWarning` naming the measured cause. A repeated top
+  singular value (no unique limit; always with ``J = 2``) raises ``ValueError``.
 """
 from __future__ import annotations
 
@@ -32,35 +50,40 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..handeye import MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
-from ..so3 import (
-    check_rotation_matrices, chordal_to_angle_deg, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign,
-)
+from ..handeye import Motions, MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
+from ..so3 import check_init, chordal_to_angle_deg, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign
 from ._registry import register
+from ._warnings import ConvergenceWarning, IterationCapWarning
 
-__all__ = ["TwoStepResult", "ConvergenceWarning", "two_step", "two_step_fixed_point", "two_step_iterations"]
+__all__ = ["TwoStepResult", "ConvergenceWarning", "IterationCapWarning", "two_step", "two_step_fixed_point",
+           "REPEATED_TOL"]
 
 REFERENCE = (
     "Z.-Q. Zhang, 'Cameras and Inertial/Magnetic Sensor Units Alignment Calibration', "
     "Sec. II-B, eqs. (11)-(19)"
 )
 VARIANTS = ("corrected", "paper")
-
-
-class ConvergenceWarning(RuntimeWarning):
-    """The two-step iteration stopped before reaching its fixed point."""
+#: ``1 - sigma_2 / sigma_1`` of ``K`` at or below which the top singular value counts as repeated
+#: (no unique limit). The limit's rounding error is about ``eps / (sigma_1 - sigma_2)``.
+REPEATED_TOL = 1e-8
+#: ``|<init, v1>| / ||init||`` below which a start counts as orthogonal to the limit.
+ORTHOGONAL_TOL = 1e-8
 
 
 @dataclass(frozen=True)
 class TwoStepResult:
-    """Per-iteration output of :func:`two_step`; iteration ``n = 1 .. N`` is index ``n - 1``.
+    """Output of :func:`two_step`; iteration ``n = 1 .. N`` is index ``n - 1``.
+
+    With ``iterations="auto"`` only the final estimate is kept (``N`` axis of length 1)
+    and ``n_iterations`` says how many iterations each problem took.
 
     Attributes
     ----------
     right, left : ndarray, shape (..., N, 3, 3)
         Projected estimates ``R^r_{0,n}`` and ``R^l_{0,n}`` (eqs. (16)-(19)).
     right_raw, left_raw : ndarray, shape (..., N, 3, 3)
-        Raw iterates of eqs. (14) and (15), before projection.
+        Raw iterates of eqs. (14) and (15), before projection (``"auto"``: unit-norm
+        iterates, or the singular vectors where the limit came from the closed form).
     cost_right, cost_left : ndarray, shape (..., N)
         Cost of eq. (8) at the projected estimates.
     init : ndarray, shape (..., 3, 3)
@@ -69,6 +92,11 @@ class TwoStepResult:
         Where the projected iterates converge (from the SVD of ``K``).
     observability : MotionObservability
     variant : str
+    n_iterations : ndarray of int, shape (...)
+        Iterations run per problem.
+    closed_form : ndarray of bool, shape (...)
+        ``"auto"`` only: the estimate is the closed-form limit (the iteration would have
+        needed more than its cap); always False for a fixed ``N``.
     """
 
     right: np.ndarray
@@ -82,6 +110,8 @@ class TwoStepResult:
     fixed_point_left: np.ndarray
     observability: MotionObservability
     variant: str
+    n_iterations: np.ndarray
+    closed_form: np.ndarray
 
     @property
     def R_right(self) -> np.ndarray:
@@ -116,26 +146,56 @@ def _project(X: np.ndarray, variant: str) -> np.ndarray:
     return nearest_rotation_up_to_sign(X)
 
 
-def _check_init(init, batch_shape: tuple) -> np.ndarray:
-    if init is None:
-        return np.broadcast_to(np.eye(3), batch_shape + (3, 3))
-    init = check_rotation_matrices(init, "init")
-    try:
-        return np.broadcast_to(init, batch_shape + (3, 3))
-    except ValueError:
+def _check_variant(variant: str) -> None:
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+
+
+def _fixed_point(m: Motions, init: np.ndarray, variant: str):
+    """Projected limits ``(right, left)`` and the signed unit limits ``(u, v)`` from the SVD of ``K``."""
+    U, _, Vt = m.svd
+    u1, v1 = U[..., :, 0], Vt[..., 0, :]
+    # the iteration keeps the sign of <init, v1>; u1 is paired with v1 (K v1 = sigma1 u1)
+    c = np.where(np.einsum("...i,...i->...", vec(init), v1) < 0, -1.0, 1.0)[..., None]
+    u, v = c * u1, c * v1
+    return _project(unvec(u), variant), _project(unvec(v), variant), u, v
+
+
+def _first(mask) -> str:
+    mask = np.asarray(mask)
+    return f" (first at batch index {tuple(int(i) for i in np.argwhere(mask)[0])})" if mask.ndim else ""
+
+
+def _check_unique_limit(m: Motions) -> None:
+    """Raise ``ValueError`` where the top singular value of ``K`` is repeated (the limit depends on the start)."""
+    if m.J == 2:
         raise ValueError(
-            f"init must have shape (3, 3) or broadcast to the batch shape {batch_shape + (3, 3)}, "
-            f"got {init.shape}"
-        ) from None
+            "the two-step iteration cannot determine R0 from J = 2 motion pairs: the top singular value of K "
+            "is then triple whatever the motions (K^T K has the eigenvalue 1 on R0 span{I, c c^T, [c]x}, c the "
+            "axis of B_1^T B_2), so the limit is R0 Rot(c, phi) with phi set by the start. Add motion pairs, or "
+            "use a solver that needs only two non-parallel motions (chordal_optimal, park_martin, andreff)"
+        )
+    s = m.svd[1]
+    gap = 1.0 - s[..., 1] / s[..., 0]
+    repeated = gap <= REPEATED_TOL
+    if np.any(repeated):
+        raise ValueError(
+            f"the two-step iteration has no unique limit for {int(np.sum(repeated))} of {repeated.size} "
+            f"problems{_first(repeated)}: the top singular value of K is repeated (sigma_2 / sigma_1 = 1 - "
+            f"{float(np.min(gap)):.2g}, at most 1 - {REPEATED_TOL:g}), so the limit depends on the start. The "
+            f"relative motions B_1^T B_j nearly share one axis; add motions about other axes or use "
+            f"chordal_optimal"
+        )
 
 
-def two_step_fixed_point(A, B, init=None, *, variant: str = "corrected"):
+def two_step_fixed_point(A, B=None, init=None, *, variant: str = "corrected"):
     """Limits of the projected two-step iterates, from the SVD of ``K``.
 
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera / sensor relative rotations (see :func:`two_step`).
+        Camera / sensor relative rotations (see :func:`two_step`), or a
+        :class:`~replication.handeye.Motions` as ``A`` (``B=None``).
     init : None or array_like, shape (..., 3, 3)
         ``R^l_{0,0}``; only the sign of ``<init, v1>`` matters, and only for
         ``variant="paper"``.
@@ -145,111 +205,19 @@ def two_step_fixed_point(A, B, init=None, *, variant: str = "corrected"):
     -------
     (right, left) : tuple of ndarray, shape (..., 3, 3)
         Limits of ``R^r_{0,n}`` and ``R^l_{0,n}``: the projections of the top
-        left (``u1``) and right (``v1``) singular vectors of ``K``.
+        left (``u1``) and right (``v1``) singular vectors of ``K``. Where the top
+        singular value is repeated (e.g. motions about one axis) the limit depends on
+        the start and this is one of them (see the module notes).
     """
     _check_variant(variant)
-    _, _, K, _ = prepare_motions(A, B, require_observable=False)
-    init = _check_init(init, K.shape[:-2])
-    return _fixed_point(K, init, variant)
+    m = prepare_motions(A, B, require_observable=False)
+    return _fixed_point(m, check_init(init, m.batch_shape), variant)[:2]
 
 
-def two_step_iterations(A, B, *, reduction: float = 1e-10, cap: int = 20000) -> int:
-    """Iterations the two-step method needs to reach its fixed point on every problem of a batch.
-
-    From :meth:`replication.handeye.MotionObservability.iterations_for` with
-    ``inconsistent=True`` (also covers outlier pairs), at least 50 (the paper's count) and
-    at most ``cap``.
-    """
-    obs = prepare_motions(A, B, require_observable=False)[3]
-    need = obs.iterations_for(reduction, inconsistent=True)
-    return int(np.clip(np.ceil(np.max(need)), 50, cap))
-
-
-def _fixed_point(K: np.ndarray, init: np.ndarray, variant: str):
-    U, _, Vt = np.linalg.svd(K)
-    u1, v1 = U[..., :, 0], Vt[..., 0, :]
-    # the iteration keeps the sign of <init, v1>; u1 is paired with v1 (K v1 = sigma1 u1)
-    c = np.where(np.einsum("...i,...i->...", vec(init), v1) < 0, -1.0, 1.0)
-    right = _project(unvec(c[..., None] * u1), variant)
-    left = _project(unvec(c[..., None] * v1), variant)
-    return right, left
-
-
-def _check_variant(variant: str) -> None:
-    if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-
-
-def two_step(
-    A,
-    B,
-    *,
-    iterations: int,
-    init=None,
-    variant: str = "corrected",
-    convergence_tol_deg: float = 1e-3,
-) -> TwoStepResult:
-    """The paper's two-step iteration, every iterate recorded (eqs. (11)-(19)).
-
-    Solves ``A_j R0 = R0 B_j`` (eq. (7)) for ``R0`` = camera_from_sensor, with
-    ``A_j = Delta R_{c,j}`` (camera) and ``B_j = Delta R_{i,j}`` (sensor).
-
-    Parameters
-    ----------
-    A : array_like, shape (..., J, 3, 3)
-        Camera relative rotations; ``H1`` of eq. (11) stacks them.
-    B : array_like, shape (..., J, 3, 3)
-        Sensor relative rotations; ``H2`` of eq. (12) puts them side by side.
-    iterations : int
-        Number ``N >= 1`` of iterations (steps 2-4 of the paper).
-    init : None or array_like, shape (3, 3) or (..., 3, 3)
-        ``R^l_{0,0}``, a rotation. The paper does not state it; ``None`` means the
-        identity.
-    variant : {"corrected", "paper"}
-        ``"paper"``: exactly as printed — raw iterates projected by eq. (17)
-        ``U A^T`` (may be a reflection), no check for degenerate motion.
-        ``"corrected"`` (default): the raw iterate is multiplied by
-        ``sign(det)`` and projected onto SO(3), and degenerate motion raises.
-        The two agree whenever ``<init, R0> > 0`` and the motions are not
-        degenerate; see the module notes.
-    convergence_tol_deg : float
-        A :class:`ConvergenceWarning` is issued when a final estimate is farther
-        than this from the iteration's fixed point (too few iterations for the
-        motions' ``spectral_ratio``).
-
-    Returns
-    -------
-    TwoStepResult
-
-    Raises
-    ------
-    ValueError
-        Malformed input (shapes, NaN, non-rotations, ``J < 2``), degenerate
-        motion (all rotation axes parallel; ``variant="corrected"`` only),
-        ``iterations < 1``, a bad ``init`` or ``variant``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from replication.so3 import random_rotations
-    >>> rng = np.random.default_rng(0)
-    >>> R0 = random_rotations(rng, ())
-    >>> A = random_rotations(rng, 20)
-    >>> B = R0.T @ A @ R0            # Delta R_i = R0^T Delta R_c R0
-    >>> res = two_step(A, B, iterations=30)
-    >>> bool(np.linalg.norm(res.R_right - R0) < 1e-9)
-    True
-    """
-    _check_variant(variant)
-    if int(iterations) != iterations or iterations < 1:
-        raise ValueError(f"iterations must be a positive integer, got {iterations!r}")
-    iterations = int(iterations)
-    # K: vec(V2H(H1 X) H2^+) = K vec(X). The paper has no guard against degenerate motion; nor has "paper".
-    A, B, K, observability = prepare_motions(A, B, require_observable=(variant == "corrected"))
-
+def _history(m: Motions, init: np.ndarray, iterations: int, variant: str):
+    """The paper's protocol: exactly ``iterations`` steps, every raw iterate recorded."""
+    K = m.K
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
-    init = _check_init(init, K.shape[:-2])
-
     # The printed iteration never rescales: its iterates shrink like sigma_1(K)^(2n) and, with
     # inconsistent data (sigma_1 well below 1, e.g. outlier pairs), underflow to 0 after a few hundred
     # iterations. We iterate on unit vectors and carry the scale separately; the projections (16)-(19)
@@ -268,47 +236,240 @@ def two_step(
         x_l, scale = x_l / n_l[..., None], scale * n_l
         unit_l.append(x_l)
         scales_l.append(scale)
-    unit_r = unvec(np.stack(unit_r, axis=-2))
-    unit_l = unvec(np.stack(unit_l, axis=-2))
-    right_raw = unit_r * np.stack(scales_r, axis=-1)[..., None, None]
-    left_raw = unit_l * np.stack(scales_l, axis=-1)[..., None, None]
+    unit = unvec(np.stack(unit_r + unit_l, axis=-2))  # (..., 2N, 3, 3): one SVD call for both sides
+    scales = np.stack(scales_r + scales_l, axis=-1)[..., None, None]
+    projected = _project(unit, variant)  # eqs. (16)-(19)
+    N = iterations
+    return projected[..., :N, :, :], projected[..., N:, :, :], (unit * scales)[..., :N, :, :], \
+        (unit * scales)[..., N:, :, :]
 
-    right = _project(unit_r, variant)  # eqs. (16)-(18)
-    left = _project(unit_l, variant)  # eqs. (16), (17), (19)
-    K_it, J = K[..., None, :, :], A.shape[-3]
-    fp_right, fp_left = _fixed_point(K, init, variant)
+
+def _auto(m: Motions, init: np.ndarray, variant: str, fp_r, fp_l, u, v, tol: float, cap: int):
+    """Iterate until the projected estimates are within ``tol`` of their limits, at most ``cap`` iterations.
+
+    Returns ``(right, left, raw_right, raw_left, n_iterations, closed_form, orthogonal)`` over the
+    flattened batch. Problems that do not converge within ``cap`` get the closed-form limits.
+    """
+    batch = m.batch_shape
+    n = int(np.prod(batch, dtype=int))
+    K = m.K.reshape(n, 9, 9)
+    Kt = np.swapaxes(K, -1, -2)
+    fr, fl = fp_r.reshape(n, 3, 3), fp_l.reshape(n, 3, 3)
+    uf, vf = u.reshape(n, 9), v.reshape(n, 9)
+    x = vec(init).reshape(n, 9)
+    x = x / np.linalg.norm(x, axis=-1, keepdims=True)
+    orthogonal = np.abs(np.einsum("ni,ni->n", x, vf)) < ORTHOGONAL_TOL
+    # a unit iterate within d of the unit limit is projected within about lip * d of the projected limit
+    lip = 2.0 / np.sum(np.linalg.svd(unvec(vf), compute_uv=False)[:, 1:], axis=-1)
+    R_r, R_l = fr.copy(), fl.copy()
+    raw_r, raw_l = unvec(uf).copy(), unvec(vf).copy()
+    its = np.zeros(n, dtype=int)
+    done = orthogonal.copy()
+    active = np.flatnonzero(~done)
+    xa = x[active]
+    k, next_check = 0, 1
+    while active.size and k < cap:
+        Ka, Kta = K[active], Kt[active]
+        xr = np.einsum("nab,nb->na", Ka, xa)  # eq. (14)
+        xr /= np.linalg.norm(xr, axis=-1, keepdims=True)
+        xa = np.einsum("nab,nb->na", Kta, xr)  # eq. (15)
+        xa /= np.linalg.norm(xa, axis=-1, keepdims=True)
+        k += 1
+        # cheap test every iteration (distance of the unit vectors), projected test on a geometric schedule
+        vec_close = lip[active] * np.maximum(np.linalg.norm(xr - uf[active], axis=-1),
+                                             np.linalg.norm(xa - vf[active], axis=-1)) <= tol
+        if vec_close.all() or k >= next_check or k == cap:
+            next_check = k + max(1, k // 4)
+            Pr, Pl = _project(unvec(xr), variant), _project(unvec(xa), variant)  # eqs. (16)-(19)
+            dist = np.maximum(np.linalg.norm(Pr - fr[active], axis=(-2, -1)),
+                              np.linalg.norm(Pl - fl[active], axis=(-2, -1)))
+            conv = vec_close | (dist <= tol)
+            idx = active[conv]
+            R_r[idx], R_l[idx] = Pr[conv], Pl[conv]
+            raw_r[idx], raw_l[idx] = unvec(xr[conv]), unvec(xa[conv])
+            its[idx] = k
+            done[idx] = True
+            active, xa = active[~conv], xa[~conv]
+    its[active] = k
+    closed = ~done | orthogonal
+    shape = lambda a, tail: a.reshape(batch + tail)
+    return (shape(R_r, (3, 3)), shape(R_l, (3, 3)), shape(raw_r, (3, 3)), shape(raw_l, (3, 3)),
+            shape(its, ()), shape(closed, ()), shape(orthogonal, ()))
+
+
+def _warn_closed_form(m: Motions, closed, orthogonal, cap: int, tol: float, stacklevel: int) -> None:
+    if not np.any(closed):
+        return
+    ratio = m.observability.spectral_ratio
+    slow = closed & ~orthogonal
+    causes = []
+    if np.any(slow):
+        worst = float(np.max(ratio[slow]))
+        rate = float(np.max(m.observability.two_step_rate[slow]))
+        causes.append(
+            f"{int(np.sum(slow))} would need more than {cap} iterations (measured: sigma_2 / sigma_1 of K up to "
+            f"{worst:.6g}, so the raw iterate's error shrinks by its square per iteration; projected-error rate "
+            f"sigma_max(mean_j B_j)^2 up to {rate:.6g})"
+        )
+    if np.any(orthogonal):
+        causes.append(
+            f"{int(np.sum(orthogonal))} started orthogonal to the limit (|<init, v1>| / ||init|| < "
+            f"{ORTHOGONAL_TOL:g}), from which the iteration cannot reach it"
+        )
+    warnings.warn(
+        f"two_step: of {np.size(closed)} problems, {' and '.join(causes)}; their estimate is the iteration's "
+        f"limit computed in closed form from the SVD of K",
+        IterationCapWarning, stacklevel=stacklevel,
+    )
+
+
+def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "corrected",
+                   convergence_tol_deg: float = 1e-3, tol: float = 1e-12, cap: int = 1000,
+                   stacklevel: int = 3) -> TwoStepResult:
+    """:func:`two_step` on validated motions."""
+    _check_variant(variant)
+    auto = isinstance(iterations, str)
+    if auto and iterations != "auto":
+        raise ValueError(f"iterations must be a positive integer or 'auto', got {iterations!r}")
+    if not auto and (int(iterations) != iterations or iterations < 1):
+        raise ValueError(f"iterations must be a positive integer or 'auto', got {iterations!r}")
+    if int(cap) != cap or cap < 1:
+        raise ValueError(f"cap must be a positive integer, got {cap!r}")
+    if not tol > 0:
+        raise ValueError(f"tol must be positive, got {tol!r}")
+    if variant == "corrected":  # the paper has no guard against degenerate motion; nor has "paper"
+        m.require(observable=True)
+    if auto:
+        _check_unique_limit(m)
+    init = check_init(init, m.batch_shape)
+    fp_r, fp_l, u, v = _fixed_point(m, init, variant)
+    observability = m.observability
+    if auto:
+        right, left, raw_r, raw_l, its, closed, orthogonal = _auto(m, init, variant, fp_r, fp_l, u, v, tol, int(cap))
+        _warn_closed_form(m, closed, orthogonal, int(cap), tol, stacklevel + 1)
+        right, left, raw_r, raw_l = (a[..., None, :, :] for a in (right, left, raw_r, raw_l))
+    else:
+        iterations = int(iterations)
+        right, left, raw_r, raw_l = _history(m, init, iterations, variant)
+        its = np.full(m.batch_shape, iterations)
+        closed = np.zeros(m.batch_shape, dtype=bool)
+    K_it, J = m.K[..., None, :, :], m.J
     result = TwoStepResult(
         right=right,
         left=left,
-        right_raw=right_raw,
-        left_raw=left_raw,
+        right_raw=raw_r,
+        left_raw=raw_l,
         cost_right=handeye_cost_kron(right, K_it, J),  # eq. (8)
         cost_left=handeye_cost_kron(left, K_it, J),
         init=init,
-        fixed_point_right=fp_right,
-        fixed_point_left=fp_left,
+        fixed_point_right=fp_r,
+        fixed_point_left=fp_l,
         observability=observability,
         variant=variant,
+        n_iterations=its,
+        closed_form=closed,
     )
-    gap = result.distance_to_fixed_point_deg
-    if np.any(gap > convergence_tol_deg):
-        need = float(np.max(observability.iterations_for(1e-8)))
-        hint = (f"the motions need about {need:.0f} iterations (small or nearly single-axis motions)"
-                if np.isfinite(need) else "it never converges: the motions share a rotation axis")
-        warnings.warn(
-            f"two_step stopped {float(np.max(gap)):.3g} deg from its fixed point after {iterations} "
-            f"iterations ({int(np.sum(gap > convergence_tol_deg))} of {gap.size} problems); {hint}",
-            ConvergenceWarning,
-            stacklevel=2,
-        )
+    if not auto:
+        gap = result.distance_to_fixed_point_deg
+        late = gap > convergence_tol_deg
+        if np.any(late):
+            ratio = float(np.max(observability.spectral_ratio[late]))
+            rate = float(np.max(observability.two_step_rate[late]))
+            need = float(np.max(observability.iterations_for(1e-8)[late]))
+            warnings.warn(
+                f"two_step stopped {float(np.max(gap)):.3g} deg from its fixed point after {iterations} "
+                f"iterations ({int(np.sum(late))} of {gap.size} problems); the motions need about {need:.3g} "
+                f"iterations (measured: projected-error rate sigma_max(mean_j B_j)^2 up to {rate:.6g}, "
+                f"sigma_2 / sigma_1 of K up to {ratio:.6g}); use iterations='auto' for the limit",
+                ConvergenceWarning,
+                stacklevel=stacklevel,
+            )
     return result
 
 
-@register("two_step_right", reference=REFERENCE + ", estimate R^r (eq. (18))")
-def _solve_two_step_right(A, B, *, iterations: int = 50, **options):
-    return two_step(A, B, iterations=iterations, **options).R_right
+def two_step(
+    A,
+    B=None,
+    *,
+    iterations="auto",
+    init=None,
+    variant: str = "corrected",
+    convergence_tol_deg: float = 1e-3,
+    tol: float = 1e-12,
+    cap: int = 1000,
+) -> TwoStepResult:
+    """The paper's two-step iteration (eqs. (11)-(19)), run to its limit or for a fixed count.
+
+    Solves ``A_j R0 = R0 B_j`` (eq. (7)) for ``R0`` = camera_from_sensor, with
+    ``A_j = Delta R_{c,j}`` (camera) and ``B_j = Delta R_{i,j}`` (sensor).
+
+    Parameters
+    ----------
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations; ``H1`` of eq. (11) stacks them (or prepared motions, ``B=None``).
+    B : array_like, shape (..., J, 3, 3)
+        Sensor relative rotations; ``H2`` of eq. (12) puts them side by side.
+    iterations : "auto" or int
+        ``"auto"`` (default): iterate until the projected estimates are within ``tol``
+        (Frobenius) of the iteration's limit; problems that would need more than ``cap``
+        iterations (or start orthogonal to the limit) get the closed-form limit, with an
+        :class:`IterationCapWarning` naming the measured cause; only the final estimate
+        is recorded. An integer ``N >= 1``: the paper's protocol, exactly ``N`` iterations
+        (steps 2-4), every iterate recorded.
+    init : None or array_like, shape (3, 3) or (..., 3, 3)
+        ``R^l_{0,0}``, a rotation. The paper does not state it; ``None`` means the
+        identity.
+    variant : {"corrected", "paper"}
+        ``"paper"``: exactly as printed — raw iterates projected by eq. (17)
+        ``U A^T`` (may be a reflection), no check for degenerate motion.
+        ``"corrected"`` (default): the raw iterate is multiplied by
+        ``sign(det)`` and projected onto SO(3), and degenerate motion raises.
+        The two agree whenever ``<init, R0> > 0`` and the motions are not
+        degenerate; see the module notes.
+    convergence_tol_deg : float
+        Fixed ``N`` only: a :class:`ConvergenceWarning` is issued when a final estimate
+        is farther than this from the iteration's fixed point.
+    tol : float
+        ``"auto"`` only: convergence threshold on ``||R_n - R_limit||_F``.
+    cap : int
+        ``"auto"`` only: most iterations before finishing from the closed form.
+
+    Returns
+    -------
+    TwoStepResult
+
+    Raises
+    ------
+    ValueError
+        Malformed input (shapes, NaN, non-rotations, ``J < 2``), degenerate
+        motion (all rotation axes parallel; ``variant="corrected"`` only), a bad
+        ``iterations``, ``init``, ``variant``, ``tol`` or ``cap``; with ``"auto"``
+        also ``J = 2`` or a repeated top singular value of ``K`` (no unique limit).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from replication.so3 import random_rotations
+    >>> rng = np.random.default_rng(0)
+    >>> R0 = random_rotations(rng, ())
+    >>> A = random_rotations(rng, 20)
+    >>> B = R0.T @ A @ R0            # Delta R_i = R0^T Delta R_c R0
+    >>> res = two_step(A, B)         # iterations="auto": run to the limit
+    >>> bool(np.linalg.norm(res.R_right - R0) < 1e-9), int(res.n_iterations) < 50
+    (True, True)
+    >>> len(two_step(A, B, iterations=30).right)   # the paper's protocol: every iterate
+    30
+    """
+    m = prepare_motions(A, B, require_observable=False)
+    return _two_step_core(m, iterations=iterations, init=init, variant=variant,
+                          convergence_tol_deg=convergence_tol_deg, tol=tol, cap=cap)
 
 
-@register("two_step_left", reference=REFERENCE + ", estimate R^l (eq. (19))")
-def _solve_two_step_left(A, B, *, iterations: int = 50, **options):
-    return two_step(A, B, iterations=iterations, **options).R_left
+@register("two_step_right", reference=REFERENCE + ", estimate R^r (eq. (18))", min_motions=3)
+def _solve_two_step_right(motions, **options):
+    return _two_step_core(motions, stacklevel=4, **options).R_right
+
+
+@register("two_step_left", reference=REFERENCE + ", estimate R^l (eq. (19))", min_motions=3)
+def _solve_two_step_left(motions, **options):
+    return _two_step_core(motions, stacklevel=4, **options).R_left
