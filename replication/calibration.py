@@ -239,7 +239,9 @@ def every_solver(A, B, reference, *, methods=None, opencv_pairs=None) -> "pandas
     Returns
     -------
     pandas.DataFrame
-        Index ``method``; columns ``error_deg``, ``n_pairs``, ``seconds``.
+        Index ``method``; columns ``error_deg``, ``n_pairs``, ``warnings`` (the classes of the
+        solver's warnings other than :class:`~replication.solvers.ObservabilityWarning`, which
+        concerns the data set, not the solver), ``seconds``.
     """
     import time
 
@@ -251,11 +253,13 @@ def every_solver(A, B, reference, *, methods=None, opencv_pairs=None) -> "pandas
     for name in available() if methods is None else methods:
         a, b = opencv_pairs if (opencv_pairs is not None and name.startswith("opencv_")) else (A, B)
         start = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ObservabilityWarning)  # reported once per data set instead
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ReplicationWarning)
             R = solve(name, a, b)
+        issued = sorted({w.category.__name__ for w in caught if issubclass(w.category, ReplicationWarning)
+                         and not issubclass(w.category, ObservabilityWarning)})
         rows.append({"method": name, "error_deg": float(angle_between_deg(R, np.asarray(reference))),
-                     "n_pairs": len(a), "seconds": time.perf_counter() - start})
+                     "n_pairs": len(a), "warnings": ", ".join(issued), "seconds": time.perf_counter() - start})
     return pd.DataFrame(rows).set_index("method")
 
 
