@@ -2,6 +2,7 @@
 
 ``python -m replication reproduce`` re-executes every notebook and writes ``results/``.
 ``python -m replication calibrate --camera FILE --sensor FILE`` calibrates a real rig.
+``python -m replication fetch-data DEST`` downloads and verifies the real recordings notebook 07 reads.
 """
 from __future__ import annotations
 
@@ -161,6 +162,15 @@ def main(argv: list[str] | None = None) -> int:
     gen.add_argument("--out", help="output folder (default: data/lab of this project)")
     gen.add_argument("--seed", type=int, help="LabSettings.seed (default: that of the committed data)")
     gen.set_defaults(func=generate_lab_command)
+    from .fetch import FETCH_HELP, fetch_command
+
+    fet = sub.add_parser("fetch-data", help="download and verify the real recordings (data/real_data_manifest.csv)",
+                         description=FETCH_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    fet.add_argument("dest", help="folder to write the recordings to (created if missing)")
+    fet.add_argument("--mirror", help="take the files from this local copy (same layout) instead of downloading")
+    fet.add_argument("--check", action="store_true", help="only verify the files already in DEST")
+    fet.add_argument("--only", nargs="*", help="only these folders of the manifest (e.g. tabb_rwhe_ds1)")
+    fet.set_defaults(func=fetch_command)
     args = parser.parse_args(argv)
     return args.func(args)
 

@@ -243,6 +243,18 @@ class LabSettings:
                 off[name] = tuple(0.0 for _ in value) if isinstance(value, tuple) else 0.0
         return dataclasses.replace(self, **off)
 
+    @property
+    def noise_free_dynamic_attitude(self) -> bool:
+        """Whether the accelerometer and magnetometer carry no random noise.
+
+        The Madgwick filter's correction is a *normalised* gradient step of fixed size; with
+        noise-free accelerometer and magnetometer the gradient is zero up to rounding and its
+        direction, hence the filter's chatter in the dynamic trial, is set by rounding: Table II's
+        statistics then change at the 1e-3 deg level between CPUs and BLAS kernels
+        (demonstrated in ``tests/test_lab.py``). With either noise on they do not.
+        """
+        return not np.any(self.acc_noise_density_ug) and not self.mag_noise_ut
+
     def exact(self) -> "LabSettings":
         """Every error source switched off (the chain must then recover ``R0``)."""
         return self.without(*SOURCES)
@@ -766,7 +778,7 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
 
 def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
     """One line of numbers per experiment: per method the mean true ``R0`` error (``true_``; and
-    ``true_ok_`` over the data sets within ``failure_deg``), the
+    ``true_clean_`` over the data sets on which the solver issued no warning), the
     number of data sets whose estimate is more than ``failure_deg`` from the truth, the
     number of data sets on which the solver warned, the
     mean spread around the method's mean estimate (Fig. 6) and the Table II RMS averaged
@@ -776,8 +788,9 @@ def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
     row = {}
     for name in result.estimates:
         err = per.get_group(name)["true_error_deg"]
+        clean = per.get_group(name)["warnings"] == ""
         row[f"true_{name}"] = err.mean()
-        row[f"true_ok_{name}"] = err[err <= failure_deg].mean()
+        row[f"true_clean_{name}"] = err[clean].mean() if clean.any() else np.nan
         row[f"failed_{name}"] = int((err > failure_deg).sum())
         row[f"warned_{name}"] = int((per.get_group(name)["warnings"] != "").sum())
         row[f"spread_{name}"] = per.get_group(name)["from_mean_deg"].mean()
@@ -796,14 +809,17 @@ def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict 
     Returns
     -------
     pandas.DataFrame
-        Index ``case``; columns of :func:`summarize`.
+        Index ``case``; columns ``noise_free_dynamic_attitude`` (see
+        :attr:`LabSettings.noise_free_dynamic_attitude`: Table II's statistics of that case are
+        set by rounding at the 1e-3 deg level) and those of :func:`summarize`.
     """
     sources = list(SOURCES) if sources is None else list(sources)
     cases = [("all sources", settings)]
     cases += [(f"without {s}", settings.without(s)) for s in sources]
     cases += [(f"only {s}", settings.without(*[o for o in sources if o != s])) for s in sources]
     cases.append(("no sources", settings.without(*sources)))
-    rows = [{"case": label, **summarize(run_lab(simulate_lab(st), solvers))} for label, st in cases]
+    rows = [{"case": label, "noise_free_dynamic_attitude": st.noise_free_dynamic_attitude,
+             **summarize(run_lab(simulate_lab(st), solvers))} for label, st in cases]
     return pd.DataFrame(rows).set_index("case")
 
 

@@ -2,8 +2,10 @@
 
 ``setup()`` fixes print precision and plot style (the notebooks' first code cell).
 ``save_table`` writes CSV + Markdown to ``results/tables/``; ``save_figure``
-writes PNG to ``results/figures/``. ``$REPLICATION_RESULTS_DIR`` overrides
-``results/`` (the test suite points it at a temporary folder).
+writes PNG to ``results/figures/`` and shows it in the notebook as that PNG, whatever
+the matplotlib backend (``MPLBACKEND=Agg``, common in CI, shows nothing by itself).
+``$REPLICATION_RESULTS_DIR`` overrides ``results/`` (the test suite points it at a
+temporary folder). Files are written to a temporary name and renamed, never half-written.
 """
 from __future__ import annotations
 
@@ -62,21 +64,49 @@ def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:
     """
     out = results_dir() / "tables"
     out.mkdir(parents=True, exist_ok=True)
-    csv = out / f"{name}.csv"
-    df.to_csv(csv)
     flat = df.copy()
     if isinstance(flat.columns, pd.MultiIndex):  # ("ours_right", "mean") -> "ours_right mean"
         flat.columns = [" ".join(str(part) for part in col) for col in flat.columns]
     flat = flat.reset_index() if any(name is not None for name in flat.index.names) else flat
-    (out / f"{name}.md").write_text(flat.to_markdown(floatfmt=floatfmt, index=False) + "\n")
+    _write_atomic(out / f"{name}.csv", df.to_csv().encode())
+    _write_atomic(out / f"{name}.md", (flat.to_markdown(floatfmt=floatfmt, index=False) + "\n").encode())
 
 
 def save_figure(fig, name: str) -> None:
-    """Write ``fig`` as ``results/figures/<name>.png`` (returns nothing, like :func:`save_table`)."""
+    """Write ``fig`` as ``results/figures/<name>.png`` and show that PNG in the notebook; close ``fig``.
+
+    Returns nothing, like :func:`save_table`. The figure is displayed explicitly (an
+    ``image/png`` output) and closed, so the stored output is the same with the inline
+    backend and with ``MPLBACKEND=Agg``.
+    """
+    import io
+
+    import matplotlib.pyplot as plt
+
     out = results_dir() / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    path = out / f"{name}.png"
-    fig.savefig(path, bbox_inches="tight", metadata={"Software": None})
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", bbox_inches="tight", metadata={"Software": None})
+    png = buffer.getvalue()
+    _write_atomic(out / f"{name}.png", png)
+    plt.close(fig)
+    try:
+        from IPython import get_ipython
+        from IPython.display import Image, display
+    except ImportError:  # pragma: no cover - IPython is a dependency
+        return
+    if get_ipython() is not None:
+        display(Image(data=png, format="png"))
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    tmp = path.with_name(path.name + ".part")
+    try:
+        tmp.write_bytes(data)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
 
 
 def best_of(fn, repeat: int = 7) -> float:

@@ -35,6 +35,8 @@ __all__ = [
     "GyroStream",
     "DEFAULT_REAL_DATA",
     "data_root",
+    "StereoCalibration",
+    "load_orbslam3_stereo",
     "real_data_available",
     "load_tum_trajectory",
     "load_euroc_imu",
@@ -124,8 +126,9 @@ def data_root(path=None) -> Path:
     root = Path(path or os.environ.get("REPLICATION_REAL_DATA") or DEFAULT_REAL_DATA)
     if not root.is_dir():
         raise FileNotFoundError(
-            f"real-data folder {root} not found; pass its path or set REPLICATION_REAL_DATA "
-            f"(CI uses ../shared/data/real)"
+            f"real-data folder {root} not found; get the recordings with 'python -m replication fetch-data DEST' "
+            f"(data/real_data_manifest.csv lists them) and set REPLICATION_REAL_DATA=DEST, or pass the folder's "
+            f"path (CI uses ../shared/data/real)"
         )
     return root
 
@@ -394,3 +397,90 @@ def load_reference(path, camera: str = "cam0") -> np.ndarray:
             return load_euroc_sensor_yaml(path)
         return load_kalibr_camchain(path, camera)
     return load_tabb_solution(path)
+
+
+@dataclass(frozen=True)
+class StereoCalibration:
+    """A stereo rig's calibration as ORB-SLAM3 reads it (``Examples/Stereo/*.yaml``, pinhole model).
+
+    Attributes
+    ----------
+    K1, K2 : ndarray (3, 3)
+        Camera matrices of the left (1) and right (2) camera.
+    dist1, dist2 : ndarray (4,)
+        Radial-tangential distortion ``k1, k2, p1, p2``.
+    size : (int, int)
+        Image width and height.
+    R_c1_c2, t_c1_c2 : ndarray (3, 3), (3,)
+        ``Stereo.T_c1_c2``: camera 2 in camera 1 (``x_c1 = R x_c2 + t``).
+    source : str
+    """
+
+    K1: np.ndarray
+    dist1: np.ndarray
+    K2: np.ndarray
+    dist2: np.ndarray
+    size: tuple
+    R_c1_c2: np.ndarray
+    t_c1_c2: np.ndarray
+    source: str
+
+    def rectification_rotation(self) -> np.ndarray:
+        """``R1`` of ``cv2.stereoRectify``: the rotation from the raw left camera to the rectified one.
+
+        ORB-SLAM3 (v1.0) rectifies a pinhole stereo pair itself and reports the *rectified* left
+        camera, so a stereo trajectory's camera is ``R1`` times the raw ``cam0``:
+        ``camera_from_sensor`` becomes ``R1 R0``.
+        """
+        import cv2
+
+        R_c2_c1 = self.R_c1_c2.T  # cv2.stereoRectify takes x_c2 = R x_c1 + T
+        R1 = cv2.stereoRectify(self.K1, self.dist1, self.K2, self.dist2, self.size, R_c2_c1,
+                               -R_c2_c1 @ self.t_c1_c2)[0]
+        return np.asarray(R1, dtype=float)
+
+
+def load_orbslam3_stereo(path) -> StereoCalibration:
+    """Read an ORB-SLAM3 stereo settings file (OpenCV ``FileStorage`` YAML, ``Camera.type: "PinHole"``).
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        Missing file, a missing or malformed entry (named), a camera type other than PinHole, or a
+        ``Stereo.T_c1_c2`` whose rotation is not a rotation.
+    """
+    import cv2
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file" + (" (it is a directory)" if path.is_dir() else ""))
+    try:
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    except cv2.error as err:
+        raise ValueError(f"{path}: not an OpenCV FileStorage YAML file ({str(err).strip().splitlines()[-1]})") from None
+    if not fs.isOpened():
+        raise ValueError(f"{path}: not an OpenCV FileStorage YAML file")
+    try:
+        def number(key):
+            node = fs.getNode(key)
+            if node.empty() or not node.isReal() and not node.isInt():
+                raise ValueError(f"{path}: entry {key!r} missing or not a number")
+            return float(node.real())
+
+        kind = fs.getNode("Camera.type")
+        if not kind.empty() and kind.string() != "PinHole":
+            raise ValueError(f"{path}: Camera.type is {kind.string()!r}; only 'PinHole' is supported")
+        cams = []
+        for c in ("Camera1", "Camera2"):
+            K = np.array([[number(f"{c}.fx"), 0.0, number(f"{c}.cx")], [0.0, number(f"{c}.fy"), number(f"{c}.cy")],
+                          [0.0, 0.0, 1.0]])
+            cams.append((K, np.array([number(f"{c}.{k}") for k in ("k1", "k2", "p1", "p2")])))
+        size = (int(number("Camera.width")), int(number("Camera.height")))
+        T = fs.getNode("Stereo.T_c1_c2").mat()
+        if T is None or np.shape(T) != (4, 4):
+            raise ValueError(f"{path}: entry 'Stereo.T_c1_c2' missing or not a 4x4 matrix")
+    finally:
+        fs.release()
+    T = np.asarray(T, dtype=float)
+    R = check_rotation_matrices(T[:3, :3], f"{path}: Stereo.T_c1_c2 rotation", atol=1e-5)
+    return StereoCalibration(cams[0][0], cams[0][1], cams[1][0], cams[1][1], size, R, T[:3, 3], str(path))

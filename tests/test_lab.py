@@ -227,3 +227,26 @@ def test_loader_reports_a_missing_file(copy):
     (copy / "dynamic_markers.csv").unlink()
     with pytest.raises(FileNotFoundError, match="dynamic_markers.csv: no such file"):
         lab_io.load_lab(copy)
+
+
+def _table2_rms(rec):
+    return lab.run_lab(rec).table2["rms_deg"].to_numpy()
+
+
+@pytest.mark.parametrize("noisy", [True, False])
+def test_table2_is_rounding_sensitive_only_without_accelerometer_and_magnetometer_noise(noisy):
+    """Madgwick's correction is a normalised gradient step: with noise-free accelerometer and magnetometer its
+    direction is set by rounding, so a 1e-13 relative change of the IMU data moves Table II; with noise it does not."""
+    settings = dataclasses.replace(SMALL, dynamic_seconds=10.0)
+    if not noisy:
+        settings = settings.without("accelerometer errors", "magnetometer errors")
+    assert settings.noise_free_dynamic_attitude is not noisy
+    rec = lab.simulate_lab(settings)
+    imu = rec.dynamic_imu.copy()
+    cols = lab.GYR_COLUMNS + lab.ACC_COLUMNS + lab.MAG_COLUMNS
+    imu[cols] = imu[cols] * (1.0 + 1e-13)
+    change = np.abs(_table2_rms(rec) - _table2_rms(dataclasses.replace(rec, dynamic_imu=imu))).max()
+    if noisy:
+        assert change < 1e-8
+    else:
+        assert change > 1e-6

@@ -10,8 +10,8 @@ from replication import calibrate, realdata as rd, so3
 from replication.calibration import calibrate_poses, integrate_gyro
 
 HAVE_REAL = rd.real_data_available()
-needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: set REPLICATION_REAL_DATA "
-                                "or provide ../shared/data/real")
+needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
+                                "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST (or provide ../shared/data/real)")
 
 TUM_LINES = [
     "# t tx ty tz qx qy qz qw",

@@ -1,0 +1,220 @@
+"""The real recordings notebook 07 and the tests read: manifest, checksums, download from their public origins.
+
+``data/real_data_manifest.csv`` lists every file the project reads from the real-data folder
+(:func:`replication.realdata.data_root`): its folder and name, size, SHA-256, the public
+repository, commit and path it comes from, its licence and what to cite. :func:`fetch` downloads
+the files to a folder of the reader's choice and verifies them; :func:`verify` checks a folder
+that is already there. From the shell::
+
+    python -m replication fetch-data DEST          # download and verify, then
+    export REPLICATION_REAL_DATA=DEST              # point the notebooks and tests at it
+
+A file is fetched from ``https://raw.githubusercontent.com/<repository>/<commit>/<path>``; where
+that returns a Git LFS pointer instead of the content, from GitHub's LFS media host. ``--mirror``
+takes the files from a local copy laid out like ``DEST`` instead (a colleague's folder, or the
+shared data folder), with the same checksums. A file is written under a temporary name and renamed
+only after its size and SHA-256 match: never half-written.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
+
+#: The manifest shipped with the project.
+MANIFEST = Path(__file__).resolve().parent.parent / "data" / "real_data_manifest.csv"
+COLUMNS = ["folder", "file", "bytes", "sha256", "repository", "commit", "path", "licence", "citation"]
+_LFS_POINTER = b"version https://git-lfs.github.com/spec/v1"
+
+
+@dataclass(frozen=True)
+class ManifestEntry:
+    """One file of the real-data folder and where it comes from."""
+
+    folder: str
+    file: str
+    bytes: int
+    sha256: str
+    repository: str
+    commit: str
+    path: str
+    licence: str
+    citation: str
+
+    @property
+    def relpath(self) -> Path:
+        """``<folder>/<file>`` inside the real-data folder."""
+        return Path(self.folder) / self.file
+
+    @property
+    def url(self) -> str:
+        """The file at its pinned commit on GitHub."""
+        return f"https://raw.githubusercontent.com/{self.repository}/{self.commit}/{self.path}"
+
+    @property
+    def lfs_url(self) -> str:
+        """The same file from GitHub's LFS media host (for repositories that store it with Git LFS)."""
+        return f"https://media.githubusercontent.com/media/{self.repository}/{self.commit}/{self.path}"
+
+
+def load_manifest(path=MANIFEST) -> list[ManifestEntry]:
+    """Read and validate the manifest; errors name the file, line and column."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: manifest not found" + (" (it is a directory)" if path.is_dir() else ""))
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows or rows[0] != COLUMNS:
+        raise ValueError(f"{path}: line 1: header must be {','.join(COLUMNS)}")
+    entries = []
+    for line, row in enumerate(rows[1:], start=2):
+        if not row:
+            continue
+        if len(row) != len(COLUMNS):
+            raise ValueError(f"{path}: line {line}: expected {len(COLUMNS)} columns, got {len(row)}")
+        values = dict(zip(COLUMNS, row))
+        for column in COLUMNS:
+            if not values[column].strip():
+                raise ValueError(f"{path}: line {line}, column {column!r}: empty")
+        if not values["bytes"].isdigit():
+            raise ValueError(f"{path}: line {line}, column 'bytes': not a whole number ({values['bytes']!r})")
+        if len(values["sha256"]) != 64 or any(c not in "0123456789abcdef" for c in values["sha256"]):
+            raise ValueError(f"{path}: line {line}, column 'sha256': not 64 lowercase hex digits")
+        if len(values["commit"]) != 40:
+            raise ValueError(f"{path}: line {line}, column 'commit': not a full 40-character commit hash")
+        entries.append(ManifestEntry(**{**values, "bytes": int(values["bytes"])}))
+    seen = set()
+    for e in entries:
+        if e.relpath in seen:
+            raise ValueError(f"{path}: {e.relpath} is listed twice")
+        seen.add(e.relpath)
+    return entries
+
+
+def sha256_of(data_or_path) -> str:
+    """SHA-256 (hex) of bytes or of a file's content."""
+    if isinstance(data_or_path, (bytes, bytearray)):
+        return hashlib.sha256(data_or_path).hexdigest()
+    h = hashlib.sha256()
+    with open(data_or_path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _status(path: Path, entry: ManifestEntry) -> str:
+    if not path.is_file():
+        return "missing"
+    size = path.stat().st_size
+    if size != entry.bytes:
+        return f"size {size} != {entry.bytes}"
+    digest = sha256_of(path)
+    if digest != entry.sha256:
+        return f"sha256 {digest[:12]}... != {entry.sha256[:12]}..."
+    return "ok"
+
+
+def verify(root, entries=None) -> dict:
+    """``{relative path: "ok" | "missing" | "size ... != ..." | "sha256 ... != ..."}`` for a real-data folder."""
+    root = Path(root)
+    entries = load_manifest() if entries is None else entries
+    return {str(e.relpath): _status(root / e.relpath, e) for e in entries}
+
+
+def _download(url: str, timeout: float) -> bytes:
+    import urllib.request
+
+    with urllib.request.urlopen(url, timeout=timeout) as response:  # noqa: S310 (https URLs from the manifest)
+        return response.read()
+
+
+def _obtain(entry: ManifestEntry, mirror, timeout: float) -> bytes:
+    if mirror is not None:
+        source = Path(str(mirror).removeprefix("file://")) / entry.relpath
+        if not source.is_file():
+            raise FileNotFoundError(f"{source}: not in the mirror")
+        return source.read_bytes()
+    data = _download(entry.url, timeout)
+    if data.startswith(_LFS_POINTER):  # the repository keeps this file in Git LFS
+        data = _download(entry.lfs_url, timeout)
+    return data
+
+
+def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) -> dict:
+    """Download (or copy from ``mirror``) every manifest file into ``dest`` and verify it.
+
+    Files already present with the right checksum are kept. Returns :func:`verify`'s report
+    after the fetch; a file whose download fails or does not match is reported, not written.
+    """
+    dest = Path(dest)
+    if dest.exists() and not dest.is_dir():
+        raise NotADirectoryError(f"{dest}: exists and is not a directory")
+    entries = load_manifest() if entries is None else entries
+    for e in entries:
+        target = dest / e.relpath
+        if _status(target, e) == "ok":
+            log(f"ok       {e.relpath}")
+            continue
+        try:
+            data = _obtain(e, mirror, timeout)
+        except (OSError, ValueError) as err:  # URLError is an OSError
+            log(f"FAILED   {e.relpath}: {err}")
+            continue
+        digest = sha256_of(data)
+        if len(data) != e.bytes or digest != e.sha256:
+            log(f"FAILED   {e.relpath}: got {len(data)} bytes, sha256 {digest[:12]}...; expected {e.bytes} bytes, "
+                f"{e.sha256[:12]}... (source: {mirror or e.url})")
+            continue
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = target.with_name(target.name + ".part")
+        try:
+            tmp.write_bytes(data)
+            os.replace(tmp, target)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+        log(f"fetched  {e.relpath} ({e.bytes} bytes)")
+    return verify(dest, entries)
+
+
+def fetch_command(args) -> int:
+    """``python -m replication fetch-data``: exit 0 if every file is present and verified, else 1."""
+    try:
+        entries = load_manifest()
+        if args.only:
+            entries = [e for e in entries if e.folder in args.only]
+            if not entries:
+                raise ValueError(f"--only {args.only}: no such folder in the manifest")
+        if args.check:
+            report = verify(args.dest, entries)
+            for rel, status in report.items():
+                print(f"{status:8s} {rel}" if status in ("ok", "missing") else f"BAD      {rel}: {status}")
+        else:
+            report = fetch(args.dest, mirror=args.mirror, entries=entries)
+    except (ValueError, FileNotFoundError, NotADirectoryError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    bad = [rel for rel, status in report.items() if status != "ok"]
+    if bad:
+        print(f"{len(bad)} of {len(report)} files missing or not matching the manifest", file=sys.stderr)
+        return 1
+    print(f"all {len(report)} files verified in {Path(args.dest).resolve()}; "
+          f"set REPLICATION_REAL_DATA={Path(args.dest).resolve()}")
+    return 0
+
+
+FETCH_HELP = """\
+Download the real recordings that notebook 07 and the real-data tests read, from their public origins
+(GitHub repositories at pinned commits; see data/real_data_manifest.csv for each file's repository, commit,
+path, size, SHA-256, licence and citation), verify every checksum, and write them to DEST. Then run with
+REPLICATION_REAL_DATA=DEST. Files already in DEST with the right checksum are kept.
+Exit status: 0 all files verified, 1 some missing or not matching, 2 bad arguments or manifest.
+"""
