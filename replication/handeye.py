@@ -322,6 +322,19 @@ class MotionObservability:
         ``s_2 / sqrt(J)`` in degrees, where ``s_2`` is the second singular value of
         the J x 3 stack of rotation vectors: an RMS amount of rotation about axes
         orthogonal to the dominant one. Zero when all motions share one axis.
+    camera_rms_motion_deg : ndarray, shape (...)
+        RMS rotation angle of the camera motions, degrees (small motions leave ``R0`` poorly
+        determined whatever their axes).
+    symmetric_gap : ndarray, shape (...)
+        ``lambda_1 - lambda_2`` of ``sym(K) = (K + K^T)/2``. Eq. (8) on SO(3) is
+        ``2J (3 - vec(R)^T sym(K) vec(R))``: a second rotation fits the data as well as ``R0``
+        only if this gap vanishes (noise-free: exactly when the matrices commuting with every
+        ``B_j`` are more than the multiples of ``I``, e.g. motions all about one axis, or
+        motions about an axis ``n`` together with half-turns about axes perpendicular to ``n``).
+    inconsistency : ndarray, shape (...)
+        ``1 - lambda_1`` of ``sym(K)``: zero for noise-free data, grows with noise and outliers.
+        ``symmetric_gap`` well above ``inconsistency`` means the minimiser of (8) is well
+        determined for the data's noise.
     """
 
     kron_singular_values: np.ndarray
@@ -329,6 +342,9 @@ class MotionObservability:
     two_step_rate: np.ndarray
     camera_axis_spread_deg: np.ndarray
     sensor_axis_spread_deg: np.ndarray
+    camera_rms_motion_deg: np.ndarray
+    symmetric_gap: np.ndarray
+    inconsistency: np.ndarray
 
     def iterations_for(self, reduction: float = 1e-6) -> np.ndarray:
         """Iterations for the projected two-step error to shrink by ``reduction`` (noise-free analysis).
@@ -341,12 +357,21 @@ class MotionObservability:
             return np.where(rate < 1.0, np.log(reduction) / np.log(rate), np.inf)
 
 
-def _axis_spread_deg(R: np.ndarray) -> np.ndarray:
-    """``s_2 / sqrt(J)`` of the (..., J, 3) rotation vectors, in degrees (see :class:`MotionObservability`)."""
+def _axis_spread_deg(R: np.ndarray):
+    """``(s_2, sqrt(s_1^2 + s_2^2 + s_3^2)) / sqrt(J)`` of the (..., J, 3) rotation vectors, degrees.
+
+    The first is the axis spread of :class:`MotionObservability`, the second the RMS motion angle.
+    """
     w = log_map(R)
     gram = np.swapaxes(w, -1, -2) @ w  # (..., 3, 3): s_k^2 are its eigenvalues
-    s2 = np.sqrt(np.clip(np.linalg.eigvalsh(gram)[..., 1], 0.0, None))
-    return np.degrees(s2 / np.sqrt(R.shape[-3]))
+    ev = np.clip(np.linalg.eigvalsh(gram), 0.0, None)
+    J = R.shape[-3]
+    return np.degrees(np.sqrt(ev[..., 1] / J)), np.degrees(np.sqrt(ev.sum(axis=-1) / J))
+
+
+#: Below this, the gap between the two largest eigenvalues of ``sym(K)`` and the data's inconsistency both
+#: vanish to rounding: a second rotation solves eq. (7) exactly (see :meth:`Motions.require`).
+NONUNIQUE_TOL = 1e-10
 
 
 class Motions:
@@ -369,6 +394,12 @@ class Motions:
 
     def __init__(self, A, B, *, atol: float = 1e-6):
         A, B = check_motion_pairs(A, B, min_motions=1, atol=atol)
+        if A.size == 0:
+            raise ValueError(f"A and B hold no problems (batch shape {A.shape[:-3]})")
+        # private, read-only copies: the caller's arrays may change later, the cached K must not go stale
+        A, B = np.array(A, dtype=float), np.array(B, dtype=float)
+        A.setflags(write=False)
+        B.setflags(write=False)
         self._set(A, B)
 
     def _set(self, A, B):
@@ -417,7 +448,20 @@ class Motions:
     @property
     def axis_spread_deg(self):
         """``(camera, sensor)`` axis spreads in degrees (see :class:`MotionObservability`)."""
-        return self._cached("spread", lambda: (_axis_spread_deg(self.A), _axis_spread_deg(self.B)))
+        return self._cached("spread", lambda: (_axis_spread_deg(self.A)[0], _axis_spread_deg(self.B)[0]))
+
+    @property
+    def rms_motion_deg(self):
+        """RMS rotation angle of the camera motions, degrees."""
+        return self._cached("rms_motion", lambda: _axis_spread_deg(self.A)[1])
+
+    @property
+    def sym_eigvals(self) -> np.ndarray:
+        """Eigenvalues of ``sym(K) = (K + K^T) / 2``, descending, shape (..., 9)."""
+        def compute():
+            K = self.K
+            return np.linalg.eigvalsh(0.5 * (K + np.swapaxes(K, -1, -2)))[..., ::-1]
+        return self._cached("sym_eigvals", compute)
 
     @property
     def observability(self) -> MotionObservability:
@@ -430,15 +474,19 @@ class Motions:
                 np.linalg.norm(self.A.mean(axis=-3), ord=2, axis=(-2, -1)),
                 np.linalg.norm(self.B.mean(axis=-3), ord=2, axis=(-2, -1)),
             ) ** 2
-            return MotionObservability(sv, ratio, rate, *self.axis_spread_deg)
+            ev = self.sym_eigvals
+            return MotionObservability(sv, ratio, rate, *self.axis_spread_deg, self.rms_motion_deg,
+                                       ev[..., 0] - ev[..., 1], 1.0 - ev[..., 0])
         return self._cached("observability", compute)
 
     def require(self, *, min_motions: int = 2, observable: bool = True,
                 min_axis_spread_deg: float = 1e-6) -> "Motions":
-        """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) the motions are not degenerate.
+        """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) ``R0`` is determined.
 
-        Degenerate: on the camera or the sensor side every rotation axis is parallel (axis
-        spread below ``min_axis_spread_deg``); see :func:`check_observable`. Returns ``self``.
+        Degenerate: on the camera or the sensor side every rotation axis is parallel (axis spread
+        below ``min_axis_spread_deg``; see :func:`check_observable`), or, more generally, a second
+        rotation solves eq. (7) exactly (``symmetric_gap`` and ``inconsistency`` of
+        :class:`MotionObservability` both below ``1e-10``). Returns ``self``.
         """
         if self.J < min_motions:
             raise ValueError(f"need at least {min_motions} motion pairs (J >= {min_motions}), got J = {self.J}")
@@ -454,6 +502,17 @@ class Motions:
                         f"{min_axis_spread_deg:g} deg); R0 is then not unique: at least two motions "
                         f"with non-parallel rotation axes are needed"
                     )
+            ev = self.sym_eigvals
+            twin = (ev[..., 0] - ev[..., 1] < NONUNIQUE_TOL) & (1.0 - ev[..., 0] < NONUNIQUE_TOL)
+            if np.any(twin):
+                idx = tuple(int(i) for i in np.argwhere(twin)[0]) if twin.ndim else ()
+                where = f" at batch index {idx}" if idx else ""
+                raise ValueError(
+                    f"degenerate motion{where}: R0 is not unique: a second rotation solves eq. (7) exactly "
+                    f"(the two largest eigenvalues of sym(K) are both 1 to within {NONUNIQUE_TOL:g}), as for "
+                    f"motions about one axis n together with half-turns about axes perpendicular to n; add "
+                    f"motions about other axes"
+                )
         return self
 
     def subset(self, index) -> "Motions":

@@ -78,8 +78,10 @@ def check_matrices(M, name: str = "M") -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``M`` is not numeric, does not end in ``(3, 3)``, or holds NaN/inf.
+        If ``M`` is not real-valued numeric, does not end in ``(3, 3)``, or holds NaN/inf.
     """
+    if np.iscomplexobj(M):
+        raise ValueError(f"{name} must be real-valued; got a complex array")
     try:
         M = np.asarray(M, dtype=float)
     except (TypeError, ValueError) as exc:

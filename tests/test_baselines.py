@@ -48,10 +48,13 @@ def test_chordal_optimal_no_lower_minimum_from_24_other_starts(paper_sim):
 def test_chordal_certificate_rejects_a_point_that_is_not_stationary(paper_sim):
     R0, A, B = paper_sim
     far = R0 @ Rotation.from_rotvec([0.0, 0.0, 0.5]).as_matrix()
-    res = chordal_optimal(A, B, init=far, max_iterations=0)
-    assert not res.local_minimum.any()
+    res = chordal_optimal(A, B, init=far, max_iterations=0, certify=False)
+    assert not res.local_minimum.any() and not res.global_optimum.any()
     assert res.gradient_norm.min() > 1e-3
     assert chordal_optimal(A, B, init=far).local_minimum.all()
+    # with the certificate, the relaxation replaces the unconverged start by the certified minimiser
+    certified = chordal_optimal(A, B, init=far, max_iterations=0)
+    assert certified.global_optimum.all() and (certified.certificate == "sdp").all()
 
 
 def test_robust_survives_outlier_pairs_that_break_least_squares(rng):

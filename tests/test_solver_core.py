@@ -17,7 +17,8 @@ from replication import handeye, so3
 from replication.baselines import corrupt_pairs
 from replication.simulation import opencv_protocol, simulate
 from replication.solvers import (
-    GAP_TOL, LOCAL_ANGLE_TOL_DEG, CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, Motions,
+    GAP_TOL, LOCAL_ANGLE_TOL_DEG, AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning,
+    LocalMinimumWarning, Motions, ObservabilityWarning, global_certificate,
     ReplicationWarning, andreff, available, calibrate_hand_eye, chordal_optimal, horaud_dornaika, park_martin,
     robust, solve, solver_info, sqp, tsai_lenz, two_step, two_step_fixed_point,
 )
@@ -383,3 +384,126 @@ def test_motions_object_is_read_only_and_caches_K(problem):
         m.A = B
     with pytest.raises(ValueError, match="either a Motions object or the arrays"):
         solve("andreff", m, B)
+
+
+# ----------------------------------------------------------------------------------------- from the referee's report
+
+def _half_turn(n):
+    n = np.asarray(n, dtype=float)
+    return 2 * np.outer(n, n) / (n @ n) - np.eye(3)
+
+
+def test_half_turn_sign_flips_are_flagged_not_silent():
+    """Exact half-turns: the log map / quaternion sign is arbitrary, and the classic closed forms can flip."""
+    R0 = Rotation.from_rotvec([0, 0, np.pi / 2]).as_matrix()
+    axes = np.array([[1, 0, 0], [0, 1, 2], [2, 1, 3.0]])
+    A = np.stack([_half_turn(a) for a in axes])
+    B = np.stack([_half_turn(R0.T @ a) for a in axes])
+    for method in ("park_martin", "horaud_dornaika", "tsai_lenz"):
+        R, caught, _ = _solve_recording(method, A, B)
+        assert so3.angle_between_deg(R, R0) < 1e-6 or AccuracyWarning in caught, method
+    for method in ("chordal_optimal", "andreff"):
+        assert_rotations_close(solve(method, A, B), R0, 1e-9, name=method)
+
+
+def test_paper_variant_reflection_is_flagged_and_never_certified(rng):
+    R0 = so3.random_rotations(rng, ())
+    A = so3.random_rotations(rng, 10)
+    init = R0 @ Rotation.from_rotvec(np.radians(150) * np.array([1.0, 0, 0])).as_matrix()
+    with pytest.warns(AccuracyWarning, match="reflection"):
+        sol = solve("two_step_left", A, R0.T @ A @ R0, variant="paper", init=init, full_output=True)
+    assert np.linalg.det(sol.R) < 0 and not sol.global_optimum
+    with pytest.warns(AccuracyWarning, match="reflection"):
+        two_step(A, R0.T @ A @ R0, variant="paper", init=init)
+
+
+def test_a_second_exact_solution_is_refused():
+    """Motions about n plus half-turns about axes perpendicular to n: R0 Rot(n, 180 deg) solves eq. (7) too."""
+    R0 = Rotation.from_rotvec([0.3, 0.2, 1.0]).as_matrix()
+    A = np.stack([Rotation.from_rotvec([0, 0, 1.2]).as_matrix(), _half_turn([1, 0, 0]), _half_turn([1, 1, 0])])
+    B = R0.T @ A @ R0
+    twin = R0 @ Rotation.from_rotvec(np.pi * (R0.T @ [0, 0, 1.0])).as_matrix()  # R0 Rot(b, 180 deg), b = R0^T n
+    assert np.abs(A @ twin - twin @ B).max() < 1e-12 and so3.angle_between_deg(twin, R0) > 170
+    for name, fn in EXPORTED.items():
+        if name != "two_step_fixed_point":  # the diagnostic returns one of the limits, as documented
+            with pytest.raises(ValueError, match="not unique"):
+                fn(A, B)
+    # with noise the near-twin is reported as poorly determined
+    noisy = so3.noise_rotations(so3.sample_ball(np.random.default_rng(0), (3,), 0.005)) @ B
+    with pytest.warns(ObservabilityWarning, match="determine R0 poorly"):
+        solve("chordal_optimal", A, noisy)
+
+
+def test_direct_calls_warn_about_weak_motions_like_solve(rng):
+    R0 = so3.random_rotations(rng, ())
+    A = np.stack([Rotation.from_rotvec([np.radians(0.25), 0, 0]).as_matrix(),
+                  Rotation.from_rotvec([0, np.radians(0.001), 0]).as_matrix(),
+                  Rotation.from_rotvec([0, 0, np.radians(0.002)]).as_matrix()])
+    for fn in (chordal_optimal, sqp, lambda a, b: two_step(a, b, iterations=5)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fn(A, R0.T @ A @ R0)
+        assert any(issubclass(w.category, ObservabilityWarning) and "small motions" in str(w.message)
+                   for w in caught)
+
+
+def test_chordal_certificate_needs_a_stationary_point(outlier_problems):
+    A, B = outlier_problems[0]
+    res = chordal_optimal(A, B, max_iterations=1)
+    assert not res.global_optimum[~res.local_minimum].any()
+    with pytest.raises(ValueError, match="always certifies"):
+        solve("chordal_optimal", A, B, certify=False)
+    with pytest.raises(ValueError, match="at least 2 motion pairs"):
+        global_certificate(Motions(A[:, :1], B[:, :1]))
+
+
+def test_motions_are_private_read_only_copies(problem):
+    R0, A, B = problem
+    A = A.copy()
+    m = Motions(A, B)
+    A[:] = 2 * A  # the caller's array changes afterwards; the prepared motions must not
+    assert_rotations_close(solve("park_martin", m), R0, 1e-9)
+    assert not m.A.flags.writeable
+    with pytest.raises(ValueError, match="real-valued"):
+        Motions(B.astype(complex), B)
+    with pytest.raises(ValueError, match="no problems"):
+        Motions(B[None][:0], B[None][:0])
+
+
+def test_sdp_bound_is_valid_and_tight_only_at_the_global_minimum(outlier_problems):
+    from replication.solvers._sdp import relaxation, upper_bound
+
+    A, B = outlier_problems[0]
+    newton = chordal_optimal(A, B, certify=False)
+    best = chordal_optimal(A, B)
+    k = int(np.flatnonzero(newton.cost > best.cost + 1e-6)[0])  # Newton stuck on a non-global minimum
+    K = handeye.kronecker_operator(A[k], B[k])
+    M = 0.5 * (K + K.T)
+    lam = relaxation(M)[0]
+    g = lambda R: handeye.vec(R) @ M @ handeye.vec(R)
+    bound_local = upper_bound(M, newton.R[k], lam)
+    assert bound_local >= g(best.R[k]) - 1e-12  # valid whatever the candidate: it bounds every rotation
+    assert bound_local > g(newton.R[k]) + 1e-6  # so it cannot certify the non-global minimum
+    assert abs(upper_bound(M, best.R[k], lam) - g(best.R[k])) < 1e-9  # and it is tight at the global one
+
+
+def test_sqp_stopping_short_is_reported():
+    sim = simulate(4, 5)
+    with pytest.warns(ConvergenceWarning, match="stopped short of the minimum"):
+        sqp(sim.A, sim.B, ftol=1e-3)
+
+
+def test_closed_form_finish_states_its_precision(rng):
+    R0 = so3.random_rotations(rng, ())
+    A = so3.random_rotations(rng, 20, angle_range_deg=(0.0, 10.0))
+    with pytest.warns(IterationCapWarning, match=r"determined by rounding to about eps / \(1 - sigma_2 / sigma_1\)"):
+        two_step(A, R0.T @ A @ R0, cap=50)
+
+
+def test_exported_wrapper_warnings_point_at_the_caller(rng):
+    R0 = so3.random_rotations(rng, ())
+    w = np.outer(np.linspace(0.2, 1.5, 10), [0.0, 0.6, 0.8]) + rng.normal(scale=0.002, size=(10, 3))
+    A = Rotation.from_rotvec(w).as_matrix()
+    with pytest.warns(ObservabilityWarning) as caught:
+        park_martin(A, R0.T @ A @ R0)
+    assert caught[0].filename == __file__

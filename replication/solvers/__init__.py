@@ -24,14 +24,14 @@ Warnings (:mod:`._warnings`) name the measured cause whenever an answer may be w
 from ..handeye import Motions, pair_residual_deg, prepare_motions
 from ._registry import LOCAL_ANGLE_TOL_DEG, LOCAL_ATOL, LOCAL_RTOL, Solution, SolverInfo, available, register, solve, solver_info
 from ._warnings import (
-    CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, ObservabilityWarning,
+    AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, ObservabilityWarning,
     ReplicationWarning,
 )
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
 from .opencv import calibrate_hand_eye
 from .optimal import GAP_TOL, ChordalResult, chordal_optimal, global_certificate
 from .robust import robust
-from .sqp import SQPResult, sqp
+from .sqp import SQP_VARIANTS, SQPResult, sqp
 from .two_step import TwoStepResult, two_step, two_step_fixed_point
 
 __all__ = [
@@ -48,6 +48,7 @@ __all__ = [
     "ConvergenceWarning",
     "IterationCapWarning",
     "LocalMinimumWarning",
+    "AccuracyWarning",
     "CertificateWarning",
     "GAP_TOL",
     "LOCAL_RTOL",
@@ -58,6 +59,7 @@ __all__ = [
     "TwoStepResult",
     "sqp",
     "SQPResult",
+    "SQP_VARIANTS",
     "park_martin",
     "horaud_dornaika",
     "andreff",

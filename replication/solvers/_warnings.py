@@ -6,7 +6,7 @@ from __future__ import annotations
 
 __all__ = [
     "ReplicationWarning", "ObservabilityWarning", "ConvergenceWarning", "IterationCapWarning",
-    "LocalMinimumWarning", "CertificateWarning",
+    "LocalMinimumWarning", "AccuracyWarning", "CertificateWarning",
 ]
 
 
@@ -15,7 +15,8 @@ class ReplicationWarning(UserWarning):
 
 
 class ObservabilityWarning(ReplicationWarning):
-    """The motions barely constrain ``R0`` (rotation axes nearly parallel, or tiny rotations)."""
+    """The motions barely constrain ``R0``: axes nearly parallel, motions small for the data's noise, or a second
+    rotation fitting eq. (8) almost as well."""
 
 
 class ConvergenceWarning(ReplicationWarning, RuntimeWarning):
@@ -32,6 +33,15 @@ class IterationCapWarning(ReplicationWarning):
 
 class LocalMinimumWarning(ReplicationWarning):
     """A local solver's answer costs more on eq. (8) than the certified global minimum (a wrong stationary point)."""
+
+
+class AccuracyWarning(ReplicationWarning):
+    """A (non-local) solver's answer is far from the certified minimiser of eq. (8), or is not a rotation.
+
+    Raised where the answer's cost (8) is more than ``GROSS_FACTOR`` (10) times the certified minimum (plus a
+    small absolute tolerance): e.g. Park & Martin, Horaud & Dornaika or Tsai & Lenz when a motion of (nearly)
+    180 deg has its axis or quaternion sign flipped between the two sides.
+    """
 
 
 class CertificateWarning(ReplicationWarning):

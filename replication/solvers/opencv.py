@@ -99,7 +99,13 @@ def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_fai
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor`` (OpenCV's ``R_cam2gripper``).
     """
-    return _calibrate_hand_eye(prepare_motions(A, B), method, on_failure=on_failure)
+    from ._registry import check_answer, warn_if_weak
+
+    m = prepare_motions(A, B)
+    warn_if_weak(m)
+    R = _calibrate_hand_eye(m, method, on_failure=on_failure)
+    check_answer(m, R, f"cv2.calibrateHandEye({method})")
+    return R
 
 
 def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise") -> np.ndarray:

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..handeye import Motions, MotionObservability, prepare_motions, unvec, vec
 from ..so3 import check_init, exp_map, skew
-from ._registry import register
+from ._registry import register, warn_if_weak
 from ._sdp import relaxation, upper_bound
 from ._warnings import CertificateWarning
 from .classic import relaxed_rotation
@@ -71,7 +71,10 @@ class ChordalResult:
     duality_gap : ndarray, shape (...)
         ``cost - lower_bound`` (>= 0 up to rounding).
     global_optimum : ndarray of bool, shape (...)
-        ``duality_gap <= GAP_TOL * J``: ``R`` is certified to be the global minimiser.
+        ``local_minimum`` and ``duality_gap <= GAP_TOL * J``: ``R`` is a strict local minimiser whose cost
+        is certified to be within ``GAP_TOL * J`` of the global minimum of eq. (8). Where another minimum
+        has a cost within that tolerance (motions that nearly admit a second solution; an
+        :class:`~replication.solvers.ObservabilityWarning` says so), eq. (8) cannot tell the two apart.
     certificate : ndarray of str, shape (...)
         How: ``"lagrangian"`` (the fast O(3) dual at the Newton solution), ``"sdp"`` (the
         semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
@@ -199,20 +202,33 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
         ok = 2.0 * J * (upper - g) <= GAP_TOL * J
         how[ok] = "lagrangian"
         R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
+        # the fallback may have replaced R: judge stationarity at the final answer
+        _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
+        grad_norm = np.linalg.norm(grad, axis=-1)
+        hmin = np.linalg.eigvalsh(-hess)[..., 0]
+        local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     gap = np.clip(2.0 * J * (upper - g), 0.0, None)
     cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
     res = ChordalResult(
         R=R, cost=cost, gradient_norm=2.0 * grad_norm, hessian_min_eigenvalue=2.0 * hmin, iterations=its,
         local_minimum=local, lower_bound=cost - gap if certify else upper, duality_gap=gap if certify else upper,
-        global_optimum=(gap <= GAP_TOL * J) & certify, certificate=how.astype(str), observability=m.observability,
+        global_optimum=(gap <= GAP_TOL * J) & local & certify, certificate=how.astype(str),
+        observability=m.observability,
     )
     if certify and not res.global_optimum.all():
         bad = ~res.global_optimum
+        loose = bad & ~local
+        causes = []
+        if np.any(loose):
+            causes.append(f"{int(loose.sum())} are not at a stationary point (Newton stopped after "
+                          f"{max_iterations} iterations; gradient up to {float(np.max(2.0 * grad_norm[loose])):.3g} J)")
+        if np.any(bad & local):
+            causes.append(f"for {int((bad & local).sum())} the semidefinite relaxation was not tight (duality gap up "
+                          f"to {float(np.max(gap[bad & local])):.3g} > {GAP_TOL:g} J): a local minimum that may not "
+                          f"be global")
         warnings.warn(
             f"chordal_optimal could not certify the global minimum of eq. (8) for {int(bad.sum())} of "
-            f"{bad.size} problems: the semidefinite relaxation was not tight (largest duality gap "
-            f"{float(np.nanmax(np.where(bad, gap, np.nan))):.3g} > {GAP_TOL:g} J); the answer is a local "
-            f"minimum that may not be global",
+            f"{bad.size} problems: " + "; ".join(causes),
             CertificateWarning, stacklevel=3,
         )
     return res
@@ -239,7 +255,11 @@ def _sdp_fallback(K, M, J, R, g, upper, how, todo):
 
 
 def global_certificate(motions: Motions) -> ChordalResult:
-    """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`."""
+    """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`.
+
+    Raises ``ValueError`` for degenerate motion (see :meth:`replication.handeye.Motions.require`).
+    """
+    motions.require()
     return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
 
 
@@ -284,12 +304,16 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
         Malformed or degenerate input (see :func:`replication.handeye.prepare_motions`).
     """
     m = prepare_motions(A, B)
+    warn_if_weak(m)
     return _chordal_core(m, init=init, max_iterations=max_iterations, gradient_tol=gradient_tol,
                          hessian_tol=hessian_tol, certify=certify)
 
 
 @register("chordal_optimal", reference=REFERENCE)
 def _solve_chordal(motions, **options):
+    if "certify" in options:
+        raise ValueError("solve('chordal_optimal') always certifies its answer; call "
+                         "replication.solvers.chordal_optimal(A, B, certify=False) for the bare Newton result")
     if not options:
         return global_certificate(motions).R
     return _chordal_core(motions, **options).R

@@ -7,7 +7,9 @@ gradients or tolerances it used. Our choices:
 * variables: the 9 entries of ``R`` (``vec``, column-major), as in (8)-(10);
 * objective: eq. (8), evaluated exactly as ``2J(||R||^2 - vec(R)^T K vec(R))``
   (:func:`replication.handeye.handeye_cost_kron`), with its analytic gradient
-  ``2J(2x - (K + K^T) x)``;
+  ``2J(2x - (K + K^T) x)`` (``gradient="analytic"``) or SciPy's two-point finite differences of the
+  objective and the constraints (``gradient="finite-difference"``): about 10 more cost evaluations per
+  iteration, as the paper says of its SQP ("more than 10 times within an iteration");
 * constraints (default ``"orthonormal"``): eq. (9) ``R R^T = U`` as its 6
   independent entries, analytic Jacobian; eq. (10) ``det R = 1`` is kept by
   starting in SO(3) (its connected component). ``constraints="paper"`` adds
@@ -18,6 +20,11 @@ gradients or tolerances it used. Our choices:
 * start: the same ``init`` as the two-step method (identity by default);
 * SciPy's ``method="SLSQP"`` with ``ftol`` and ``maxiter`` exposed; one SLSQP
   major iteration is one "iteration" of the history.
+
+The paper's SQP is not identified. :data:`SQP_VARIANTS` names the settings the notebooks bracket it with:
+``"analytic"`` (analytic gradients, converged: the default), ``"finite-difference"`` (the paper's evaluation
+count, converged) and ``"capped"`` (finite differences, SciPy's default ``ftol = 1e-6`` and at most 30
+iterations: an SQP run to a budget, the paper's "at least 30 iterations", rather than to convergence).
 
 The iterates are *not* projected: SQP iterates need not be feasible, and their
 ``||R - R0||_F`` can exceed ``2 sqrt 2`` (the largest distance between two
@@ -35,10 +42,17 @@ import warnings
 
 from ..handeye import Motions, handeye_cost_kron, prepare_motions, unvec, vec
 from ..so3 import check_init, nearest_rotation
-from ._registry import check_local_answer, register
+from ._registry import check_local_answer, register, warn_if_weak
 from ._warnings import ConvergenceWarning
 
-__all__ = ["SQPResult", "sqp"]
+__all__ = ["SQPResult", "sqp", "SQP_VARIANTS"]
+
+#: Named SQP settings (options of :func:`sqp`); see the module notes.
+SQP_VARIANTS = {
+    "analytic": {"gradient": "analytic"},
+    "finite-difference": {"gradient": "finite-difference"},
+    "capped": {"gradient": "finite-difference", "ftol": 1e-6, "max_iterations": 30},
+}
 
 REFERENCE = (
     "Problem (8)-(10) of Z.-Q. Zhang's paper, solved by sequential quadratic programming "
@@ -83,7 +97,7 @@ class SQPResult:
         return self.projected[..., -1, :, :]
 
 
-def _constraints(kind: str):
+def _constraints(kind: str, analytic: bool = True):
     def orth(x):
         R = unvec(x)
         M = R @ R.T - np.eye(3)
@@ -110,10 +124,12 @@ def _constraints(kind: str):
     cons = [{"type": "eq", "fun": orth, "jac": orth_jac}]
     if kind == "paper":
         cons.append({"type": "eq", "fun": det, "jac": det_jac})
+    if not analytic:  # SciPy approximates the constraint Jacobians by finite differences as well
+        cons = [{"type": c["type"], "fun": c["fun"]} for c in cons]
     return cons
 
 
-def _sqp_one(K, J, init, max_iterations, ftol, cons):
+def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic):
     sym = K + K.T
 
     def f(x):
@@ -126,7 +142,7 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons):
 
     history = []
     out = minimize(
-        f, vec(init), jac=grad, method="SLSQP", constraints=cons,
+        f, vec(init), jac=grad if analytic else None, method="SLSQP", constraints=cons,
         callback=lambda xk: history.append(np.array(xk, dtype=float)),
         options={"maxiter": max_iterations, "ftol": ftol},
     )
@@ -138,7 +154,7 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons):
 
 
 def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
-        constraints: str = "orthonormal") -> SQPResult:
+        constraints: str = "orthonormal", gradient: str = "analytic") -> SQPResult:
     """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
 
     SQP is a local method: from a start far from ``R0`` it can stop on a wrong
@@ -163,6 +179,8 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     constraints : {"orthonormal", "paper"}
         ``"orthonormal"`` (default): eq. (9) only; ``"paper"``: eqs. (9) and (10)
         literally (linearly dependent at rotations; see the module notes).
+    gradient : {"analytic", "finite-difference"}
+        Analytic gradients (default) or SciPy's finite differences (see the module notes).
 
     Returns
     -------
@@ -172,19 +190,24 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     ------
     ValueError
         Malformed or degenerate input, bad ``init``, ``max_iterations < 1``,
-        unknown ``constraints``.
+        unknown ``constraints`` or ``gradient``.
     """
     m = prepare_motions(A, B)
-    res = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints)
+    warn_if_weak(m)
+    res = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints,
+                    gradient=gradient)
     check_local_answer(m, res.R, "sqp", stacklevel=3)
     return res
 
 
 def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
-              constraints: str = "orthonormal", stacklevel: int = 3) -> SQPResult:
+              constraints: str = "orthonormal", gradient: str = "analytic", stacklevel: int = 3) -> SQPResult:
     """:func:`sqp` on validated motions (without the global-minimum check, which the door does)."""
     if constraints not in ("paper", "orthonormal"):
         raise ValueError(f"constraints must be 'paper' or 'orthonormal', got {constraints!r}")
+    if gradient not in ("analytic", "finite-difference"):
+        raise ValueError(f"gradient must be 'analytic' or 'finite-difference', got {gradient!r}")
+    analytic = gradient == "analytic"
     if int(max_iterations) != max_iterations or max_iterations < 1:
         raise ValueError(f"max_iterations must be a positive integer, got {max_iterations!r}")
     if not ftol > 0:
@@ -192,9 +215,9 @@ def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float =
     max_iterations = int(max_iterations)
     K, batch, J = m.K, m.batch_shape, m.J
     init = check_init(init, batch)
-    cons = _constraints(constraints)
+    cons = _constraints(constraints, analytic)
     flat_K, flat_init = K.reshape(-1, 9, 9), init.reshape(-1, 3, 3)
-    runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons) for n in range(len(flat_K))]
+    runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons, analytic) for n in range(len(flat_K))]
     iterates = unvec(np.stack([r[0] for r in runs])).reshape(batch + (max_iterations, 3, 3))
     res = SQPResult(
         iterates=iterates,

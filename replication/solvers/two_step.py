@@ -51,9 +51,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..handeye import Motions, MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
-from ..so3 import check_init, chordal_to_angle_deg, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign
-from ._registry import register
-from ._warnings import ConvergenceWarning, IterationCapWarning
+from ..so3 import check_init, chordal_to_angle_deg, det3, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign
+from ._registry import register, warn_if_weak
+from ._warnings import AccuracyWarning, ConvergenceWarning, IterationCapWarning
 
 __all__ = ["TwoStepResult", "ConvergenceWarning", "IterationCapWarning", "two_step", "two_step_fixed_point",
            "REPEATED_TOL"]
@@ -183,8 +183,9 @@ def _check_unique_limit(m: Motions) -> None:
             f"the two-step iteration has no unique limit for {int(np.sum(repeated))} of {repeated.size} "
             f"problems{_first(repeated)}: the top singular value of K is repeated (sigma_2 / sigma_1 = 1 - "
             f"{float(np.min(gap)):.2g}, at most 1 - {REPEATED_TOL:g}), so the limit depends on the start. The "
-            f"relative motions B_1^T B_j nearly share one axis; add motions about other axes or use "
-            f"chordal_optimal"
+            f"relative motions B_1^T B_j are tiny or nearly share one axis (RMS motion "
+            f"{float(np.min(m.rms_motion_deg[repeated] if repeated.ndim else m.rms_motion_deg)):.3g} deg); add larger "
+            f"motions about other axes, or use chordal_optimal"
         )
 
 
@@ -214,8 +215,8 @@ def two_step_fixed_point(A, B=None, init=None, *, variant: str = "corrected"):
     return _fixed_point(m, check_init(init, m.batch_shape), variant)[:2]
 
 
-def _history(m: Motions, init: np.ndarray, iterations: int, variant: str):
-    """The paper's protocol: exactly ``iterations`` steps, every raw iterate recorded."""
+def _history(m: Motions, init: np.ndarray, iterations: int, variant: str, keep: bool = True):
+    """The paper's protocol: exactly ``iterations`` steps, every raw iterate recorded (``keep``) or the last only."""
     K = m.K
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
     # The printed iteration never rescales: its iterates shrink like sigma_1(K)^(2n) and, with
@@ -225,21 +226,23 @@ def _history(m: Motions, init: np.ndarray, iterations: int, variant: str):
     x_l = vec(init)  # R^l_{0,0}: step 1, n = 1
     scale = np.ones(K.shape[:-2])
     unit_r, unit_l, scales_r, scales_l = [], [], [], []
-    for _ in range(iterations):
+    for n in range(iterations):
         x_r = np.einsum("...ab,...b->...a", K, x_l)  # eq. (14): R^r_n = V2H(H1 R^l_{n-1}) H2^+
         n_r = np.linalg.norm(x_r, axis=-1)
         x_r, scale = x_r / n_r[..., None], scale * n_r
-        unit_r.append(x_r)
-        scales_r.append(scale)
         x_l = np.einsum("...ab,...b->...a", Kt, x_r)  # eq. (15): R^l_n = H1^+ H2V(R^r_n H2)
+        if keep or n == iterations - 1:
+            unit_r.append(x_r)
+            scales_r.append(scale)
         n_l = np.linalg.norm(x_l, axis=-1)
         x_l, scale = x_l / n_l[..., None], scale * n_l
-        unit_l.append(x_l)
-        scales_l.append(scale)
+        if keep or n == iterations - 1:
+            unit_l.append(x_l)
+            scales_l.append(scale)
     unit = unvec(np.stack(unit_r + unit_l, axis=-2))  # (..., 2N, 3, 3): one SVD call for both sides
     scales = np.stack(scales_r + scales_l, axis=-1)[..., None, None]
     projected = _project(unit, variant)  # eqs. (16)-(19)
-    N = iterations
+    N = len(unit_r)
     return projected[..., :N, :, :], projected[..., N:, :, :], (unit * scales)[..., :N, :, :], \
         (unit * scales)[..., N:, :, :]
 
@@ -316,15 +319,19 @@ def _warn_closed_form(m: Motions, closed, orthogonal, cap: int, tol: float, stac
             f"{int(np.sum(orthogonal))} started orthogonal to the limit (|<init, v1>| / ||init|| < "
             f"{ORTHOGONAL_TOL:g}), from which the iteration cannot reach it"
         )
+    s = m.svd[1]
+    gap = np.where(closed, 1.0 - s[..., 1] / s[..., 0], np.inf)
+    precision = np.finfo(float).eps / float(np.min(gap))
     warnings.warn(
         f"two_step: of {np.size(closed)} problems, {' and '.join(causes)}; their estimate is the iteration's "
-        f"limit computed in closed form from the SVD of K",
+        f"limit computed in closed form from the SVD of K, determined by rounding to about eps / (1 - sigma_2 / "
+        f"sigma_1) = {precision:.1g} (relative)",
         IterationCapWarning, stacklevel=stacklevel,
     )
 
 
 def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "corrected",
-                   convergence_tol_deg: float = 1e-3, tol: float = 1e-12, cap: int = 1000,
+                   convergence_tol_deg: float = 1e-3, tol: float = 1e-12, cap: int = 1000, history: bool = True,
                    stacklevel: int = 3) -> TwoStepResult:
     """:func:`two_step` on validated motions."""
     _check_variant(variant)
@@ -350,7 +357,7 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
         right, left, raw_r, raw_l = (a[..., None, :, :] for a in (right, left, raw_r, raw_l))
     else:
         iterations = int(iterations)
-        right, left, raw_r, raw_l = _history(m, init, iterations, variant)
+        right, left, raw_r, raw_l = _history(m, init, iterations, variant, keep=bool(history))
         its = np.full(m.batch_shape, iterations)
         closed = np.zeros(m.batch_shape, dtype=bool)
     K_it, J = m.K[..., None, :, :], m.J
@@ -376,6 +383,14 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
             ratio = float(np.max(observability.spectral_ratio[late]))
             rate = float(np.max(observability.two_step_rate[late]))
             need = float(np.max(observability.iterations_for(1e-8)[late]))
+            if m.J == 2 or 1.0 - ratio <= REPEATED_TOL:
+                warnings.warn(
+                    f"two_step stopped {float(np.max(gap)):.3g} deg from the projected top singular vector of K after "
+                    f"{iterations} iterations ({int(np.sum(late))} of {gap.size} problems), but that limit is not "
+                    f"unique: the top singular value of K is repeated (J = {m.J}; sigma_2 / sigma_1 = {ratio:.6g}), "
+                    f"so the iteration settles on a start-dependent point",
+                    ConvergenceWarning, stacklevel=stacklevel)
+                return result
             warnings.warn(
                 f"two_step stopped {float(np.max(gap)):.3g} deg from its fixed point after {iterations} "
                 f"iterations ({int(np.sum(late))} of {gap.size} problems); the motions need about {need:.3g} "
@@ -397,6 +412,7 @@ def two_step(
     convergence_tol_deg: float = 1e-3,
     tol: float = 1e-12,
     cap: int = 1000,
+    history: bool = True,
 ) -> TwoStepResult:
     """The paper's two-step iteration (eqs. (11)-(19)), run to its limit or for a fixed count.
 
@@ -433,6 +449,9 @@ def two_step(
         ``"auto"`` only: convergence threshold on ``||R_n - R_limit||_F``.
     cap : int
         ``"auto"`` only: most iterations before finishing from the closed form.
+    history : bool
+        Fixed ``N`` only: record (and project) every iterate (default), or only the last one
+        (the lean run the paper's timing claim is about; the ``N`` axis then has length 1).
 
     Returns
     -------
@@ -461,8 +480,21 @@ def two_step(
     30
     """
     m = prepare_motions(A, B, require_observable=False)
-    return _two_step_core(m, iterations=iterations, init=init, variant=variant,
-                          convergence_tol_deg=convergence_tol_deg, tol=tol, cap=cap)
+    if variant == "corrected":
+        m.require()
+        warn_if_weak(m)
+    result = _two_step_core(m, iterations=iterations, init=init, variant=variant,
+                            convergence_tol_deg=convergence_tol_deg, tol=tol, cap=cap, history=history)
+    if variant == "paper":
+        for R in (result.R_right, result.R_left):
+            if np.any(det3(R) < 0):
+                warnings.warn(
+                    f"two_step (variant='paper') returned a reflection (det -1), not a rotation, in "
+                    f"{int(np.sum(det3(R) < 0))} of {np.size(det3(R))} problems: the printed algorithm fails so from a "
+                    f"start more than 120 deg from R0; variant='corrected' (the default) does not",
+                    AccuracyWarning, stacklevel=2)
+                break
+    return result
 
 
 @register("two_step_right", reference=REFERENCE + ", estimate R^r (eq. (18))", min_motions=3)
