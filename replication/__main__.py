@@ -12,6 +12,8 @@ import sys
 import time
 from pathlib import Path
 
+from ._io import write_atomic
+
 ROOT = Path(__file__).resolve().parent.parent
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
 
@@ -77,7 +79,37 @@ def reproduce(args: argparse.Namespace) -> int:
             times[path.name] = execute_notebook(path)
     for name, seconds in times.items():
         print(f"{name}: {seconds:.1f} s")
+    from .ledger import collect, to_markdown
+
+    ledger = collect(complete=not args.only)
+    (results / "tables").mkdir(parents=True, exist_ok=True)
+    write_atomic(results / "tables" / "claims.csv", ledger.to_csv(index=False))
+    write_atomic(results / "tables" / "claims.md", to_markdown(ledger))
+    print(f"claims ledger: {ledger['claim'].nunique()} claims, verdicts "
+          + ", ".join(f"{v}: {n}" for v, n in ledger.drop_duplicates("claim")["verdict"].value_counts().items()))
     print(f"results written to {results}")
+    return 0
+
+
+def claims_command(args: argparse.Namespace) -> int:
+    from .ledger import collect, to_markdown, update_readme
+
+    try:
+        ledger = collect()
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    if args.check:
+        if update_readme(ledger, check=True):
+            print("README's claims table matches the executed notebooks")
+            return 0
+        print("README's claims table is out of date: run 'python -m replication claims --readme'", file=sys.stderr)
+        return 1
+    if args.readme:
+        update_readme(ledger)
+        print("README's claims table updated")
+        return 0
+    print(to_markdown(ledger))
     return 0
 
 
@@ -116,9 +148,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
         out = Path(args.out)
         report = {"camera": str(args.camera), "sensor": str(args.sensor), "sensor_kind": args.sensor_kind,
                   **result.to_dict()}
-        tmp = out.with_name(out.name + ".part")
-        tmp.write_text(json.dumps(report, indent=2) + "\n")
-        tmp.replace(out)  # never a half-written report
+        write_atomic(out, json.dumps(report, indent=2) + "\n")  # never a half-written report
         print(f"report written to {out}")
     return 0
 
@@ -162,6 +192,10 @@ def main(argv: list[str] | None = None) -> int:
     gen.add_argument("--out", help="output folder (default: data/lab of this project)")
     gen.add_argument("--seed", type=int, help="LabSettings.seed (default: that of the committed data)")
     gen.set_defaults(func=generate_lab_command)
+    cla = sub.add_parser("claims", help="the claims ledger from the executed notebooks (data/paper/claims.csv)")
+    cla.add_argument("--readme", action="store_true", help="write it into README.md between the claims markers")
+    cla.add_argument("--check", action="store_true", help="exit 1 if README.md's table is out of date")
+    cla.set_defaults(func=claims_command)
     from .fetch import FETCH_HELP, fetch_command
 
     fet = sub.add_parser("fetch-data", help="download and verify the real recordings (data/real_data_manifest.csv)",

@@ -20,6 +20,7 @@ import pandas as pd
 from .handeye import handeye_cost
 from .simulation import noise_bound_for_angle_deg, simulate
 from .so3 import angle_between_deg, check_rotation_matrices, random_rotations
+from .stats import paired_ratio_ci
 from .solvers import ReplicationWarning, available, solve
 
 __all__ = ["corrupt_pairs", "compare", "sweep", "SWEEPS"]
@@ -59,7 +60,8 @@ def corrupt_pairs(B, fraction: float, rng: np.random.Generator):
     return B, outlier
 
 
-def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
+def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None,
+            rng: np.random.Generator | None = None) -> pd.DataFrame:
     """Run solvers on the same problems; one row per solver.
 
     Parameters
@@ -72,6 +74,11 @@ def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
         Default: :func:`replication.solvers.available`.
     options : dict, optional
         ``{method: {option: value}}`` passed to :func:`replication.solvers.solve`.
+    ratio_to : str, optional
+        A method in ``methods``: adds ``ratio`` (each method's mean error over its mean error, on the
+        problems both solved) with a paired bootstrap 95 % interval ``ratio_low``, ``ratio_high`` (needs ``rng``).
+    rng : numpy.random.Generator, optional
+        For the bootstrap.
 
     Returns
     -------
@@ -85,7 +92,7 @@ def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
     """
     methods = available() if methods is None else list(methods)
     options = dict(options or {})
-    rows = []
+    rows, errors = [], {}
     for name in methods:
         opts = dict(options.get(name, {}))
         if name.startswith("opencv_"):
@@ -99,6 +106,8 @@ def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
         failed = ~np.isfinite(R).all(axis=(-2, -1))
         ok = ~failed
         err = angle_between_deg(R[ok], np.broadcast_to(R0, R.shape)[ok])
+        errors[name] = np.full(ok.shape, np.nan)
+        errors[name][ok] = err
         rows.append({
             "method": name,
             "mean_deg": err.mean(),
@@ -111,11 +120,18 @@ def compare(A, B, R0, *, methods=None, options=None) -> pd.DataFrame:
             "seconds": seconds,
             "per_s": len(R) / seconds,
         })
-    return pd.DataFrame(rows).set_index("method")
+    table = pd.DataFrame(rows).set_index("method")
+    if ratio_to is not None:
+        if ratio_to not in errors or rng is None:
+            raise ValueError("ratio_to must be one of the methods compared, and rng must be given")
+        for name, err in errors.items():
+            both = np.isfinite(err) & np.isfinite(errors[ratio_to])
+            table.loc[name, ["ratio", "ratio_low", "ratio_high"]] = paired_ratio_ci(err[both], errors[ratio_to][both], rng)
+    return table
 
 
 def sweep(parameter: str, values, *, n_runs: int, seed: int, methods=None, options=None,
-          outlier_fraction: float = 0.0) -> pd.DataFrame:
+          outlier_fraction: float = 0.0, ratio_to: str | None = None) -> pd.DataFrame:
     """:func:`compare` at each value of one setting; a long table.
 
     Parameters
@@ -133,6 +149,8 @@ def sweep(parameter: str, values, *, n_runs: int, seed: int, methods=None, optio
         See :func:`compare`.
     outlier_fraction : float
         Fraction of corrupted pairs when ``parameter`` is not ``"outlier_fraction"``.
+    ratio_to : str, optional
+        See :func:`compare`; the bootstrap of value ``k`` is seeded by ``[seed + k, 2]``.
 
     Returns
     -------
@@ -148,7 +166,8 @@ def sweep(parameter: str, values, *, n_runs: int, seed: int, methods=None, optio
         B = sim.B
         if fraction > 0:
             B, _ = corrupt_pairs(B, fraction, np.random.default_rng([seed + k, 1]))
-        df = compare(sim.A, B, sim.R0, methods=methods, options=options).reset_index()
+        df = compare(sim.A, B, sim.R0, methods=methods, options=options, ratio_to=ratio_to,
+                     rng=np.random.default_rng([seed + k, 2])).reset_index()
         df.insert(0, "value", value)
         df.insert(0, "parameter", parameter)
         frames.append(df)

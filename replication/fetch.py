@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+
+from ._io import write_atomic
 
 __all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
 
@@ -174,13 +175,7 @@ def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) 
                 f"{e.sha256[:12]}... (source: {mirror or e.url})")
             continue
         target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(target.name + ".part")
-        try:
-            tmp.write_bytes(data)
-            os.replace(tmp, target)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
+        write_atomic(target, data)
         log(f"fetched  {e.relpath} ({e.bytes} bytes)")
     return verify(dest, entries)
 

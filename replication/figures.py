@@ -12,12 +12,15 @@ METHOD_STYLE = {
     "ours_left": {"color": "tab:purple", "label": "ours, $R^l$"},
     "optimization": {"color": "tab:blue", "label": "SQP (SLSQP)"},
     "optimization_projected": {"color": "tab:blue", "ls": "--", "label": "SQP, iterate projected"},
+    "optimization (analytic)": {"color": "tab:blue", "label": "SQP, analytic gradients"},
+    "optimization (finite-difference)": {"color": "tab:orange", "ls": "--", "label": "SQP, finite differences"},
+    "optimization (capped)": {"color": "tab:red", "ls": ":", "label": "SQP, capped (30 it., ftol 1e-6)"},
 }
 
 
-def convergence_figure(curves: dict, *, ylabel: str, title: str, logy: bool = True):
-    """One line per method: ``curves[name]`` is a 1-D array over iterations 1..N."""
-    fig, ax = plt.subplots()
+def convergence_figure(curves: dict, *, ylabel: str, title: str, logy: bool = True, ax=None):
+    """One line per method: ``curves[name]`` is a 1-D array over iterations 1..N (on ``ax`` if given)."""
+    fig, ax = plt.subplots() if ax is None else (ax.figure, ax)
     for name, values in curves.items():
         values = np.asarray(values)
         ax.plot(np.arange(1, len(values) + 1), values, marker=".", **METHOD_STYLE.get(name, {"label": name}))
@@ -26,7 +29,7 @@ def convergence_figure(curves: dict, *, ylabel: str, title: str, logy: bool = Tr
     ax.set_xlabel("iteration")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
-    ax.legend()
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
 

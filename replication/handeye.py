@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .so3 import check_matrices, check_rotation_matrices, chordal_to_angle_deg, log_map
+from .so3 import _first_index, check_matrices, check_rotation_matrices, chordal_to_angle_deg, log_map
 
 __all__ = [
     "check_motion_pairs",
@@ -374,6 +374,12 @@ def _axis_spread_deg(R: np.ndarray):
 NONUNIQUE_TOL = 1e-10
 
 
+def _first_batch_index(mask):
+    """``(index, " at batch index (...)")`` of the first True of a batch mask (``((), "")`` for a scalar)."""
+    idx = _first_index(mask)
+    return idx, (f" at batch index {idx}" if idx else "")
+
+
 class Motions:
     """Validated motion pairs of ``A X = X B`` and what every solver needs, built once.
 
@@ -494,8 +500,7 @@ class Motions:
             for side, spread in zip(("camera", "sensor"), self.axis_spread_deg):
                 bad = np.asarray(spread) < min_axis_spread_deg
                 if bad.any():
-                    idx = tuple(int(i) for i in np.argwhere(bad)[0]) if bad.ndim else ()
-                    where = f" at batch index {idx}" if idx else ""
+                    idx, where = _first_batch_index(bad)
                     raise ValueError(
                         f"degenerate motion: the {side} rotations{where} all share one "
                         f"rotation axis or do not rotate (axis spread {float(spread[idx]):.3g} deg < "
@@ -505,8 +510,7 @@ class Motions:
             ev = self.sym_eigvals
             twin = (ev[..., 0] - ev[..., 1] < NONUNIQUE_TOL) & (1.0 - ev[..., 0] < NONUNIQUE_TOL)
             if np.any(twin):
-                idx = tuple(int(i) for i in np.argwhere(twin)[0]) if twin.ndim else ()
-                where = f" at batch index {idx}" if idx else ""
+                _, where = _first_batch_index(twin)
                 raise ValueError(
                     f"degenerate motion{where}: R0 is not unique: a second rotation solves eq. (7) exactly "
                     f"(the two largest eigenvalues of sym(K) are both 1 to within {NONUNIQUE_TOL:g}), as for "

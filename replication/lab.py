@@ -611,22 +611,32 @@ def _chordal_mean(R):
     return nearest_rotation(np.sum(R, axis=-3))
 
 
-def static_motions(recording: LabRecording) -> dict:
+def static_motions(recording: LabRecording, *, sample: str = "mean") -> dict:
     """Camera and sensor relative rotations of each static data set (the paper's protocol).
 
-    At each static orientation the *mean* of the measurements is used (Sec. III-B):
-    the mean marker pixels give one PnP attitude ``C_t``, the mean accelerometer and
+    At each static orientation the *mean* of the measurements is used (Sec. III-B, "to increase the
+    signal-to-noise ratio"): the mean marker pixels give one PnP attitude ``C_t``, the mean accelerometer and
     magnetometer vectors one ``I_t``. Consecutive orientations give the motions
     ``Delta R_c = C_{t+1} C_t^T`` and ``Delta R_i = I_{t+1} I_t^T`` (eqs. (3)-(4)).
+
+    Parameters
+    ----------
+    recording : LabRecording
+    sample : {"mean", "single"}
+        ``"mean"``: the paper's protocol; ``"single"``: the first sample of each orientation instead (the
+        intervention that measures what the averaging buys).
 
     Returns
     -------
     dict
         set id -> ``(A, B)``, each of shape (poses - 1, 3, 3).
     """
+    if sample not in ("mean", "single"):
+        raise ValueError(f"sample must be 'mean' or 'single', got {sample!r}")
+    reduce = (lambda g: g.mean()) if sample == "mean" else (lambda g: g.first())
     n = len(recording.rig["wand_points"])
-    C = camera_orientations(marker_pixels(recording.static_markers.groupby(["set", "pose"]).mean(), n), recording.rig)
-    im = recording.static_imu.groupby(["set", "pose"])[IMU_COLUMNS].mean()
+    C = camera_orientations(marker_pixels(reduce(recording.static_markers.groupby(["set", "pose"])), n), recording.rig)
+    im = reduce(recording.static_imu.groupby(["set", "pose"])[IMU_COLUMNS])
     I = static_sensor_orientations(im[ACC_COLUMNS].to_numpy(), im[MAG_COLUMNS].to_numpy())
     sets = im.index.get_level_values("set").to_numpy()
     out = {}
@@ -690,6 +700,10 @@ class LabResult:
         Rows (angle, method), columns of :func:`attitude_statistics`.
     truth : numpy.ndarray or None
         The true ``R0`` if the recording carries one (simulation).
+    dynamic : dict
+        The dynamic trial at the camera times: ``t`` (s), ``camera`` (``C_t``, camera_from_world) and
+        ``sensor`` (``I_t``, sensor_from_world, slerped to the camera times), for re-projecting it with
+        another ``R0`` or another reference frame (:mod:`replication.table2`).
     """
 
     estimates: dict
@@ -698,6 +712,7 @@ class LabResult:
     traces: pd.DataFrame
     table2: pd.DataFrame
     truth: np.ndarray | None = None
+    dynamic: dict = field(default_factory=dict)
 
 
 def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResult:
@@ -773,7 +788,8 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
     for name, tr in traces.items():
         for i, a in enumerate(("roll", "pitch", "yaw")):
             frame[f"{name}_{a}"] = tr[:, i]
-    return LabResult(estimates, r0, per_set, pd.DataFrame(frame), table2, truth)
+    return LabResult(estimates, r0, per_set, pd.DataFrame(frame), table2, truth,
+                     {"t": t_cam, "camera": C, "sensor": I_cam})
 
 
 def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:

@@ -16,12 +16,12 @@ interrupted run leaves no half-written file.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ._io import write_atomic
 from .calibration import integrate_gyro
 from .lab import (ACC_COLUMNS, GRAVITY, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, UNITS, LabRecording, _marker_columns,
                   static_hold_seconds)
@@ -50,12 +50,6 @@ def _json_text(data: dict) -> str:
     return "{\n" + ",\n".join(f"  {json.dumps(k)}: {json.dumps(v)}" for k, v in data.items()) + "\n}\n"
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def _csv_text(df: pd.DataFrame) -> str:
     out = pd.DataFrame(index=df.index)
     for col in df.columns:
@@ -71,13 +65,13 @@ def write_lab(recording: LabRecording, directory) -> Path:
     """Write ``recording`` to ``directory`` (created if missing); returns the folder."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    _atomic_write(directory / "rig.json", _json_text(recording.rig))
+    write_atomic(directory / "rig.json", _json_text(recording.rig))
     for name in FILES[1:]:
-        _atomic_write(directory / name, _csv_text(getattr(recording, name[:-4])))
+        write_atomic(directory / name, _csv_text(getattr(recording, name[:-4])))
     if recording.truth:
         truth = {k: np.asarray(v).round(12).tolist() for k, v in recording.truth.items()}
         truth["note"] = "simulation only: the true camera_from_sensor rotation (v_camera = R0 v_sensor)"
-        _atomic_write(directory / "truth.json", _json_text(truth))
+        write_atomic(directory / "truth.json", _json_text(truth))
     return directory
 
 

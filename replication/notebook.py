@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ._io import write_atomic
+
 __all__ = ["setup", "results_dir", "save_table", "save_figure", "best_of"]
 
 #: Digits printed by numpy and pandas in the notebooks (keeps stored outputs stable).
@@ -68,8 +70,8 @@ def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:
     if isinstance(flat.columns, pd.MultiIndex):  # ("ours_right", "mean") -> "ours_right mean"
         flat.columns = [" ".join(str(part) for part in col) for col in flat.columns]
     flat = flat.reset_index() if any(name is not None for name in flat.index.names) else flat
-    _write_atomic(out / f"{name}.csv", df.to_csv().encode())
-    _write_atomic(out / f"{name}.md", (flat.to_markdown(floatfmt=floatfmt, index=False) + "\n").encode())
+    write_atomic(out / f"{name}.csv", df.to_csv().encode())
+    write_atomic(out / f"{name}.md", (flat.to_markdown(floatfmt=floatfmt, index=False) + "\n").encode())
 
 
 def save_figure(fig, name: str) -> None:
@@ -88,7 +90,7 @@ def save_figure(fig, name: str) -> None:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", bbox_inches="tight", metadata={"Software": None})
     png = buffer.getvalue()
-    _write_atomic(out / f"{name}.png", png)
+    write_atomic(out / f"{name}.png", png)
     plt.close(fig)
     try:
         from IPython import get_ipython
@@ -97,16 +99,6 @@ def save_figure(fig, name: str) -> None:
         return
     if get_ipython() is not None:
         display(Image(data=png, format="png"))
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    tmp = path.with_name(path.name + ".part")
-    try:
-        tmp.write_bytes(data)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
 
 
 def best_of(fn, repeat: int = 7) -> float:

@@ -87,6 +87,13 @@ def load_table2() -> pd.DataFrame:
 
 
 def load_claims() -> pd.Series:
-    """Numeric claims of the text (iteration counts, run times), indexed by claim name."""
-    df = _read("claims.csv", ["claim", "value", "unit", "where"], ["value"])
-    return df.set_index("claim")["value"]
+    """The paper's numbers in its checkable claims, indexed by claim id (claims without a number left out).
+
+    The full ledger of claims (statements, where the paper makes them) is :func:`replication.ledger.load_claims`.
+    """
+    from .ledger import load_claims as ledger_claims
+
+    df = ledger_claims()
+    values = df.loc[df["paper_value"] != "", "paper_value"].astype(float)
+    values.index.name = "claim"
+    return values

@@ -44,8 +44,9 @@ ROTATION_ATOL = 1e-6
 
 
 def _first_index(mask: np.ndarray) -> tuple:
-    """Index (over the leading dimensions) of the first True entry of ``mask``."""
-    return tuple(int(i) for i in np.argwhere(mask)[0])
+    """Index (over the leading dimensions) of the first True entry of ``mask`` (``()`` for a scalar)."""
+    mask = np.asarray(mask)
+    return tuple(int(i) for i in np.argwhere(mask)[0]) if mask.ndim else ()
 
 
 def det3(M) -> np.ndarray:

@@ -17,7 +17,7 @@ def test_tables_are_complete():
     t1, t2 = paper.load_table1(), paper.load_table2()
     assert len(t1) == 21 and t1.loc[(50, "ours_right"), "mean"] == pytest.approx(0.009)
     assert len(t2) == 12 and t2.loc[("pitch", "sensor_frame"), "rms_deg"] == pytest.approx(68.3401)
-    assert paper.load_claims()["n_runs_table1"] == 1000
+    assert paper.load_claims()["sqp_30_iterations"] == 30 and paper.load_claims()["lab_protocol"] == 10
 
 
 def test_table2_rms_consistency_is_as_documented():

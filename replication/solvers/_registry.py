@@ -25,17 +25,20 @@ __all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "availa
 #: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
 #: the excess grows like ``J delta^2`` (``delta`` the angle to the minimiser, radians, times a curvature
 #: of order 2-3), so either term corresponds to about 0.03 deg at the paper's noise: well above
-#: SLSQP's own stopping jitter (0.01 deg seen), far below a wrong stationary point (0.3-43 % of ``f*``
-#: and tens of degrees off).
+#: SLSQP's own stopping jitter (0.01 deg seen), far below an answer in another basin or stopped far away at
+#: an iteration limit (0.3-43 % of ``f*`` and tens of degrees off).
 LOCAL_RTOL = 1e-3
 LOCAL_ATOL = 1e-6
 #: Within the basin of the global minimum, a local solver's answer farther than this from the certified
 #: minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's objective tolerance).
 LOCAL_ANGLE_TOL_DEG = 1e-4
-#: An answer above the certified minimum and farther than this from the minimiser is a wrong stationary point
-#: (:class:`LocalMinimumWarning`); closer, it stopped short (:class:`ConvergenceWarning`). The minima of eq. (8)
+#: An answer above the certified minimum and farther than this from the minimiser did not reach the global
+#: minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before converging); closer, it stopped short (:class:`ConvergenceWarning`). The minima of eq. (8)
 #: seen here lie 100 deg and more apart (notebook 06); SLSQP's short stops are hundredths of a degree.
 WRONG_POINT_DEG = 1.0
+#: ``|grad f| / J`` above which an answer is not a stationary point of eq. (8) (the warning then says the solver
+#: stopped before converging rather than on another stationary point).
+STATIONARY_TOL = 1e-3
 #: A non-local solver's answer gets an :class:`AccuracyWarning` when its cost (8) exceeds ``GROSS_FACTOR`` times
 #: the certified minimum plus ``LOCAL_ATOL * J``: a failure, not a less efficient estimate. Measured on 300
 #: problems each at the paper's noise and J = 3, 5, 20 (and 5 deg noise): the closed forms stay within 1.2x of
@@ -64,8 +67,8 @@ class SolverInfo:
         Fewest motion pairs ``J`` it accepts.
     local : bool
         ``True`` for a local method whose answer depends on a start ``init``
-        (an option it accepts); it may converge to a wrong stationary point
-        from a start far from ``R0``. :func:`solve` then checks its answer against
+        (an option it accepts); from a start far from ``R0`` it may stop short of
+        the minimum (an iteration limit) or on another stationary point. :func:`solve` then checks its answer against
         the certified global minimum of eq. (8).
     equivariant : bool
         ``True`` if re-expressing the camera frame by ``G`` (``A -> G A G^T``)
@@ -229,7 +232,8 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8).
 
     * :class:`LocalMinimumWarning`: cost (8) above the certified minimum ``f*`` by more than
-      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` (a wrong stationary point, another basin);
+      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than ``WRONG_POINT_DEG`` from the minimiser (another
+      stationary point, or stopped far away; the gradient of (8) tells which);
     * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
       certified minimiser (it stopped short of the minimum).
 
@@ -244,12 +248,24 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     off = above & (angle > WRONG_POINT_DEG)  # another stationary point
     short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)  # in the right basin, not at its bottom
     if np.any(off):
+        from .optimal import _derivatives
+
+        K = motions.K
+        grad = _derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), np.asarray(R, dtype=float))[1]
+        moving = 2.0 * np.linalg.norm(grad, axis=-1) > STATIONARY_TOL  # |grad (8)| / J: not a stationary point
+        parts = []
+        if np.any(off & moving):
+            parts.append(f"{int(np.sum(off & moving))} where eq. (8) still has a gradient (up to "
+                         f"{float(np.max((2.0 * np.linalg.norm(grad, axis=-1))[off & moving])):.3g} J): the solver stopped "
+                         f"before converging (e.g. its iteration limit)")
+        if np.any(off & ~moving):
+            parts.append(f"{int(np.sum(off & ~moving))} at another stationary point of (8)")
         warnings.warn(
             f"{method} did not reach the global minimum of eq. (8) in {int(np.sum(off))} of {off.size} problems: "
             f"its cost exceeds the certified minimum f* by up to {float(np.max(gap[off])):.3g} (tolerance "
             f"{LOCAL_RTOL:g} f* + {LOCAL_ATOL:g} J) and its answer is {float(np.min(angle[off])):.3g}-"
-            f"{float(np.max(angle[off])):.3g} deg from the certified minimiser: a wrong stationary point, which a "
-            f"local method reaches from a start far from R0; use chordal_optimal, or a start near R0",
+            f"{float(np.max(angle[off])):.3g} deg from the certified minimiser; " + "; ".join(parts)
+            + ". A local method from a start far from R0 does this; use chordal_optimal, or a start near R0",
             LocalMinimumWarning,
             stacklevel=stacklevel,
         )

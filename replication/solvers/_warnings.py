@@ -32,7 +32,11 @@ class IterationCapWarning(ReplicationWarning):
 
 
 class LocalMinimumWarning(ReplicationWarning):
-    """A local solver's answer costs more on eq. (8) than the certified global minimum (a wrong stationary point)."""
+    """A local solver's answer is far from, and costs more on eq. (8) than, the certified global minimum.
+
+    Either it stopped before converging (e.g. SLSQP's iteration limit from a start far from ``R0``) or on
+    another stationary point; the message says which, from the gradient of (8) at the answer.
+    """
 
 
 class AccuracyWarning(ReplicationWarning):

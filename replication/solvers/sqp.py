@@ -157,8 +157,9 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         constraints: str = "orthonormal", gradient: str = "analytic") -> SQPResult:
     """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
 
-    SQP is a local method: from a start far from ``R0`` it can stop on a wrong
-    stationary point. Its answer is therefore checked against the certified global
+    SQP is a local method: from a start far from ``R0`` it can reach its iteration
+    limit far from the minimum (every failure in notebooks 03, 05 and 07), and eq. (8) over
+    SO(3) has other strict local minima it could stop on (notebook 06). Its answer is therefore checked against the certified global
     minimum of eq. (8) (:func:`replication.solvers.chordal_optimal`), and a
     :class:`~replication.solvers.LocalMinimumWarning` names the problems where it is
     not that minimum; a :class:`~replication.solvers.ConvergenceWarning` names those

@@ -51,7 +51,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..handeye import Motions, MotionObservability, handeye_cost_kron, prepare_motions, unvec, vec
-from ..so3 import check_init, chordal_to_angle_deg, det3, frobenius_error, nearest_rotation, nearest_rotation_up_to_sign
+from ..so3 import (_first_index, check_init, chordal_to_angle_deg, det3, frobenius_error, nearest_rotation,
+                   nearest_rotation_up_to_sign)
 from ._registry import register, warn_if_weak
 from ._warnings import AccuracyWarning, ConvergenceWarning, IterationCapWarning
 
@@ -162,8 +163,8 @@ def _fixed_point(m: Motions, init: np.ndarray, variant: str):
 
 
 def _first(mask) -> str:
-    mask = np.asarray(mask)
-    return f" (first at batch index {tuple(int(i) for i in np.argwhere(mask)[0])})" if mask.ndim else ""
+    idx = _first_index(mask)
+    return f" (first at batch index {idx})" if idx else ""
 
 
 def _check_unique_limit(m: Motions) -> None:

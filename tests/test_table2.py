@@ -1,0 +1,68 @@
+"""What Table II measures (replication.table2): re-projection with any R0 and reference frame, the seed study
+and its interventions, and the single-sample protocol of lab.static_motions."""
+import dataclasses
+
+import numpy as np
+import pytest
+
+from replication import lab
+from replication.so3 import exp_map
+from replication.table2 import projection_statistics, reference_frame_dependence, seed_study
+
+SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
+
+
+@pytest.fixture(scope="module")
+def small_result():
+    return lab.run_lab(lab.simulate_lab(SMALL))
+
+
+def test_projection_with_the_used_r0_reproduces_table2(small_result):
+    for method in ("ours_right", "optimization"):
+        again = projection_statistics(small_result, small_result.r0[method])
+        ref = small_result.table2.xs(method, level="method")
+        assert np.allclose(again[["rms_deg", "mean_deg", "sd_deg"]], ref[["rms_deg", "mean_deg", "sd_deg"]], atol=1e-9)
+
+
+def test_a_wrong_r0_shows_in_table2_and_bad_input_is_refused(small_result):
+    true = projection_statistics(small_result, small_result.truth)["rms_deg"].mean()
+    off = projection_statistics(small_result, small_result.truth @ exp_map(np.radians([0.0, 20.0, 0.0])))
+    assert off["rms_deg"].mean() > true + 1.0
+    with pytest.raises(ValueError, match="reference_time"):
+        projection_statistics(small_result, small_result.truth, reference_time=1e3)
+    with pytest.raises(ValueError, match="R0"):
+        projection_statistics(small_result, np.eye(3) * 2)
+
+
+def test_reference_frame_dependence_has_one_row_per_r0_and_time(small_result):
+    out = reference_frame_dependence(small_result, {"true": small_result.truth, "est": small_result.r0["ours_right"]},
+                                     [0, 2, 4])
+    assert out.shape == (6, 6) and list(out.index.get_level_values(1)[:3]) == [0.0, 2.0, 4.0]
+    assert np.isclose(out.loc[("true", 0.0), "pitch mean"],
+                      projection_statistics(small_result, small_result.truth).loc["pitch", "mean_deg"])
+
+
+def test_single_sample_protocol_equals_the_mean_without_noise_and_is_validated():
+    rec = lab.simulate_lab(dataclasses.replace(lab.LabSettings().exact(), n_sets=2, poses_per_set=(4, 4),
+                                               dynamic_seconds=4.0))
+    mean, single = lab.static_motions(rec), lab.static_motions(rec, sample="single")
+    for k in mean:
+        assert np.abs(mean[k][0] - single[k][0]).max() < 1e-6 and np.abs(mean[k][1] - single[k][1]).max() < 1e-6
+    noisy = lab.simulate_lab(SMALL)
+    assert np.abs(lab.static_motions(noisy)[0][1] - lab.static_motions(noisy, sample="single")[0][1]).max() > 1e-5
+    with pytest.raises(ValueError, match="sample"):
+        lab.static_motions(rec, sample="median")
+
+
+def test_seed_study_rows_and_interventions():
+    study = seed_study([1, 2], SMALL, sqp_caps=(3, 100), turned_deg=(10.0,), single_sample=True)
+    assert list(study.index) == [1, 2]
+    for col in ("shared_bias_ours_right", "true_ours_right", "spread_optimization", "failed_ours_left", "rms_true_R0",
+                "pitch_bias_true_R0", "corr_roll_ours_right", "rms_turned_10", "failed_sqp_3", "limit_sqp_3",
+                "failed_sqp_100", "limit_sqp_100", "true_single_ours_right"):
+        assert col in study.columns, col
+    assert (study["rms_turned_10"] > study["rms_true_R0"]).all()       # a 10 deg error is visible in Table II
+    assert (study["limit_sqp_3"] <= study["failed_sqp_3"]).all()
+    assert study["failed_sqp_3"].sum() >= study["failed_sqp_100"].sum()
+    assert (study["failed_sqp_100"] == study["failed_optimization"]).all()  # run_lab's SQP is the 100-iteration one
+    assert (study["true_single_ours_right"] > 0).all()
