@@ -15,6 +15,7 @@ METHOD_STYLE = {
     "optimization (analytic)": {"color": "tab:blue", "label": "SQP, analytic gradients"},
     "optimization (finite-difference)": {"color": "tab:orange", "ls": "--", "label": "SQP, finite differences"},
     "optimization (capped)": {"color": "tab:red", "ls": ":", "label": "SQP, capped (30 it., ftol 1e-6)"},
+    "optimization (per-pair cost)": {"color": "tab:brown", "ls": "-.", "label": "SQP, cost (8) / 2J"},
 }
 
 

@@ -56,7 +56,7 @@ from .so3 import angle_between_deg, log_map, nearest_rotation, quaternion_to_mat
 from .solvers import ReplicationWarning, solve
 
 __all__ = [
-    "GRAVITY", "WAND_POINTS", "SOURCES", "TABLE2_SOLVERS", "LabSettings", "LabRecording", "LabResult",
+    "GRAVITY", "WAND_POINTS", "SOURCES", "PARTS", "TABLE2_SOLVERS", "LabSettings", "LabRecording", "LabResult",
     "simulate_lab", "camera_orientations", "static_sensor_orientations", "dynamic_sensor_orientations",
     "ACC_COLUMNS", "GYR_COLUMNS", "MAG_COLUMNS", "IMU_COLUMNS", "UNITS", "marker_pixels", "static_hold_seconds",
     "static_motions", "euler_rpy_deg", "attitude_statistics", "run_lab", "summarize", "ablation", "sensitivity",
@@ -100,6 +100,13 @@ SOURCES = {
     "magnetometer errors": ("mag_noise_ut", "mag_hard_iron_ut", "mag_soft_iron", "mag_misalignment_deg"),
     "magnetic field deflection": ("field_deflection_deg",),
     "lever-arm acceleration": ("lever_arm_m",),
+}
+
+#: Parts of an error source, for finer interventions (:meth:`LabSettings.without` takes these names too):
+#: the magnetometer's random noise apart from its residual calibration errors.
+PARTS = {
+    "magnetometer noise": ("mag_noise_ut",),
+    "magnetometer calibration errors": ("mag_hard_iron_ut", "mag_soft_iron", "mag_misalignment_deg"),
 }
 
 
@@ -232,13 +239,14 @@ class LabSettings:
     mount_error_deg: float = 3.0
 
     def without(self, *sources: str) -> "LabSettings":
-        """These settings with the named error sources (keys of :data:`SOURCES`) switched off."""
-        unknown = [s for s in sources if s not in SOURCES]
+        """These settings with the named error sources (keys of :data:`SOURCES` or :data:`PARTS`) switched off."""
+        known = {**SOURCES, **PARTS}
+        unknown = [s for s in sources if s not in known]
         if unknown:
-            raise ValueError(f"unknown error source(s) {unknown}; known: {list(SOURCES)}")
+            raise ValueError(f"unknown error source(s) {unknown}; known: {list(known)}")
         off = {}
         for s in sources:
-            for name in SOURCES[s]:
+            for name in known[s]:
                 value = getattr(self, name)
                 off[name] = tuple(0.0 for _ in value) if isinstance(value, tuple) else 0.0
         return dataclasses.replace(self, **off)

@@ -68,7 +68,7 @@ def reference_frame_dependence(result: LabResult, estimates: dict, times) -> pd.
     return out
 
 
-def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: float = 10.0, sqp_caps=(),
+def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: float = 10.0, sqp_runs=None,
                turned_deg=(), single_sample: bool = False) -> pd.DataFrame:
     """The simulated experiment once per seed: one row of numbers per seed.
 
@@ -78,7 +78,8 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
     consistency), ``failed_<m>`` (data sets more than ``failure_deg`` off), ``rms_<m>`` (Table II's RMS averaged
     over roll, pitch, yaw), ``corr_<m>`` (smallest correlation over the three angles; ``corr_<angle>_ours_right``
     per angle); ``pitch_bias_true_R0`` / ``rms_true_R0``: Table II's pitch mean and average RMS when the true
-    ``R0`` is used for the projection.
+    ``R0`` is used for the projection; ``rms_reversed_ours_right``: the same with the two-step (``R^r``) chordal
+    mean's error reversed (``E^T R0`` for the estimate ``E R0``: an error of the same size and axis, opposite sign).
 
     Parameters
     ----------
@@ -87,9 +88,10 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
         Every seed uses these settings with its own ``seed``.
     failure_deg : float
         A data set whose estimate is farther than this from the true ``R0`` has failed.
-    sqp_caps : iterable of int
-        Also run SQP from the identity with these iteration caps on every data set: ``failed_sqp_<cap>`` (data
-        sets more than ``failure_deg`` off) and ``limit_sqp_<cap>`` (of those, stopped by the iteration limit).
+    sqp_runs : dict, optional
+        ``{name: options of replication.solvers.sqp}``: also run SQP from the identity so configured on every
+        data set: ``failed_sqp_<name>`` (data sets more than ``failure_deg`` off) and ``limit_sqp_<name>`` (of
+        those, stopped by the iteration limit, ``max_iterations``, default 100).
     turned_deg : iterable of float
         Also project with the true ``R0`` turned by these angles (about the camera's x, y and z axis in turn):
         ``rms_turned_<angle>`` is Table II's RMS averaged over the three angles and the three axes, i.e. the
@@ -118,18 +120,21 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
         row["pitch_bias_true_R0"] = float(true.loc["pitch", "mean_deg"])
         row["pitch_bias_ours_right"] = float(result.table2.loc[("pitch", "ours_right"), "mean_deg"])
         row["rms_true_R0"] = float(true["rms_deg"].mean())
+        error = result.r0["ours_right"] @ result.truth.T
+        row["rms_reversed_ours_right"] = float(projection_statistics(result, error.T @ result.truth)["rms_deg"].mean())
         for angle in turned_deg:
             turned = [result.truth @ exp_map(np.radians(float(angle)) * axis) for axis in np.eye(3)]
             row[f"rms_turned_{angle:g}"] = float(np.mean([projection_statistics(result, R)["rms_deg"].mean()
                                                           for R in turned]))
-        motions = static_motions(recording) if sqp_caps else {}
-        for cap in sqp_caps:
+        motions = static_motions(recording) if sqp_runs else {}
+        for name, options in (sqp_runs or {}).items():
+            cap = int(options.get("max_iterations", 100))
             with warnings.catch_warnings():  # the failures are what is counted
                 warnings.simplefilter("ignore", ReplicationWarning)
-                runs = [sqp(A, B, max_iterations=int(cap)) for A, B in motions.values()]
+                runs = [sqp(A, B, **options) for A, B in motions.values()]
             off = [angle_between_deg(r.R, result.truth) > failure_deg for r in runs]
-            row[f"failed_sqp_{cap}"] = int(sum(off))
-            row[f"limit_sqp_{cap}"] = int(sum(o and int(r.n_iterations) >= int(cap) for o, r in zip(off, runs)))
+            row[f"failed_sqp_{name}"] = int(sum(off))
+            row[f"limit_sqp_{name}"] = int(sum(o and int(r.n_iterations) >= cap for o, r in zip(off, runs)))
         if single_sample:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", ReplicationWarning)

@@ -507,3 +507,20 @@ def test_exported_wrapper_warnings_point_at_the_caller(rng):
     with pytest.warns(ObservabilityWarning) as caught:
         park_martin(A, R0.T @ A @ R0)
     assert caught[0].filename == __file__
+
+
+def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
+    """SLSQP is not scale-invariant: the objective's scale (unstated in the paper) changes its path, not its answer."""
+    from replication.simulation import simulate
+    from replication.solvers import sqp
+
+    sim = simulate(3, 5)
+    as_printed, per_pair = sqp(sim.A, sim.B), sqp(sim.A, sim.B, cost="per-pair")
+    assert_rotations_close(as_printed.R, per_pair.R, 1e-3)
+    # SQPResult.cost is eq. (8) as printed either way: the same at the common minimiser ...
+    assert np.allclose(as_printed.cost[..., -1], per_pair.cost[..., -1], rtol=1e-4)
+    # ... but the first step differs by orders of magnitude (the identity Hessian guess meets another scale)
+    assert (as_printed.cost[..., 0] > 100 * per_pair.cost[..., 0]).all()
+    for bad in ("mean", 0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="cost must be"):
+            sqp(sim.A, sim.B, cost=bad)

@@ -55,14 +55,25 @@ def test_single_sample_protocol_equals_the_mean_without_noise_and_is_validated()
 
 
 def test_seed_study_rows_and_interventions():
-    study = seed_study([1, 2], SMALL, sqp_caps=(3, 100), turned_deg=(10.0,), single_sample=True)
+    study = seed_study([1, 2], SMALL, sqp_runs={"3": {"max_iterations": 3}, "100": {}}, turned_deg=(10.0,),
+                       single_sample=True)
     assert list(study.index) == [1, 2]
     for col in ("shared_bias_ours_right", "true_ours_right", "spread_optimization", "failed_ours_left", "rms_true_R0",
                 "pitch_bias_true_R0", "corr_roll_ours_right", "rms_turned_10", "failed_sqp_3", "limit_sqp_3",
-                "failed_sqp_100", "limit_sqp_100", "true_single_ours_right"):
+                "failed_sqp_100", "limit_sqp_100", "true_single_ours_right", "rms_reversed_ours_right"):
         assert col in study.columns, col
     assert (study["rms_turned_10"] > study["rms_true_R0"]).all()       # a 10 deg error is visible in Table II
-    assert (study["limit_sqp_3"] <= study["failed_sqp_3"]).all()
+    assert (study["limit_sqp_3"] <= study["failed_sqp_3"]).all() and study["limit_sqp_3"].sum() >= 1
     assert study["failed_sqp_3"].sum() >= study["failed_sqp_100"].sum()
     assert (study["failed_sqp_100"] == study["failed_optimization"]).all()  # run_lab's SQP is the 100-iteration one
     assert (study["true_single_ours_right"] > 0).all()
+    assert (study["rms_reversed_ours_right"] != study["rms_ours_right"]).all()
+
+
+def test_parts_of_a_source_switch_off_separately():
+    s = lab.LabSettings()
+    noise_off, cal_off = s.without("magnetometer noise"), s.without("magnetometer calibration errors")
+    assert noise_off.mag_noise_ut == 0 and noise_off.mag_hard_iron_ut == s.mag_hard_iron_ut
+    assert cal_off.mag_noise_ut == s.mag_noise_ut and cal_off.mag_soft_iron == 0 and cal_off.mag_misalignment_deg == 0
+    with pytest.raises(ValueError, match="unknown error source"):
+        s.without("magnetometer")

@@ -24,7 +24,9 @@ gradients or tolerances it used. Our choices:
 The paper's SQP is not identified. :data:`SQP_VARIANTS` names the settings the notebooks bracket it with:
 ``"analytic"`` (analytic gradients, converged: the default), ``"finite-difference"`` (the paper's evaluation
 count, converged) and ``"capped"`` (finite differences, SciPy's default ``ftol = 1e-6`` and at most 30
-iterations: an SQP run to a budget, the paper's "at least 30 iterations", rather than to convergence).
+iterations: an SQP run to a budget, the paper's "at least 30 iterations", rather than to convergence) and
+``"per-pair cost"`` (analytic gradients, the objective divided by ``2J``: SLSQP is not scale-invariant, and
+how the paper scaled its cost is not stated).
 
 The iterates are *not* projected: SQP iterates need not be feasible, and their
 ``||R - R0||_F`` can exceed ``2 sqrt 2`` (the largest distance between two
@@ -52,6 +54,7 @@ SQP_VARIANTS = {
     "analytic": {"gradient": "analytic"},
     "finite-difference": {"gradient": "finite-difference"},
     "capped": {"gradient": "finite-difference", "ftol": 1e-6, "max_iterations": 30},
+    "per-pair cost": {"gradient": "analytic", "cost": "per-pair"},
 }
 
 REFERENCE = (
@@ -129,16 +132,17 @@ def _constraints(kind: str, analytic: bool = True):
     return cons
 
 
-def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic):
+def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic, scale):
     sym = K + K.T
+    c = 2.0 * J * scale
 
     def f(x):
-        # eq. (8) as in handeye_cost_kron, written out on the flat vector: it runs in SLSQP's inner
-        # loop, and the recorded histories (chaotic when SQP diverges) depend on its rounding
-        return 2.0 * J * (x @ x - x @ K @ x)
+        # eq. (8) as in handeye_cost_kron (times ``scale``), written out on the flat vector: it runs in SLSQP's
+        # inner loop, and the recorded histories (chaotic when SQP diverges) depend on its rounding
+        return c * (x @ x - x @ K @ x)
 
     def grad(x):
-        return 2.0 * J * (2.0 * x - sym @ x)
+        return c * (2.0 * x - sym @ x)
 
     history = []
     out = minimize(
@@ -154,12 +158,13 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic):
 
 
 def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
-        constraints: str = "orthonormal", gradient: str = "analytic") -> SQPResult:
+        constraints: str = "orthonormal", gradient: str = "analytic", cost="sum") -> SQPResult:
     """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
 
     SQP is a local method: from a start far from ``R0`` it can reach its iteration
-    limit far from the minimum (every failure in notebooks 03, 05 and 07), and eq. (8) over
-    SO(3) has other strict local minima it could stop on (notebook 06). Its answer is therefore checked against the certified global
+    limit far from the minimum (notebooks 03, 05 and 07; how often depends on the scale of
+    the objective, ``cost``), or converge to one of the other strict local minima of eq. (8)
+    over SO(3) (notebooks 03 and 06). Its answer is therefore checked against the certified global
     minimum of eq. (8) (:func:`replication.solvers.chordal_optimal`), and a
     :class:`~replication.solvers.LocalMinimumWarning` names the problems where it is
     not that minimum; a :class:`~replication.solvers.ConvergenceWarning` names those
@@ -182,6 +187,12 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         literally (linearly dependent at rotations; see the module notes).
     gradient : {"analytic", "finite-difference"}
         Analytic gradients (default) or SciPy's finite differences (see the module notes).
+    cost : {"sum", "per-pair"} or float
+        The objective SLSQP sees: eq. (8) as printed, a sum over the ``J`` pairs (default), divided by
+        ``2J`` (``"per-pair"``), or multiplied by a positive number; the minimiser is the same. SLSQP is not
+        invariant to the objective's scale (its first Hessian estimate is the identity, ``ftol`` is absolute),
+        so its path, speed and failures change with it (notebook 03); the paper does not say which scale its
+        SQP saw. ``SQPResult.cost`` is eq. (8) as printed either way.
 
     Returns
     -------
@@ -196,14 +207,23 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     m = prepare_motions(A, B)
     warn_if_weak(m)
     res = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints,
-                    gradient=gradient)
+                    gradient=gradient, cost=cost)
     check_local_answer(m, res.R, "sqp", stacklevel=3)
     return res
 
 
 def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
-              constraints: str = "orthonormal", gradient: str = "analytic", stacklevel: int = 3) -> SQPResult:
+              constraints: str = "orthonormal", gradient: str = "analytic", cost="sum",
+              stacklevel: int = 3) -> SQPResult:
     """:func:`sqp` on validated motions (without the global-minimum check, which the door does)."""
+    if isinstance(cost, str):
+        if cost not in ("sum", "per-pair"):
+            raise ValueError(f"cost must be 'sum', 'per-pair' or a positive number, got {cost!r}")
+        scale = 1.0 if cost == "sum" else 1.0 / (2.0 * m.J)
+    else:
+        scale = float(cost)
+        if not (np.isfinite(scale) and scale > 0):
+            raise ValueError(f"cost must be 'sum', 'per-pair' or a positive number, got {cost!r}")
     if constraints not in ("paper", "orthonormal"):
         raise ValueError(f"constraints must be 'paper' or 'orthonormal', got {constraints!r}")
     if gradient not in ("analytic", "finite-difference"):
@@ -218,7 +238,8 @@ def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float =
     init = check_init(init, batch)
     cons = _constraints(constraints, analytic)
     flat_K, flat_init = K.reshape(-1, 9, 9), init.reshape(-1, 3, 3)
-    runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons, analytic) for n in range(len(flat_K))]
+    runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons, analytic, scale)
+            for n in range(len(flat_K))]
     iterates = unvec(np.stack([r[0] for r in runs])).reshape(batch + (max_iterations, 3, 3))
     res = SQPResult(
         iterates=iterates,
