@@ -34,11 +34,13 @@ AT_MINIMUM_DEG = 0.01
 
 
 def noise_sweep(levels, n_runs: int, seed: int, *, motions=None, init=None, noise_distribution: str = "uniform",
-                sqp_variant: str = "analytic", iterations: int = 50, camera_noise_deg: float = 1.0) -> dict:
+                sqp_variant: str = "analytic", sqp_options=None, iterations: int = 50,
+                camera_noise_deg: float = 1.0) -> dict:
     """Final errors of both methods at each sensor-noise level (degrees).
 
     Level ``k`` draws ``n_runs`` problems with seed ``seed + k``. The two-step method runs the paper's
-    ``iterations``; SQP (the named variant, at most ``iterations``) is projected onto SO(3) at the end.
+    ``iterations``; SQP (the named variant of ``SQP_VARIANTS``, updated by ``sqp_options``, e.g.
+    ``{"cost": 0.0005}``; at most ``iterations``) is projected onto SO(3) at the end.
 
     Returns
     -------
@@ -46,7 +48,7 @@ def noise_sweep(levels, n_runs: int, seed: int, *, motions=None, init=None, nois
         level -> ``{"two_step": (n,) errors of R^r, "sqp": (n,) errors, "sqp_at_minimum": (n,) bool}``
         (errors ``||R - R0||_F``).
     """
-    options = dict(SQP_VARIANTS[sqp_variant])
+    options = {**SQP_VARIANTS[sqp_variant], **(sqp_options or {})}
     cap = min(int(options.pop("max_iterations", iterations)), iterations)
     out = {}
     for k, level in enumerate(levels):

@@ -32,6 +32,7 @@ __all__ = [
     "chordal_to_angle_deg",
     "nearest_rotation_up_to_sign",
     "rotation_angle_deg",
+    "orthonormality_residual",
     "log_map",
     "exp_map",
     "as_quaternion",
@@ -345,6 +346,12 @@ def frobenius_error(R_est, R_true) -> np.ndarray:
     R_est = check_matrices(R_est, "R_est")
     R_true = check_matrices(R_true, "R_true")
     return np.linalg.norm(R_est - R_true, axis=(-2, -1))
+
+
+def orthonormality_residual(M) -> np.ndarray:
+    """``||M^T M - I||_F`` of each 3x3 matrix (0 for a rotation or a reflection); shape (...)."""
+    M = np.asarray(M, dtype=float)
+    return np.linalg.norm(np.swapaxes(M, -1, -2) @ M - np.eye(3), axis=(-2, -1))
 
 
 def rotation_angle_deg(R) -> np.ndarray:

@@ -19,7 +19,7 @@ from .stats import z_score
 
 __all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED",
            "converged_at", "first_below", "convergence_summary", "ONE_PERCENT", "NEGLIGIBLE", "RISE_TOL",
-           "COST_RISE_RTOL"]
+           "COST_RISE_RTOL", "FEASIBLE_TOL", "diverting_runs"]
 
 #: The paper's "1 % error", read as ``||R_hat - R0||_F < 0.01 ||R0||_F = 0.01 sqrt(3)``.
 ONE_PERCENT = 0.01 * np.sqrt(3.0)
@@ -159,6 +159,39 @@ def converged_at(mean_error, rel: float = 0.05, atol: float = 0.0):
 RISE_TOL = 1e-6
 #: The same for the cost (8), relative to its value.
 COST_RISE_RTOL = 1e-6
+
+#: An SQP iterate counts as (nearly) a rotation when ``||X^T X - I||_F`` is below this (see
+#: :func:`replication.so3.orthonormality_residual`); off it, a lower cost (8) need not mean a better rotation.
+FEASIBLE_TOL = 0.1
+
+
+def diverting_runs(errors, costs, *, min_error: float = 0.0, feasible=None) -> np.ndarray:
+    """Per run: an iteration at which the error rises while the cost (8) falls (the paper: SQP "may divert").
+
+    Parameters
+    ----------
+    errors, costs : array_like, shape (n, iterations)
+        Per-iteration error ``||R_n - R0||_F`` and cost (8).
+    min_error : float
+        Count only iterations whose new error is above this (absolute: the same bar for every method).
+    feasible : array_like of bool, shape (n, iterations), optional
+        Count only iterations whose new iterate is (nearly) a rotation.
+
+    A rise smaller than :data:`RISE_TOL` (error) or a fall smaller than :data:`COST_RISE_RTOL` (relative cost)
+    is rounding and not counted.
+    """
+    err, cost = np.asarray(errors, dtype=float), np.asarray(costs, dtype=float)
+    if err.shape != cost.shape or err.ndim != 2:
+        raise ValueError(f"errors and costs must have the same shape (n, iterations), got {err.shape}, {cost.shape}")
+    step = (np.diff(err, axis=1) > RISE_TOL) & (np.diff(cost, axis=1) < -COST_RISE_RTOL * np.abs(cost[:, :-1]))
+    step &= err[:, 1:] > min_error
+    if feasible is not None:
+        feasible = np.asarray(feasible, dtype=bool)
+        if feasible.shape != err.shape:
+            raise ValueError(f"feasible must have the shape of errors {err.shape}, got {feasible.shape}")
+        step &= feasible[:, 1:]
+    return step.any(axis=1)
+
 
 #: "Negligible error" (Sec. III-A) read as: within this of the final mean error. On the paper's own Table I it
 #: puts the two-step method's convergence at iteration 15 and SQP's at 50, as the text says.

@@ -5,7 +5,8 @@ import pytest
 from replication import paper
 from replication.simulation import simulate
 from replication.tables import (
-    ONE_PERCENT, RISE_TOL, converged_at, convergence_summary, first_below, iterate_errors, table1, versus_paper,
+    ONE_PERCENT, RISE_TOL, converged_at, convergence_summary, diverting_runs, first_below, iterate_errors, table1,
+    versus_paper,
 )
 
 
@@ -88,3 +89,14 @@ def test_rounding_level_rises_are_not_counted():
     assert s.loc["w", "error_rises"] == 0 and s.loc["w", "cost_rises"] == 0 and s.loc["w", "diverts"] == 0
     err[3] = 0.01 + 10 * RISE_TOL
     assert convergence_summary({"w": np.tile(err, (5, 1))}, np.random.default_rng(0), n_boot=5).loc["w", "error_rises"] == 1
+
+
+def test_diverting_runs_with_an_absolute_bar_and_feasibility():
+    err = np.array([[1.0, 0.5, 0.8, 0.01], [1.0, 0.5, 0.02, 0.03]])
+    cost = np.array([[9.0, 5.0, 4.0, 1.0], [9.0, 5.0, 4.0, 3.0]])   # always falling
+    assert diverting_runs(err, cost).tolist() == [True, True]
+    assert diverting_runs(err, cost, min_error=0.05).tolist() == [True, False]   # the second rise is at 0.03
+    off = np.array([[True, True, False, True], [True] * 4])                        # the first rise is off SO(3)
+    assert diverting_runs(err, cost, min_error=0.05, feasible=off).tolist() == [False, False]
+    with pytest.raises(ValueError, match="same shape"):
+        diverting_runs(err, cost[:, :3])
