@@ -157,7 +157,7 @@ def generate_lab_command(args: argparse.Namespace) -> int:
     import time
 
     from .lab import LabSettings, simulate_lab
-    from .lab_io import default_lab_dir, write_lab
+    from .lab import default_lab_dir, write_lab
 
     start = time.perf_counter()
     settings = LabSettings() if args.seed is None else LabSettings(seed=args.seed)

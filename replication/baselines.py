@@ -61,15 +61,19 @@ def corrupt_pairs(B, fraction: float, rng: np.random.Generator):
 
 
 def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None,
-            rng: np.random.Generator | None = None) -> pd.DataFrame:
+            rng: np.random.Generator | None = None, pairs_for: dict | None = None,
+            ignore_warnings: tuple = ()) -> pd.DataFrame:
     """Run solvers on the same problems; one row per solver.
+
+    The one study loop over solvers: notebook 06 runs it on Monte Carlo batches, notebook 07
+    (:mod:`replication.real_study`) on one real recording at a time.
 
     Parameters
     ----------
-    A, B : ndarray, shape (N, J, 3, 3)
-        Camera / sensor relative rotations of ``N`` problems.
+    A, B : ndarray, shape (N, J, 3, 3) or (J, 3, 3)
+        Camera / sensor relative rotations of ``N`` problems (or of one).
     R0 : array_like, shape (N, 3, 3) or (3, 3)
-        True ``camera_from_sensor``.
+        True (or reference) ``camera_from_sensor``.
     methods : list of str, optional
         Default: :func:`replication.solvers.available`.
     options : dict, optional
@@ -79,6 +83,12 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
         problems both solved) with a paired bootstrap 95 % interval ``ratio_low``, ``ratio_high`` (needs ``rng``).
     rng : numpy.random.Generator, optional
         For the bootstrap.
+    pairs_for : dict, optional
+        ``{name prefix: (A, B)}``: other pairs for the methods whose name starts with the prefix (e.g. the
+        ``opencv_`` solvers, which rebuild a pose chain from consecutive pairs and form all its pairs).
+    ignore_warnings : tuple of Warning classes
+        Warnings left out of the ``warnings`` column (e.g. :class:`~replication.solvers.ObservabilityWarning`,
+        which concerns the data set, not the solver).
 
     Returns
     -------
@@ -88,7 +98,7 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
         (problems where OpenCV returned no rotation; they are left out of the
         error statistics), ``warnings`` (the classes of the warnings the call issued, e.g.
         ``LocalMinimumWarning``; empty if none), ``seconds`` (wall time of the call), ``per_s``
-        (calibrations per second).
+        (calibrations per second), ``n_pairs`` (pairs per problem given to the method).
     """
     methods = available() if methods is None else list(methods)
     options = dict(options or {})
@@ -97,12 +107,15 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
         opts = dict(options.get(name, {}))
         if name.startswith("opencv_"):
             opts.setdefault("on_failure", "nan")  # count OpenCV's non-rotations instead of stopping
+        a, b = next((p for prefix, p in (pairs_for or {}).items() if name.startswith(prefix)), (A, B))
         start = time.perf_counter()
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ReplicationWarning)
-            R = solve(name, A, B, **opts)  # each call validates and builds K itself: fair timings
+            R = solve(name, a, b, **opts)  # each call validates and builds K itself: fair timings
         seconds = time.perf_counter() - start
-        issued = sorted({w.category.__name__ for w in caught if issubclass(w.category, ReplicationWarning)})
+        issued = sorted({w.category.__name__ for w in caught if issubclass(w.category, ReplicationWarning)
+                         and not issubclass(w.category, tuple(ignore_warnings))})
+        a, b, R = (np.asarray(x)[None] if np.ndim(a) == 3 else np.asarray(x) for x in (a, b, R))  # one problem
         failed = ~np.isfinite(R).all(axis=(-2, -1))
         ok = ~failed
         err = angle_between_deg(R[ok], np.broadcast_to(R0, R.shape)[ok])
@@ -114,11 +127,12 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
             "median_deg": np.median(err),
             "p95_deg": np.percentile(err, 95),
             "max_deg": err.max(),
-            "mean_cost": handeye_cost(R[ok], A[ok], B[ok]).mean(),
+            "mean_cost": handeye_cost(R[ok], a[ok], b[ok]).mean(),
             "failures": int(failed.sum()),
             "warnings": ", ".join(issued),
             "seconds": seconds,
             "per_s": len(R) / seconds,
+            "n_pairs": a.shape[-3],
         })
     table = pd.DataFrame(rows).set_index("method")
     if ratio_to is not None:

@@ -15,9 +15,8 @@
    moving-block bootstrap over the pairs (overlapping pairs are correlated, so
    blocks span ``interval``) for a confidence radius in degrees.
 
-Conventions: ``R0 = camera_from_sensor`` (maps sensor-frame vectors into the camera
-frame; Kalibr's ``R_cam<-imu``). Quaternions are ``(w, x, y, z)``. Euler angles are
-intrinsic ``z-y'-x''`` (yaw, pitch, roll) in degrees: ``R0 = Rz(yaw) Ry(pitch) Rx(roll)``.
+Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
+``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -25,20 +24,18 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from .handeye import MotionObservability, pair_residual_deg
-from .realdata import GyroStream, OrientationStream
+from .handeye import pair_residual_deg, relative_rotations
+from .motions import MotionObservability, prepare_motions
 from .so3 import (
-    angle_between_deg, as_quaternion, check_rotation_matrices, cumulative_product, exp_map, log_map,
-    rotation_angle_deg,
+    angle_between_deg, as_quaternion, check_rotation_matrices, log_map, rotation_angle_deg, yaw_pitch_roll_deg,
 )
-from .handeye import prepare_motions
+from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name here
 from .solvers import ReplicationWarning, solve, solver_info
 
 __all__ = [
     "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
-    "stream_pairs", "pose_pairs", "every_solver",
+    "stream_pairs", "pose_pairs",
 ]
 
 
@@ -130,18 +127,6 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
-def integrate_gyro(gyro: GyroStream) -> OrientationStream:
-    """Orientation ``world_from_body`` (``Q(t_0) = I``) from body-frame rates, trapezoidal rule.
-
-    ``Q_{k+1} = Q_k exp([(omega_k + omega_{k+1}) / 2] dt_k)``; the products are a batched
-    prefix scan (:func:`replication.so3.cumulative_product`). No bias is removed.
-    """
-    dt = np.diff(gyro.t)
-    steps = exp_map(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
-    Q = np.concatenate([np.eye(3)[None], cumulative_product(steps)])
-    return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")
-
-
 def _speed(Q, times) -> np.ndarray:
     """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading axes."""
     rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
@@ -199,9 +184,8 @@ def motion_pairs(camera: OrientationStream, sensor: OrientationStream, interval:
     if len(i) < 2:
         raise ValueError(f"fewer than 2 motion pairs at interval {interval:g} s (streams overlap "
                          f"{t[-1] - t[0] if len(t) else 0:.2f} s)")
-    Qs = sensor.at(t + offset)
-    A = np.swapaxes(Qc[j], -1, -2) @ Qc[i]  # eq. (3): C_k C_t^T with C = Q^T
-    B = np.swapaxes(Qs[j], -1, -2) @ Qs[i]  # eq. (4)
+    A = relative_rotations(Qc, pairs=(i, j), convention="world_from_body", atol=1e-5)  # eq. (3): C_k C_t^T, C = Q^T
+    B = relative_rotations(sensor.at(t + offset), pairs=(i, j), convention="world_from_body", atol=1e-5)  # eq. (4)
     return A, B, t[i]
 
 
@@ -220,47 +204,6 @@ def stream_pairs(camera: OrientationStream, sensor, *, interval: float = 1.0, ma
     offset, corr = estimate_time_offset(camera, sensor, max_offset=max_offset)
     A, B, _ = motion_pairs(camera, sensor, interval, offset=offset if correct_offset else 0.0)
     return A, B, offset, corr
-
-
-def every_solver(A, B, reference, *, methods=None, opencv_pairs=None) -> "pandas.DataFrame":
-    """Every registered solver on the same pairs; angle to ``reference`` in degrees.
-
-    Parameters
-    ----------
-    A, B : ndarray (J, 3, 3)
-    reference : array_like (3, 3)
-        Reference ``camera_from_sensor``.
-    methods : list of str, optional
-        Default: all registered solvers.
-    opencv_pairs : (A, B), optional
-        Pairs for the ``opencv_*`` solvers, which rebuild a pose chain and form all its pairs
-        (``J (J + 1) / 2`` of them): pass consecutive or non-overlapping pairs.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Index ``method``; columns ``error_deg``, ``n_pairs``, ``warnings`` (the classes of the
-        solver's warnings other than :class:`~replication.solvers.ObservabilityWarning`, which
-        concerns the data set, not the solver), ``seconds``.
-    """
-    import time
-
-    import pandas as pd
-
-    from .solvers import ObservabilityWarning, available
-
-    rows = []
-    for name in available() if methods is None else methods:
-        a, b = opencv_pairs if (opencv_pairs is not None and name.startswith("opencv_")) else (A, B)
-        start = time.perf_counter()
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ReplicationWarning)
-            R = solve(name, a, b)
-        issued = sorted({w.category.__name__ for w in caught if issubclass(w.category, ReplicationWarning)
-                         and not issubclass(w.category, ObservabilityWarning)})
-        rows.append({"method": name, "error_deg": float(angle_between_deg(R, np.asarray(reference))),
-                     "n_pairs": len(a), "warnings": ", ".join(issued), "seconds": time.perf_counter() - start})
-    return pd.DataFrame(rows).set_index("method")
 
 
 def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
@@ -349,8 +292,8 @@ def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
         i, j = np.arange(len(C) - 1), np.arange(1, len(C))
     else:
         raise ValueError(f"pairs must be 'all' or 'consecutive', got {pairs!r}")
-    A = C[j] @ np.swapaxes(C[i], -1, -2)  # eq. (3)
-    B = S[j] @ np.swapaxes(S[i], -1, -2)  # eq. (4)
+    A = relative_rotations(C, pairs=(i, j), atol=1e-5)  # eq. (3)
+    B = relative_rotations(S, pairs=(i, j), atol=1e-5)  # eq. (4)
     if pairs == "all":
         keep = rotation_angle_deg(B) > min_motion_deg
         A, B = A[keep], B[keep]
@@ -380,7 +323,7 @@ def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference,
     return CalibrationResult(
         R=R,
         quaternion_wxyz=as_quaternion(R),
-        euler_zyx_deg=Rotation.from_matrix(R).as_euler("ZYX", degrees=True),
+        euler_zyx_deg=yaw_pitch_roll_deg(R),
         method=method,
         interval_s=interval,
         n_pairs=int(len(A)),

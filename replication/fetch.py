@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ._io import write_atomic
+from .datafile import fail, read_text
 
 __all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
 
@@ -66,36 +67,30 @@ class ManifestEntry:
 def load_manifest(path=MANIFEST) -> list[ManifestEntry]:
     """Read and validate the manifest; errors name the file, line and column."""
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: manifest not found" + (" (it is a directory)" if path.is_dir() else ""))
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as err:
-        raise ValueError(f"{path}: not UTF-8 text ({err.reason} at byte {err.start})") from None
-    rows = list(csv.reader(text.splitlines()))
+    rows = list(csv.reader(read_text(path, "the real-data manifest").splitlines()))
     if not rows or rows[0] != COLUMNS:
-        raise ValueError(f"{path}: line 1: header must be {','.join(COLUMNS)}")
+        fail(path, f"header must be {','.join(COLUMNS)}", line=1)
     entries = []
     for line, row in enumerate(rows[1:], start=2):
         if not row:
             continue
         if len(row) != len(COLUMNS):
-            raise ValueError(f"{path}: line {line}: expected {len(COLUMNS)} columns, got {len(row)}")
+            fail(path, f"expected {len(COLUMNS)} columns, got {len(row)}", line=line)
         values = dict(zip(COLUMNS, row))
         for column in COLUMNS:
             if not values[column].strip():
-                raise ValueError(f"{path}: line {line}, column {column!r}: empty")
+                fail(path, "empty", line=line, column=column)
         if not values["bytes"].isdigit():
-            raise ValueError(f"{path}: line {line}, column 'bytes': not a whole number ({values['bytes']!r})")
+            fail(path, f"not a whole number ({values['bytes']!r})", line=line, column="bytes")
         if len(values["sha256"]) != 64 or any(c not in "0123456789abcdef" for c in values["sha256"]):
-            raise ValueError(f"{path}: line {line}, column 'sha256': not 64 lowercase hex digits")
+            fail(path, "not 64 lowercase hex digits", line=line, column="sha256")
         if len(values["commit"]) != 40:
-            raise ValueError(f"{path}: line {line}, column 'commit': not a full 40-character commit hash")
+            fail(path, "not a full 40-character commit hash", line=line, column="commit")
         entries.append(ManifestEntry(**{**values, "bytes": int(values["bytes"])}))
     seen = set()
     for e in entries:
         if e.relpath in seen:
-            raise ValueError(f"{path}: {e.relpath} is listed twice")
+            fail(path, f"{e.relpath} is listed twice")
         seen.add(e.relpath)
     return entries
 

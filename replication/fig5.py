@@ -14,6 +14,9 @@ with uncertainties:
 * the growth ratio ``(two-step error at the top level - at the bottom) / (the same for SQP)``, with a bootstrap
   interval (problems resampled per level, the two methods paired on the same problems): below 1 means the
   two-step error grows more slowly, as the paper claims.
+
+:func:`sweep_grid` runs the notebook's grid of settings (motions x start x noise distribution x SQP
+configuration), :func:`summary_table` and :func:`fig5_figure` show it.
 """
 from __future__ import annotations
 
@@ -27,7 +30,8 @@ from .so3 import angle_between_deg, frobenius_error
 from .solvers import SQP_VARIANTS, ReplicationWarning, chordal_optimal, sqp, two_step
 from .stats import mean_se
 
-__all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG"]
+__all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
+           "fig5_figure", "two_step_growth", "ratio_range"]
 
 #: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having reached it.
 AT_MINIMUM_DEG = 0.01
@@ -114,3 +118,160 @@ def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000) -> 
     else:
         growth.update(ratio=np.nan, low=np.nan, high=np.nan)
     return per_level, growth
+
+
+#: The settings of notebook 04's grid where the slow SQP variants also run: our defaults and the matched setting.
+FULL_SETTINGS = (("Haar", "identity"), ("0-90 deg", "150 deg from R0"))
+
+
+def sqp_configs_for(motions: str, start: str, noise: str, *, full_noise: str = "uniform in ball",
+                    full_settings=FULL_SETTINGS) -> list:
+    """The SQP configurations run in one setting of the grid (labels of notebook 04's ``CONFIGS``).
+
+    Analytic SQP everywhere; with noise ``full_noise`` also analytic SQP on eq. (8) / 100J (``"cost / 100J"``),
+    and where ``(motions, start)`` is in ``full_settings`` the finite-difference and capped variants too.
+
+    Returns
+    -------
+    list of str
+        In this order: ``"analytic"``, ``"cost / 100J"``, ``"finite-difference"``, ``"capped"`` (the order in
+        which :func:`sweep_grid` runs them and draws their bootstrap samples).
+    """
+    variants = ["analytic"]
+    if noise == full_noise:
+        variants.append("cost / 100J")
+        if (motions, start) in full_settings:
+            variants += ["finite-difference", "capped"]
+    return variants
+
+
+def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, motions: dict, starts: dict,
+               noise: dict, configs: dict, variants_for=sqp_configs_for, n_boot: int = 2000):
+    """:func:`noise_sweep` and :func:`resilience` over a grid of settings.
+
+    Loops over ``motions``, then ``starts``, then ``noise``, then ``variants_for(motions label, start label,
+    noise label)``; every setting uses the same ``seed`` (level ``k``: ``seed + k``), so settings share their
+    problems where their motions and noise distribution agree.
+
+    Parameters
+    ----------
+    levels : sequence of float
+        Sensor-noise levels (deg).
+    n_runs, seed : int
+    rng : numpy.random.Generator
+        Bootstrap draws of :func:`resilience`, setting after setting in loop order.
+    motions, starts, noise : dict
+        label -> ``motions`` / ``init`` / ``noise_distribution`` of :func:`noise_sweep`.
+    configs : dict
+        SQP configuration label -> ``(sqp_variant, sqp_options)``.
+    variants_for : callable
+        ``(motions label, start label, noise label) -> list of configuration labels``.
+    n_boot : int
+
+    Returns
+    -------
+    (sweeps, per_level, growth)
+        ``sweeps``: ``(motions, start, noise, SQP variant) -> noise_sweep output``. ``per_level``: the stacked
+        per-level tables of :func:`resilience`, index ``(motions, start, noise, SQP variant, sensor noise (deg))``,
+        sorted. ``growth``: one row per setting (the ``growth`` dicts), sorted.
+    """
+    results, sweeps = {}, {}
+    for m_name, m_range in motions.items():
+        for s_name, start in starts.items():
+            for n_name, dist in noise.items():
+                for variant in variants_for(m_name, s_name, n_name):
+                    key = (m_name, s_name, n_name, variant)
+                    base, options = configs[variant]
+                    sweeps[key] = noise_sweep(levels, n_runs, seed, motions=m_range, init=start,
+                                              noise_distribution=dist, sqp_variant=base, sqp_options=options)
+                    results[key] = resilience(sweeps[key], rng, n_boot=n_boot)
+    names = ["motions", "start", "noise", "SQP variant"]
+    per_level = pd.concat({k: v[0] for k, v in results.items()}, names=names + ["sensor noise (deg)"]).sort_index()
+    growth = pd.DataFrame({k: v[1] for k, v in results.items()}).T
+    growth.index.names = names
+    return sweeps, per_level, growth.sort_index()
+
+
+def _interval(v, lo, hi) -> str:
+    return "-" if pd.isna(v) else f"{v:.2f} [{lo:.2f}, {hi:.2f}]"
+
+
+def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float = 1.0, high: float = 10.0):
+    """One text row per setting: SQP's failure share, the two-step / SQP ratio at two levels, the growth ratio.
+
+    Ratios are ``"r [low, high]"`` (95 % bootstrap), ``"-"`` where SQP failed (NaN); the failure share goes
+    through :func:`replication.stats.share_range`.
+
+    Parameters
+    ----------
+    per_level, growth : DataFrame
+        :func:`sweep_grid` output.
+    low, high : float
+        The levels whose ratios are shown.
+    """
+    from .stats import share_range
+
+    def ratio_at(level):
+        return per_level.xs(level, level=-1).apply(lambda r: _interval(r["ratio"], r["ratio_low"], r["ratio_high"]),
+                                                   axis=1)
+
+    return pd.DataFrame({
+        "SQP not at the global minimum": growth["sqp_failed_share"].map(share_range),
+        f"ratio at {low:g} deg": ratio_at(low),
+        f"ratio at {high:g} deg": ratio_at(high),
+        f"growth ratio {low:g} -> {high:g} deg": growth.apply(lambda r: _interval(r["ratio"], r["low"], r["high"]),
+                                                              axis=1),
+    })
+
+
+def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
+                variants=(("analytic", "-"), ("finite-difference", "--"), ("capped", ":"))):
+    """Fig. 5 replicated: final error against sensor noise, one panel per setting.
+
+    Each panel: the two-step mean error (``R^r``) with ``± 1.96 SE`` error bars (from the ``"analytic"`` row of
+    ``per_level``), and each SQP variant's mean error over *all* runs (including runs that did not reach the
+    minimum), log scale.
+
+    Parameters
+    ----------
+    per_level, sweeps
+        :func:`sweep_grid` output.
+    levels : sequence of float
+    panels : sequence of (title, (motions, start, noise))
+    variants : sequence of (SQP variant, line style)
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(12, 4.2), sharey=True)
+    for ax, (label, key) in zip(axes, panels):
+        base = per_level.loc[key + ("analytic",)]
+        ax.errorbar(levels, base["two_step"], yerr=1.96 * base["two_step_se"], marker="o", capsize=3,
+                    color="tab:cyan", label="ours, $R^r$")
+        for variant, style in variants:
+            sw = sweeps[key + (variant,)]
+            ax.plot(levels, [sw[lv]["sqp"].mean() for lv in levels], ls=style, marker=".",
+                    label=f"SQP ({variant}), all runs")
+        ax.set_xlabel(r"noise on $\Delta R_i$ (deg); noise on $\Delta R_c$ = 1 deg")
+        ax.set_title(label, fontsize=9)
+        ax.set_yscale("log")
+    axes[0].set_ylabel(r"final $\|\hat R_0 - R_0\|_F$ (mean; ours $\pm$ 1.96 SE)")
+    axes[0].legend(fontsize=8)
+    fig.suptitle("Fig. 5 (replicated)")
+    fig.tight_layout()
+    return fig
+
+
+def two_step_growth(sweeps: dict, keys, *, low: float = 1.0, high: float = 10.0) -> dict:
+    """Growth of the two-step mean error between two levels: ``mean(error at high) - mean(error at low)``, per key."""
+    return {k: sweeps[k][high]["two_step"].mean() - sweeps[k][low]["two_step"].mean() for k in keys}
+
+
+def ratio_range(per_level: pd.DataFrame, motions: str, start: str = "identity") -> tuple:
+    """Smallest and largest two-step / SQP ratio over every level, noise distribution and SQP configuration of one
+    (motions, start) setting."""
+    ratio = per_level.xs(motions, level="motions").xs(start, level="start")["ratio"]
+    return ratio.min(), ratio.max()

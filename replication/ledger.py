@@ -14,6 +14,7 @@ Verdicts: ``holds``, ``fails``, ``holds only if`` (the condition says what must 
 """
 from __future__ import annotations
 
+import io
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import write_atomic
+from .datafile import fail, read_text
 
 __all__ = ["VERDICTS", "CLAIM_MIME", "ClaimRecord", "load_claims", "record", "collect", "to_markdown",
            "update_readme"]
@@ -65,24 +67,21 @@ def load_claims(path=None) -> pd.DataFrame:
     from .paper import data_dir
 
     path = Path(path) if path else data_dir() / "paper" / "claims.csv"
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: claims file not found")
-    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    df = pd.read_csv(io.StringIO(read_text(path, "the claims file")), dtype=str, keep_default_na=False)
     expected = ["claim", "statement", "where", "paper_value", "unit"]
     if list(df.columns) != expected:
-        raise ValueError(f"{path}: line 1: columns must be {expected}, got {list(df.columns)}")
+        fail(path, f"columns must be {expected}, got {list(df.columns)}", line=1)
     for line, row in enumerate(df.itertuples(index=False), start=2):
         for col in ("claim", "statement", "where"):
             if not getattr(row, col).strip():
-                raise ValueError(f"{path}: line {line}, column {col!r}: empty")
+                fail(path, "empty", line=line, column=col)
         if row.paper_value.strip():
             try:
                 float(row.paper_value)
             except ValueError:
-                raise ValueError(f"{path}: line {line}, column 'paper_value': not a number "
-                                 f"({row.paper_value!r})") from None
+                fail(path, f"not a number ({row.paper_value!r})", line=line, column="paper_value")
     if df["claim"].duplicated().any():
-        raise ValueError(f"{path}: claim ids repeated: {sorted(df.loc[df['claim'].duplicated(), 'claim'])}")
+        fail(path, f"claim ids repeated: {sorted(df.loc[df['claim'].duplicated(), 'claim'])}")
     return df.set_index("claim")
 
 

@@ -1,16 +1,20 @@
 """The paper's published numbers (``data/paper/``): the comparison target, never a result.
 
-Every loader validates its file (columns, numbers, no NaN, expected rows) and
-raises ``ValueError`` naming the file and the problem.
+Every loader validates its file (columns, numbers, no NaN, expected rows) and raises
+:class:`~replication.datafile.DataFileError` (a ``ValueError``) naming the file, the line
+and column where known, and the problem; a missing file raises
+:class:`~replication.datafile.DataFileNotFound` (also a ``FileNotFoundError``).
 """
 from __future__ import annotations
 
+import io
 import os
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from .datafile import fail, read_text
 from .so3 import nearest_rotation
 
 __all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims"]
@@ -28,19 +32,31 @@ def data_dir() -> Path:
 
 
 def _read(name: str, columns: list[str], numeric: list[str]) -> pd.DataFrame:
+    """``data_dir()/paper/<name>`` as a table of ``columns``, the ``numeric`` ones as floats.
+
+    Raises
+    ------
+    DataFileNotFound
+        The file is missing (also a ``FileNotFoundError``).
+    DataFileError
+        Not UTF-8 text, not a CSV, a missing column, or a value of a ``numeric`` column that is
+        not a number (line and column named; the header is line 1).
+    """
     path = data_dir() / "paper" / name
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: paper data file not found")
-    df = pd.read_csv(path)
+    text = read_text(path, "paper data file")
+    try:
+        df = pd.read_csv(io.StringIO(text))
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        fail(path, f"not a readable CSV ({exc})")
     missing = [c for c in columns if c not in df.columns]
     if missing:
-        raise ValueError(f"{path}: missing columns {missing}; expected {columns}")
+        fail(path, f"missing columns {missing}; expected {columns}", line=1)
     for col in numeric:
         values = pd.to_numeric(df[col], errors="coerce")
         bad = values.isna()
         if bad.any():
             row = int(np.flatnonzero(bad)[0]) + 2  # header is line 1
-            raise ValueError(f"{path}: line {row}, column {col!r}: not a number ({df[col].iloc[row - 2]!r})")
+            fail(path, f"not a number ({df[col].iloc[row - 2]!r})", line=row, column=col)
         df[col] = values.astype(float)
     return df[columns]
 
@@ -49,7 +65,7 @@ def load_r0() -> np.ndarray:
     """R0 of the simulation as printed in Sec. III-A (4 decimals, not exactly orthogonal), (3, 3)."""
     df = _read("r0.csv", ["row", "col0", "col1", "col2"], ["col0", "col1", "col2"])
     if len(df) != 3:
-        raise ValueError(f"{data_dir() / 'paper' / 'r0.csv'}: expected 3 rows, got {len(df)}")
+        fail(data_dir() / "paper" / "r0.csv", f"expected 3 rows, got {len(df)}")
     return df[["col0", "col1", "col2"]].to_numpy()
 
 
@@ -64,11 +80,8 @@ def _check_grid(df: pd.DataFrame, name: str, keys: dict) -> pd.DataFrame:
     if got.has_duplicates or set(got) != set(expected):
         missing = sorted(set(expected) - set(got))
         extra = sorted(set(got) - set(expected))
-        raise ValueError(
-            f"{data_dir() / 'paper' / name}: expected one row per {tuple(keys)} in "
-            f"{list(keys.values())}; missing {missing}, unexpected {extra}, "
-            f"duplicates {got.has_duplicates}"
-        )
+        fail(data_dir() / "paper" / name, f"expected one row per {tuple(keys)} in {list(keys.values())}; "
+             f"missing {missing}, unexpected {extra}, duplicates {got.has_duplicates}")
     return df.set_index(list(keys)).sort_index()
 
 

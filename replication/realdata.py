@@ -5,19 +5,16 @@ is found by :func:`data_root`: an explicit argument, else ``$REPLICATION_REAL_DA
 ``../shared/data/real`` next to the project. Each folder's ``README.txt`` gives provenance,
 formats and frames.
 
-Conventions
------------
-* An :class:`OrientationStream` holds ``world_from_body`` rotations (a SLAM / mocap
-  trajectory's quaternions rotate body vectors into the world) at times in seconds.
-  In the paper's notation the body-from-world attitude is ``C_t = Q_t^T``.
-* A :class:`GyroStream` holds angular velocity in rad/s, in the body (IMU) frame.
-* Every reference rotation is returned as ``camera_from_sensor``, the paper's ``R0``
-  (``A_j R0 = R0 B_j`` with ``A`` camera, ``B`` sensor/IMU/hand motions).
-* Quaternions in files are unit quaternions; the loaders accept a norm within
-  ``QUATERNION_NORM_TOL`` of 1 and normalise.
+Every loader converts its format to the package's conventions (``docs/conventions.md``): an
+:class:`~replication.streams.OrientationStream` of ``world_from_body`` rotations at times in
+seconds, a :class:`~replication.streams.GyroStream` in rad/s (both re-exported here), every
+reference rotation as ``camera_from_sensor`` (the paper's ``R0``). Stored quaternions must have
+a norm within ``QUATERNION_NORM_TOL`` of 1 and are normalised.
 
-Malformed files raise ``ValueError`` naming the file, the line and the problem; nothing
-is written anywhere by a loader.
+Malformed files raise :class:`~replication.datafile.DataFileError` (a ``ValueError``)
+naming the file, the line and column where known, and the problem; a missing file raises
+:class:`~replication.datafile.DataFileNotFound` (also a ``FileNotFoundError``). Nothing is
+written anywhere by a loader.
 """
 from __future__ import annotations
 
@@ -26,9 +23,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
+from .datafile import fail, read_lines, read_text
 from .so3 import check_rotation_matrices, nearest_rotation, quaternion_to_matrix
+from .streams import GyroStream, OrientationStream  # re-exported: defined in replication.streams
 
 __all__ = [
     "OrientationStream",
@@ -54,65 +52,6 @@ __all__ = [
 DEFAULT_REAL_DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "real"
 #: Accepted deviation of a stored quaternion's norm from 1.
 QUATERNION_NORM_TOL = 1e-3
-
-
-@dataclass(frozen=True)
-class OrientationStream:
-    """Timestamped orientations: ``R[k]`` is ``world_from_body`` at time ``t[k]`` (s, increasing)."""
-
-    t: np.ndarray
-    R: np.ndarray
-    source: str = ""
-
-    def __post_init__(self):
-        R = check_rotation_matrices(self.R, f"{self.source or 'orientation stream'} R", atol=1e-5)
-        _validate_stream(self, "R", R, (3, 3))
-
-    def at(self, times) -> np.ndarray:
-        """``world_from_body`` slerp-interpolated at ``times`` (which must lie inside the stream)."""
-        return Slerp(self.t, Rotation.from_matrix(self.R))(times).as_matrix()
-
-    def between(self, start: float, stop: float) -> "OrientationStream":
-        """The samples with ``start <= t <= stop``."""
-        keep = (self.t >= start) & (self.t <= stop)
-        return OrientationStream(self.t[keep], self.R[keep], self.source)
-
-
-@dataclass(frozen=True)
-class GyroStream:
-    """Angular velocity ``omega[k]`` (rad/s, body frame) at time ``t[k]`` (s, increasing)."""
-
-    t: np.ndarray
-    omega: np.ndarray
-    source: str = ""
-
-    def __post_init__(self):
-        w = np.asarray(self.omega, dtype=float)
-        if not np.all(np.isfinite(w)):
-            raise ValueError(f"{self.source}: angular velocity contains NaN or inf")
-        _validate_stream(self, "omega", w, (3,))
-
-
-def _validate_stream(stream, name: str, values: np.ndarray, tail: tuple) -> None:
-    """Check shapes and timestamps of a frozen stream and store the converted arrays on it."""
-    t = np.asarray(stream.t, dtype=float)
-    if t.ndim != 1 or values.shape != t.shape + tail:
-        raise ValueError(f"{stream.source}: need t of shape (N,) and {name} of shape (N, {', '.join(map(str, tail))}), "
-                         f"got {t.shape}, {values.shape}")
-    _check_times(t, stream.source)
-    object.__setattr__(stream, "t", t)
-    object.__setattr__(stream, name, values)
-
-
-def _check_times(t, source):
-    if len(t) < 2:
-        raise ValueError(f"{source}: need at least 2 samples, got {len(t)}")
-    if not np.all(np.isfinite(t)):
-        raise ValueError(f"{source}: timestamps contain NaN or inf")
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        raise ValueError(f"{source}: timestamps not strictly increasing at sample {bad[0] + 1} "
-                         f"({t[bad[0]]!r} then {t[bad[0] + 1]!r})")
 
 
 def data_root(path=None) -> Path:
@@ -142,43 +81,45 @@ def real_data_available(path=None) -> bool:
     return True
 
 
-def _read_rows(path, n_columns: int, *, delimiter=None, what: str, drop_repeated: bool = False):
+def _read_rows(path, names: tuple, *, delimiter=None, what: str, drop_repeated: bool = False):
     """Numeric rows of a text file, skipping blank and ``#`` lines; errors name file, line and column.
 
-    ``drop_repeated``: skip a line identical in every value to the previous data line.
+    ``names``: the columns (their number is the expected count); ``drop_repeated``: skip a line
+    identical in every value to the previous data line.
+
+    Returns
+    -------
+    (data, lines) : ndarray (N, len(names)), ndarray (N,) of 1-based line numbers
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
+    n_columns = len(names)
     rows, lines = [], []
-    with open(path) as fh:
-        for lineno, line in enumerate(fh, 1):
-            text = line.strip()
-            if not text or text.startswith("#"):
-                continue
-            parts = [p for p in (text.split(delimiter) if delimiter else text.split())]
-            if len(parts) != n_columns:
-                raise ValueError(f"{path}, line {lineno}: expected {n_columns} columns ({what}), got {len(parts)}")
-            try:
-                values = [float(p) for p in parts]
-            except ValueError:
-                col = next(i for i, p in enumerate(parts) if not _is_float(p))
-                raise ValueError(f"{path}, line {lineno}, column {col + 1}: not a number: {parts[col]!r}") from None
-            bad = [i for i, v in enumerate(values) if not np.isfinite(v)]
-            if bad:
-                raise ValueError(f"{path}, line {lineno}, column {bad[0] + 1}: NaN or inf")
-            if drop_repeated and rows and values == rows[-1]:
-                continue
-            rows.append(values)
-            lines.append(lineno)
+    for lineno, line in enumerate(read_lines(path), 1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        parts = text.split(delimiter) if delimiter else text.split()
+        if len(parts) != n_columns:
+            fail(path, f"expected {n_columns} columns ({what}), got {len(parts)}", line=lineno)
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            col = next(i for i, p in enumerate(parts) if not _is_float(p))
+            fail(path, f"not a number: {parts[col]!r}", line=lineno, column=col + 1, column_name=names[col])
+        bad = [i for i, v in enumerate(values) if not np.isfinite(v)]
+        if bad:
+            fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=names[bad[0]])
+        if drop_repeated and rows and values == rows[-1]:
+            continue
+        rows.append(values)
+        lines.append(lineno)
     if len(rows) < 2:
-        raise ValueError(f"{path}: fewer than 2 data lines ({what})")
+        fail(path, f"fewer than 2 data lines ({what})")
     data = np.array(rows)
     step = np.diff(data[:, 0])
     if np.any(step <= 0):
         k = int(np.flatnonzero(step <= 0)[0])
-        raise ValueError(f"{path}, line {lines[k + 1]}, column 1: timestamp not after the previous line's "
-                         f"({data[k + 1, 0]!r} <= {data[k, 0]!r})")
+        fail(path, f"timestamp not after the previous line's ({data[k + 1, 0]!r} <= {data[k, 0]!r})",
+             line=lines[k + 1], column=1, column_name=names[0])
     return data, np.array(lines)
 
 
@@ -194,8 +135,8 @@ def _quaternions(path, q_wxyz, lines):
     norm = np.linalg.norm(q_wxyz, axis=-1)
     bad = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOL)
     if bad.size:
-        raise ValueError(f"{path}, line {lines[bad[0]]}: quaternion norm {norm[bad[0]]:.6g} is not 1 "
-                         f"(tolerance {QUATERNION_NORM_TOL:g}); wrong column order or units?")
+        fail(path, f"quaternion norm {norm[bad[0]]:.6g} is not 1 (tolerance {QUATERNION_NORM_TOL:g}); "
+             "wrong column order or units?", line=lines[bad[0]])
     return quaternion_to_matrix(q_wxyz / norm[:, None])
 
 
@@ -207,6 +148,11 @@ def _seconds(t, path, time_unit):
     return t * 1e-9 if time_unit == "ns" else t
 
 
+TUM_COLUMNS = ("t", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
+EUROC_POSE_COLUMNS = ("t[ns]", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z")
+EUROC_IMU_COLUMNS = ("t[ns]", "w_x", "w_y", "w_z", "a_x", "a_y", "a_z")
+
+
 def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = False) -> OrientationStream:
     """A TUM / ORB-SLAM3 trajectory: lines ``t tx ty tz qx qy qz qw`` (scalar last).
 
@@ -216,8 +162,13 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
     exceed 1e12, as ORB-SLAM3's do). Translations are ignored. ``drop_repeated=True`` skips
     lines that repeat the previous line exactly (one of the shared ORB-SLAM3 runs has such
     lines); otherwise a repeated timestamp is an error.
+
+    Raises
+    ------
+    DataFileError
+        A missing or unreadable file, or the first malformed line (line and column named).
     """
-    data, lines = _read_rows(path, 8, what="t tx ty tz qx qy qz qw", drop_repeated=drop_repeated)
+    data, lines = _read_rows(path, TUM_COLUMNS, what=" ".join(TUM_COLUMNS), drop_repeated=drop_repeated)
     R = _quaternions(path, data[:, [7, 4, 5, 6]], lines)
     return OrientationStream(_seconds(data[:, 0], path, time_unit), R, str(path))
 
@@ -228,7 +179,7 @@ def load_euroc_mocap(path) -> OrientationStream:
     ``q_RS`` (scalar first) rotates body (sensor S) vectors into the world R: ``world_from_body``.
     EuRoC's ``state_groundtruth_estimate0/data.csv`` has more columns; pass its first 8 only.
     """
-    data, lines = _read_rows(path, 8, delimiter=",", what="t[ns], p_xyz, q_wxyz")
+    data, lines = _read_rows(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz")
     R = _quaternions(path, data[:, 4:8], lines)
     return OrientationStream(data[:, 0] * 1e-9, R, str(path))
 
@@ -239,33 +190,46 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0) -> GyroStream:
     Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are
     rejected as a units error (deg/s stored as rad/s).
     """
-    data, lines = _read_rows(path, 7, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]")
+    data, lines = _read_rows(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]")
     w = data[:, 1:4]
     bad = np.flatnonzero(np.abs(w).max(axis=1) > max_rate_rad_s)
     if bad.size:
-        raise ValueError(f"{path}, line {lines[bad[0]]}: angular rate {np.abs(w[bad[0]]).max():.4g} rad/s exceeds "
-                         f"{max_rate_rad_s:g} rad/s; are the rates in deg/s?")
+        fail(path, f"angular rate {np.abs(w[bad[0]]).max():.4g} rad/s exceeds {max_rate_rad_s:g} rad/s; "
+             "are the rates in deg/s?", line=lines[bad[0]])
     return GyroStream(data[:, 0] * 1e-9, w, str(path))
 
 
 def _yaml(path):
+    import io
+
     import yaml
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
+    stream = io.StringIO(read_text(path))
+    stream.name = str(path)  # YAML's messages name the file
     try:
-        with open(path) as fh:
-            return yaml.safe_load(fh)
+        return yaml.safe_load(stream)
     except yaml.YAMLError as err:
-        raise ValueError(f"{path}: not valid YAML: {err}") from None
+        mark = getattr(err, "problem_mark", None)
+        fail(path, f"not valid YAML: {err}", line=None if mark is None else mark.line + 1,
+             column=None if mark is None else mark.column + 1)
+
+
+def _rotation(path, M, what, atol):
+    """``check_rotation_matrices`` whose error is a :class:`~replication.datafile.DataFileError` for ``path``."""
+    try:
+        return check_rotation_matrices(M, what, atol=atol)
+    except ValueError as err:
+        fail(path, str(err))
 
 
 def _rotation_block(path, matrix, what):
-    M = np.asarray(matrix, dtype=float)
+    try:
+        M = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError):
+        fail(path, f"{what} is not a numeric matrix")
     if M.shape != (4, 4):
-        raise ValueError(f"{path}: {what} must be a 4x4 matrix, got shape {M.shape}")
-    return check_rotation_matrices(M[:3, :3], f"{path}: rotation part of {what}", atol=1e-5)
+        fail(path, f"{what} must be a 4x4 matrix, got shape {M.shape}")
+    return _rotation(path, M[:3, :3], f"rotation part of {what}", atol=1e-5)
 
 
 def load_kalibr_camchain(path, camera: str = "cam0") -> np.ndarray:
@@ -278,7 +242,7 @@ def load_kalibr_camchain(path, camera: str = "cam0") -> np.ndarray:
     try:
         T = doc[camera]["T_cam_imu"]
     except (KeyError, TypeError):
-        raise ValueError(f"{path}: no {camera}.T_cam_imu entry") from None
+        fail(path, f"no {camera}.T_cam_imu entry")
     return _rotation_block(path, T, f"{camera}.T_cam_imu")
 
 
@@ -293,16 +257,15 @@ def load_euroc_sensor_yaml(path) -> np.ndarray:
         T = doc["T_BS"]
         M = np.asarray(T["data"], dtype=float).reshape(int(T["rows"]), int(T["cols"]))
     except (KeyError, TypeError, ValueError):
-        raise ValueError(f"{path}: no valid T_BS (rows, cols, data) entry") from None
+        fail(path, "no valid T_BS (rows, cols, data) entry")
     return _rotation_block(path, M, "T_BS").T
 
 
 def _tabb_count(path, tokens):
     try:
-        n = int(tokens[0])
+        return int(tokens[0])
     except (IndexError, ValueError):
-        raise ValueError(f"{path}, line 1: expected the number of poses") from None
-    return n
+        fail(path, "expected the number of poses", line=1, column=1)
 
 
 def load_tabb_poses(path) -> np.ndarray:
@@ -311,19 +274,17 @@ def load_tabb_poses(path) -> np.ndarray:
     Returns the rotations ``hand_from_base`` (body-from-world attitudes of the hand), shape (N, 3, 3).
     The file prints 6 digits, so each rotation is checked to 1e-4 and projected onto SO(3).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
-    tokens = path.read_text().split()
+    tokens = read_text(path).split()
     n = _tabb_count(path, tokens)
     values = tokens[1:]
     if len(values) != 16 * n:
-        raise ValueError(f"{path}: header says {n} poses (need {16 * n} numbers), found {len(values)} numbers")
+        fail(path, f"header says {n} poses (need {16 * n} numbers), found {len(values)} numbers")
     try:
         T = np.array([float(v) for v in values]).reshape(n, 4, 4)
     except ValueError:
-        raise ValueError(f"{path}: a pose entry is not a number") from None
-    return nearest_rotation(check_rotation_matrices(T[:, :3, :3], f"{path}: hand_from_base rotations", atol=1e-4))
+        bad = next(v for v in values if not _is_float(v))
+        fail(path, f"a pose entry is not a number: {bad!r}")
+    return nearest_rotation(_rotation(path, T[:, :3, :3], "hand_from_base rotations", atol=1e-4))
 
 
 def load_tabb_camera_poses(path) -> np.ndarray:
@@ -333,10 +294,7 @@ def load_tabb_camera_poses(path) -> np.ndarray:
     camera's body-from-world attitude. The file prints 6 digits, so rows are orthonormal only
     to about 1e-6; each rotation is projected onto SO(3). Returns shape (N, 3, 3).
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
-    lines = path.read_text().splitlines()
+    lines = read_lines(path)
     n = _tabb_count(path, lines[0].split() if lines else [])
     mats = []
     for lineno, line in enumerate(lines[1:], 2):
@@ -344,29 +302,27 @@ def load_tabb_camera_poses(path) -> np.ndarray:
         if not parts:
             continue
         if len(parts) != 30:
-            raise ValueError(f"{path}, line {lineno}: expected 30 fields (image, K, R, t, distortion), got {len(parts)}")
-        try:
-            mats.append(np.array([float(v) for v in parts[10:19]]).reshape(3, 3))
-        except ValueError:
-            raise ValueError(f"{path}, line {lineno}: rotation entries (fields 11-19) are not numbers") from None
+            fail(path, f"expected 30 fields (image, K, R, t, distortion), got {len(parts)}", line=lineno)
+        bad = [i for i in range(10, 19) if not _is_float(parts[i])]
+        if bad:
+            fail(path, f"rotation entries (fields 11-19) are not numbers: {parts[bad[0]]!r}", line=lineno,
+                 column=bad[0] + 1)
+        mats.append(np.array([float(v) for v in parts[10:19]]).reshape(3, 3))
     if len(mats) != n:
-        raise ValueError(f"{path}: header says {n} poses, found {len(mats)}")
+        fail(path, f"header says {n} poses, found {len(mats)}")
     R = np.array(mats)
-    check_rotation_matrices(R, f"{path}: camera_from_target rotations", atol=1e-4)
+    _rotation(path, R, "camera_from_target rotations", atol=1e-4)
     return nearest_rotation(R)
 
 
 def load_tabb_solution(path) -> np.ndarray:
     """Tabb's published solution ``transformations.txt``: the rotation of ``Z = T_cam<-hand`` (``R0``)."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file")
-    lines = [ln.split() for ln in path.read_text().splitlines()]
+    lines = [ln.split() for ln in read_lines(path)]
     try:
         start = next(i for i, ln in enumerate(lines) if ln and ln[0] == "Z")
         M = np.array([[float(v) for v in lines[start + 1 + r]] for r in range(4)])
     except (StopIteration, ValueError, IndexError):
-        raise ValueError(f"{path}: no 4x4 matrix after a line starting with 'Z'") from None
+        fail(path, "no 4x4 matrix after a line starting with 'Z'")
     return _rotation_block(path, M, "Z")
 
 
@@ -445,31 +401,32 @@ def load_orbslam3_stereo(path) -> StereoCalibration:
 
     Raises
     ------
-    FileNotFoundError, ValueError
-        Missing file, a missing or malformed entry (named), a camera type other than PinHole, or a
+    DataFileNotFound
+        Missing file (also a ``FileNotFoundError``).
+    DataFileError
+        A missing or malformed entry (named), a camera type other than PinHole, or a
         ``Stereo.T_c1_c2`` whose rotation is not a rotation.
     """
     import cv2
 
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such file" + (" (it is a directory)" if path.is_dir() else ""))
+    read_text(path)  # missing, a directory, not UTF-8 text: the same errors as every loader
     try:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     except cv2.error as err:
-        raise ValueError(f"{path}: not an OpenCV FileStorage YAML file ({str(err).strip().splitlines()[-1]})") from None
+        fail(path, f"not an OpenCV FileStorage YAML file ({str(err).strip().splitlines()[-1]})")
     if not fs.isOpened():
-        raise ValueError(f"{path}: not an OpenCV FileStorage YAML file")
+        fail(path, "not an OpenCV FileStorage YAML file")
     try:
         def number(key):
             node = fs.getNode(key)
             if node.empty() or not node.isReal() and not node.isInt():
-                raise ValueError(f"{path}: entry {key!r} missing or not a number")
+                fail(path, f"entry {key!r} missing or not a number")
             return float(node.real())
 
         kind = fs.getNode("Camera.type")
         if not kind.empty() and kind.string() != "PinHole":
-            raise ValueError(f"{path}: Camera.type is {kind.string()!r}; only 'PinHole' is supported")
+            fail(path, f"Camera.type is {kind.string()!r}; only 'PinHole' is supported")
         cams = []
         for c in ("Camera1", "Camera2"):
             K = np.array([[number(f"{c}.fx"), 0.0, number(f"{c}.cx")], [0.0, number(f"{c}.fy"), number(f"{c}.cy")],
@@ -478,9 +435,9 @@ def load_orbslam3_stereo(path) -> StereoCalibration:
         size = (int(number("Camera.width")), int(number("Camera.height")))
         T = fs.getNode("Stereo.T_c1_c2").mat()
         if T is None or np.shape(T) != (4, 4):
-            raise ValueError(f"{path}: entry 'Stereo.T_c1_c2' missing or not a 4x4 matrix")
+            fail(path, "entry 'Stereo.T_c1_c2' missing or not a 4x4 matrix")
     finally:
         fs.release()
     T = np.asarray(T, dtype=float)
-    R = check_rotation_matrices(T[:3, :3], f"{path}: Stereo.T_c1_c2 rotation", atol=1e-5)
+    R = _rotation(path, T[:3, :3], "Stereo.T_c1_c2 rotation", atol=1e-5)
     return StereoCalibration(cams[0][0], cams[0][1], cams[1][0], cams[1][1], size, R, T[:3, 3], str(path))

@@ -1,13 +1,7 @@
-"""Rotation-matrix helpers: validation, projection onto SO(3), noise, sampling, error metrics.
+"""Rotation-matrix helpers: validation, projection onto SO(3), noise, sampling, error metrics, conversions.
 
-Conventions used throughout the package
----------------------------------------
-* Rotations are 3x3 matrices acting on column vectors, batched over leading
-  dimensions: an array of shape ``(..., 3, 3)``.
-* ``camera_from_sensor`` is the paper's ``R0``: it maps vectors given in the
-  inertial/magnetic sensor frame into the camera frame (eq. (1): ``C_t = R0 I_t``).
-* Angles are in degrees in every public name that ends in ``_deg``; otherwise radians.
-* Randomness only through an explicit :class:`numpy.random.Generator`.
+Every conversion of the package (rotation vectors, quaternions, Euler angles, slerp) lives here.
+Conventions (frames in names, batching, degrees vs radians, the paper's symbols): ``docs/conventions.md``.
 
 Reference: Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment
 Calibration"; equation numbers below are the paper's.
@@ -15,9 +9,11 @@ Calibration"; equation numbers below are the paper's.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
+
+from .checks import ROTATION_ATOL, check_init, check_matrices, check_rotation_matrices, det3  # re-exported
 
 __all__ = [
+    "ROTATION_ATOL",
     "check_matrices",
     "check_rotation_matrices",
     "check_init",
@@ -37,129 +33,12 @@ __all__ = [
     "exp_map",
     "as_quaternion",
     "quaternion_to_matrix",
+    "yaw_pitch_roll_deg",
+    "from_euler",
+    "slerp",
+    "slerp_interpolator",
     "cumulative_product",
 ]
-
-#: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
-ROTATION_ATOL = 1e-6
-
-
-def _first_index(mask: np.ndarray) -> tuple:
-    """Index (over the leading dimensions) of the first True entry of ``mask`` (``()`` for a scalar)."""
-    mask = np.asarray(mask)
-    return tuple(int(i) for i in np.argwhere(mask)[0]) if mask.ndim else ()
-
-
-def det3(M) -> np.ndarray:
-    """Determinants of 3x3 matrices, batched: (..., 3, 3) -> (...), as the triple product of the rows.
-
-    Elementwise (no LAPACK call per matrix), so much faster than ``numpy.linalg.det`` on large
-    batches of 3x3 matrices; same value to rounding.
-    """
-    M = np.asarray(M, dtype=float)
-    a, b, c = M[..., 0, :], M[..., 1, :], M[..., 2, :]
-    return (a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
-            - a[..., 1] * (b[..., 0] * c[..., 2] - b[..., 2] * c[..., 0])
-            + a[..., 2] * (b[..., 0] * c[..., 1] - b[..., 1] * c[..., 0]))
-
-
-def check_matrices(M, name: str = "M") -> np.ndarray:
-    """Validate a batch of 3x3 matrices and return it as a float array.
-
-    Parameters
-    ----------
-    M : array_like, shape (..., 3, 3)
-        Matrices to check.
-    name : str
-        Name used in error messages.
-
-    Returns
-    -------
-    numpy.ndarray of float64, shape (..., 3, 3)
-
-    Raises
-    ------
-    ValueError
-        If ``M`` is not real-valued numeric, does not end in ``(3, 3)``, or holds NaN/inf.
-    """
-    if np.iscomplexobj(M):
-        raise ValueError(f"{name} must be real-valued; got a complex array")
-    try:
-        M = np.asarray(M, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array of 3x3 matrices: {exc}") from None
-    if M.ndim < 2 or M.shape[-2:] != (3, 3):
-        raise ValueError(f"{name} must have shape (..., 3, 3), got {M.shape}")
-    finite = np.isfinite(M).all(axis=(-2, -1))
-    if not finite.all():
-        raise ValueError(f"{name} contains NaN or inf (first at index {_first_index(~finite)})")
-    return M
-
-
-def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> np.ndarray:
-    """Validate that every 3x3 block of ``R`` is a proper rotation (in SO(3)).
-
-    A block ``R`` is accepted when ``||R^T R - I||_F <= atol`` and
-    ``|det(R) - 1| <= atol`` (eqs. (9)-(10) of the paper as a test).
-
-    Parameters
-    ----------
-    R : array_like, shape (..., 3, 3)
-    name : str
-        Name used in error messages.
-    atol : float
-        Tolerance of the orthonormality and determinant tests.
-
-    Returns
-    -------
-    numpy.ndarray of float64, shape (..., 3, 3)
-
-    Raises
-    ------
-    ValueError
-        Naming the first offending index: wrong shape, NaN/inf, not orthonormal,
-        or a reflection (det = -1).
-    """
-    R = check_matrices(R, name)
-    E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
-    ortho = np.sqrt(np.einsum("...ab,...ab->...", E, E))  # ||R^T R - I||_F
-    bad = ortho > atol
-    if bad.any():
-        idx = _first_index(bad)
-        raise ValueError(
-            f"{name} is not a rotation matrix at index {idx}: "
-            f"||R^T R - I||_F = {ortho[idx]:.3g} > {atol:g} ({int(bad.sum())} bad of {bad.size})"
-        )
-    det = det3(R)
-    bad = np.abs(det - 1.0) > atol
-    if bad.any():
-        idx = _first_index(bad)
-        raise ValueError(
-            f"{name} is not a rotation matrix at index {idx}: det = {det[idx]:.6g} "
-            f"(a reflection; a rotation has det = +1)"
-        )
-    return R
-
-
-def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
-    """A start rotation for a batch of problems: ``None`` means the identity; broadcast to ``batch_shape``.
-
-    Raises
-    ------
-    ValueError
-        ``init`` is not a rotation, or does not broadcast to ``batch_shape + (3, 3)``.
-    """
-    if init is None:
-        return np.broadcast_to(np.eye(3), tuple(batch_shape) + (3, 3))
-    init = check_rotation_matrices(init, name)
-    try:
-        return np.broadcast_to(init, tuple(batch_shape) + (3, 3))
-    except ValueError:
-        raise ValueError(
-            f"{name} must have shape (3, 3) or broadcast to the batch shape {tuple(batch_shape) + (3, 3)}, "
-            f"got {init.shape}"
-        ) from None
-
 
 def skew(v) -> np.ndarray:
     """Skew-symmetric matrix ``[v x]`` with ``[v x] w = v x w``.
@@ -324,7 +203,7 @@ def random_rotations(
     shape = (int(shape),) if np.ndim(shape) == 0 else tuple(int(s) for s in shape)
     n = int(np.prod(shape))
     if angle_range_deg is None:
-        mats = Rotation.random(n, rng=rng).as_matrix() if n else np.empty((0, 3, 3))
+        mats = _scipy_rotation().random(n, rng=rng).as_matrix() if n else np.empty((0, 3, 3))
         return mats.reshape(shape + (3, 3))
     lo, hi = (float(a) for a in angle_range_deg)
     if not (0.0 <= lo <= hi <= 180.0):
@@ -332,7 +211,7 @@ def random_rotations(
     axis = rng.normal(size=(n, 3))
     axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
     angle = np.radians(rng.uniform(lo, hi, size=n))
-    mats = Rotation.from_rotvec(axis * angle[:, None]).as_matrix() if n else np.empty((0, 3, 3))
+    mats = _scipy_rotation().from_rotvec(axis * angle[:, None]).as_matrix() if n else np.empty((0, 3, 3))
     return mats.reshape(shape + (3, 3))
 
 
@@ -362,7 +241,7 @@ def rotation_angle_deg(R) -> np.ndarray:
     """
     R = check_matrices(R, "R")
     flat = R.reshape(-1, 3, 3)
-    ang = Rotation.from_matrix(flat).magnitude() if len(flat) else np.empty(0)
+    ang = _scipy_rotation().from_matrix(flat).magnitude() if len(flat) else np.empty(0)
     return np.degrees(ang).reshape(R.shape[:-2])
 
 
@@ -381,6 +260,13 @@ def angle_between_deg(R_est, R_true) -> np.ndarray:
     R_est = check_matrices(R_est, "R_est")
     R_true = check_matrices(R_true, "R_true")
     return rotation_angle_deg(np.swapaxes(R_true, -1, -2) @ R_est)
+
+
+def _scipy_rotation():
+    """SciPy's ``Rotation``, imported on first use: ``import replication.so3`` loads NumPy only."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
 
 
 def _batched(func, X, tail_in, tail_out):
@@ -464,7 +350,40 @@ def as_quaternion(R) -> np.ndarray:
 def quaternion_to_matrix(q) -> np.ndarray:
     """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first), batched."""
     q = np.asarray(q, dtype=float)
-    return _batched(lambda v: Rotation.from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))
+    return _batched(lambda v: _scipy_rotation().from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))
+
+
+def yaw_pitch_roll_deg(R) -> np.ndarray:
+    """Yaw, pitch, roll (degrees, in that order) with ``R = Rz(yaw) Ry(pitch) Rx(roll)``, batched: (..., 3, 3) -> (..., 3).
+
+    The intrinsic z-y'-x'' (Tait-Bryan) angles of the aerospace convention; pitch in
+    ``[-90, 90]``, yaw and roll in ``(-180, 180]``. Roll-first order is ``[..., ::-1]``.
+    See ``docs/conventions.md``.
+    """
+    R = np.asarray(R, dtype=float)
+    return _batched(lambda m: _scipy_rotation().from_matrix(m).as_euler("ZYX", degrees=True), R, (3, 3), (3,))
+
+
+def from_euler(seq: str, angles, *, degrees: bool = False) -> np.ndarray:
+    """Rotation matrices from Euler angles in SciPy's ``seq`` (upper case: intrinsic), batched: (..., len(seq)) -> (..., 3, 3)."""
+    angles = np.asarray(angles, dtype=float)
+    return _batched(lambda a: _scipy_rotation().from_euler(seq, a, degrees=degrees).as_matrix(), angles, (len(seq),), (3, 3))
+
+
+def slerp_interpolator(t, R):
+    """A function ``times -> rotations`` (..., 3, 3) interpolating ``R`` (sampled at increasing ``t``) along the geodesic.
+
+    SciPy's ``Slerp``, built once: call the result as often as needed.
+    """
+    from scipy.spatial.transform import Slerp
+
+    interpolator = Slerp(np.asarray(t, dtype=float), _scipy_rotation().from_matrix(np.asarray(R, dtype=float)))
+    return lambda times: interpolator(times).as_matrix()
+
+
+def slerp(t, R, times) -> np.ndarray:
+    """Rotations ``R`` (sampled at increasing ``t``) interpolated at ``times`` (see :func:`slerp_interpolator`)."""
+    return slerp_interpolator(t, R)(times)
 
 
 def cumulative_product(R) -> np.ndarray:

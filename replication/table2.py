@@ -1,4 +1,4 @@
-"""What Table II measures, and the simulated lab over many seeds (support of ``notebooks/05_table2_experiment.ipynb``).
+"""Table II: its statistics, what they measure, and the comparison with the paper's (beside Table I's :mod:`replication.table1`).
 
 Table II compares the camera's relative attitude ``Delta R_c = C_k C_ref^T`` with the sensor's, projected into
 the camera frame with an estimate of ``R0``: ``R0 Delta R_i R0^T``, ``Delta R_i = I_k I_ref^T``. Its numbers
@@ -6,28 +6,55 @@ mix two errors: that of the ``R0`` used, and that of the sensor's own attitude (
 reference frame and at each time. :func:`projection_statistics` re-projects a lab run's dynamic trial with any
 ``R0`` (the true one included) and any reference frame, which separates the two by intervention:
 project with the true ``R0`` (no calibration error left), move the reference frame, switch error sources off.
-:func:`seed_study` repeats the whole simulated experiment over many seeds, so that a statement about the lab
-is about its distribution, not about one draw.
+Roll, pitch and yaw are the intrinsic ``z-y'-x''`` angles of a relative rotation,
+``Delta R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`replication.so3.yaw_pitch_roll_deg`), listed roll first as in
+Table II. The lab over many seeds is :func:`replication.lab.seed_study`.
 """
 from __future__ import annotations
 
-import dataclasses
-import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from .handeye import relative_rotations
-from .lab import (LabResult, LabSettings, attitude_statistics, euler_rpy_deg, run_lab, simulate_lab, static_motions,
-                  summarize)
-from .so3 import angle_between_deg, check_rotation_matrices, exp_map
-from .solvers import ReplicationWarning, solve, sqp
+from .paper import TABLE2_ANGLES, TABLE2_METHODS, load_table2
+from .so3 import check_rotation_matrices, rotation_angle_deg, yaw_pitch_roll_deg
 
-__all__ = ["projection_statistics", "reference_frame_dependence", "seed_study"]
+if TYPE_CHECKING:  # the lab's chain computes Table II with this module; no import cycle at run time
+    from .lab import LabResult
+
+__all__ = ["attitude_statistics", "projection_statistics", "reference_frame_dependence",
+           "table2_versus_paper"]
+
+
+def attitude_statistics(estimate_deg, reference_deg) -> pd.DataFrame:
+    """Table II's statistics of an attitude trace against the camera's.
+
+    Parameters
+    ----------
+    estimate_deg, reference_deg : array_like, shape (M, 3)
+        Roll, pitch, yaw traces (degrees).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index roll, pitch, yaw; columns ``rms_deg``, ``mean_deg``, ``sd_deg`` of the
+        difference ``estimate - reference`` (wrapped to (-180, 180]; population SD, so
+        ``rms^2 = mean^2 + sd^2``) and ``correlation`` (Pearson) of the two traces.
+    """
+    est, ref = np.asarray(estimate_deg, dtype=float), np.asarray(reference_deg, dtype=float)
+    d = (est - ref + 180.0) % 360.0 - 180.0
+    corr = [np.corrcoef(est[:, i], ref[:, i])[0, 1] for i in range(3)]
+    return pd.DataFrame(
+        {"rms_deg": np.sqrt(np.mean(d**2, axis=0)), "mean_deg": d.mean(axis=0), "sd_deg": d.std(axis=0),
+         "correlation": corr},
+        index=pd.Index(["roll", "pitch", "yaw"], name="angle"),
+    )
 
 
 def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0) -> pd.DataFrame:
-    """Table II's statistics (:func:`replication.lab.attitude_statistics`) of the dynamic trial projected with ``R0``.
+    """Table II's statistics (:func:`attitude_statistics`) of the dynamic trial projected with ``R0``.
 
     Parameters
     ----------
@@ -40,13 +67,13 @@ def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0)
         :func:`replication.lab.run_lab`'s, is the first frame).
     """
     R0 = check_rotation_matrices(R0, "R0", atol=1e-6)
-    t, C, I = result.dynamic["t"], result.dynamic["camera"], result.dynamic["sensor"]
+    t, C, Q = result.dynamic["t"], result.dynamic["camera_from_world"], result.dynamic["world_from_sensor"]
     if not 0.0 <= reference_time <= t[-1] - t[0]:
         raise ValueError(f"reference_time must be within the trial (0 to {t[-1] - t[0]:.1f} s), got {reference_time}")
     ref = int(np.argmin(np.abs(t - t[0] - reference_time)))
     dC = relative_rotations(C, reference=ref)
-    dI = relative_rotations(I, reference=ref)
-    return attitude_statistics(euler_rpy_deg(R0 @ dI @ R0.T), euler_rpy_deg(dC))
+    dI = relative_rotations(Q, reference=ref, convention="world_from_body")
+    return attitude_statistics(yaw_pitch_roll_deg(R0 @ dI @ R0.T)[..., ::-1], yaw_pitch_roll_deg(dC)[..., ::-1])
 
 
 def reference_frame_dependence(result: LabResult, estimates: dict, times) -> pd.DataFrame:
@@ -68,77 +95,25 @@ def reference_frame_dependence(result: LabResult, estimates: dict, times) -> pd.
     return out
 
 
-def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: float = 10.0, sqp_runs=None,
-               turned_deg=(), single_sample: bool = False) -> pd.DataFrame:
-    """The simulated experiment once per seed: one row of numbers per seed.
+def table2_versus_paper(result: LabResult) -> pd.DataFrame:
+    """Table II of the simulated lab beside the paper's, with each method's true ``R0`` error.
 
-    Columns: per method (``ours_right``, ``ours_left``, ``optimization``) ``shared_bias_<m>`` (angle of the
-    chordal mean of its 10 estimates to the true ``R0``: what every data set shares), ``true_<m>`` (mean angle of
-    the 10 estimates to the true ``R0``), ``spread_<m>`` (mean angle of the estimates to their mean: Fig. 6's
-    consistency), ``failed_<m>`` (data sets more than ``failure_deg`` off), ``rms_<m>`` (Table II's RMS averaged
-    over roll, pitch, yaw), ``corr_<m>`` (smallest correlation over the three angles; ``corr_<angle>_ours_right``
-    per angle); ``pitch_bias_true_R0`` / ``rms_true_R0``: Table II's pitch mean and average RMS when the true
-    ``R0`` is used for the projection; ``rms_reversed_ours_right``: the same with the two-step (``R^r``) chordal
-    mean's error reversed (``E^T R0`` for the estimate ``E R0``: an error of the same size and axis, opposite sign).
-
-    Parameters
-    ----------
-    seeds : iterable of int
-    settings : LabSettings
-        Every seed uses these settings with its own ``seed``.
-    failure_deg : float
-        A data set whose estimate is farther than this from the true ``R0`` has failed.
-    sqp_runs : dict, optional
-        ``{name: options of replication.solvers.sqp}``: also run SQP from the identity so configured on every
-        data set: ``failed_sqp_<name>`` (data sets more than ``failure_deg`` off) and ``limit_sqp_<name>`` (of
-        those, stopped by the iteration limit, ``max_iterations``, default 100).
-    turned_deg : iterable of float
-        Also project with the true ``R0`` turned by these angles (about the camera's x, y and z axis in turn):
-        ``rms_turned_<angle>`` is Table II's RMS averaged over the three angles and the three axes, i.e. the
-        RMS a calibration that far off would show.
-    single_sample : bool
-        Also calibrate with the first sample of each static orientation instead of the mean
-        (:func:`replication.lab.static_motions`): ``true_single_ours_right``.
+    Returns
+    -------
+    pandas.DataFrame
+        Index (angle, method); columns ``paper_*`` and ``ours_*`` for RMS, mean, SD
+        (deg) and correlation, and ``true_r0_error_deg``: the mean angle of the method's
+        per-set estimates to the true ``R0`` (for ``sensor_frame``: the angle of the true
+        ``R0`` itself, the error of assuming aligned frames). NaN if the truth is unknown.
     """
-    rows = []
-    for seed in seeds:
-        recording = simulate_lab(dataclasses.replace(settings, seed=int(seed)))
-        result = run_lab(recording)
-        row = {"seed": int(seed)}
-        summary = summarize(result, failure_deg=failure_deg)
-        for name, R in result.estimates.items():
-            row[f"shared_bias_{name}"] = float(angle_between_deg(result.r0[name], result.truth))
-            row[f"true_{name}"] = summary[f"true_{name}"]
-            row[f"spread_{name}"] = summary[f"spread_{name}"]
-            row[f"failed_{name}"] = summary[f"failed_{name}"]
-            row[f"rms_{name}"] = summary[f"rms_{name}"]
-            row[f"corr_{name}"] = float(result.table2.xs(name, level="method")["correlation"].min())
-        for angle in ("roll", "pitch", "yaw"):
-            row[f"corr_{angle}_ours_right"] = float(result.table2.loc[(angle, "ours_right"), "correlation"])
-        row["rms_sensor_frame"] = summary["rms_sensor_frame"]
-        true = projection_statistics(result, result.truth)
-        row["pitch_bias_true_R0"] = float(true.loc["pitch", "mean_deg"])
-        row["pitch_bias_ours_right"] = float(result.table2.loc[("pitch", "ours_right"), "mean_deg"])
-        row["rms_true_R0"] = float(true["rms_deg"].mean())
-        error = result.r0["ours_right"] @ result.truth.T
-        row["rms_reversed_ours_right"] = float(projection_statistics(result, error.T @ result.truth)["rms_deg"].mean())
-        for angle in turned_deg:
-            turned = [result.truth @ exp_map(np.radians(float(angle)) * axis) for axis in np.eye(3)]
-            row[f"rms_turned_{angle:g}"] = float(np.mean([projection_statistics(result, R)["rms_deg"].mean()
-                                                          for R in turned]))
-        motions = static_motions(recording) if sqp_runs else {}
-        for name, options in (sqp_runs or {}).items():
-            cap = int(options.get("max_iterations", 100))
-            with warnings.catch_warnings():  # the failures are what is counted
-                warnings.simplefilter("ignore", ReplicationWarning)
-                runs = [sqp(A, B, **options) for A, B in motions.values()]
-            off = [angle_between_deg(r.R, result.truth) > failure_deg for r in runs]
-            row[f"failed_sqp_{name}"] = int(sum(off))
-            row[f"limit_sqp_{name}"] = int(sum(o and int(r.n_iterations) >= cap for o, r in zip(off, runs)))
-        if single_sample:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", ReplicationWarning)
-                single = [solve("two_step_right", A, B) for A, B in static_motions(recording, sample="single").values()]
-            row["true_single_ours_right"] = float(np.mean(angle_between_deg(np.stack(single), result.truth)))
-        rows.append(row)
-    return pd.DataFrame(rows).set_index("seed")
+    paper = load_table2()  # indexed by (angle, method)
+    ours = result.table2.reindex(paper.index)
+    out = pd.concat([paper.add_prefix("paper_"), ours.add_prefix("ours_")], axis=1)
+    cols = ["rms_deg", "mean_deg", "sd_deg", "correlation"]
+    out = out[[f"{w}_{c}" for c in cols for w in ("paper", "ours")]]
+    true = {}
+    if result.truth is not None:
+        true = result.per_set.groupby("method")["true_error_deg"].mean().to_dict()
+        true["sensor_frame"] = float(rotation_angle_deg(result.truth))  # ignoring R0 altogether
+    out["true_r0_error_deg"] = [true.get(m, np.nan) for m in out.index.get_level_values("method")]
+    return out.reindex(pd.MultiIndex.from_product([TABLE2_ANGLES, TABLE2_METHODS], names=["angle", "method"]))

@@ -19,10 +19,9 @@ def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> Non
     R = check_matrices(R, name)
     R_ref = check_matrices(R_ref, "R_ref")
     angle = np.atleast_1d(angle_between_deg(R, R_ref))
-    worst = int(np.argmax(angle))
-    if not angle[worst] <= atol_deg:
-        idx = np.unravel_index(worst, angle.shape)
+    idx = np.unravel_index(int(np.argmax(angle)), angle.shape)
+    if not angle[idx] <= atol_deg:
         raise AssertionError(
-            f"{name} differs from the reference by {float(angle[worst]):.3g} deg at index "
+            f"{name} differs from the reference by {float(angle[idx]):.3g} deg at index "
             f"{tuple(int(i) for i in idx)} (> {atol_deg:g} deg; {int(np.sum(angle > atol_deg))} of {angle.size} off)"
         )

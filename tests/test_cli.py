@@ -50,7 +50,7 @@ def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
 def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
     """(That the committed data/lab equal the generator's output is tests/test_lab.py's check.)"""
     from replication.__main__ import main
-    from replication.lab_io import load_lab
+    from replication.lab import load_lab
 
     assert main(["generate-lab", "--out", str(tmp_path / "a"), "--seed", "7"]) == 0
     assert "seed 7" in capsys.readouterr().out

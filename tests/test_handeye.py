@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, so3
+from replication import handeye, motions, so3
 
 
 @settings(max_examples=30, deadline=None)
@@ -77,12 +77,12 @@ def test_single_axis_and_no_motion_are_degenerate(rng):
     R0 = so3.random_rotations(rng, ())
     A = Rotation.from_rotvec(np.outer(rng.uniform(0.1, 1.5, 10), [0, 1, 0])).as_matrix()
     with pytest.raises(ValueError, match="degenerate motion: the camera rotations all share one"):
-        handeye.check_observable(A, R0.T @ A @ R0)
-    obs = handeye.motion_observability(A, R0.T @ A @ R0)
+        motions.check_observable(A, R0.T @ A @ R0)
+    obs = motions.motion_observability(A, R0.T @ A @ R0)
     assert np.isclose(obs.two_step_rate, 1.0) and np.isclose(obs.kron_singular_values[2], 1.0)
     eye = np.broadcast_to(np.eye(3), (5, 3, 3))
     with pytest.raises(ValueError, match="degenerate motion"):
-        handeye.check_observable(eye, eye)
+        motions.check_observable(eye, eye)
 
 
 def test_degenerate_batch_member_is_named(rng, problem):
@@ -91,12 +91,24 @@ def test_degenerate_batch_member_is_named(rng, problem):
     AA = np.stack([A, A_bad, A])
     BB = np.swapaxes(R0, -1, -2) @ AA @ R0
     with pytest.raises(ValueError, match=r"batch index \(1,\)"):
-        handeye.check_observable(AA, BB)
+        motions.check_observable(AA, BB)
 
 
 def test_observability_of_generic_motion(problem):
     R0, A, B = problem
-    obs = handeye.check_observable(A, B)
+    obs = motions.check_observable(A, B)
     assert np.isclose(obs.kron_singular_values[0], 1.0) and obs.spectral_ratio < 0.9
     assert obs.camera_axis_spread_deg > 10 and obs.two_step_rate < 0.9
     assert 0 < obs.iterations_for(1e-6) < 100
+
+
+def test_relative_rotations_of_chosen_pairs_follow_eq_3_in_both_conventions(rng):
+    C = so3.random_rotations(rng, (2, 6))  # body_from_world attitudes, batched
+    t_index, k_index = np.array([0, 2, 1]), np.array([3, 5, 4])
+    A = handeye.relative_rotations(C, pairs=(t_index, k_index))
+    assert A.shape == (2, 3, 3, 3)
+    np.testing.assert_allclose(A[1, 2], C[1, 4] @ C[1, 1].T, atol=1e-15)  # eq. (3): C_k C_t^T
+    Q = np.swapaxes(C, -1, -2)  # the same motions from world_from_body orientations
+    assert np.array_equal(handeye.relative_rotations(Q, pairs=(t_index, k_index), convention="world_from_body"), A)
+    with pytest.raises(ValueError, match="either reference or pairs"):
+        handeye.relative_rotations(C, reference=0, pairs=(t_index, k_index))

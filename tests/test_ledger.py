@@ -1,7 +1,6 @@
 """The claims ledger: every checkable claim of the paper has a verdict, evidence and uncertainty, and README agrees."""
 import re
 
-import pandas as pd
 import pytest
 
 from replication import ledger

@@ -38,7 +38,7 @@ def data_copy(tmp_path, monkeypatch):
 def test_malformed_value_is_named(data_copy):
     text = (data_copy / "table1.csv").read_text().replace("2.339", "2.3x9")
     (data_copy / "table1.csv").write_text(text)
-    with pytest.raises(ValueError, match=r"table1.csv: line 3, column 'mean'"):
+    with pytest.raises(ValueError, match=r"table1.csv, line 3, column 'mean': not a number \('2.3x9'\)"):
         paper.load_table1()
 
 

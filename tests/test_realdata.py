@@ -35,9 +35,9 @@ def test_tum_trajectory_reads_nanoseconds_and_world_from_body(tmp_path):
 
 @pytest.mark.parametrize("line, message", [
     ("1520530313399738752.0 0 0 0 0 0 1", r"line 5: expected 8 columns"),
-    ("1520530313399738752.0 0 0 0 0 0 x 1", r"line 5, column 7: not a number: 'x'"),
-    ("1520530313399738752.0 0 0 0 0 0 nan 1", r"line 5, column 7: NaN or inf"),
-    ("1520530313299737600.0 0 0 0 0 0 0 1", r"line 5, column 1: timestamp not after"),
+    ("1520530313399738752.0 0 0 0 0 0 x 1", r"line 5, column 7 \('qz'\): not a number: 'x'"),
+    ("1520530313399738752.0 0 0 0 0 0 nan 1", r"line 5, column 7 \('qz'\): NaN or inf"),
+    ("1520530313299737600.0 0 0 0 0 0 0 1", r"line 5, column 1 \('t'\): timestamp not after"),
     ("1520530313399738752.0 0 0 0 0 0 0 2", r"line 5: quaternion norm 2 is not 1"),
 ])
 def test_malformed_trajectory_lines_are_named(tmp_path, line, message):

@@ -114,3 +114,22 @@ def test_frobenius_error_matches_angle(rng):
     R1, R2 = so3.random_rotations(rng, (2, 100))
     theta = np.radians(so3.angle_between_deg(R1, R2))
     assert np.allclose(so3.frobenius_error(R1, R2), 2 * np.sqrt(2) * np.sin(theta / 2))
+
+
+def test_assert_rotations_close_names_the_worst_index():
+    from replication.testing import assert_rotations_close
+
+    R = np.broadcast_to(np.eye(3), (2, 3, 3, 3)).copy()
+    R[1, 2] = so3.exp_map(np.radians([0.0, 0.0, 0.5]))
+    R[0, 1] = so3.exp_map(np.radians([0.0, 0.2, 0.0]))
+    assert_rotations_close(R, np.eye(3), 0.6)
+    with pytest.raises(AssertionError, match=r"by 0\.5 deg at index \(1, 2\) \(> 0\.1 deg; 2 of 6 off\)"):
+        assert_rotations_close(R, np.eye(3), 0.1)
+
+
+def test_yaw_pitch_roll_order_is_in_the_name():
+    R = so3.from_euler("ZYX", [30.0, -20.0, 10.0], degrees=True)
+    np.testing.assert_allclose(so3.yaw_pitch_roll_deg(R), [30.0, -20.0, 10.0])
+    np.testing.assert_allclose(R, so3.from_euler("z", [30.0], degrees=True) @ so3.from_euler("y", [-20.0], degrees=True)
+                               @ so3.from_euler("x", [10.0], degrees=True))
+    assert so3.yaw_pitch_roll_deg(np.broadcast_to(R, (4, 5, 3, 3))).shape == (4, 5, 3)

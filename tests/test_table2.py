@@ -7,7 +7,8 @@ import pytest
 
 from replication import lab
 from replication.so3 import exp_map
-from replication.table2 import projection_statistics, reference_frame_dependence, seed_study
+from replication.lab import seed_study
+from replication.table2 import attitude_statistics, projection_statistics, reference_frame_dependence
 
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
 
@@ -77,3 +78,13 @@ def test_parts_of_a_source_switch_off_separately():
     assert cal_off.mag_noise_ut == s.mag_noise_ut and cal_off.mag_soft_iron == 0 and cal_off.mag_misalignment_deg == 0
     with pytest.raises(ValueError, match="unknown error source"):
         s.without("magnetometer")
+
+
+def test_attitude_statistics_wraps_and_adds_up():
+    ref = np.array([[179.0, 0, 0], [0, 10, 0], [-90, 20, 5], [45, 30, 10]])
+    est = ref + np.array([[2.0, 1, 0], [-1, 1, 0], [0, 1, 0], [1, 1, 0]])
+    est[0, 0] = -179.0  # 179 -> -179 is a +2 deg difference, not -358
+    s = attitude_statistics(est, ref)
+    np.testing.assert_allclose(s.loc["roll", ["mean_deg", "rms_deg"]], [0.5, np.sqrt(1.5)])
+    np.testing.assert_allclose(s["rms_deg"] ** 2, s["mean_deg"] ** 2 + s["sd_deg"] ** 2)
+    assert s.loc["pitch", "sd_deg"] == 0 and s.loc["yaw", "correlation"] == pytest.approx(1.0)

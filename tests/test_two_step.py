@@ -9,6 +9,7 @@ from scipy.spatial.transform import Rotation
 from replication import handeye, so3
 from replication.so3 import random_rotations
 from replication.solvers import ConvergenceWarning, two_step, two_step_fixed_point
+from replication.testing import assert_rotations_close
 
 
 @settings(max_examples=40, deadline=None)
@@ -81,7 +82,8 @@ def test_noisy_iterates_converge_to_the_fixed_point(problem, rng):
     Bn = so3.noise_rotations(so3.sample_ball(rng, 20, 0.02)) @ B
     res = two_step(An, Bn, iterations=80)
     right, left = two_step_fixed_point(An, Bn)
-    assert so3.angle_between_deg(res.R_right, right) < 1e-8 and so3.angle_between_deg(res.R_left, left) < 1e-8
+    assert_rotations_close(res.R_right, right, 1e-8, name="R_right")
+    assert_rotations_close(res.R_left, left, 1e-8, name="R_left")
     assert 0.001 < so3.angle_between_deg(res.R_right, R0) < 2
 
 
@@ -137,4 +139,4 @@ def test_no_underflow_when_sigma1_is_well_below_one(rng):
     assert np.all(res.left_raw[..., -1, :, :] == 0)  # the printed iteration has underflowed
     so3.check_rotation_matrices(res.R_left)
     fixed = two_step_fixed_point(A, B)[1]
-    assert so3.angle_between_deg(res.R_left, fixed).max() < 1e-6
+    assert_rotations_close(res.R_left, fixed, 1e-6, name="R_left")

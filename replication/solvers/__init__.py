@@ -6,7 +6,7 @@ True
 
 Every solver has one public door that validates once (:func:`solve`, or the exported
 function of the same name) and a private core that receives a validated
-:class:`replication.handeye.Motions`. Add a baseline with :func:`register`::
+:class:`replication.motions.Motions`. Add a baseline with :func:`register`::
 
     @register("my_method", reference="Author, Title, Year", min_motions=2)
     def my_method(motions, **options):
@@ -15,13 +15,15 @@ function of the same name) and a private core that receives a validated
 
 ``my_method(A, B)`` then validates like ``solve("my_method", A, B)``.
 
-Modules: :mod:`.two_step` (the paper's method), :mod:`.sqp` (the paper's
-comparison), :mod:`.classic` (Park & Martin, Horaud & Dornaika, Andreff,
-Tsai & Lenz), :mod:`.optimal` (the certified global minimiser of eq. (8)),
-:mod:`.robust` (outlier pairs), :mod:`.opencv` (``cv2.calibrateHandEye``).
+Modules (no function shares a module's name): :mod:`.iteration` (the paper's two-step
+iteration, :func:`two_step`), :mod:`.slsqp` (the paper's SQP comparison, :func:`sqp`),
+:mod:`.classic` (Park & Martin, Horaud & Dornaika, Andreff, Tsai & Lenz), :mod:`.optimal`
+(the certified global minimiser of eq. (8)), :mod:`.msac` (outlier pairs, :func:`robust`),
+:mod:`.opencv` (``cv2.calibrateHandEye``).
 Warnings (:mod:`._warnings`) name the measured cause whenever an answer may be wrong.
 """
-from ..handeye import Motions, pair_residual_deg, prepare_motions
+from ..handeye import pair_residual_deg
+from ..motions import Motions, prepare_motions
 from ._registry import LOCAL_ANGLE_TOL_DEG, LOCAL_ATOL, LOCAL_RTOL, Solution, SolverInfo, available, register, solve, solver_info
 from ._warnings import (
     AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, ObservabilityWarning,
@@ -29,10 +31,10 @@ from ._warnings import (
 )
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
 from .opencv import calibrate_hand_eye
+from .iteration import TwoStepResult, two_step, two_step_fixed_point
+from .msac import robust
 from .optimal import GAP_TOL, ChordalResult, chordal_optimal, global_certificate
-from .robust import robust
-from .sqp import SQP_VARIANTS, SQPResult, sqp
-from .two_step import TwoStepResult, two_step, two_step_fixed_point
+from .slsqp import SQP_VARIANTS, SQPResult, sqp
 
 __all__ = [
     "Motions",

@@ -2,7 +2,7 @@
 
 Every solver has one public door that validates (:func:`solve`, or the function
 :func:`register` returns) and one private core that receives a validated
-:class:`replication.handeye.Motions` and never validates again (the pattern of
+:class:`replication.motions.Motions` and never validates again (the pattern of
 OpenCV's ``calibration_handeye.cpp``).
 """
 from __future__ import annotations
@@ -14,7 +14,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..handeye import Motions, MotionObservability, handeye_cost, prepare_motions, vec
+from ..handeye import handeye_cost, vec
+from ..motions import Motions, MotionObservability, prepare_motions
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
 
 __all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve",
@@ -60,7 +61,7 @@ class SolverInfo:
         The ``method`` name given to :func:`solve`.
     core : callable
         ``core(motions, **options) -> (..., 3, 3)``; receives a validated
-        :class:`replication.handeye.Motions`.
+        :class:`replication.motions.Motions`.
     reference : str
         The paper the solver implements.
     min_motions : int
@@ -98,7 +99,7 @@ class Solution:
         Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2``.
     observability : MotionObservability
         How well the motions determine ``R0`` (see
-        :class:`replication.handeye.MotionObservability`).
+        :class:`replication.motions.MotionObservability`).
     lower_bound : ndarray, shape (...)
         Certified lower bound on the minimum of eq. (8) over SO(3)
         (:func:`replication.solvers.chordal_optimal`'s certificate).
@@ -127,7 +128,7 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
     """Decorator adding a solver core to the registry; returns its public, validating door.
 
     The decorated ``core(motions, **options)`` receives a
-    :class:`replication.handeye.Motions` already validated by :func:`solve`
+    :class:`replication.motions.Motions` already validated by :func:`solve`
     (rotations, same shape, ``J >= min_motions``, not degenerate): ``motions.A``
     (camera relative rotations), ``motions.B`` (sensor relative rotations), both
     ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
@@ -340,7 +341,7 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         A name from :func:`available`.
     A : array_like, shape (..., J, 3, 3), or Motions
         Camera relative rotations ``Delta R_c``; or a
-        :class:`replication.handeye.Motions` prepared once for several solvers (then ``B=None``).
+        :class:`replication.motions.Motions` prepared once for several solvers (then ``B=None``).
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     full_output : bool
@@ -349,7 +350,7 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         minimum of eq. (8) (``global_optimum``, ``duality_gap``).
     warn_axis_spread_deg : float
         Issue an :class:`ObservabilityWarning` when the camera or sensor axis
-        spread (:class:`replication.handeye.MotionObservability`) of a problem is
+        spread (:class:`replication.motions.MotionObservability`) of a problem is
         below this: nearly single-axis (or small) motion leaves the rotation about that
         axis poorly determined. Exactly single-axis motion raises instead.
     **options

@@ -1,12 +1,12 @@
 """Classic closed-form solvers of the rotation part of hand-eye calibration ``A X = X B``.
 
-Conventions (as everywhere in :mod:`replication`): ``A[..., j] = Delta R_{c,j}``
+Conventions (``docs/conventions.md``): ``A[..., j] = Delta R_{c,j}``
 are camera relative rotations, ``B[..., j] = Delta R_{i,j}`` the sensor's, and
 ``X = R0 = camera_from_sensor`` solves ``A_j X = X B_j`` (the paper's eq. (7)).
 In the robotics literature's names, ``A`` plays the gripper/hand motion and
 ``B`` the camera/eye motion. Each solver is exported as its public door
 ``solver(A, B)`` (validates, like :func:`replication.solvers.solve`); its core,
-written below, receives validated :class:`~replication.handeye.Motions` and returns
+written below, receives validated :class:`~replication.motions.Motions` and returns
 ``(..., 3, 3)`` rotations (det +1), batched without Python loops.
 
 Relations used below (all follow from ``A_j = X B_j X^T``):
@@ -48,7 +48,7 @@ def park_martin(motions):
     ----------
     A, B : array_like, shape (..., J, 3, 3)
         Camera and sensor relative rotations, ``J >= 2`` with non-parallel axes (or a
-        :class:`~replication.handeye.Motions` as ``A``).
+        :class:`~replication.motions.Motions` as ``A``).
 
     Returns
     -------
@@ -99,7 +99,7 @@ def horaud_dornaika(motions):
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.motions.Motions` as ``A``).
 
     Returns
     -------
@@ -152,13 +152,13 @@ def andreff(motions):
     ``det > 0`` and it is projected onto SO(3) (Andreff's orthogonalisation).
 
     Compare the paper's two-step iteration: it converges to the top *singular*
-    vector of ``K`` (see :mod:`replication.solvers.two_step`); this is the top
+    vector of ``K`` (see :mod:`replication.solvers.iteration`); this is the top
     eigenvector of its symmetric part. Noise-free both equal ``vec(R0)/sqrt(3)``.
 
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.motions.Motions` as ``A``).
 
     Returns
     -------
@@ -194,7 +194,7 @@ def tsai_lenz(motions):
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.handeye.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.motions.Motions` as ``A``).
 
     Returns
     -------

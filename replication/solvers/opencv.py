@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..handeye import prepare_motions
+from ..motions import prepare_motions
 from ._registry import register
 
 __all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
@@ -86,7 +86,7 @@ def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_fai
     ----------
     A, B : array_like, shape (..., J, 3, 3)
         Camera / sensor relative rotations (validated here; or a
-        :class:`~replication.handeye.Motions` as ``A``).
+        :class:`~replication.motions.Motions` as ``A``).
     method : str
         Name of a ``cv2.CALIB_HAND_EYE_*`` constant.
     on_failure : {"raise", "nan"}
@@ -135,7 +135,7 @@ def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise") -> n
     # initial value, the exact identity; accept an identity only if it is the certified minimum of eq. (8)
     identity = np.all(out == np.eye(3), axis=(-2, -1))
     if identity.any():
-        from ..handeye import Motions
+        from ..motions import Motions
         from ._registry import LOCAL_ATOL, LOCAL_RTOL, _gap_to_global
 
         sub = Motions._trusted(flatA[identity], flatB[identity])

@@ -24,7 +24,8 @@ import warnings
 
 import numpy as np
 
-from ..handeye import Motions, MotionObservability, prepare_motions, unvec, vec
+from ..handeye import unvec, vec
+from ..motions import Motions, MotionObservability, prepare_motions
 from ..so3 import check_init, exp_map, skew
 from ._registry import register, warn_if_weak
 from ._sdp import relaxation, upper_bound
@@ -257,7 +258,7 @@ def _sdp_fallback(K, M, J, R, g, upper, how, todo):
 def global_certificate(motions: Motions) -> ChordalResult:
     """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`.
 
-    Raises ``ValueError`` for degenerate motion (see :meth:`replication.handeye.Motions.require`).
+    Raises ``ValueError`` for degenerate motion (see :meth:`replication.motions.Motions.require`).
     """
     motions.require()
     return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
@@ -301,7 +302,7 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
     Raises
     ------
     ValueError
-        Malformed or degenerate input (see :func:`replication.handeye.prepare_motions`).
+        Malformed or degenerate input (see :func:`replication.motions.prepare_motions`).
     """
     m = prepare_motions(A, B)
     warn_if_weak(m)

@@ -1,4 +1,4 @@
-"""Table I machinery: per-iteration errors of each method, the table, and the comparison with the paper.
+"""Table I itself: per-iteration errors of each method, the table, the comparison with the paper, convergence measures.
 
 SQP appears once per named variant (:data:`replication.solvers.SQP_VARIANTS`), as columns
 ``"optimization (analytic)"`` etc.; each is compared with the paper's single "Optimization" column.
@@ -11,14 +11,14 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from . import paper
-from .simulation import SimulatedProblems
-from .so3 import frobenius_error
-from .solvers import SQP_VARIANTS, ReplicationWarning, sqp, two_step
-from .stats import z_score
+from .. import paper
+from ..simulation import SimulatedProblems
+from ..so3 import frobenius_error
+from ..solvers import SQP_VARIANTS, ReplicationWarning, sqp, two_step
+from ..stats import z_score
 
-__all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED",
-           "converged_at", "first_below", "convergence_summary", "ONE_PERCENT", "NEGLIGIBLE", "RISE_TOL",
+__all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED", "converged_at",
+           "first_below", "convergence_summary", "ONE_PERCENT", "NEGLIGIBLE", "RISE_TOL",
            "COST_RISE_RTOL", "FEASIBLE_TOL", "diverting_runs"]
 
 #: The paper's "1 % error", read as ``||R_hat - R0||_F < 0.01 ||R0||_F = 0.01 sqrt(3)``.

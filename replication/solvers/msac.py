@@ -60,7 +60,7 @@ def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, se
     ----------
     A, B : array_like, shape (..., J, 3, 3)
         ``J >= 3``: with two pairs there is no redundancy to vote with (or a
-        :class:`~replication.handeye.Motions` as ``A``).
+        :class:`~replication.motions.Motions` as ``A``).
     threshold_deg : float
         Inlier threshold on the residual angle. The default, 5 deg, is above
         the residual of an inlier in the paper's simulation (camera and sensor

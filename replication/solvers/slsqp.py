@@ -42,7 +42,8 @@ from scipy.optimize import minimize
 
 import warnings
 
-from ..handeye import Motions, handeye_cost_kron, prepare_motions, unvec, vec
+from ..handeye import handeye_cost_kron, unvec, vec
+from ..motions import Motions, prepare_motions
 from ..so3 import check_init, nearest_rotation
 from ._registry import check_local_answer, register, warn_if_weak
 from ._warnings import ConvergenceWarning

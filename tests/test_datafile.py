@@ -1,0 +1,190 @@
+"""Every loader family reports an unreadable or malformed file with one error, DataFileError: the file,
+the line and the column of the problem (realdata, lab.recording, paper)."""
+import pickle
+
+import pytest
+from conftest import SMALL_LAB
+
+from replication import lab, paper
+from replication import realdata as rd
+from replication.datafile import DataFileError, DataFileNotFound, fail, read_lines, read_text
+
+TUM_LINES = [
+    "# t tx ty tz qx qy qz qw",
+    "1520530313249735680.0 0 0 0 0 0 0 1",
+    "1520530313299737600.0 0 0 0 0.0087265 0 0 0.9999619",
+    "1520530313349738752.0 0 0 0 0.0174524 0 0 0.9998477",
+]
+BINARY = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR"
+TABLE1 = (paper.data_dir() / "paper" / "table1.csv").read_text()  # the project's lab_dir, read before any monkeypatch
+
+
+# ----------------------------------------------------------------------------- the error itself
+
+def test_error_prints_file_line_and_column_and_stays_a_value_error(tmp_path):
+    err = DataFileError(tmp_path / "t.txt", "not a number: 'x'", line=12, column=3, column_name="qw")
+    assert str(err) == f"{tmp_path / 't.txt'}, line 12, column 3 ('qw'): not a number: 'x'"
+    assert isinstance(err, ValueError) and not isinstance(err, FileNotFoundError)
+    assert (err.path, err.line, err.column, err.message) == (tmp_path / "t.txt", 12, 3, "not a number: 'x'")
+    assert str(DataFileError("a.csv", "bad", column="acc_x")) == "a.csv, column 'acc_x': bad"
+    assert str(DataFileError("a.csv", "bad", line=2)) == "a.csv, line 2: bad"
+    assert str(DataFileError("a.csv", "bad")) == "a.csv: bad"
+    again = pickle.loads(pickle.dumps(err))
+    assert type(again) is DataFileError and str(again) == str(err) and again.column_name == "qw"
+
+
+def test_not_found_is_also_a_file_not_found_error(tmp_path):
+    with pytest.raises(FileNotFoundError) as info:
+        read_text(tmp_path / "none.txt", "the rig description")
+    err = info.value
+    assert isinstance(err, DataFileNotFound) and isinstance(err, ValueError)
+    assert err.path == tmp_path / "none.txt" and err.filename == str(tmp_path / "none.txt")
+    assert str(err) == f"{tmp_path / 'none.txt'}: no such file (the rig description)"
+    with pytest.raises(DataFileError, match=r"x.csv, line 4, column 'u3': bad") as info:
+        fail("x.csv", "bad", line=4, column="u3")
+    assert info.value.__suppress_context__
+
+
+def test_read_text_translates_newlines_and_drops_a_bom(tmp_path):
+    path = tmp_path / "a.txt"
+    path.write_bytes(b"\xef\xbb\xbfa\r\nb\rc\n\nd")
+    assert read_text(path) == "a\nb\nc\n\nd"
+    assert read_lines(path) == ["a", "b", "c", "", "d"]
+    path.write_bytes(b"a\n")
+    assert read_lines(path) == ["a"]
+
+
+def test_the_bad_byte_is_located(tmp_path):
+    path = tmp_path / "a.txt"
+    path.write_bytes(b"1 2\r\n3 4\n5 \xff 6\n")
+    with pytest.raises(DataFileError, match=r"a.txt, line 3: not UTF-8 text \(invalid start byte at byte 11") as info:
+        read_text(path)
+    assert info.value.line == 3 and info.value.column is None
+
+
+# ----------------------------------------------------------------------------- the loader families
+
+def _tum(path):
+    return rd.load_tum_trajectory(path)
+
+
+def _paper(path):
+    return paper.load_table1()
+
+
+def _lab(path):
+    return lab.load_lab(path.parent)
+
+
+@pytest.fixture
+def paper_dir(tmp_path, monkeypatch):
+    (tmp_path / "paper").mkdir()
+    monkeypatch.setenv("REPLICATION_DATA_DIR", str(tmp_path))
+    return tmp_path / "paper"
+
+
+SMALL = SMALL_LAB
+
+
+@pytest.fixture(params=["tum", "paper", "lab rig", "lab csv"])
+def family(request, tmp_path, paper_dir, lab_dir):
+    """(the file a loader reads, its valid text, a call of the loader)."""
+    if request.param == "tum":
+        return tmp_path / "traj.txt", "\n".join(TUM_LINES) + "\n", _tum
+    if request.param == "paper":
+        return paper_dir / "table1.csv", TABLE1, _paper
+    name = "rig.json" if request.param == "lab rig" else "static_imu.csv"
+    return lab_dir / name, (lab_dir / name).read_text(), _lab
+
+
+def test_missing_file(family):
+    path, _, load = family
+    if path.exists():
+        path.unlink()
+    with pytest.raises(FileNotFoundError) as info:
+        load(path)
+    err = info.value
+    assert isinstance(err, DataFileNotFound) and err.path == path and "no such file" in err.message
+
+
+def test_directory_instead_of_a_file(family):
+    path, _, load = family
+    if path.exists():
+        path.unlink()
+    path.mkdir()
+    with pytest.raises(DataFileError) as info:
+        load(path)
+    assert info.value.path == path and info.value.message == "is a directory, not a file"
+    assert isinstance(info.value, FileNotFoundError)  # as the loaders raised before
+
+
+def test_binary_file(family):
+    path, _, load = family
+    path.write_bytes(BINARY)
+    with pytest.raises(DataFileError) as info:
+        load(path)
+    err = info.value
+    assert err.path == path and err.line == 1 and err.message.startswith("not UTF-8 text (invalid start byte at byte 0")
+
+
+@pytest.mark.parametrize("encoding, problem", [("utf-16", "invalid start byte at byte 0"),
+                                               ("utf-16-le", "a NUL byte at byte 1")])
+def test_utf16_file(family, encoding, problem):
+    path, text, load = family
+    path.write_bytes(text.encode(encoding))
+    with pytest.raises(DataFileError) as info:
+        load(path)
+    err = info.value
+    assert err.path == path and err.line == 1 and err.message.startswith(f"not UTF-8 text ({problem}")
+    assert "UTF-16" in err.message
+
+
+def test_a_valid_file_loads(family):
+    path, text, load = family
+    path.write_text(text)
+    load(path)
+
+
+def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
+    path = tmp_path / "traj.txt"
+    path.write_text("\n".join(TUM_LINES + ["1520530313399738752.0 0 0 0 0 0 0 1x"]) + "\n")
+    with pytest.raises(DataFileError) as info:
+        rd.load_tum_trajectory(path)
+    err = info.value
+    assert (err.path, err.line, err.column, err.column_name) == (path, 5, 8, "qw")
+    assert err.message == "not a number: '1x'"
+
+    table = paper_dir / "table1.csv"
+    table.write_text(TABLE1.replace("2.339", "2.3x9"))
+    with pytest.raises(DataFileError) as info:
+        paper.load_table1()
+    assert (info.value.path, info.value.line, info.value.column) == (table, 3, "mean")
+
+    imu = lab_dir / "static_imu.csv"
+    lines = imu.read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[lines[0].split(",").index("gyr_y")] = "abc"
+    lines[5] = ",".join(cells)
+    imu.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataFileError) as info:
+        lab.load_lab(lab_dir)
+    assert (info.value.path, info.value.line, info.value.column) == (imu, 6, "gyr_y")
+    assert info.value.message == "not a number: 'abc'"
+
+
+def test_other_realdata_loaders_raise_it_too(tmp_path):
+    yaml_file = tmp_path / "c.yaml"
+    yaml_file.write_text("cam0:\n  T_cam_imu: [[1, 0,\n  - 2\n")
+    with pytest.raises(DataFileError) as info:
+        rd.load_kalibr_camchain(yaml_file)
+    assert info.value.path == yaml_file and info.value.line is not None and "not valid YAML" in info.value.message
+    with pytest.raises(DataFileNotFound):
+        rd.load_orbslam3_stereo(tmp_path / "none.yaml")
+    (tmp_path / "dir.yaml").mkdir()
+    with pytest.raises(DataFileNotFound, match="is a directory, not a file"):
+        rd.load_orbslam3_stereo(tmp_path / "dir.yaml")
+    robot = tmp_path / "robot.txt"
+    robot.write_text("x\n")
+    with pytest.raises(DataFileError) as info:
+        rd.load_tabb_poses(robot)
+    assert (info.value.line, info.value.column) == (1, 1) and "number of poses" in info.value.message

@@ -1,0 +1,93 @@
+"""Orientation and gyro streams: the cached slerp, the world_from_body field, gyro integration, a light import."""
+import dataclasses
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.spatial.transform as sst
+
+from replication import calibration, realdata, so3, streams
+from replication.streams import GyroStream, OrientationStream, integrate_gyro
+
+
+@pytest.fixture
+def stream(rng):
+    t = np.sort(rng.uniform(0.0, 10.0, 50))
+    return OrientationStream(t, so3.random_rotations(rng, 50), "test")
+
+
+def test_at_is_bit_identical_to_a_fresh_slerp_and_builds_it_once(stream, rng, monkeypatch):
+    times = rng.uniform(stream.t[0], stream.t[-1], 200)
+    expected = sst.Slerp(stream.t, sst.Rotation.from_matrix(stream.R))(times).as_matrix()
+    built = []
+
+    class CountingSlerp(sst.Slerp):
+        def __init__(self, *args, **kwargs):
+            built.append(1)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(sst, "Slerp", CountingSlerp)
+    first = stream.at(times)
+    cached = stream._interpolator
+    second = stream.at(times[::-1])
+    assert np.array_equal(first, expected) and np.array_equal(second, expected[::-1])
+    assert len(built) == 1 and stream._interpolator is cached
+    np.testing.assert_allclose(stream.at(stream.t), stream.R, rtol=0, atol=1e-14)  # at the samples: the samples
+    assert np.array_equal(first, so3.slerp(stream.t, stream.R, times))
+
+
+def test_the_cache_is_not_part_of_the_value(stream):
+    stream.at(stream.t[1:3])
+    assert "_interpolator" not in repr(stream)
+    copy = dataclasses.replace(stream)
+    assert copy._interpolator is None and copy.world_from_body is stream.world_from_body
+    part = stream.between(stream.t[5], stream.t[20])
+    assert part._interpolator is None and len(part.t) == 16
+
+
+def test_R_is_world_from_body_and_read_only(stream, rng):
+    assert stream.R is stream.world_from_body
+    same = OrientationStream(t=stream.t, world_from_body=stream.R, source="kw")
+    assert np.array_equal(same.R, stream.R)
+    with pytest.raises(AttributeError):
+        stream.R = so3.random_rotations(rng, 50)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        stream.world_from_body = stream.R
+    with pytest.raises(ValueError, match="not a rotation matrix"):
+        OrientationStream(stream.t, 2 * stream.R)
+    with pytest.raises(ValueError, match="not strictly increasing at sample 1"):
+        OrientationStream([0.0, 0.0], stream.R[:2])
+
+
+def test_old_homes_re_export_the_same_objects():
+    assert realdata.OrientationStream is OrientationStream and realdata.GyroStream is GyroStream
+    assert calibration.integrate_gyro is integrate_gyro
+    assert calibration.OrientationStream is OrientationStream
+
+
+def test_integrate_gyro_of_a_constant_rate_is_exp_of_w_t():
+    t = np.linspace(0.0, 2.0, 401) ** 1.5  # uneven steps
+    w = np.array([0.3, -0.2, 0.5])
+    Q = integrate_gyro(GyroStream(t, np.tile(w, (len(t), 1)), "imu"))
+    assert isinstance(Q, OrientationStream) and Q.source == "integrated imu"
+    assert np.array_equal(Q.R[0], np.eye(3))
+    np.testing.assert_allclose(Q.R, so3.exp_map(t[:, None] * w), rtol=0, atol=1e-13)
+
+
+def test_gyro_stream_validation():
+    with pytest.raises(ValueError, match="NaN or inf"):
+        GyroStream([0.0, 1.0], [[0, 0, 0], [0, np.nan, 0]])
+    with pytest.raises(ValueError, match=r"omega of shape \(N, 3\)"):
+        GyroStream([0.0, 1.0], [[0, 0], [0, 0]])
+
+
+def test_importing_streams_loads_no_solver_and_no_optimiser():
+    code = ("import sys, replication.streams as s; import numpy as np; "
+            "s.OrientationStream([0.0, 1.0], np.stack([np.eye(3)] * 2)).at([0.5]); "
+            "bad = [m for m in sys.modules if m.startswith(('scipy.optimize', 'replication.solvers', "
+            "'replication.calibration', 'replication.handeye'))]; print(bad)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+    assert streams.__name__ == "replication.streams"

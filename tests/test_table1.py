@@ -1,0 +1,280 @@
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from replication import paper
+from replication.simulation import matched_start, simulate
+from replication.so3 import exp_map
+from replication.solvers import chordal_optimal
+from replication.stats import share_range
+from replication.table1 import (
+    ONE_PERCENT, RISE_TOL, at_other_minimum, compact, converged_at, convergence_by_setting, convergence_summary,
+    cost_against_minimum, cost_scale_study, diverting_runs, diverting_table, failure_display, failure_table,
+    first_below, fresh_mismatch, interval_text, iterate_errors, paper_two_step_means, per_setting_text, scales_text,
+    sensitivity_grid, share_text, shown_convergence, shown_cost_scales, sqp_failures, sqp_per_setting_text, table1,
+    two_step_means, versus_paper,
+)
+
+
+def test_iterate_errors_shapes_and_noise_free_convergence():
+    sim = simulate(2, 4, noise_camera=0.0, noise_sensor=0.0)
+    errs = iterate_errors(sim, iterations=30, sqp_variants=("analytic", "capped"), sqp_runs={"capped": 2})
+    assert set(errs) == {"optimization (analytic)", "optimization (capped)", "ours_right", "ours_left"}
+    assert errs["ours_right"].shape == (4, 30) and errs["optimization (capped)"].shape == (2, 30)
+    assert errs["ours_right"][:, -1].max() < 1e-9 and errs["optimization (analytic)"][:, -1].max() < 1e-6
+    assert set(iterate_errors(sim, iterations=30, with_sqp=False)) == {"ours_right", "ours_left"}
+
+
+def test_table1_picks_the_right_iterations_with_standard_errors():
+    err = np.tile(np.arange(1.0, 51.0), (3, 1))  # error = iteration number, identical runs
+    tab = table1({"ours_right": err})
+    assert list(tab.index) == list(paper.TABLE1_ITERATIONS)
+    assert np.array_equal(tab[("ours_right", "mean")], paper.TABLE1_ITERATIONS)
+    assert np.all(tab[("ours_right", "std")] == 0) and np.all(tab[("ours_right", "se")] == 0)
+
+
+def _ours_equal_to_paper(se: float):
+    ref = paper.load_table1()
+    cols = {}
+    for m in ("ours_right", "ours_left", "optimization (analytic)"):
+        means = ref.xs("optimization" if m.startswith("opt") else m, level="method")["mean"].to_numpy()
+        cols[(m, "mean")], cols[(m, "std")], cols[(m, "se")] = means.copy(), np.zeros_like(means), np.full_like(means, se)
+    return pd.DataFrame(cols, index=pd.Index(paper.TABLE1_ITERATIONS, name="iteration"))
+
+
+def test_versus_paper_compares_in_standard_errors():
+    ours = _ours_equal_to_paper(1e-4)
+    assert (versus_paper(ours)["verdict"] == "agrees").all()
+    # at the noise floor the paper's SE is 0.004 / sqrt(1000) = 1.3e-4: 0.001 off is about 6 SE, a difference
+    ours.loc[50, ("ours_left", "mean")] += 0.001
+    # the old relative tolerance max(0.005, 0.25 x paper) would have accepted it
+    ours.loc[20, ("ours_right", "mean")] += 0.0002  # about 1.2 SE: agrees
+    cmp = versus_paper(ours)
+    assert cmp.loc[(50, "ours_left"), "verdict"] == "differs" and cmp.loc[(50, "ours_left"), "z"] > 5
+    assert cmp.loc[(20, "ours_right"), "verdict"] == "agrees"
+    assert cmp.loc[(2, "optimization (analytic)"), "paper"] == "3.488 ± 0.250"  # compared with "Optimization"
+    ours.loc[5, ("optimization (analytic)", "mean")] = 1e5  # an infeasible SQP iterate has no digits
+    assert versus_paper(ours).loc[(5, "optimization (analytic)"), "verdict"] == "infeasible"
+
+
+def test_convergence_measures():
+    curve = np.array([2.0, 1.0, 0.5, 0.02, 0.012, 0.0104, 0.0101, 0.01])
+    assert first_below(curve, ONE_PERCENT) == 5 and first_below(curve, 1e-9) is None
+    assert converged_at(curve, 0.05) == 6 and converged_at(curve, 0.0, 0.005) == 5
+    rising = curve.copy()
+    rising[2] = 3.5  # rises above 2 sqrt 2 (off SO(3)) while far above its floor
+    errs = {"a": np.tile(curve, (20, 1)), "b": np.tile(rising, (20, 1))}
+    summary = convergence_summary(errs, np.random.default_rng(0), n_boot=20)
+    assert summary.loc["a", "below_1pct"] == 5 and summary.loc["a", "rises_above_floor"] == 0
+    assert summary.loc["b", "rises_above_floor"] == 1 and summary.loc["a", "left_SO3"] == 0
+    assert summary.loc["b", "left_SO3"] == 1
+
+
+def test_convergence_caps_costs_and_diverting_runs():
+    err = np.array([2.0, 1.0, 1.5, 0.02, 0.0105, 0.0101, 0.01, 0.0102])  # rises at 3 (above floor) and at 8 (at it)
+    cost = np.array([9.0, 5.0, 4.0, 1.0, 0.5, 0.4, 0.3, 0.35])           # falls at 3, rises at 8
+    flat = np.tile(np.r_[np.linspace(2.0, 0.01, 5), [0.01] * 3], (10, 1))  # a capped solver padded after 5
+    summary = convergence_summary({"d": np.tile(err, (10, 1)), "capped": flat}, np.random.default_rng(1), n_boot=10,
+                                  caps={"capped": 5}, costs={"d": np.tile(cost, (10, 1))})
+    assert summary.loc["d", "error_rises"] == 1 and summary.loc["d", "cost_rises"] == 1
+    assert summary.loc["d", "diverts"] == 1 and summary.loc["d", "diverts_above_floor"] == 1
+    assert np.isnan(summary.loc["capped", "cost_rises"])            # no costs given for it
+    assert summary.loc["capped", "settled"] is None or pd.isna(summary.loc["capped", "settled"])  # only at its cap
+    at_floor = err.copy()
+    at_floor[2] = 0.9  # no rise above the floor any more; the one at iteration 8 remains, with the cost rising too
+    s2 = convergence_summary({"d": np.tile(at_floor, (10, 1))}, np.random.default_rng(1), n_boot=10,
+                             costs={"d": np.tile(cost, (10, 1))})
+    assert s2.loc["d", "error_rises"] == 1 and s2.loc["d", "diverts"] == 0 and s2.loc["d", "diverts_above_floor"] == 0
+
+
+def test_rounding_level_rises_are_not_counted():
+    err = np.array([1.0, 0.1, 0.01, 0.01 + 1e-13, 0.01 + 2e-13])     # wobble at its fixed point
+    cost = np.array([5.0, 1.0, 0.2, 0.2 * (1 + 1e-12), 0.2])
+    s = convergence_summary({"w": np.tile(err, (5, 1))}, np.random.default_rng(0), n_boot=5,
+                            costs={"w": np.tile(cost, (5, 1))})
+    assert s.loc["w", "error_rises"] == 0 and s.loc["w", "cost_rises"] == 0 and s.loc["w", "diverts"] == 0
+    err[3] = 0.01 + 10 * RISE_TOL
+    assert convergence_summary({"w": np.tile(err, (5, 1))}, np.random.default_rng(0), n_boot=5).loc["w", "error_rises"] == 1
+
+
+def test_diverting_runs_with_an_absolute_bar_and_feasibility():
+    err = np.array([[1.0, 0.5, 0.8, 0.01], [1.0, 0.5, 0.02, 0.03]])
+    cost = np.array([[9.0, 5.0, 4.0, 1.0], [9.0, 5.0, 4.0, 3.0]])   # always falling
+    assert diverting_runs(err, cost).tolist() == [True, True]
+    assert diverting_runs(err, cost, min_error=0.05).tolist() == [True, False]   # the second rise is at 0.03
+    off = np.array([[True, True, False, True], [True] * 4])                        # the first rise is off SO(3)
+    assert diverting_runs(err, cost, min_error=0.05, feasible=off).tolist() == [False, False]
+    with pytest.raises(ValueError, match="same shape"):
+        diverting_runs(err, cost[:, :3])
+
+
+# --- the studies of notebook 03 ---------------------------------------------------------------------------------
+
+def test_compact_shows_ours_with_z_beside_the_paper():
+    ours = _ours_equal_to_paper(1e-4)
+    ours.loc[5, ("optimization (analytic)", "mean")] = 1e5
+    table = compact(versus_paper(ours))
+    assert list(table.columns[:2]) == ["paper ours_right", "paper optimization"]
+    assert table.loc[2, "paper ours_right"] == "2.339 ± 0.275" and table.loc[2, "paper optimization"] == "3.488 ± 0.250"
+    assert table.loc[2, "ours_right"] == "2.339 ± 0.000 (z +0)"
+    assert table.loc[5, "optimization (analytic)"] == "infeasible (mean > 10)"
+
+
+def test_two_step_means_mismatch_is_the_mean_absolute_log_ratio():
+    pm = paper_two_step_means()
+    assert pm.shape == (7, 2) and pm.loc[2, "ours_right"] == 2.339 and pm.loc[10, "ours_left"] == 0.062
+    sim = simulate(3, 3)
+    means, _ = two_step_means(sim, None, pm)
+    # a "paper" e times ours on one side and equal on the other: |log| is 1 on half of the cells
+    fake = means[["ours_right", "ours_left"]].copy()
+    fake["ours_right"] *= np.e
+    assert two_step_means(sim, None, fake)[1] == pytest.approx(0.5)
+
+
+def test_sensitivity_grid_order_values_and_left_closer():
+    pm = paper_two_step_means()
+    motions, starts, noise = {"Haar": None, "0-90": (0.0, 90.0)}, {"identity": None, "far": matched_start()}, \
+        {"ball": "uniform"}
+    sens, left_closer = sensitivity_grid(7, 3, motions, starts, noise, pm)
+    assert list(sens.index) == [("Haar", "identity", "ball"), ("Haar", "far", "ball"), ("0-90", "identity", "ball"),
+                                ("0-90", "far", "ball")]
+    assert list(sens.columns) == ["R^r @2", "R^r @5", "R^r @10", "R^r @20", "R^r @50", "mismatch"]
+    means, mismatch = two_step_means(simulate(7, 3, motion_angle_range_deg=(0.0, 90.0)), matched_start(), pm)
+    assert sens.loc[("0-90", "far", "ball"), "R^r @5"] == means.loc[5, "ours_right"]
+    assert sens.loc[("0-90", "far", "ball"), "mismatch"] == mismatch
+    # the early cells counted are those still above twice the floor
+    expected = 0
+    for m in motions.values():
+        for s in starts.values():
+            mm, _ = two_step_means(simulate(7, 3, motion_angle_range_deg=m), s, pm)
+            expected += sum(mm.loc[n, "ours_right"] > 2 * mm.loc[50, "ours_right"] for n in (2, 5, 10))
+    assert len(left_closer) == expected > 0
+
+
+def test_fresh_mismatch_averages_over_noise_distributions():
+    pm = paper_two_step_means()
+    noise = {"ball": "uniform", "sphere": "sphere"}
+    fresh = fresh_mismatch([("Haar", "identity")], 9, 3, {"Haar": None}, {"identity": None}, noise, pm)
+    each = [two_step_means(simulate(9, 3, noise_distribution=d), None, pm)[1] for d in noise.values()]
+    assert list(fresh) == [("Haar", "identity")] and fresh[("Haar", "identity")] == pytest.approx(np.mean(each))
+
+
+def test_failure_table_and_its_display():
+    fails = failure_table({"a": {"optimization (x)": np.array([[1.0, 0.01], [1.0, 0.2]]),
+                                 "ours_right": np.array([0.1, 0.0, 0.0, 0.0])},
+                           "b": {"optimization (x)": np.zeros(3)}}, fail=0.05)
+    assert fails.loc["a", "optimization (x)"] == 0.5 and fails.loc["a", "ours_right"] == 0.25
+    assert fails.loc["b", "optimization (x)"] == 0.0 and np.isnan(fails.loc["b", "ours_right"])
+    shown = failure_display(fails, lambda row, col: 100)
+    assert shown.loc["a", "optimization (x)"] == share_range(0.5)              # SQP strictly inside (0, 1): a bracket
+    assert shown.loc["a", "ours_right"] == "25.0% ± 4.3%"                       # sqrt(0.25 * 0.75 / 100) = 0.0433
+    assert shown.loc["b", "optimization (x)"] == "0.0% ± 0.0%" and shown.loc["b", "ours_right"] == ""
+
+
+def test_sqp_failures_and_other_minimum():
+    sim = simulate(2, 3, noise_camera=0.0, noise_sensor=0.0)
+    res, failed, at_limit = sqp_failures(sim.A, sim.B, sim.R0)
+    assert not failed.any() and not at_limit.any() and not at_other_minimum(res, sim.A, sim.B).any()
+    # fake SQP answers: stopped early on a rotation 120 deg from the minimiser (another minimum); the same at the
+    # limit; the same but its last raw iterate off SO(3); and at the minimiser
+    R0 = sim.R0[0]
+    far = R0 @ exp_map(np.array([0.0, 0.0, np.deg2rad(120.0)]))
+    R = np.stack([far, far, far, R0])
+    last = R.copy()
+    last[2] = 2.0 * far
+    fake = SimpleNamespace(R=R, iterates=last[:, None], n_iterations=np.array([10, 50, 10, 10]))
+    A, B = np.repeat(sim.A[:1], 4, axis=0), np.repeat(sim.B[:1], 4, axis=0)
+    assert at_other_minimum(fake, A, B).tolist() == [True, False, False, False]
+
+
+def test_cost_scale_study_noise_free():
+    sim = simulate(4, 3, noise_camera=0.0, noise_sensor=0.0)
+    table, runs = cost_scale_study({"s": (sim, None)}, {"as printed": 1.0, "/ 40": 1 / 40},
+                                   np.random.default_rng(0), n_runs=2, at=(30, 50))
+    assert table.index.names == ["setting", "eq. (8) times"]
+    assert list(table.index) == [("s", "as printed"), ("s", "/ 40")]
+    assert list(table.columns) == ["failed", "below_1pct", "below_1pct_low", "below_1pct_high", "settled",
+                                   "settled_low", "settled_high", "mean @30", "mean @50"]
+    assert (table["failed"] == 0).all() and (table["mean @50"] < 1e-6).all()
+    r, e = runs[("s", "/ 40")]
+    assert e.shape == (2, 50) and table.loc[("s", "/ 40"), "mean @30"] == e.mean(axis=0)[29]
+
+
+def test_interval_and_share_texts():
+    row = pd.Series({"k": 5.0, "k_low": 4.0, "k_high": 6.4}, name="ours_right")
+    assert interval_text(row, "k") == "5 [4, 6]"
+    never = pd.Series({"k": np.nan, "k_low": np.nan, "k_high": np.nan}, name=("matched", "optimization (capped)"))
+    assert interval_text(never, "k") == "never"
+    assert interval_text(never, "k", {"optimization (capped)": 30}) == "never (30 iterations)"
+    assert interval_text(never.rename("ours_right"), "k", {}) == "never (50 iterations)"
+    far = pd.Series({"p": 0.5, "q": 0.0}, name=("matched (fresh seeds)", "optimization (analytic)"))
+    assert share_text(far, "p") == "varies †" and share_text(far, "q") == share_range(0.0)
+    assert share_text(far.rename(("defaults", "optimization (analytic)")), "p") == "50%"
+    frames = (("d", pd.DataFrame({"k": [3.0, np.nan], "k_low": [3.0, np.nan], "k_high": [4.0, np.nan]},
+                                 index=["ours_right", "optimization (a)"])),)
+    assert per_setting_text(frames * 2, "ours_right", "k") == "d 3 [3, 4]; d 3 [3, 4]"
+    assert sqp_per_setting_text(frames, ["optimization (a)"], "k", {}) == "d: a never (50 iterations)"
+    scales = pd.DataFrame({"settled": [8.0, np.nan], "settled_low": [7.0, np.nan], "settled_high": [9.0, np.nan]},
+                          index=pd.MultiIndex.from_tuples([("s", "x1"), ("s", "x2")]))
+    assert scales_text(scales, "s", ["x1", "x2"]) == "x1 8 [7, 9], x2 never"
+
+
+def test_shown_cost_scales_adds_the_papers_row():
+    scales = pd.DataFrame({"failed": [0.0, 0.5], "below_1pct": [3.0, np.nan], "below_1pct_low": [3.0, np.nan],
+                           "below_1pct_high": [4.0, np.nan], "settled": [5.0, np.nan], "settled_low": [5.0, np.nan],
+                           "settled_high": [6.0, np.nan], "mean @15": [0.1234, np.nan], "mean @30": [0.01, np.nan],
+                           "mean @50": [0.001, np.nan]},
+                          index=pd.MultiIndex.from_tuples([("s", "1"), ("s", "2")], names=["setting", "eq. (8) times"]))
+    shown = shown_cost_scales(scales)
+    assert shown.loc[("s", "1")].tolist() == ["0%", "3 [3, 4]", "5 [5, 6]", "0.123", "0.010", "0.001"]
+    assert shown.loc[("s", "2")].tolist() == [share_range(0.5), "never", "never", "-", "-", "-"]
+    assert shown.loc[("paper's Table I", "?")].tolist() == ["-", "-", "-", "0.451", "0.053", "0.015"]
+
+
+def test_convergence_by_setting_stacks_summaries_in_order():
+    curve = np.array([2.0, 1.0, 0.5, 0.02, 0.012, 0.0104, 0.0101, 0.01])
+    big = np.tile(curve * 2000, (6, 1))                           # final mean 20 > DIVERGED
+    settings = {"defaults": (None, {"ours_right": np.tile(curve, (6, 1))}, {"ours_right": np.tile(curve, (6, 1))}),
+                "matched (x)": (None, {"optimization (a)": big}, {"optimization (a)": big})}
+    conv = convergence_by_setting(settings, np.random.default_rng(3))
+    rng = np.random.default_rng(3)
+    first = convergence_summary(settings["defaults"][1], rng, costs=settings["defaults"][2])
+    second = convergence_summary(settings["matched (x)"][1], rng, costs=settings["matched (x)"][2])
+    assert conv.index.names == ["setting", "method"]
+    pd.testing.assert_frame_equal(conv.loc["defaults"], first, check_names=False)
+    pd.testing.assert_frame_equal(conv.loc["matched (x)"][second.columns], second, check_names=False,
+                                  check_dtype=False)
+    shown = shown_convergence(conv)
+    assert shown.loc[("defaults", "ours_right"), "final error"] == "0.0100 ± 0.0000"
+    assert shown.loc[("defaults", "ours_right"), "below 1 %"].startswith("5 [")
+    assert shown.loc[("matched (x)", "optimization (a)"), "final error"] == "infeasible (mean > 10)"
+    assert shown.loc[("defaults", "ours_right"), "error rises"] == "0%"
+
+
+def test_cost_against_minimum_ratios():
+    sim = simulate(5, 4)
+    floor = chordal_optimal(sim.A, sim.B).cost
+    cost = np.tile(2.0 * floor[:, None], (1, 50))
+    cost[:, 0] *= 4.0                                               # cost at iteration 1 four times that at 10
+    shown, ratios, minima = cost_against_minimum({"s": (sim, None, {"ours_right": cost})}, np.random.default_rng(0))
+    assert ratios["s"]["@10 / @1"] == pytest.approx(0.25)
+    assert ratios["s"]["@10 / minimum"] == pytest.approx((2.0, 2.0, 2.0))
+    assert np.allclose(minima["s"].cost, floor)
+    assert list(shown.columns) == ["cost @1", "cost @10", "cost @50", "certified minimum of (8)", "@10 / minimum",
+                                   "@50 / minimum"]
+    assert shown.loc["s", "@50 / minimum"] == "2.000 [2.000, 2.000]"
+
+
+def test_diverting_table_with_fake_runs():
+    err = np.array([[1.0, 0.5, 0.8, 0.01], [1.0, 0.5, 0.02, 0.03]])
+    cost = np.array([[9.0, 5.0, 4.0, 1.0], [9.0, 5.0, 4.0, 3.0]])   # always falling: every error rise diverts
+    iterates = np.broadcast_to(np.eye(3), (2, 4, 3, 3)).copy()
+    iterates[0, 2] *= 2.0                                           # run 0's rise (iteration 3) is off SO(3)
+    scale_runs = {("s", "as printed"): (SimpleNamespace(iterates=iterates, cost=cost), err)}
+    settings = {"s": (None, {"ours_right": err[::-1]}, {"ours_right": cost[::-1]})}
+    div = diverting_table(scale_runs, settings, ["s"], scale_names=("as printed",), bar=0.05, n_runs=1)
+    assert list(div.columns) == ["diverts, error > 0.05", "... and on a rotation"]
+    assert div.loc[("s", "SQP, eq. (8) as printed")].tolist() == [0.5, 0.0]
+    assert div.loc[("s", "two-step R^r")].tolist() == [0.0, 0.0]   # its first run rises to 0.03 only
