@@ -113,46 +113,6 @@ def claims_command(args: argparse.Namespace) -> int:
     return 0
 
 
-CALIBRATE_HELP = """\
-Estimate R0 = camera_from_sensor (A_j R0 = R0 B_j) from two timestamped streams.
-
-Formats (recognised by --*-kind and the file name):
-  camera / orientation sensor:
-    *.txt  TUM / ORB-SLAM3 trajectory, lines "t tx ty tz qx qy qz qw" (t in s or ns), pose world<-body
-    *.csv  EuRoC / TUM-VI mocap or ground truth, "t[ns], px, py, pz, qw, qx, qy, qz", world<-body
-  gyro sensor (--sensor-kind gyro):
-    *.csv  EuRoC / TUM-VI imu0/data.csv, "t[ns], wx, wy, wz [rad/s], ax, ay, az [m/s^2]"
-  reference (optional):
-    Kalibr camchain YAML (<cam>.T_cam_imu), EuRoC sensor.yaml (T_BS, cam -> body), Tabb transformations.txt (Z)
-Clock offset is estimated by cross-correlating angular speeds and removed unless --keep-clock.
-"""
-
-
-def calibrate_command(args: argparse.Namespace) -> int:
-    import json
-
-    from .calibration import calibrate
-    from .realdata import load_reference, load_stream
-
-    try:
-        camera = load_stream(args.camera, "orientation")
-        sensor = load_stream(args.sensor, args.sensor_kind)
-        reference = load_reference(args.reference, args.reference_camera) if args.reference else None
-        result = calibrate(camera, sensor, method=args.method, interval=args.interval, max_offset=args.max_offset,
-                           correct_offset=not args.keep_clock, n_bootstrap=args.bootstrap, reference=reference)
-    except (ValueError, FileNotFoundError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(result.summary())
-    if args.out:
-        out = Path(args.out)
-        report = {"camera": str(args.camera), "sensor": str(args.sensor), "sensor_kind": args.sensor_kind,
-                  **result.to_dict()}
-        write_atomic(out, json.dumps(report, indent=2) + "\n")  # never a half-written report
-        print(f"report written to {out}")
-    return 0
-
-
 def generate_lab_command(args: argparse.Namespace) -> int:
     import time
 
@@ -174,20 +134,9 @@ def main(argv: list[str] | None = None) -> int:
     rep.add_argument("--results", default=str(ROOT / "results"), help="output folder (tables/, figures/)")
     rep.add_argument("--only", nargs="*", help="run only notebooks whose name contains one of these")
     rep.set_defaults(func=reproduce)
-    cal = sub.add_parser("calibrate", help="calibrate a real rig from two orientation streams",
-                         description=CALIBRATE_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera)")
-    cal.add_argument("--sensor", required=True, help="sensor trajectory or raw gyro samples")
-    cal.add_argument("--sensor-kind", choices=["orientation", "gyro"], default="orientation")
-    cal.add_argument("--method", default="chordal_optimal", help="a solver from replication.solvers.available()")
-    cal.add_argument("--interval", type=float, default=1.0, help="seconds between the two poses of a pair")
-    cal.add_argument("--max-offset", type=float, default=0.2, help="largest clock offset searched (s)")
-    cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
-    cal.add_argument("--bootstrap", type=int, default=200, help="bootstrap replicates (0: none)")
-    cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
-    cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
-    cal.add_argument("--out", help="write a JSON report here")
-    cal.set_defaults(func=calibrate_command)
+    from .calibrate_cli import add_parser as add_calibrate_parser
+
+    add_calibrate_parser(sub)
     gen = sub.add_parser("generate-lab", help="write the simulated lab recordings (default: data/lab)")
     gen.add_argument("--out", help="output folder (default: data/lab of this project)")
     gen.add_argument("--seed", type=int, help="LabSettings.seed (default: that of the committed data)")

@@ -7,31 +7,35 @@
    trapezoidal rate, body frame: ``Q(t + dt) = Q(t) exp([omega] dt)``);
 2. the clock offset between the streams is estimated by cross-correlating their
    angular speeds and reported (and by default removed);
-3. pairs: for every camera time ``t_i`` the camera time ``t_j`` closest to
-   ``t_i + interval``; ``A = Qc_j^T Qc_i``, ``B = Qs(t_j)^T Qs(t_i)`` with ``Qs``
-   slerp-interpolated (``Q`` are ``world_from_body``; this is eq. (3)-(4)'s
-   ``C_k C_t^T`` with ``C = Q^T``);
+3. pairs at ``interval`` seconds (steps 2-3: :mod:`replication.association`);
 4. the solver, the residual of every pair, the observability diagnostic, and a
    moving-block bootstrap over the pairs (overlapping pairs are correlated, so
-   blocks span ``interval``) for a confidence radius in degrees.
+   blocks span ``interval``) for a confidence radius in degrees;
+5. a verdict (:mod:`replication.quality`: ``ok`` / ``warning`` / ``fail`` with every reason
+   measured) and, where it is not ``ok``, a search for the usual input mistakes by name
+   (:mod:`replication.diagnose`). Pairs whose interval crosses a gap in a stream are dropped.
+
+Every parameter is checked before any work, with its name in the message.
 
 Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
 ``docs/conventions.md``.
 """
 from __future__ import annotations
 
+import math
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .association import estimate_time_offset, motion_pairs, stream_pairs  # re-exported: public names here
 from .handeye import pair_residual_deg, relative_rotations
-from .motions import MotionObservability, prepare_motions
-from .so3 import (
-    angle_between_deg, as_quaternion, check_rotation_matrices, log_map, rotation_angle_deg, yaw_pitch_roll_deg,
-)
-from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name here
+from .motions import prepare_motions
+from .quality import Evidence, judge
+from .report import CalibrationResult  # re-exported: a public name here
+from .so3 import (angle_between_deg, as_quaternion, check_rotation_matrices, log_map, rotation_angle_deg,
+                  yaw_pitch_roll_deg)
 from .solvers import ReplicationWarning, solve, solver_info
+from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
 
 __all__ = [
     "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
@@ -39,177 +43,115 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class CalibrationResult:
-    """What :func:`calibrate` returns; ``to_dict()`` gives the JSON report.
-
-    Attributes
-    ----------
-    R : ndarray (3, 3)
-        ``camera_from_sensor`` (det +1).
-    quaternion_wxyz : ndarray (4,)
-        The same rotation, scalar first, ``w >= 0``.
-    euler_zyx_deg : ndarray (3,)
-        Yaw, pitch, roll (intrinsic z-y'-x''), degrees.
-    method : str
-    interval_s : float
-        Pairing interval.
-    n_pairs : int
-    time_offset_s, time_offset_correlation : float
-        Estimated sensor-clock offset (sensor sample at ``t + offset`` matches the camera at ``t``)
-        and the correlation of the angular speeds there.
-    time_offset_applied : bool
-    residual_deg : dict
-        Per-pair residual angle (angle of ``R^T A_j R B_j^T``): mean, median, rms, p95, max.
-    bootstrap_ci95_deg : float
-        95th percentile of the angle between bootstrap estimates and ``R`` (NaN if no bootstrap).
-    observability : MotionObservability
-    reference_error_deg : float or None
-        Angle to a reference rotation, when one was given.
-    """
-
-    R: np.ndarray
-    quaternion_wxyz: np.ndarray
-    euler_zyx_deg: np.ndarray
-    method: str
-    interval_s: float
-    n_pairs: int
-    time_offset_s: float
-    time_offset_correlation: float
-    time_offset_applied: bool
-    residual_deg: dict
-    bootstrap_ci95_deg: float
-    observability: MotionObservability = field(repr=False)
-    reference_error_deg: float | None = None
-
-    def to_dict(self) -> dict:
-        """A JSON-serialisable report (conventions included)."""
-        obs = self.observability
-        return {
-            "R0_camera_from_sensor": np.round(self.R, 12).tolist(),
-            "quaternion_wxyz": np.round(self.quaternion_wxyz, 12).tolist(),
-            "euler_zyx_deg": {"yaw": float(self.euler_zyx_deg[0]), "pitch": float(self.euler_zyx_deg[1]),
-                              "roll": float(self.euler_zyx_deg[2])},
-            "conventions": "R0 maps sensor-frame vectors into the camera frame (A_j R0 = R0 B_j); "
-                           "quaternion scalar first; Euler intrinsic z-y'-x'' (yaw, pitch, roll)",
-            "method": self.method,
-            "interval_s": self.interval_s,
-            "n_pairs": self.n_pairs,
-            "time_offset_s": self.time_offset_s,
-            "time_offset_correlation": self.time_offset_correlation,
-            "time_offset_applied": self.time_offset_applied,
-            "residual_deg": self.residual_deg,
-            "bootstrap_ci95_deg": self.bootstrap_ci95_deg,
-            "observability": {
-                "spectral_ratio": float(obs.spectral_ratio),
-                "camera_axis_spread_deg": float(obs.camera_axis_spread_deg),
-                "sensor_axis_spread_deg": float(obs.sensor_axis_spread_deg),
-            },
-            "reference_error_deg": self.reference_error_deg,
-        }
-
-    def summary(self) -> str:
-        """A short human-readable report."""
-        yaw, pitch, roll = self.euler_zyx_deg
-        lines = [
-            f"R0 (camera_from_sensor), {self.method}, {self.n_pairs} pairs at {self.interval_s:g} s:",
-            *("  [" + "  ".join(f"{v:+.6f}" for v in row) + "]" for row in self.R),
-            f"quaternion (w, x, y, z): {np.array2string(self.quaternion_wxyz, precision=6)}",
-            f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
-            f"time offset: {1e3 * self.time_offset_s:+.1f} ms (correlation {self.time_offset_correlation:.4f}, "
-            f"{'applied' if self.time_offset_applied else 'not applied'})",
-            f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
-            f"bootstrap 95% radius: {self.bootstrap_ci95_deg:.3f} deg; axis spread camera "
-            f"{float(self.observability.camera_axis_spread_deg):.1f} deg",
-        ]
-        if self.reference_error_deg is not None:
-            lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
-        return "\n".join(lines)
+#: A stream has a gap where more than this many of its median sample intervals pass without a sample.
+GAP_FACTOR = 5.0
+#: Resolution of the clock-offset search (s), as :func:`replication.association.estimate_time_offset` uses.
+OFFSET_RESOLUTION = 0.5e-3
 
 
-def _speed(Q, times) -> np.ndarray:
-    """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading axes."""
-    rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
-    return np.linalg.norm(log_map(rel), axis=-1) / np.diff(times)
+def _check_number(name, value, *, minimum=None, integer=False, strict=True):
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is a finite number (an integer if asked) above ``minimum``."""
+    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.integer, np.floating))
+    if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
+        raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {value!r}")
+    if minimum is not None and (value <= minimum if strict else value < minimum):
+        raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {value!r}")
 
 
-def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *, max_offset: float = 0.2,
-                         resolution: float = 0.5e-3):
-    """Clock offset by cross-correlating angular speeds; returns ``(offset_s, correlation)``.
-
-    The offset ``d`` maximises the correlation between the camera's angular speed over
-    ``[t_k, t_{k+1}]`` and the sensor's over ``[t_k + d, t_{k+1} + d]`` (sensor slerped);
-    searched on a 10 ms grid in ``[-max_offset, max_offset]``, then refined to ``resolution``.
-    """
-    lo = max(camera.t[0], sensor.t[0] + max_offset)
-    hi = min(camera.t[-1], sensor.t[-1] - max_offset)
-    keep = (camera.t >= lo) & (camera.t <= hi)
-    t = camera.t[keep]
-    if len(t) < 10:
-        raise ValueError(f"the streams overlap in fewer than 10 camera samples (overlap {lo:.3f}..{hi:.3f} s)")
-    cam = _speed(camera.R[keep], t)
-
-    def corr(offsets):
-        Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
-        sen = _speed(Qs, t)
-        a = cam - cam.mean()
-        b = sen - sen.mean(axis=1, keepdims=True)
-        return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
-
-    coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
-    best = coarse[np.argmax(corr(coarse))]
-    fine = np.clip(np.arange(best - 0.01, best + 0.01 + 1e-12, resolution), -max_offset, max_offset)
-    c = corr(fine)
-    k = int(np.argmax(c))
-    return float(fine[k]), float(c[k])
+def _check_common(method, n_bootstrap, seed, reference):
+    solver_info(method)  # an unknown name fails before any work, listing the available ones
+    _check_number("n_bootstrap", n_bootstrap, minimum=0, integer=True, strict=False)
+    _check_number("seed", seed, minimum=0, integer=True, strict=False)
+    if reference is None:
+        return None
+    ref = np.asarray(reference, dtype=float)
+    if ref.shape == (4, 4):
+        raise ValueError("reference is a 4x4 transform; pass its rotation block (the upper-left 3x3 camera_from_sensor)")
+    if ref.shape != (3, 3):
+        raise ValueError(f"reference must be a 3x3 rotation (camera_from_sensor), got shape {ref.shape}")
+    return check_rotation_matrices(ref, "reference", atol=1e-5)
 
 
-def motion_pairs(camera: OrientationStream, sensor: OrientationStream, interval: float, *, offset: float = 0.0):
-    """Relative-rotation pairs ``(A, B)`` at ``interval`` seconds (see the module notes).
-
-    Returns
-    -------
-    (A, B, t_start) : ndarray (J, 3, 3), ndarray (J, 3, 3), ndarray (J,)
-    """
-    if not interval > 0:
-        raise ValueError(f"interval must be positive, got {interval!r}")
-    t = camera.t
-    inside = (t + offset >= sensor.t[0]) & (t + offset <= sensor.t[-1])
-    t, Qc = t[inside], camera.R[inside]
-    j = np.clip(np.searchsorted(t, t + interval), 1, len(t) - 1)
-    j = np.where(np.abs(t[j - 1] - t - interval) < np.abs(t[j] - t - interval), j - 1, j)
-    tol = 0.5 * np.median(np.diff(t))
-    i = np.flatnonzero((np.abs(t[j] - t - interval) <= tol) & (j > np.arange(len(t))))
-    j = j[i]
-    if len(i) < 2:
-        raise ValueError(f"fewer than 2 motion pairs at interval {interval:g} s (streams overlap "
-                         f"{t[-1] - t[0] if len(t) else 0:.2f} s)")
-    A = relative_rotations(Qc, pairs=(i, j), convention="world_from_body", atol=1e-5)  # eq. (3): C_k C_t^T, C = Q^T
-    B = relative_rotations(sensor.at(t + offset), pairs=(i, j), convention="world_from_body", atol=1e-5)  # eq. (4)
-    return A, B, t[i]
+def _gaps(t) -> np.ndarray:
+    """``(start, end)`` of every gap of a stream: more than :data:`GAP_FACTOR` median intervals without a sample."""
+    dt = np.diff(t)
+    k = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
+    return np.stack([t[k], t[k + 1]], axis=-1)
 
 
-def stream_pairs(camera: OrientationStream, sensor, *, interval: float = 1.0, max_offset: float = 0.2,
-                 correct_offset: bool = True):
-    """Steps 1-3 of :func:`calibrate`: integrate a gyro, estimate the clock offset, form the pairs.
+def _span(stream) -> dict:
+    return {"kind": type(stream).__name__, "source": stream.source, "samples": int(len(stream.t)),
+            "start_s": float(stream.t[0]), "end_s": float(stream.t[-1]), "span_s": float(stream.t[-1] - stream.t[0]),
+            "median_rate_hz": float(1.0 / np.median(np.diff(stream.t)))}
 
-    Returns
-    -------
-    (A, B, offset_s, correlation)
-    """
-    if isinstance(sensor, GyroStream):
-        sensor = integrate_gyro(sensor)
-    if not isinstance(camera, OrientationStream) or not isinstance(sensor, OrientationStream):
-        raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
-    offset, corr = estimate_time_offset(camera, sensor, max_offset=max_offset)
-    A, B, _ = motion_pairs(camera, sensor, interval, offset=offset if correct_offset else 0.0)
-    return A, B, offset, corr
+
+def _check_overlap(camera, sensor, max_offset):
+    """Refuse streams that do not overlap, naming the likely time-unit mistake from their spans."""
+    lo, hi = max(camera.t[0], sensor.t[0] + max_offset), min(camera.t[-1], sensor.t[-1] - max_offset)
+    if np.sum((camera.t >= lo) & (camera.t <= hi)) >= 10:
+        return
+    unit = _time_unit_reason(camera, sensor)
+    hint = f"; {unit.message}" if unit is not None else ""
+    raise ValueError(f"the streams overlap in fewer than 10 camera samples: camera {camera.t[0]:.6g}..{camera.t[-1]:.6g} "
+                     f"s, sensor {sensor.t[0]:.6g}..{sensor.t[-1]:.6g} s (offset search +-{max_offset:g} s){hint}")
+
+
+def _gap_free_window(camera, sensor, max_offset):
+    """The camera samples inside the sensor stream's longest stretch without a gap (the whole stream if it has none):
+    across a gap the sensor's orientation is interpolated or integrated through missing data, and its angular speed
+    there would bias the clock-offset search."""
+    gaps = _gaps(sensor.t)
+    if not len(gaps):
+        return camera
+    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]]).reshape(-1, 2)  # gap-free stretches
+    best = edges[np.argmax(np.diff(edges, axis=1)[:, 0])]
+    part = camera.between(best[0] + max_offset, best[1] - max_offset)
+    return part if len(part.t) >= 10 else camera
+
+
+def _time_unit_reason(camera, sensor):
+    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file in ms, us or ns)."""
+    from .quality import Reason
+
+    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
+    for unit, factor in (("ms", 1e3), ("us", 1e6), ("ns", 1e9)):
+        for name, big, small in (("sensor", ss, cs), ("camera", cs, ss)):
+            if small > 0 and 0.5 < big / (factor * small) < 2.0:
+                return Reason("time_unit", "fail", float(big / small), factor,
+                              f"the {name} stream spans {big:.4g} s and the other {small:.4g} s: the {name} file's "
+                              f"times look like {unit} read as seconds (give its time unit)")
+    return None
+
+
+def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
+    """Mask of pairs to drop: an end in a gap of the sensor stream (interpolated across it), or, for an integrated
+    gyro, any gap within the pair (the integration across it is wrong)."""
+    gaps = _gaps(sensor_t)
+    s, e = t_start + offset, t_start + interval + offset
+    drop = np.zeros(len(t_start), bool)
+    for g0, g1 in gaps:
+        inside = ((s > g0) & (s < g1)) | ((e > g0) & (e < g1))
+        drop |= inside | ((s < g1) & (e > g0)) if integrated else inside
+    return drop
+
+
+def _speeds(camera, sensor, offset, lo, hi):
+    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by ``offset``, in the overlap."""
+    t = camera.t[(camera.t >= lo) & (camera.t <= hi)]
+    if len(t) < 2:
+        return None
+    cam = camera.at(t)
+    sen = sensor.at(t + offset)
+    dt = np.diff(t)
+    speed = [rotation_angle_deg(relative_rotations(Q, convention="world_from_body", atol=1e-5)) / dt for Q in (cam, sen)]
+    return 0.5 * (t[1:] + t[:-1]), speed[0], speed[1]
 
 
 def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
               stride: int = 1, max_offset: float = 0.2, correct_offset: bool = True, n_bootstrap: int = 200,
-              seed: int = 0, reference=None, **options) -> CalibrationResult:
-    """``R0`` (camera_from_sensor) of a real rig from two timestamped streams.
+              seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False,
+              **options) -> CalibrationResult:
+    """``R0`` (camera_from_sensor) of a real rig from two timestamped streams, with a verdict on it.
 
     Parameters
     ----------
@@ -218,8 +160,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     sensor : OrientationStream or GyroStream
         Sensor ``world_from_sensor`` orientations, or raw body-frame rates (integrated here).
     method : str
-        A registered solver (:func:`replication.solvers.available`); the two-step solvers get
-        enough iterations to reach their fixed point.
+        A registered solver (:func:`replication.solvers.available`).
     interval : float
         Seconds between the two orientations of a pair.
     stride : int
@@ -236,28 +177,77 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         Seeds the bootstrap.
     reference : None or array_like (3, 3)
         A reference ``R0``; the result then reports the angle to it.
+    diagnose : bool
+        Where the verdict is not ``ok``, look for the usual input mistakes (:mod:`replication.diagnose`).
+    progress : bool
+        Show a progress bar over the bootstrap (on standard error).
     **options
         Passed to the solver.
 
     Returns
     -------
     CalibrationResult
+        With ``verdict``: read it before using ``R``.
+
+    Raises
+    ------
+    ValueError
+        A bad parameter (named), streams of the wrong type, or streams that do not overlap (with the likely
+        time-unit mistake when their spans show one).
     """
-    solver_info(method)  # unknown names fail before any work
-    A, B, offset, corr = stream_pairs(camera, sensor, interval=interval, max_offset=max_offset,
-                                      correct_offset=correct_offset)
-    A, B = A[::stride], B[::stride]
+    reference = _check_common(method, n_bootstrap, seed, reference)
+    _check_number("interval", interval, minimum=0)
+    _check_number("stride", stride, minimum=1, integer=True, strict=False)
+    _check_number("max_offset", max_offset, minimum=0)
+    if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
+        raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
+    gyro = sensor if isinstance(sensor, GyroStream) else None
+    oriented = integrate_gyro(sensor) if gyro is not None else sensor
+    _check_overlap(camera, oriented, max_offset)
+    window = _gap_free_window(camera, oriented, max_offset)
+    offset, corr, curve = estimate_time_offset(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
+                                               full_output=True)
+    used = offset if correct_offset else 0.0
+    A, B, t_start = motion_pairs(camera, oriented, interval, offset=used)
+    A, B, t_start = A[::stride], B[::stride], t_start[::stride]
+    drop = _pairs_across_gaps(t_start, interval, used, oriented.t, integrated=gyro is not None)
+    before = len(A)
+    if drop.all():
+        raise ValueError(f"every one of the {before} pairs spans a gap in the sensor stream")
+    A, B, t_start = A[~drop], B[~drop], t_start[~drop]
     # overlapping pairs are correlated: bootstrap blocks span one interval
     block = max(1, round(interval / np.median(np.diff(camera.t)) / stride))
-    return _solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
-                        seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
-                        options=options)
+    lo, hi = max(camera.t[0], oriented.t[0] - used), min(camera.t[-1], oriented.t[-1] - used)
+    parameters = {"method": method, "interval_s": interval, "stride": stride, "max_offset_s": max_offset,
+                  "correct_offset": bool(correct_offset), "n_bootstrap": n_bootstrap, "seed": seed,
+                  "diagnose": bool(diagnose), "solver_options": {k: repr(v) for k, v in options.items()}}
+    inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
+              "reference_camera_from_sensor": reference}
+    rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
+    evidence = dict(offset_s=offset, offset_correlation=corr, max_offset_s=max_offset,
+                    offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
+                    pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
+    result = _solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
+                          seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
+                          options=options, evidence=evidence, parameters=parameters, inputs=inputs,
+                          pair_times=t_start, progress=progress)
+    result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]))
+    unit = _time_unit_reason(camera, sensor)
+    if unit is not None:
+        result = _with_reasons(result, [unit])
+    if diagnose and result.verdict.level != "ok":
+        from .diagnose import input_mistakes
+
+        found = input_mistakes(camera, sensor, result, interval=interval, max_offset=max_offset)
+        if found:
+            result = _with_reasons(result, found)
+    return result
 
 
 def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
                     pairs: str = "all", min_motion_deg: float = 2.0, n_bootstrap: int = 200, seed: int = 0,
-                    reference=None, **options) -> CalibrationResult:
-    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera).
+                    reference=None, progress: bool = False, **options) -> CalibrationResult:
+    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with a verdict.
 
     Parameters
     ----------
@@ -271,17 +261,24 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         pose chain from these and form all pairs themselves).
     min_motion_deg : float
         Drop pairs whose sensor rotation is smaller than this.
-    n_bootstrap, seed, reference, **options
+    n_bootstrap, seed, reference, progress, **options
         As in :func:`calibrate`. The bootstrap resamples pairs one by one; pairs that share a
         pose are correlated, so its radius understates the uncertainty.
     """
+    reference = _check_common(method, n_bootstrap, seed, reference)
+    _check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
     C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
     S = check_rotation_matrices(sensor_attitudes, "sensor_attitudes", atol=1e-5)
     if C.shape != S.shape or C.ndim != 3:
         raise ValueError(f"need two (N, 3, 3) arrays of the same N, got {C.shape} and {S.shape}")
     A, B = pose_pairs(C, S, pairs=pairs, min_motion_deg=min_motion_deg)
+    parameters = {"method": method, "pairs": pairs, "min_motion_deg": min_motion_deg, "n_bootstrap": n_bootstrap,
+                  "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
+    inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
+              "sensor": {"kind": "static poses", "samples": int(len(S))}, "reference_camera_from_sensor": reference}
     return _solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                        seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options)
+                        seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
+                        evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress)
 
 
 def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
@@ -300,25 +297,55 @@ def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
     return A, B
 
 
-def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options):
-    """Solve, residuals, moving-block bootstrap; the common end of :func:`calibrate` and :func:`calibrate_poses`."""
+def _bootstrap(motions, method, options, *, block, n_bootstrap, seed, progress):
+    """Moving-block bootstrap estimates, in chunks (a progress bar over them if asked)."""
+    rng = np.random.default_rng(seed)
+    J = motions.J
+    block = int(min(J, block))
+    starts = rng.integers(0, J - block + 1, size=(n_bootstrap, -(-J // block)))
+    idx = (starts[..., None] + np.arange(block)).reshape(n_bootstrap, -1)[:, :J]
+    core = solver_info(method).core
+    chunks = np.array_split(np.arange(n_bootstrap), min(n_bootstrap, 10)) if progress else [np.arange(n_bootstrap)]
+    out = []
+    with warnings.catch_warnings():
+        # the resampled pairs were validated: call the solver's core; the replicates' own warnings would repeat
+        # the main solve's
+        warnings.simplefilter("ignore", ReplicationWarning)
+        if progress:
+            from tqdm import tqdm
+
+            chunks = tqdm(chunks, desc=f"bootstrap ({method})", unit="chunk", file=__import__("sys").stderr)
+        for chunk in chunks:
+            out.append(core(motions.subset(idx[chunk]), **options))
+    return np.concatenate(out)
+
+
+def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
+                 parameters, inputs, pair_times, progress):
+    """Solve, residuals, bootstrap, verdict; the common end of :func:`calibrate` and :func:`calibrate_poses`."""
     motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
-    sol = solve(method, motions, full_output=True, **options)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ReplicationWarning)
+        sol = solve(method, motions, full_output=True, **options)
+    ours = [w for w in caught if issubclass(w.category, ReplicationWarning)]
+    for w in caught:  # still said to the caller, as solve() says it
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     R = sol.R
     res = pair_residual_deg(R, A, B)
-    ci = float("nan")
-    if n_bootstrap:
-        rng = np.random.default_rng(seed)
-        J = len(A)
-        block = int(min(J, block))
-        starts = rng.integers(0, J - block + 1, size=(n_bootstrap, -(-J // block)))
-        idx = (starts[..., None] + np.arange(block)).reshape(n_bootstrap, -1)[:, :J]
-        with warnings.catch_warnings():
-            # the resampled pairs were validated above: call the solver's core; the replicates' own
-            # warnings would repeat the main solve's
-            warnings.simplefilter("ignore", ReplicationWarning)
-            R_boot = solver_info(method).core(motions.subset(idx), **options)
+    J = len(A)
+    blocks = J / int(min(J, block))
+    ci, boot = float("nan"), np.empty((0, 3))
+    if n_bootstrap and blocks >= 3:
+        R_boot = _bootstrap(motions, method, options, block=block, n_bootstrap=n_bootstrap, seed=seed,
+                            progress=progress)
         ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
+        boot = np.degrees(log_map(R_boot @ R.T))
+    motion = float(np.median(rotation_angle_deg(A)))
+    verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
+                             bootstrap_deg=ci if math.isfinite(ci) else None,
+                             axis_spread_deg=float(sol.observability.camera_axis_spread_deg),
+                             warnings=tuple(w.category.__name__ for w in ours),
+                             blocks=blocks if n_bootstrap else None, **evidence))
     offset, corr, applied = time_offset
     return CalibrationResult(
         R=R,
@@ -326,7 +353,7 @@ def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference,
         euler_zyx_deg=yaw_pitch_roll_deg(R),
         method=method,
         interval_s=interval,
-        n_pairs=int(len(A)),
+        n_pairs=int(J),
         time_offset_s=offset,
         time_offset_correlation=corr,
         time_offset_applied=applied,
@@ -335,5 +362,19 @@ def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference,
                       "max": float(res.max())},
         bootstrap_ci95_deg=ci,
         observability=sol.observability,
-        reference_error_deg=None if reference is None else float(angle_between_deg(R, np.asarray(reference))),
+        reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
+        verdict=verdict,
+        warnings=tuple(f"{w.category.__name__}: {w.message}" for w in ours),
+        parameters=parameters,
+        inputs=inputs,
+        diagnostics={"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
+                     "motion_median_deg": motion},
     )
+
+
+def _with_reasons(result: CalibrationResult, reasons) -> CalibrationResult:
+    import dataclasses
+
+    from .quality import Verdict
+
+    return dataclasses.replace(result, verdict=Verdict.of((*result.verdict.reasons, *reasons)))

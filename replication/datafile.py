@@ -17,7 +17,13 @@ import errno
 from pathlib import Path
 from typing import NoReturn
 
-__all__ = ["DataFileError", "DataFileNotFound", "fail", "read_text", "read_lines"]
+import numpy as np
+
+__all__ = ["DataFileError", "DataFileNotFound", "fail", "read_text", "read_lines", "read_table", "is_number",
+           "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
+
+#: Accepted deviation of a stored quaternion's norm from 1.
+QUATERNION_NORM_TOL = 1e-3
 
 
 class DataFileError(ValueError):
@@ -157,3 +163,79 @@ def read_lines(path, what: str | None = None) -> list[str]:
     if lines and lines[-1] == "":
         lines.pop()
     return lines
+
+
+def read_table(path, names, *, delimiter=None, what: str | None = None, header: bool = False,
+               drop_repeated: bool = False, increasing_first: bool = True):
+    """Numeric rows of a text file, skipping blank and ``#`` lines; every error names file, line and column.
+
+    ``names``: the columns (their number is the expected count; a bad value names its column); ``delimiter``:
+    ``None`` splits on white space; ``header``: skip the first data line (a header of names); ``drop_repeated``:
+    skip a line identical in every value to the previous data line; ``increasing_first``: the first column
+    (a time stamp) must increase strictly.
+
+    Returns
+    -------
+    (data, lines) : ndarray (N, len(names)), ndarray (N,) of 1-based line numbers
+    """
+    names = tuple(names)
+    n_columns = len(names)
+    what = what or ", ".join(names)
+    rows, lines = [], []
+    skip_header = header
+    for lineno, line in enumerate(read_lines(path), 1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        if skip_header:
+            skip_header = False
+            continue
+        parts = text.split(delimiter) if delimiter else text.split()
+        if len(parts) != n_columns:
+            fail(path, f"expected {n_columns} columns ({what}), got {len(parts)}", line=lineno)
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            col = next(i for i, p in enumerate(parts) if not is_number(p))
+            fail(path, f"not a number: {parts[col]!r}", line=lineno, column=col + 1, column_name=names[col])
+        bad = [i for i, v in enumerate(values) if not np.isfinite(v)]
+        if bad:
+            fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=names[bad[0]])
+        if drop_repeated and rows and values == rows[-1]:
+            continue
+        rows.append(values)
+        lines.append(lineno)
+    if len(rows) < 2:
+        fail(path, f"fewer than 2 data lines ({what})")
+    data = np.array(rows)
+    step = np.diff(data[:, 0])
+    if increasing_first and np.any(step <= 0):
+        k = int(np.flatnonzero(step <= 0)[0])
+        fail(path, f"timestamp not after the previous line's ({data[k + 1, 0]!r} <= {data[k, 0]!r})",
+             line=lines[k + 1], column=1, column_name=names[0])
+    return data, np.array(lines)
+
+
+def is_number(text) -> bool:
+    """Whether ``float(text)`` succeeds."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def unit_quaternion_rotations(path, q_wxyz, lines, tol: float = QUATERNION_NORM_TOL):
+    """Rotation matrices of unit quaternions ``(w, x, y, z)`` read from ``path`` (``lines``: their line numbers).
+
+    A norm off 1 by more than ``tol`` raises :class:`DataFileError` at its line (a wrong column order or
+    unit); the others are normalised.
+    """
+    from .so3 import quaternion_to_matrix
+
+    norm = np.linalg.norm(q_wxyz, axis=-1)
+    bad = np.flatnonzero(np.abs(norm - 1.0) > tol)
+    if bad.size:
+        fail(path, f"quaternion norm {norm[bad[0]]:.6g} is not 1 (tolerance {tol:g}); "
+             "wrong column order or units?", line=lines[bad[0]])
+    return quaternion_to_matrix(q_wxyz / norm[:, None])

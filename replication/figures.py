@@ -4,7 +4,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure"]
+__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure",
+           "calibration_figure"]
 
 #: One colour/line style per method, reused in every figure.
 METHOD_STYLE = {
@@ -123,3 +124,77 @@ def fig7_figure(traces):
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     return fig
+
+
+_VERDICT_COLOUR = {"ok": "tab:green", "warning": "tab:orange", "fail": "tab:red"}
+
+
+def calibration_figure(result):
+    """The diagnostic figure of a calibration (:meth:`replication.report.CalibrationResult.plot`), like Kalibr's report.
+
+    (a) angular speed of both streams after the clock alignment; (b) the clock-offset cross-correlation with the
+    chosen peak and the search bounds; (c) per-pair residuals over time; (d) their histogram; (e) the bootstrap
+    cloud (estimates as rotation vectors of ``R_boot R^T``, deg); (f) the verdict and its reasons.
+    """
+    d = result.diagnostics
+    fig, axes = plt.subplots(2, 3, figsize=(14, 7.5))
+    (a, b, c), (h, e, f) = axes
+    t0 = d.get("t0", 0.0)
+    speeds = d.get("speeds")
+    if speeds is not None:
+        t, cam, sen = speeds
+        a.plot(t - t0, cam, lw=0.7, label="camera")
+        a.plot(t - t0, sen, lw=0.7, alpha=0.8, label="sensor, clock aligned")
+        a.set_xlabel("time since the camera's first sample (s)")
+        a.set_ylabel("angular speed (deg/s)")
+        a.legend(fontsize=7)
+    else:
+        a.text(0.5, 0.5, "static pose sets: no streams", ha="center", va="center", transform=a.transAxes)
+    a.set_title("(a) angular speed")
+    curve = d.get("offset_curve")
+    if curve is not None:
+        offsets, corr = curve
+        b.plot(1e3 * np.asarray(offsets), corr, lw=0.8)
+        b.axvline(1e3 * result.time_offset_s, color="k", ls="--", lw=0.8, label="chosen")
+        bound = result.parameters.get("max_offset_s")
+        if bound:
+            for x in (-bound, bound):
+                b.axvline(1e3 * x, color="tab:red", ls=":", lw=0.8)
+        b.set_xlabel("sensor clock offset (ms)")
+        b.set_ylabel("correlation of angular speeds")
+        b.legend(fontsize=7)
+    else:
+        b.text(0.5, 0.5, "no clock to align", ha="center", va="center", transform=b.transAxes)
+    b.set_title("(b) clock offset")
+    res = np.asarray(d.get("residuals_deg", []))
+    times = d.get("pair_times")
+    c.plot(np.arange(len(res)) if times is None else np.asarray(times) - t0, res, ".", ms=2)
+    c.set_xlabel("pair" if times is None else "pair start, since the camera's first sample (s)")
+    c.set_ylabel("residual (deg)")
+    c.set_title("(c) per-pair residual")
+    h.hist(res, bins=50)
+    h.set_xlabel("residual (deg)")
+    h.set_title(f"(d) residuals: median {result.residual_deg['median']:.3g} deg")
+    cloud = np.asarray(d.get("bootstrap_rotvec_deg", np.empty((0, 3))))
+    if len(cloud):
+        e.scatter(cloud[:, 0], cloud[:, 1], s=4, c=cloud[:, 2], cmap="coolwarm")
+        e.set_aspect("equal", adjustable="datalim")
+        e.set_xlabel("x (deg)")
+        e.set_ylabel("y (deg); colour: z")
+    else:
+        e.text(0.5, 0.5, "no bootstrap", ha="center", va="center", transform=e.transAxes)
+    e.set_title("(e) bootstrap estimates about R0")
+    f.axis("off")
+    colour = _VERDICT_COLOUR[result.verdict.level]
+    f.text(0.0, 1.0, f"verdict: {result.verdict.level.upper()}", color=colour, fontsize=14, weight="bold",
+           va="top", transform=f.transAxes)
+    lines = [r.message for r in result.verdict.reasons] or ["every check passed"]
+    import textwrap
+
+    body = "\n".join(textwrap.fill(f"- {m}", 60) for m in lines[:8])
+    f.text(0.0, 0.88, body, fontsize=7, va="top", transform=f.transAxes)
+    f.set_title("(f) verdict")
+    fig.suptitle(f"R0 by {result.method}: {result.n_pairs} pairs", color=colour)
+    fig.tight_layout()
+    return fig
+

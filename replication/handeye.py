@@ -114,7 +114,17 @@ def relative_rotations(orientations, *, reference: int | None = None, pairs=None
     if pairs is not None:
         if reference is not None:
             raise ValueError("give either reference or pairs, not both")
-        t_index, k_index = (np.asarray(p, dtype=int) for p in pairs)
+        t_index, k_index = (np.asarray(p) for p in pairs)
+        n = C.shape[-3]
+        for name, index in (("t_index", t_index), ("k_index", k_index)):
+            if index.ndim != 1 or not np.issubdtype(index.dtype, np.integer) and index.size:
+                raise ValueError(f"pairs: {name} must be a 1-D array of integers, got {index.dtype} of shape {index.shape}")
+            if index.size and (index.min() < 0 or index.max() >= n):
+                raise ValueError(f"pairs: {name} out of range for N = {n} orientations "
+                                 f"(min {index.min()}, max {index.max()})")
+        if t_index.shape != k_index.shape:
+            raise ValueError(f"pairs: t_index and k_index must have the same length, got {len(t_index)} and "
+                             f"{len(k_index)}")
         return C[..., k_index, :, :] @ Ct[..., t_index, :, :]  # eq. (3): Delta R = C_k C_t^T
     if reference is None:
         return C[..., 1:, :, :] @ Ct[..., :-1, :, :]  # eq. (3): Delta R = C_k C_t^T

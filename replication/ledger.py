@@ -14,7 +14,6 @@ Verdicts: ``holds``, ``fails``, ``holds only if`` (the condition says what must 
 """
 from __future__ import annotations
 
-import io
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -22,7 +21,7 @@ from pathlib import Path
 import pandas as pd
 
 from ._io import write_atomic
-from .datafile import fail, read_text
+from .paper import load_claim_table as load_claims  # the ledger's claims: a public name here
 
 __all__ = ["VERDICTS", "CLAIM_MIME", "ClaimRecord", "load_claims", "record", "collect", "to_markdown",
            "update_readme"]
@@ -60,29 +59,6 @@ class ClaimRecord:
     uncertainty: str
     setting: str
     condition: str = ""
-
-
-def load_claims(path=None) -> pd.DataFrame:
-    """The claims, indexed by ``claim``: ``statement``, ``where``, ``paper_value``, ``unit``."""
-    from .paper import data_dir
-
-    path = Path(path) if path else data_dir() / "paper" / "claims.csv"
-    df = pd.read_csv(io.StringIO(read_text(path, "the claims file")), dtype=str, keep_default_na=False)
-    expected = ["claim", "statement", "where", "paper_value", "unit"]
-    if list(df.columns) != expected:
-        fail(path, f"columns must be {expected}, got {list(df.columns)}", line=1)
-    for line, row in enumerate(df.itertuples(index=False), start=2):
-        for col in ("claim", "statement", "where"):
-            if not getattr(row, col).strip():
-                fail(path, "empty", line=line, column=col)
-        if row.paper_value.strip():
-            try:
-                float(row.paper_value)
-            except ValueError:
-                fail(path, f"not a number ({row.paper_value!r})", line=line, column="paper_value")
-    if df["claim"].duplicated().any():
-        fail(path, f"claim ids repeated: {sorted(df.loc[df['claim'].duplicated(), 'claim'])}")
-    return df.set_index("claim")
 
 
 def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting: str, condition: str = "") -> None:

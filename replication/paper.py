@@ -17,7 +17,8 @@ import pandas as pd
 from .datafile import fail, read_text
 from .so3 import nearest_rotation
 
-__all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims"]
+__all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims",
+           "load_claim_table"]
 
 TABLE1_ITERATIONS = (2, 5, 10, 15, 20, 30, 50)
 TABLE1_METHODS = ("optimization", "ours_right", "ours_left")
@@ -102,11 +103,31 @@ def load_table2() -> pd.DataFrame:
 def load_claims() -> pd.Series:
     """The paper's numbers in its checkable claims, indexed by claim id (claims without a number left out).
 
-    The full ledger of claims (statements, where the paper makes them) is :func:`replication.ledger.load_claims`.
+    The full table of claims (statements, where the paper makes them) is :func:`load_claim_table`.
     """
-    from .ledger import load_claims as ledger_claims
-
-    df = ledger_claims()
+    df = load_claim_table()
     values = df.loc[df["paper_value"] != "", "paper_value"].astype(float)
     values.index.name = "claim"
     return values
+
+
+def load_claim_table(path=None) -> pd.DataFrame:
+    """The checkable claims of ``data/paper/claims.csv``, indexed by ``claim``: ``statement``, ``where``,
+    ``paper_value``, ``unit`` (the ledger's rows, :mod:`replication.ledger`)."""
+    path = Path(path) if path else data_dir() / "paper" / "claims.csv"
+    df = pd.read_csv(io.StringIO(read_text(path, "the claims file")), dtype=str, keep_default_na=False)
+    expected = ["claim", "statement", "where", "paper_value", "unit"]
+    if list(df.columns) != expected:
+        fail(path, f"columns must be {expected}, got {list(df.columns)}", line=1)
+    for line, row in enumerate(df.itertuples(index=False), start=2):
+        for col in ("claim", "statement", "where"):
+            if not getattr(row, col).strip():
+                fail(path, "empty", line=line, column=col)
+        if row.paper_value.strip():
+            try:
+                float(row.paper_value)
+            except ValueError:
+                fail(path, f"not a number ({row.paper_value!r})", line=line, column="paper_value")
+    if df["claim"].duplicated().any():
+        fail(path, f"claim ids repeated: {sorted(df.loc[df['claim'].duplicated(), 'claim'])}")
+    return df.set_index("claim")

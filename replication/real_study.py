@@ -21,7 +21,8 @@ from .calibration import calibrate, calibrate_poses, pose_pairs, stream_pairs
 from .so3 import rotation_angle_deg
 from .solvers import ConvergenceWarning, ObservabilityWarning, ReplicationWarning, two_step
 
-__all__ = ["recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table"]
+__all__ = ["recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table",
+           "calibrations", "usual_mistakes", "verdict_table"]
 
 
 def recording_warnings(fn, *args, **kwargs):
@@ -48,7 +49,8 @@ def calibration_table(streams: dict, pose_sets: dict, references: dict, methods,
     pandas.DataFrame
         Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``pairs``, ``bootstrap95_deg``,
         ``offset_ms`` and ``offset_corr`` (the clock offset and its correlation; NaN for pose sets),
-        ``axis_spread_deg`` (camera), ``observability_warning`` and ``other warnings``.
+        ``axis_spread_deg`` (camera), ``observability_warning``, ``other warnings`` and ``verdict`` (the level of
+        the result's verdict, :mod:`replication.quality`).
     """
     rows = []
     for name, (cam, sensor, ref) in streams.items():
@@ -59,7 +61,7 @@ def calibration_table(streams: dict, pose_sets: dict, references: dict, methods,
                          "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": 1e3 * r.time_offset_s,
                          "offset_corr": r.time_offset_correlation,
                          "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
-                         "observability_warning": weak, "other warnings": others})
+                         "observability_warning": weak, "other warnings": others, "verdict": r.verdict.level})
     for name, (cam, sensor, ref) in pose_sets.items():
         for method in methods:
             r, weak, others = recording_warnings(calibrate_poses, cam, sensor, method=method,
@@ -67,7 +69,7 @@ def calibration_table(streams: dict, pose_sets: dict, references: dict, methods,
             rows.append({"data": name, "method": method, "error_deg": r.reference_error_deg,
                          "pairs": r.n_pairs, "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": np.nan,
                          "offset_corr": np.nan, "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
-                         "observability_warning": weak, "other warnings": others})
+                         "observability_warning": weak, "other warnings": others, "verdict": r.verdict.level})
     return pd.DataFrame(rows).set_index(["data", "method"])
 
 
@@ -158,3 +160,57 @@ def sensitivity_table(camera, gyro, reference, *, intervals, shares, methods, n_
                                    n_bootstrap=n_bootstrap, seed=seed)[0]
             rows.append(row("length (share of the recording)", share, method, r))
     return pd.DataFrame(rows).set_index(["study", "value", "method"])
+
+
+def calibrations(streams: dict, pose_sets: dict, references: dict, *, seed: int, **options) -> dict:
+    """One :func:`~replication.calibration.calibrate` (or ``calibrate_poses``) per data set: ``{name: result}``."""
+    out = {}
+    for name, (cam, sensor, ref) in streams.items():
+        out[name] = recording_warnings(calibrate, cam, sensor, reference=references[ref], seed=seed, **options)[0]
+    for name, (cam, sensor, ref) in pose_sets.items():
+        out[name] = recording_warnings(calibrate_poses, cam, sensor, reference=references[ref], seed=seed,
+                                       **options)[0]
+    return out
+
+
+def usual_mistakes(camera, gyro, reference, *, seed: int, n_bootstrap: int = 50) -> dict:
+    """The issue's usual input mistakes made on purpose on one good recording (an intervention): ``{case: result}``.
+
+    Cases: as recorded; the camera quaternions read in the wrong component order (``(w, x, y, z)`` read as
+    ``(x, y, z, w)``); the camera poses inverted (``camera_from_world``); the gyro in deg/s read as rad/s; the
+    sensor clock 10 s off (beyond the default offset search of 0.2 s).
+    """
+    from .so3 import as_quaternion, quaternion_to_matrix
+    from .streams import GyroStream, OrientationStream
+
+    q = as_quaternion(camera.world_from_body)
+    cases = {
+        "as recorded": (camera, gyro),
+        "camera quaternions (w, x, y, z) read as (x, y, z, w)":
+            (OrientationStream(camera.t, quaternion_to_matrix(q[:, [3, 0, 1, 2]]), camera.source), gyro),
+        "camera poses inverted (camera_from_world)":
+            (OrientationStream(camera.t, np.swapaxes(camera.world_from_body, -1, -2), camera.source), gyro),
+        "gyro in deg/s read as rad/s": (camera, GyroStream(gyro.t, np.degrees(gyro.omega), gyro.source)),
+        "sensor clock 10 s off": (camera, GyroStream(gyro.t + 10.0, gyro.omega, gyro.source)),
+    }
+    return {name: recording_warnings(calibrate, cam, sen, reference=reference, seed=seed,
+                                     n_bootstrap=n_bootstrap)[0] for name, (cam, sen) in cases.items()}
+
+
+def verdict_table(results: dict) -> pd.DataFrame:
+    """One row per result: its verdict, the checks behind it (names, worst first), an input mistake it named, and
+    its angle to the reference (deg).
+
+    The reasons' full messages (with their measured numbers and thresholds) are in each result's
+    ``verdict.reasons`` and on its diagnostic figure.
+    """
+    rows = []
+    for name, r in results.items():
+        reasons = sorted(r.verdict.reasons, key=lambda x: x.level != "fail")
+        mistake = next((x.message.split(";")[0].removeprefix("likely input mistake: ") for x in reasons
+                        if x.check == "input_mistake"), "")
+        rows.append({"data": name, "verdict": r.verdict.level,
+                     "checks": ", ".join(f"{x.check} ({x.level})" for x in reasons if x.check != "input_mistake"),
+                     "input mistake named": mistake, "error_deg": r.reference_error_deg})
+    return pd.DataFrame(rows).set_index("data")
+

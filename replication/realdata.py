@@ -9,7 +9,7 @@ Every loader converts its format to the package's conventions (``docs/convention
 :class:`~replication.streams.OrientationStream` of ``world_from_body`` rotations at times in
 seconds, a :class:`~replication.streams.GyroStream` in rad/s (both re-exported here), every
 reference rotation as ``camera_from_sensor`` (the paper's ``R0``). Stored quaternions must have
-a norm within ``QUATERNION_NORM_TOL`` of 1 and are normalised.
+a norm within :data:`replication.datafile.QUATERNION_NORM_TOL` of 1 and are normalised.
 
 Malformed files raise :class:`~replication.datafile.DataFileError` (a ``ValueError``)
 naming the file, the line and column where known, and the problem; a missing file raises
@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .datafile import fail, read_lines, read_text
-from .so3 import check_rotation_matrices, nearest_rotation, quaternion_to_matrix
+from .datafile import fail, is_number, read_lines, read_table, read_text, unit_quaternion_rotations
+from .so3 import check_rotation_matrices, nearest_rotation
 from .streams import GyroStream, OrientationStream  # re-exported: defined in replication.streams
 
 __all__ = [
@@ -50,8 +50,6 @@ __all__ = [
 
 #: Where the shared recordings are when neither an argument nor ``$REPLICATION_REAL_DATA`` says otherwise.
 DEFAULT_REAL_DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "real"
-#: Accepted deviation of a stored quaternion's norm from 1.
-QUATERNION_NORM_TOL = 1e-3
 
 
 def data_root(path=None) -> Path:
@@ -81,71 +79,16 @@ def real_data_available(path=None) -> bool:
     return True
 
 
-def _read_rows(path, names: tuple, *, delimiter=None, what: str, drop_repeated: bool = False):
-    """Numeric rows of a text file, skipping blank and ``#`` lines; errors name file, line and column.
-
-    ``names``: the columns (their number is the expected count); ``drop_repeated``: skip a line
-    identical in every value to the previous data line.
-
-    Returns
-    -------
-    (data, lines) : ndarray (N, len(names)), ndarray (N,) of 1-based line numbers
-    """
-    n_columns = len(names)
-    rows, lines = [], []
-    for lineno, line in enumerate(read_lines(path), 1):
-        text = line.strip()
-        if not text or text.startswith("#"):
-            continue
-        parts = text.split(delimiter) if delimiter else text.split()
-        if len(parts) != n_columns:
-            fail(path, f"expected {n_columns} columns ({what}), got {len(parts)}", line=lineno)
-        try:
-            values = [float(p) for p in parts]
-        except ValueError:
-            col = next(i for i, p in enumerate(parts) if not _is_float(p))
-            fail(path, f"not a number: {parts[col]!r}", line=lineno, column=col + 1, column_name=names[col])
-        bad = [i for i, v in enumerate(values) if not np.isfinite(v)]
-        if bad:
-            fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=names[bad[0]])
-        if drop_repeated and rows and values == rows[-1]:
-            continue
-        rows.append(values)
-        lines.append(lineno)
-    if len(rows) < 2:
-        fail(path, f"fewer than 2 data lines ({what})")
-    data = np.array(rows)
-    step = np.diff(data[:, 0])
-    if np.any(step <= 0):
-        k = int(np.flatnonzero(step <= 0)[0])
-        fail(path, f"timestamp not after the previous line's ({data[k + 1, 0]!r} <= {data[k, 0]!r})",
-             line=lines[k + 1], column=1, column_name=names[0])
-    return data, np.array(lines)
-
-
-def _is_float(text):
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _quaternions(path, q_wxyz, lines):
-    norm = np.linalg.norm(q_wxyz, axis=-1)
-    bad = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOL)
-    if bad.size:
-        fail(path, f"quaternion norm {norm[bad[0]]:.6g} is not 1 (tolerance {QUATERNION_NORM_TOL:g}); "
-             "wrong column order or units?", line=lines[bad[0]])
-    return quaternion_to_matrix(q_wxyz / norm[:, None])
+#: Seconds per unit of the time stamps a loader accepts (``time_unit``).
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 
 def _seconds(t, path, time_unit):
     if time_unit == "auto":
         time_unit = "ns" if np.median(np.abs(t)) > 1e12 else "s"
-    if time_unit not in ("s", "ns"):
-        raise ValueError(f"time_unit must be 's', 'ns' or 'auto', got {time_unit!r}")
-    return t * 1e-9 if time_unit == "ns" else t
+    if time_unit not in TIME_UNITS:
+        raise ValueError(f"time_unit must be one of {sorted(TIME_UNITS)} or 'auto', got {time_unit!r}")
+    return t * TIME_UNITS[time_unit]
 
 
 TUM_COLUMNS = ("t", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
@@ -158,7 +101,7 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
 
     Each pose is ``T_world<-body`` (ORB-SLAM3's ``SaveTrajectoryEuRoC`` writes camera-to-world
     ``Twc``; OpenVINS' ground truth writes the IMU body in the world), so the stream holds
-    ``world_from_body``. ``time_unit``: ``"s"``, ``"ns"`` or ``"auto"`` (ns when timestamps
+    ``world_from_body``. ``time_unit``: ``"s"``, ``"ms"``, ``"us"``, ``"ns"`` or ``"auto"`` (ns when timestamps
     exceed 1e12, as ORB-SLAM3's do). Translations are ignored. ``drop_repeated=True`` skips
     lines that repeat the previous line exactly (one of the shared ORB-SLAM3 runs has such
     lines); otherwise a repeated timestamp is an error.
@@ -168,8 +111,8 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
     DataFileError
         A missing or unreadable file, or the first malformed line (line and column named).
     """
-    data, lines = _read_rows(path, TUM_COLUMNS, what=" ".join(TUM_COLUMNS), drop_repeated=drop_repeated)
-    R = _quaternions(path, data[:, [7, 4, 5, 6]], lines)
+    data, lines = read_table(path, TUM_COLUMNS, what=" ".join(TUM_COLUMNS), drop_repeated=drop_repeated)
+    R = unit_quaternion_rotations(path, data[:, [7, 4, 5, 6]], lines)
     return OrientationStream(_seconds(data[:, 0], path, time_unit), R, str(path))
 
 
@@ -179,8 +122,8 @@ def load_euroc_mocap(path) -> OrientationStream:
     ``q_RS`` (scalar first) rotates body (sensor S) vectors into the world R: ``world_from_body``.
     EuRoC's ``state_groundtruth_estimate0/data.csv`` has more columns; pass its first 8 only.
     """
-    data, lines = _read_rows(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz")
-    R = _quaternions(path, data[:, 4:8], lines)
+    data, lines = read_table(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz")
+    R = unit_quaternion_rotations(path, data[:, 4:8], lines)
     return OrientationStream(data[:, 0] * 1e-9, R, str(path))
 
 
@@ -190,7 +133,7 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0) -> GyroStream:
     Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are
     rejected as a units error (deg/s stored as rad/s).
     """
-    data, lines = _read_rows(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]")
+    data, lines = read_table(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]")
     w = data[:, 1:4]
     bad = np.flatnonzero(np.abs(w).max(axis=1) > max_rate_rad_s)
     if bad.size:
@@ -282,7 +225,7 @@ def load_tabb_poses(path) -> np.ndarray:
     try:
         T = np.array([float(v) for v in values]).reshape(n, 4, 4)
     except ValueError:
-        bad = next(v for v in values if not _is_float(v))
+        bad = next(v for v in values if not is_number(v))
         fail(path, f"a pose entry is not a number: {bad!r}")
     return nearest_rotation(_rotation(path, T[:, :3, :3], "hand_from_base rotations", atol=1e-4))
 
@@ -303,7 +246,7 @@ def load_tabb_camera_poses(path) -> np.ndarray:
             continue
         if len(parts) != 30:
             fail(path, f"expected 30 fields (image, K, R, t, distortion), got {len(parts)}", line=lineno)
-        bad = [i for i in range(10, 19) if not _is_float(parts[i])]
+        bad = [i for i in range(10, 19) if not is_number(parts[i])]
         if bad:
             fail(path, f"rotation entries (fields 11-19) are not numbers: {parts[bad[0]]!r}", line=lineno,
                  column=bad[0] + 1)
@@ -326,18 +269,25 @@ def load_tabb_solution(path) -> np.ndarray:
     return _rotation_block(path, M, "Z")
 
 
-def load_stream(path, kind: str = "orientation"):
+def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", drop_repeated: bool = False):
     """Load a stream by kind and file type.
 
     ``kind="gyro"``: an EuRoC/TUM-VI ``imu0/data.csv`` (:func:`load_euroc_imu`).
     ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth
-    (:func:`load_euroc_mocap`), anything else as a TUM trajectory (:func:`load_tum_trajectory`).
+    (:func:`load_euroc_mocap`), anything else as a TUM trajectory (:func:`load_tum_trajectory`,
+    which takes ``time_unit`` and ``drop_repeated``). EuRoC CSVs are in nanoseconds by their format:
+    a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them.
     """
+    if kind not in ("gyro", "orientation"):
+        raise ValueError(f"kind must be 'gyro' or 'orientation', got {kind!r}")
+    euroc = kind == "gyro" or Path(path).suffix.lower() == ".csv"
+    if euroc and time_unit not in ("auto", "ns"):
+        raise ValueError(f"{path}: EuRoC / TUM-VI CSV time stamps are nanoseconds by format; time_unit "
+                         f"{time_unit!r} applies to TUM trajectories only")
     if kind == "gyro":
         return load_euroc_imu(path)
-    if kind != "orientation":
-        raise ValueError(f"kind must be 'gyro' or 'orientation', got {kind!r}")
-    return load_euroc_mocap(path) if Path(path).suffix.lower() == ".csv" else load_tum_trajectory(path)
+    return load_euroc_mocap(path) if euroc else load_tum_trajectory(path, time_unit=time_unit,
+                                                                    drop_repeated=drop_repeated)
 
 
 def load_reference(path, camera: str = "cam0") -> np.ndarray:

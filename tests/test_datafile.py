@@ -2,6 +2,8 @@
 the line and the column of the problem (realdata, lab.recording, paper)."""
 import pickle
 
+import numpy as np
+
 import pytest
 from conftest import SMALL_LAB
 
@@ -188,3 +190,22 @@ def test_other_realdata_loaders_raise_it_too(tmp_path):
     with pytest.raises(DataFileError) as info:
         rd.load_tabb_poses(robot)
     assert (info.value.line, info.value.column) == (1, 1) and "number of poses" in info.value.message
+
+
+def test_read_table_is_the_loaders_parser_with_a_header_and_quaternion_check(tmp_path):
+    """A new format's loader needs only the toolkit: header, file/line/column errors, quaternion norms."""
+    from replication.datafile import read_table, unit_quaternion_rotations
+
+    path = tmp_path / "poses.csv"
+    path.write_text("t_ns,qw,qx,qy,qz\n1,1,0,0,0\n2,0,1,0,0\n3,0.5,x,0.5,0.5\n")
+    names = ("t_ns", "qw", "qx", "qy", "qz")
+    with pytest.raises(DataFileError) as err:
+        read_table(path, names, delimiter=",", header=True)
+    assert (err.value.line, err.value.column, err.value.column_name) == (4, 3, "qx")
+    path.write_text("t_ns,qw,qx,qy,qz\n1,1,0,0,0\n2,0,1,0,0\n3,0.5,0.5,0.5,0.6\n")
+    data, lines = read_table(path, names, delimiter=",", header=True)
+    assert data.shape == (3, 5) and list(lines) == [2, 3, 4]
+    with pytest.raises(DataFileError, match="quaternion norm") as err:
+        unit_quaternion_rotations(path, data[:, 1:], lines)
+    assert err.value.line == 4
+    np.testing.assert_allclose(unit_quaternion_rotations(path, data[:2, 1:], lines[:2])[1], np.diag([1.0, -1, -1]))

@@ -112,3 +112,9 @@ def test_relative_rotations_of_chosen_pairs_follow_eq_3_in_both_conventions(rng)
     assert np.array_equal(handeye.relative_rotations(Q, pairs=(t_index, k_index), convention="world_from_body"), A)
     with pytest.raises(ValueError, match="either reference or pairs"):
         handeye.relative_rotations(C, reference=0, pairs=(t_index, k_index))
+    with pytest.raises(ValueError, match="same length, got 1 and 3"):
+        handeye.relative_rotations(C, pairs=([0], [1, 2, 3]))
+    with pytest.raises(ValueError, match="k_index out of range for N = 6"):
+        handeye.relative_rotations(C, pairs=([0, 1], [-1, 2]))
+    with pytest.raises(ValueError, match="t_index must be a 1-D array of integers"):
+        handeye.relative_rotations(C, pairs=([0.5], [1]))

@@ -48,3 +48,59 @@ def test_no_name_shadows_a_submodule(module):
     for sub in pkgutil.iter_modules(mod.__path__):
         value = getattr(mod, sub.name, None)
         assert value is None or isinstance(value, types.ModuleType), f"{module}.{sub.name} is a {type(value).__name__}"
+
+
+#: The layers of README's "Layout", top first; a module imports (at module level) only from its own layer or above.
+LAYERS = {
+    "foundation": ["_io", "checks", "datafile"],
+    "maths": ["so3", "handeye", "motions", "stats"],
+    "data": ["streams", "realdata", "paper", "fetch"],
+    "solvers": ["solvers"],
+    "pipeline": ["simulation", "association", "quality", "report", "diagnose", "calibration", "table2", "lab",
+                 "lab.settings", "lab.recording", "lab.simulate", "lab.chain"],
+    "studies": ["table1", "fig5", "baselines", "real_study", "lab.study", "ledger", "figures", "notebook"],
+    "entry points and tools": ["__init__", "__main__", "calibrate_cli", "lab_io", "testing"],
+}
+RANK = {name: rank for rank, names in enumerate(LAYERS.values()) for name in names}
+
+
+def _layer_of(module: str) -> int:
+    """Rank of ``replication.<module>``: its longest listed prefix."""
+    parts = module.split(".")
+    for k in range(len(parts), 0, -1):
+        if ".".join(parts[:k]) in RANK:
+            return RANK[".".join(parts[:k])]
+    raise KeyError(f"replication.{module} is in no layer of README's Layout (add it to tests/test_layout.py:LAYERS)")
+
+
+def _module_level_imports(path: Path, module: str):
+    """Intra-package modules imported at module level (``if TYPE_CHECKING:`` blocks left out)."""
+    import ast
+
+    package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            continue
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package[: len(package) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+                names = [target] if node.module else [f"{target}.{a.name}" for a in node.names]
+            elif (node.module or "").startswith("replication"):
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                yield name.removeprefix("replication.").removeprefix("replication")
+
+
+@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
+def test_imports_go_only_to_the_same_layer_or_above(path):
+    rel = path.relative_to(PACKAGE).with_suffix("")
+    module = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts) or "__init__"
+    own = _layer_of(module)
+    for target in _module_level_imports(path, "replication." + module if module != "__init__" else "replication"):
+        if not target:
+            continue
+        assert _layer_of(target) <= own, (f"replication.{module} ({list(LAYERS)[own]}) imports replication.{target} "
+                                           f"({list(LAYERS)[_layer_of(target)]}), a lower layer")

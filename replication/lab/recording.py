@@ -282,6 +282,18 @@ def _check_gyro_units(path, df, window_s=2.0, limit_deg=20.0):
               f"by {np.median(err):.3g} deg (median); expected rad/s (data in deg/s?)", column="gyr_x")
 
 
+def _check_time_unit(path, df, rate_hz):
+    """The time column must step by the rig's sample period (within a factor of 2 in the median): a column in
+    ms or us steps 1000 or 1e6 times too far, and every duration computed from it is off by that factor."""
+    step = np.median(np.diff(df["t"].to_numpy()))
+    ratio = step * rate_hz
+    if not 0.5 < ratio < 2.0:
+        units = {1e3: "ms", 1e6: "us", 1e9: "ns"}
+        guess = next((f"; the times look like {u}, not s" for f, u in units.items() if 0.5 < ratio / f < 2.0), "")
+        _fail(path, f"time stamps step by {step:.6g} (median) where the rig's {rate_hz:g} Hz needs "
+              f"{1.0 / rate_hz:.6g} s{guess}", column="t")
+
+
 def _check_pixels(path, df, rig):
     n = len(rig["wand_points"])
     w, h = rig["image_size"]
@@ -327,6 +339,7 @@ def load_lab(directory=None, *, min_static_seconds: float = 5.0, min_poses: int 
         cols = (["set", "pose"] if grouped else []) + ["t"] + (IMU_COLUMNS if "imu" in name else marker_cols)
         path = directory / name
         df = _load_table(path, cols, grouped=grouped)
+        _check_time_unit(path, df, rig["imu_rate_hz" if "imu" in name else "camera_rate_hz"])
         if "imu" in name:
             _check_imu(path, df)
             if not grouped:

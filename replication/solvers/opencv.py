@@ -26,6 +26,13 @@ together, and zero translations leave them without a solution):
 With made-up non-zero translations both return a wrong rotation (the
 translations are then inconsistent with the rotations); see
 ``tests/test_baselines.py``. They are not registered.
+
+Cost: the ``N (N - 1) / 2`` pose pairs make one ``cv2.calibrateHandEye`` call grow as ``N^2`` (measured,
+OpenCV 4.14, 2 cores: ``CALIB_HAND_EYE_PARK`` 0.13 s at 200 poses, 0.51 s at 400, 2.0 s at 800, 8.2 s at
+1600; Tsai about half, Horaud three quarters of that), and so does its memory (process peak 126 MB at
+400 poses, 491 MB at 1600). The wrappers therefore refuse more than
+:data:`MAX_PAIRS` motion pairs per problem with a ``ValueError`` naming the alternatives, unless the caller
+raises the limit (``max_pairs=``) knowingly.
 """
 from __future__ import annotations
 
@@ -34,7 +41,7 @@ import numpy as np
 from ..motions import prepare_motions
 from ._registry import register
 
-__all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY"]
+__all__ = ["calibrate_hand_eye", "all_pairs", "OPENCV_METHODS", "UNUSABLE_FOR_ROTATION_ONLY", "MAX_PAIRS"]
 
 #: Registered OpenCV methods: registry name -> (``cv2`` constant, the paper it implements).
 OPENCV_METHODS = {
@@ -44,6 +51,16 @@ OPENCV_METHODS = {
 }
 #: OpenCV methods that need translations and fail on rotation-only data.
 UNUSABLE_FOR_ROTATION_ONLY = ("CALIB_HAND_EYE_ANDREFF", "CALIB_HAND_EYE_DANIILIDIS")
+#: Most motion pairs ``J`` per problem the wrappers pass to OpenCV (a chain of ``J + 1`` poses, of which
+#: OpenCV forms all ``J (J + 1) / 2`` pairs). One ``cv2.calibrateHandEye`` call takes about ``3.2e-6 N^2`` s
+#: for ``N`` poses (``CALIB_HAND_EYE_PARK``, the slowest; ``benchmarks/bench_bounded.py``): at this limit
+#: 0.5 s, and ``calibrate``'s 200 bootstrap replicates about 100 s. Notebook 07 passes at most 181
+#: non-overlapping pairs per recording and notebook 06 at most 50; a whole recording's overlapping pairs
+#: (2700 for TUM-VI room1) would take ~24 s per call, over an hour with the bootstrap.
+MAX_PAIRS = 400
+#: Seconds per squared pose of one ``cv2.calibrateHandEye`` call, measured per method (2 cores, OpenCV 4.14);
+#: only for the estimate in the refusal message.
+_SECONDS_PER_POSE2 = {"CALIB_HAND_EYE_TSAI": 1.8e-6, "CALIB_HAND_EYE_PARK": 3.2e-6, "CALIB_HAND_EYE_HORAUD": 2.5e-6}
 
 
 def _cv2():
@@ -70,7 +87,26 @@ def _chain(A, B):
     return Hg, Hc
 
 
-def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure: str = "raise") -> np.ndarray:
+def _check_size(J: int, method: str, max_pairs: int) -> None:
+    """Refuse a chain of more than ``max_pairs`` motions: OpenCV's time grows as the square of its poses."""
+    if int(max_pairs) != max_pairs or max_pairs < 1:
+        raise ValueError(f"max_pairs must be a positive integer, got {max_pairs!r}")
+    if J <= max_pairs:
+        return
+    N = J + 1
+    seconds = _SECONDS_PER_POSE2.get(method, max(_SECONDS_PER_POSE2.values())) * N ** 2
+    raise ValueError(
+        f"cv2.calibrateHandEye({method}) on J = {J} motion pairs refused (max_pairs = {int(max_pairs)}): the "
+        f"wrapper chains them into N = {N} poses and OpenCV forms all N (N - 1) / 2 = {N * (N - 1) // 2} pose "
+        f"pairs, so one call takes time growing as N^2 (measured about {seconds:.3g} s per problem here, 0.5 s at "
+        f"401 poses), and calibrate repeats it for every bootstrap replicate. Use non-overlapping pairs "
+        f"(calibrate(..., stride=k) with k about interval / camera period), fewer poses, or a solver linear in "
+        f"J such as chordal_optimal or park_martin; or pass max_pairs={J} to accept the cost"
+    )
+
+
+def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_failure: str = "raise",
+                       max_pairs: int = MAX_PAIRS) -> np.ndarray:
     """``R0`` from ``cv2.calibrateHandEye`` on the pose chain of ``(A, B)``, one call per problem.
 
     OpenCV's own log messages are silenced during the call; its output is checked
@@ -93,22 +129,33 @@ def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_fai
         What to do when OpenCV's result is not a rotation (NaN or det -1):
         raise ``ValueError`` naming the problem, or return NaN for that problem
         (for studies that count failures).
+    max_pairs : int
+        Most motion pairs ``J`` per problem (default :data:`MAX_PAIRS`, 400): OpenCV forms all
+        ``J (J + 1) / 2`` pairs of the pose chain, so its time grows as ``J^2``.
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor`` (OpenCV's ``R_cam2gripper``).
+
+    Raises
+    ------
+    ValueError
+        ``J > max_pairs`` (the message names the measured cost and the alternatives: non-overlapping
+        pairs, ``stride`` in :func:`replication.calibrate`, fewer poses, or ``chordal_optimal`` /
+        ``park_martin``); OpenCV's result is not a rotation and ``on_failure="raise"``.
     """
     from ._registry import check_answer, warn_if_weak
 
     m = prepare_motions(A, B)
     warn_if_weak(m)
-    R = _calibrate_hand_eye(m, method, on_failure=on_failure)
+    R = _calibrate_hand_eye(m, method, on_failure=on_failure, max_pairs=max_pairs)
     check_answer(m, R, f"cv2.calibrateHandEye({method})")
     return R
 
 
-def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise") -> np.ndarray:
+def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise",
+                        max_pairs: int = MAX_PAIRS) -> np.ndarray:
     """:func:`calibrate_hand_eye` on validated motions."""
     if on_failure not in ("raise", "nan"):
         raise ValueError(f"on_failure must be 'raise' or 'nan', got {on_failure!r}")
@@ -118,6 +165,7 @@ def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise") -> n
     flag = getattr(cv2, method)
     A, B = motions.A, motions.B
     lead, J = A.shape[:-3], A.shape[-3]
+    _check_size(J, method, max_pairs)  # before any O(J^2) work
     flatA, flatB = A.reshape((-1, J, 3, 3)), B.reshape((-1, J, 3, 3))
     zeros = [np.zeros((3, 1))] * (J + 1)
     out = np.empty((len(flatA), 3, 3))
@@ -158,7 +206,8 @@ def all_pairs(A, B):
 
     Pair ``(i, j)``, ``i < j``, is ``(Hg_j^{-1} Hg_i, Hc_j Hc_i^{-1})``, i.e.
     ``(A_{j-1} ... A_i, B_{j-1} ... B_i)``. Any solver run on these pairs sees
-    the same data as ``cv2.calibrateHandEye`` (used to check the wrappers).
+    the same data as ``cv2.calibrateHandEye`` (used to check the wrappers). The output itself is
+    ``O(J^2)`` (no limit here: it is built on request, for small ``J``).
 
     Parameters
     ----------
@@ -176,10 +225,11 @@ def all_pairs(A, B):
 def _register(name: str, constant: str, paper: str):
     @register(name, reference=f"OpenCV cv2.calibrateHandEye({constant}): {paper}",
               equivariant=constant != "CALIB_HAND_EYE_TSAI")
-    def solver(motions, *, on_failure="raise"):
-        return _calibrate_hand_eye(motions, constant, on_failure=on_failure)
+    def solver(motions, *, on_failure="raise", max_pairs=MAX_PAIRS):
+        return _calibrate_hand_eye(motions, constant, on_failure=on_failure, max_pairs=max_pairs)
 
-    solver.__doc__ = f"``cv2.calibrateHandEye`` with ``{constant}`` ({paper}); see :func:`calibrate_hand_eye`."
+    solver.__doc__ = (f"``cv2.calibrateHandEye`` with ``{constant}`` ({paper}); see :func:`calibrate_hand_eye` "
+                      f"(at most ``max_pairs`` = :data:`MAX_PAIRS` motion pairs per problem).")
     return solver
 
 

@@ -1,0 +1,206 @@
+"""The quality verdict of a calibration: ``ok``, ``warning`` or ``fail``, with every reason measured.
+
+:func:`judge` compares what a calibration measured about itself (its :class:`Evidence`) with the thresholds
+below. Each reason names the check, the measured number, the threshold and the likely cause; the verdict is the
+worst level of its reasons. :func:`replication.calibration.calibrate` attaches it to its result, the summary
+prints it, the JSON report stores it, and ``python -m replication calibrate`` exits with :data:`EXIT_FAIL`
+on ``fail`` unless told to ``--accept`` it.
+
+The thresholds and the reasoning behind them (measured on the real recordings of notebook 07, where every
+calibration is within 0.7 deg of its published reference, and on the mistakes of the issue's bad-input campaign):
+
+==========================  ===============  ===============  =========================================================
+check                       warning below /  fail below /     why
+                            above            above
+==========================  ===============  ===============  =========================================================
+time-offset correlation     < 0.9            < 0.5            the angular speeds of the two streams are the same signal
+                                                              when both see one rigid motion: 0.990-0.999 on the real
+                                                              recordings; unrelated streams, wrong units or columns
+                                                              give -0.2 to 0.5
+offset at the search bound  --               within 2         the correlation peaks at the edge of the search: the
+                                             resolutions      true offset may lie outside it (raise ``max_offset``)
+pairs per bootstrap block   < 10             < 3              overlapping pairs are resampled in blocks spanning one
+                                                              interval; with fewer than 3 independent blocks the
+                                                              bootstrap radius means nothing (it is reported as null)
+overlap                     < 10 intervals   < 2 intervals    the calibration rests on a few seconds of motion
+median residual / median    > 0.1            > 0.3            with the right ``R0`` the residual of a pair is the
+motion angle                                                  streams' noise over one interval: 0.003-0.025 of the
+                                                              motion on the real recordings; a wrong ``R0`` or
+                                                              mismatched streams leave residuals of the order of the
+                                                              motion itself
+median residual             > 2 deg          > 10 deg         the same, in absolute terms (real recordings: 0.09-0.41)
+bootstrap 95 % radius       > 1 deg          > 5 deg          real recordings: 0.02-0.34 deg; the issue's silent
+                                                              failures: 24-171 deg
+camera axis spread          < 1 deg          --               motions nearly about one axis leave the rotation about
+                                                              it poorly determined (``ObservabilityWarning``)
+solver warnings             any other        ``Local-         a local solver away from the certified optimum of
+                            ``Replication-   MinimumWarning``, eq. (8), or a closed form off by a half-turn, is a wrong
+                            Warning``        ``Accuracy-      answer, whatever the other checks say
+                                             Warning``
+pairs across stream gaps    any dropped      more than half   a pair whose interval contains a gap in either stream
+                                             dropped          (more than 5 sample intervals without data) is dropped
+sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow gyro over one interval leaves an
+                                             interval         integration error in every pair
+==========================  ===============  ===============  =========================================================
+
+A reason may also come from :mod:`replication.diagnose`, which names an input mistake (quaternion order, pose
+direction, gyro or time units) when reordering or rescaling the input makes the residual collapse.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS"]
+
+#: Verdict levels, best first.
+LEVELS = ("ok", "warning", "fail")
+#: Exit code of ``python -m replication calibrate`` for a ``fail`` verdict (2 is bad input).
+EXIT_FAIL = 3
+
+#: ``(warning, fail)`` bounds of each check (see the module notes for the reasoning).
+THRESHOLDS = {
+    "offset_correlation": (0.9, 0.5),          # below
+    "offset_at_bound_resolutions": (None, 2),  # within this many resolutions of the bound: fail
+    "blocks": (10, 3),                         # below
+    "overlap_intervals": (10, 2),              # below
+    "residual_to_motion": (0.1, 0.3),          # above
+    "residual_median_deg": (2.0, 10.0),        # above
+    "bootstrap_deg": (1.0, 5.0),               # above
+    "axis_spread_deg": (1.0, None),            # below
+    "gap_share_dropped": (0.0, 0.5),           # above
+    "gyro_rate_hz": (50.0, None),              # below
+    "gyro_samples_per_interval": (None, 5.0),  # below
+}
+
+_FAIL_WARNINGS = ("LocalMinimumWarning", "AccuracyWarning")
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One finding: ``check`` measured ``measured`` against ``threshold`` and reached ``level``."""
+
+    check: str
+    level: str
+    measured: float | None
+    threshold: float | None
+    message: str
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``level`` (the worst of the reasons, ``ok`` if none) and the ``reasons``."""
+
+    level: str
+    reasons: tuple
+
+    @classmethod
+    def of(cls, reasons) -> "Verdict":
+        reasons = tuple(reasons)
+        level = max((r.level for r in reasons), key=LEVELS.index, default="ok")
+        return cls(level, reasons)
+
+    def to_dict(self) -> dict:
+        return {"level": self.level, "reasons": [r.to_dict() for r in self.reasons]}
+
+    def lines(self) -> list[str]:
+        """The verdict and one line per reason, for a summary."""
+        return [f"verdict: {self.level.upper()}"] + [f"  {r.level}: {r.message}" for r in self.reasons]
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What a calibration measured about itself (``None`` where it does not apply, e.g. static poses)."""
+
+    n_pairs: int
+    residual_median_deg: float
+    motion_median_deg: float
+    bootstrap_deg: float | None
+    axis_spread_deg: float
+    warnings: tuple = ()
+    offset_s: float | None = None
+    offset_correlation: float | None = None
+    max_offset_s: float | None = None
+    offset_resolution_s: float | None = None
+    blocks: float | None = None
+    overlap_s: float | None = None
+    interval_s: float | None = None
+    pairs_dropped_at_gaps: int = 0
+    pairs_before_gaps: int | None = None
+    gyro_rate_hz: float | None = None
+
+
+def _above(check, value, name, unit, why):
+    warn, fail = THRESHOLDS[check]
+    if value is None:
+        return None
+    for level, bound in (("fail", fail), ("warning", warn)):
+        if bound is not None and value > bound:
+            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} > {bound:g}{unit}: {why}")
+    return None
+
+
+def _below(check, value, name, unit, why):
+    warn, fail = THRESHOLDS[check]
+    if value is None:
+        return None
+    for level, bound in (("fail", fail), ("warning", warn)):
+        if bound is not None and value < bound:
+            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
+    return None
+
+
+def judge(e: Evidence, extra=()) -> Verdict:
+    """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g. diagnoses)."""
+    reasons = []
+    if e.offset_correlation is not None:
+        reasons.append(_below("offset_correlation", e.offset_correlation, "time-offset correlation", "",
+                              "the two streams' angular speeds do not match (unrelated streams, wrong units or "
+                              "columns, or a clock offset beyond the search)"))
+    if e.offset_s is not None and e.max_offset_s is not None:
+        margin = THRESHOLDS["offset_at_bound_resolutions"][1] * (e.offset_resolution_s or 0.0)
+        if abs(e.offset_s) >= e.max_offset_s - margin:
+            reasons.append(Reason("offset_at_bound", "fail", float(e.offset_s), float(e.max_offset_s),
+                                  f"the clock offset {1e3 * e.offset_s:+.1f} ms lies at the search bound "
+                                  f"+-{1e3 * e.max_offset_s:g} ms: the true offset may be larger (raise max_offset)"))
+    if e.blocks is not None:
+        reasons.append(_below("blocks", e.blocks, "independent bootstrap blocks", "",
+                              "too few for a meaningful bootstrap radius (a longer overlap or a shorter interval)"))
+    if e.overlap_s is not None and e.interval_s:
+        reasons.append(_below("overlap_intervals", e.overlap_s / e.interval_s, "overlap of the streams in pairing "
+                              "intervals", "", f"the streams overlap {e.overlap_s:.1f} s only"))
+    if e.motion_median_deg > 0:
+        reasons.append(_above("residual_to_motion", e.residual_median_deg / e.motion_median_deg,
+                              "median pair residual / median motion", "",
+                              "R0 does not map one stream's motions onto the other's"))
+    reasons.append(_above("residual_median_deg", e.residual_median_deg, "median pair residual", " deg",
+                          "far above what stream noise leaves with the right R0"))
+    reasons.append(_above("bootstrap_deg", e.bootstrap_deg, "bootstrap 95 % radius", " deg",
+                          "the pairs disagree on R0"))
+    reasons.append(_below("axis_spread_deg", e.axis_spread_deg, "camera axis spread", " deg",
+                          "nearly single-axis motion: the rotation about that axis is poorly determined"))
+    for name in sorted(set(e.warnings)):
+        level = "fail" if name in _FAIL_WARNINGS else "warning"
+        if name == "ObservabilityWarning":
+            if e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
+                continue  # the axis spread above says it, with its number
+            reasons.append(Reason("observability", "warning", None, None,
+                                  "the solver issued ObservabilityWarning: another rotation fits eq. (8) almost as "
+                                  "well (motions small for the noise, outlier pairs, or nearly a second solution)"))
+            continue
+        reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
+                              + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
+    if e.pairs_dropped_at_gaps:
+        share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)
+        reasons.append(_above("gap_share_dropped", share, "share of pairs dropped across stream gaps", "",
+                              f"{e.pairs_dropped_at_gaps} pairs spanned a gap in a stream and were dropped"))
+    if e.gyro_rate_hz is not None:
+        reasons.append(_below("gyro_rate_hz", e.gyro_rate_hz, "gyro rate", " Hz",
+                              "integrating a slow gyro leaves an error in every pair"))
+        if e.interval_s:
+            reasons.append(_below("gyro_samples_per_interval", e.gyro_rate_hz * e.interval_s,
+                                  "gyro samples per pairing interval", "",
+                                  "too few to integrate the motion of one pair"))
+    return Verdict.of([r for r in [*reasons, *extra] if r is not None])

@@ -1,0 +1,221 @@
+"""Bounded cost: robust in O(J) memory, the OpenCV wrappers' size limit, the offset search in blocks.
+
+Figures behind the limits: ``benchmarks/bench_bounded.py``.
+"""
+import time
+import tracemalloc
+import warnings
+from itertools import combinations
+
+import numpy as np
+import pytest
+
+from replication import association, so3
+from replication.handeye import pair_residual_deg
+from replication.baselines import corrupt_pairs
+from replication.motions import prepare_motions
+from replication.simulation import simulate
+from replication.solvers import calibrate_hand_eye, chordal_optimal, robust, solve
+from replication.solvers import msac, opencv
+from replication.streams import GyroStream, OrientationStream, integrate_gyro
+
+
+def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    A = so3.random_rotations(rng, J)
+    B = so3.exp_map(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
+    return R0, A, corrupt_pairs(B, share, rng)[0]  # the same draws as notebook 06's outlier sweep
+
+
+def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_iterations=10):
+    """``robust`` as it was before the cost was bounded (all pairs listed, one (..., H, J) residual array)."""
+    from replication.handeye import kronecker_operator
+    from replication.solvers.optimal import chordal_newton
+
+    A, B, J = motions.A, motions.B, motions.J
+    idx = np.array(list(combinations(range(J), 2)))
+    if len(idx) > max_hypotheses:
+        idx = idx[np.sort(np.random.default_rng(seed).choice(len(idx), size=max_hypotheses, replace=False))]
+    alpha, beta = so3.log_map(A), so3.log_map(B)
+    R_h = so3.nearest_rotation(np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :]))
+    r = pair_residual_deg(R_h, A[..., None, :, :, :], B[..., None, :, :, :])
+    best = np.argmin(np.sum(np.minimum(r, threshold_deg) ** 2, axis=-1), axis=-1)
+    R = np.take_along_axis(R_h, best[..., None, None, None], axis=-3)[..., 0, :, :]
+    for _ in range(irls_iterations):
+        w = 1.0 / (1.0 + (pair_residual_deg(R, A, B) / (0.5 * threshold_deg)) ** 2)
+        R = chordal_newton(kronecker_operator(A, B, weights=w), R)[0]
+    return R
+
+
+# --- robust ------------------------------------------------------------------------------------------------------
+
+def test_sample_positions_decode_to_the_itertools_order():
+    for J in (3, 4, 17, 200, 1001):
+        k = np.arange(J * (J - 1) // 2)
+        np.testing.assert_array_equal(msac._pair_at(k, J), np.array(list(combinations(range(J), 2))))
+    J = 1_000_000  # the last pairs of the largest J of the benchmark
+    n = J * (J - 1) // 2
+    np.testing.assert_array_equal(msac._pair_at([0, J - 2, J - 1, n - 2, n - 1], J),
+                                  [[0, 1], [0, J - 1], [1, 2], [J - 3, J - 1], [J - 2, J - 1]])
+
+
+@pytest.mark.parametrize("options", [{}, {"max_hypotheses": 5000}, {"max_hypotheses": 7, "seed": 3}])
+def test_robust_below_the_cap_is_bit_identical_to_before(options, monkeypatch):
+    sim = simulate(3, 12, n_motions=50)
+    m = prepare_motions(sim.A, sim.B)
+    before = _robust_before(m, **options)
+    np.testing.assert_array_equal(msac.robust.core(m, **options), before)
+    monkeypatch.setattr(msac, "_EXACT_BLOCK", 500)  # many blocks of problems x hypotheses: same bits
+    np.testing.assert_array_equal(msac.robust.core(m, **options), before)
+
+
+def test_robust_above_the_cap_draws_the_same_samples_and_agrees(monkeypatch):
+    _, A, B = _outlier_problem(60, seed=1)
+    m = prepare_motions(np.stack([A, A[::-1]]), np.stack([B, B[::-1]]))
+    exact_idx, exact_R = msac._hypotheses(60, 200, 0), msac.robust.core(m)
+    monkeypatch.setattr(msac, "MAX_ENUMERATED_PAIRS", 10)  # 1770 pairs: drawn, not listed
+    np.testing.assert_array_equal(msac._hypotheses(60, 200, 0), exact_idx)
+    np.testing.assert_array_equal(msac._hypotheses(60, 5000, 0), np.array(list(combinations(range(60), 2))))
+    # the blocked 81-vector scores equal pair_residual_deg's to rounding
+    R_h = so3.random_rotations(np.random.default_rng(2), (2, 30))
+    flat = m.A.reshape(-1, 60, 3, 3), m.B.reshape(-1, 60, 3, 3)
+    np.testing.assert_allclose(msac._scores_blocked(R_h, *flat, 5.0), msac._scores_exact(R_h, *flat, 5.0),
+                               rtol=1e-10)
+    monkeypatch.setattr(msac, "SCORE_BLOCK", 70)  # several blocks of pairs and of hypotheses
+    np.testing.assert_allclose(msac._scores_blocked(R_h, *flat, 5.0), msac._scores_exact(R_h, *flat, 5.0),
+                               rtol=1e-10)
+    np.testing.assert_allclose(msac.robust.core(m), exact_R, rtol=0, atol=1e-12)
+
+
+def test_robust_above_the_cap_recovers_r0_with_30_percent_outliers():
+    R0, A, B = _outlier_problem(3000, seed=4)  # 4.5 million two-pair samples, above MAX_ENUMERATED_PAIRS
+    assert 3000 * 2999 // 2 > msac.MAX_ENUMERATED_PAIRS
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the outliers make eq. (8) flat: ObservabilityWarning
+        err_robust = float(so3.angle_between_deg(robust(A, B), R0))
+        err_ls = float(so3.angle_between_deg(chordal_optimal(A, B).R, R0))
+    assert err_robust < 0.1
+    assert err_ls > 10 * err_robust
+
+
+def test_robust_memory_is_linear_in_j():
+    J = 20_000  # J (J - 1) / 2 = 2e8 samples: an index array of them alone takes 3.2 GB
+    R0, A, B = _outlier_problem(J, seed=5)
+    m = prepare_motions(A, B)
+    tracemalloc.start()
+    try:
+        R = msac.robust.core(m)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert so3.angle_between_deg(R, R0) < 0.1
+    assert peak < 80e6, f"robust at J = {J} peaked at {peak / 1e6:.0f} MB"
+
+
+# --- OpenCV ------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["opencv_park", "opencv_tsai", "opencv_horaud"])
+def test_opencv_wrappers_refuse_long_chains_before_calling_opencv(method, monkeypatch):
+    import cv2
+
+    def fail(*args, **kwargs):
+        raise AssertionError("cv2.calibrateHandEye called")
+
+    _, A, B = _outlier_problem(opencv.MAX_PAIRS + 1, share=0.0, seed=6)
+    monkeypatch.setattr(cv2, "calibrateHandEye", fail)
+    start = time.perf_counter()
+    with pytest.raises(ValueError, match=r"N\^2") as err:
+        solve(method, A, B)
+    assert time.perf_counter() - start < 1.0
+    for alternative in ("stride", "non-overlapping", "fewer poses", "chordal_optimal", "park_martin", "max_pairs"):
+        assert alternative in str(err.value)
+    assert f"J = {opencv.MAX_PAIRS + 1}" in str(err.value)
+
+
+def test_opencv_limit_is_a_documented_option():
+    _, A, B = _outlier_problem(30, share=0.0, noise_deg=0.1, seed=7)
+    with pytest.raises(ValueError, match="max_pairs = 10"):
+        calibrate_hand_eye(A, B, "CALIB_HAND_EYE_PARK", max_pairs=10)
+    with pytest.raises(ValueError, match="max_pairs must be a positive integer"):
+        solve("opencv_park", A, B, max_pairs=0)
+    np.testing.assert_array_equal(solve("opencv_park", A, B, max_pairs=30), solve("opencv_park", A, B))
+    assert opencv.MAX_PAIRS >= 200  # notebook 07 passes up to 181 non-overlapping pairs, notebook 06 up to 50
+
+
+# --- clock-offset search -----------------------------------------------------------------------------------------
+
+def _streams(seconds=30.0, offset=0.0123):
+    rng = np.random.default_rng(8)
+    R0 = so3.random_rotations(rng, ())
+
+    def attitude(t):
+        return so3.exp_map(np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t), np.sin(0.45 * t + 1.0),
+                                     np.cos(0.3 * t) + 0.1 * np.sin(4.1 * t)], axis=-1))
+
+    tc, tg = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = attitude(np.concatenate([tg[:1] - 0.005, tg, tg[-1:] + 0.005]) - offset) @ R0
+    omega = so3.log_map(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) / 0.01
+    return OrientationStream(tc, attitude(tc), "camera"), integrate_gyro(GyroStream(tg, omega, "gyro"))
+
+
+def _correlations_before(cam, sensor, t, offsets):
+    """The correlation of before (all offsets in one array)."""
+    Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
+    sen = association._speed(Qs, t)
+    a = cam - cam.mean()
+    b = sen - sen.mean(axis=1, keepdims=True)
+    return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
+
+
+@pytest.fixture(scope="module")
+def offset_problem():
+    camera, sensor = _streams()
+    keep = (camera.t >= sensor.t[0] + 1.0) & (camera.t <= sensor.t[-1] - 1.0)
+    t = camera.t[keep]
+    return camera, sensor, t, association._speed(camera.R[keep], t)
+
+
+def test_offset_blocks_are_bit_identical(offset_problem):
+    _, sensor, t, cam = offset_problem
+    offsets = np.arange(-0.3, 0.3 + 1e-12, 0.01)  # 61 offsets
+    one = association._correlations(cam, sensor, t, offsets, block_samples=len(offsets) * len(t))
+    np.testing.assert_array_equal(one, _correlations_before(cam, sensor, t, offsets))  # one block: as before
+    blocked = [association._correlations(cam, sensor, t, offsets, block_samples=per * len(t)) for per in (1, 4, 7, 60)]
+    for other in blocked[1:]:
+        np.testing.assert_array_equal(other, blocked[0])  # the block size does not touch an offset's arithmetic
+    np.testing.assert_allclose(blocked[0], one, rtol=0, atol=1e-14)  # sum(b * a) vs BLAS's b @ a: a few ulp
+
+
+def test_offset_search_in_small_blocks_finds_the_same_offset(offset_problem, monkeypatch):
+    camera, sensor, _, _ = offset_problem
+    default = association.estimate_time_offset(camera, sensor)
+    assert abs(default[0] - 0.0123) < 0.5e-3
+    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 3000)  # about 5 offsets per block
+    blocked = association.estimate_time_offset(camera, sensor)
+    assert blocked[0] == default[0] and abs(blocked[1] - default[1]) < 1e-14
+
+
+def test_offset_search_memory_does_not_grow_with_max_offset(offset_problem, monkeypatch):
+    camera, sensor, _, _ = offset_problem
+    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 2 ** 14)
+    peaks = []
+    for max_offset in (0.3, 3.0):  # 61 and 601 candidate offsets
+        tracemalloc.start()
+        try:
+            association.estimate_time_offset(camera, sensor, max_offset=max_offset)
+            peaks.append(tracemalloc.get_traced_memory()[1])
+        finally:
+            tracemalloc.stop()
+    # in one array, 601 offsets x ~480 camera times x ~150 bytes would take ~40 MB
+    assert peaks[1] < 1.3 * peaks[0] + 0.5e6 and peaks[1] < 10e6, peaks
+
+
+@pytest.mark.parametrize("name, value", [("max_offset", 0), ("max_offset", -0.1), ("max_offset", np.nan),
+                                         ("max_offset", np.inf), ("max_offset", "0.2"), ("max_offset", True),
+                                         ("resolution", 0.0), ("resolution", -1e-3), ("resolution", np.inf),
+                                         ("resolution", np.nan), ("resolution", None)])
+def test_offset_search_refuses_bad_arguments(offset_problem, name, value):
+    camera, sensor, _, _ = offset_problem
+    with pytest.raises(ValueError, match=name):
+        association.estimate_time_offset(camera, sensor, **{name: value})
