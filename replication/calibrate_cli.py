@@ -75,8 +75,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--bootstrap", type=_number(int, minimum=0, strict=False), default=200,
                      help="bootstrap replicates (0: none)")
     cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
-    cal.add_argument("--time-unit", choices=["auto", "s", "ms", "us", "ns"], default="auto",
-                     help="time unit of TUM trajectories (auto: ns above 1e12, else s)")
+    units = ["auto", "s", "ms", "us", "ns"]
+    cal.add_argument("--time-unit", choices=units, default=None,
+                     help="time unit of both files when they are TUM trajectories (auto: ns above 1e12, else s)")
+    cal.add_argument("--camera-time-unit", choices=units, default=None, help="time unit of the camera file only")
+    cal.add_argument("--sensor-time-unit", choices=units, default=None, help="time unit of the sensor file only")
     cal.add_argument("--drop-repeated", action="store_true",
                      help="skip lines of a TUM trajectory that repeat the previous line verbatim")
     cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
@@ -84,6 +87,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--out", help="write the JSON report here (folders are created)")
     cal.add_argument("--plot", help="write the diagnostic figure (PNG) here (folders are created)")
     cal.add_argument("--accept", action="store_true", help="exit 0 even when the verdict is fail")
+    cal.add_argument("--online", action="store_true",
+                     help="also replay the streams through the online estimator (replication.online), as if live")
+    cal.add_argument("--track", help="with --online: write its estimate, 95 %% radius, ready and alarms per pair (CSV)")
+    cal.add_argument("--target", type=_number(float, minimum=0), default=0.5,
+                     help="with --online: ready once the 95 %% radius is below this (deg)")
     cal.add_argument("--quiet", action="store_true", help="no progress bar")
     cal.set_defaults(func=calibrate_command)
     return cal
@@ -91,6 +99,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 def _check_output(path) -> Path:
     """Create the folders of ``path`` and check that it can be written, before any work."""
+    text = str(path)
+    if not text.strip():
+        raise ValueError("an output path is empty")
+    if text.endswith(("/", os.sep)):
+        raise ValueError(f"{text}: names a folder; give a file name")
     path = Path(path).resolve()
     if path.is_dir():
         raise ValueError(f"{path}: is a directory; give a file name")
@@ -116,11 +129,39 @@ def _load(args):
 
     if args.poses:
         return realdata.load_tabb_camera_poses(args.camera), realdata.load_tabb_poses(args.sensor)
-    camera = realdata.load_stream(args.camera, "orientation", time_unit=args.time_unit,
+    camera = realdata.load_stream(args.camera, "orientation", time_unit=_unit(args, "camera"),
                                   drop_repeated=args.drop_repeated)
-    sensor = realdata.load_stream(args.sensor, args.sensor_kind, time_unit=args.time_unit,
+    sensor = realdata.load_stream(args.sensor, args.sensor_kind, time_unit=_unit(args, "sensor"),
                                   drop_repeated=args.drop_repeated)
     return camera, sensor
+
+
+def _unit(args, side: str) -> str:
+    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM files), else auto."""
+    own = getattr(args, f"{side}_time_unit")
+    if own is not None:
+        return own
+    path = args.camera if side == "camera" else args.sensor
+    csv = side == "sensor" and args.sensor_kind == "gyro" or str(path).lower().endswith(".csv")
+    return "auto" if args.time_unit is None or csv else args.time_unit
+
+
+def _online(args, camera, sensor, reference, track) -> None:
+    """Replay the streams through the online estimator; print when it was ready and its alarms; write the track."""
+    from .live import replay
+    from .online import OnlineCalibrator
+
+    rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
+                  reference=reference)
+    ready = rows[rows["ready"]]
+    t0 = camera.t[0]
+    print(f"online: {len(rows)} pairs at {args.interval:g} s, clock offset {1e3 * rows.attrs['offset_s']:+.1f} ms; "
+          + (f"ready (95 % radius < {args.target:g} deg) after {ready['t'].iloc[0] - t0:.1f} s"
+             if len(ready) else f"never ready (final radius {rows['radius_deg'].iloc[-1]:.3g} deg)")
+          + f"; re-mount alarms at {[round(t - t0, 1) for t in rows.loc[rows['alarm'], 't']]} s")
+    if track is not None:
+        write_atomic(track, rows.to_csv(index=False))
+        print(f"online track written to {track}")
 
 
 def calibrate_command(args: argparse.Namespace) -> int:
@@ -130,8 +171,13 @@ def calibrate_command(args: argparse.Namespace) -> int:
 
     try:
         solver_info(args.method)
-        out = _check_output(args.out) if args.out else None
-        plot = _check_output(args.plot) if args.plot else None
+        if args.track is not None and not args.online:
+            raise ValueError("--track needs --online")
+        if args.online and args.poses:
+            raise ValueError("--online needs streams, not static pose sets (--poses)")
+        out = _check_output(args.out) if args.out is not None else None
+        plot = _check_output(args.plot) if args.plot is not None else None
+        track = _check_output(args.track) if args.track is not None else None
         camera, sensor = _load(args)
         reference = load_reference(args.reference, args.reference_camera) if args.reference else None
         common = dict(method=args.method, n_bootstrap=args.bootstrap, seed=args.seed, reference=reference,
@@ -145,13 +191,16 @@ def calibrate_command(args: argparse.Namespace) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print(result.summary())
+    if args.online:
+        _online(args, camera, sensor, reference, track)
     if out is not None:
         files = {"camera": _file_entry(args.camera), "sensor": _file_entry(args.sensor)}
         if args.reference:
             files["reference"] = {**_file_entry(args.reference), "camera_entry": args.reference_camera}
         report = {"command": ["python", "-m", "replication", *sys.argv[1:]] if sys.argv else [],
                   "cwd": os.getcwd(), "files": files,
-                  "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind, "time_unit": args.time_unit,
+                  "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
+                          "time_units": {"camera": _unit(args, "camera"), "sensor": _unit(args, "sensor")},
                           "drop_repeated": args.drop_repeated, "accept": args.accept},
                   **result.to_dict()}
         write_atomic(out, json.dumps(report, indent=2, allow_nan=False) + "\n")  # never a half-written report

@@ -109,18 +109,55 @@ def _gap_free_window(camera, sensor, max_offset):
     return part if len(part.t) >= 10 else camera
 
 
+#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit mistake puts one
+#: stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach that in 2286).
+PLAUSIBLE_SPAN_S = (1.0, 1e4)
+
+
 def _time_unit_reason(camera, sensor):
-    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file in ms, us or ns)."""
+    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file's time stamps in
+    another unit than its loader read them in); it blames the stream whose span is implausible for a recording."""
     from .quality import Reason
 
     cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
-    for unit, factor in (("ms", 1e3), ("us", 1e6), ("ns", 1e9)):
-        for name, big, small in (("sensor", ss, cs), ("camera", cs, ss)):
-            if small > 0 and 0.5 < big / (factor * small) < 2.0:
-                return Reason("time_unit", "fail", float(big / small), factor,
-                              f"the {name} stream spans {big:.4g} s and the other {small:.4g} s: the {name} file's "
-                              f"times look like {unit} read as seconds (give its time unit)")
-    return None
+    if not (cs > 0 and ss > 0):
+        return None
+    ratio = max(cs, ss) / min(cs, ss)
+    factor = next((f for f in (1e3, 1e6, 1e9) if 0.5 < ratio / f < 2.0), None)
+    if factor is None:
+        return None
+    lo, hi = PLAUSIBLE_SPAN_S
+    odd = [name for name, span, start in (("camera", cs, camera.t[0]), ("sensor", ss, sensor.t[0]))
+           if not lo <= span <= hi or abs(start) > 1e10]
+    culprit = f"the {odd[0]} file's" if len(odd) == 1 else "one of the two files'"
+    return Reason("time_unit", "fail", float(ratio), factor,
+                  f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about {factor:.0e}: "
+                  f"{culprit} time stamps are likely in another unit than they were read in (TUM trajectories: "
+                  f"--camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by format)")
+
+
+def _same_stream(camera, sensor) -> bool:
+    """Whether the 'sensor' is the camera stream itself (same times, same orientations)."""
+    return (isinstance(sensor, OrientationStream) and len(sensor.t) == len(camera.t)
+            and np.array_equal(sensor.t, camera.t) and np.array_equal(sensor.world_from_body, camera.world_from_body))
+
+
+def _check_options(method, options):
+    """Refuse solver options the solver does not take (or values it refuses), before any work: the solver is
+    called once with them on a tiny exact problem."""
+    if not options:
+        return
+    from .so3 import exp_map
+
+    A = exp_map(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            solver_info(method).core(prepare_motions(A, A), **options)
+        except TypeError as err:
+            raise ValueError(f"solver {method!r} does not take the option(s) {sorted(options)}: {err}") from None
+        except ValueError as err:
+            raise ValueError(f"solver {method!r} refuses the option(s) {sorted(options)}: {err}") from None
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
@@ -196,11 +233,15 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         time-unit mistake when their spans show one).
     """
     reference = _check_common(method, n_bootstrap, seed, reference)
+    _check_options(method, options)
     _check_number("interval", interval, minimum=0)
     _check_number("stride", stride, minimum=1, integer=True, strict=False)
     _check_number("max_offset", max_offset, minimum=0)
     if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
         raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
+    if _same_stream(camera, sensor):
+        raise ValueError("the sensor stream is the camera stream itself (same times and orientations): give the "
+                         "sensor's own recording")
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
@@ -224,7 +265,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    evidence = dict(offset_s=offset, offset_correlation=corr, max_offset_s=max_offset,
+    evidence = dict(offset_s=offset, offset_correlation=corr, max_offset_s=max_offset, offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
                     pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
     result = _solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
@@ -246,7 +287,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
 
 def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
                     pairs: str = "all", min_motion_deg: float = 2.0, n_bootstrap: int = 200, seed: int = 0,
-                    reference=None, progress: bool = False, **options) -> CalibrationResult:
+                    reference=None, diagnose: bool = True, progress: bool = False, **options) -> CalibrationResult:
     """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with a verdict.
 
     Parameters
@@ -264,8 +305,13 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     n_bootstrap, seed, reference, progress, **options
         As in :func:`calibrate`. The bootstrap resamples pairs one by one; pairs that share a
         pose are correlated, so its radius understates the uncertainty.
+    diagnose : bool
+        Also calibrate with either pose set inverted, and fail naming the pose direction when one of them fits
+        clearly better (:func:`replication.diagnose.pose_direction`). Both sets inverted is a consistent problem
+        for another unknown: only a reference reveals it.
     """
     reference = _check_common(method, n_bootstrap, seed, reference)
+    _check_options(method, options)
     _check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
     C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
     S = check_rotation_matrices(sensor_attitudes, "sensor_attitudes", atol=1e-5)
@@ -276,9 +322,19 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
                   "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
     inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
               "sensor": {"kind": "static poses", "samples": int(len(S))}, "reference_camera_from_sensor": reference}
-    return _solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                        seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
-                        evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress)
+    if len(A) < 2:
+        raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
+                         f"lower it or give poses that differ more")
+    result = _solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
+                          seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
+                          evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress)
+    if diagnose:
+        from .diagnose import pose_direction
+
+        found = pose_direction(C, S, result, pairs=pairs, min_motion_deg=min_motion_deg)
+        if found:
+            result = _with_reasons(result, found)
+    return result
 
 
 def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
@@ -335,17 +391,24 @@ def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference,
     J = len(A)
     blocks = J / int(min(J, block))
     ci, boot = float("nan"), np.empty((0, 3))
+    boot_failed = None
     if n_bootstrap and blocks >= 3:
-        R_boot = _bootstrap(motions, method, options, block=block, n_bootstrap=n_bootstrap, seed=seed,
-                            progress=progress)
-        ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
-        boot = np.degrees(log_map(R_boot @ R.T))
+        try:
+            R_boot = _bootstrap(motions, method, options, block=block, n_bootstrap=n_bootstrap, seed=seed,
+                                progress=progress)
+        except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
+            boot_failed = str(err).split(":")[0]
+        else:
+            ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
+            boot = np.degrees(log_map(R_boot @ R.T))
     motion = float(np.median(rotation_angle_deg(A)))
     verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
                              bootstrap_deg=ci if math.isfinite(ci) else None,
                              axis_spread_deg=float(sol.observability.camera_axis_spread_deg),
                              warnings=tuple(w.category.__name__ for w in ours),
-                             blocks=blocks if n_bootstrap else None, **evidence))
+                             blocks=blocks if n_bootstrap else None, bootstrap_failed=boot_failed,
+                             reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
+                             **evidence))
     offset, corr, applied = time_offset
     return CalibrationResult(
         R=R,

@@ -24,7 +24,10 @@ from .quality import Reason
 from .so3 import as_quaternion, quaternion_to_matrix
 from .streams import GyroStream, OrientationStream
 
-__all__ = ["input_mistakes", "FIT_SHARE", "FIT_TO_MOTION"]
+__all__ = ["input_mistakes", "pose_direction", "FIT_SHARE", "FIT_TO_MOTION", "POSE_FIT_SHARE"]
+
+#: Static pose sets: an inverted hypothesis is named when its median residual is below this share of the input's.
+POSE_FIT_SHARE = 0.6
 
 #: A hypothesis fits when its median residual is below this share of the calibration's ...
 FIT_SHARE = 0.2
@@ -56,6 +59,7 @@ def _hypotheses(camera, sensor):
         for name, order in _ORDERS.items():
             yield "sensor", name, camera, _reordered(sensor, order)
         yield "sensor", "sensor_from_world poses where world_from_sensor belongs", camera, _inverted(sensor)
+        yield "camera and sensor", "inverted poses (body_from_world) in both", _inverted(camera), _inverted(sensor)
     if isinstance(sensor, GyroStream):
         yield "sensor", "gyro rates in deg/s read as rad/s", camera, GyroStream(sensor.t, np.radians(sensor.omega),
                                                                                sensor.source)
@@ -90,3 +94,33 @@ def input_mistakes(camera, sensor, result, *, interval: float, max_offset: float
                    f"likely input mistake: {which}; with that undone the median pair residual falls from {base:.3g} "
                    f"deg to {best:.3g} deg (median motion {motion:.3g} deg) and the time-offset correlation is "
                    f"{fits[0][2]:.3f}")]
+
+
+def pose_direction(C, S, result, *, pairs: str, min_motion_deg: float) -> list[Reason]:
+    """Static pose sets: calibrate with the camera poses or the robot poses inverted; a ``fail`` reason
+    naming the pose direction when one fits clearly better (median residual below :data:`POSE_FIT_SHARE` of the
+    input's). Static poses carry no clock or speed to check, so this runs on every pose calibration."""
+    from .calibration import calibrate_poses
+
+    base = result.residual_deg["median"]
+    inv = lambda M: np.swapaxes(M, -1, -2)  # noqa: E731
+    fits = []
+    # (both sets inverted is a consistent problem for another unknown, the world-to-world rotation: the rotations
+    # alone cannot show it, only a reference can; see replication.quality)
+    for mistake, c, s in (("camera poses inverted (target_from_camera where camera_from_target belongs)", inv(C), S),
+                          ("robot poses inverted (base_from_hand where hand_from_base belongs)", C, inv(S))):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                trial = calibrate_poses(c, s, pairs=pairs, min_motion_deg=min_motion_deg, n_bootstrap=0,
+                                        diagnose=False)
+        except ValueError:
+            continue
+        fits.append((trial.residual_deg["median"], mistake))
+    best = min(fits, default=None)
+    if best is None or not best[0] < POSE_FIT_SHARE * base:
+        return []
+    return [Reason("input_mistake", "fail", float(best[0]), float(base),
+                   f"likely input mistake: {best[1]}; with that undone the median pair residual falls from "
+                   f"{base:.3g} deg to {best[0]:.3g} deg")]
+

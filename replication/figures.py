@@ -5,7 +5,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 __all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure",
-           "calibration_figure"]
+           "calibration_figure", "live_figure"]
 
 #: One colour/line style per method, reused in every figure.
 METHOD_STYLE = {
@@ -195,6 +195,28 @@ def calibration_figure(result):
     f.text(0.0, 0.88, body, fontsize=7, va="top", transform=f.transAxes)
     f.set_title("(f) verdict")
     fig.suptitle(f"R0 by {result.method}: {result.n_pairs} pairs", color=colour)
+    fig.tight_layout()
+    return fig
+
+
+def live_figure(runs: dict, targets=(0.5, 0.2)):
+    """Notebook 08: the online estimate's error to the reference and its stated radius over time, per recording,
+    with the moment VINS-Mono's rule declares success (``runs``: :func:`replication.live_study.live_run` results)."""
+    fig, axes = plt.subplots(1, len(runs), figsize=(6.5 * len(runs), 4.2), squeeze=False)
+    for ax, (name, (track, vins)) in zip(axes[0], runs.items()):
+        ok = track["n_pairs"] >= 10
+        ax.semilogy(track["t"][ok], track["error_deg"][ok], label="error to the reference")
+        ax.semilogy(track["t"][ok], track["radius_deg"][ok], "--", label="stated 95 % radius")
+        for target in targets:
+            ax.axhline(target, color="grey", lw=0.6, ls=":")
+        if np.isfinite(vins["ready_t"]):
+            ax.axvline(vins["ready_t"], color="tab:red", lw=0.8)
+            ax.annotate(f"VINS-Mono rule: done,\n{vins['error_at_ready_deg']:.2f} deg off", (vins["ready_t"], 0.9),
+                        xycoords=("data", "axes fraction"), fontsize=7, color="tab:red", va="top")
+        ax.set_title(name)
+        ax.set_xlabel("time since the first camera pose (s)")
+        ax.set_ylabel("deg")
+        ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     return fig
 

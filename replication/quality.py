@@ -41,6 +41,12 @@ pairs across stream gaps    any dropped      more than half   a pair whose inter
                                              dropped          (more than 5 sample intervals without data) is dropped
 sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow gyro over one interval leaves an
                                              interval         integration error in every pair
+motion pairs                < 30             < 10             a handful of pairs fits R0 almost exactly whatever the
+                                                              input's errors, so the residual checks see nothing
+angle to a given reference  > 1 deg          > 5 deg          the real recordings: 0.06-0.63 deg (the stereo run's
+                                                              rectified frame); a gyro with permuted or flipped axes
+                                                              is a fixed rotation only a reference reveals
+clock offset left in        > 5 ms           --               ``correct_offset=False`` with a measured offset
 ==========================  ===============  ===============  =========================================================
 
 A reason may also come from :mod:`replication.diagnose`, which names an input mistake (quaternion order, pose
@@ -70,6 +76,9 @@ THRESHOLDS = {
     "gap_share_dropped": (0.0, 0.5),           # above
     "gyro_rate_hz": (50.0, None),              # below
     "gyro_samples_per_interval": (None, 5.0),  # below
+    "n_pairs": (30, 10),                       # below
+    "reference_error_deg": (1.0, 5.0),         # above
+    "offset_left_ms": (5.0, None),             # above (an offset measured but not removed)
 }
 
 _FAIL_WARNINGS = ("LocalMinimumWarning", "AccuracyWarning")
@@ -130,6 +139,9 @@ class Evidence:
     pairs_dropped_at_gaps: int = 0
     pairs_before_gaps: int | None = None
     gyro_rate_hz: float | None = None
+    reference_error_deg: float | None = None
+    bootstrap_failed: str | None = None
+    offset_applied: bool = True
 
 
 def _above(check, value, name, unit, why):
@@ -154,7 +166,18 @@ def _below(check, value, name, unit, why):
 
 def judge(e: Evidence, extra=()) -> Verdict:
     """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g. diagnoses)."""
-    reasons = []
+    reasons = [_below("n_pairs", e.n_pairs, "motion pairs", "", "too few for R0 and a check of it (3 unknowns; a "
+                      "smaller stride or interval, or a longer recording)")]
+    if e.bootstrap_failed:
+        reasons.append(Reason("bootstrap_failed", "warning", None, None, f"no bootstrap radius: a resample of the "
+                              f"pairs was refused ({e.bootstrap_failed}); too few or too similar pairs"))
+    if e.reference_error_deg is not None:
+        reasons.append(_above("reference_error_deg", e.reference_error_deg, "angle to the given reference", " deg",
+                              "the data agree with another R0 than the reference: gyro axes permuted or sign-flipped "
+                              "(a fixed rotation the data alone cannot show), or a reference for another rig or camera"))
+    if e.offset_s is not None and not e.offset_applied:
+        reasons.append(_above("offset_left_ms", abs(1e3 * e.offset_s), "clock offset measured but not removed", " ms",
+                              "the pairs were formed with the clocks as recorded (keep-clock)"))
     if e.offset_correlation is not None:
         reasons.append(_below("offset_correlation", e.offset_correlation, "time-offset correlation", "",
                               "the two streams' angular speeds do not match (unrelated streams, wrong units or "

@@ -56,9 +56,11 @@ LAYERS = {
     "maths": ["so3", "handeye", "motions", "stats"],
     "data": ["streams", "realdata", "paper", "fetch"],
     "solvers": ["solvers"],
-    "pipeline": ["simulation", "association", "quality", "report", "diagnose", "calibration", "table2", "lab",
+    "pipeline": ["simulation", "association", "quality", "report", "diagnose", "calibration", "table2", "online",
+                 "live", "vins_rule", "lab",
                  "lab.settings", "lab.recording", "lab.simulate", "lab.chain"],
-    "studies": ["table1", "fig5", "baselines", "real_study", "lab.study", "ledger", "figures", "notebook"],
+    "studies": ["table1", "fig5", "baselines", "real_study", "live_study", "lab.study", "ledger", "figures",
+                "notebook"],
     "entry points and tools": ["__init__", "__main__", "calibrate_cli", "lab_io", "testing"],
 }
 RANK = {name: rank for rank, names in enumerate(LAYERS.values()) for name in names}
