@@ -20,3 +20,14 @@ def write_atomic(path, data: bytes | str) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def png_bytes(fig, dpi=None) -> bytes:
+    """A matplotlib figure as PNG bytes, cropped to its content, without the (version-dependent) software tag."""
+    import io
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", bbox_inches="tight", metadata={"Software": None},
+                **({} if dpi is None else {"dpi": dpi}))
+    return buffer.getvalue()
+

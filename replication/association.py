@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .checks import check_number
 from .handeye import relative_rotations
 from .so3 import log_map
 from .streams import GyroStream, OrientationStream, integrate_gyro
@@ -33,14 +34,6 @@ def _speed(Q, times) -> np.ndarray:
 #: ``max_offset`` is. The default search (``max_offset`` 0.2 s, 41 offsets) fits in one block up to 12 700
 #: camera times (10.6 min at 20 Hz).
 OFFSET_BLOCK_SAMPLES = 2 ** 19
-
-
-def _check_positive(name: str, value) -> float:
-    """``value`` as a float; ``ValueError`` naming ``name`` unless it is a finite number > 0."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(value) or not value > 0:
-        raise ValueError(f"{name} must be a positive finite number (seconds), got {value!r}")
-    return float(value)
 
 
 def _correlations(cam, sensor: OrientationStream, t, offsets, block_samples: int | None = None) -> np.ndarray:
@@ -104,8 +97,8 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
         ``max_offset`` or ``resolution`` not a positive finite number; the streams overlap in fewer than 10
         camera samples once shifted by ``max_offset``.
     """
-    max_offset = _check_positive("max_offset", max_offset)
-    resolution = _check_positive("resolution", resolution)
+    max_offset = float(check_number("max_offset", max_offset, minimum=0))
+    resolution = float(check_number("resolution", resolution, minimum=0))
     lo = max(camera.t[0], sensor.t[0] + max_offset)
     hi = min(camera.t[-1], sensor.t[-1] - max_offset)
     keep = (camera.t >= lo) & (camera.t <= hi)

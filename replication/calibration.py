@@ -29,6 +29,7 @@ import numpy as np
 
 from .association import estimate_time_offset, motion_pairs, stream_pairs  # re-exported: public names here
 from .handeye import pair_residual_deg, relative_rotations
+from .checks import check_number
 from .motions import prepare_motions
 from .quality import Evidence, judge
 from .report import CalibrationResult  # re-exported: a public name here
@@ -49,19 +50,10 @@ GAP_FACTOR = 5.0
 OFFSET_RESOLUTION = 0.5e-3
 
 
-def _check_number(name, value, *, minimum=None, integer=False, strict=True):
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is a finite number (an integer if asked) above ``minimum``."""
-    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.integer, np.floating))
-    if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
-        raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {value!r}")
-    if minimum is not None and (value <= minimum if strict else value < minimum):
-        raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {value!r}")
-
-
 def _check_common(method, n_bootstrap, seed, reference):
     solver_info(method)  # an unknown name fails before any work, listing the available ones
-    _check_number("n_bootstrap", n_bootstrap, minimum=0, integer=True, strict=False)
-    _check_number("seed", seed, minimum=0, integer=True, strict=False)
+    check_number("n_bootstrap", n_bootstrap, minimum=0, integer=True, strict=False)
+    check_number("seed", seed, minimum=0, integer=True, strict=False)
     if reference is None:
         return None
     ref = np.asarray(reference, dtype=float)
@@ -234,9 +226,9 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     """
     reference = _check_common(method, n_bootstrap, seed, reference)
     _check_options(method, options)
-    _check_number("interval", interval, minimum=0)
-    _check_number("stride", stride, minimum=1, integer=True, strict=False)
-    _check_number("max_offset", max_offset, minimum=0)
+    check_number("interval", interval, minimum=0)
+    check_number("stride", stride, minimum=1, integer=True, strict=False)
+    check_number("max_offset", max_offset, minimum=0)
     if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
         raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
     if _same_stream(camera, sensor):
@@ -312,7 +304,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     """
     reference = _check_common(method, n_bootstrap, seed, reference)
     _check_options(method, options)
-    _check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
+    check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
     C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
     S = check_rotation_matrices(sensor_attitudes, "sensor_attitudes", atol=1e-5)
     if C.shape != S.shape or C.ndim != 3:

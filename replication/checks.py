@@ -5,9 +5,11 @@ violation. Conventions: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init"]
+__all__ = ["ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init", "check_number"]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
 ROTATION_ATOL = 1e-6
@@ -128,3 +130,15 @@ def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
             f"{name} must have shape (3, 3) or broadcast to the batch shape {tuple(batch_shape) + (3, 3)}, "
             f"got {init.shape}"
         ) from None
+
+
+def check_number(name: str, value, *, minimum=None, integer: bool = False, strict: bool = True):
+    """``value``, or ``ValueError`` naming ``name`` unless it is a finite number (an integer if asked) above
+    ``minimum`` (``>=`` if not ``strict``). Booleans are refused."""
+    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.integer, np.floating))
+    if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
+        raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {value!r}")
+    if minimum is not None and (value <= minimum if strict else value < minimum):
+        raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {value!r}")
+    return value
+

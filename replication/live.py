@@ -12,6 +12,7 @@ from collections import deque
 
 import numpy as np
 
+from .checks import check_number, check_rotation_matrices
 from .online import OnlineCalibrator
 from .so3 import angle_between_deg, as_quaternion, exp_map, log_map
 
@@ -48,8 +49,7 @@ class LiveRig:
     def __init__(self, calibrator: OnlineCalibrator, *, interval: float = 1.0, offset: float | None = None,
                  offset_window: float = 20.0, max_offset: float = 0.2, on_pair=None):
         for name, value in (("interval", interval), ("offset_window", offset_window), ("max_offset", max_offset)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+            check_number(name, value, minimum=0)
         self.calibrator, self.interval, self.on_pair = calibrator, float(interval), on_pair
         self.offset = None if offset is None else float(offset)
         self.offset_window, self.max_offset = float(offset_window), float(max_offset)
@@ -81,7 +81,7 @@ class LiveRig:
 
     def add_orientation(self, t: float, world_from_sensor) -> None:
         """One sensor orientation (an orientation sensor instead of a gyro): time (s) and ``world_from_sensor``."""
-        Q = OnlineCalibrator._check(world_from_sensor, "world_from_sensor")
+        Q = check_rotation_matrices(world_from_sensor, "world_from_sensor")
         if Q.shape != (3, 3) or not math.isfinite(t):
             raise ValueError(f"a sensor pose is a finite time and one 3x3 rotation, got t={t!r}, shape {Q.shape}")
         if self._gyro and not t > self._gyro[-1][0]:
@@ -100,7 +100,7 @@ class LiveRig:
 
     def add_camera(self, t: float, world_from_camera) -> None:
         """One camera pose: time (s) and ``world_from_camera`` (3x3 rotation)."""
-        C = OnlineCalibrator._check(world_from_camera, "world_from_camera")
+        C = check_rotation_matrices(world_from_camera, "world_from_camera")
         if C.shape != (3, 3) or not math.isfinite(t):
             raise ValueError(f"a camera pose is a finite time and one 3x3 rotation, got t={t!r}, shape {C.shape}")
         if not t > self._last_camera_t:

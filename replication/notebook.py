@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._io import write_atomic
+from ._io import png_bytes, write_atomic
 
 __all__ = ["setup", "results_dir", "save_table", "save_figure", "best_of"]
 
@@ -81,15 +81,11 @@ def save_figure(fig, name: str) -> None:
     ``image/png`` output) and closed, so the stored output is the same with the inline
     backend and with ``MPLBACKEND=Agg``.
     """
-    import io
-
     import matplotlib.pyplot as plt
 
     out = results_dir() / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", bbox_inches="tight", metadata={"Software": None})
-    png = buffer.getvalue()
+    png = png_bytes(fig)
     write_atomic(out / f"{name}.png", png)
     plt.close(fig)
     try:

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .checks import check_rotation_matrices, det3
+from .checks import check_number, check_rotation_matrices
 from .handeye import unvec, vec
 from .so3 import angle_between_deg, nearest_rotation_up_to_sign
 
@@ -126,17 +126,15 @@ class OnlineCalibrator:
                  step_every: int = 5, refine_every: int = 10, min_pairs: int = MIN_PAIRS,
                  cusum_k: float = 2.0, cusum_h: float = 30.0, cusum_cap: float = 10.0, reference_rate: float = 1 / 30,
                  init=None):
-        for name, value, lo in (("target_deg", target_deg, 0.0), ("cusum_h", cusum_h, 0.0), ("cusum_k", cusum_k, 0.0),
-                                ("cusum_cap", cusum_cap, 0.0)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > lo):
-                raise ValueError(f"{name} must be a finite number > {lo:g}, got {value!r}")
+        for name, value in (("target_deg", target_deg), ("cusum_h", cusum_h), ("cusum_k", cusum_k),
+                            ("cusum_cap", cusum_cap)):
+            check_number(name, value, minimum=0)
         if not 0.0 < level < 1.0:
             raise ValueError(f"level must be in (0, 1), got {level!r}")
         if not 0.0 < forgetting <= 1.0:
             raise ValueError(f"forgetting must be in (0, 1], got {forgetting!r}")
         for name, value in (("step_every", step_every), ("refine_every", refine_every), ("min_pairs", min_pairs)):
-            if not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+            check_number(name, value, minimum=1, integer=True, strict=False)
         if min_pairs < 4:
             raise ValueError(f"min_pairs must be at least 4 (3 unknowns and a noise estimate), got {min_pairs}")
         self.target_deg, self.level, self.forgetting = float(target_deg), float(level), float(forgetting)
@@ -205,20 +203,6 @@ class OnlineCalibrator:
         return self._n >= self.min_pairs and self._radius < self.target_deg
 
     # ------------------------------------------------------------------------------------------------ update
-    @staticmethod
-    def _check(M, name):
-        """``M`` (..., 3, 3) as rotations, or ``ValueError`` naming ``name`` (cheap: one product and a determinant)."""
-        M = np.asarray(M, dtype=float)
-        if M.shape[-2:] != (3, 3):
-            raise ValueError(f"{name} must be 3x3 rotations, got shape {M.shape}")
-        E = np.swapaxes(M, -1, -2) @ M
-        err = np.abs(E - _EYE).max() if M.size else 0.0
-        if not err <= 1e-6:  # also catches NaN / inf
-            raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {err:.3g}")
-        if np.any(det3(M) < 0):
-            raise ValueError(f"{name} is a reflection (det -1), not a rotation")
-        return M
-
     def update(self, A, B) -> OnlineState:
         """Add one pair ``(A_j, B_j)`` (camera and sensor motion over the same interval). O(1) work and memory."""
         try:
@@ -227,11 +211,12 @@ class OnlineCalibrator:
             raise ValueError(f"a pair is two 3x3 rotations: {err}") from None
         if M.shape != (2, 3, 3):
             raise ValueError(f"a pair is two 3x3 rotations, got shapes {np.shape(A)} and {np.shape(B)}")
-        err = float(np.abs(np.swapaxes(M, -1, -2) @ M - _EYE).max())
-        for name, (a, b, c, d, e, f, g, h, i) in zip(("A (camera motion)", "B (sensor motion)"), M.reshape(2, 9).tolist()):
-            if not err <= 1e-6:  # also catches NaN / inf
-                self._check(M[0], "A (camera motion)")  # names the culprit
-                self._check(M[1], "B (sensor motion)")
+        # the checks of replication.checks.check_rotation_matrices, inline: this is the per-pair hot path
+        err = np.abs(np.swapaxes(M, -1, -2) @ M - _EYE).max(axis=(1, 2)).tolist()
+        for name, e_k, (a, b, c, d, e, f, g, h, i) in zip(("A (camera motion)", "B (sensor motion)"), err,
+                                                          M.reshape(2, 9).tolist()):
+            if not e_k <= 1e-6:  # also catches NaN / inf
+                raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {e_k:.3g}")
             if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0:
                 raise ValueError(f"{name} is a reflection (det -1), not a rotation")
         return self._update(M[0], M[1])
@@ -263,8 +248,8 @@ class OnlineCalibrator:
 
     def update_many(self, A, B) -> list[OnlineState]:
         """:meth:`update` for each pair of ``(J, 3, 3)`` arrays in order (a replay); validated once, up front."""
-        A = self._check(A, "A (camera motions)")
-        B = self._check(B, "B (sensor motions)")
+        A = check_rotation_matrices(A, "A (camera motions)")
+        B = check_rotation_matrices(B, "B (sensor motions)")
         if A.shape != B.shape or A.ndim != 3:
             raise ValueError(f"need two (J, 3, 3) arrays of the same J, got {A.shape} and {B.shape}")
         return [self._update(a, b) for a, b in zip(A, B)]

@@ -41,35 +41,27 @@ def recording_warnings(fn, *args, **kwargs):
     return r, ObservabilityWarning in kinds, ", ".join(sorted(k.__name__ for k in kinds - {ObservabilityWarning}))
 
 
-def calibration_table(streams: dict, pose_sets: dict, references: dict, methods, *, seed: int) -> pd.DataFrame:
-    """:func:`~replication.calibration.calibrate` on every stream pair and pose set, with each method.
+def calibration_table(results: dict) -> pd.DataFrame:
+    """The headline table of :func:`calibrations`' results, one row per ``(data, method)``.
 
     Returns
     -------
     pandas.DataFrame
         Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``pairs``, ``bootstrap95_deg``,
         ``offset_ms`` and ``offset_corr`` (the clock offset and its correlation; NaN for pose sets),
-        ``axis_spread_deg`` (camera), ``observability_warning``, ``other warnings`` and ``verdict`` (the level of
-        the result's verdict, :mod:`replication.quality`).
+        ``axis_spread_deg`` (camera), ``observability_warning``, ``other warnings`` (from the result's warnings) and
+        ``verdict`` (the level of the result's verdict, :mod:`replication.quality`).
     """
     rows = []
-    for name, (cam, sensor, ref) in streams.items():
-        for method in methods:
-            r, weak, others = recording_warnings(calibrate, cam, sensor, method=method, reference=references[ref],
-                                                 seed=seed)
-            rows.append({"data": name, "method": method, "error_deg": r.reference_error_deg, "pairs": r.n_pairs,
-                         "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": 1e3 * r.time_offset_s,
-                         "offset_corr": r.time_offset_correlation,
-                         "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
-                         "observability_warning": weak, "other warnings": others, "verdict": r.verdict.level})
-    for name, (cam, sensor, ref) in pose_sets.items():
-        for method in methods:
-            r, weak, others = recording_warnings(calibrate_poses, cam, sensor, method=method,
-                                                 reference=references[ref], seed=seed)
-            rows.append({"data": name, "method": method, "error_deg": r.reference_error_deg,
-                         "pairs": r.n_pairs, "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": np.nan,
-                         "offset_corr": np.nan, "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
-                         "observability_warning": weak, "other warnings": others, "verdict": r.verdict.level})
+    for (name, method), r in results.items():
+        kinds = {w.split(":", 1)[0] for w in r.warnings}
+        static = np.isnan(r.time_offset_correlation)  # a static pose set has no clock
+        rows.append({"data": name, "method": method, "error_deg": r.reference_error_deg, "pairs": r.n_pairs,
+                     "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": np.nan if static else 1e3 * r.time_offset_s,
+                     "offset_corr": r.time_offset_correlation,
+                     "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
+                     "observability_warning": "ObservabilityWarning" in kinds,
+                     "other warnings": ", ".join(sorted(kinds - {"ObservabilityWarning"})), "verdict": r.verdict.level})
     return pd.DataFrame(rows).set_index(["data", "method"])
 
 
@@ -162,14 +154,16 @@ def sensitivity_table(camera, gyro, reference, *, intervals, shares, methods, n_
     return pd.DataFrame(rows).set_index(["study", "value", "method"])
 
 
-def calibrations(streams: dict, pose_sets: dict, references: dict, *, seed: int, **options) -> dict:
-    """One :func:`~replication.calibration.calibrate` (or ``calibrate_poses``) per data set: ``{name: result}``."""
+def calibrations(streams: dict, pose_sets: dict, references: dict, methods=("chordal_optimal",), *, seed: int,
+                 **options) -> dict:
+    """:func:`~replication.calibration.calibrate` on every stream pair (``calibrate_poses`` on every pose set), with
+    each method, warnings recorded in the results, not shown: ``{(data, method): result}``."""
     out = {}
-    for name, (cam, sensor, ref) in streams.items():
-        out[name] = recording_warnings(calibrate, cam, sensor, reference=references[ref], seed=seed, **options)[0]
-    for name, (cam, sensor, ref) in pose_sets.items():
-        out[name] = recording_warnings(calibrate_poses, cam, sensor, reference=references[ref], seed=seed,
-                                       **options)[0]
+    for name, (cam, sensor, ref) in {**streams, **pose_sets}.items():
+        fn = calibrate_poses if name in pose_sets else calibrate
+        for method in methods:
+            out[name, method] = recording_warnings(fn, cam, sensor, method=method, reference=references[ref],
+                                                   seed=seed, **options)[0]
     return out
 
 

@@ -168,11 +168,7 @@ class CalibrationResult:
 
         fig = calibration_figure(self)
         if path is not None:
-            import io
+            from ._io import png_bytes, write_atomic
 
-            from ._io import write_atomic
-
-            buffer = io.BytesIO()
-            fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight", metadata={"Software": None})
-            write_atomic(path, buffer.getvalue())
+            write_atomic(path, png_bytes(fig, dpi=110))
         return fig

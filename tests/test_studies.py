@@ -10,7 +10,7 @@ import pytest
 from replication import lab, so3
 from replication.baselines import compare, sweep
 from replication.paper import TABLE2_ANGLES, TABLE2_METHODS
-from replication.real_study import calibration_table, protocol_table, sensitivity_table, solver_tables
+from replication.real_study import calibration_table, calibrations, protocol_table, sensitivity_table, solver_tables
 from replication.simulation import simulate
 from replication.solvers import ObservabilityWarning
 from replication.streams import OrientationStream
@@ -125,7 +125,7 @@ def test_real_studies_recover_a_known_r0_and_shape_their_tables(synthetic_rig):
     streams, refs = {"rig": (camera, sensor, "truth")}, {"truth": R0}
     C = np.swapaxes(camera.R[::40], -1, -2)  # body_from_world attitudes of 20 static poses
     poses = {"poses": (C, np.swapaxes(sensor.R[::40], -1, -2), "truth")}
-    head = calibration_table(streams, poses, refs, ("chordal_optimal",), seed=1)
+    head = calibration_table(calibrations(streams, poses, refs, ("chordal_optimal",), seed=1))
     assert list(head.index) == [("rig", "chordal_optimal"), ("poses", "chordal_optimal")]
     assert (head["error_deg"] < 1e-3).all() and np.isnan(head.loc[("poses", "chordal_optimal"), "offset_ms"])
     solvers = solver_tables(streams, {}, refs)
