@@ -24,8 +24,8 @@ class LiveRig:
 
     The gyro is integrated as it comes (:func:`replication.streams.integrate_gyro`'s trapezoidal rule) into a
     buffer that holds only the last ``interval + 2 max_offset + 1`` seconds (O(1) memory in the recording's
-    length). Camera poses form non-overlapping pairs ``interval`` seconds long (the radius assumes independent
-    pairs); each pair's sensor motion is the integrated orientation slerped to the camera times plus the clock
+    length). Camera poses form pairs ``interval`` seconds long that share no pose (the radius assumes independent
+    pairs; a pair ending where the next starts would share that pose's noise); each pair's sensor motion is the integrated orientation slerped to the camera times plus the clock
     offset. The offset is estimated once, on the first ``offset_window`` seconds of both streams
     (:func:`replication.association.estimate_time_offset`; those samples are held until then), unless given.
     A pair whose sensor interval contains a gap (more than ``GAP_FACTOR`` median sample intervals) is dropped.
@@ -60,7 +60,8 @@ class LiveRig:
         self._start = None        # (t, world_from_camera) of the pair being formed
         self._last_camera_t = -math.inf
         self.pairs_dropped = 0
-        self.events = []          # (time of the pair's end, OnlineState)
+        self._now = -math.inf      # the latest time stamp seen on either stream
+        self.events = []          # (time of the pair's end, time it was formed, OnlineState)
 
     def add_gyro(self, t: float, omega) -> None:
         """One gyro sample: time (s) and body rate (rad/s, 3)."""
@@ -92,6 +93,7 @@ class LiveRig:
         self._push(float(t), Q)
 
     def _push(self, t, Q) -> None:
+        self._now = max(self._now, t)
         self._gyro.append((t, Q))
         keep = self.interval + 2 * self.max_offset + 1.0 + (self.offset_window if self.offset is None else 0.0)
         while len(self._gyro) > 2 and self._gyro[0][0] < t - keep:
@@ -106,6 +108,7 @@ class LiveRig:
         if not t > self._last_camera_t:
             raise ValueError(f"camera time going backwards or repeated: {t!r} after {self._last_camera_t!r}")
         self._last_camera_t = float(t)
+        self._now = max(self._now, float(t))
         self._camera.append((float(t), C))
         self._drain()
 
@@ -148,14 +151,14 @@ class LiveRig:
             if t - t0 < self.interval - 1e-9:
                 continue
             Q0, Q1 = self._sensor_at(t0 + self.offset), self._sensor_at(t + self.offset)
-            self._start = (t, C)
+            self._start = None  # the next pair starts at the next pose: pairs share no pose, hence no pose noise
             if Q0 is None or Q1 is None or isinstance(Q0, str) or isinstance(Q1, str) or self._gap_between(
                     t0 + self.offset, t + self.offset):
                 self.pairs_dropped += 1
                 continue
             A = C.T @ C0    # eq. (3) with C = Q^T: camera motion from t0 to t
             B = Q1.T @ Q0   # eq. (4)
-            self.events.append((t, self.calibrator.update(A, B)))
+            self.events.append((t, self._now, self.calibrator.update(A, B)))
             if self.on_pair is not None:
                 self.on_pair(t, A, B)
 
@@ -177,7 +180,8 @@ def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.
     ``remount = (t, R)``: from time ``t`` on, the sensor is mounted ``R`` further (its rates become
     ``R^T omega``, its orientations ``Q R``: a synthetic re-mount, for the change detector); the reference is then
     ``reference @ R``.
-    Returns a :class:`pandas.DataFrame` with ``t`` (s, the pair's end), ``n_pairs``, ``radius_deg``, ``ready``,
+    Returns a :class:`pandas.DataFrame` with ``t`` (s, the pair's end), ``t_seen`` (s, when the pair was formed:
+    later than ``t`` while the first ``offset_window`` seconds are held for the clock offset), ``n_pairs``, ``radius_deg``, ``ready``,
     ``alarm``, the estimate as a quaternion ``qw, qx, qy, qz`` (camera_from_sensor) and, with a reference,
     ``error_deg``.
     """
@@ -196,9 +200,9 @@ def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.
         else:
             rig.add_orientation(t, sensor.world_from_body[k] @ R_re if after else sensor.world_from_body[k])
     rows = []
-    for t_end, state in rig.events:
+    for t_end, t_seen, state in rig.events:
         q = as_quaternion(state.R)
-        row = {"t": t_end, "n_pairs": state.n_pairs, "radius_deg": state.radius_deg, "ready": state.ready,
+        row = {"t": t_end, "t_seen": t_seen, "n_pairs": state.n_pairs, "radius_deg": state.radius_deg, "ready": state.ready,
                "alarm": state.alarm, "qw": q[0], "qx": q[1], "qy": q[2], "qz": q[3]}
         if reference is not None:
             ref = reference if remount is None or t_end < remount[0] else reference @ R_re

@@ -7,7 +7,8 @@ The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (
 * the running sums of ``B_j kron A_j`` (9x9) and of ``G_j = 2I - B_j - B_j^T`` (3x3), with optional exponential
   forgetting (weights ``lambda^age``);
 * a warm-started two-step step (eqs. (14)-(17): ``R^r = proj(K vec R^l)``, ``R^l = proj(K^T vec R^r)``) every
-  ``step_every`` pairs, and a warm-started Newton refinement to the minimiser of eq. (8)
+  ``step_every`` pairs, which starts the next refinement, and a warm-started Newton refinement to the minimiser of
+  eq. (8), which is the published estimate
   (:func:`replication.solvers.optimal.chordal_newton`) at ``min_pairs`` and then every ``refine_every`` pairs or
   every tenth of the pairs so far, whichever is more (so its cost per pair falls as ``1 / J``), and on demand
   (:meth:`OnlineCalibrator.estimate`): fed the same pairs, it equals the batch ``chordal_optimal``. Pairs are
@@ -153,13 +154,16 @@ class OnlineCalibrator:
         """Forget every pair (after a re-mount): the estimate starts again from ``init`` (default: the last one)."""
         self._S = np.zeros((9, 9))     # sum of weights x (B kron A)
         self._SB = np.zeros((3, 3))    # sum of weights x B  (G = 2 w I - SB - SB^T)
+        self._SB2 = np.zeros((3, 3))   # sum of squared weights x B (forgetting: the covariance's middle factor)
         self._w = 0.0                  # sum of weights (J without forgetting)
+        self._w2 = 0.0                 # sum of squared weights
         self._n = 0                    # pairs since the start
         self._bufA, self._bufB = [], []  # pairs not yet in the sums (at most step_every of them)
         self._mean_d2 = math.nan       # mean d_j^2 = cost (8) / J at the current estimate (the detector's reference)
         self._cusum = 0.0
         start = self._init if init is None and not hasattr(self, "_R") else (self._R if init is None else init)
-        self._R = np.array(start, dtype=float)
+        self._R = np.array(start, dtype=float)      # the published estimate: the last refinement's minimiser
+        self._warm = self._R                          # the two-step iterate: the next refinement's start
         self._radius = math.inf
         self._next_refine = self.min_pairs
 
@@ -175,7 +179,9 @@ class OnlineCalibrator:
         S = np.einsum("i,iab,icd->acbd", w, B, A).reshape(9, 9)
         self._S = decay * self._S + S
         self._SB = decay * self._SB + np.einsum("i,iab->ab", w, B)
+        self._SB2 = decay ** 2 * self._SB2 + np.einsum("i,iab->ab", w ** 2, B)
         self._w = decay * self._w + w.sum()
+        self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
         self._bufA.clear()
         self._bufB.clear()
 
@@ -256,16 +262,19 @@ class OnlineCalibrator:
 
     # ------------------------------------------------------------------------------------------------ estimates
     def _step(self) -> None:
-        """One warm-started two-step iteration (eqs. (14)-(17)); the radius waits for the next refinement."""
+        """One warm-started two-step iteration (eqs. (14)-(17)) on the next refinement's start. The published
+        estimate stays the last minimiser of eq. (8), the one the radius describes: the two-step fixed point is
+        not that minimiser and is farther from ``R0`` (notebook 01), so publishing it would leave the radius
+        describing another estimate."""
         K = self.K
-        right = nearest_rotation_up_to_sign(unvec(K @ vec(self._R)))   # eq. (14), projected (16)
-        self._R = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
+        right = nearest_rotation_up_to_sign(unvec(K @ vec(self._warm)))   # eq. (14), projected (16)
+        self._warm = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
 
     def _refine(self, max_iterations: int = 30) -> None:
-        """Newton on SO(3) to the minimiser of eq. (8) from the current estimate (warm start), then the radius."""
+        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate (warm start), then the radius."""
         from .solvers.optimal import chordal_newton
 
-        self._R = chordal_newton(self.K, self._R, max_iterations=max_iterations)[0]
+        self._R = self._warm = chordal_newton(self.K, self._warm, max_iterations=max_iterations)[0]
         self._update_radius()
 
     def _update_radius(self) -> None:
@@ -277,16 +286,21 @@ class OnlineCalibrator:
         if not self._mean_d2 > 0:  # the detector's reference starts from the cost; then it follows in-control pairs
             self._mean_d2 = cost / self._w
         s2 = cost / (2.0 * max(self._w - 3.0, 1.0))                          # mean square residual angle
-        G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j (2I - B_j - B_j^T)
+        G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
         try:
-            cov = (s2 / 3.0) * np.linalg.inv(G)
+            Gi = np.linalg.inv(G)
         except np.linalg.LinAlgError:
             self._radius = math.inf
             return
+        if self.forgetting == 1.0:
+            cov = (s2 / 3.0) * Gi
+        else:  # weighted least squares: G^-1 (sum_j w_j^2 (2I - B_j - B_j^T)) G^-1
+            G2 = 2.0 * self._w2 * _EYE - self._SB2 - self._SB2.T
+            cov = (s2 / 3.0) * Gi @ G2 @ Gi
         self._radius = radius_deg(cov, self.level) if np.all(np.isfinite(cov)) else math.inf
 
     def estimate(self) -> np.ndarray:
-        """The minimiser of eq. (8) over the pairs so far (Newton to convergence from the current estimate)."""
+        """The minimiser of eq. (8) over the pairs so far (Newton to convergence from the current iterate)."""
         self._flush()
         if self._w:
             self._refine(max_iterations=100)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket", "proportion_ci"]
+__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket"]
 
 
 def mean_se(x, axis=0):
@@ -89,16 +89,3 @@ def share_range(p, step: float = 0.05) -> str:
     k = int(np.floor(p / step + 1e-9))
     low, high = k * step, min((k + 1) * step, 1.0)
     return f"{100 * low:.0f}-{100 * high:.0f} %"
-
-
-def proportion_ci(successes: int, n: int, level: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval of a proportion ``successes / n`` at ``level`` (default 95 %)."""
-    import statistics
-
-    if n <= 0 or not 0 <= successes <= n:
-        raise ValueError(f"need 0 <= successes <= n and n > 0, got {successes} of {n}")
-    z = statistics.NormalDist().inv_cdf(0.5 + level / 2)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * ((p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5) / (1 + z * z / n)
-    return centre - half, centre + half

@@ -202,3 +202,23 @@ def test_cli_online_writes_the_track(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--target", "0"])
     assert main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--track", str(track)]) == 2
+
+
+def test_between_refinements_the_estimate_is_the_last_minimiser(rng):
+    """The two-step steps only prepare the next refinement: the published estimate is the one the radius describes."""
+    R0 = so3.random_rotations(rng, ())
+    A, B = _noisy_pairs(rng, 19, R0)
+    states = OnlineCalibrator(cusum_h=1e9).update_many(A, B)
+    assert all(np.array_equal(s.R, states[9].R) for s in states[9:19])  # refinements at 10 and 20 pairs
+    assert all(s.radius_deg == states[9].radius_deg for s in states[9:19])
+    assert_rotations_close(states[9].R, chordal_optimal(A[:10], B[:10]).R, 1e-9)
+
+
+def test_live_pairs_share_no_pose():
+    from replication.live import replay
+
+    R0, camera, gyro, _ = _streams()
+    spans = []
+    replay(camera, gyro, OnlineCalibrator(), interval=1.0, on_pair=lambda t, A, B: spans.append(t))
+    ends = np.array(spans)
+    assert np.all(np.diff(ends) > 1.0)  # each pair starts at the pose after the previous pair's end
