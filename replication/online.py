@@ -27,7 +27,13 @@ itself: ``||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2) ~ 2 theta_j^2``, so ``s^2
 O(1) from the running ``K``. The radius at level ``p`` is the ``p`` quantile of ``|w|`` for that covariance
 (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` with ``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the
 eigenvalues ``l``). Pairs must not overlap in time (overlapping pairs share their noise; the stream front end,
-:class:`replication.live.LiveRig`, forms one pair per interval). Its coverage is measured in ``tests/test_online.py`` and notebook 08.
+:class:`replication.live.LiveRig`, forms pairs that share no pose).
+
+**What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
+trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error) leaves
+small residuals and a small radius: ``ready`` is then declared while the estimate is farther off than the target.
+Notebook 08 shows this on EuRoC MH01 (its SLAM run against the ground truth); check such a rig against a reference
+or with :func:`replication.calibration.calibrate`'s verdict before trusting ``ready``. Its coverage is measured in ``tests/test_online.py`` and notebook 08.
 
 **Re-mount detection.** After ``min_pairs`` pairs, each new pair's ``d_j^2 = ||A_j R - R B_j||_F^2`` is compared
 with a reference level ``m``: the mean of the pairs so far at the estimate of that moment (the cost (8) over ``J``),
