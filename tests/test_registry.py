@@ -1,10 +1,14 @@
+import uuid
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from replication import so3
 from replication.motions import Motions
-from replication.solvers import _registry, available, register, solve, solver_info
+from replication.handeye import handeye_cost
+from replication.simulation import simulate
+from replication.solvers import AccuracyWarning, _registry, available, register, solve, solver_info
 from replication.testing import assert_rotations_close
 
 
@@ -57,3 +61,106 @@ def test_solve_refuses_degenerate_motion(rng):
     A = Rotation.from_rotvec(np.outer(np.linspace(0.2, 1.0, 8), [1, 0, 0])).as_matrix()
     with pytest.raises(ValueError, match="degenerate motion"):
         solve("two_step_right", A, R0.T @ A @ R0)
+
+
+# ------------------------------------------------------------------ what a core returns is checked at the door
+
+@pytest.fixture
+def bad_core():
+    """``make(core, **register_options) -> name``: registers ``core`` under a unique name, removed afterwards."""
+    names = []
+
+    def make(core, **options):
+        name = f"test_core_{len(names)}_{uuid.uuid4().hex[:8]}"
+        register(name, reference="test: a core that may break its contract", **options)(core)
+        names.append(name)
+        return name
+
+    yield make
+    for name in names:
+        _registry._REGISTRY.pop(name, None)
+
+
+@pytest.fixture(scope="module")
+def two_noisy():
+    """Two noisy problems (J = 20) and their certified minimisers of eq. (8)."""
+    sim = simulate(7, 2)
+    return sim.A, sim.B, solve("chordal_optimal", sim.A, sim.B)
+
+
+NOT_ROTATION = "returned a matrix that is not a rotation at batch index"
+
+
+def _edited(R, index, value):
+    R = np.array(R)
+    R[index] = value
+    return R
+
+
+@pytest.mark.parametrize("answer, match", [
+    (lambda m, X: 2 * np.eye(3), r"returned an array of shape \(3, 3\); expected a numpy array of shape \(2, 3, 3\)"),
+    (lambda m, X: X[0], r"returned an array of shape \(3, 3\); expected .* \(2, 3, 3\)"),
+    (lambda m, X: None, r"returned None; expected a numpy array of shape \(2, 3, 3\)"),
+    (lambda m, X: list(X), r"returned a list; expected a numpy array of shape \(2, 3, 3\)"),
+    (lambda m, X: X.astype(complex), r"returned an array of dtype complex128; expected real numbers"),
+    (lambda m, X: X.astype(object), r"returned an array of dtype object; expected real numbers"),
+    (lambda m, X: _edited(X, (1, 0, 2), np.nan), rf"{NOT_ROTATION} \(1,\): NaN or inf in part of the block"),
+    (lambda m, X: _edited(X, 1, np.inf), rf"{NOT_ROTATION} \(1,\): NaN or inf in part of the block"),
+    (lambda m, X: 2 * X, rf"{NOT_ROTATION} \(0,\): \|\|R\^T R - I\|\|_F = 5.2, det R = 8"),
+], ids=["2I-for-a-batch", "one-for-a-batch", "None", "list", "complex", "object", "partial-NaN", "inf", "2R"])
+def test_a_core_answer_breaking_the_contract_is_refused(bad_core, two_noisy, answer, match):
+    A, B, X = two_noisy
+    name = bad_core(lambda motions: answer(motions, X))
+    with pytest.raises(ValueError, match=rf"solver '{name}' {match}"):
+        solve(name, A, B, full_output=True)
+
+
+def _stretched(R, violation):
+    """``R diag(1 + e, 1, 1)`` with ``||(.)^T (.) - I||_F = 2 e + e^2 = violation`` (and ``|det - 1| = e``)."""
+    e = np.sqrt(1.0 + violation) - 1.0
+    return R @ np.diag([1.0 + e, 1.0, 1.0])
+
+
+def test_answer_tolerance_boundary(bad_core, two_noisy):
+    A, B, X = two_noisy
+    assert _registry.ANSWER_ATOL <= so3.ROTATION_ATOL  # an accepted answer passes every door as a rotation
+    for factor in (0.5, 0.99):
+        name = bad_core(lambda motions, f=factor: _edited(X, 1, _stretched(X[1], f * _registry.ANSWER_ATOL)))
+        R = solve(name, A, B)
+        so3.check_rotation_matrices(R)
+    name = bad_core(lambda motions: _edited(X, 1, _stretched(X[1], 1.01 * _registry.ANSWER_ATOL)))
+    with pytest.raises(ValueError, match=rf"solver '{name}' {NOT_ROTATION} \(1,\): \|\|R\^T R - I\|\|_F = 1.01e-06"
+                                         r".*tolerance ANSWER_ATOL = 1e-06"):
+        solve(name, A, B)
+
+
+@pytest.mark.parametrize("local", [False, True])
+def test_a_reflection_is_warned_not_refused_and_never_certified(bad_core, two_noisy, local):
+    """``-R*`` (det -1) has exactly the cost (8) of the minimiser ``R*``: only its determinant tells it apart."""
+    A, B, X = two_noisy
+    name = bad_core(lambda motions, **_: _edited(X, 1, -X[1]), local=local)
+    with pytest.warns(AccuracyWarning, match=rf"{name} returned a reflection \(det -1\), not a rotation, in 1 of 2"):
+        sol = solve(name, A, B, full_output=True)
+    np.testing.assert_allclose(sol.cost[1], handeye_cost(X[1], A[1], B[1]), rtol=1e-12)
+    assert sol.global_optimum.tolist() == [True, False]
+    assert np.isfinite(sol.cost).all() and np.isnan(sol.duality_gap[1]) and np.isfinite(sol.duality_gap[0])
+
+
+@pytest.mark.parametrize("local", [False, True])
+def test_a_declared_failure_is_a_whole_nan_block_warned_and_never_certified(bad_core, two_noisy, local):
+    A, B, X = two_noisy
+    name = bad_core(lambda motions, **_: _edited(X, 1, np.nan), local=local)
+    with pytest.warns(AccuracyWarning, match=rf"{name} declared a failure \(returned NaN\) in 1 of 2 problems, "
+                                             r"first at batch index \(1,\)"):
+        sol = solve(name, A, B, full_output=True)
+    assert np.isnan(sol.R[1]).all() and np.array_equal(sol.R[0], X[0])
+    assert sol.global_optimum.tolist() == [True, False]
+    assert np.isnan(sol.cost[1]) and np.isnan(sol.duality_gap[1]) and np.isfinite(sol.lower_bound).all()
+
+
+def test_a_core_answer_is_returned_as_floats(bad_core, two_noisy):
+    A, B, _ = two_noisy
+    name = bad_core(lambda motions: np.broadcast_to(np.eye(3, dtype=int), motions.batch_shape + (3, 3)))
+    with pytest.warns(AccuracyWarning, match="far from the certified minimiser"):
+        R = solve(name, A, B)
+    assert R.dtype == float and np.array_equal(R, np.broadcast_to(np.eye(3), (2, 3, 3)))

@@ -14,13 +14,14 @@ from typing import Callable
 
 import numpy as np
 
+from ..checks import _first_index, det3
 from ..handeye import handeye_cost, vec
 from ..motions import Motions, MotionObservability, prepare_motions
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
 
 __all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
-           "check_answer", "warn_if_weak"]
+           "ANSWER_ATOL", "check_answer", "warn_if_weak"]
 
 #: A local solver's answer is flagged (:class:`LocalMinimumWarning`) when its cost (8) exceeds the
 #: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
@@ -49,6 +50,14 @@ GROSS_FACTOR = 10.0
 #: The motions count as weakly determining ``R0`` (:class:`ObservabilityWarning`) when the gap between the two
 #: largest eigenvalues of ``sym(K)`` is below this many times the data's inconsistency ``1 - lambda_1``.
 WEAK_GAP_FACTOR = 3.0
+#: :func:`solve` refuses (``ValueError``) a core's answer block with ``||R^T R - I||_F`` or ``| |det R| - 1 |``
+#: above this. Measured over the contract, solver-core, baseline and registry tests' problems and 1700 harsher ones
+#: (J = 3-20, noise up to 17 deg, motions of 0.5-3 deg and of 150-180 deg, 40 % outliers): every registered solver
+#: stays within 1.1e-14 except OpenCV's Park & Martin ((M^T M)^(-1/2) M^T of an ill-conditioned M: 4e-11 in the tests,
+#: 8e-9 at 17 deg noise with small motions). 1e-6 is 100x above that, and the tolerance at which every door of the
+#: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
+#: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
+ANSWER_ATOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -60,8 +69,10 @@ class SolverInfo:
     name : str
         The ``method`` name given to :func:`solve`.
     core : callable
-        ``core(motions, **options) -> (..., 3, 3)``; receives a validated
-        :class:`replication.motions.Motions`.
+        ``core(motions, **options) -> ndarray (..., 3, 3)``; receives a validated
+        :class:`replication.motions.Motions`. It returns one rotation per problem (a reflection is
+        warned about), or a whole 3x3 block of NaN for a problem it declares failed; :func:`solve`
+        refuses anything else (see :data:`ANSWER_ATOL`).
     reference : str
         The paper the solver implements.
     min_motions : int
@@ -93,10 +104,10 @@ class Solution:
     Attributes
     ----------
     R : ndarray, shape (..., 3, 3)
-        Estimate of ``R0`` (camera_from_sensor).
+        Estimate of ``R0`` (camera_from_sensor); NaN where the solver declared a failure.
     method : str
     cost : ndarray, shape (...)
-        Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2``.
+        Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2`` (NaN where ``R`` is NaN).
     observability : MotionObservability
         How well the motions determine ``R0`` (see
         :class:`replication.motions.MotionObservability`).
@@ -104,11 +115,12 @@ class Solution:
         Certified lower bound on the minimum of eq. (8) over SO(3)
         (:func:`replication.solvers.chordal_optimal`'s certificate).
     duality_gap : ndarray, shape (...)
-        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8).
+        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8) over SO(3);
+        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection).
     global_optimum : ndarray of bool, shape (...)
-        ``R`` is certified to be the global minimiser of eq. (8) (``duality_gap`` at most
-        ``GAP_TOL * J``). The paper's two-step method is not, once there is noise: its
-        fixed point is not the minimiser of its own cost.
+        ``R`` is a rotation certified to be the global minimiser of eq. (8) (``duality_gap`` at most
+        ``GAP_TOL * J``); never for a NaN or a reflection. The paper's two-step method is not, once
+        there is noise: its fixed point is not the minimiser of its own cost.
     """
 
     R: np.ndarray
@@ -132,7 +144,8 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
     (rotations, same shape, ``J >= min_motions``, not degenerate): ``motions.A``
     (camera relative rotations), ``motions.B`` (sensor relative rotations), both
     ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
-    ``camera_from_sensor`` of shape ``(..., 3, 3)``.
+    ``camera_from_sensor``, a numpy array of shape ``(..., 3, 3)``: a rotation per problem, or a whole
+    3x3 block of NaN for a problem it declares failed; :func:`solve` refuses anything else.
 
     The decorator returns ``public(A, B, **options) = solve(name, A, B, **options)``,
     so the exported name validates its input like every other door.
@@ -238,13 +251,18 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
       certified minimiser (it stopped short of the minimum).
 
-    Returns the boolean mask of problems flagged either way.
+    Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
+    about itself, are skipped. Returns the boolean mask of problems flagged either way.
     """
     from ..so3 import angle_between_deg
     from .optimal import global_certificate
 
+    cert_R = global_certificate(motions).R
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    rotation = finite & (det3(np.where(finite[..., None, None], R, np.eye(3))) > 0)
+    R = np.where(rotation[..., None, None], R, cert_R)  # stands in as the minimiser: never flagged here
     _, lower, gap = _gap_to_global(motions, R)
-    angle = angle_between_deg(R, global_certificate(motions).R)
+    angle = angle_between_deg(R, cert_R)
     above = gap > LOCAL_RTOL * np.abs(lower) + LOCAL_ATOL * motions.J
     off = above & (angle > WRONG_POINT_DEG)  # another stationary point
     short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)  # in the right basin, not at its bottom
@@ -289,29 +307,44 @@ def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int =
     ``LOCAL_ATOL * J``) are compared with the certified minimum. NaN answers (a solver's declared
     failures) are skipped. Returns the boolean mask of flagged problems.
     """
-    from ..so3 import angle_between_deg, det3
-    from .optimal import global_certificate
-
     R = np.asarray(R, dtype=float)
-    batch, J = R.shape[:-2], motions.J
-    flat = R.reshape(-1, 3, 3)
-    finite = np.isfinite(flat).all(axis=(-2, -1))
-    safe = np.where(finite[:, None, None], flat, np.eye(3))
-    flagged = np.zeros(len(flat), dtype=bool)
-    reflection = finite & (det3(safe) < 0)
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    reflection = finite & (det3(np.where(finite[..., None, None], R, np.eye(3))) < 0)
+    _warn_not_rotations(method, np.zeros_like(finite), reflection, stacklevel + 1)
+    return reflection | _screen_gross(motions, R, finite & ~reflection, method, stacklevel + 1)
+
+
+def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray, stacklevel: int) -> None:
+    """:class:`AccuracyWarning` for declared failures (NaN blocks) and for reflections among a solver's answers."""
+    if np.any(failed):
+        warnings.warn(
+            f"{method} declared a failure (returned NaN) in {int(np.sum(failed))} of {failed.size} problems, first at "
+            f"batch index {_first_index(failed)}: no estimate there (with full_output: cost and duality_gap NaN, "
+            f"global_optimum False)",
+            AccuracyWarning, stacklevel=stacklevel)
     if np.any(reflection):
         warnings.warn(
             f"{method} returned a reflection (det -1), not a rotation, in {int(np.sum(reflection))} of "
-            f"{len(flat)} problems" + (": the paper-literal variant fails so from a start more than 120 deg from R0"
-                                       if method.startswith("two_step") else ""),
+            f"{reflection.size} problems" + (": the paper-literal variant fails so from a start more than 120 deg "
+                                             "from R0" if method.startswith("two_step") else ""),
             AccuracyWarning, stacklevel=stacklevel)
-        flagged |= reflection
+
+
+def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: str, stacklevel: int) -> np.ndarray:
+    """The gross-error screen of :func:`check_answer` over the ``usable`` answers (rotations); returns its mask."""
+    from ..so3 import angle_between_deg
+    from .optimal import global_certificate
+
+    batch, J = R.shape[:-2], motions.J
+    flat, usable = R.reshape(-1, 3, 3), usable.reshape(-1)
+    safe = np.where(usable[:, None, None], flat, np.eye(3))
+    flagged = np.zeros(len(flat), dtype=bool)
     K = motions.K.reshape(-1, 9, 9)
     x = vec(safe)
     g = np.einsum("na,nab,nb->n", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
     cost = 2.0 * J * (3.0 - g)
     lower = 6.0 * J * np.maximum(1.0 - motions.sym_eigvals[..., 0].reshape(-1), 0.0)  # relaxation bound on f*
-    screen = finite & ~reflection & (cost > GROSS_FACTOR * lower + LOCAL_ATOL * J)
+    screen = usable & (cost > GROSS_FACTOR * lower + LOCAL_ATOL * J)
     if np.any(screen):
         A = motions.A.reshape((-1,) + motions.A.shape[-3:])[screen]
         B = motions.B.reshape((-1,) + motions.B.shape[-3:])[screen]
@@ -329,6 +362,41 @@ def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int =
                 AccuracyWarning, stacklevel=stacklevel)
             flagged[np.flatnonzero(screen)[gross]] = True
     return flagged.reshape(batch)
+
+
+def _checked_answer(method: str, motions: Motions, R):
+    """A core's answer as a float array, with its masks ``(failed, reflection)``; ``ValueError`` if it breaks the
+    contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem).
+
+    One vectorised pass over the batch: orthogonality ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against
+    :data:`ANSWER_ATOL` (a reflection passes both and is only warned about); any NaN or inf in a block that is not
+    all NaN fails them.
+    """
+    expected = motions.batch_shape + (3, 3)
+    if not isinstance(R, np.ndarray) or R.shape != expected:
+        got = (f"an array of shape {R.shape}" if isinstance(R, np.ndarray) else
+               "None" if R is None else f"a {type(R).__name__}")
+        raise ValueError(f"solver {method!r} returned {got}; expected a numpy array of shape {expected} (one 3x3 "
+                         f"rotation per problem of batch shape {motions.batch_shape})")
+    if R.dtype.kind not in "fiu":
+        raise ValueError(f"solver {method!r} returned an array of dtype {R.dtype}; expected real numbers, shape "
+                         f"{expected}")
+    R = np.asarray(R, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
+        ortho = np.sqrt(np.einsum("...ij,...ij->...", E, E))
+        det = det3(R)
+        violation = np.maximum(ortho, np.abs(np.abs(det) - 1.0))  # NaN wherever the block holds NaN or inf
+    failed = np.isnan(R).all(axis=(-2, -1))
+    bad = ~(violation <= ANSWER_ATOL) & ~failed
+    if np.any(bad):
+        i = _first_index(bad)
+        what = ("NaN or inf in part of the block (a declared failure is a whole block of NaN)"
+                if not np.isfinite(R[i]).all() else
+                f"||R^T R - I||_F = {ortho[i]:.3g}, det R = {det[i]:.6g}: | |det R| - 1 | = {abs(abs(det[i]) - 1):.3g}")
+        raise ValueError(f"solver {method!r} returned a matrix that is not a rotation at batch index {i}: {what} "
+                         f"(tolerance ANSWER_ATOL = {ANSWER_ATOL:g}; {int(np.sum(bad))} bad of {bad.size})")
+    return R, failed, ~failed & (det < 0)
 
 
 def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread_deg: float = 1.0,
@@ -368,8 +436,9 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
     LocalMinimumWarning, ConvergenceWarning
         A ``local`` solver (e.g. ``sqp``) ended above, or short of, the certified global minimum of eq. (8).
     AccuracyWarning
-        Any other solver (except ``chordal_optimal``, which certifies itself) returned an answer far from the
-        certified minimiser, or not a rotation (see :func:`check_answer`).
+        Any solver returned a reflection (det -1) or declared a failure (a 3x3 block of NaN); any other solver
+        (except ``chordal_optimal``, which certifies itself) returned an answer far from the certified
+        minimiser (see :func:`check_answer`).
     IterationCapWarning, CertificateWarning
         From the solvers themselves (see each).
 
@@ -378,22 +447,25 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
     ValueError
         Unknown method (the message lists the available ones), malformed input
         (see :func:`replication.handeye.check_motion_pairs`), fewer motions than
-        the solver needs, or degenerate motion (``R0`` not unique).
+        the solver needs, or degenerate motion (``R0`` not unique); or the solver's core broke its contract
+        (:class:`SolverInfo`): not an array of shape ``batch shape + (3, 3)``, not real, a block partly NaN
+        or inf, or a block farther than :data:`ANSWER_ATOL` from orthogonal (the message names the solver, the
+        first offending batch index and the measured violation).
     """
     info = solver_info(method)
     motions = prepare_motions(A, B, min_motions=info.min_motions)
     warn_if_weak(motions, warn_axis_spread_deg, stacklevel=_stacklevel)
-    R = info.core(motions, **options)
+    R, failed, reflection = _checked_answer(method, motions, info.core(motions, **options))
+    _warn_not_rotations(method, failed, reflection, _stacklevel)
     if info.local:
         check_local_answer(motions, R, method, stacklevel=_stacklevel)
     elif method != "chordal_optimal":
-        check_answer(motions, R, method, stacklevel=_stacklevel)
+        _screen_gross(motions, R, ~failed & ~reflection, method, _stacklevel)
     if not full_output:
         return R
-    from ..so3 import det3
     from .optimal import GAP_TOL
 
     cost, lower, gap = _gap_to_global(motions, R)
-    rotation = np.isfinite(R).all(axis=(-2, -1)) & (det3(np.nan_to_num(R)) > 0)
+    gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
     return Solution(R=R, method=method, cost=cost, observability=motions.observability, lower_bound=lower,
-                    duality_gap=gap, global_optimum=(gap <= GAP_TOL * motions.J) & rotation)
+                    duality_gap=gap, global_optimum=gap <= GAP_TOL * motions.J)
