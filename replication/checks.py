@@ -9,10 +9,16 @@ import math
 
 import numpy as np
 
-__all__ = ["ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init", "check_number"]
+__all__ = ["ROTATION_ATOL", "MAX_ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init",
+           "check_atol", "check_number"]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
 ROTATION_ATOL = 1e-6
+#: Largest ``atol`` a rotation test accepts. The loosest in the package is 1e-4 (loaders of files that print 4-6
+#: digits); above 1e-2 a "rotation" may be scaled or sheared by half a percent, a third of the paper's noise per
+#: motion (``||v|| < 0.02``, chordal distance up to 0.028), and the algebra of eq. (8) that every solver relies on
+#: (``||A_j R||_F = ||R||_F``, ``||K||_2 <= 1``) no longer holds: such matrices are not rotation data.
+MAX_ROTATION_ATOL = 1e-2
 
 
 def _first_index(mask: np.ndarray) -> tuple:
@@ -79,7 +85,8 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
     name : str
         Name used in error messages.
     atol : float
-        Tolerance of the orthonormality and determinant tests.
+        Tolerance of the orthonormality and determinant tests: a finite number in
+        ``(0, MAX_ROTATION_ATOL]`` (a NaN tolerance would accept anything, 0 refuses rounding).
 
     Returns
     -------
@@ -88,9 +95,10 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
     Raises
     ------
     ValueError
-        Naming the first offending index: wrong shape, NaN/inf, not orthonormal,
-        or a reflection (det = -1).
+        ``atol`` out of range (named); or naming the first offending index: wrong shape, NaN/inf,
+        not orthonormal, or a reflection (det = -1).
     """
+    check_atol(atol)
     R = check_matrices(R, name)
     E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
     ortho = np.sqrt(np.einsum("...ab,...ab->...", E, E))  # ||R^T R - I||_F
@@ -110,6 +118,16 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
             f"(a reflection; a rotation has det = +1)"
         )
     return R
+
+
+def check_atol(atol, name: str = "atol"):
+    """``atol`` of a rotation test, or ``ValueError`` naming ``name`` unless it is a finite number in
+    ``(0, MAX_ROTATION_ATOL]``."""
+    check_number(name, atol, minimum=0)
+    if atol > MAX_ROTATION_ATOL:
+        raise ValueError(f"{name} must be <= {MAX_ROTATION_ATOL:g} (MAX_ROTATION_ATOL: looser matrices are not "
+                         f"rotations), got {atol!r}")
+    return atol
 
 
 def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:

@@ -44,7 +44,8 @@ def check_motion_pairs(A, B, *, min_motions: int = 2, atol: float = 1e-6):
     min_motions : int
         Fewest motions ``J`` the caller needs.
     atol : float
-        Tolerance of the rotation test (see :func:`check_rotation_matrices`).
+        Tolerance of the rotation test (see :func:`check_rotation_matrices`): a finite
+        number in ``(0, 1e-2]``.
 
     Returns
     -------
@@ -53,8 +54,9 @@ def check_motion_pairs(A, B, *, min_motions: int = 2, atol: float = 1e-6):
     Raises
     ------
     ValueError
-        Wrong shapes, mismatched shapes, ``J < min_motions``, NaN/inf, or a
-        matrix that is not a rotation (the message names the array and index).
+        Wrong shapes, mismatched shapes, ``J < min_motions``, NaN/inf, a
+        matrix that is not a rotation (the message names the array and index),
+        or ``atol`` out of range (named).
     """
     A = check_matrices(A, "A (camera relative rotations)")
     B = check_matrices(B, "B (sensor relative rotations)")

@@ -119,6 +119,10 @@ class Motions:
         Camera relative rotations ``Delta R_c`` (validated float array; do not modify).
     B : ndarray, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
+
+    ``Motions(A, B, atol=1e-6)``: ``atol`` is the tolerance of the rotation test of ``A`` and ``B``, a finite
+    number in ``(0, 1e-2]`` (:func:`replication.checks.check_rotation_matrices`; ``ValueError`` naming ``atol``
+    otherwise).
     """
 
     __slots__ = ("A", "B", "_cache")

@@ -6,7 +6,7 @@ from scipy.spatial.transform import Rotation
 
 from replication import so3
 from replication.motions import Motions
-from replication.handeye import handeye_cost
+from replication.handeye import handeye_cost, relative_rotations
 from replication.simulation import simulate
 from replication.solvers import AccuracyWarning, _registry, available, register, solve, solver_info
 from replication.testing import assert_rotations_close
@@ -164,3 +164,32 @@ def test_a_core_answer_is_returned_as_floats(bad_core, two_noisy):
     with pytest.warns(AccuracyWarning, match="far from the certified minimiser"):
         R = solve(name, A, B)
     assert R.dtype == float and np.array_equal(R, np.broadcast_to(np.eye(3), (2, 3, 3)))
+
+
+# ------------------------------------------------------------------ the tolerance of the rotation test is checked
+
+@pytest.mark.parametrize("atol, match", [
+    (float("nan"), r"atol must be a finite number, got nan"),
+    (float("inf"), r"atol must be a finite number, got inf"),
+    (-1.0, r"atol must be > 0, got -1.0"),
+    (0.0, r"atol must be > 0, got 0.0"),
+    (0.5, r"atol must be <= 0.01 \(MAX_ROTATION_ATOL.*got 0.5"),
+    ("1e-6", r"atol must be a finite number, got '1e-6'"),
+    (True, r"atol must be a finite number, got True"),
+], ids=["nan", "inf", "negative", "zero", "too-loose", "str", "bool"])
+def test_motions_refuse_a_bad_atol(problem, atol, match):
+    _, A, B = problem
+    with pytest.raises(ValueError, match=match):
+        Motions(2 * A, B, atol=atol)  # a NaN tolerance used to accept these non-rotations
+    with pytest.raises(ValueError, match=match):
+        Motions(A, B, atol=atol)
+    with pytest.raises(ValueError, match=match):
+        relative_rotations(A, atol=atol)
+
+
+@pytest.mark.parametrize("atol", [1e-12, 1e-4, np.float64(1e-2)])
+def test_motions_accept_an_atol_in_range(problem, atol):
+    _, A, B = problem
+    assert Motions(A, B, atol=atol).J == 20
+    with pytest.raises(ValueError, match="not a rotation matrix"):
+        Motions(2 * A, B, atol=atol)
