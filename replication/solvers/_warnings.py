@@ -40,7 +40,8 @@ class LocalMinimumWarning(ReplicationWarning):
 
 
 class AccuracyWarning(ReplicationWarning):
-    """A (non-local) solver's answer is far from the certified minimiser of eq. (8), or is not a rotation.
+    """A (non-local) solver's answer is far from the certified minimiser of eq. (8); or any solver's answer is not a
+    rotation (a reflection, or NaN: a failure the solver declares).
 
     Raised where the answer's cost (8) is more than ``GROSS_FACTOR`` (10) times the certified minimum (plus a
     small absolute tolerance): e.g. Park & Martin, Horaud & Dornaika or Tsai & Lenz when a motion of (nearly)
