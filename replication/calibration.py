@@ -22,20 +22,15 @@ Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pi
 """
 from __future__ import annotations
 
-import math
-import warnings
-
 import numpy as np
 
 from .association import estimate_time_offset, motion_pairs, stream_pairs  # re-exported: public names here
-from .handeye import pair_residual_deg, relative_rotations
 from .checks import check_number
-from .motions import prepare_motions
-from .quality import Evidence, judge
+from .estimate import check_common, check_options, solve_pairs, with_reasons
+from .handeye import relative_rotations
+from .poses import calibrate_poses, pose_pairs  # re-exported: public names here
 from .report import CalibrationResult  # re-exported: a public name here
-from .so3 import (angle_between_deg, as_quaternion, check_rotation_matrices, log_map, rotation_angle_deg,
-                  yaw_pitch_roll_deg)
-from .solvers import ReplicationWarning, solve, solver_info
+from .so3 import rotation_angle_deg
 from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
 
 __all__ = [
@@ -48,20 +43,6 @@ __all__ = [
 GAP_FACTOR = 5.0
 #: Resolution of the clock-offset search (s), as :func:`replication.association.estimate_time_offset` uses.
 OFFSET_RESOLUTION = 0.5e-3
-
-
-def _check_common(method, n_bootstrap, seed, reference):
-    solver_info(method)  # an unknown name fails before any work, listing the available ones
-    check_number("n_bootstrap", n_bootstrap, minimum=0, integer=True, strict=False)
-    check_number("seed", seed, minimum=0, integer=True, strict=False)
-    if reference is None:
-        return None
-    ref = np.asarray(reference, dtype=float)
-    if ref.shape == (4, 4):
-        raise ValueError("reference is a 4x4 transform; pass its rotation block (the upper-left 3x3 camera_from_sensor)")
-    if ref.shape != (3, 3):
-        raise ValueError(f"reference must be a 3x3 rotation (camera_from_sensor), got shape {ref.shape}")
-    return check_rotation_matrices(ref, "reference", atol=1e-5)
 
 
 def _gaps(t) -> np.ndarray:
@@ -132,24 +113,6 @@ def _same_stream(camera, sensor) -> bool:
     """Whether the 'sensor' is the camera stream itself (same times, same orientations)."""
     return (isinstance(sensor, OrientationStream) and len(sensor.t) == len(camera.t)
             and np.array_equal(sensor.t, camera.t) and np.array_equal(sensor.world_from_body, camera.world_from_body))
-
-
-def _check_options(method, options):
-    """Refuse solver options the solver does not take (or values it refuses), before any work: the solver is
-    called once with them on a tiny exact problem."""
-    if not options:
-        return
-    from .so3 import exp_map
-
-    A = exp_map(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            solver_info(method).core(prepare_motions(A, A), **options)
-        except TypeError as err:
-            raise ValueError(f"solver {method!r} does not take the option(s) {sorted(options)}: {err}") from None
-        except ValueError as err:
-            raise ValueError(f"solver {method!r} refuses the option(s) {sorted(options)}: {err}") from None
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
@@ -224,8 +187,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         A bad parameter (named), streams of the wrong type, or streams that do not overlap (with the likely
         time-unit mistake when their spans show one).
     """
-    reference = _check_common(method, n_bootstrap, seed, reference)
-    _check_options(method, options)
+    reference = check_common(method, n_bootstrap, seed, reference)
+    check_options(method, options)
     check_number("interval", interval, minimum=0)
     check_number("stride", stride, minimum=1, integer=True, strict=False)
     check_number("max_offset", max_offset, minimum=0)
@@ -260,176 +223,20 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     evidence = dict(offset_s=offset, offset_correlation=corr, max_offset_s=max_offset, offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
                     pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
-    result = _solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
+    result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,
                           pair_times=t_start, progress=progress)
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]))
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
-        result = _with_reasons(result, [unit])
+        result = with_reasons(result, [unit])
     if diagnose and result.verdict.level != "ok":
         from .diagnose import input_mistakes
 
-        found = input_mistakes(camera, sensor, result, interval=interval, max_offset=max_offset)
+        found = input_mistakes(camera, sensor, base_residual_deg=result.residual_deg["median"],
+                               motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
+                               max_offset=max_offset, calibrate=calibrate, reference=reference)
         if found:
-            result = _with_reasons(result, found)
+            result = with_reasons(result, found)
     return result
-
-
-def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
-                    pairs: str = "all", min_motion_deg: float = 2.0, n_bootstrap: int = 200, seed: int = 0,
-                    reference=None, diagnose: bool = True, progress: bool = False, **options) -> CalibrationResult:
-    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with a verdict.
-
-    Parameters
-    ----------
-    camera_attitudes : array_like (N, 3, 3)
-        ``camera_from_world`` (e.g. ``R_target2cam``: chessboard = world).
-    sensor_attitudes : array_like (N, 3, 3)
-        ``sensor_from_world`` (e.g. a robot's ``base -> hand`` rotation: base = world).
-    pairs : {"all", "consecutive"}
-        ``"all"``: every ``(i, j)``, ``i < j``, with ``A = C_j C_i^T``, ``B = S_j S_i^T``
-        (eqs. (3)-(4)); ``"consecutive"``: ``(i, i + 1)`` only (the OpenCV wrappers rebuild the
-        pose chain from these and form all pairs themselves).
-    min_motion_deg : float
-        Drop pairs whose sensor rotation is smaller than this.
-    n_bootstrap, seed, reference, progress, **options
-        As in :func:`calibrate`. The bootstrap resamples pairs one by one; pairs that share a
-        pose are correlated, so its radius understates the uncertainty.
-    diagnose : bool
-        Also calibrate with either pose set inverted, and fail naming the pose direction when one of them fits
-        clearly better (:func:`replication.diagnose.pose_direction`). Both sets inverted is a consistent problem
-        for another unknown: only a reference reveals it.
-    """
-    reference = _check_common(method, n_bootstrap, seed, reference)
-    _check_options(method, options)
-    check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
-    C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
-    S = check_rotation_matrices(sensor_attitudes, "sensor_attitudes", atol=1e-5)
-    if C.shape != S.shape or C.ndim != 3:
-        raise ValueError(f"need two (N, 3, 3) arrays of the same N, got {C.shape} and {S.shape}")
-    A, B = pose_pairs(C, S, pairs=pairs, min_motion_deg=min_motion_deg)
-    parameters = {"method": method, "pairs": pairs, "min_motion_deg": min_motion_deg, "n_bootstrap": n_bootstrap,
-                  "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
-    inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
-              "sensor": {"kind": "static poses", "samples": int(len(S))}, "reference_camera_from_sensor": reference}
-    if len(A) < 2:
-        raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
-                         f"lower it or give poses that differ more")
-    result = _solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
-                          evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress)
-    if diagnose:
-        from .diagnose import pose_direction
-
-        found = pose_direction(C, S, result, pairs=pairs, min_motion_deg=min_motion_deg)
-        if found:
-            result = _with_reasons(result, found)
-    return result
-
-
-def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0):
-    """Relative rotations from static attitudes (see :func:`calibrate_poses`); returns ``(A, B)``."""
-    if pairs == "all":
-        i, j = np.triu_indices(len(C), k=1)
-    elif pairs == "consecutive":
-        i, j = np.arange(len(C) - 1), np.arange(1, len(C))
-    else:
-        raise ValueError(f"pairs must be 'all' or 'consecutive', got {pairs!r}")
-    A = relative_rotations(C, pairs=(i, j), atol=1e-5)  # eq. (3)
-    B = relative_rotations(S, pairs=(i, j), atol=1e-5)  # eq. (4)
-    if pairs == "all":
-        keep = rotation_angle_deg(B) > min_motion_deg
-        A, B = A[keep], B[keep]
-    return A, B
-
-
-def _bootstrap(motions, method, options, *, block, n_bootstrap, seed, progress):
-    """Moving-block bootstrap estimates, in chunks (a progress bar over them if asked)."""
-    rng = np.random.default_rng(seed)
-    J = motions.J
-    block = int(min(J, block))
-    starts = rng.integers(0, J - block + 1, size=(n_bootstrap, -(-J // block)))
-    idx = (starts[..., None] + np.arange(block)).reshape(n_bootstrap, -1)[:, :J]
-    core = solver_info(method).core
-    chunks = np.array_split(np.arange(n_bootstrap), min(n_bootstrap, 10)) if progress else [np.arange(n_bootstrap)]
-    out = []
-    with warnings.catch_warnings():
-        # the resampled pairs were validated: call the solver's core; the replicates' own warnings would repeat
-        # the main solve's
-        warnings.simplefilter("ignore", ReplicationWarning)
-        if progress:
-            from tqdm import tqdm
-
-            chunks = tqdm(chunks, desc=f"bootstrap ({method})", unit="chunk", file=__import__("sys").stderr)
-        for chunk in chunks:
-            out.append(core(motions.subset(idx[chunk]), **options))
-    return np.concatenate(out)
-
-
-def _solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
-                 parameters, inputs, pair_times, progress):
-    """Solve, residuals, bootstrap, verdict; the common end of :func:`calibrate` and :func:`calibrate_poses`."""
-    motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ReplicationWarning)
-        sol = solve(method, motions, full_output=True, **options)
-    ours = [w for w in caught if issubclass(w.category, ReplicationWarning)]
-    for w in caught:  # still said to the caller, as solve() says it
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    R = sol.R
-    res = pair_residual_deg(R, A, B)
-    J = len(A)
-    blocks = J / int(min(J, block))
-    ci, boot = float("nan"), np.empty((0, 3))
-    boot_failed = None
-    if n_bootstrap and blocks >= 3:
-        try:
-            R_boot = _bootstrap(motions, method, options, block=block, n_bootstrap=n_bootstrap, seed=seed,
-                                progress=progress)
-        except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
-            boot_failed = str(err).split(":")[0]
-        else:
-            ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
-            boot = np.degrees(log_map(R_boot @ R.T))
-    motion = float(np.median(rotation_angle_deg(A)))
-    verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
-                             bootstrap_deg=ci if math.isfinite(ci) else None,
-                             axis_spread_deg=float(sol.observability.camera_axis_spread_deg),
-                             warnings=tuple(w.category.__name__ for w in ours),
-                             blocks=blocks if n_bootstrap else None, bootstrap_failed=boot_failed,
-                             reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
-                             **evidence))
-    offset, corr, applied = time_offset
-    return CalibrationResult(
-        R=R,
-        quaternion_wxyz=as_quaternion(R),
-        euler_zyx_deg=yaw_pitch_roll_deg(R),
-        method=method,
-        interval_s=interval,
-        n_pairs=int(J),
-        time_offset_s=offset,
-        time_offset_correlation=corr,
-        time_offset_applied=applied,
-        residual_deg={"mean": float(res.mean()), "median": float(np.median(res)),
-                      "rms": float(np.sqrt(np.mean(res ** 2))), "p95": float(np.percentile(res, 95)),
-                      "max": float(res.max())},
-        bootstrap_ci95_deg=ci,
-        observability=sol.observability,
-        reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
-        verdict=verdict,
-        warnings=tuple(f"{w.category.__name__}: {w.message}" for w in ours),
-        parameters=parameters,
-        inputs=inputs,
-        diagnostics={"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
-                     "motion_median_deg": motion},
-    )
-
-
-def _with_reasons(result: CalibrationResult, reasons) -> CalibrationResult:
-    import dataclasses
-
-    from .quality import Verdict
-
-    return dataclasses.replace(result, verdict=Verdict.of((*result.verdict.reasons, *reasons)))

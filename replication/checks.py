@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 __all__ = ["ROTATION_ATOL", "MAX_ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init",
+           "check_range",
            "check_atol", "check_number"]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
@@ -160,3 +161,12 @@ def check_number(name: str, value, *, minimum=None, integer: bool = False, stric
         raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {value!r}")
     return value
 
+
+def check_range(name: str, value, *, low: float, high: float, low_open: bool = True, high_open: bool = False) -> float:
+    """``float(value)``, or ``ValueError`` naming ``name`` unless it is a finite number in the interval from ``low`` to
+    ``high`` (open or closed at each end as asked). Booleans are refused."""
+    check_number(name, value)
+    if (value <= low if low_open else value < low) or (value >= high if high_open else value > high):
+        raise ValueError(f"{name} must be in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}, "
+                         f"got {value!r}")
+    return float(value)

@@ -33,6 +33,15 @@ bootstrap 95 % radius       > 1 deg          > 5 deg          real recordings: 0
                                                               failures: 24-171 deg
 camera axis spread          < 1 deg          --               motions nearly about one axis leave the rotation about
                                                               it poorly determined (``ObservabilityWarning``)
+excitation (online)         < 1 deg          --               the RMS rotation about axes perpendicular to the least-
+                                                              excited direction (:mod:`replication.online`): the
+                                                              motion so far does not determine R0
+outlying station (pose      > 3 x the        --               a station whose pairs all fit badly holds a bad
+sets): median residual of   stations'                         measurement (a chessboard detection, a robot pose);
+its pairs                   median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x
+median motion per pair      < 1 deg          < 0.5 deg        a rig at rest, or an interval too short, leaves pairs of
+                                                              noise (real recordings: 1.75 deg on EuRoC at 0.25 s,
+                                                              3.9-52 deg at 1 s, 12.7 deg between Tabb's stations)
 solver warnings             any other        ``Local-         a local solver away from the certified optimum of
                             ``Replication-   MinimumWarning``, eq. (8), or a closed form off by a half-turn, is a wrong
                             Warning``        ``Accuracy-      answer, whatever the other checks say
@@ -56,6 +65,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 __all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS"]
 
 #: Verdict levels, best first.
@@ -73,6 +84,9 @@ THRESHOLDS = {
     "residual_median_deg": (2.0, 10.0),        # above
     "bootstrap_deg": (1.0, 5.0),               # above
     "axis_spread_deg": (1.0, None),            # below
+    "excitation_deg": (1.0, None),             # below (online: the motion so far does not determine R0)
+    "motion_median_deg": (1.0, 0.5),           # below
+    "pose_residual_ratio": (3.0, None),        # above: a station's median residual / the stations' median
     "gap_share_dropped": (0.0, 0.5),           # above
     "gyro_rate_hz": (50.0, None),              # below
     "gyro_samples_per_interval": (None, 5.0),  # below
@@ -124,10 +138,10 @@ class Evidence:
     """What a calibration measured about itself (``None`` where it does not apply, e.g. static poses)."""
 
     n_pairs: int
-    residual_median_deg: float
-    motion_median_deg: float
+    residual_median_deg: float | None
+    motion_median_deg: float | None
     bootstrap_deg: float | None
-    axis_spread_deg: float
+    axis_spread_deg: float | None = None
     warnings: tuple = ()
     offset_s: float | None = None
     offset_correlation: float | None = None
@@ -142,6 +156,10 @@ class Evidence:
     reference_error_deg: float | None = None
     bootstrap_failed: str | None = None
     offset_applied: bool = True
+    radius_kind: str = "bootstrap"          # what the radius is: "bootstrap" (batch) or "curvature" (online)
+    excitation_deg: float | None = None     # online: RMS rotation about axes perpendicular to the least-excited one
+    repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
+    pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
 
 
 def _above(check, value, name, unit, why):
@@ -162,6 +180,25 @@ def _below(check, value, name, unit, why):
         if bound is not None and value < bound:
             return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
     return None
+
+
+def _outlying_poses(medians):
+    """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
+    factor = THRESHOLDS["pose_residual_ratio"][0]
+    base = float(np.nanmedian(medians))
+    if not base > 0:
+        return None
+    ratio = medians / base
+    bad = np.flatnonzero(ratio > factor)
+    if not len(bad):
+        return None
+    bad = bad[np.argsort(-ratio[bad])]
+    named = ", ".join(f"{int(k)} ({medians[k]:.3g} deg)" for k in bad[:5]) + (f" and {len(bad) - 5} more"
+                                                                                if len(bad) > 5 else "")
+    return Reason("pose_outliers", "warning", float(ratio[bad[0]]), factor,
+                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): {named} > "
+                  f"{factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: a bad measurement "
+                  f"at that station (a target detection, a robot pose); its pairs pull R0")
 
 
 def judge(e: Evidence, extra=()) -> Verdict:
@@ -194,20 +231,29 @@ def judge(e: Evidence, extra=()) -> Verdict:
     if e.overlap_s is not None and e.interval_s:
         reasons.append(_below("overlap_intervals", e.overlap_s / e.interval_s, "overlap of the streams in pairing "
                               "intervals", "", f"the streams overlap {e.overlap_s:.1f} s only"))
-    if e.motion_median_deg > 0:
+    reasons.append(_below("motion_median_deg", e.motion_median_deg, "median motion per pair", " deg",
+                          "the rig barely moves over a pairing interval (at rest, or an interval too short): the "
+                          "pairs carry noise, not motion"))
+    if e.motion_median_deg is not None and e.residual_median_deg is not None and e.motion_median_deg > 0:
         reasons.append(_above("residual_to_motion", e.residual_median_deg / e.motion_median_deg,
                               "median pair residual / median motion", "",
                               "R0 does not map one stream's motions onto the other's"))
     reasons.append(_above("residual_median_deg", e.residual_median_deg, "median pair residual", " deg",
                           "far above what stream noise leaves with the right R0"))
-    reasons.append(_above("bootstrap_deg", e.bootstrap_deg, "bootstrap 95 % radius", " deg",
-                          "the pairs disagree on R0"))
+    radius = "bootstrap 95 % radius" if e.radius_kind == "bootstrap" else "95 % radius (curvature of eq. (8))"
+    reasons.append(_above("bootstrap_deg", e.bootstrap_deg, radius, " deg", "the pairs disagree on R0"))
     reasons.append(_below("axis_spread_deg", e.axis_spread_deg, "camera axis spread", " deg",
                           "nearly single-axis motion: the rotation about that axis is poorly determined"))
+    reasons.append(_below("excitation_deg", e.excitation_deg, "RMS rotation about the least-excited axes", " deg",
+                          "the motion so far does not determine R0 (rotate about other axes)"))
+    if e.repeated_pairs:
+        reasons.append(Reason("repeated_pairs", "warning", float(e.repeated_pairs), 0.0,
+                              f"{e.repeated_pairs} pairs repeated earlier ones (a stalled stream, or data fed twice) "
+                              f"and were not counted"))
     for name in sorted(set(e.warnings)):
         level = "fail" if name in _FAIL_WARNINGS else "warning"
         if name == "ObservabilityWarning":
-            if e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
+            if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
                 continue  # the axis spread above says it, with its number
             reasons.append(Reason("observability", "warning", None, None,
                                   "the solver issued ObservabilityWarning: another rotation fits eq. (8) almost as "
@@ -215,6 +261,8 @@ def judge(e: Evidence, extra=()) -> Verdict:
             continue
         reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
+    if e.pose_residual_medians_deg is not None:
+        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
     if e.pairs_dropped_at_gaps:
         share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)
         reasons.append(_above("gap_share_dropped", share, "share of pairs dropped across stream gaps", "",

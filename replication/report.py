@@ -15,11 +15,26 @@ import numpy as np
 from .motions import MotionObservability
 from .quality import Verdict
 
-__all__ = ["CalibrationResult", "OFFSET_CONVENTION", "json_safe"]
+__all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]
 
 #: The sign convention of the clock offset, in words (stored in every report).
 OFFSET_CONVENTION = ("time_offset_s = d means the sensor sample stamped t + d matches the camera sample stamped t "
-                     "(the sensor clock runs d ahead); the pairs use sensor times t + d when the offset is applied")
+                     "(d > 0: the sensor clock runs d ahead of the camera's; d < 0: behind by |d|); Kalibr's "
+                     "timeshift_cam_imu (t_imu = t_cam + shift) is d; the pairs use sensor times t + d when the offset "
+                     "is applied")
+#: What every radius of this package covers, and what it does not (stated in reports, summaries and figures).
+RADIUS_COVERS = ("the pairs' own noise only (their scatter about the estimate); errors every pair shares (a "
+                 "trajectory's bias, a clock or scale error, the reference's own error) are not in it")
+
+
+def offset_in_words(offset_s: float) -> str:
+    """The clock offset with its sign in words (see :data:`OFFSET_CONVENTION`)."""
+    ms = 1e3 * offset_s
+    if ms == 0.0:
+        return "+0.0 ms: the clocks agree (the sensor sample stamped t matches the camera sample stamped t)"
+    side = "ahead of" if ms > 0 else "behind"
+    return (f"{ms:+.1f} ms: the sensor sample stamped t {'+' if ms > 0 else '-'} {abs(ms):.1f} ms matches the camera "
+            f"sample stamped t (sensor clock {side} the camera's by {abs(ms):.1f} ms; Kalibr's timeshift_cam_imu)")
 
 
 def json_safe(value):
@@ -67,6 +82,14 @@ class CalibrationResult:
     observability : MotionObservability
     reference_error_deg : float or None
         Angle to a reference rotation, when one was given.
+    bootstrap_resamples : str
+        What the bootstrap resampled ("pairs in moving blocks of N", "stations", or "none").
+    bootstrap_covers : str
+        What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
+    pose_residual_median_deg : list of float or None
+        Static pose sets: each station's median pair residual (0-based station order).
+    online : dict or None
+        ``calibrate --online``: what the online replay found (:meth:`replication.live.LiveRig.summary`).
     verdict : Verdict
         ``ok`` / ``warning`` / ``fail`` and every reason with its measured number and threshold
         (:mod:`replication.quality`).
@@ -95,6 +118,10 @@ class CalibrationResult:
     bootstrap_ci95_deg: float
     observability: MotionObservability = field(repr=False)
     reference_error_deg: float | None = None
+    bootstrap_resamples: str = "none"
+    bootstrap_covers: str = RADIUS_COVERS
+    pose_residual_median_deg: list | None = None
+    online: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
     warnings: tuple = ()
     parameters: dict = field(default_factory=dict)
@@ -127,6 +154,10 @@ class CalibrationResult:
             "time_offset_convention": OFFSET_CONVENTION,
             "residual_deg": self.residual_deg,
             "bootstrap_ci95_deg": self.bootstrap_ci95_deg,
+            "bootstrap_resamples": self.bootstrap_resamples,
+            "bootstrap_covers": self.bootstrap_covers,
+            "pose_residual_median_deg": self.pose_residual_median_deg,
+            "online": self.online,
             "observability": {
                 "spectral_ratio": float(obs.spectral_ratio),
                 "camera_axis_spread_deg": float(obs.camera_axis_spread_deg),
@@ -150,13 +181,12 @@ class CalibrationResult:
             f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
         ]
         if math.isfinite(self.time_offset_correlation):
-            lines.append(f"time offset: {1e3 * self.time_offset_s:+.1f} ms, sensor clock ahead of the camera's "
-                         f"(correlation {self.time_offset_correlation:.4f}, "
-                         f"{'applied' if self.time_offset_applied else 'not applied'})")
+            lines.append(f"time offset: {offset_in_words(self.time_offset_s)} (correlation "
+                         f"{self.time_offset_correlation:.4f}, {'applied' if self.time_offset_applied else 'not applied'})")
         lines += [
             f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
-            f"bootstrap 95% radius: {boot}; axis spread camera "
-            f"{float(self.observability.camera_axis_spread_deg):.1f} deg",
+            f"bootstrap 95% radius: {boot} (resampling {self.bootstrap_resamples}); it covers {self.bootstrap_covers}",
+            f"axis spread camera {float(self.observability.camera_axis_spread_deg):.1f} deg",
         ]
         if self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")

@@ -4,9 +4,14 @@ Every interval takes an explicit :class:`numpy.random.Generator`, so a notebook'
 """
 from __future__ import annotations
 
+import functools
+import math
+import statistics
+
 import numpy as np
 
-__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket"]
+__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket", "wilson_interval",
+           "poisson_upper", "radius_deg"]
 
 
 def mean_se(x, axis=0):
@@ -89,3 +94,57 @@ def share_range(p, step: float = 0.05) -> str:
     k = int(np.floor(p / step + 1e-9))
     low, high = k * step, min((k + 1) * step, 1.0)
     return f"{100 * low:.0f}-{100 * high:.0f} %"
+
+
+def wilson_interval(k, n, level: float = 0.95):
+    """Wilson score interval ``(low, high)`` of a share ``k / n`` (counts of independent runs).
+
+    Unlike ``k / n +- z SE`` it stays inside [0, 1] and is not empty at ``k = 0`` or ``k = n``.
+    """
+    import statistics
+
+    k, n = int(k), int(n)
+    if n < 1 or not 0 <= k <= n:
+        raise ValueError(f"need 0 <= k <= n and n >= 1, got k={k}, n={n}")
+    if not 0 < level < 1:
+        raise ValueError(f"level must be in (0, 1), got {level}")
+    z = statistics.NormalDist().inv_cdf(0.5 + level / 2)
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def poisson_upper(k, exposure: float, level: float = 0.95) -> float:
+    """One-sided upper ``level`` bound on a rate from ``k`` events in ``exposure`` (exact: ``chi^2_{2(k+1)}``
+    quantile / 2; for ``k = 0`` at 95 % it is ``3.0 / exposure``)."""
+    from scipy.stats import chi2
+
+    k = int(k)
+    if k < 0 or not exposure > 0:
+        raise ValueError(f"need k >= 0 and a positive exposure, got k={k}, exposure={exposure}")
+    return float(chi2.ppf(level, 2 * (k + 1)) / 2.0 / exposure)
+
+
+def radius_deg(cov, level: float = 0.95) -> float:
+    """The ``level`` quantile of ``|w|`` (degrees) for ``w ~ N(0, cov)`` (radians).
+
+    ``|w|^2`` is a weighted sum of chi-square variables; Welch-Satterthwaite matches it with ``a chi^2_nu``
+    (``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the eigenvalues ``l`` of ``cov``), whose quantile
+    comes from the Wilson-Hilferty cube-root normal approximation (within 1 % for ``nu >= 1``).
+    """
+    lam = np.clip(np.linalg.eigvalsh(cov), 0.0, None)
+    total, squares = float(lam.sum()), float((lam ** 2).sum())
+    if not math.isfinite(total) or not math.isfinite(squares):
+        return math.inf
+    if not total > 0:
+        return 0.0
+    a, nu = squares / total, total ** 2 / squares
+    z = _normal_quantile(level)
+    q = nu * (1.0 - 2.0 / (9.0 * nu) + z * math.sqrt(2.0 / (9.0 * nu))) ** 3  # chi^2_nu quantile
+    return math.degrees(math.sqrt(a * q))
+
+
+@functools.lru_cache(maxsize=8)
+def _normal_quantile(level: float) -> float:
+    return statistics.NormalDist().inv_cdf(level)

@@ -420,12 +420,12 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
     camera, gyro, _ = rig
-    import replication.calibration as cal
+    import replication.estimate as est
 
     def refuse(*a, **k):
         raise ValueError("degenerate motion: a resample")
 
-    monkeypatch.setattr(cal, "_bootstrap", refuse)
+    monkeypatch.setattr(est, "_replicates", refuse)
     r = calibrate(camera, gyro, n_bootstrap=20)
     assert math.isnan(r.bootstrap_ci95_deg) and "degenerate motion" in _reasons(r)["bootstrap_failed"].message
 

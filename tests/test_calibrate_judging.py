@@ -1,0 +1,169 @@
+"""The batch verdict's new words: pose sets judged by station (bootstrap over stations, per-station residuals, an
+outlying station named), every radius saying what it covers, the offset's sign in words, ties among input mistakes
+named together in a fixed order, and each new threshold at its boundary."""
+import dataclasses
+import json
+
+import jsonschema
+import numpy as np
+import pytest
+
+from replication import so3
+from replication.calibration import calibrate, calibrate_poses
+from replication.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
+from replication.quality import THRESHOLDS, Evidence, judge
+from replication.report import RADIUS_COVERS, offset_in_words
+from replication.simulation import rig_streams
+
+SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
+                     / "calibration_report.schema.json").read_text())
+
+
+def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
+    """Static stations of a robot and a camera rigidly linked by R0 (``C_k = R0 S_k``, both ``body_from_world``), each
+    station's two attitudes with independent noise (``bad``: one station's camera attitude turned by ``bad_deg``)."""
+    R0 = so3.random_rotations(rng, ())
+    W = so3.random_rotations(rng, ())  # the target's frame in the robot base's
+    S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
+    C = R0 @ S @ W
+    sd = np.radians(station_noise_deg) / np.sqrt(3)
+    C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ C
+    S = so3.exp_map(rng.normal(0, sd, (N, 3))) @ S
+    if bad is not None:
+        C[bad] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
+    return R0, C, S
+
+
+def _reasons(result):
+    return {r.check: r for r in result.verdict.reasons}
+
+
+def test_pose_sets_resample_stations_not_pairs(rng):
+    R0, C, S = _stations(rng)
+    r = calibrate_poses(C, S, n_bootstrap=100, seed=1)
+    assert r.bootstrap_resamples == "stations"
+    pairs = calibrate_poses(C, S, n_bootstrap=100, seed=1, pairs="consecutive")
+    assert pairs.bootstrap_resamples == "pairs in moving blocks of 2"
+    # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations' information
+    import replication.estimate as est
+
+    J = r.n_pairs
+    by_pairs = est.block_indices(np.random.default_rng(1), J, 1, 100)
+    motions = __import__("replication.motions", fromlist=["prepare_motions"]).prepare_motions(
+        *__import__("replication.poses", fromlist=["pose_pairs"]).pose_pairs(C, S))
+    R_boot = est._replicates(motions, "chordal_optimal", {}, by_pairs, progress=False)
+    naive = float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95))
+    assert r.bootstrap_ci95_deg > 2.5 * naive
+
+
+def test_station_bootstrap_covers_the_error_about_95_percent(rng):
+    """40 problems: the error within the station radius in most (the 95 % level, 40 draws: at least 32)."""
+    hits = 0
+    for _ in range(40):
+        R0, C, S = _stations(rng, N=20)
+        r = calibrate_poses(C, S, n_bootstrap=100, seed=2)
+        hits += float(so3.angle_between_deg(r.R, R0)) <= r.bootstrap_ci95_deg
+    assert hits >= 32, hits
+
+
+def test_an_outlying_station_is_named_with_its_index(rng):
+    R0, C, S = _stations(rng, bad=7)
+    r = calibrate_poses(C, S, n_bootstrap=0)
+    reason = _reasons(r)["pose_outliers"]
+    assert reason.level == "warning" and "7 (" in reason.message and reason.threshold == THRESHOLDS[
+        "pose_residual_ratio"][0]
+    assert len(r.pose_residual_median_deg) == 30 and int(np.argmax(r.pose_residual_median_deg)) == 7
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["pose_residual_median_deg"][7] == pytest.approx(max(report["pose_residual_median_deg"]))
+    clean = calibrate_poses(*_stations(rng)[1:], n_bootstrap=0)
+    assert "pose_outliers" not in _reasons(clean)
+
+
+@pytest.mark.parametrize("ratio, flagged", [(2.99, False), (3.01, True)])
+def test_outlying_station_threshold_boundary(ratio, flagged):
+    medians = np.full(20, 0.4)
+    medians[3] = ratio * 0.4
+    e = Evidence(n_pairs=190, residual_median_deg=0.4, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0, pose_residual_medians_deg=tuple(medians))
+    assert ("pose_outliers" in {r.check for r in judge(e).reasons}) is flagged
+
+
+@pytest.mark.parametrize("motion, level", [(1.01, None), (0.99, "warning"), (0.51, "warning"), (0.49, "fail")])
+def test_motion_median_threshold_boundaries(motion, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.001, motion_median_deg=motion, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0)
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("motion_median_deg") == level
+
+
+@pytest.mark.parametrize("excitation, level", [(1.01, None), (0.99, "warning")])
+def test_excitation_threshold_boundary(excitation, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 excitation_deg=excitation, radius_kind="curvature")
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("excitation_deg") == level
+
+
+def test_every_radius_says_what_it_covers(rng):
+    R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.05)
+    r = calibrate(camera, gyro, n_bootstrap=30)
+    assert RADIUS_COVERS in r.summary() and r.bootstrap_covers == RADIUS_COVERS
+    assert r.bootstrap_resamples.startswith("pairs in moving blocks of")
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["bootstrap_covers"] == RADIUS_COVERS and "not in it" in report["bootstrap_covers"]
+
+
+@pytest.mark.parametrize("offset, words", [
+    (0.0123, "+12.3 ms: the sensor sample stamped t + 12.3 ms matches the camera sample stamped t (sensor clock ahead "
+             "of the camera's by 12.3 ms; Kalibr's timeshift_cam_imu)"),
+    (-0.0123, "-12.3 ms: the sensor sample stamped t - 12.3 ms matches the camera sample stamped t (sensor clock "
+              "behind the camera's by 12.3 ms; Kalibr's timeshift_cam_imu)"),
+    (0.0, "+0.0 ms: the clocks agree (the sensor sample stamped t matches the camera sample stamped t)"),
+])
+def test_the_offset_sign_in_words(offset, words):
+    assert offset_in_words(offset) == words
+
+
+def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
+    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever is smaller."""
+    R = np.eye(3)
+    a, b = (0, 0.2 + 1e-15, "first", R, 0.9), (3, 0.2, "second", R, 0.9)
+    one = _one_finding([a, b], 1.0, lambda f: f[2], None)[1]
+    two = _one_finding([b, a], 1.0, lambda f: f[2], None)[1]
+    flipped = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 + 1e-15, "second", R, 0.9)], 1.0, lambda f: f[2],
+                           None)[1]
+    assert one == two and "first, or second: the data cannot tell which; a reference can" in one
+    assert flipped.split(";")[0] == one.split(";")[0]
+    outside = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 * TIE_SHARE * 1.01, "second", R, 0.9)], 1.0,
+                           lambda f: f[2], None)[1]
+    assert "second" not in outside
+
+
+def test_a_reference_tells_tied_hypotheses_apart():
+    R_right = so3.exp_map(np.radians([10.0, 0.0, 0.0]))
+    fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
+    message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
+    assert message.startswith("likely input mistake: second; the reference tells them apart")
+
+
+def test_hypotheses_are_listed_once_each():
+    assert len(set(HYPOTHESES)) == len(HYPOTHESES)
+
+
+def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
+    R0, C, S = _stations(rng)
+    r = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0)
+    message = _reasons(r)["input_mistake"].message
+    assert "camera poses inverted" in message
+    if "robot poses inverted" in message:  # both fit equally: named together, camera first, and the reference decides
+        assert message.index("camera poses") < message.index("robot poses")
+        decided = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0, reference=R0)
+        assert "robot poses inverted" not in _reasons(decided)["input_mistake"].message.split(";")[0]
+
+
+def test_judge_tolerates_missing_residuals():
+    e = dataclasses.replace(Evidence(n_pairs=12, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None),
+                            radius_kind="curvature")
+    assert judge(e).level in ("ok", "warning")
