@@ -146,22 +146,39 @@ def _unit(args, side: str) -> str:
     return "auto" if args.time_unit is None or csv else args.time_unit
 
 
-def _online(args, camera, sensor, reference, track) -> None:
-    """Replay the streams through the online estimator; print when it was ready and its alarms; write the track."""
+def _online(args, camera, sensor, reference, result):
+    """Replay the streams through the online estimator with the batch options (interval, stride, clock offset
+    search and whether to apply it); print what it found; return the result with the online summary and track."""
+    import dataclasses
+
     from .live import replay
     from .online import OnlineCalibrator
 
     rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
+                  max_offset=args.max_offset, correct_offset=not args.keep_clock, stride=args.stride,
                   reference=reference)
-    ready = rows[rows["ready"]]
-    t0 = camera.t[0]
-    print(f"online: {len(rows)} pairs at {args.interval:g} s, clock offset {1e3 * rows.attrs['offset_s']:+.1f} ms; "
-          + (f"ready (95 % radius < {args.target:g} deg) after {ready['t'].iloc[0] - t0:.1f} s"
-             if len(ready) else f"never ready (final radius {rows['radius_deg'].iloc[-1]:.3g} deg)")
-          + f"; re-mount alarms at {[round(t - t0, 1) for t in rows.loc[rows['alarm'], 't']]} s")
-    if track is not None:
-        write_atomic(track, rows.to_csv(index=False))
-        print(f"online track written to {track}")
+    summary = rows.attrs["summary"]
+    offset = summary["clock_offset_s"]
+    head = (f"online: {len(rows)} pairs at {args.interval:g} s"
+            + (f", clock offset {1e3 * offset:+.1f} ms" if offset is not None else "")
+            + f"; verdict {summary['verdict']['level'].upper()}")
+    if not len(rows):
+        print(f"{head}; no pairs were formed" + (f" ({summary['note']})" if summary["note"] else
+                                                   " (the streams overlap too little for one pair)"))
+    elif summary["ready_at_s"] is not None:
+        print(f"{head}; ready ({100 * summary['radius_level']:g} % radius < {args.target:g} deg) when the pair ending "
+              f"at {summary['ready_pair_end_s']:.1f} s was formed, {summary['ready_at_s']:.1f} s after the camera's "
+              f"first sample; final radius {summary['radius_deg']:.3g} deg")
+    else:
+        print(f"{head}; never ready: " + "; ".join(summary["not_ready"]))
+    for line in summary["verdict"]["reasons"]:
+        if line["level"] == "fail":
+            print(f"  online fail: {line['message']}")
+    print("  events: " + ("none" if not summary["events"] else ", ".join(
+        f"{ev['kind']} at {ev['t_s']:.1f} s" for ev in summary["events"])))
+    print(f"  the online radius covers {summary['radius_covers']}")
+    diagnostics = {**result.diagnostics, "online_track": rows}
+    return dataclasses.replace(result, online=summary, diagnostics=diagnostics), rows
 
 
 def calibrate_command(args: argparse.Namespace) -> int:
@@ -192,7 +209,10 @@ def calibrate_command(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     print(result.summary())
     if args.online:
-        _online(args, camera, sensor, reference, track)
+        result, rows = _online(args, camera, sensor, reference, result)
+        if track is not None:
+            write_atomic(track, rows.to_csv(index=False))
+            print(f"online track written to {track}")
     if out is not None:
         files = {"camera": _file_entry(args.camera), "sensor": _file_entry(args.sensor)}
         if args.reference:

@@ -1,107 +1,104 @@
-"""Online alignment: the paper's two-step iteration as a live estimator, with a calibrated "ready" signal and
-re-mount detection.
+"""Online alignment: the paper's two-step iteration as a live estimator that says when the motion so far determines
+``R0``, how far off it may be, and what changed when its residuals jump.
 
-The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (14)-(15) in ``vec`` form,
-:func:`replication.handeye.kronecker_operator`), so each new pair costs O(1): :class:`OnlineCalibrator` keeps
+The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (14)-(15) in ``vec`` form), so each
+new pair costs O(1): :class:`OnlineCalibrator` keeps the running sums of ``B_j kron A_j`` and of ``2I - B_j - B_j^T``
+(optionally with exponential forgetting), takes warm-started two-step steps (eqs. (14)-(17)) until the motion
+determines ``R0``, and publishes the minimiser of eq. (8) (Newton from the two-step iterate or the last minimiser,
+:func:`replication.solvers.optimal.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs or every
+tenth of the pairs so far, whichever is more: fed the same pairs, it equals the batch ``chordal_optimal``.
 
-* the running sums of ``B_j kron A_j`` (9x9) and of ``G_j = 2I - B_j - B_j^T`` (3x3), with optional exponential
-  forgetting (weights ``lambda^age``);
-* a warm-started two-step step (eqs. (14)-(17): ``R^r = proj(K vec R^l)``, ``R^l = proj(K^T vec R^r)``) every
-  ``step_every`` pairs, which starts the next refinement, and a warm-started Newton refinement to the minimiser of
-  eq. (8), which is the published estimate
-  (:func:`replication.solvers.optimal.chordal_newton`) at ``min_pairs`` and then every ``refine_every`` pairs or
-  every tenth of the pairs so far, whichever is more (so its cost per pair falls as ``1 / J``), and on demand
-  (:meth:`OnlineCalibrator.estimate`): fed the same pairs, it equals the batch ``chordal_optimal``. Pairs are
-  buffered between steps and added to the sums in one batched product, so a pair costs a validation, the
-  change detector's residual and an append;
-* a 95 % error radius from the local curvature of eq. (8) and a running noise estimate (below), computed at
-  each refinement (about the minimiser), and ``ready`` once the radius is below a target;
-* a CUSUM on the pair residuals that raises an alarm when ``R0`` changes (the sensor was re-mounted), then
-  starts over.
+**When the motion determines R0.** Near the minimiser, perturbing ``R`` to ``R exp([w]x)`` changes pair ``j``'s
+residual rotation vector by about ``(I - B_j^T) w``, so the information about ``w`` is ``G = sum_j w_j (2I - B_j -
+B_j^T)``; for a motion of angle ``theta`` about axis ``n``, ``2I - B - B^T = 4 sin^2(theta / 2) (I - n n^T)``: a
+motion says nothing about rotations about its own axis. The *excitation* is ``sqrt(lambda_min(G) / sum w)`` in
+degrees, the RMS rotation about axes perpendicular to the least-excited direction (its eigenvector, named while it is
+too small). The motion so far *determines* ``R0`` when
 
-**The radius.** Near the minimiser, perturbing ``R`` to ``R exp([w]x)`` changes the residual rotation vector of
-pair ``j`` by about ``(I - B_j^T) w``, so the least-squares estimate's error is ``w = G^{-1} sum_j (I - B_j) r_j``
-with ``G = sum_j (I - B_j)(I - B_j^T) = sum_j (2I - B_j - B_j^T)``. With independent, isotropic pair residuals
-of mean square ``s^2`` (``s^2 / 3`` per axis), ``cov(w) = (s^2 / 3) G^{-1}``. ``s^2`` comes from the cost (8)
-itself: ``||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2) ~ 2 theta_j^2``, so ``s^2 = cost / (2 (J - 3))``, again
-O(1) from the running ``K``. The radius at level ``p`` is the ``p`` quantile of ``|w|`` for that covariance
-(Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` with ``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the
-eigenvalues ``l``). Pairs must not overlap in time (overlapping pairs share their noise; the stream front end,
-:class:`replication.live.LiveRig`, forms pairs that share no pose).
+* the excitation is at least :data:`MIN_EXCITATION_DEG` (single-axis motion, a rig turning at constant speed, or a
+  rig at rest never get there: about the shared axis the data say nothing, whatever they say about the noise), and
+* the effective number of distinct pairs, ``(sum w)^2 / sum w^2`` over the pairs added, is at least ``min_pairs``.
+  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise: a stalled
+  stream re-sending its last pair, a recording fed twice) adds no information and shares the earlier pair's noise: it
+  is counted (:attr:`OnlineCalibrator.duplicates`) and not added. Pairs whose camera and sensor motions are both
+  below :data:`SMALL_MOTION_DEG` are never called repeats (a rig at rest repeats the identity with independent noise).
+
+**The radius.** With independent, isotropic pair residuals of mean square ``s^2`` (``s^2 / 3`` per axis),
+``cov(w) = (s^2 / 3) G^{-1}`` (with forgetting, the weighted form ``G^{-1} G_2 G^{-1}``). ``s^2`` comes from the cost
+(8) itself: ``||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2) ~ 2 theta_j^2``, so ``s^2 = (cost / sum w) n_eff /
+(2 (n_eff - 3))``, and it never goes below :data:`NOISE_FLOOR_DEG` squared: data that fit exactly (noise-free, or
+repeated) cannot claim a radius below what a real sensor's noise allows. The radius at level ``p`` is the ``p``
+quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenvalues of ``cov``). Pairs must not
+overlap in time (:class:`replication.live.LiveRig` forms pairs that share no pose).
+
+**Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
+confirmed, and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and
+thresholds as the batch verdict, :mod:`replication.quality`). :meth:`OnlineCalibrator.status` says which of these
+fails, with its number.
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
-trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error) leaves
-small residuals and a small radius: ``ready`` is then declared while the estimate is farther off than the target.
-Notebook 08 shows this on EuRoC MH01 (its SLAM run against the ground truth); check such a rig against a reference
-or with :func:`replication.calibration.calibrate`'s verdict before trusting ``ready``. Its coverage is measured in ``tests/test_online.py`` and notebook 08.
+trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
+reference's own error) leaves small residuals and a small radius: ``ready`` is then declared while the estimate is
+farther off than the target. Notebook 08 shows this on EuRoC MH01.
 
-**Re-mount detection.** After ``min_pairs`` pairs, each new pair's ``d_j^2 = ||A_j R - R B_j||_F^2`` is compared
-with a reference level ``m``: the mean of the pairs so far at the estimate of that moment (the cost (8) over ``J``),
-then an exponential average of the pairs' ``d_j^2`` (rate ``reference_rate``, each capped at ``cap m``) taken
-while the detector's sum is below ``h / 3``, so that the reference follows a residual level that drifts (faster
-motion, a worse SLAM segment) but not the pairs after a change; it never goes below :data:`D2_FLOOR`: ``S = max(0, S + min(d_j^2 / m, cap) - k)``; an alarm when
-``S > h``. Without a change ``d^2 / m`` is about ``chi^2_3 / 3`` (mean 1); after a re-mount by ``delta`` it jumps to
-about ``(delta / s)^2`` times the motion, for every pair, so the alarm comes within a few pairs; the ``cap``
-keeps a single outlier pair from raising it alone.
+**Changes, confirmed and told apart** (:mod:`replication.online_events`): once the motion determines ``R0``, a CUSUM
+on the pair residuals and a drift test raise alarms; the pairs after an alarm are solved on their own and the event
+is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``.
 
 Notation and frames: ``docs/conventions.md`` (``A`` camera motions, ``B`` sensor motions, ``R0 =
 camera_from_sensor``).
 """
 from __future__ import annotations
 
-import functools
 import math
-import statistics
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
 
-from .checks import check_number, check_rotation_matrices
+from .checks import check_number, check_range, check_rotation_matrices
 from .handeye import unvec, vec
+from .online_events import DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, RepeatFilter
 from .so3 import angle_between_deg, nearest_rotation_up_to_sign
+from .stats import radius_deg
 
-__all__ = ["OnlineCalibrator", "OnlineState", "radius_deg", "MIN_PAIRS"]
+__all__ = ["OnlineCalibrator", "OnlineState", "OnlineEvent", "MIN_PAIRS", "EVENT_KINDS",
+           "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG", "DUPLICATE_DEG", "SMALL_MOTION_DEG"]
 
 _EYE = np.eye(3)
 #: Floor of the change detector's reference level ``d^2``: a residual of 0.01 deg (``d^2 ~ 2 theta^2``), below any
 #: real sensor's noise; noise-free data would otherwise make rounding look like a change.
 D2_FLOOR = 2.0 * math.radians(0.01) ** 2
-
+#: Floor of the RMS pair residual the radius assumes (deg): the same 0.01 deg. Data that fit exactly (noise-free or
+#: repeated pairs) then give a radius set by the motion's geometry, never 0 (and infinite about an unexcited axis).
+NOISE_FLOOR_DEG = 0.01
+#: The motion determines ``R0`` once the RMS rotation about axes perpendicular to the least-excited direction is at
+#: least this (deg). The batch verdict warns below an axis spread of 1 deg (:mod:`replication.quality`); the
+#: excitation is at least the axis spread (``lambda_min(G) ~ s_2^2 + s_3^2`` of the rotation vectors).
+MIN_EXCITATION_DEG = 1.0
 #: Pairs before the radius, ``ready`` and the change detector mean anything (3 unknowns, noise from J - 3).
 MIN_PAIRS = 10
-
-
-def radius_deg(cov, level: float = 0.95) -> float:
-    """The ``level`` quantile of ``|w|`` (degrees) for ``w ~ N(0, cov)`` (radians).
-
-    ``|w|^2`` is a weighted sum of chi-square variables; Welch-Satterthwaite matches it with ``a chi^2_nu``
-    (``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the eigenvalues ``l`` of ``cov``), whose quantile
-    comes from the Wilson-Hilferty cube-root normal approximation (within 1 % for ``nu >= 1``).
-    """
-    lam = np.clip(np.linalg.eigvalsh(cov), 0.0, None)
-    total, squares = float(lam.sum()), float((lam ** 2).sum())
-    if not total > 0:
-        return 0.0
-    a, nu = squares / total, total ** 2 / squares
-    z = _normal_quantile(level)
-    q = nu * (1.0 - 2.0 / (9.0 * nu) + z * math.sqrt(2.0 / (9.0 * nu))) ** 3  # chi^2_nu quantile
-    return math.degrees(math.sqrt(a * q))
-
-
-@functools.lru_cache(maxsize=8)
-def _normal_quantile(level: float) -> float:
-    return statistics.NormalDist().inv_cdf(level)
+#: Recent pairs whose residuals and motions the online verdict reads (its medians).
+RECENT_PAIRS = 200
 
 
 @dataclass(frozen=True)
 class OnlineState:
     """What :meth:`OnlineCalibrator.update` returns after each pair."""
 
-    n_pairs: int          # pairs since the last (re)start
-    R: np.ndarray         # current camera_from_sensor estimate
-    radius_deg: float     # error radius at the calibrator's level (inf before MIN_PAIRS)
-    ready: bool           # radius below the target
-    alarm: bool           # a re-mount was detected at this pair (the calibrator then started over)
+    n_pairs: int          # pairs since the last (re)start, repeats excluded
+    R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
+    radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
+    ready: bool           # determined, radius below the target, no change being confirmed, verdict not fail
+    alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
+    event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
+    determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
+    checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
+    estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
+
+
+def _angle_deg_from_d2(d2: float) -> float:
+    return math.degrees(2.0 * math.asin(min(1.0, math.sqrt(max(d2, 0.0) / 8.0))))
 
 
 class OnlineCalibrator:
@@ -110,49 +107,91 @@ class OnlineCalibrator:
     Parameters
     ----------
     target_deg : float
-        ``ready`` once the error radius is below this (degrees).
+        ``ready`` needs the error radius below this (degrees).
     level : float
-        Confidence of the radius (default 0.95).
+        Confidence of the radius, in (0, 1) (default 0.95).
     forgetting : float
-        Exponential forgetting factor in (0, 1]; 1 keeps every pair with weight 1 (then the state equals the
-        batch problem of all pairs since the last start).
+        Exponential forgetting factor in ``[(min_pairs - 1) / (min_pairs + 1), 1]``; 1 keeps every pair with weight
+        1 (the state then equals the batch problem of all pairs since the last start). Below that range the
+        effective number of pairs ``(1 + lambda) / (1 - lambda)`` could never reach ``min_pairs``.
     step_every, refine_every : int
         A two-step step every ``step_every`` pairs; a Newton refinement (and the radius) every ``refine_every``
         pairs or every tenth of the pairs so far, whichever is more.
     min_pairs : int
-        Pairs before ``ready`` and the change detector.
+        Effective distinct pairs the motion needs (at least 4: 3 unknowns and a noise estimate).
     cusum_k, cusum_h, cusum_cap : float
-        The change detector's allowance, threshold and per-pair cap (see the module notes).
+        The change detector's allowance, threshold and per-pair cap (``0 < k < cap``; see the module notes).
     reference_rate : float
-        How fast the detector's reference level follows the in-control residuals (an exponential average).
+        How fast the detector's reference level follows the in-control residuals (an exponential average), in (0, 1].
+    confirm_pairs : int
+        Pairs in the confirmation window after an alarm (at least 5).
+    noise_floor_deg, min_excitation_deg, duplicate_deg : float
+        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG` and :data:`DUPLICATE_DEG` (``duplicate_deg = 0``:
+        exact repeats only).
     init : array_like (3, 3), optional
         Start of the iteration (default identity).
+
+    Attributes
+    ----------
+    events : list of OnlineEvent
+        Every confirmed alarm, classified.
+    alarms : list of int
+        Pair indices (over the calibrator's life) where a re-mount was confirmed.
+    duplicates : int
+        Pairs refused as repeats of an earlier pair.
+    pairs_dropped : int
+        Pairs kept out of the estimate as outliers.
     """
 
     def __init__(self, *, target_deg: float = 0.5, level: float = 0.95, forgetting: float = 1.0,
                  step_every: int = 5, refine_every: int = 10, min_pairs: int = MIN_PAIRS,
                  cusum_k: float = 2.0, cusum_h: float = 30.0, cusum_cap: float = 10.0, reference_rate: float = 1 / 30,
-                 init=None):
+                 confirm_pairs: int = 10, max_confirm_pairs: int = 60, drift_pairs: int = 50,
+                 noise_floor_deg: float = NOISE_FLOOR_DEG,
+                 min_excitation_deg: float = MIN_EXCITATION_DEG, duplicate_deg: float = DUPLICATE_DEG, init=None):
         for name, value in (("target_deg", target_deg), ("cusum_h", cusum_h), ("cusum_k", cusum_k),
-                            ("cusum_cap", cusum_cap)):
+                            ("noise_floor_deg", noise_floor_deg), ("min_excitation_deg", min_excitation_deg)):
             check_number(name, value, minimum=0)
-        if not 0.0 < level < 1.0:
-            raise ValueError(f"level must be in (0, 1), got {level!r}")
-        if not 0.0 < forgetting <= 1.0:
-            raise ValueError(f"forgetting must be in (0, 1], got {forgetting!r}")
-        for name, value in (("step_every", step_every), ("refine_every", refine_every), ("min_pairs", min_pairs)):
-            check_number(name, value, minimum=1, integer=True, strict=False)
-        if min_pairs < 4:
-            raise ValueError(f"min_pairs must be at least 4 (3 unknowns and a noise estimate), got {min_pairs}")
-        self.target_deg, self.level, self.forgetting = float(target_deg), float(level), float(forgetting)
+        check_number("duplicate_deg", duplicate_deg, minimum=0, strict=False)
+        check_number("cusum_cap", cusum_cap)
+        if not cusum_cap > cusum_k:
+            raise ValueError(f"cusum_cap must be above cusum_k (else the detector's sum never rises), got cusum_cap="
+                             f"{cusum_cap!r}, cusum_k={cusum_k!r}")
+        self.level = check_range("level", level, low=0.0, high=1.0, high_open=True)
+        self.reference_rate = check_range("reference_rate", reference_rate, low=0.0, high=1.0)
+        # min_pairs: 3 unknowns and a noise estimate; confirm_pairs: also a trim; drift_pairs: a window solved alone
+        for name, value, least in (("step_every", step_every, 1), ("refine_every", refine_every, 1),
+                                   ("min_pairs", min_pairs, 4), ("confirm_pairs", confirm_pairs, 5),
+                                   ("max_confirm_pairs", max_confirm_pairs, 5), ("drift_pairs", drift_pairs, 10)):
+            check_number(name, value, minimum=least, integer=True, strict=False)
+        if max_confirm_pairs < confirm_pairs:
+            raise ValueError(f"max_confirm_pairs must be at least confirm_pairs = {confirm_pairs}, got "
+                             f"{max_confirm_pairs}")
+        lowest = (min_pairs - 1) / (min_pairs + 1)
+        self.forgetting = check_range("forgetting", forgetting, low=lowest, high=1.0, low_open=False)
+        self.target_deg = float(target_deg)
         self.step_every, self.refine_every, self.min_pairs = int(step_every), int(refine_every), int(min_pairs)
+        self.confirm_pairs, self.max_confirm_pairs = int(confirm_pairs), int(max_confirm_pairs)
+        self.drift_pairs = int(drift_pairs)
         self.cusum_k, self.cusum_h, self.cusum_cap = float(cusum_k), float(cusum_h), float(cusum_cap)
-        if not 0.0 < reference_rate <= 1.0:
-            raise ValueError(f"reference_rate must be in (0, 1], got {reference_rate!r}")
-        self.reference_rate = float(reference_rate)
+        self.noise_floor_deg, self.min_excitation_deg = float(noise_floor_deg), float(min_excitation_deg)
+        self.duplicate_deg = float(duplicate_deg)
         self._init = np.eye(3) if init is None else check_rotation_matrices(init, "init")
-        self.alarms: list[int] = []  # pair indices (over the calibrator's life) where a re-mount was detected
-        self.n_total = 0
+        if self._init.shape != (3, 3):
+            raise ValueError(f"init must be one 3x3 rotation, got shape {self._init.shape}")
+        self.alarms: list[int] = []
+        self.events: list[OnlineEvent] = []
+        self.n_total = 0          # pairs received over the calibrator's life, repeats excluded
+        self.duplicates = 0
+        self.pairs_dropped = 0
+        self._repeats = RepeatFilter(self.duplicate_deg)
+        self._detector = ChangeDetector(k=self.cusum_k, h=self.cusum_h, cap=self.cusum_cap,
+                                        reference_rate=self.reference_rate, confirm_pairs=self.confirm_pairs,
+                                        max_confirm_pairs=self.max_confirm_pairs, drift_pairs=self.drift_pairs,
+                                        min_excitation_deg=self.min_excitation_deg,
+                                        noise_floor_deg=self.noise_floor_deg, d2_floor=D2_FLOOR)
+        self._recent_motion = deque(maxlen=RECENT_PAIRS)
+        self._context: dict = {}
         self.restart()
 
     # ------------------------------------------------------------------------------------------------ state
@@ -163,15 +202,23 @@ class OnlineCalibrator:
         self._SB2 = np.zeros((3, 3))   # sum of squared weights x B (forgetting: the covariance's middle factor)
         self._w = 0.0                  # sum of weights (J without forgetting)
         self._w2 = 0.0                 # sum of squared weights
-        self._n = 0                    # pairs since the start
-        self._bufA, self._bufB = [], []  # pairs not yet in the sums (at most step_every of them)
-        self._mean_d2 = math.nan       # mean d_j^2 = cost (8) / J at the current estimate (the detector's reference)
-        self._cusum = 0.0
+        self._n = 0                    # pairs since the start (repeats excluded, outliers included)
+        self._bufA, self._bufB = [], []  # pairs not yet in the sums (at most 16)
         start = self._init if init is None and not hasattr(self, "_R") else (self._R if init is None else init)
         self._R = np.array(start, dtype=float)      # the published estimate: the last refinement's minimiser
         self._warm = self._R                          # the two-step iterate: the next refinement's start
         self._radius = math.inf
+        self._cov = None
+        self._s2 = math.radians(self.noise_floor_deg) ** 2
+        self._excitation = 0.0
+        self._weak_axis = None
+        self._n_eff = 0.0
         self._next_refine = self.min_pairs
+        self._rearm = False
+        self._detector.reset()
+        self._recent_res = deque(maxlen=RECENT_PAIRS)   # residual angles (deg) of pairs on arrival, once armed
+        self._verdict = None
+        self._refined = False
 
     def _flush(self) -> None:
         """Add the buffered pairs to the running sums (one batched product; weights lambda^age)."""
@@ -188,8 +235,15 @@ class OnlineCalibrator:
         self._SB2 = decay ** 2 * self._SB2 + np.einsum("i,iab->ab", w ** 2, B)
         self._w = decay * self._w + w.sum()
         self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
+        self._n_eff = self._w ** 2 / self._w2
         self._bufA.clear()
         self._bufB.clear()
+
+    def _add(self, A, B) -> None:
+        self._bufA.append(A)
+        self._bufB.append(B)
+        if len(self._bufA) >= 16:  # O(1) memory: the buffer goes into the sums in batches
+            self._flush()
 
     @property
     def K(self) -> np.ndarray:
@@ -203,6 +257,7 @@ class OnlineCalibrator:
 
     @property
     def n_pairs(self) -> int:
+        """Pairs since the last (re)start, repeats excluded."""
         return self._n
 
     @property
@@ -211,8 +266,33 @@ class OnlineCalibrator:
         return self._radius
 
     @property
+    def excitation_deg(self) -> float:
+        """RMS rotation about axes perpendicular to the least-excited direction (deg, at the last refinement)."""
+        return self._excitation
+
+    @property
+    def effective_pairs(self) -> float:
+        """``(sum w)^2 / sum w^2`` over the distinct pairs in the estimate (at the last refinement)."""
+        return self._n_eff
+
+    @property
+    def determined(self) -> bool:
+        """The motion so far determines ``R0``: excitation and effective distinct pairs (see the module notes)."""
+        return bool(self._excitation >= self.min_excitation_deg and self._n_eff >= self.min_pairs - 1e-9)
+
+    @property
+    def checking(self) -> bool:
+        """A change-detector alarm is being confirmed."""
+        return self._detector.checking
+
+    @property
     def ready(self) -> bool:
-        return self._n >= self.min_pairs and self._radius < self.target_deg
+        return bool(self.determined and not self._detector.checking and self._radius < self.target_deg
+                    and (self._verdict is None or self._verdict.level != "fail"))
+
+    def _state(self, event) -> OnlineState:
+        return OnlineState(self._n, self._R, self._radius, self.ready, event == "remount", event, self.determined,
+                           self._detector.checking, self._refined)
 
     # ------------------------------------------------------------------------------------------------ update
     def update(self, A, B) -> OnlineState:
@@ -225,38 +305,13 @@ class OnlineCalibrator:
             raise ValueError(f"a pair is two 3x3 rotations, got shapes {np.shape(A)} and {np.shape(B)}")
         # the checks of replication.checks.check_rotation_matrices, inline: this is the per-pair hot path
         err = np.abs(np.swapaxes(M, -1, -2) @ M - _EYE).max(axis=(1, 2)).tolist()
-        for name, e_k, (a, b, c, d, e, f, g, h, i) in zip(("A (camera motion)", "B (sensor motion)"), err,
-                                                          M.reshape(2, 9).tolist()):
+        flat = M.reshape(2, 9).tolist()
+        for name, e_k, (a, b, c, d, e, f, g, h, i) in zip(("A (camera motion)", "B (sensor motion)"), err, flat):
             if not e_k <= 1e-6:  # also catches NaN / inf
                 raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {e_k:.3g}")
             if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0:
                 raise ValueError(f"{name} is a reflection (det -1), not a rotation")
-        return self._update(M[0], M[1])
-
-    def _update(self, A, B) -> OnlineState:
-        alarm = False
-        if self._n >= self.min_pairs:  # the change detector, on the pair before it is added
-            R = self._R
-            d2 = 6.0 - 2.0 * float(np.vdot(A @ R, R @ B))  # ||A R - R B||_F^2
-            mean = max(self._mean_d2, D2_FLOOR)
-            z = min(d2 / mean, self.cusum_cap)
-            self._cusum = max(0.0, self._cusum + z - self.cusum_k)
-            if self._cusum <= self.cusum_h / 3:  # no change building up: the reference follows the residual level
-                self._mean_d2 += self.reference_rate * (min(d2, self.cusum_cap * mean) - self._mean_d2)
-            if self._cusum > self.cusum_h:
-                alarm = True
-                self.alarms.append(self.n_total)
-                self.restart(init=R)
-        self._bufA.append(A)
-        self._bufB.append(B)
-        self._n += 1
-        self.n_total += 1
-        if self._n >= self._next_refine:
-            self._refine()
-            self._next_refine = self._n + max(self.refine_every, self._n // 10)
-        elif self._n % self.step_every == 0:
-            self._step()
-        return OnlineState(self._n, self._R, self._radius, self.ready, alarm)
+        return self._update(M[0], M[1], flat[0], flat[1])
 
     def update_many(self, A, B) -> list[OnlineState]:
         """:meth:`update` for each pair of ``(J, 3, 3)`` arrays in order (a replay); validated once, up front."""
@@ -264,7 +319,39 @@ class OnlineCalibrator:
         B = check_rotation_matrices(B, "B (sensor motions)")
         if A.shape != B.shape or A.ndim != 3:
             raise ValueError(f"need two (J, 3, 3) arrays of the same J, got {A.shape} and {B.shape}")
-        return [self._update(a, b) for a, b in zip(A, B)]
+        fa, fb = A.reshape(-1, 9).tolist(), B.reshape(-1, 9).tolist()
+        return [self._update(a, b, x, y) for a, b, x, y in zip(A, B, fa, fb)]
+
+    def _update(self, A, B, fa, fb) -> OnlineState:
+        if self._repeats.seen(fa, fb):
+            self.duplicates += 1
+            return self._state(None)
+        self.n_total += 1
+        self._n += 1
+        self._recent_motion.append(math.degrees(math.acos(max(-1.0, min(1.0, 0.5 * (fa[0] + fa[4] + fa[8] - 1.0))))))
+        detector = self._detector
+        if detector.armed:
+            R = self._R
+            d2 = 6.0 - 2.0 * float(np.vdot(A @ R, R @ B))  # ||A R - R B||_F^2
+            self._recent_res.append(_angle_deg_from_d2(d2))
+            checking = detector.checking
+            add, decide = detector.observe(A, B, d2, self.n_total - 1, R, self._cov)
+            if checking:
+                return self._state(self._decide() if decide else None)
+            if not add:
+                self.pairs_dropped += 1
+                return self._state(None)
+            self._add(A, B)
+            if detector.checking:  # an alarm at this pair: the next ones go to the confirmation window
+                return self._state(None)
+        else:
+            self._add(A, B)
+        if self._n >= self._next_refine:
+            self._refine()
+            self._next_refine = self._n + max(self.refine_every, self._n // 10)
+        elif self._n % self.step_every == 0 and not detector.armed:
+            self._step()  # once the motion determines R0, the last minimiser is the next refinement's start
+        return self._state(None)
 
     # ------------------------------------------------------------------------------------------------ estimates
     def _step(self) -> None:
@@ -273,37 +360,51 @@ class OnlineCalibrator:
         not that minimiser and is farther from ``R0`` (notebook 01), so publishing it would leave the radius
         describing another estimate."""
         K = self.K
+        if not self._w:
+            return
         right = nearest_rotation_up_to_sign(unvec(K @ vec(self._warm)))   # eq. (14), projected (16)
         self._warm = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
 
     def _refine(self, max_iterations: int = 30) -> None:
-        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate (warm start), then the radius."""
+        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate (warm start), then the radius, the
+        detector's start and the residual checks."""
         from .solvers.optimal import chordal_newton
 
-        self._R = self._warm = chordal_newton(self.K, self._warm, max_iterations=max_iterations)[0]
-        self._update_radius()
-
-    def _update_radius(self) -> None:
-        if self._n < self.min_pairs:
-            self._radius = math.inf
+        K = self.K
+        if not self._w:
             return
+        self._R = self._warm = chordal_newton(K, self._warm, max_iterations=max_iterations)[0]
+        self._refined = True
+        cost = self._update_radius()
+        if self.determined and (not self._detector.armed or self._rearm):
+            # the detector starts (or its reference restarts) once the motion determines R0
+            self._rearm = False
+            self._detector.arm(cost / self._w, self.n_total)
+        self._verdict = self.verdict()
+
+    def _update_radius(self) -> float:
+        """Excitation, noise level and radius at the current estimate; returns the cost (8) (weighted)."""
         x = vec(self._R)
         cost = max(2.0 * (3.0 * self._w - x @ (0.5 * (self._S + self._S.T)) @ x), 0.0)  # eq. (8) from the running K
-        if not self._mean_d2 > 0:  # the detector's reference starts from the cost; then it follows in-control pairs
-            self._mean_d2 = cost / self._w
-        s2 = cost / (2.0 * max(self._w - 3.0, 1.0))                          # mean square residual angle
+        n_eff = self._n_eff
+        s2 = cost / self._w * n_eff / (2.0 * max(n_eff - 3.0, 1.0))       # mean square residual angle per pair
+        self._s2 = s2 = max(s2, math.radians(self.noise_floor_deg) ** 2)   # never below a real sensor's noise
         G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
-        try:
-            Gi = np.linalg.inv(G)
-        except np.linalg.LinAlgError:
-            self._radius = math.inf
-            return
+        lam, V = np.linalg.eigh(G)
+        self._excitation = math.degrees(math.sqrt(max(float(lam[0]), 0.0) / self._w))
+        self._weak_axis = V[:, 0]
+        if not lam[0] > 1e-12 * max(float(lam[-1]), 1e-300) or n_eff < self.min_pairs:
+            self._radius, self._cov = math.inf, None
+            return cost
+        Gi = (V / lam) @ V.T
         if self.forgetting == 1.0:
             cov = (s2 / 3.0) * Gi
         else:  # weighted least squares: G^-1 (sum_j w_j^2 (2I - B_j - B_j^T)) G^-1
             G2 = 2.0 * self._w2 * _EYE - self._SB2 - self._SB2.T
             cov = (s2 / 3.0) * Gi @ G2 @ Gi
+        self._cov = cov
         self._radius = radius_deg(cov, self.level) if np.all(np.isfinite(cov)) else math.inf
+        return cost
 
     def estimate(self) -> np.ndarray:
         """The minimiser of eq. (8) over the pairs so far (Newton to convergence from the current iterate)."""
@@ -315,3 +416,85 @@ class OnlineCalibrator:
     def error_deg(self, R0) -> float:
         """Angle (degrees) between the current estimate and ``R0``."""
         return float(angle_between_deg(self._R, np.asarray(R0, dtype=float)))
+
+    # ------------------------------------------------------------------------------------------------ changes
+    def _decide(self) -> str | None:
+        """The detector's decision on its confirmation window, acted on; None while it waits for more pairs."""
+        decision = self._detector.decide(self._R, self._cov, self.n_total - 1)
+        if decision is None:
+            return None
+        event = decision["event"]
+        self.pairs_dropped += event.pairs_dropped - decision["held_before"]
+        if decision["restart"]:
+            self.alarms.append(event.pair)
+            self.restart(init=decision["R_new"])
+            self._n = len(decision["kept"])
+        for a, b in decision["kept"]:
+            self._add(a, b)
+        self._rearm = decision["rearm"]  # new information: the reference restarts at the refined estimate
+        self._refine()
+        self._next_refine = self._n + max(self.refine_every, self._n // 10)
+        self.events.append(event)
+        return event.kind
+
+    # ------------------------------------------------------------------------------------------------ judging
+    def evidence(self) -> dict:
+        """What the estimator measured about itself (the inputs of :meth:`verdict` and :meth:`status`)."""
+        self._flush()
+        res, mot = list(self._recent_res), list(self._recent_motion)
+        return {"n_pairs": self._n, "effective_pairs": self._n_eff, "repeated_pairs": self.duplicates,
+                "pairs_dropped": self.pairs_dropped, "excitation_deg": self._excitation,
+                "least_excited_axis_sensor": None if self._weak_axis is None else self._weak_axis.tolist(),
+                "radius_deg": self._radius, "rms_residual_deg": math.degrees(math.sqrt(self._s2)),
+                "residual_median_deg": float(np.median(res)) if len(res) >= self.min_pairs else None,
+                "motion_median_deg": float(np.median(mot)) if mot else None,
+                "determined": self.determined, "checking": self._detector.checking}
+
+    def verdict(self):
+        """The online verdict: the batch checks (:func:`replication.quality.judge`, same thresholds) on what the
+        estimator measured (the radius in place of the bootstrap radius; medians over the last
+        :data:`RECENT_PAIRS` pairs) and on the stream front end's evidence (:meth:`set_context`)."""
+        from .quality import Evidence, judge
+
+        e = self.evidence()
+        context = dict(self._context)
+        found = context.pop("extra", ())
+        return judge(Evidence(n_pairs=int(round(self._n_eff)), residual_median_deg=e["residual_median_deg"],
+                              motion_median_deg=e["motion_median_deg"],
+                              bootstrap_deg=self._radius if math.isfinite(self._radius) else None,
+                              axis_spread_deg=None, excitation_deg=self._excitation, radius_kind="curvature",
+                              repeated_pairs=self.duplicates, **context), found)
+
+    def set_context(self, **evidence) -> None:
+        """Evidence from a stream front end (:class:`replication.live.LiveRig`: clock offset, gaps, gyro rate, as
+        fields of :class:`replication.quality.Evidence`; ``extra``: further reasons, e.g. a named input mistake),
+        judged with the estimator's own from now on (``ready`` needs the verdict not to fail)."""
+        self._context.update(evidence)
+        if self._refined:
+            self._verdict = self.verdict()
+
+    @property
+    def current_verdict(self):
+        """The verdict as of the last refinement (what ``ready`` reads), or None before the first."""
+        return self._verdict
+
+    def status(self) -> dict:
+        """:meth:`evidence` with ``ready`` and, while not ready, ``not_ready``: one sentence per unmet condition,
+        with its number."""
+        e = self.evidence()
+        why = []
+        if self._n_eff < self.min_pairs:
+            why.append(f"{self._n_eff:.1f} effective distinct pairs < {self.min_pairs}"
+                       + (f" ({self.duplicates} repeated pairs refused)" if self.duplicates else ""))
+        if self._excitation < self.min_excitation_deg:
+            axis = e["least_excited_axis_sensor"]
+            why.append(f"the motion does not determine R0: RMS rotation about axes perpendicular to "
+                       f"{np.round(axis, 3).tolist() if axis else 'any axis'} (sensor frame) is "
+                       f"{self._excitation:.3g} deg < {self.min_excitation_deg:g} deg; rotate about other axes")
+        if self._detector.checking:
+            why.append(f"a change is being confirmed ({len(self._detector.window)} of {self._detector.target} pairs)")
+        if not self._radius < self.target_deg:
+            why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
+        if self._verdict is not None and self._verdict.level == "fail":
+            why += [r.message for r in self._verdict.reasons if r.level == "fail"]
+        return {**e, "ready": self.ready, "not_ready": why}
