@@ -52,7 +52,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -82,9 +82,8 @@ MIN_PAIRS = 10
 RECENT_PAIRS = 200
 
 
-@dataclass(frozen=True)
-class OnlineState:
-    """What :meth:`OnlineCalibrator.update` returns after each pair."""
+class OnlineState(NamedTuple):
+    """What :meth:`OnlineCalibrator.update` returns after each pair (an immutable record)."""
 
     n_pairs: int          # pairs since the last (re)start, repeats excluded
     R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
@@ -95,6 +94,21 @@ class OnlineState:
     determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
     checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
     estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
+
+
+def _check_rotation(name: str, flat) -> None:
+    """The checks of :func:`replication.checks.check_rotation_matrices` (tolerance 1e-6) on one row-major rotation, in
+    plain Python: this is the per-pair hot path."""
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = flat
+    if not math.isfinite(a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8):
+        raise ValueError(f"{name} is not a rotation matrix: it holds NaN or inf")
+    err = max(abs(a0 * a0 + a3 * a3 + a6 * a6 - 1.0), abs(a1 * a1 + a4 * a4 + a7 * a7 - 1.0),
+              abs(a2 * a2 + a5 * a5 + a8 * a8 - 1.0), abs(a0 * a1 + a3 * a4 + a6 * a7),
+              abs(a0 * a2 + a3 * a5 + a6 * a8), abs(a1 * a2 + a4 * a5 + a7 * a8))
+    if not err <= 1e-6:
+        raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {err:.3g}")
+    if a0 * (a4 * a8 - a5 * a7) - a1 * (a3 * a8 - a5 * a6) + a2 * (a3 * a7 - a4 * a6) < 0:
+        raise ValueError(f"{name} is a reflection (det -1), not a rotation")
 
 
 def _angle_deg_from_d2(d2: float) -> float:
@@ -303,15 +317,10 @@ class OnlineCalibrator:
             raise ValueError(f"a pair is two 3x3 rotations: {err}") from None
         if M.shape != (2, 3, 3):
             raise ValueError(f"a pair is two 3x3 rotations, got shapes {np.shape(A)} and {np.shape(B)}")
-        # the checks of replication.checks.check_rotation_matrices, inline: this is the per-pair hot path
-        err = np.abs(np.swapaxes(M, -1, -2) @ M - _EYE).max(axis=(1, 2)).tolist()
-        flat = M.reshape(2, 9).tolist()
-        for name, e_k, (a, b, c, d, e, f, g, h, i) in zip(("A (camera motion)", "B (sensor motion)"), err, flat):
-            if not e_k <= 1e-6:  # also catches NaN / inf
-                raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {e_k:.3g}")
-            if a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0:
-                raise ValueError(f"{name} is a reflection (det -1), not a rotation")
-        return self._update(M[0], M[1], flat[0], flat[1])
+        fa, fb = M[0].ravel().tolist(), M[1].ravel().tolist()
+        for name, flat in (("A (camera motion)", fa), ("B (sensor motion)", fb)):
+            _check_rotation(name, flat)
+        return self._update(M[0], M[1], fa, fb)
 
     def update_many(self, A, B) -> list[OnlineState]:
         """:meth:`update` for each pair of ``(J, 3, 3)`` arrays in order (a replay); validated once, up front."""

@@ -58,20 +58,26 @@ SMALL_MOTION_DEG = 0.5
 #: Pairs between the onset of a suspected change and its alarm that are kept (the CUSUM rises for at most
 #: ``h / (cap - k)`` pairs after a jump; more are only kept after a slow drift).
 SINCE_ONSET = 64
+#: Width of the repeat test's grid cells, in tolerances (wide: a pair is rarely near a cell edge, so one look-up).
+CELL_TOLERANCES = 16.0
 #: Most distinct pairs remembered for the repeat test (about 0.3 kB each): 28 h at one pair per second.
 DUPLICATE_MEMORY = 100_000
+
+
+_STAY, _DOWN, _UP = (0,), (0, -1), (0, 1)
 
 
 class RepeatFilter:
     """Remembers the pairs seen and tells whether a new one repeats one of them (within ``tol_deg`` elementwise on
     both rotation matrices; ``tol_deg = 0``: exact repeats only). Pairs whose camera and sensor motions are both
     below :data:`SMALL_MOTION_DEG` are never repeats. O(1) per pair: a grid on the sensor motion's antisymmetric
-    part (cells of ``2 tol``: a pair within ``tol`` lies in this cell or the neighbour on the side of the nearer
-    cell edge, per axis, so at most 8 cells are looked up); at most :data:`DUPLICATE_MEMORY` pairs are remembered
+    part (cells of :data:`CELL_TOLERANCES` ``tol``: a pair within ``tol`` lies in this cell or, where this pair is
+    within ``tol`` of the cell's edge on an axis, in the neighbour across it; at most 8 cells are looked up); at most :data:`DUPLICATE_MEMORY` pairs are remembered
     (later ones are compared, not remembered)."""
 
     def __init__(self, tol_deg: float = DUPLICATE_DEG):
         self._tol = math.radians(tol_deg)
+        self._inv = 1.0 / (CELL_TOLERANCES * self._tol) if self._tol else 0.0
         self._small_trace = 1.0 + 2.0 * math.cos(math.radians(SMALL_MOTION_DEG))
         self._seen: dict = {}
         self.remembered = 0
@@ -91,19 +97,23 @@ class RepeatFilter:
                 self._seen[key] = True
                 self.remembered += 1
             return False
-        cell = 2.0 * tol
-        v = (0.5 * (fb[7] - fb[5]) / cell, 0.5 * (fb[2] - fb[6]) / cell, 0.5 * (fb[3] - fb[1]) / cell)
-        base = [math.floor(x) for x in v]
-        side = [1 if x - c >= 0.5 else -1 for x, c in zip(v, base)]
-        for dx in (0, side[0]):
-            for dy in (0, side[1]):
-                for dz in (0, side[2]):
-                    for ga, gb in self._seen.get((base[0] + dx, base[1] + dy, base[2] + dz), ()):
-                        if all(abs(x - y) <= tol for x, y in zip(fa, ga)) and all(
-                                abs(x - y) <= tol for x, y in zip(fb, gb)):
+        # cells of CELL_TOLERANCES tol per axis; a pair within tol is in this cell or, where this one lies within tol
+        # of the cell's edge, in the neighbour across it (mostly one look-up, at most 8)
+        inv, edge = self._inv, 1.0 / CELL_TOLERANCES
+        x, y, z = 0.5 * (fb[7] - fb[5]) * inv, 0.5 * (fb[2] - fb[6]) * inv, 0.5 * (fb[3] - fb[1]) * inv
+        bx, by, bz = math.floor(x), math.floor(y), math.floor(z)
+        x, y, z = x - bx, y - by, z - bz
+        seen = self._seen
+        for dx in (_DOWN if x < edge else _UP if x > 1.0 - edge else _STAY):
+            for dy in (_DOWN if y < edge else _UP if y > 1.0 - edge else _STAY):
+                for dz in (_DOWN if z < edge else _UP if z > 1.0 - edge else _STAY):
+                    for ga, gb in seen.get((bx + dx, by + dy, bz + dz), ()):
+                        if all(abs(p - q) <= tol for p, q in zip(fa, ga)) and all(
+                                abs(p - q) <= tol for p, q in zip(fb, gb)):
                             return True
+        base = (bx, by, bz)
         if self.remembered < DUPLICATE_MEMORY:
-            self._seen.setdefault(tuple(base), []).append((fa, fb))
+            seen.setdefault(base, []).append((fa, fb))
             self.remembered += 1
         return False
 
