@@ -344,7 +344,7 @@ class OnlineCalibrator:
             d2 = 6.0 - 2.0 * float(np.vdot(A @ R, R @ B))  # ||A R - R B||_F^2
             self._recent_res.append(_angle_deg_from_d2(d2))
             checking = detector.checking
-            add, decide = detector.observe(A, B, d2, self.n_total - 1, R, self._cov)
+            add, decide = detector.observe(A, B, d2, self.n_total - 1, R, self._cov, self._s2)
             if checking:
                 return self._state(self._decide() if decide else None)
             if not add:
@@ -429,7 +429,7 @@ class OnlineCalibrator:
     # ------------------------------------------------------------------------------------------------ changes
     def _decide(self) -> str | None:
         """The detector's decision on its confirmation window, acted on; None while it waits for more pairs."""
-        decision = self._detector.decide(self._R, self._cov, self.n_total - 1)
+        decision = self._detector.decide(self._R, self._cov, self._s2, self.n_total - 1)
         if decision is None:
             return None
         event = decision["event"]

@@ -6,18 +6,22 @@ behind it: the pairs after an alarm solved on their own and compared with the es
 drift test (the last ``drift_pairs`` pairs solved on their own, every half of that); it then holds the next pairs in a
 confirmation window and :func:`classify` names the event:
 
-* ``remount``: the window's own estimate (:func:`solve_window`) differs from the current one by more than the
-  :data:`CONFIRM_LEVEL` quantile of their combined error (the covariances of the two radii added): the pairs after
-  the alarm agree on a new ``R0``;
+* ``remount``: the window's own estimate (:func:`solve_window`: a consensus, then the minimiser of (8) over the pairs
+  that agree with it) differs from the current one by more than the :data:`CONFIRM_LEVEL` quantile of their
+  combined error (the two estimates' covariances added; the window's noise taken as at least the estimate's own),
+  those pairs do not fit the current estimate at its noise level (``3 sum d^2 / (2 s^2)`` above the
+  :data:`FIT_LEVEL` quantile of ``chi^2_{3n}``, ``s^2`` the estimate's mean square residual angle), and the window fits its own estimate at no more than ``cap`` times the old level
+  (median ``d^2 / m``): the pairs after the alarm agree on a new ``R0``;
+* ``outliers``: no new ``R0``, and the window's pairs either fit the current estimate at the old level or are gross
+  outliers (``d^2 / m > cap``), or most of them fit it (median ``d^2 / m`` at most :data:`NOISE_Z`): the alarm
+  came from a few pairs (a burst, or scattered outliers), which stay out of the estimate;
 * ``noise_change``: no new ``R0``, but the window's residuals at its own best fit are above the old level (median of
-  ``d^2 / m`` above :data:`NOISE_Z`): the noise level changed;
-* ``outliers``: no new ``R0``, and most of the window still fits the current estimate at the old level (median
-  ``d^2 / m`` at most :data:`NOISE_Z`): the alarm came from a few pairs (a burst, or scattered outliers);
+  ``d^2 / m`` above :data:`NOISE_Z`): the noise level changed, and the reference level follows;
 * ``new_information``: the window fits an estimate within the current radius better than the current estimate
-  (typically the first well-excited pairs after weak motion).
+  (typically the first well-excited pairs after weak motion): the pairs are added.
 
 Where the window's angle to the estimate is below the re-mount threshold but above half of it, the decision waits
-for :data:`EXTEND_BY` more pairs (up to ``max_confirm_pairs``): a small re-mount needs more pairs to show.
+for ``confirm_pairs`` more pairs (up to ``max_confirm_pairs``): a small re-mount needs more pairs to show.
 
 Notation (``d_j^2 = ||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2)``, ``m`` the detector's reference level) and frames:
 ``docs/conventions.md`` and :mod:`replication.online`.
@@ -32,15 +36,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .so3 import angle_between_deg
-from .stats import radius_deg
+from .stats import _normal_quantile, radius_deg
 
-__all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY", "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2",
-           "classify"]
+__all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY",
+           "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
+           "drift_test", "combined_threshold", "describe"]
 
 #: Kinds of :class:`OnlineEvent`, in the order :func:`classify` tests them.
 EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
+#: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
+FIT_LEVEL = 0.9
 #: In-control ``d^2 / m`` is about ``chi^2_3 / 3`` (median 0.79). A window whose median at its own best fit is above
 #: this (RMS residual about 1.6 times the old level) has a new noise level.
 NOISE_Z = 2.0
@@ -156,44 +163,43 @@ def _excitation_deg(B) -> float:
     return math.degrees(math.sqrt(max(float(np.linalg.eigvalsh(G)[0]), 0.0) / n)), G
 
 
-def solve_window(A, B, R_start, *, min_excitation_deg: float, noise_floor_deg: float, d2_floor: float,
-                 certified: bool = True):
+def solve_window(A, B, *, min_excitation_deg: float, s2_floor: float, d2_floor: float):
     """A window of pairs solved on its own: ``(R, keep, cov)``.
 
-    ``R`` minimises eq. (8) over the window (the certified minimiser, ``chordal_optimal``; with ``certified=False``
-    a few Newton steps from ``R_start``, for the cheap drift test), re-solved once without the pairs whose ``d^2``
-    exceeds :data:`TRIM_FACTOR` times the median (``keep`` marks the pairs used). ``cov`` is the estimate's
-    covariance ``(s^2 / 3) G^{-1}`` (``s^2`` from the kept pairs, never below ``noise_floor_deg^2``), or None where
-    the window's motions do not determine ``R0`` (excitation below ``min_excitation_deg``, fewer than 5 pairs kept,
-    or a degenerate solve): then no re-mount can be confirmed from it.
+    A consensus first (``robust``: MSAC over two-pair samples, then Cauchy IRLS), so that outlier pairs inside the
+    window do not move it; then the minimiser of eq. (8) over the pairs within :data:`TRIM_FACTOR` times the median
+    ``d^2`` of that consensus (the certified ``chordal_optimal``; ``keep`` marks them). ``cov`` is the estimate's
+    covariance ``(s^2 / 3) G^{-1}`` over the kept pairs, ``s^2`` their mean square residual, never below ``s2_floor``
+    (the estimate's own noise level: from a handful of pairs ``s^2`` is too uncertain to lower the threshold a
+    re-mount must pass); None where the window does not determine ``R0`` (excitation below ``min_excitation_deg``,
+    fewer than 5 pairs or half the window kept, a degenerate solve): then no re-mount can be confirmed from it.
     """
     from .solvers import solve
-    from .solvers.optimal import chordal_newton
 
     keep = np.ones(len(A), bool)
-    R = np.asarray(R_start, dtype=float)
-    for _ in range(2):
-        try:
-            if certified:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    R = solve("chordal_optimal", A[keep], B[keep])
-            else:
-                K = np.einsum("iab,icd->acbd", B[keep], A[keep]).reshape(9, 9) / keep.sum()
-                R = chordal_newton(K, R, max_iterations=10)[0]
-        except ValueError:  # the window alone is degenerate (e.g. single-axis)
-            return np.asarray(R_start, dtype=float), keep, None
-        d2 = pair_d2(R, A, B)
-        trimmed = d2 <= TRIM_FACTOR * max(float(np.median(d2[keep])), d2_floor)
-        if trimmed.sum() < 5 or np.array_equal(trimmed, keep):
-            break
-        keep = trimmed
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            R = solve("robust", A, B)
+            d2 = pair_d2(R, A, B)
+            keep = d2 <= TRIM_FACTOR * max(float(np.median(d2)), d2_floor)
+            if keep.sum() < max(5, len(A) / 2):
+                return R, keep, None
+            R = solve("chordal_optimal", A[keep], B[keep])
+    except ValueError:  # the window alone is degenerate (e.g. single-axis)
+        return np.eye(3), keep, None
     n = int(keep.sum())
     excitation, G = _excitation_deg(B[keep])
-    if n < 5 or excitation < min_excitation_deg:
+    if excitation < min_excitation_deg:
         return R, keep, None
-    s2 = max(float(np.mean(pair_d2(R, A[keep], B[keep]))) / 2.0 * n / (n - 3.0), math.radians(noise_floor_deg) ** 2)
+    s2 = max(float(np.mean(pair_d2(R, A[keep], B[keep]))) / 2.0 * n / (n - 3.0), s2_floor)
     return R, keep, (s2 / 3.0) * np.linalg.inv(G)
+
+
+def chi2_quantile(level: float, dof: int) -> float:
+    """The ``level`` quantile of ``chi^2_dof`` (Wilson-Hilferty)."""
+    z = _normal_quantile(level)
+    return dof * (1.0 - 2.0 / (9.0 * dof) + z * math.sqrt(2.0 / (9.0 * dof))) ** 3
 
 
 def combined_threshold(cov_a, cov_b) -> float:
@@ -204,9 +210,9 @@ def combined_threshold(cov_a, cov_b) -> float:
     return radius_deg(cov_a + cov_b, CONFIRM_LEVEL)
 
 
-def classify(R_old, cov_old, m, A, B, *, min_excitation_deg, noise_floor_deg, d2_floor):
-    """Classify a confirmation window ``(A, B)`` against the estimate ``R_old`` (covariance ``cov_old``) and the
-    reference level ``m`` (see the module notes).
+def classify(R_old, cov_old, s2_old, m, A, B, *, cap, min_excitation_deg, d2_floor):
+    """Classify a confirmation window ``(A, B)`` against the estimate ``R_old`` (covariance ``cov_old``, mean square
+    residual ``s2_old``) and the reference level ``m`` (see the module notes).
 
     Returns
     -------
@@ -216,27 +222,40 @@ def classify(R_old, cov_old, m, A, B, *, min_excitation_deg, noise_floor_deg, d2
         ``z_old``, ``z_new`` (``d^2 / m`` of each window pair at each estimate), ``median_z_before``,
         ``median_z_after`` and ``level_new`` (the window's mean ``d^2`` at its own estimate, kept pairs).
     """
-    R_new, keep, cov_new = solve_window(A, B, R_old, min_excitation_deg=min_excitation_deg,
-                                        noise_floor_deg=noise_floor_deg, d2_floor=d2_floor)
+    R_new, keep, cov_new = solve_window(A, B, min_excitation_deg=min_excitation_deg, s2_floor=s2_old,
+                                        d2_floor=d2_floor)
+    if cov_new is None:
+        R_new = R_old
     d2_old, d2_new = pair_d2(R_old, A, B), pair_d2(R_new, A, B)
     angle = float(angle_between_deg(R_old, R_new))
     threshold = combined_threshold(cov_old, cov_new)
-    med_old, med_new = float(np.median(d2_old / m)), float(np.median(d2_new / m))
-    if angle > threshold:
+    z_old, z_new = d2_old / m, d2_new / m
+    med_old, med_new = float(np.median(z_old)), float(np.median(z_new))
+    gross = z_old > cap
+    # the pairs the window's own estimate keeps must not fit the old estimate at its noise level s2_old (the mean
+    # square residual angle over every pair in it; the detector's reference level m follows slow changes): their
+    # sum of 3 d^2 / (2 s2_old), about chi^2_{3n} in control, above its FIT_LEVEL quantile
+    n = int(keep.sum())
+    misfit = 1.5 * float(np.sum(d2_old[keep])) / s2_old > chi2_quantile(FIT_LEVEL, 3 * n)
+    if angle > threshold and med_new <= cap and misfit:
         kind = "remount"
+    elif gross.any() and (gross.all() or float(np.median(z_old[~gross])) <= NOISE_Z):
+        kind = "outliers"  # the window's pairs either fit the estimate at the old level or are gross outliers
     elif med_new > NOISE_Z:
         kind = "noise_change"
     elif med_old <= NOISE_Z:
         kind = "outliers"
     else:
         kind = "new_information"
+    # close to a re-mount (more than half the threshold away, or beyond it but fitting the old estimate): more pairs
+    # may decide
     return {"kind": kind, "undecided": kind != "remount" and angle > 0.5 * threshold, "R_new": R_new, "keep": keep,
-            "angle_deg": angle, "threshold_deg": threshold, "z_old": d2_old / m, "z_new": d2_new / m,
+            "angle_deg": angle, "threshold_deg": threshold, "z_old": z_old, "z_new": z_new,
             "median_z_before": med_old, "median_z_after": med_new,
             "level_new": max(float(np.mean(d2_new[keep])), d2_floor)}
 
 
-def drift_test(R, cov, A, B, *, min_excitation_deg, noise_floor_deg) -> tuple[bool, float, float]:
+def drift_test(R, cov, s2_old, A, B, *, min_excitation_deg) -> tuple[bool, float, float]:
     """Whether the last pairs ``(A, B)`` (already in the estimate) agree on another rotation than the estimate ``R``
     (covariance ``cov``). Returns ``(alarm, angle_deg, threshold_deg)``.
 
@@ -244,7 +263,7 @@ def drift_test(R, cov, A, B, *, min_excitation_deg, noise_floor_deg) -> tuple[bo
     residual rotation vector is about ``r_j - (I - B_j) w`` (``r_j`` the vee of the antisymmetric part of
     ``R^T A_j R B_j^T``), so the window's estimate is ``w = G^{-1} sum_j (I - B_j^T) r_j`` with covariance
     ``(s^2 / 3) G^{-1}`` (``s^2`` the window's mean square residual after the step, ``n / (n - 3)`` corrected, never
-    below ``noise_floor_deg^2``). An alarm when ``|w|`` exceeds the :data:`CONFIRM_LEVEL` combined radius; cheap
+    below the estimate's own ``s2_old``). An alarm when ``|w|`` exceeds the :data:`CONFIRM_LEVEL` combined radius; cheap
     (no solver, no per-pair Python), and it is confirmed on the pairs after it.
     """
     if cov is None:
@@ -259,7 +278,7 @@ def drift_test(R, cov, A, B, *, min_excitation_deg, noise_floor_deg) -> tuple[bo
         return False, math.nan, math.inf
     w = np.linalg.solve(G, r.sum(axis=0) - np.einsum("jba,jb->a", B, r))
     e = r - (w - np.einsum("jab,b->ja", B, w))
-    s2 = max(float(np.einsum("ja,ja->", e, e)) / (n - 3.0), math.radians(noise_floor_deg) ** 2)
+    s2 = max(float(np.einsum("ja,ja->", e, e)) / (n - 3.0), s2_old)
     angle = math.degrees(float(np.linalg.norm(w)))
     threshold = combined_threshold(cov, (s2 / 3.0) * np.linalg.inv(G))
     return angle > threshold, angle, threshold
@@ -321,8 +340,9 @@ class ChangeDetector:
         self.since_onset.clear()
         self.onset = index
 
-    def observe(self, A, B, d2: float, index: int, R, cov) -> tuple[bool, bool]:
-        """One pair (``index``) with residual ``d2`` at the estimate ``R`` (covariance ``cov``). Returns ``(add,
+    def observe(self, A, B, d2: float, index: int, R, cov, s2) -> tuple[bool, bool]:
+        """One pair (``index``) with residual ``d2`` at the estimate ``R`` (covariance ``cov``, mean square residual
+        ``s2``). Returns ``(add,
         decide)``: whether the calibrator adds it to its sums, and whether the confirmation window is complete (call
         :meth:`decide`)."""
         if self.checking:
@@ -347,16 +367,17 @@ class ChangeDetector:
             self.since_drift = 0
             A_w = np.array([a for a, _ in self.recent])
             B_w = np.array([b for _, b in self.recent])
-            if drift_test(R, cov, A_w, B_w, min_excitation_deg=self.min_excitation_deg,
-                          noise_floor_deg=self.noise_floor_deg)[0]:
+            if drift_test(R, cov, s2, A_w, B_w, min_excitation_deg=self.min_excitation_deg)[0]:
                 self._alarm(index, "drift")
         return not held, False
 
     def _alarm(self, index: int, source: str) -> None:
+        # a jump (CUSUM) shows in a few pairs; a drift was seen in drift_pairs pairs and needs more than a few
         self.checking, self.alarm_pair, self.source = True, index, source
-        self.window, self.target = [], self.confirm_pairs
+        self.window = []
+        self.target = self.confirm_pairs if source == "cusum" else min(self.drift_pairs // 2, self.max_confirm_pairs)
 
-    def decide(self, R_old, cov_old, index: int):
+    def decide(self, R_old, cov_old, s2_old, index: int):
         """The confirmation window's decision (:func:`classify`), or None while it waits for more pairs. Returns a
         dict: ``event`` (:class:`OnlineEvent`), ``restart`` (a re-mount: start over from ``R_new``), ``kept`` (the
         pairs to add: the window's and the held-out ones that fit), ``held_before`` (pairs held out before the
@@ -364,8 +385,8 @@ class ChangeDetector:
         A = np.array([a for a, _ in self.window])
         B = np.array([b for _, b in self.window])
         m = max(self.level, self.d2_floor)
-        info = classify(R_old, cov_old, m, A, B, min_excitation_deg=self.min_excitation_deg,
-                        noise_floor_deg=self.noise_floor_deg, d2_floor=self.d2_floor)
+        info = classify(R_old, cov_old, s2_old, m, A, B, cap=self.cap, min_excitation_deg=self.min_excitation_deg,
+                        d2_floor=self.d2_floor)
         if info["undecided"] and len(A) < self.max_confirm_pairs:
             self.target = min(len(A) + self.confirm_pairs, self.max_confirm_pairs)
             return None
