@@ -1,14 +1,17 @@
-"""The clock offset of :mod:`replication.association`: refined below the search grid.
+"""The clock offset of :mod:`replication.association`: refined below the search grid, with a block-bootstrap interval,
+the margin of its correlation peak over the next one, and its sign in words.
 
 The synthetic rig is the one of ``tests/test_calibrate_trust.py`` (a 20 Hz camera and, rigidly attached, a 200 Hz
 gyro; smooth three-axis motion), here with the gyro's clock shifted and optional noise on both streams. The truth
 is the shift: without it the rig's correlation peaks at -0.0001 ms.
 """
+import math
+
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.association import estimate_time_offset
+from replication import association, so3
+from replication.association import OffsetEstimate, estimate_time_offset, offset_analysis, offset_in_words
 from replication.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
 from replication.streams import GyroStream, OrientationStream, integrate_gyro
 
@@ -34,6 +37,18 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
     return camera, integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
 
 
+def _periodic(freq_hz=3.0, seconds=60.0):
+    """A single-axis sinusoidal oscillation: the angular speed repeats every ``1 / (2 freq_hz)`` s."""
+    axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
+
+    def world_from_camera(t):
+        return axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], axis=-1)) @ axis.T
+
+    t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
+    return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),
+            OrientationStream(t_sensor, world_from_camera(t_sensor) @ R0, "sensor"))
+
+
 # ------------------------------------------------------------------------------------------- sub-grid refinement
 
 #: Each at least 0.12 ms from the 0.5 ms grid: the grid's maximum alone is off by more than 0.1 ms.
@@ -48,19 +63,130 @@ def test_an_off_grid_offset_is_found_within_0_1_ms(offset_ms):
     assert corr > 0.9999
 
 
-def test_the_refined_offset_is_on_the_curve_with_its_correlation():
+@pytest.mark.parametrize("offset_ms", (0.13, 0.37))
+def test_the_parabola_refines_below_the_sub_grid(offset_ms):
+    """0.02 ms from the 0.05 ms sub-grid: its maximum alone would be off by 0.02 ms (measured: 1e-4 ms)."""
+    assert abs(estimate_time_offset(*_rig(1e-3 * offset_ms))[0] - 1e-3 * offset_ms) <= 0.005e-3
+
+
+def test_the_refined_offset_is_the_analysis_offset_and_on_the_curve():
     camera, sensor = _rig(2.29e-3)
     offset, corr, (offsets, corrs) = estimate_time_offset(camera, sensor, full_output=True)
-    assert (offset, corr) == estimate_time_offset(camera, sensor)
+    found = offset_analysis(camera, sensor, n_bootstrap=0)
+    assert (found.offset_s, found.correlation) == (offset, corr)
+    assert found.grid_offset_s == 2.5e-3 or abs(found.grid_offset_s - 2.5e-3) < 1e-12  # the fine grid's maximum
     k = np.flatnonzero(offsets == offset)
     assert len(k) == 1 and corrs[k[0]] == corr  # the correlation evaluated at the refined offset
     assert np.all(np.diff(offsets) > 0) and len(offsets) > 41 + 41
 
 
-@pytest.mark.parametrize("offset_ms", (0.13, 0.37))
-def test_the_parabola_refines_below_the_sub_grid(offset_ms):
-    """0.02 ms from the 0.05 ms sub-grid: its maximum alone would be off by 0.02 ms (measured: 1e-4 ms)."""
-    assert abs(estimate_time_offset(*_rig(1e-3 * offset_ms))[0] - 1e-3 * offset_ms) <= 0.005e-3
+def test_the_offset_does_not_depend_on_the_block_size(monkeypatch):
+    camera, sensor = _rig(-1.71e-3, camera_noise_deg=0.05, gyro_noise=0.01)
+    default = offset_analysis(camera, sensor, n_bootstrap=50)
+    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 3000)  # five offsets, eight replicates per block
+    blocked = offset_analysis(camera, sensor, n_bootstrap=50)
+    assert (blocked.offset_s, blocked.correlation) == (default.offset_s, default.correlation)
+    np.testing.assert_allclose(blocked.ci95_s, default.ci95_s, rtol=0, atol=1e-12)  # BLAS rounds by shape
+
+
+# ------------------------------------------------------------------------------------------- the interval
+
+def test_the_interval_holds_the_truth_when_clean_and_widens_with_noise():
+    truth = 0.37e-3
+    found = [offset_analysis(*_rig(truth, camera_noise_deg=c, gyro_noise=g, seed=3), n_bootstrap=100)
+             for c, g in ((0.0, 0.0), (0.02, 0.005), (0.1, 0.01))]
+    lo, hi = found[0].ci95_s
+    assert lo <= truth <= hi and hi - lo < 0.01e-3  # clean: the truth, to 0.01 ms
+    widths = [f.ci95_s[1] - f.ci95_s[0] for f in found]
+    assert widths[0] < widths[1] < widths[2] and widths[1] > 0.5e-3, widths
+    assert all(f.ci95_s[0] <= f.offset_s <= f.ci95_s[1] for f in found)
+    # whether a noisy interval holds the truth is a matter of chance: benchmarks/bench_offset.py measures how often
+
+
+def test_the_interval_is_deterministic_for_a_seed():
+    camera, sensor = _rig(-3.43e-3, camera_noise_deg=0.05, gyro_noise=0.01, seed=1)
+    first, again = (offset_analysis(camera, sensor, n_bootstrap=60, seed=7) for _ in range(2))
+    other = offset_analysis(camera, sensor, n_bootstrap=60, seed=8)
+    assert first.ci95_s == again.ci95_s and all(math.isfinite(v) for v in first.ci95_s)
+    assert other.ci95_s != first.ci95_s  # the seed is used
+    assert (first.n_bootstrap, first.block_s) == (60, 1.0)
+
+
+def test_without_replicates_there_is_no_interval():
+    found = offset_analysis(*_rig(0.13e-3), n_bootstrap=0)
+    assert isinstance(found, OffsetEstimate) and all(math.isnan(v) for v in found.ci95_s)
+
+
+def test_an_unrelated_sensor_has_an_interval_beyond_the_offsets_evaluated():
+    camera, _ = _rig()
+    _, unrelated = _rig(seed=1)
+    unrelated = integrate_gyro(GyroStream(np.arange(-1.0, 31.0, 0.005), np.random.default_rng(2).normal(
+        size=(6400, 3)), "noise"))
+    lo, hi = offset_analysis(camera, unrelated, n_bootstrap=100).ci95_s
+    assert lo == -math.inf or hi == math.inf or hi - lo > 0.1
+
+
+# ------------------------------------------------------------------------------------------- an ambiguous peak
+
+def test_periodic_motion_has_a_small_peak_margin():
+    found = offset_analysis(*_periodic(), n_bootstrap=0)
+    assert found.peak_margin < 0.02  # measured 0.011: the speed repeats every 167 ms
+    assert abs(abs(found.second_peak_offset_s) - 1 / 6) < 0.015
+    assert found.peak_margin == pytest.approx(found.correlation - found.second_peak_correlation)
+
+
+def test_three_axis_motion_has_a_large_peak_margin():
+    camera, sensor = _rig(seconds=40.0)
+    found = offset_analysis(camera, sensor, max_offset=5.0, n_bootstrap=0)
+    assert found.peak_margin > 0.15 and abs(found.second_peak_offset_s) > 1.0  # measured 0.21 at 4.48 s
+    default = offset_analysis(camera, sensor, n_bootstrap=0)
+    assert math.isnan(default.peak_margin) and math.isnan(default.second_peak_offset_s)  # no other peak in +-0.2 s
+
+
+# ------------------------------------------------------------------------------------------- the sign in words
+
+KALIBR = "Kalibr's timeshift_cam_imu, t_imu = t_cam + shift"
+
+
+@pytest.mark.parametrize("offset_s, words", [
+    (0.0123, "+12.3 ms: the sensor sample stamped t + 12.3 ms matches the camera sample stamped t (sensor clock ahead "
+             f"of the camera's by 12.3 ms; {KALIBR})"),
+    (-0.0123, "-12.3 ms: the sensor sample stamped t - 12.3 ms matches the camera sample stamped t (sensor clock "
+              f"behind the camera's by 12.3 ms; {KALIBR})"),
+    (0.0, f"0.0 ms: the sensor sample stamped t matches the camera sample stamped t (the clocks agree to 0.05 ms; "
+          f"{KALIBR})"),
+    (-0.00004, f"0.0 ms: the sensor sample stamped t matches the camera sample stamped t (the clocks agree to 0.05 ms; "
+               f"{KALIBR})"),
+])
+def test_offset_in_words(offset_s, words):
+    assert offset_in_words(offset_s) == words
+
+
+def test_offset_in_words_to_more_decimals_and_on_the_estimate():
+    assert offset_in_words(-0.00015594, decimals=3).startswith("-0.156 ms: the sensor sample stamped t - 0.156 ms")
+    found = offset_analysis(*_rig(12.3e-3), n_bootstrap=0)
+    assert found.in_words().startswith("+12.3 ms: the sensor sample stamped t + 12.3 ms matches")
+
+
+# ------------------------------------------------------------------------------------------- parameters
+
+@pytest.mark.parametrize("name, value", [("n_bootstrap", -1), ("n_bootstrap", 2.5), ("n_bootstrap", True),
+                                         ("n_bootstrap", "200"), ("n_bootstrap", None), ("seed", -1), ("seed", 1.5),
+                                         ("seed", None), ("seed", np.nan), ("block_s", 0.0), ("block_s", -1.0),
+                                         ("block_s", np.nan), ("block_s", np.inf), ("block_s", "1"),
+                                         ("block_s", 20.0), ("max_offset", 0.0), ("resolution", -1e-3)])
+def test_offset_analysis_refuses_bad_parameters_before_the_work(monkeypatch, name, value):
+    camera, sensor = _rig()
+    monkeypatch.setattr(association, "_search", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(ValueError, match=name):
+        offset_analysis(camera, sensor, **{name: value})
+
+
+@pytest.mark.parametrize("kw", [{"offset_s": np.nan}, {"offset_s": "1"}, {"offset_s": 0.1, "decimals": -1},
+                                {"offset_s": 0.1, "decimals": 1.5}])
+def test_offset_in_words_refuses_bad_arguments(kw):
+    with pytest.raises(ValueError, match="decimals" if "decimals" in kw else "offset_s"):
+        offset_in_words(**kw)
 
 
 # ------------------------------------------------------------------------------------------- real recordings
