@@ -111,12 +111,15 @@ def coverage(runs, camera_noise_deg, gyro_noise, *, seconds=30.0, block_s=1.0, s
           f"mean {1e3 * np.mean(errors):+.2f} ms")
 
 
-def periodic(freq_hz=3.0, seconds=60.0):
-    """A single-axis oscillation at ``freq_hz``: the angular speed repeats every ``1 / (2 freq_hz)`` s."""
+def periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0):
+    """A single-axis oscillation at ``freq_hz`` (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
+    ``aperiodic`` times the rig's three-axis motion."""
     axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
-        return axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], axis=-1)) @ axis.T
+        slow = so3.exp_map(aperiodic * np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                 0.7 * np.cos(0.3 * t)], -1))
+        return slow @ axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], -1)) @ axis.T
 
     t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
     return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),
@@ -138,9 +141,13 @@ def margins():
         "synthetic rig (three axes, 40 s)": noisy_rig(0.0, 0.0, 0.0, np.random.default_rng(0), 40.0),
         "periodic 3 Hz (speed period 167 ms)": periodic(3.0),
         "periodic 1.3 Hz (speed period 385 ms)": periodic(1.3),
+        "periodic 3 Hz times 0.3 x the rig's motion": periodic(3.0, aperiodic=0.3),
+        "periodic 3 Hz times 1.0 x the rig's motion": periodic(3.0, aperiodic=1.0),
+        "periodic 3 Hz times 2.0 x the rig's motion": periodic(3.0, aperiodic=2.0),
     }
     print(f"\npeak margin (correlation at the peak - highest coarse local maximum farther than "
-          f"{1e3 * association.PEAK_SEPARATION_S:.0f} ms; NaN: none in the search):")
+          f"{1e3 * association.PEAK_SEPARATION_S:.0f} ms, refined if within {association.RIVAL_REFINED_WITHIN:g} on "
+          "the coarse curve; NaN: none in the search):")
     for name, (camera, sensor) in cases.items():
         row = []
         for max_offset in (0.2, 0.5, 1.0, 2.0):
@@ -190,4 +197,9 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    if "--margins" in sys.argv:  # only the peak margins
+        margins()
+    else:
+        main()

@@ -80,8 +80,17 @@ SUBGRID_STEPS = 10
 #: coarse maximum (s); a replicate whose maximum lies at either end of those is beyond them (:func:`offset_analysis`).
 BOOTSTRAP_SPAN_S = 0.1
 
-#: A competing correlation peak is a local maximum of the 10 ms coarse curve farther than this from the peak (s).
+#: A competing correlation peak is a local maximum of the 10 ms coarse curve farther than this from the peak (s): a
+#: 20 Hz camera's interval; nearer maxima would be ripples of the same lobe (none seen on the recordings).
 PEAK_SEPARATION_S = 0.05
+
+#: Competing peaks whose coarse correlation is within ``RIVAL_REFINED_WITHIN`` of the coarse maximum (the
+#: ``RIVALS_REFINED`` highest) are refined like the peak, and the highest refined is the estimate: the coarse grid
+#: lowers a sharp peak by up to 0.011 when it falls between grid offsets (measured on a 3 Hz oscillation, whose
+#: aliases 167 ms apart are equally high), enough to rank the aliases wrongly: with a little aperiodic motion
+#: added, the coarse maximum alone chose an alias for 9 of 15 true offsets, the highest refined for none.
+RIVAL_REFINED_WITHIN = 0.1
+RIVALS_REFINED = 4
 
 
 def _overlap(camera, sensor, max_offset):
@@ -135,17 +144,9 @@ def _vertex(x, y) -> np.ndarray:
     return np.where(np.isfinite(np.max(y, axis=-1)), v, np.nan)
 
 
-def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
-    """The coarse, fine and sub-grid searches of :func:`estimate_time_offset`. With ``keep_rows`` also ``boot_x``, the
-    fine and sub-grid offsets and the coarse ones within :data:`BOOTSTRAP_SPAN_S` of the coarse maximum (sorted),
-    and ``rows``, the centred sensor speeds there (for :func:`_bootstrap_offsets`)."""
-    max_offset = float(check_number("max_offset", max_offset, minimum=0))
-    resolution = float(check_number("resolution", resolution, minimum=0))
-    t, cam = _overlap(camera, sensor, max_offset)
-    a = cam - cam.mean()
-    coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
-    c_coarse = _correlations(cam, sensor, t, coarse)
-    best = coarse[np.argmax(c_coarse)]
+def _refine(a, sensor, t, best, max_offset, resolution, keep_rows: bool) -> dict:
+    """The fine and sub-grid searches around the coarse offset ``best`` and the refined peak (see
+    :func:`estimate_time_offset`); with ``keep_rows`` the centred sensor speeds at the fine and sub-grid offsets."""
     fine = np.unique(np.clip(np.arange(best - 0.01, best + 0.01 + 1e-12, resolution), -max_offset, max_offset))
     c_fine, rows_fine = _row_correlations(a, sensor, t, fine, keep_rows)
     grid = fine[np.argmax(c_fine)]
@@ -156,16 +157,51 @@ def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
     x, y = np.concatenate([fine, sub])[order], np.concatenate([c_fine, c_sub])[order]
     offset = float(_vertex(x, y))
     corr = float(_row_correlations(a, sensor, t, np.array([offset]), False)[0][0])
-    curve_x, first = np.unique(np.concatenate([coarse, x, [offset]]), return_index=True)
-    out = dict(t=t, a=a, coarse=coarse, c_coarse=c_coarse, grid=float(grid), offset=offset, corr=corr,
-               curve=(curve_x, np.concatenate([c_coarse, y, [corr]])[first]))
+    return dict(best=best, fine=fine, x=np.append(x, offset), y=np.append(y, corr), grid=float(grid), offset=offset,
+                corr=corr, rows=np.concatenate([rows_fine, rows_sub])[order] if keep_rows else None,
+                rows_x=np.concatenate([fine, sub])[order])
+
+
+def _local_maxima(corr) -> np.ndarray:
+    """Indices of the interior local maxima of a curve (higher than the left neighbour, not lower than the right)."""
+    return np.flatnonzero((corr[1:-1] > corr[:-2]) & (corr[1:-1] >= corr[2:])) + 1
+
+
+def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
+    """The searches of :func:`estimate_time_offset`: ``offset``, ``corr``, ``grid``, ``curve`` and the rival peak
+    ``second`` (offset, correlation). With ``keep_rows`` also ``boot_x``, the fine and sub-grid offsets and the
+    coarse ones within :data:`BOOTSTRAP_SPAN_S` of the peak's coarse maximum (sorted), and ``rows``, the centred
+    sensor speeds there (for :func:`_bootstrap_offsets`)."""
+    max_offset = float(check_number("max_offset", max_offset, minimum=0))
+    resolution = float(check_number("resolution", resolution, minimum=0))
+    t, cam = _overlap(camera, sensor, max_offset)
+    a = cam - cam.mean()
+    coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
+    c_coarse = _correlations(cam, sensor, t, coarse)
+    top = int(np.argmax(c_coarse))
+    rivals = [i for i in _local_maxima(c_coarse) if abs(coarse[i] - coarse[top]) > PEAK_SEPARATION_S]
+    close = sorted((i for i in rivals if c_coarse[top] - c_coarse[i] < RIVAL_REFINED_WITHIN),
+                   key=lambda i: -c_coarse[i])[:RIVALS_REFINED]
+    refined = [_refine(a, sensor, t, coarse[top], max_offset, resolution, keep_rows)]
+    refined += [_refine(a, sensor, t, coarse[i], max_offset, resolution, False) for i in close]
+    peak = max(refined, key=lambda r: r["corr"])  # the first of equals: the coarse maximum's
+    if keep_rows and peak["rows"] is None:
+        peak = _refine(a, sensor, t, peak["best"], max_offset, resolution, True)
+    far = [(r["offset"], r["corr"]) for r in refined if abs(r["offset"] - peak["offset"]) > PEAK_SEPARATION_S]
+    far += [(coarse[i], c_coarse[i]) for i in _local_maxima(c_coarse)
+            if abs(coarse[i] - peak["best"]) > PEAK_SEPARATION_S and i not in close and i != top]
+    second = max(far, key=lambda p: p[1]) if far else (float("nan"), float("nan"))
+    curve_x, first = np.unique(np.concatenate([coarse] + [r["x"] for r in refined]), return_index=True)
+    curve = (curve_x, np.concatenate([c_coarse] + [r["y"] for r in refined])[first])
+    out = dict(t=t, a=a, grid=peak["grid"], offset=peak["offset"], corr=peak["corr"],
+               second=(float(second[0]), float(second[1])), curve=curve)
     if keep_rows:
+        fine, rows, x = peak["fine"], peak["rows"], peak["rows_x"]
         outside = (coarse < fine[0] - 1e-9) | (coarse > fine[-1] + 1e-9)
-        near = coarse[(np.abs(coarse - best) <= BOOTSTRAP_SPAN_S + 1e-9) & outside]
+        near = coarse[(np.abs(coarse - peak["best"]) <= BOOTSTRAP_SPAN_S + 1e-9) & outside]
         rows_near = _row_correlations(a, sensor, t, near, True)[1]
-        order = np.argsort(np.concatenate([near, fine, sub]), kind="stable")
-        out.update(boot_x=np.concatenate([near, fine, sub])[order],
-                   rows=np.concatenate([rows_near, rows_fine, rows_sub])[order])
+        order = np.argsort(np.concatenate([near, x]), kind="stable")
+        out.update(boot_x=np.concatenate([near, x])[order], rows=np.concatenate([rows_near, rows])[order])
     return out
 
 
@@ -178,10 +214,13 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
     10 ms grid in ``[-max_offset, max_offset]``, then on a ``resolution`` grid within 10 ms of the coarse maximum,
     then on the sub-grid ``h = resolution / SUBGRID_STEPS`` within one ``resolution`` of the fine maximum, and
     refined there by the parabola through the maximum and its two neighbours (:func:`_vertex`; for a smooth peak
-    its error is ``O(h^2 r'''/r'')``, at most 0.0011 ms on the recordings of :data:`SUBGRID_STEPS`).
-    ``d`` is Kalibr's ``timeshift_cam_imu`` (:func:`offset_in_words`).
+    its error is ``O(h^2 r'''/r'')``, at most 0.0011 ms on the recordings of :data:`SUBGRID_STEPS`). Other
+    local maxima of the coarse curve within :data:`RIVAL_REFINED_WITHIN` of its maximum (periodic motion) are refined
+    the same way, and the highest refined peak is ``d``. ``d`` is Kalibr's ``timeshift_cam_imu``
+    (:func:`offset_in_words`).
 
-    Cost: time ``O((max_offset / 10 ms + 0.02 s / resolution) x camera times)``; memory bounded by
+    Cost: time ``O((max_offset / 10 ms + 0.02 s / resolution) x camera times)``, the second term once more for each
+    rival refined (at most :data:`RIVALS_REFINED`; none on the recordings measured); memory bounded by
     :data:`OFFSET_BLOCK_SAMPLES` interpolated samples (~80 MB) plus 8 bytes per candidate offset, whatever
     ``max_offset`` is (the candidates are evaluated block by block, see :func:`_correlations`).
 
@@ -230,8 +269,9 @@ class OffsetEstimate:
         an end is infinite when more than 2.5 % of the replicates peak beyond the offsets they are evaluated on
         (:data:`BOOTSTRAP_SPAN_S`); ``(nan, nan)`` without replicates.
     second_peak_offset_s, second_peak_correlation : float
-        The highest local maximum of the coarse (10 ms) curve farther than ``peak_separation_s`` from
-        ``offset_s``; NaN if there is none.
+        The highest other peak farther than ``peak_separation_s`` from ``offset_s``: a local maximum of the coarse
+        (10 ms) curve, refined like the peak if its coarse correlation is within :data:`RIVAL_REFINED_WITHIN` of the
+        coarse maximum (see :func:`estimate_time_offset`); NaN if there is none.
     peak_margin : float
         ``correlation - second_peak_correlation``: small when another offset matches the speeds almost as well
         (periodic motion); NaN if there is no other peak in the search.
@@ -295,16 +335,6 @@ def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndar
     return out
 
 
-def _second_peak(offsets, corr, peak: float):
-    """The highest interior local maximum of ``corr`` farther than :data:`PEAK_SEPARATION_S` from ``peak``."""
-    i = np.flatnonzero((corr[1:-1] > corr[:-2]) & (corr[1:-1] >= corr[2:])) + 1
-    i = i[np.abs(offsets[i] - peak) > PEAK_SEPARATION_S]
-    if not len(i):
-        return float("nan"), float("nan")
-    best = i[np.argmax(corr[i])]
-    return float(offsets[best]), float(corr[best])
-
-
 def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max_offset: float = 0.2,
                     resolution: float = 0.5e-3, n_bootstrap: int = 200, seed: int = 0,
                     block_s: float = 1.0) -> OffsetEstimate:
@@ -318,8 +348,8 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
       (:func:`_bootstrap_offsets`). It describes the spread due to the samples; an error every sample shares (a
       latency of the SLAM front end, a mis-stamped stream) is invisible to it.
     * ``peak_margin``: the correlation at the peak minus the highest other local maximum of the 10 ms coarse
-      curve farther than :data:`PEAK_SEPARATION_S` from it (NaN if none): periodic motion makes several
-      near-equal peaks, and the margin says how close the runner-up came.
+      curve farther than :data:`PEAK_SEPARATION_S` from it, refined if close (NaN if none): periodic motion makes
+      several near-equal peaks, and the margin says how close the runner-up came.
 
     Cost: :func:`estimate_time_offset`'s and the sensor speeds at the ``~2 BOOTSTRAP_SPAN_S / 10 ms`` coarse offsets
     again; 32 bytes per camera time for each offset the replicates use (78 at the default ``resolution``), plus
@@ -362,7 +392,7 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
     if n_bootstrap:
         boot = _bootstrap_offsets(s["a"], s["rows"], s["boot_x"], n_bootstrap, block, np.random.default_rng(seed))
         ci = (float(np.nanpercentile(boot, 2.5, method="lower")), float(np.nanpercentile(boot, 97.5, method="higher")))
-    second = _second_peak(s["coarse"], s["c_coarse"], s["offset"])
+    second = s["second"]
     return OffsetEstimate(s["offset"], s["corr"], s["grid"], ci, second[0], second[1], s["corr"] - second[1],
                           s["curve"], n_bootstrap, block_s)
 

@@ -37,16 +37,19 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
     return camera, integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
 
 
-def _periodic(freq_hz=3.0, seconds=60.0):
-    """A single-axis sinusoidal oscillation: the angular speed repeats every ``1 / (2 freq_hz)`` s."""
+def _periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0, offset=0.0):
+    """A single-axis sinusoidal oscillation (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
+    ``aperiodic`` times the rig's three-axis motion; the sensor's clock reads ``offset`` s ahead."""
     axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
-        return axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], axis=-1)) @ axis.T
+        slow = _world_from_camera(t) if aperiodic else np.eye(3)
+        slow = so3.exp_map(aperiodic * so3.log_map(slow)) if aperiodic else slow
+        return slow @ axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], -1)) @ axis.T
 
     t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
     return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),
-            OrientationStream(t_sensor, world_from_camera(t_sensor) @ R0, "sensor"))
+            OrientationStream(t_sensor + offset, world_from_camera(t_sensor) @ R0, "sensor"))
 
 
 # ------------------------------------------------------------------------------------------- sub-grid refinement
@@ -130,9 +133,18 @@ def test_an_unrelated_sensor_has_an_interval_beyond_the_offsets_evaluated():
 
 def test_periodic_motion_has_a_small_peak_margin():
     found = offset_analysis(*_periodic(), n_bootstrap=0)
-    assert found.peak_margin < 0.02  # measured 0.011: the speed repeats every 167 ms
-    assert abs(abs(found.second_peak_offset_s) - 1 / 6) < 0.015
+    assert found.peak_margin < 0.001  # the speed repeats every 167 ms: the aliases are equally high
+    assert abs(abs(found.second_peak_offset_s - found.offset_s) - 1 / 6) < 0.001  # refined like the peak
     assert found.peak_margin == pytest.approx(found.correlation - found.second_peak_correlation)
+
+
+@pytest.mark.parametrize("offset_ms", (5.0, 46.6))
+def test_of_near_equal_peaks_the_highest_refined_wins(offset_ms):
+    """Mostly periodic motion with the peak between coarse offsets: its alias 167 ms away sits closer to the 10 ms
+    grid and is higher there (the coarse maximum alone picked 171.66 and -120.07 ms)."""
+    found = offset_analysis(*_periodic(aperiodic=0.3, offset=1e-3 * offset_ms), n_bootstrap=0)
+    assert abs(found.offset_s - 1e-3 * offset_ms) < 0.1e-3
+    assert 0 < found.peak_margin < 0.01  # measured 0.0032
 
 
 def test_three_axis_motion_has_a_large_peak_margin():
