@@ -11,7 +11,8 @@
 * the peak margin on the recordings and on a periodic motion, at the default search (+-0.2 s) and a wider one;
 * the run time of ``offset_analysis`` (200 replicates), ``estimate_time_offset`` and the search of before.
 
-Usage: python benchmarks/bench_offset.py [--quick]   (needs the real recordings; prints figures, asserts nothing)
+Usage: python benchmarks/bench_offset.py [--quick] [--margins]   (needs the real recordings; prints figures, asserts
+nothing; --margins: only the peak margins)
 """
 import argparse
 import time
@@ -181,7 +182,10 @@ def timing(repeats):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer shifts, coverage runs and repeats")
+    parser.add_argument("--margins", action="store_true", help="only the peak margins")
     args = parser.parse_args(argv)
+    if args.margins:
+        return margins()
     rng = np.random.default_rng(7)
     random_ms = rng.uniform(-20.0, 20.0, 12)
     shifts = 1e-3 * np.concatenate([ISSUE_MS, [] if args.quick else random_ms])
@@ -197,9 +201,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    import sys
-
-    if "--margins" in sys.argv:  # only the peak margins
-        margins()
-    else:
-        main()
+    main()
