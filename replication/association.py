@@ -311,22 +311,25 @@ def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndar
 
         ``r_j = (w . (a b_j) - S_a S_j / W) / sqrt((w . a^2 - S_a^2 / W) (w . b_j^2 - S_j^2 / W))``,
 
-    for all replicates at once by matrix products (replicates in chunks of :data:`OFFSET_BLOCK_SAMPLES` weights);
+    for all replicates at once by matrix products (replicates and samples in chunks of at most
+    :data:`OFFSET_BLOCK_SAMPLES` weights or products' terms);
     its maximum is refined as the estimate's (:func:`_vertex`), and is -inf or +inf at the first or last offset
     (the replicate's peak may lie beyond). The starts are drawn all at once, so the chunking changes the result
     only by rounding (BLAS's products round by shape).
     """
     n, J = len(a), len(rows)
     starts = rng.integers(0, n, size=(n_bootstrap, -(-n // block)))
-    terms = np.vstack([a, a * a, rows, rows * rows, rows * a])  # one product gives every weighted sum
-    out = np.empty(n_bootstrap)
+    out, per = np.empty(n_bootstrap), max(1, OFFSET_BLOCK_SAMPLES // (3 * J + 2))
     chunks = -(-n_bootstrap * n // OFFSET_BLOCK_SAMPLES)
     for r in np.array_split(np.arange(n_bootstrap), chunks):
         picks = np.bincount((starts[r] + n * np.arange(len(r))[:, None]).ravel(), minlength=len(r) * n)
         ext = np.concatenate([np.zeros((len(r), 1)), picks.reshape(len(r), n)[:, n - block + 1:],
                               picks.reshape(len(r), n)], axis=1).cumsum(axis=1)
         w = ext[:, block:] - ext[:, :-block]  # w_i = draws of the starts i - block + 1 .. i (mod n)
-        W, S = w.sum(axis=1, keepdims=True), w @ terms.T
+        W, S = w.sum(axis=1, keepdims=True), np.zeros((len(r), 3 * J + 2))
+        for i in range(0, n, per):  # every weighted sum in one product, the speeds in chunks of samples
+            b, c = rows[:, i:i + per], a[i:i + per]
+            S += w[:, i:i + per] @ np.vstack([c, c * c, b, b * b, b * c]).T
         sa, saa, sb, sbb, sab = S[:, :1], S[:, 1:2], S[:, 2:J + 2], S[:, J + 2:2 * J + 2], S[:, 2 * J + 2:]
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = (sab - sa * sb / W) / np.sqrt((saa - sa * sa / W) * (sbb - sb * sb / W))
@@ -352,9 +355,9 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
       several near-equal peaks, and the margin says how close the runner-up came.
 
     Cost: :func:`estimate_time_offset`'s and the sensor speeds at the ``~2 BOOTSTRAP_SPAN_S / 10 ms`` coarse offsets
-    again; 32 bytes per camera time for each offset the replicates use (78 at the default ``resolution``), plus
-    ``O(n_bootstrap x camera times x offsets)`` time for the products, with the replicates' weights held in
-    chunks of at most :data:`OFFSET_BLOCK_SAMPLES`.
+    again; 8 bytes per camera time for each offset the replicates use (78 at the default ``resolution``: 0.6 kB
+    per camera time), plus ``O(n_bootstrap x camera times x offsets)`` time for the products, their weights and
+    terms held in chunks of at most :data:`OFFSET_BLOCK_SAMPLES` values.
 
     Parameters
     ----------
