@@ -178,6 +178,9 @@ def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
     a = cam - cam.mean()
     coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
     c_coarse = _correlations(cam, sensor, t, coarse)
+    if not np.isfinite(c_coarse).any():  # a stream whose angular speed does not vary (a rig at rest): no information
+        return dict(t=t, a=a, grid=0.0, offset=0.0, corr=float("nan"), second=(float("nan"), float("nan")),
+                    curve=(coarse, c_coarse), rows=None)
     top = int(np.argmax(c_coarse))
     rivals = [i for i in _local_maxima(c_coarse) if abs(coarse[i] - coarse[top]) > PEAK_SEPARATION_S]
     close = sorted((i for i in rivals if c_coarse[top] - c_coarse[i] < RIVAL_REFINED_WITHIN),
@@ -240,6 +243,9 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
     (offset_s, correlation) : (float, float)
         The refined offset and ``r`` evaluated at it (one more evaluation, not the parabola's value). With
         ``full_output``: ``(offset_s, correlation, (offsets, correlations))``.
+
+    Where either stream's angular speed does not vary at all (a rig at rest) no offset can be estimated: 0 with a NaN
+    correlation (the verdict then fails on the correlation).
 
     Raises
     ------
@@ -392,7 +398,7 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
                          f"{len(t) - 1} in the overlap: use a shorter block_s")
     s = _search(camera, sensor, max_offset, resolution, keep_rows=n_bootstrap > 0)
     ci = (float("nan"), float("nan"))
-    if n_bootstrap:
+    if n_bootstrap and s["rows"] is not None:
         boot = _bootstrap_offsets(s["a"], s["rows"], s["boot_x"], n_bootstrap, block, np.random.default_rng(seed))
         ci = (float(np.nanpercentile(boot, 2.5, method="lower")), float(np.nanpercentile(boot, 97.5, method="higher")))
     second = s["second"]

@@ -6,7 +6,9 @@
 1. the sensor stream becomes an orientation stream (raw gyro samples are integrated,
    trapezoidal rate, body frame: ``Q(t + dt) = Q(t) exp([omega] dt)``);
 2. the clock offset between the streams is estimated by cross-correlating their
-   angular speeds and reported (and by default removed);
+   angular speeds, refined below the search grid, with a 95 % block-bootstrap interval and the margin of its
+   correlation peak over any other (:func:`replication.association.offset_analysis`), reported (and by default
+   removed);
 3. pairs at ``interval`` seconds (steps 2-3: :mod:`replication.association`);
 4. the solver, the residual of every pair, the observability diagnostic, and a
    moving-block bootstrap over the pairs (overlapping pairs are correlated, so
@@ -24,7 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .association import estimate_time_offset, motion_pairs, stream_pairs  # re-exported: public names here
+from .association import (estimate_time_offset, motion_pairs, offset_analysis,  # re-exported: public names here
+                          stream_pairs)
 from .checks import check_number
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .handeye import relative_rotations
@@ -201,8 +204,10 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
     window = _gap_free_window(camera, oriented, max_offset)
-    offset, corr, curve = estimate_time_offset(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
-                                               full_output=True)
+    span = window.t[-1] - window.t[0]
+    clock = offset_analysis(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
+                            n_bootstrap=n_bootstrap, seed=seed, block_s=min(1.0, 0.25 * span))
+    offset, corr, curve = clock.offset_s, clock.correlation, clock.curve
     used = offset if correct_offset else 0.0
     A, B, t_start = motion_pairs(camera, oriented, interval, offset=used)
     A, B, t_start = A[::stride], B[::stride], t_start[::stride]
@@ -220,11 +225,14 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    evidence = dict(offset_s=offset, offset_correlation=corr, max_offset_s=max_offset, offset_applied=bool(correct_offset),
+    evidence = dict(offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
+                    second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
+                    offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
                     pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
     result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
+                          time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,
                           pair_times=t_start, progress=progress)
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]))

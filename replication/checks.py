@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 __all__ = ["ROTATION_ATOL", "MAX_ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init",
-           "check_range",
+           "check_range", "check_rotation_flat",
            "check_atol", "check_number"]
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
@@ -170,3 +170,19 @@ def check_range(name: str, value, *, low: float, high: float, low_open: bool = T
         raise ValueError(f"{name} must be in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}, "
                          f"got {value!r}")
     return float(value)
+
+
+def check_rotation_flat(name: str, flat, atol: float = ROTATION_ATOL) -> None:
+    """The checks of :func:`check_rotation_matrices` on one rotation given as a row-major list of 9 floats, in plain
+    Python (a per-sample hot path: :class:`replication.online.OnlineCalibrator`); the largest entry of ``R^T R - I``
+    against ``atol``."""
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = flat
+    if not math.isfinite(a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8):
+        raise ValueError(f"{name} is not a rotation matrix: it holds NaN or inf")
+    err = max(abs(a0 * a0 + a3 * a3 + a6 * a6 - 1.0), abs(a1 * a1 + a4 * a4 + a7 * a7 - 1.0),
+              abs(a2 * a2 + a5 * a5 + a8 * a8 - 1.0), abs(a0 * a1 + a3 * a4 + a6 * a7),
+              abs(a0 * a2 + a3 * a5 + a6 * a8), abs(a1 * a2 + a4 * a5 + a7 * a8))
+    if not err <= atol:
+        raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {err:.3g}")
+    if a0 * (a4 * a8 - a5 * a7) - a1 * (a3 * a8 - a5 * a6) + a2 * (a3 * a7 - a4 * a6) < 0:
+        raise ValueError(f"{name} is a reflection (det -1), not a rotation")

@@ -56,9 +56,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .checks import check_number, check_range, check_rotation_matrices
+from .checks import check_number, check_range, check_rotation_flat, check_rotation_matrices
 from .handeye import unvec, vec
-from .online_events import DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, RepeatFilter
+from .online_events import (DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, RepeatFilter,
+                            residual_angle_deg)
 from .so3 import angle_between_deg, nearest_rotation_up_to_sign
 from .stats import radius_deg
 
@@ -94,25 +95,6 @@ class OnlineState(NamedTuple):
     determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
     checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
     estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
-
-
-def _check_rotation(name: str, flat) -> None:
-    """The checks of :func:`replication.checks.check_rotation_matrices` (tolerance 1e-6) on one row-major rotation, in
-    plain Python: this is the per-pair hot path."""
-    a0, a1, a2, a3, a4, a5, a6, a7, a8 = flat
-    if not math.isfinite(a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8):
-        raise ValueError(f"{name} is not a rotation matrix: it holds NaN or inf")
-    err = max(abs(a0 * a0 + a3 * a3 + a6 * a6 - 1.0), abs(a1 * a1 + a4 * a4 + a7 * a7 - 1.0),
-              abs(a2 * a2 + a5 * a5 + a8 * a8 - 1.0), abs(a0 * a1 + a3 * a4 + a6 * a7),
-              abs(a0 * a2 + a3 * a5 + a6 * a8), abs(a1 * a2 + a4 * a5 + a7 * a8))
-    if not err <= 1e-6:
-        raise ValueError(f"{name} is not a rotation matrix: max |R^T R - I| = {err:.3g}")
-    if a0 * (a4 * a8 - a5 * a7) - a1 * (a3 * a8 - a5 * a6) + a2 * (a3 * a7 - a4 * a6) < 0:
-        raise ValueError(f"{name} is a reflection (det -1), not a rotation")
-
-
-def _angle_deg_from_d2(d2: float) -> float:
-    return math.degrees(2.0 * math.asin(min(1.0, math.sqrt(max(d2, 0.0) / 8.0))))
 
 
 class OnlineCalibrator:
@@ -319,7 +301,7 @@ class OnlineCalibrator:
             raise ValueError(f"a pair is two 3x3 rotations, got shapes {np.shape(A)} and {np.shape(B)}")
         fa, fb = M[0].ravel().tolist(), M[1].ravel().tolist()
         for name, flat in (("A (camera motion)", fa), ("B (sensor motion)", fb)):
-            _check_rotation(name, flat)
+            check_rotation_flat(name, flat)
         return self._update(M[0], M[1], fa, fb)
 
     def update_many(self, A, B) -> list[OnlineState]:
@@ -342,7 +324,7 @@ class OnlineCalibrator:
         if detector.armed:
             R = self._R
             d2 = 6.0 - 2.0 * float(np.vdot(A @ R, R @ B))  # ||A R - R B||_F^2
-            self._recent_res.append(_angle_deg_from_d2(d2))
+            self._recent_res.append(residual_angle_deg(d2))
             checking = detector.checking
             add, decide = detector.observe(A, B, d2, self.n_total - 1, R, self._cov, self._s2)
             if checking:

@@ -40,7 +40,7 @@ from .stats import _normal_quantile, radius_deg
 
 __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY",
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
-           "drift_test", "combined_threshold", "describe"]
+           "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
 #: Kinds of :class:`OnlineEvent`, in the order :func:`classify` tests them.
 EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information")
@@ -155,6 +155,11 @@ class OnlineEvent:
 def pair_d2(R, A, B) -> np.ndarray:
     """``||A_j R - R B_j||_F^2`` of every pair (``8 sin^2(theta_j / 2)``, ``theta_j`` the residual angle)."""
     return 6.0 - 2.0 * np.einsum("jab,jab->j", A @ R, R @ B)
+
+
+def residual_angle_deg(d2: float) -> float:
+    """The residual rotation angle (deg) of a pair from its ``d^2 = 8 sin^2(theta / 2)``."""
+    return math.degrees(2.0 * math.asin(min(1.0, math.sqrt(max(d2, 0.0) / 8.0))))
 
 
 def _excitation_deg(B) -> float:

@@ -17,6 +17,10 @@ time-offset correlation     < 0.9            < 0.5            the angular speeds
                                                               when both see one rigid motion: 0.990-0.999 on the real
                                                               recordings; unrelated streams, wrong units or columns
                                                               give -0.2 to 0.5
+offset peak margin          < 0.1            < 0.01           another offset matches the speeds almost as well:
+(correlation at the peak                                      periodic motion aliases the offset (a pure oscillation:
+minus the next peak's)                                        0.0000; the real recordings: no other peak within
+                                                              +-0.2 s, 0.44-0.66 within +-2 s)
 offset at the search bound  --               within 2         the correlation peaks at the edge of the search: the
                                              resolutions      true offset may lie outside it (raise ``max_offset``)
 pairs per bootstrap block   < 10             < 3              overlapping pairs are resampled in blocks spanning one
@@ -63,6 +67,7 @@ direction, gyro or time units) when reordering or rescaling the input makes the 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -78,6 +83,7 @@ EXIT_FAIL = 3
 THRESHOLDS = {
     "offset_correlation": (0.9, 0.5),          # below
     "offset_at_bound_resolutions": (None, 2),  # within this many resolutions of the bound: fail
+    "offset_peak_margin": (0.1, 0.01),         # below: another clock offset matches the speeds almost as well
     "blocks": (10, 3),                         # below
     "overlap_intervals": (10, 2),              # below
     "residual_to_motion": (0.1, 0.3),          # above
@@ -158,6 +164,8 @@ class Evidence:
     offset_applied: bool = True
     radius_kind: str = "bootstrap"          # what the radius is: "bootstrap" (batch) or "curvature" (online)
     excitation_deg: float | None = None     # online: RMS rotation about axes perpendicular to the least-excited one
+    offset_peak_margin: float | None = None  # correlation at the offset minus the best other peak's (NaN: none)
+    second_peak_offset_s: float | None = None
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
 
@@ -215,10 +223,19 @@ def judge(e: Evidence, extra=()) -> Verdict:
     if e.offset_s is not None and not e.offset_applied:
         reasons.append(_above("offset_left_ms", abs(1e3 * e.offset_s), "clock offset measured but not removed", " ms",
                               "the pairs were formed with the clocks as recorded (keep-clock)"))
-    if e.offset_correlation is not None:
+    if e.offset_correlation is not None and not math.isfinite(e.offset_correlation):
+        reasons.append(Reason("offset_correlation", "fail", None, THRESHOLDS["offset_correlation"][1],
+                              "no time-offset correlation: a stream's angular speed does not vary (a rig at rest, or "
+                              "a constant stream), so no clock offset could be estimated"))
+    elif e.offset_correlation is not None:
         reasons.append(_below("offset_correlation", e.offset_correlation, "time-offset correlation", "",
                               "the two streams' angular speeds do not match (unrelated streams, wrong units or "
                               "columns, or a clock offset beyond the search)"))
+    if e.offset_peak_margin is not None and math.isfinite(e.offset_peak_margin):
+        reasons.append(_below("offset_peak_margin", e.offset_peak_margin, "margin of the time-offset correlation peak "
+                              "over the next one", "", f"another clock offset ({1e3 * e.second_peak_offset_s:+.1f} ms) "
+                              f"matches the angular speeds almost as well (periodic motion): the offset may be that "
+                              f"one; record motion that is not periodic"))
     if e.offset_s is not None and e.max_offset_s is not None:
         margin = THRESHOLDS["offset_at_bound_resolutions"][1] * (e.offset_resolution_s or 0.0)
         if abs(e.offset_s) >= e.max_offset_s - margin:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .association import offset_in_words
 from .motions import MotionObservability
 from .quality import Verdict
 
@@ -25,16 +26,6 @@ OFFSET_CONVENTION = ("time_offset_s = d means the sensor sample stamped t + d ma
 #: What every radius of this package covers, and what it does not (stated in reports, summaries and figures).
 RADIUS_COVERS = ("the pairs' own noise only (their scatter about the estimate); errors every pair shares (a "
                  "trajectory's bias, a clock or scale error, the reference's own error) are not in it")
-
-
-def offset_in_words(offset_s: float) -> str:
-    """The clock offset with its sign in words (see :data:`OFFSET_CONVENTION`)."""
-    ms = 1e3 * offset_s
-    if ms == 0.0:
-        return "+0.0 ms: the clocks agree (the sensor sample stamped t matches the camera sample stamped t)"
-    side = "ahead of" if ms > 0 else "behind"
-    return (f"{ms:+.1f} ms: the sensor sample stamped t {'+' if ms > 0 else '-'} {abs(ms):.1f} ms matches the camera "
-            f"sample stamped t (sensor clock {side} the camera's by {abs(ms):.1f} ms; Kalibr's timeshift_cam_imu)")
 
 
 def json_safe(value):
@@ -74,6 +65,11 @@ class CalibrationResult:
         Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the angular speeds
         there (NaN for static pose sets).
     time_offset_applied : bool
+    time_offset_ci95_s : (float, float)
+        95 % block-bootstrap interval of the offset (:func:`replication.association.offset_analysis`; NaN without a
+        bootstrap, infinite at an end where the replicates leave the offsets searched).
+    time_offset_peak_margin : float
+        Correlation at the offset minus that at the best other peak (NaN: no other peak in the search).
     residual_deg : dict
         Per-pair residual angle (angle of ``R^T A_j R B_j^T``): mean, median, rms, p95, max.
     bootstrap_ci95_deg : float
@@ -118,6 +114,8 @@ class CalibrationResult:
     bootstrap_ci95_deg: float
     observability: MotionObservability = field(repr=False)
     reference_error_deg: float | None = None
+    time_offset_ci95_s: tuple = (math.nan, math.nan)
+    time_offset_peak_margin: float = math.nan
     bootstrap_resamples: str = "none"
     bootstrap_covers: str = RADIUS_COVERS
     pose_residual_median_deg: list | None = None
@@ -152,6 +150,8 @@ class CalibrationResult:
             "time_offset_correlation": self.time_offset_correlation,
             "time_offset_applied": self.time_offset_applied,
             "time_offset_convention": OFFSET_CONVENTION,
+            "time_offset_ci95_s": list(self.time_offset_ci95_s),
+            "time_offset_peak_margin": self.time_offset_peak_margin,
             "residual_deg": self.residual_deg,
             "bootstrap_ci95_deg": self.bootstrap_ci95_deg,
             "bootstrap_resamples": self.bootstrap_resamples,
@@ -181,7 +181,9 @@ class CalibrationResult:
             f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
         ]
         if math.isfinite(self.time_offset_correlation):
-            lines.append(f"time offset: {offset_in_words(self.time_offset_s)} (correlation "
+            lo, hi = (1e3 * v for v in self.time_offset_ci95_s)
+            ci = f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms, " if math.isfinite(lo) or math.isfinite(hi) else ""
+            lines.append(f"time offset: {offset_in_words(self.time_offset_s, decimals=2)} ({ci}correlation "
                          f"{self.time_offset_correlation:.4f}, {'applied' if self.time_offset_applied else 'not applied'})")
         lines += [
             f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",

@@ -12,7 +12,8 @@ from replication import so3
 from replication.calibration import calibrate, calibrate_poses
 from replication.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
 from replication.quality import THRESHOLDS, Evidence, judge
-from replication.report import RADIUS_COVERS, offset_in_words
+from replication.association import offset_in_words
+from replication.report import RADIUS_COVERS
 from replication.simulation import rig_streams
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
@@ -117,13 +118,22 @@ def test_every_radius_says_what_it_covers(rng):
 
 @pytest.mark.parametrize("offset, words", [
     (0.0123, "+12.3 ms: the sensor sample stamped t + 12.3 ms matches the camera sample stamped t (sensor clock ahead "
-             "of the camera's by 12.3 ms; Kalibr's timeshift_cam_imu)"),
+             "of the camera's by 12.3 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift)"),
     (-0.0123, "-12.3 ms: the sensor sample stamped t - 12.3 ms matches the camera sample stamped t (sensor clock "
-              "behind the camera's by 12.3 ms; Kalibr's timeshift_cam_imu)"),
-    (0.0, "+0.0 ms: the clocks agree (the sensor sample stamped t matches the camera sample stamped t)"),
+              "behind the camera's by 12.3 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift)"),
 ])
-def test_the_offset_sign_in_words(offset, words):
+def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
+    """The summary states the sign right for both signs (it printed 'ahead' whatever the sign)."""
     assert offset_in_words(offset) == words
+    R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.02)
+    from replication.streams import GyroStream
+
+    r = calibrate(camera, GyroStream(gyro.t + offset, gyro.omega, "gyro"), n_bootstrap=20)
+    line = next(x for x in r.summary().splitlines() if x.startswith("time offset"))
+    side = "ahead of" if offset > 0 else "behind"
+    assert f"sensor clock {side} the camera's by 12.30 ms" in line and "95 % interval" in line
+    lo, hi = r.time_offset_ci95_s
+    assert lo <= offset <= hi and hi - lo < 2e-3
 
 
 def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
