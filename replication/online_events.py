@@ -67,27 +67,44 @@ SMALL_MOTION_DEG = 0.5
 SINCE_ONSET = 64
 #: Width of the repeat test's grid cells, in tolerances (wide: a pair is rarely near a cell edge, so one look-up).
 CELL_TOLERANCES = 16.0
-#: Most distinct pairs remembered for the repeat test (about 0.3 kB each): 28 h at one pair per second.
-DUPLICATE_MEMORY = 100_000
+#: Most distinct pairs remembered for the repeat test (about 0.3 kB each, 15 MB in all): 14 h at one pair per second.
+DUPLICATE_MEMORY = 50_000
 
 
 _STAY, _DOWN, _UP = (0,), (0, -1), (0, 1)
+_KEY = 1 << 40  # a cell's three integer coordinates as one integer key (|coordinate| < 2**39 for rotations)
 
 
 class RepeatFilter:
     """Remembers the pairs seen and tells whether a new one repeats one of them (within ``tol_deg`` elementwise on
     both rotation matrices; ``tol_deg = 0``: exact repeats only). Pairs whose camera and sensor motions are both
-    below :data:`SMALL_MOTION_DEG` are never repeats. O(1) per pair: a grid on the sensor motion's antisymmetric
-    part (cells of :data:`CELL_TOLERANCES` ``tol``: a pair within ``tol`` lies in this cell or, where this pair is
-    within ``tol`` of the cell's edge on an axis, in the neighbour across it; at most 8 cells are looked up); at most :data:`DUPLICATE_MEMORY` pairs are remembered
-    (later ones are compared, not remembered)."""
+    below :data:`SMALL_MOTION_DEG` are never repeats.
+
+    O(1) per pair: a grid on the sensor motion's antisymmetric part, cells of :data:`CELL_TOLERANCES` ``tol`` per
+    axis; a pair within ``tol`` lies in this pair's cell or, where this pair is within ``tol`` of the cell's edge on
+    an axis, in the neighbour across it (mostly one look-up, at most 8). The first :data:`DUPLICATE_MEMORY` distinct
+    pairs are remembered (18 floats each in one array, about 0.3 kB per pair with the grid); later ones are compared,
+    not remembered.
+    """
 
     def __init__(self, tol_deg: float = DUPLICATE_DEG):
         self._tol = math.radians(tol_deg)
         self._inv = 1.0 / (CELL_TOLERANCES * self._tol) if self._tol else 0.0
         self._small_trace = 1.0 + 2.0 * math.cos(math.radians(SMALL_MOTION_DEG))
-        self._seen: dict = {}
+        self._cells: dict = {}              # cell key -> row index, or list of row indices
+        self._rows = np.empty((64, 18))      # the remembered pairs (flat A, flat B), grown by doubling
         self.remembered = 0
+
+    def _remember(self, key, values) -> None:
+        if self.remembered >= DUPLICATE_MEMORY:
+            return
+        if self.remembered == len(self._rows):
+            self._rows = np.concatenate([self._rows, np.empty_like(self._rows)])[:DUPLICATE_MEMORY]
+        self._rows[self.remembered] = values
+        held = self._cells.get(key)
+        self._cells[key] = self.remembered if held is None else (
+            [held, self.remembered] if isinstance(held, int) else held + [self.remembered])
+        self.remembered += 1
 
     def seen(self, fa, fb) -> bool:
         """Whether the pair (row-major flat ``A`` and ``B``, lists of 9 floats) repeats an earlier one; remembers it
@@ -95,33 +112,26 @@ class RepeatFilter:
         small = self._small_trace
         if fa[0] + fa[4] + fa[8] > small and fb[0] + fb[4] + fb[8] > small:
             return False  # a rig at rest repeats the identity with independent noise: not a repeat
-        tol = self._tol
+        tol, cells = self._tol, self._cells
         if tol == 0.0:
             key = tuple(fa + fb)
-            if key in self._seen:
+            if key in cells:
                 return True
-            if self.remembered < DUPLICATE_MEMORY:
-                self._seen[key] = True
-                self.remembered += 1
+            self._remember(key, fa + fb)
             return False
-        # cells of CELL_TOLERANCES tol per axis; a pair within tol is in this cell or, where this one lies within tol
-        # of the cell's edge, in the neighbour across it (mostly one look-up, at most 8)
         inv, edge = self._inv, 1.0 / CELL_TOLERANCES
         x, y, z = 0.5 * (fb[7] - fb[5]) * inv, 0.5 * (fb[2] - fb[6]) * inv, 0.5 * (fb[3] - fb[1]) * inv
         bx, by, bz = math.floor(x), math.floor(y), math.floor(z)
         x, y, z = x - bx, y - by, z - bz
-        seen = self._seen
         for dx in (_DOWN if x < edge else _UP if x > 1.0 - edge else _STAY):
             for dy in (_DOWN if y < edge else _UP if y > 1.0 - edge else _STAY):
                 for dz in (_DOWN if z < edge else _UP if z > 1.0 - edge else _STAY):
-                    for ga, gb in seen.get((bx + dx, by + dy, bz + dz), ()):
-                        if all(abs(p - q) <= tol for p, q in zip(fa, ga)) and all(
-                                abs(p - q) <= tol for p, q in zip(fb, gb)):
+                    held = cells.get(((bx + dx) * _KEY + by + dy) * _KEY + bz + dz)
+                    if held is not None:
+                        rows = self._rows[held if isinstance(held, list) else [held]]
+                        if np.any(np.abs(rows - np.array(fa + fb)).max(axis=1) <= tol):
                             return True
-        base = (bx, by, bz)
-        if self.remembered < DUPLICATE_MEMORY:
-            seen.setdefault(base, []).append((fa, fb))
-            self.remembered += 1
+        self._remember((bx * _KEY + by) * _KEY + bz, fa + fb)
         return False
 
 
