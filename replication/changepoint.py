@@ -27,7 +27,11 @@ with ``d_k = log(R_before^T R_after)``::
 
     W_k = d_k^T (C_before + C_after)^{-1} d_k / phi
 
-is about chi-square with 3 degrees of freedom without a change; the test statistic is ``max_k W_k``.
+is about chi-square with 3 degrees of freedom without a change; the test statistic is ``max_k W_k``. The split
+reported is the least-squares one (Bai 1994, the estimator of a break date): the ``k`` that minimises the sum of
+the two sides' costs (8), each at its own estimate; the ``block`` pairs spanning the split are left out at every
+``k`` alike (a pair across a re-mount fits neither mounting). The maximiser of ``W_k`` is not used: where the noise
+is uneven along the recording, a noisy stretch sways it by seconds.
 
 **The threshold.** The maximum over the correlated splits of a share ``[lambda_1, lambda_2]`` of the recording
 is, for long recordings, that of ``|B(lambda)|^2 / (lambda (1 - lambda))`` with ``B`` a 3-dimensional Brownian
@@ -54,7 +58,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .checks import check_number, check_rotation_matrices
-from .handeye import check_motion_pairs, vec
+from .handeye import check_motion_pairs
 from .online import radius_deg
 from .so3 import angle_between_deg, log_map
 from .solvers.classic import relaxed_rotation
@@ -78,6 +82,8 @@ NEWTON_ITERATIONS = 8
 #: Floor of the mean square residual angle (rad^2): a residual of 0.01 deg, below any real sensor's noise, so
 #: that noise-free data is not judged by rounding (as :data:`replication.online.D2_FLOOR`).
 S2_FLOOR = math.radians(0.01) ** 2
+#: A side's ``G`` with its smallest eigenvalue below this share of its largest: motions about one axis only.
+DEGENERATE_TOL = 1e-10
 _DOF = 3  # a rotation has three degrees of freedom
 _EYE = np.eye(3)
 
@@ -93,12 +99,13 @@ class ChangeTest:
     statistic, threshold : float
         ``max_k W_k`` and the threshold it is compared with (see the module notes).
     p_value : float
-        The false-alarm probability of a statistic this large (the same approximation as the threshold;
-        rounded to 1 below 1e-300 or above 1).
+        The false-alarm probability of a statistic this large (the approximation of the threshold, clipped to
+        [0, 1]).
     level : float
         The false-alarm probability the threshold was set for.
     split_index : int
-        Index of the first pair of the ``after`` side (pairs ``split_index - block .. split_index - 1`` span the
+        The least-squares split (module notes; ``statistic`` is the maximum over every split, not necessarily
+        this one's): index of the first pair of the ``after`` side (pairs ``split_index - block .. split_index - 1`` span the
         split and belong to neither side).
     split_time : float
         Its start time ``t[split_index]`` (s): the estimated time of the change.
@@ -107,8 +114,8 @@ class ChangeTest:
     angle_deg : float
         The angle between them.
     difference_radius_deg : float
-        95 % radius of that angle's noise (``phi (C_before + C_after)``): without a change the angle is below it
-        in 95 % of recordings.
+        95 % radius of that angle's noise at this split (``phi (C_before + C_after)``; for a split chosen in
+        advance, the selected one's angle is larger).
     n_before, n_after : int
         Pairs on each side.
     inflation : float
@@ -193,13 +200,12 @@ def _fit(S, SB, n):
     cost = np.clip(2.0 * n * (3.0 - g), 0.0, None)          # eq. (8) at R, from K
     s2 = np.maximum(cost / (2.0 * (n - 3.0)), S2_FLOOR)      # mean square residual angle (rad^2)
     G = 2.0 * n[:, None, None] * _EYE - SB - np.swapaxes(SB, -1, -2)
+    lam = np.linalg.eigvalsh(G)
+    if np.any(lam[:, 0] <= DEGENERATE_TOL * lam[:, -1]):
+        raise ValueError("degenerate motion on one side of a split: the sensor turns about one axis only there, so R0 "
+                         "is not determined on that side (G = sum_j (2I - B_j - B_j^T) is singular); a change test "
+                         "needs motions about other axes on both sides")
     return R, cost, s2, G
-
-
-def _cost(R, S, n):
-    """Eq. (8) at ``R`` of the pairs whose ``B_j kron A_j`` sum to ``S`` (``n`` of them): ``2 (3 n - x^T sym(S) x)``."""
-    x = vec(R)
-    return 2.0 * (3.0 * n - np.einsum("ka,kab,kb->k", x, S, x))
 
 
 def _long_run(A, B, R, m: int):
@@ -304,9 +310,9 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
     Ca = (s2a / 3.0)[:, None, None] * np.linalg.inv(Ga)
     d = log_map(np.swapaxes(Rb, -1, -2) @ Ra)
     W = np.einsum("ka,ka->k", d, np.linalg.solve(Cb + Ca, d[..., None])[..., 0])
-    # the split: least squares over every pair (Bai 1994), the pairs across it at the better of the two estimates
-    guard = PK[ks] - PK[end]
-    i = int(np.argmin(cb + ca + np.minimum(_cost(Rb, guard, m), _cost(Ra, guard, m))))
+    # the split: least squares (Bai 1994) over the pairs on either side; the block spanning the split is left out
+    # at every split alike (it straddles the change), so the sums compare the same number of pairs
+    i = int(np.argmin(cb + ca))
     k = int(ks[i])
     # the inflation for overlapping pairs, on the two-segment fit at that split
     omega = _long_run(A[:k - m], B[:k - m], Rb[i], m) + _long_run(A[k:], B[k:], Ra[i], m)
