@@ -57,11 +57,16 @@ def remount_half_way():
     return two_segment_test(*_pairs(camera, gyro), block=BLOCK)
 
 
-def test_a_2_deg_remount_half_way_is_found_where_it_happened(remount_half_way):
-    r = remount_half_way
+@pytest.mark.parametrize("kind", ["gyro", "orientations"])
+def test_a_2_deg_remount_half_way_is_found_where_it_happened(remount_half_way, kind):
+    if kind == "gyro":
+        r = remount_half_way
+    else:  # an orientation sensor: the pairs across the re-mount jump by the whole step
+        camera, gyro = _rig(1)
+        r = two_segment_test(*_pairs(camera, remounted(integrate_gyro(gyro), 30.0, STEP)), block=BLOCK)
     assert isinstance(r, ChangeTest)
     assert r.significant and r.statistic > r.threshold and r.p_value < 1e-6, r.summary()
-    assert abs(r.split_time - 30.0) < 2.0, r.summary()
+    assert abs(r.split_time - 30.0) < 0.5, r.summary()  # candidate splits every 0.25 s
     assert_rotations_close(r.R_before, R0, 0.2, name="R_before")
     assert_rotations_close(r.R_after, R0 @ STEP, 0.2, name="R_after")
     assert r.angle_deg == pytest.approx(2.0, abs=0.2) and r.angle_deg >= FAIL_DEG
@@ -87,7 +92,7 @@ def test_splits_keep_min_share_on_each_side():
         assert (k - BLOCK).min() < n_min + BLOCK and (J - k).min() < n_min + BLOCK  # and no more than that
         assert r.n_before >= n_min and r.n_after >= n_min and r.n_before + BLOCK + r.n_after == J
         if share == 0.15:  # the change is inside the splits: found
-            assert r.significant and abs(r.split_time - 12.0) < 2.0, r.summary()
+            assert r.significant and abs(r.split_time - 12.0) < 0.5, r.summary()
         else:  # outside: the split nearest to it, and no closer to the end
             assert r.split_time == r.split_times[0], r.summary()
 
@@ -110,7 +115,8 @@ def test_the_inflation_measures_overlap():
 
 
 def test_threshold_is_andrews_for_long_recordings_and_higher_for_short():
-    # sup of a 3-dim squared normalised Brownian bridge over [0.15, 0.85]: 1 % point 18.2 (simulated, benchmark)
+    # sup of a 3-dim squared normalised Brownian bridge over [0.15, 0.85]: 1 % point 18.0-18.3, 5 % 14.0-14.1
+    # (simulated, benchmarks/bench_changepoint.py); the approximation is a little above (on the safe side)
     assert threshold(0.01, 1e9, 0.15, 0.85) == pytest.approx(18.3, abs=0.3)
     assert threshold(0.05, 1e9, 0.15, 0.85) == pytest.approx(14.2, abs=0.3)
     short, long_ = threshold(0.01, 30.0, 0.15, 0.85), threshold(0.01, 300.0, 0.15, 0.85)
@@ -161,6 +167,13 @@ def test_bad_pairs_and_times_are_refused(pairs):
         two_segment_test(2.0 * A, B, t, block=BLOCK)
     with pytest.raises(ValueError, match=r"A and B must have shape \(J, 3, 3\)"):
         two_segment_test(A[None], B[None], t, block=BLOCK)
+
+
+def test_motions_about_one_axis_are_refused():
+    rng = np.random.default_rng(6)
+    A = so3.exp_map(rng.uniform(0.2, 1.0, (1000, 1)) * np.array([0.0, 0.0, 1.0]))
+    with pytest.raises(ValueError, match="degenerate motion on one side"):
+        two_segment_test(A, R0.T @ A @ R0, 0.05 * np.arange(1000), block=1)
 
 
 def test_too_few_pairs_are_refused(pairs):
@@ -216,6 +229,6 @@ def test_a_2_deg_remount_in_tumvi_is_found():
     t_r = camera.t[0] + 0.5 * (camera.t[-1] - camera.t[0])
     _, A, B, t, block = _calibrated_pairs(camera, remounted(gyro, t_r, STEP))
     c = two_segment_test(A, B, t, block=block)
-    assert c.significant and c.angle_deg >= FAIL_DEG and abs(c.split_time - t_r) < 2.0, c.summary()
+    assert c.significant and c.angle_deg >= FAIL_DEG and abs(c.split_time - t_r) < 1.0, c.summary()
     assert_rotations_close(c.R_before, base, 0.2, name="R_before")
     assert_rotations_close(c.R_after, base @ STEP, 0.2, name="R_after")
