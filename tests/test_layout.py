@@ -57,7 +57,7 @@ LAYERS = {
     "data": ["streams", "realdata", "paper", "fetch"],
     "solvers": ["solvers"],
     "pipeline": ["simulation", "association", "quality", "report", "diagnose", "calibration", "estimate", "poses",
-                 "table2", "online_events", "online", "live", "vins_rule", "lab",
+                 "changepoint", "table2", "online_events", "online", "live", "vins_rule", "lab",
                  "lab.settings", "lab.recording", "lab.simulate", "lab.chain"],
     "studies": ["table1", "fig5", "baselines", "real_study", "live_study", "lab.study", "ledger", "figures",
                 "notebook"],
