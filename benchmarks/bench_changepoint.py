@@ -25,10 +25,13 @@ from scipy.stats import binomtest
 from replication import so3
 from replication.association import estimate_time_offset, motion_pairs
 from replication.calibration import calibrate
-from replication.changepoint import FAIL_DEG, WARNING_DEG, remounted, threshold, two_segment_test
+from replication.changepoint import remounted, threshold, two_segment_test
 from replication.live_study import REMOUNT_AXIS
+from replication.quality import THRESHOLDS
 from replication.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
 from replication.streams import GyroStream, OrientationStream, integrate_gyro
+
+WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
 R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
 #: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per 200 Hz sample),

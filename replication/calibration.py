@@ -13,7 +13,9 @@
 4. the solver, the residual of every pair, the observability diagnostic, and a
    moving-block bootstrap over the pairs (overlapping pairs are correlated, so
    blocks span ``interval``) for a confidence radius in degrees;
-5. a verdict (:mod:`replication.quality`: ``ok`` / ``warning`` / ``fail`` with every reason
+5. a change test (:mod:`replication.changepoint`: do the pairs before and after some time agree on the same
+   ``R0``? a re-mount during the recording fails the verdict, naming the time and both estimates);
+6. a verdict (:mod:`replication.quality`: ``ok`` / ``warning`` / ``fail`` with every reason
    measured) and, where it is not ``ok``, a search for the usual input mistakes by name
    (:mod:`replication.diagnose`). Pairs whose interval crosses a gap in a stream are dropped.
 
@@ -142,6 +144,30 @@ def _speeds(camera, sensor, offset, lo, hi):
     return 0.5 * (t[1:] + t[:-1]), speed[0], speed[1]
 
 
+def _change_test(A, B, t_start, block, t0):
+    """The change test on the pairs (:func:`replication.changepoint.two_segment_test`), its times since ``t0``; or
+    ``(None, why)`` where it cannot run (too short a recording, one side's motions about one axis)."""
+    import dataclasses
+
+    from .changepoint import two_segment_test
+
+    try:
+        c = two_segment_test(A, B, t_start, block=block)
+    except ValueError as err:
+        return None, f"not run: {err}"
+    return dataclasses.replace(c, split_time=c.split_time - t0, split_times=c.split_times - t0), None
+
+
+def _change_report(c, note) -> dict:
+    """The change test for the JSON report (times since the camera's first sample)."""
+    if c is None:
+        return {"run": False, "note": note}
+    return {"run": True, "note": None, "significant": bool(c.significant), "statistic": c.statistic,
+            "threshold": c.threshold, "p_value": c.p_value, "level": c.level, "split_time_s": c.split_time,
+            "angle_deg": c.angle_deg, "difference_radius_deg": c.difference_radius_deg, "n_before": c.n_before,
+            "n_after": c.n_after, "R0_before": c.R_before.tolist(), "R0_after": c.R_after.tolist()}
+
+
 def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
               stride: int = 1, max_offset: float = 0.2, correct_offset: bool = True, n_bootstrap: int = 200,
               seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False,
@@ -225,7 +251,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    evidence = dict(offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
+    change, change_note = _change_test(A, B, t_start, block, float(camera.t[0]))
+    evidence = dict(change=change, offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
@@ -233,9 +260,11 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
                           time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
+                          change_test=_change_report(change, change_note),
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,
                           pair_times=t_start, progress=progress)
-    result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]))
+    result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
+                              change=change)
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])

@@ -55,7 +55,8 @@ like a change: they are correlated beyond ``block`` pairs, so ``phi`` does not h
 that wanders 0.1 deg per 10 s (0.4 deg over 135 s) is flagged in 49 of 50 recordings, halves a median 0.42 deg
 (at most 0.77 deg) apart;
 TUM-VI room1 with its gyro is flagged as recorded (p = 0.002) with halves 0.04 deg apart. The angle between the
-two sides, not the significance alone, says whether the change matters (:data:`WARNING_DEG`, :data:`FAIL_DEG`).
+two sides, not the significance alone, says whether the change matters (``remount_deg`` in
+:data:`replication.quality.THRESHOLDS`).
 """
 from __future__ import annotations
 
@@ -67,21 +68,13 @@ import numpy as np
 
 from .checks import check_number, check_rotation_matrices
 from .handeye import check_motion_pairs
-from .online import radius_deg
+from .stats import radius_deg
 from .so3 import angle_between_deg, log_map
 from .solvers.classic import relaxed_rotation
 from .solvers.optimal import chordal_newton
 from .streams import GyroStream, OrientationStream
 
-__all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS", "WARNING_DEG",
-           "FAIL_DEG"]
-
-#: Proposed sizes of a significant change for a verdict (:mod:`replication.quality` owns it): ``warning`` from
-#: WARNING_DEG, ``fail`` from FAIL_DEG; below WARNING_DEG a significant change is too small to matter. Measured
-#: (``benchmarks/bench_changepoint.py``): the real recordings as recorded split 0.04-0.23 deg apart (noise radii
-#: 0.04-0.21 deg; one of four significant); re-mounts inside them of 0.5, 1, 2 and 5 deg (24 each) are all
-#: significant, with angles of 0.22-0.68, 0.97-1.16, 1.97-2.15 and 4.96-5.16 deg.
-WARNING_DEG, FAIL_DEG = 0.5, 1.0
+__all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS"]
 
 #: Fewest independent stretches (``(J - block) / (2 block + 1)``) the test needs: the inflation and the threshold
 #: rest on them.

@@ -121,7 +121,7 @@ def _replicates(motions, method, options, index_sets, *, progress):
 
 def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
                 parameters, inputs, pair_times, progress, stations=None, extra_diagnostics=None,
-                time_offset_ci95_s=(math.nan, math.nan), time_offset_peak_margin=math.nan):
+                time_offset_ci95_s=(math.nan, math.nan), time_offset_peak_margin=math.nan, change_test=None):
     """Solve, residuals, bootstrap, verdict: a :class:`~replication.report.CalibrationResult`.
 
     ``stations = (i, j, N)``: the pairs come from static stations (pair ``k`` between stations ``i_k`` and
@@ -184,6 +184,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         time_offset_applied=applied,
         time_offset_ci95_s=tuple(float(v) for v in time_offset_ci95_s),
         time_offset_peak_margin=float(time_offset_peak_margin),
+        change_test=change_test,
         residual_deg={"mean": float(res.mean()), "median": float(np.median(res)),
                       "rms": float(np.sqrt(np.mean(res ** 2))), "p95": float(np.percentile(res, 95)),
                       "max": float(res.max())},

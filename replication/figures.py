@@ -198,6 +198,11 @@ def calibration_figure(result):
     res = np.asarray(d.get("residuals_deg", []))
     times = d.get("pair_times")
     c.plot(np.arange(len(res)) if times is None else np.asarray(times) - t0, res, ".", ms=2)
+    change = d.get("change")
+    if change is not None and change.significant:
+        c.axvline(change.split_time, color="tab:red", ls="--", lw=0.8,
+                  label=f"R0 changes here? ({change.angle_deg:.2g} deg between the sides)")
+        c.legend(fontsize=7)
     c.set_xlabel("pair" if times is None else "pair start, since the camera's first sample (s)")
     c.set_ylabel("residual (deg)")
     c.set_title("(c) per-pair residual")

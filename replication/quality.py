@@ -56,6 +56,12 @@ sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow
                                              interval         integration error in every pair
 motion pairs                < 30             < 10             a handful of pairs fits R0 almost exactly whatever the
                                                               input's errors, so the residual checks see nothing
+a change of R0 during the   > 0.5 deg        > 0.75 deg       the pairs before and after some time agree on different
+recording (change test                                        R0 beyond their noise (replication.changepoint): a
+significant; angle between                                    re-mount, or a trajectory whose frame wanders. The
+the two sides)                                                recordings as recorded: 0.04-0.23 deg (one significant,
+                                                              0.04 deg); re-mounts inside them of 0.5 / 1 / 2 / 5
+                                                              deg: 0.22-0.68 / 0.97-1.16 / 1.97-2.15 / 4.96-5.16 deg
 angle to a given reference  > 1 deg          > 5 deg          the real recordings: 0.06-0.63 deg (the stereo run's
                                                               rectified frame); a gyro with permuted or flipped axes
                                                               is a fixed rotation only a reference reveals
@@ -98,6 +104,7 @@ THRESHOLDS = {
     "gyro_samples_per_interval": (None, 5.0),  # below
     "n_pairs": (30, 10),                       # below
     "reference_error_deg": (1.0, 5.0),         # above
+    "remount_deg": (0.5, 0.75),                # above, where the change test is significant
     "offset_left_ms": (5.0, None),             # above (an offset measured but not removed)
 }
 
@@ -166,6 +173,7 @@ class Evidence:
     excitation_deg: float | None = None     # online: RMS rotation about axes perpendicular to the least-excited one
     offset_peak_margin: float | None = None  # correlation at the offset minus the best other peak's (NaN: none)
     second_peak_offset_s: float | None = None
+    change: object | None = None            # streams: replication.changepoint.ChangeTest (t relative to the camera)
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
 
@@ -188,6 +196,12 @@ def _below(check, value, name, unit, why):
         if bound is not None and value < bound:
             return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
     return None
+
+
+def _quaternion(R) -> str:
+    from .so3 import as_quaternion
+
+    return "(" + ", ".join(f"{v:.4f}" for v in as_quaternion(R)) + ")"
 
 
 def _outlying_poses(medians):
@@ -280,6 +294,14 @@ def judge(e: Evidence, extra=()) -> Verdict:
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
     if e.pose_residual_medians_deg is not None:
         reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
+    if e.change is not None and e.change.significant:
+        c = e.change
+        reasons.append(_above("remount_deg", c.angle_deg, f"angle between R0 before and after {c.split_time:.1f} s",
+                              " deg", f"the {c.n_before} pairs before and the {c.n_after} after agree on different R0 "
+                              f"beyond their noise (change test p = {c.p_value:.2g}, 95 % noise radius "
+                              f"{c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, or a "
+                              f"trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
+                              f"{_quaternion(c.R_after)} (w, x, y, z); calibrate each part on its own"))
     if e.pairs_dropped_at_gaps:
         share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)
         reasons.append(_above("gap_share_dropped", share, "share of pairs dropped across stream gaps", "",

@@ -84,6 +84,9 @@ class CalibrationResult:
         What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
     pose_residual_median_deg : list of float or None
         Static pose sets: each station's median pair residual (0-based station order).
+    change_test : dict or None
+        Streams: the change test (:func:`replication.changepoint.two_segment_test`; did ``R0`` change during the
+        recording? times since the camera's first sample), or why it was not run; None for static pose sets.
     online : dict or None
         ``calibrate --online``: what the online replay found (:meth:`replication.live.LiveRig.summary`).
     verdict : Verdict
@@ -119,6 +122,7 @@ class CalibrationResult:
     bootstrap_resamples: str = "none"
     bootstrap_covers: str = RADIUS_COVERS
     pose_residual_median_deg: list | None = None
+    change_test: dict | None = None
     online: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
     warnings: tuple = ()
@@ -157,6 +161,7 @@ class CalibrationResult:
             "bootstrap_resamples": self.bootstrap_resamples,
             "bootstrap_covers": self.bootstrap_covers,
             "pose_residual_median_deg": self.pose_residual_median_deg,
+            "change_test": self.change_test,
             "online": self.online,
             "observability": {
                 "spectral_ratio": float(obs.spectral_ratio),
@@ -190,6 +195,11 @@ class CalibrationResult:
             f"bootstrap 95% radius: {boot} (resampling {self.bootstrap_resamples}); it covers {self.bootstrap_covers}",
             f"axis spread camera {float(self.observability.camera_axis_spread_deg):.1f} deg",
         ]
+        c = self.change_test
+        if c is not None:
+            lines.append(f"change test: {c['note']}" if not c["run"] else (
+                f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
+                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g})"))
         if self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
         return "\n".join(lines)

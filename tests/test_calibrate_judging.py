@@ -177,3 +177,46 @@ def test_judge_tolerates_missing_residuals():
     e = dataclasses.replace(Evidence(n_pairs=12, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None),
                             radius_kind="curvature")
     assert judge(e).level in ("ok", "warning")
+
+
+# ------------------------------------------------------------------------------------------- a change inside a recording
+
+def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
+    from replication.changepoint import remounted
+
+    R0, camera, gyro, _ = rig_streams(90.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
+    step = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+    r = calibrate(camera, remounted(gyro, 45.0, step), n_bootstrap=20)
+    reason = _reasons(r)["remount_deg"]
+    assert r.verdict.level == "fail" and reason.level == "fail" and "after 45" in reason.message
+    assert "R0 before (" in reason.message and "after (" in reason.message
+    c = r.change_test
+    assert c["significant"] and abs(c["split_time_s"] - 45.0) < 1.0 and c["angle_deg"] == pytest.approx(2.0, abs=0.05)
+    assert so3.angle_between_deg(np.array(c["R0_before"]), R0) < 0.05
+    assert so3.angle_between_deg(np.array(c["R0_after"]), R0 @ step) < 0.05
+    jsonschema.validate(r.to_dict(), SCHEMA)
+    clean = calibrate(camera, gyro, n_bootstrap=20)
+    assert "remount_deg" not in _reasons(clean) and clean.change_test["run"] and not clean.change_test["significant"]
+
+
+def test_a_short_recording_says_why_the_change_test_did_not_run(rng):
+    R0, camera, gyro, _ = rig_streams(15.0, rng=rng, camera_noise_deg=0.05)
+    r = calibrate(camera, gyro, n_bootstrap=0)
+    assert not r.change_test["run"] and r.change_test["note"].startswith("not run: ")
+    assert "change test: not run" in r.summary()
+
+
+class _Change:
+    significant, split_time, n_before, n_after, p_value, difference_radius_deg = True, 10.0, 500, 500, 1e-6, 0.05
+    R_before = R_after = np.eye(3)
+
+    def __init__(self, angle_deg, significant=True):
+        self.angle_deg, self.significant = angle_deg, significant
+
+
+@pytest.mark.parametrize("angle, significant, level", [
+    (0.49, True, None), (0.51, True, "warning"), (0.74, True, "warning"), (0.76, True, "fail"), (5.0, False, None)])
+def test_remount_threshold_boundaries(angle, significant, level):
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(angle, significant))
+    assert {r.check: r.level for r in judge(e).reasons}.get("remount_deg") == level

@@ -16,11 +16,14 @@ import pytest
 from replication import so3
 from replication.association import motion_pairs
 from replication.calibration import calibrate
-from replication.changepoint import FAIL_DEG, ChangeTest, remounted, threshold, two_segment_test
+from replication.changepoint import ChangeTest, remounted, threshold, two_segment_test
+from replication.quality import THRESHOLDS
 from replication.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
 from replication.solvers import chordal_optimal
 from replication.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import assert_rotations_close
+
+WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
 R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
 STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))  # a 2 deg re-mount about a generic axis
