@@ -32,7 +32,7 @@ from .association import (estimate_time_offset, motion_pairs, offset_analysis,  
                           stream_pairs)
 from .checks import check_number
 from .estimate import check_common, check_options, solve_pairs, with_reasons
-from .handeye import relative_rotations
+from .handeye import pair_residual_deg, relative_rotations
 from .poses import calibrate_poses, pose_pairs  # re-exported: public names here
 from .report import CalibrationResult  # re-exported: a public name here
 from .so3 import rotation_angle_deg
@@ -145,8 +145,10 @@ def _speeds(camera, sensor, offset, lo, hi):
 
 
 def _change_test(A, B, t_start, block, t0):
-    """The change test on the pairs (:func:`replication.changepoint.two_segment_test`), its times since ``t0``; or
-    ``(None, why)`` where it cannot run (too short a recording, one side's motions about one axis)."""
+    """The change test on the pairs (:func:`replication.changepoint.two_segment_test`), its times since ``t0``, and
+    how well each side fits its own estimate (the larger median residual / median motion of the two sides: a
+    re-mount leaves each side fitting, an input mistake neither); or ``(None, why)`` where it cannot run (too short
+    a recording, one side's motions about one axis)."""
     import dataclasses
 
     from .changepoint import two_segment_test
@@ -155,14 +157,17 @@ def _change_test(A, B, t_start, block, t0):
         c = two_segment_test(A, B, t_start, block=block)
     except ValueError as err:
         return None, f"not run: {err}"
-    return dataclasses.replace(c, split_time=c.split_time - t0, split_times=c.split_times - t0), None
+    k = c.split_index
+    fit = max(float(np.median(pair_residual_deg(R, a, b)) / max(np.median(rotation_angle_deg(a)), 1e-12))
+              for R, a, b in ((c.R_before, A[:max(k - block, 1)], B[:max(k - block, 1)]), (c.R_after, A[k:], B[k:])))
+    return dataclasses.replace(c, split_time=c.split_time - t0, split_times=c.split_times - t0), fit
 
 
-def _change_report(c, note) -> dict:
+def _change_report(c, fit) -> dict:
     """The change test for the JSON report (times since the camera's first sample)."""
     if c is None:
-        return {"run": False, "note": note}
-    return {"run": True, "note": None, "significant": bool(c.significant), "statistic": c.statistic,
+        return {"run": False, "note": fit}
+    return {"run": True, "note": None, "significant": bool(c.significant), "sides_fit": fit, "statistic": c.statistic,
             "threshold": c.threshold, "p_value": c.p_value, "level": c.level, "split_time_s": c.split_time,
             "angle_deg": c.angle_deg, "difference_radius_deg": c.difference_radius_deg, "n_before": c.n_before,
             "n_after": c.n_after, "R0_before": c.R_before.tolist(), "R0_after": c.R_after.tolist()}
@@ -251,8 +256,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    change, change_note = _change_test(A, B, t_start, block, float(camera.t[0]))
-    evidence = dict(change=change, offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
+    change, change_fit = _change_test(A, B, t_start, block, float(camera.t[0]))
+    evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
@@ -260,7 +265,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
                           time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
-                          change_test=_change_report(change, change_note),
+                          change_test=_change_report(change, change_fit),
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,
                           pair_times=t_start, progress=progress)
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),

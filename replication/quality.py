@@ -57,9 +57,11 @@ sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow
 motion pairs                < 30             < 10             a handful of pairs fits R0 almost exactly whatever the
                                                               input's errors, so the residual checks see nothing
 a change of R0 during the   > 0.5 deg        > 0.75 deg       the pairs before and after some time agree on different
-recording (change test                                        R0 beyond their noise (replication.changepoint): a
-significant; angle between                                    re-mount, or a trajectory whose frame wanders. The
-the two sides)                                                recordings as recorded: 0.04-0.23 deg (one significant,
+recording (change test                                        R0 beyond their noise (replication.changepoint), each
+significant, each side                                        side fitting its own: a re-mount, or a trajectory
+fitting; angle between                                        whose frame wanders (an input mistake fits neither
+the two sides)                                                side and is named by its own reasons). The
+                                                              recordings as recorded: 0.04-0.23 deg (one significant,
                                                               0.04 deg); re-mounts inside them of 0.5 / 1 / 2 / 5
                                                               deg: 0.22-0.68 / 0.97-1.16 / 1.97-2.15 / 4.96-5.16 deg
 angle to a given reference  > 1 deg          > 5 deg          the real recordings: 0.06-0.63 deg (the stereo run's
@@ -174,6 +176,7 @@ class Evidence:
     offset_peak_margin: float | None = None  # correlation at the offset minus the best other peak's (NaN: none)
     second_peak_offset_s: float | None = None
     change: object | None = None            # streams: replication.changepoint.ChangeTest (t relative to the camera)
+    change_sides_fit: float | None = None   # the larger median residual / median motion of its two sides
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
 
@@ -294,7 +297,8 @@ def judge(e: Evidence, extra=()) -> Verdict:
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
     if e.pose_residual_medians_deg is not None:
         reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
-    if e.change is not None and e.change.significant:
+    sides_fit = e.change_sides_fit is None or e.change_sides_fit <= THRESHOLDS["residual_to_motion"][1]
+    if e.change is not None and e.change.significant and sides_fit:  # a re-mount leaves each side fitting its R0
         c = e.change
         reasons.append(_above("remount_deg", c.angle_deg, f"angle between R0 before and after {c.split_time:.1f} s",
                               " deg", f"the {c.n_before} pairs before and the {c.n_after} after agree on different R0 "

@@ -220,3 +220,23 @@ def test_remount_threshold_boundaries(angle, significant, level):
     e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
                  axis_spread_deg=10.0, change=_Change(angle, significant))
     assert {r.check: r.level for r in judge(e).reasons}.get("remount_deg") == level
+
+
+@pytest.mark.parametrize("fit, reported", [(0.29, True), (0.31, False)])
+def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, reported):
+    """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount (the residual
+    reasons say what it is); the bound is residual_to_motion's fail bound."""
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(2.0), change_sides_fit=fit)
+    assert ("remount_deg" in {r.check for r in judge(e).reasons}) is reported
+    assert THRESHOLDS["residual_to_motion"][1] == 0.3
+
+
+def test_an_input_mistake_is_not_called_a_remount(rng):
+    R0, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05)
+    q = so3.as_quaternion(camera.R)[:, [1, 2, 3, 0]]
+    from replication.streams import OrientationStream
+
+    r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
+    assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
+    assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
