@@ -17,7 +17,7 @@ import numpy as np
 
 from replication import so3
 from replication.calibration import calibrate, calibrate_poses
-from replication.estimate import _replicates, block_indices
+from replication.estimate import bootstrap_replicates, block_indices
 from replication.motions import prepare_motions
 from replication.poses import pose_pairs
 from replication.simulation import rig_streams
@@ -58,7 +58,7 @@ def stations(runs, N, noise_deg, seed):
         err = float(so3.angle_between_deg(r.R, R0))
         station_hits.append(err <= r.bootstrap_ci95_deg)
         motions = prepare_motions(*pose_pairs(C, S))
-        R_boot = _replicates(motions, "chordal_optimal", {}, block_indices(np.random.default_rng(k), motions.J, 1, 100),
+        R_boot = bootstrap_replicates(motions, "chordal_optimal", {}, block_indices(np.random.default_rng(k), motions.J, 1, 100),
                              progress=False)
         pair_hits.append(err <= float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95)))
     return station_hits, pair_hits

@@ -31,7 +31,7 @@ from .so3 import (angle_between_deg, as_quaternion, check_rotation_matrices, exp
                   yaw_pitch_roll_deg)
 from .solvers import ReplicationWarning, solve, solver_info
 
-__all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "block_indices", "station_indices", "per_station_median"]
+__all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices", "station_indices", "per_station_median"]
 
 
 def check_common(method, n_bootstrap, seed, reference):
@@ -92,9 +92,10 @@ def per_station_median(res, stations) -> np.ndarray:
                      for s in range(N)])
 
 
-def _replicates(motions, method, options, index_sets, *, progress):
-    """The solver's core on each resample (validated pairs: no re-validation; the replicates' own warnings would
-    repeat the main solve's)."""
+def bootstrap_replicates(motions, method, options, index_sets, *, progress=False):
+    """The solver's core on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list of index
+    arrays of any lengths); validated pairs, so no re-validation; the replicates' own warnings would repeat the
+    main solve's and are not issued."""
     core = solver_info(method).core
     out = []
     with warnings.catch_warnings():
@@ -150,7 +151,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     boot_failed = None
     if n_bootstrap and units >= 3:
         try:
-            R_boot = _replicates(motions, method, options, index_sets(), progress=progress)
+            R_boot = bootstrap_replicates(motions, method, options, index_sets(), progress=progress)
         except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
             boot_failed = str(err).split(":")[0]
         else:

@@ -21,7 +21,7 @@ from .calibration import calibrate, calibrate_poses, pose_pairs, stream_pairs
 from .so3 import rotation_angle_deg
 from .solvers import ConvergenceWarning, ObservabilityWarning, ReplicationWarning, two_step
 
-__all__ = ["recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table",
+__all__ = ["station_bootstrap", "recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table",
            "calibrations", "usual_mistakes", "verdict_table"]
 
 
@@ -48,7 +48,9 @@ def calibration_table(results: dict) -> pd.DataFrame:
     -------
     pandas.DataFrame
         Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``pairs``, ``bootstrap95_deg``,
-        ``offset_ms`` and ``offset_corr`` (the clock offset and its correlation; NaN for pose sets),
+        ``offset_ms``, its 95 % interval ``offset_low_ms`` / ``offset_high_ms`` and ``offset_corr`` (the clock offset
+        and its correlation; NaN for pose sets), ``change_deg`` (the angle between R0 before and after the change
+        test's split, where it ran), ``change_significant``,
         ``axis_spread_deg`` (camera), ``observability_warning``, ``other warnings`` (from the result's warnings) and
         ``verdict`` (the level of the result's verdict, :mod:`replication.quality`).
     """
@@ -58,7 +60,10 @@ def calibration_table(results: dict) -> pd.DataFrame:
         static = np.isnan(r.time_offset_correlation)  # a static pose set has no clock
         rows.append({"data": name, "method": method, "error_deg": r.reference_error_deg, "pairs": r.n_pairs,
                      "bootstrap95_deg": r.bootstrap_ci95_deg, "offset_ms": np.nan if static else 1e3 * r.time_offset_s,
+                     "offset_low_ms": 1e3 * r.time_offset_ci95_s[0], "offset_high_ms": 1e3 * r.time_offset_ci95_s[1],
                      "offset_corr": r.time_offset_correlation,
+                     "change_deg": (r.change_test or {}).get("angle_deg", np.nan),
+                     "change_significant": (r.change_test or {}).get("significant", False),
                      "axis_spread_deg": float(r.observability.camera_axis_spread_deg),
                      "observability_warning": "ObservabilityWarning" in kinds,
                      "other warnings": ", ".join(sorted(kinds - {"ObservabilityWarning"})), "verdict": r.verdict.level})
@@ -208,3 +213,18 @@ def verdict_table(results: dict) -> pd.DataFrame:
                      "input mistake named": mistake, "error_deg": r.reference_error_deg})
     return pd.DataFrame(rows).set_index("data")
 
+
+def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
+    """A static pose set's 95 % bootstrap radius resampling its stations (what :func:`calibrate_poses` does) and
+    resampling its pairs one by one (what it did before, treating the ``N (N - 1) / 2`` pairs as independent)."""
+    from .estimate import block_indices, bootstrap_replicates
+    from .motions import prepare_motions
+    from .poses import calibrate_poses, pose_pairs
+    from .so3 import angle_between_deg
+
+    r = calibrate_poses(C, S, n_bootstrap=n_bootstrap, seed=seed)
+    motions = prepare_motions(*pose_pairs(C, S))
+    boot = bootstrap_replicates(motions, "chordal_optimal", {},
+                                block_indices(np.random.default_rng(seed), motions.J, 1, n_bootstrap))
+    return {"stations": int(len(C)), "pairs": int(motions.J), "radius by stations (deg)": r.bootstrap_ci95_deg,
+            "radius by pairs one by one (deg)": float(np.percentile(angle_between_deg(boot, r.R), 95))}

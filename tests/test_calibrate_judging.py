@@ -52,7 +52,7 @@ def test_pose_sets_resample_stations_not_pairs(rng):
     by_pairs = est.block_indices(np.random.default_rng(1), J, 1, 100)
     motions = __import__("replication.motions", fromlist=["prepare_motions"]).prepare_motions(
         *__import__("replication.poses", fromlist=["pose_pairs"]).pose_pairs(C, S))
-    R_boot = est._replicates(motions, "chordal_optimal", {}, by_pairs, progress=False)
+    R_boot = est.bootstrap_replicates(motions, "chordal_optimal", {}, by_pairs, progress=False)
     naive = float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95))
     assert r.bootstrap_ci95_deg > 2.5 * naive
 

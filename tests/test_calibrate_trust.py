@@ -425,7 +425,7 @@ def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypat
     def refuse(*a, **k):
         raise ValueError("degenerate motion: a resample")
 
-    monkeypatch.setattr(est, "_replicates", refuse)
+    monkeypatch.setattr(est, "bootstrap_replicates", refuse)
     r = calibrate(camera, gyro, n_bootstrap=20)
     assert math.isnan(r.bootstrap_ci95_deg) and "degenerate motion" in _reasons(r)["bootstrap_failed"].message
 
