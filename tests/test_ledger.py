@@ -114,3 +114,181 @@ def test_a_well_formed_claims_file_reads_as_text(tmp_path):
 def test_a_missing_claims_file_is_named(tmp_path):
     with pytest.raises(DataFileNotFound, match=r"nowhere\.csv: no such file"):
         ledger.load_claims(tmp_path / "nowhere.csv")
+
+
+# ---- ledger.record in the notebook: the rules ------------------------------------------------------------------
+
+GOOD = dict(claim="theorem1", verdict="holds", evidence="e 1", uncertainty="u", setting="s", condition="")
+
+
+@pytest.mark.parametrize("changes, message", [
+    (dict(claim="theorm1"), r"unknown claim 'theorm1' \(not an id of .*claims\.csv\); close known ids: theorem1"),
+    (dict(claim="zzz"), r"unknown claim 'zzz' .*no known id is close; known: eq7_relative, theorem1"),
+    (dict(verdict="probably"), r"claim 'theorem1': verdict must be one of .*got 'probably'"),
+    (dict(verdict="Holds"), r"verdict must be one of"),
+    (dict(verdict=""), r"verdict must be one of"),
+    (dict(evidence=""), r"claim 'theorem1': evidence is blank"),
+    (dict(evidence=" \n\t "), r"claim 'theorem1': evidence is blank"),
+    (dict(uncertainty="  "), r"claim 'theorem1': uncertainty is blank"),
+    (dict(setting="\n"), r"claim 'theorem1': setting is blank"),
+    (dict(evidence=0.5), r"claim 'theorem1': evidence must be text, got float"),
+    (dict(verdict="holds only if"), r"a condition goes with, and only with, 'holds only if'"),
+    (dict(verdict="holds only if", condition="   "), r"a condition goes with, and only with"),
+    (dict(condition="the data are noise-free"), r"a condition goes with, and only with"),
+])
+def test_record_refuses_each_broken_rule(changes, message):
+    kwargs = {**GOOD, **changes}
+    with pytest.raises(ValueError, match=message):
+        ledger.record(kwargs.pop("claim"), kwargs.pop("verdict"), **kwargs)
+
+
+@pytest.mark.parametrize("verdict, condition", [(v, "the data are noise-free" if v == ledger.HOLDS_ONLY_IF else "")
+                                                for v in ledger.VERDICTS])
+def test_record_accepts_every_verdict_of_the_vocabulary(capsys, verdict, condition):
+    ledger.record("theorem1", verdict, evidence="e 1", uncertainty="u", setting="s", condition=condition)
+    assert capsys.readouterr().out.startswith(f"[theorem1] {verdict}")
+
+
+def test_the_vocabulary_is_the_documented_one():
+    assert ledger.VERDICTS == ("holds", "fails", "holds only if", "undecidable from the text")
+    assert ledger.HOLDS_ONLY_IF in ledger.VERDICTS
+
+
+# ---- collecting: stored outputs checked again (they could have been edited) --------------------------------------
+
+NOTEBOOKS = sorted((ledger.ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+
+
+def _where(collected, claim):
+    row = collected.loc[collected["claim"] == claim].iloc[0]
+    return ledger.ROOT / "notebooks" / f"{row.notebook}.ipynb", int(row.cell)
+
+
+def _copy(path, folder, name=None):
+    target = folder / (name or Path(path).name)
+    shutil.copyfile(path, target)
+    return target
+
+
+def _edit(path, which, **changes):
+    """Change the stored record of claim ``which`` in the notebook ``path`` (a copy); ``_DROP`` deletes a field."""
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    for cell in nb["cells"]:
+        for out in cell.get("outputs", []):
+            rec = out.get("data", {}).get(ledger.CLAIM_MIME)
+            if rec is not None and rec["claim"] == which:
+                rec.update(changes)
+                for key in [k for k, v in changes.items() if v is _DROP]:
+                    del rec[key]
+                path.write_text(json.dumps(nb, indent=1, ensure_ascii=False), encoding="utf-8")
+                return
+    raise AssertionError(f"no record of {which} in {path}")
+
+
+_DROP = object()
+
+
+def _notebook(path, *records):
+    """A minimal notebook at ``path`` with one cell per stored record (a dict, or any JSON value)."""
+    cells = [{"cell_type": "code", "source": "", "metadata": {}, "execution_count": 1,
+              "outputs": [{"output_type": "display_data", "metadata": {}, "data": {ledger.CLAIM_MIME: rec}}]}
+             for rec in records]
+    path.write_text(json.dumps({"cells": cells, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}),
+                    encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("claim, changes, message", [
+    ("fig5_resilience", dict(verdict="probably"), r"cell {cell}: claim 'fig5_resilience': verdict must be one of"),
+    ("fig5_resilience", dict(evidence=""), r"cell {cell}: claim 'fig5_resilience': evidence is blank"),
+    ("fig5_resilience", dict(evidence="   "), r"cell {cell}: claim 'fig5_resilience': evidence is blank"),
+    ("fig5_resilience", dict(uncertainty="\n"), r"cell {cell}: claim 'fig5_resilience': uncertainty is blank"),
+    ("fig5_resilience", dict(setting=" "), r"cell {cell}: claim 'fig5_resilience': setting is blank"),
+    ("fig5_resilience", dict(evidence=12), r"cell {cell}: claim 'fig5_resilience': evidence must be text"),
+    ("fig5_resilience", dict(claim="fig5_resilient"),
+     r"cell {cell}: unknown claim 'fig5_resilient' .*close known ids: fig5_resilience"),
+    ("fig5_resilience", dict(verdict="holds only if"),
+     r"cell {cell}: claim 'fig5_resilience': a condition goes with, and only with, 'holds only if'"),
+    ("fig5_resilience", dict(condition="if"), r"cell {cell}: claim 'fig5_resilience': a condition goes with"),
+    ("fig5_resilience", dict(setting=_DROP), r"cell {cell}: a stored claim record must have the fields"),
+    ("fig5_resilience", dict(note="x"), r"cell {cell}: a stored claim record must have the fields"),
+])
+def test_collect_refuses_an_edited_stored_record(tmp_path, collected, claim, changes, message):
+    source, cell = _where(collected, claim)
+    path = _copy(source, tmp_path)
+    _edit(path, claim, **changes)
+    with pytest.raises(DataFileError, match=re.escape(str(path)) + ": " + message.format(cell=cell)):
+        ledger.collect([path], complete=False)
+
+
+@pytest.mark.parametrize("stored", ["holds", ["theorem1", "holds"], None])
+def test_collect_refuses_a_stored_record_that_is_not_an_object(tmp_path, stored):
+    path = _notebook(tmp_path / "01_x.ipynb", stored)
+    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 0: a stored claim record must have the fields"):
+        ledger.collect([path], complete=False)
+
+
+def test_collect_refuses_two_contradicting_records_naming_both_notebooks_and_cells(tmp_path, collected):
+    first, first_cell = _where(collected, "fig5_resilience")  # 'fails'
+    second, second_cell = _where(collected, "convex_problem")  # 'fails' too: make it contradict
+    a, b = _copy(first, tmp_path), _copy(second, tmp_path)
+    _edit(b, "convex_problem", claim="fig5_resilience", verdict="holds")
+    with pytest.raises(DataFileError, match=re.escape(f"{b}: cell {second_cell}: a second record of claim "
+                                                      f"'fig5_resilience' ('holds') contradicts the one in {a.name}, "
+                                                      f"cell {first_cell} ('fails'): one record per claim")):
+        ledger.collect([a, b], complete=False)
+
+
+def test_collect_refuses_a_second_record_even_when_it_repeats_the_first(tmp_path, collected):
+    source, cell = _where(collected, "eq7_relative")
+    a, b = _copy(source, tmp_path), _copy(source, tmp_path, "09_copy.ipynb")
+    with pytest.raises(DataFileError, match=re.escape(f"{b}: cell {cell}: a second record of claim 'eq7_relative' "
+                                                      f"('holds') repeats the one in {a.name}, cell {cell}")):
+        ledger.collect([a, b], complete=False)
+
+
+def test_collect_refuses_two_records_of_one_claim_in_one_notebook(tmp_path):
+    rec = dict(GOOD)
+    path = _notebook(tmp_path / "01_x.ipynb", rec, {**rec, "evidence": "other 2"})
+    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 1: a second record of claim 'theorem1' \('holds'\) "
+                                            r"differs from the one in 01_x\.ipynb, cell 0"):
+        ledger.collect([path], complete=False)
+
+
+def test_collect_refuses_a_truncated_notebook_naming_file_line_and_column(tmp_path, collected):
+    source, _ = _where(collected, "fig5_resilience")
+    path = _copy(source, tmp_path)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    with pytest.raises(DataFileError, match=re.escape(str(path)) + r", line \d+, column \d+: not a notebook: "
+                                            r"not valid JSON \(.*; a truncated file\?\)"):
+        ledger.collect([path], complete=False)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", r", line 1, column 1: not a notebook: not valid JSON"),
+    ("claims, not JSON\n", r", line 1, column 1: not a notebook: not valid JSON"),
+    ('{"cells": [\n  {"outputs": []},\n  {"outputs": [}\n', r", line 3, column 16: not a notebook: not valid JSON"),
+    ("[1, 2]", r": not a notebook: no list of 'cells'"),
+    ('{"cells": {}}', r": not a notebook: no list of 'cells'"),
+    ('{"cells": [{"outputs": {}}]}', r": cell 0: not a notebook cell"),
+    ('{"cells": [{"outputs": ["text"]}]}', r": cell 0: an output that is not an object"),
+])
+def test_collect_refuses_what_is_not_a_notebook(tmp_path, text, message):
+    path = tmp_path / "01_broken.ipynb"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(DataFileError, match=re.escape(str(path)) + message):
+        ledger.collect([path], complete=False)
+
+
+def test_collect_names_a_missing_notebook(tmp_path):
+    with pytest.raises(DataFileNotFound, match=r"01_gone\.ipynb: no such file"):
+        ledger.collect([tmp_path / "01_gone.ipynb"], complete=False)
+
+
+def test_collect_accepts_a_valid_minimal_ledger(tmp_path):
+    path = tmp_path / "claims.csv"
+    path.write_text(HEADER + "theorem1,s,w,,\n", encoding="utf-8")
+    nb = _notebook(tmp_path / "01_x.ipynb", dict(GOOD))
+    table = ledger.collect([nb], claims_path=path)
+    assert table[["claim", "verdict", "notebook", "cell"]].values.tolist() == [["theorem1", "holds", "01_x", 0]]
