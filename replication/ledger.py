@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import difflib
 import json
+import re
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 
@@ -237,14 +238,42 @@ def to_markdown(ledger: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n"
 
 
-def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
-    """Write the ledger table between the README's claims markers; ``check``: only say whether it is current."""
-    readme = Path(readme) if readme else ROOT / "README.md"
-    text = readme.read_text(encoding="utf-8")
-    if README_START not in text or README_END not in text:
-        raise ValueError(f"{readme}: markers {README_START} / {README_END} not found")
+def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
+    """The README's text before its start marker and from its end marker on; ``DataFileError`` naming the file,
+    and the marker, if a marker is missing or repeated or the end comes before the start."""
+    found = {}
+    for marker in (README_START, README_END):
+        at = [text.count("\n", 0, m.start()) + 1 for m in re.finditer(re.escape(marker), text)]
+        if len(at) > 1:
+            fail(readme, f"the claims marker {marker} appears {len(at)} times (lines {at}); it must appear once",
+                 line=at[1])
+        found[marker] = at[0] if at else None
+    missing = [m for m, line in found.items() if line is None]
+    if missing:
+        fail(readme, f"no claims marker {' and no '.join(missing)}: the claims table goes between "
+             f"{README_START} and a later {README_END}")
+    if text.index(README_END) < text.index(README_START):
+        fail(readme, f"the claims marker {README_END} (line {found[README_END]}) comes before "
+             f"{README_START} (line {found[README_START]}); it must come after", line=found[README_END])
     head, rest = text.split(README_START, 1)
     _, tail = rest.split(README_END, 1)
+    return head, tail
+
+
+def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
+    """Write the ledger table between the README's claims markers; ``check``: only say whether it is current.
+
+    Raises
+    ------
+    DataFileNotFound
+        No README (also a ``FileNotFoundError``).
+    DataFileError
+        A claims marker (:data:`README_START`, :data:`README_END`) missing or repeated, or the end marker not
+        after the start marker.
+    """
+    readme = Path(readme) if readme else ROOT / "README.md"
+    text = read_text(readme, "the README with the claims table")
+    head, tail = _readme_parts(readme, text)
     new = f"{head}{README_START}\n{to_markdown(ledger)}{README_END}{tail}"
     if check:
         return new == text

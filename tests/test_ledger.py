@@ -292,3 +292,40 @@ def test_collect_accepts_a_valid_minimal_ledger(tmp_path):
     nb = _notebook(tmp_path / "01_x.ipynb", dict(GOOD))
     table = ledger.collect([nb], claims_path=path)
     assert table[["claim", "verdict", "notebook", "cell"]].values.tolist() == [["theorem1", "holds", "01_x", 0]]
+
+
+# ---- README's markers ------------------------------------------------------------------------------------------
+
+S, E = ledger.README_START, ledger.README_END
+
+
+@pytest.mark.parametrize("text, message", [
+    ("# title\nno table\n", rf"README\.md: no claims marker {S} and no {E}"),
+    (f"# title\n{S}\n| table |\n", rf"README\.md: no claims marker {E}:"),
+    (f"# title\n| table |\n{E}\n", rf"README\.md: no claims marker {S}:"),
+    (f"# title\n{E}\n| table |\n{S}\n", rf"README\.md, line 2: the claims marker {E} \(line 2\) comes before {S} "
+                                        rf"\(line 4\)"),
+    (f"{S}\n{E}\n{S}\n{E}\n", rf"README\.md, line 3: the claims marker {S} appears 2 times \(lines \[1, 3\]\)"),
+    (f"{S}\n{E}\ntext {E}\n", rf"README\.md, line 3: the claims marker {E} appears 2 times"),
+])
+def test_readme_markers_missing_repeated_or_out_of_order_are_named(tmp_path, collected, text, message):
+    readme = tmp_path / "README.md"
+    readme.write_text(text, encoding="utf-8")
+    for check in (True, False):
+        with pytest.raises(DataFileError, match=message):
+            ledger.update_readme(collected, readme, check=check)
+    assert readme.read_text(encoding="utf-8") == text
+
+
+def test_a_missing_readme_is_named(tmp_path, collected):
+    with pytest.raises(DataFileNotFound, match=r"README\.md: no such file \(the README with the claims table\)"):
+        ledger.update_readme(collected, tmp_path / "README.md", check=True)
+
+
+def test_readme_table_is_written_between_the_markers(tmp_path, collected):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"head\n{S}{E} tail\n", encoding="utf-8")
+    assert not ledger.update_readme(collected, readme, check=True)
+    assert ledger.update_readme(collected, readme)
+    assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.to_markdown(collected)}{E} tail\n"
+    assert ledger.update_readme(collected, readme, check=True)
