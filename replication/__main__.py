@@ -92,23 +92,26 @@ def reproduce(args: argparse.Namespace) -> int:
 
 
 def claims_command(args: argparse.Namespace) -> int:
+    """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
+    file or README refused: the message on stderr)."""
     from .ledger import collect, to_markdown, update_readme
 
     try:
         ledger = collect()
-    except ValueError as err:
+        if args.check:
+            if update_readme(ledger, check=True):
+                print("README's claims table matches the executed notebooks")
+                return 0
+            print("README's claims table is out of date: run 'python -m replication claims --readme'",
+                  file=sys.stderr)
+            return 1
+        if args.readme:
+            update_readme(ledger)
+            print("README's claims table updated")
+            return 0
+    except (ValueError, OSError) as err:  # DataFileError is a ValueError; DataFileNotFound both
         print(f"error: {err}", file=sys.stderr)
         return 2
-    if args.check:
-        if update_readme(ledger, check=True):
-            print("README's claims table matches the executed notebooks")
-            return 0
-        print("README's claims table is out of date: run 'python -m replication claims --readme'", file=sys.stderr)
-        return 1
-    if args.readme:
-        update_readme(ledger)
-        print("README's claims table updated")
-        return 0
     print(to_markdown(ledger))
     return 0
 

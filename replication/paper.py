@@ -7,8 +7,11 @@ and column where known, and the problem; a missing file raises
 """
 from __future__ import annotations
 
+import csv
 import io
+import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +21,7 @@ from .datafile import fail, read_text
 from .so3 import nearest_rotation
 
 __all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims",
-           "load_claim_table"]
+           "load_claim_table", "CLAIM_COLUMNS", "CLAIM_ID"]
 
 TABLE1_ITERATIONS = (2, 5, 10, 15, 20, 30, 50)
 TABLE1_METHODS = ("optimization", "ours_right", "ours_left")
@@ -106,28 +109,72 @@ def load_claims() -> pd.Series:
     The full table of claims (statements, where the paper makes them) is :func:`load_claim_table`.
     """
     df = load_claim_table()
-    values = df.loc[df["paper_value"] != "", "paper_value"].astype(float)
+    values = df.loc[df["paper_value"].str.strip() != "", "paper_value"].astype(float)
     values.index.name = "claim"
     return values
 
 
+#: The columns of ``data/paper/claims.csv``, in order.
+CLAIM_COLUMNS = ("claim", "statement", "where", "paper_value", "unit")
+#: A claim id: a letter, then letters, digits and underscores (no spaces: ids are matched exactly).
+CLAIM_ID = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+
+
 def load_claim_table(path=None) -> pd.DataFrame:
     """The checkable claims of ``data/paper/claims.csv``, indexed by ``claim``: ``statement``, ``where``,
-    ``paper_value``, ``unit`` (the ledger's rows, :mod:`replication.ledger`)."""
+    ``paper_value``, ``unit`` (the ledger's rows, :mod:`replication.ledger`), all text.
+
+    Raises
+    ------
+    DataFileNotFound
+        The file is missing.
+    DataFileError
+        Naming the file and the line (a record's first line; the header is line 1) and, where it is one field,
+        the column: not a CSV (an unclosed quote, text after a closing quote), a header other than
+        :data:`CLAIM_COLUMNS`, a record with another number of fields, an empty ``claim``, ``statement`` or
+        ``where``, a claim id that is not :data:`CLAIM_ID`, a claim id given twice, a ``paper_value`` that is not
+        a finite number, or a ``unit`` without a ``paper_value`` (or the reverse).
+    """
     path = Path(path) if path else data_dir() / "paper" / "claims.csv"
-    df = pd.read_csv(io.StringIO(read_text(path, "the claims file")), dtype=str, keep_default_na=False)
-    expected = ["claim", "statement", "where", "paper_value", "unit"]
-    if list(df.columns) != expected:
-        fail(path, f"columns must be {expected}, got {list(df.columns)}", line=1)
-    for line, row in enumerate(df.itertuples(index=False), start=2):
+    reader = csv.reader(io.StringIO(read_text(path, "the claims file"), newline=""), strict=True)
+    records, end = [], 0  # (first line, fields) of every non-blank record
+    try:
+        for fields in reader:
+            start, end = end + 1, reader.line_num
+            if fields:
+                records.append((start, fields))
+    except csv.Error as err:
+        fail(path, f"not a readable CSV from this line on ({err}; a quote not closed?)", line=end + 1)
+    if not records:
+        fail(path, f"empty; expected the header {','.join(CLAIM_COLUMNS)}", line=1)
+    header_line, header = records[0]
+    if tuple(header) != CLAIM_COLUMNS:
+        fail(path, f"columns must be {list(CLAIM_COLUMNS)}, got {header}", line=header_line)
+    seen = {}
+    for line, fields in records[1:]:
+        if len(fields) != len(CLAIM_COLUMNS):
+            fail(path, f"expected {len(CLAIM_COLUMNS)} fields ({','.join(CLAIM_COLUMNS)}), got {len(fields)}",
+                 line=line)
+        row = dict(zip(CLAIM_COLUMNS, fields))
         for col in ("claim", "statement", "where"):
-            if not getattr(row, col).strip():
+            if not row[col].strip():
                 fail(path, "empty", line=line, column=col)
-        if row.paper_value.strip():
+        claim = row["claim"]
+        if not CLAIM_ID.fullmatch(claim):
+            fail(path, f"not a claim id (a letter, then letters, digits, underscores): {claim!r}", line=line,
+                 column="claim")
+        if claim in seen:
+            fail(path, f"claim id {claim!r} repeated (first on line {seen[claim]})", line=line, column="claim")
+        seen[claim] = line
+        value = row["paper_value"]
+        if value.strip():
             try:
-                float(row.paper_value)
+                number = float(value)
             except ValueError:
-                fail(path, f"not a number ({row.paper_value!r})", line=line, column="paper_value")
-    if df["claim"].duplicated().any():
-        fail(path, f"claim ids repeated: {sorted(df.loc[df['claim'].duplicated(), 'claim'])}")
-    return df.set_index("claim")
+                fail(path, f"not a number ({value!r})", line=line, column="paper_value")
+            if not math.isfinite(number):
+                fail(path, f"not a finite number ({value!r})", line=line, column="paper_value")
+        if bool(value.strip()) != bool(row["unit"].strip()):
+            fail(path, "a unit goes with, and only with, a paper_value", line=line, column="unit")
+    table = pd.DataFrame([fields for _, fields in records[1:]], columns=list(CLAIM_COLUMNS), dtype=str)
+    return table.set_index("claim")
