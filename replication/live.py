@@ -23,6 +23,20 @@ __all__ = ["LiveRig", "replay", "OFFSET_RESOLUTION"]
 OFFSET_RESOLUTION = 0.5e-3
 
 
+def _exp3(x: float, y: float, z: float) -> np.ndarray:
+    """``exp([w]x)`` of one rotation vector (Rodrigues' formula in plain Python: the per-sample hot path of a live gyro;
+    :func:`replication.so3.exp_map` is the batched form, equal to rounding)."""
+    t2 = x * x + y * y + z * z
+    if t2 < 1e-16:  # second order: sin(t)/t and (1 - cos t)/t^2 to within 1e-24
+        a, b = 1.0 - t2 / 6.0, 0.5 - t2 / 24.0
+    else:
+        t = math.sqrt(t2)
+        a, b = math.sin(t) / t, (1.0 - math.cos(t)) / t2
+    return np.array([[1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
+                     [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
+                     [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
+
+
 class LiveRig:
     """A stream front end for :class:`OnlineCalibrator`: camera poses and raw gyro samples as they arrive.
 
@@ -124,22 +138,27 @@ class LiveRig:
 
     def add_gyro(self, t: float, omega) -> None:
         """One gyro sample: time (s) and body rate (rad/s, 3)."""
-        omega = np.asarray(omega, dtype=float)
-        if omega.shape != (3,) or not np.all(np.isfinite(omega)) or not math.isfinite(t):
+        try:
+            t = float(t)
+            wx, wy, wz = (float(v) for v in np.asarray(omega, dtype=float).reshape(3))
+        except (TypeError, ValueError):
+            raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t!r}, omega={omega!r}") from None
+        if not math.isfinite(t + wx + wy + wz):
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t!r}, omega={omega!r}")
         self._sensor_kind("gyro")
         if self._last_gyro is None:
             Q = np.eye(3)
         else:
-            t0, w0, Q0 = self._last_gyro
+            t0, (vx, vy, vz), Q0 = self._last_gyro
             if not t > t0:
                 raise ValueError(f"gyro time going backwards or repeated: {t!r} after {t0!r}")
             dt = t - t0
             self._gyro_dt = dt if self._gyro_dt is None else 0.99 * self._gyro_dt + 0.01 * dt  # a running typical step
-            Q = Q0 @ exp_map(0.5 * (w0 + omega) * dt)  # the trapezoidal rule of integrate_gyro
-        self._last_gyro = (float(t), omega, Q)
-        self._keep_early(self._early_sensor, float(t), omega)
-        self._push(float(t), Q)
+            h = 0.5 * dt  # the trapezoidal rule of integrate_gyro
+            Q = Q0 @ _exp3(h * (vx + wx), h * (vy + wy), h * (vz + wz))
+        self._last_gyro = (t, (wx, wy, wz), Q)
+        self._keep_early(self._early_sensor, t, np.array((wx, wy, wz)))
+        self._push(t, Q)
 
     def add_orientation(self, t: float, world_from_sensor) -> None:
         """One sensor orientation (an orientation sensor instead of a gyro): time (s) and ``world_from_sensor``."""

@@ -105,12 +105,14 @@ def ready_coverage(settings: dict, *, n_runs: int, n_pairs: int, seed: int, targ
         for _ in range(n_runs):
             R0 = random_rotations(rng, ())
             oc = OnlineCalibrator(target_deg=target_deg, cusum_h=1e12, drift_pairs=10 ** 9)
-            for j, state in enumerate(oc.update_many(*pair_stream(rng, n_pairs, R0, **kwargs)), 1):
-                if state.ready:
+            A, B = pair_stream(rng, n_pairs, R0, **kwargs)
+            for start in range(0, n_pairs, 10):  # in chunks, to stop soon after it is ready
+                state = next((s for s in oc.update_many(A[start:start + 10], B[start:start + 10]) if s.ready), None)
+                if state is not None:
                     err = float(angle_between_deg(state.R, R0))
                     ready += 1
                     covered += err <= state.radius_deg
-                    pairs.append(j)
+                    pairs.append(state.n_pairs)
                     radius.append(state.radius_deg)
                     error.append(err)
                     break
