@@ -311,6 +311,18 @@ def test_an_unreadable_input_is_refused(files, no_work, capsys):
         camera.chmod(0o644)
 
 
+def test_an_output_onto_a_pipe_is_refused(files, no_work, capsys):
+    """``--out >(gzip > r.gz)``: the path names a pipe (``/dev/fd/N``), not a file to replace."""
+    read, write = os.pipe()
+    try:
+        target = f"/dev/fd/{write}"
+        assert _calibrate(files, "--out", target) == 2
+        assert f"--out {target}: exists and is not a regular file (a pipe or a device)" in capsys.readouterr().err
+    finally:
+        os.close(read)
+        os.close(write)
+
+
 # ------------------------------------------------------------------------------------------- file-system errors
 
 @pytest.mark.parametrize("option", ["--out", "--plot"])
