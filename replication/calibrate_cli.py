@@ -150,11 +150,14 @@ def _read_inputs(args, kinds: dict):
         for option, kind in kinds.items():
             given = getattr(args, option[2:])
             try:
-                with open(given, "rb") as f:
-                    data = f.read()
+                if kind == "pipe":
+                    with open(given, "rb") as f:
+                        data = f.read()
+                    entry = {"bytes": len(data), "sha256": sha256_of(data)}
+                else:  # hashed in blocks, not held in memory
+                    entry = {"bytes": os.path.getsize(given), "sha256": sha256_of(given)}
             except OSError as err:
                 raise ValueError(f"{option} {given}: cannot be read ({os_reason(err)})") from None
-            entry = {"bytes": len(data), "sha256": sha256_of(data)}
             if kind == "pipe":
                 copy = Path(tmp) / (option[2:] + Path(given).suffix)
                 copy.write_bytes(data)
