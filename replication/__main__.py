@@ -54,14 +54,30 @@ def needs_real_data(path: Path) -> bool:
     return bool(meta.get("requires_real_data", False))
 
 
+def _check_results(results, folder, paths) -> Path:
+    """The results folder, before any notebook runs: not the notebooks' folder nor a notebook, and created and
+    writable (``ValueError`` naming the path and the reason otherwise)."""
+    from ._io import check_clashes, prepare_folder, same_file
+
+    if same_file(results, folder):
+        raise ValueError(f"--results {results} is the --notebooks folder: the results would be mixed into the "
+                         "notebooks; give another folder")
+    check_clashes({"--results": results}, {f"notebook {p.name}": p for p in paths})
+    return prepare_folder(results, "--results")
+
+
 def reproduce(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from .realdata import data_root, real_data_available
 
-    results = Path(args.results).resolve()
-    os.environ["REPLICATION_RESULTS_DIR"] = str(results)
     paths = notebooks(Path(args.notebooks))
+    try:
+        results = _check_results(args.results, args.notebooks, paths)
+    except ValueError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    os.environ["REPLICATION_RESULTS_DIR"] = str(results)
     if args.only:
         paths = [p for p in paths if any(key in p.name for key in args.only)]
     if not real_data_available():

@@ -1,20 +1,27 @@
 """``python -m replication calibrate``: the command line of :func:`replication.calibration.calibrate`.
 
-Every parameter is checked when the command line is parsed (its name in the message), the output paths before
-any work (folders created, a directory or an unwritable place refused), and the report and figure are written
-atomically. Exit codes: 0 (verdict ``ok`` or ``warning``), 2 (bad input: nothing computed or nothing written),
-:data:`replication.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``).
+Every parameter is checked when the command line is parsed (its name in the message); the paths before any work:
+every output (``--out``, ``--plot``, ``--track``) against every input (``--camera``, ``--sensor``, ``--reference``)
+and every other output, as files after resolving links (and hard links), the inputs (a regular file or a pipe,
+readable), the outputs (folders created, a directory or an unwritable place refused) and the figure's format (its
+extension). A pipe is read once, at the start, and the report records it as such with the SHA-256 of what was read;
+a regular input is hashed at the start too. The report, track and figure are written atomically. Exit codes: 0
+(verdict ``ok`` or ``warning``), 2 (bad input, or a file-system error: the path and the reason named, nothing
+computed or nothing written), :data:`replication.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import dataclasses
 import json
 import math
 import os
 import sys
+import tempfile
 from pathlib import Path
 
-from ._io import write_atomic
+from ._io import check_clashes, check_input, figure_format, os_reason, prepare_output, same_file, write_atomic
 from .quality import EXIT_FAIL
 
 __all__ = ["CALIBRATE_HELP", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
@@ -38,7 +45,10 @@ Formats (recognised by --sensor-kind and the file name):
     Kalibr camchain YAML (<cam>.T_cam_imu), EuRoC sensor.yaml (T_BS, cam -> body), Tabb transformations.txt (Z)
 The clock offset is estimated by cross-correlating angular speeds and removed unless --keep-clock; the report
 states its sign: the sensor sample stamped t + offset matches the camera sample stamped t.
-Exit codes: 0 ok or warning, 2 bad input, 3 verdict fail (0 with --accept).
+Outputs: --out, --plot (.png, .pdf or .svg, by its extension) and --track may not be an input file or one another
+(after resolving links); an input may be a pipe (read once: --camera <(...)). Refused before any work, exit 2.
+Exit codes: 0 ok or warning, 2 bad input or a file-system error (the path and the reason named), 3 verdict fail
+(0 with --accept).
 """
 
 
@@ -85,7 +95,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
     cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
     cal.add_argument("--out", help="write the JSON report here (folders are created)")
-    cal.add_argument("--plot", help="write the diagnostic figure (PNG) here (folders are created)")
+    cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension (folders are "
+                                    "created)")
     cal.add_argument("--accept", action="store_true", help="exit 0 even when the verdict is fail")
     cal.add_argument("--online", action="store_true",
                      help="also replay the streams through the online estimator (replication.online), as if live")
@@ -97,41 +108,82 @@ def add_parser(sub) -> argparse.ArgumentParser:
     return cal
 
 
-def _check_output(path) -> Path:
-    """Create the folders of ``path`` and check that it can be written, before any work."""
-    text = str(path)
-    if not text.strip():
-        raise ValueError("an output path is empty")
-    if text.endswith(("/", os.sep)):
-        raise ValueError(f"{text}: names a folder; give a file name")
-    path = Path(path).resolve()
-    if path.is_dir():
-        raise ValueError(f"{path}: is a directory; give a file name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        probe = path.with_name(path.name + ".part")
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as err:
-        raise ValueError(f"{path}: cannot write here ({err.strerror})") from None
-    return path
+#: The inputs and outputs of ``calibrate``: (option, attribute).
+INPUTS = (("--camera", "camera"), ("--sensor", "sensor"), ("--reference", "reference"))
+OUTPUTS = (("--out", "out"), ("--plot", "plot"), ("--track", "track"))
 
 
-def _file_entry(path) -> dict:
+def _check_paths(args) -> dict:
+    """Every path before any work; ``{option: "file" | "pipe"}`` of the inputs given.
+
+    Inputs exist and are regular files or pipes (a pipe is given once); no output is an input or another output;
+    the figure's extension is a known format; each output's folder is created and writable.
+    """
+    inputs = {option: getattr(args, attr) for option, attr in INPUTS}
+    kinds = {option: check_input(path, option) for option, path in inputs.items() if path is not None}
+    pipes = [option for option, kind in kinds.items() if kind == "pipe"]
+    for i, option in enumerate(pipes):
+        for other in pipes[:i]:
+            if same_file(inputs[option], inputs[other]):
+                raise ValueError(f"{option} is the same pipe as {other} ({inputs[option]}): a pipe can be read once")
+    check_clashes({option: getattr(args, attr) for option, attr in OUTPUTS}, inputs)
+    if args.plot is not None:
+        try:
+            figure_format(args.plot)
+        except ValueError as err:
+            raise ValueError(f"--plot {err}") from None
+    return kinds
+
+
+@contextlib.contextmanager
+def _read_inputs(args, kinds: dict):
+    """Read every input once: ``(paths to load from, report entries, {copy: shown name})``.
+
+    A regular file is loaded from its path and hashed now; a pipe is read whole into a temporary copy (its name's
+    extension kept: the loaders recognise formats by it) that the loaders read, and its entry records the pipe, the
+    bytes and the SHA-256 of what was read, no path to read again.
+    """
     from .fetch import sha256_of
 
-    path = Path(path).resolve()
-    return {"path": str(path), "bytes": path.stat().st_size, "sha256": sha256_of(path)}
+    paths, files, copies = {}, {}, {}
+    with tempfile.TemporaryDirectory(prefix="replication-inputs-") as tmp:
+        for option, kind in kinds.items():
+            given = getattr(args, option[2:])
+            try:
+                if kind == "pipe":
+                    with open(given, "rb") as f:
+                        data = f.read()
+                    entry = {"bytes": len(data), "sha256": sha256_of(data)}
+                else:  # hashed in blocks, not held in memory
+                    entry = {"bytes": os.path.getsize(given), "sha256": sha256_of(given)}
+            except OSError as err:
+                raise ValueError(f"{option} {given}: cannot be read ({os_reason(err)})") from None
+            if kind == "pipe":
+                copy = Path(tmp) / (option[2:] + Path(given).suffix)
+                copy.write_bytes(data)
+                paths[option], copies[str(copy)] = copy, f"{given} (a pipe, read once)"
+                files[option[2:]] = {"pipe": True, "given": str(given), **entry}
+            else:
+                paths[option] = given
+                files[option[2:]] = {"path": str(Path(given).resolve()), **entry}
+        yield paths, files, copies
 
 
-def _load(args):
+def _named(stream, copies: dict, given):
+    """``stream`` with its source the name given on the command line where it was loaded from a pipe's copy."""
+    if str(stream.source) in copies:
+        return dataclasses.replace(stream, source=str(given))
+    return stream
+
+
+def _load(args, paths):
     from . import realdata
 
     if args.poses:
-        return realdata.load_tabb_camera_poses(args.camera), realdata.load_tabb_poses(args.sensor)
-    camera = realdata.load_stream(args.camera, "orientation", time_unit=_unit(args, "camera"),
+        return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
+    camera = realdata.load_stream(paths["--camera"], "orientation", time_unit=_unit(args, "camera"),
                                   drop_repeated=args.drop_repeated)
-    sensor = realdata.load_stream(args.sensor, args.sensor_kind, time_unit=_unit(args, "sensor"),
+    sensor = realdata.load_stream(paths["--sensor"], args.sensor_kind, time_unit=_unit(args, "sensor"),
                                   drop_repeated=args.drop_repeated)
     return camera, sensor
 
@@ -181,9 +233,43 @@ def _online(args, camera, sensor, reference, result):
     return dataclasses.replace(result, online=summary, diagnostics=diagnostics), rows
 
 
-def calibrate_command(args: argparse.Namespace) -> int:
-    from .calibration import calibrate, calibrate_poses
+def _load_all(args, kinds):
+    """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors about a pipe's
+    copy name the pipe as given."""
     from .realdata import load_reference
+
+    with _read_inputs(args, kinds) as (paths, files, copies):
+        try:
+            camera, sensor = _load(args, paths)
+            reference = load_reference(paths["--reference"], args.reference_camera) if args.reference else None
+        except (ValueError, OSError) as err:
+            text = str(err)
+            for copy, shown in copies.items():
+                text = text.replace(copy, shown)
+            raise ValueError(text) from None
+        if not args.poses:
+            camera, sensor = _named(camera, copies, args.camera), _named(sensor, copies, args.sensor)
+    return camera, sensor, reference, files
+
+
+def _error(text) -> int:
+    print(f"error: {text}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def _write(path, data, what: str) -> bool:
+    """Write an output atomically; False (the path and the reason said on standard error) if the file system
+    refuses."""
+    try:
+        write_atomic(path, data)
+    except OSError as err:
+        _error(f"{what} {path}: cannot write ({os_reason(err)}); nothing was written there")
+        return False
+    return True
+
+
+def calibrate_command(args: argparse.Namespace) -> int:
+    from .calibration import OverlapError, calibrate, calibrate_poses
     from .solvers import solver_info
 
     try:
@@ -192,11 +278,11 @@ def calibrate_command(args: argparse.Namespace) -> int:
             raise ValueError("--track needs --online")
         if args.online and args.poses:
             raise ValueError("--online needs streams, not static pose sets (--poses)")
-        out = _check_output(args.out) if args.out is not None else None
-        plot = _check_output(args.plot) if args.plot is not None else None
-        track = _check_output(args.track) if args.track is not None else None
-        camera, sensor = _load(args)
-        reference = load_reference(args.reference, args.reference_camera) if args.reference else None
+        kinds = _check_paths(args)
+        out = prepare_output(args.out, "--out") if args.out is not None else None
+        plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
+        track = prepare_output(args.track, "--track") if args.track is not None else None
+        camera, sensor, reference, files = _load_all(args, kinds)
         common = dict(method=args.method, n_bootstrap=args.bootstrap, seed=args.seed, reference=reference,
                       progress=not args.quiet and sys.stderr.isatty())
         if args.poses:
@@ -204,29 +290,34 @@ def calibrate_command(args: argparse.Namespace) -> int:
         else:
             result = calibrate(camera, sensor, interval=args.interval, stride=args.stride,
                                max_offset=args.max_offset, correct_offset=not args.keep_clock, **common)
-    except (ValueError, FileNotFoundError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    except OverlapError as err:
+        return _error(err.named("--max-offset"))
+    except (ValueError, OSError) as err:
+        return _error(err)
     print(result.summary())
     if args.online:
         result, rows = _online(args, camera, sensor, reference, result)
         if track is not None:
-            write_atomic(track, rows.to_csv(index=False))
+            if not _write(track, rows.to_csv(index=False), "--track"):
+                return EXIT_BAD_INPUT
             print(f"online track written to {track}")
     if out is not None:
-        files = {"camera": _file_entry(args.camera), "sensor": _file_entry(args.sensor)}
         if args.reference:
-            files["reference"] = {**_file_entry(args.reference), "camera_entry": args.reference_camera}
+            files["reference"] = {**files["reference"], "camera_entry": args.reference_camera}
         report = {"command": ["python", "-m", "replication", *sys.argv[1:]] if sys.argv else [],
                   "cwd": os.getcwd(), "files": files,
                   "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
                           "time_units": {"camera": _unit(args, "camera"), "sensor": _unit(args, "sensor")},
                           "drop_repeated": args.drop_repeated, "accept": args.accept},
                   **result.to_dict()}
-        write_atomic(out, json.dumps(report, indent=2, allow_nan=False) + "\n")  # never a half-written report
+        if not _write(out, json.dumps(report, indent=2, allow_nan=False) + "\n", "--out"):  # never half-written
+            return EXIT_BAD_INPUT
         print(f"report written to {out}")
     if plot is not None:
-        result.plot(plot)
+        try:
+            result.plot(plot)  # the format its extension names, written atomically
+        except OSError as err:
+            return _error(f"--plot {plot}: cannot write ({os_reason(err)}); nothing was written there")
         print(f"figure written to {plot}")
     if result.verdict.level == "fail" and not args.accept:
         print(f"verdict FAIL: exit code {EXIT_FAIL} (--accept to exit 0)", file=sys.stderr)

@@ -40,7 +40,7 @@ from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_
 
 __all__ = [
     "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
-    "stream_pairs", "pose_pairs",
+    "stream_pairs", "pose_pairs", "OverlapError",
 ]
 
 
@@ -63,15 +63,75 @@ def _span(stream) -> dict:
             "median_rate_hz": float(1.0 / np.median(np.diff(stream.t)))}
 
 
-def _check_overlap(camera, sensor, max_offset):
-    """Refuse streams that do not overlap, naming the likely time-unit mistake from their spans."""
+class OverlapError(ValueError):
+    """The streams overlap in too few camera samples for the clock-offset search.
+
+    The message names the option that sets the search (``max_offset`` from the API; the command line shows its own
+    ``--max-offset`` with :meth:`named`) and gives the spans as durations.
+    """
+
+    def __init__(self, template: str, option: str = "max_offset"):
+        self.template, self.option = template, option
+        super().__init__(template.format(option=option))
+
+    def __str__(self) -> str:
+        return self.template.format(option=self.option)
+
+    def __reduce__(self):
+        return type(self), (self.template, self.option)
+
+    def named(self, option: str) -> "OverlapError":
+        """The same error naming the option as ``option`` (e.g. ``"--max-offset"``)."""
+        return type(self)(self.template, option)
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.1f} s" if abs(seconds) >= 1 else f"{seconds:.3g} s"
+
+
+def _overlap_samples(camera, sensor, max_offset) -> int:
+    """Camera samples inside the sensor's span shrunk by ``max_offset`` at each end (what the search compares)."""
     lo, hi = max(camera.t[0], sensor.t[0] + max_offset), min(camera.t[-1], sensor.t[-1] - max_offset)
-    if np.sum((camera.t >= lo) & (camera.t <= hi)) >= 10:
+    return int(np.sum((camera.t >= lo) & (camera.t <= hi)))
+
+
+def _check_overlap(camera, sensor, max_offset):
+    """Refuse streams that overlap in fewer than 10 camera samples once the offset search (+-max_offset) is allowed
+    for: :class:`OverlapError` with the spans as durations, the largest ``max_offset`` that would do where the streams
+    do overlap, and the likely time-unit mistake (with the absolute start times that show it) where there is one."""
+    if _overlap_samples(camera, sensor, max_offset) >= 10:
         return
+    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
+    spans = f"camera {_duration(cs)}, sensor {_duration(ss)} long"
     unit = _time_unit_reason(camera, sensor)
-    hint = f"; {unit.message}" if unit is not None else ""
-    raise ValueError(f"the streams overlap in fewer than 10 camera samples: camera {camera.t[0]:.6g}..{camera.t[-1]:.6g} "
-                     f"s, sensor {sensor.t[0]:.6g}..{sensor.t[-1]:.6g} s (offset search +-{max_offset:g} s){hint}")
+    if _overlap_samples(camera, sensor, 0.0) >= 10:
+        overlap = min(camera.t[-1], sensor.t[-1]) - max(camera.t[0], sensor.t[0])
+        lo, hi = 0.0, float(max_offset)  # the largest max_offset keeping 10 samples lies in [lo, hi)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _overlap_samples(camera, sensor, mid) >= 10 else (lo, mid)
+        digits = max(0, 1 - int(np.floor(np.log10(lo)))) if lo > 0 else 3
+        largest = np.floor(lo * 10 ** digits) / 10 ** digits
+        text = (f"the streams overlap by {_duration(overlap)} ({spans}), but the clock-offset search removes "
+                f"{{option}} from each end of the sensor's span: {{option}} {max_offset:g} s is larger than the "
+                f"overlap allows and leaves fewer than 10 camera samples to compare (above {largest:.{digits}f} s; "
+                f"a useful search stays well below half the overlap, and clock offsets are rarely more than a "
+                f"second)")
+    else:
+        if camera.t[-1] <= sensor.t[0]:
+            where = f"the sensor starts {_duration(sensor.t[0] - camera.t[-1])} after the camera ends"
+        elif sensor.t[-1] <= camera.t[0]:
+            where = f"the sensor ends {_duration(camera.t[0] - sensor.t[-1])} before the camera starts"
+        else:
+            where = f"they overlap by {_duration(min(camera.t[-1], sensor.t[-1]) - max(camera.t[0], sensor.t[0]))}"
+        text = f"the streams overlap in fewer than 10 camera samples ({spans}; {where}; {{option}} {max_offset:g} s)"
+        gap = max(sensor.t[0] - camera.t[-1], camera.t[0] - sensor.t[-1])
+        if unit is not None or gap > PLAUSIBLE_SPAN_S[1]:
+            text += (f"; the camera starts at t = {camera.t[0]:.3f} s, the sensor at t = {sensor.t[0]:.3f} s"
+                     + ("" if unit is not None else ": their clocks differ (one relative, one absolute time?)"))
+    if unit is not None:
+        text += "; " + unit.message.replace("{", "{{").replace("}", "}}")
+    raise OverlapError(text)
 
 
 def _gap_free_window(camera, sensor, max_offset):
@@ -218,7 +278,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     Raises
     ------
     ValueError
-        A bad parameter (named), streams of the wrong type, or streams that do not overlap (with the likely
+        A bad parameter (named), streams of the wrong type, or streams that do not overlap (:class:`OverlapError`,
+        naming ``max_offset``, with the spans as durations and the likely
         time-unit mistake when their spans show one).
     """
     reference = check_common(method, n_bootstrap, seed, reference)

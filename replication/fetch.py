@@ -23,7 +23,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ._io import write_atomic
+from ._io import os_reason, prepare_folder, same_file, write_atomic
 from .datafile import fail, read_text
 
 __all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
@@ -144,19 +144,44 @@ def _obtain(entry: ManifestEntry, mirror, timeout: float) -> bytes:
     return data
 
 
+def _check_destination(dest: Path, mirror, todo) -> None:
+    """Before any download: ``dest`` is not the mirror (no file written onto itself) and every folder a file goes to
+    can be created and written (``ValueError`` with the path and the reason)."""
+    if mirror is not None:
+        source = Path(str(mirror).removeprefix("file://"))
+        if same_file(dest, source):
+            raise ValueError(f"{dest} is the --mirror folder {source}: the files would be written onto themselves "
+                             "(--check verifies a folder in place)")
+        for e in todo:
+            if same_file(dest / e.relpath, source / e.relpath):
+                raise ValueError(f"{dest / e.relpath} is the --mirror file {source / e.relpath}: it would be written "
+                                 "onto itself")
+    prepare_folder(dest, "DEST")
+    for folder in sorted({(dest / e.relpath).parent for e in todo}):
+        prepare_folder(folder, "DEST")
+
+
 def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) -> dict:
     """Download (or copy from ``mirror``) every manifest file into ``dest`` and verify it.
 
     Files already present with the right checksum are kept. Returns :func:`verify`'s report
     after the fetch; a file whose download fails or does not match is reported, not written.
+    Before any download, ``dest`` and its folders are created and checked: a file in the way, a folder that
+    cannot be created or written, or ``dest`` being the mirror raises ``ValueError`` (``NotADirectoryError`` for
+    an existing file) naming the path and the reason; a write that fails later (a full disk) too, the files
+    fetched before it kept.
     """
     dest = Path(dest)
     if dest.exists() and not dest.is_dir():
         raise NotADirectoryError(f"{dest}: exists and is not a directory")
     entries = load_manifest() if entries is None else entries
+    status = {e.relpath: _status(dest / e.relpath, e) for e in entries}
+    todo = [e for e in entries if status[e.relpath] != "ok"]
+    if todo:
+        _check_destination(dest, mirror, todo)
     for e in entries:
         target = dest / e.relpath
-        if _status(target, e) == "ok":
+        if status[e.relpath] == "ok":
             log(f"ok       {e.relpath}")
             continue
         try:
@@ -169,8 +194,12 @@ def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) 
             log(f"FAILED   {e.relpath}: got {len(data)} bytes, sha256 {digest[:12]}...; expected {e.bytes} bytes, "
                 f"{e.sha256[:12]}... (source: {mirror or e.url})")
             continue
-        target.parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(target, data)
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            write_atomic(target, data)
+        except OSError as err:
+            raise ValueError(f"{target}: cannot write ({os_reason(err)}); nothing was written there, the files "
+                             "fetched before it are kept") from None
         log(f"fetched  {e.relpath} ({e.bytes} bytes)")
     return verify(dest, entries)
 
@@ -189,8 +218,12 @@ def fetch_command(args) -> int:
                 print(f"{status:8s} {rel}" if status in ("ok", "missing") else f"BAD      {rel}: {status}")
         else:
             report = fetch(args.dest, mirror=args.mirror, entries=entries)
-    except (ValueError, FileNotFoundError, NotADirectoryError) as err:
+    except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
+        return 2
+    except OSError as err:  # FileNotFoundError, NotADirectoryError, PermissionError, ...
+        where = f"{err.filename}: " if err.filename and str(err.filename) not in str(err.strerror or "") else ""
+        print(f"error: {where}{os_reason(err) if where else err}", file=sys.stderr)
         return 2
     bad = [rel for rel, status in report.items() if status != "ok"]
     if bad:
@@ -206,5 +239,6 @@ Download the real recordings that notebook 07 and the real-data tests read, from
 (GitHub repositories at pinned commits; see data/real_data_manifest.csv for each file's repository, commit,
 path, size, SHA-256, licence and citation), verify every checksum, and write them to DEST. Then run with
 REPLICATION_REAL_DATA=DEST. Files already in DEST with the right checksum are kept.
-Exit status: 0 all files verified, 1 some missing or not matching, 2 bad arguments or manifest.
+Exit status: 0 all files verified, 1 some missing or not matching, 2 bad arguments or manifest, or DEST cannot
+be created or written (a file in the way, no permission, a full disk: the path and the reason named).
 """

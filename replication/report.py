@@ -205,12 +205,14 @@ class CalibrationResult:
         return "\n".join(lines)
 
     def plot(self, path=None):
-        """The diagnostic figure (:func:`replication.figures.calibration_figure`); saved to ``path`` if given."""
+        """The diagnostic figure (:func:`replication.figures.calibration_figure`); saved to ``path`` if given, in the
+        format its extension names (``.png``, ``.pdf``, ``.svg``; another extension is refused with a
+        ``ValueError`` before the figure is drawn), written atomically."""
+        from ._io import figure_bytes, figure_format, write_atomic
         from .figures import calibration_figure
 
+        fmt = figure_format(path) if path is not None else None
         fig = calibration_figure(self)
         if path is not None:
-            from ._io import png_bytes, write_atomic
-
-            write_atomic(path, png_bytes(fig, dpi=110))
+            write_atomic(path, figure_bytes(fig, fmt, dpi=110))
         return fig

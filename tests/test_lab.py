@@ -10,6 +10,7 @@ import pytest
 from conftest import SMALL_LAB
 
 from replication import lab, so3
+from replication.datafile import DataFileError
 from replication.lab.simulate import _look_at
 from replication.handeye import relative_rotations
 
@@ -197,6 +198,26 @@ def test_loader_rejects_protocol_violations(lab_dir):
         lab.load_lab(lab_dir, min_poses=5)
     _edit_csv(lab_dir / "static_markers.csv", lambda ls: ls.__setitem__(slice(None), [l for l in ls if not l.startswith("1,3,")]))
     with pytest.raises(ValueError, match=r"\(set, pose\) \(1, 3\) appears only in static_imu.csv"):
+        lab.load_lab(lab_dir)
+
+
+TRUTH_CASES = {  # the value written on line 2 (after '  "camera_from_sensor": ', column 25), the message
+    "twice a rotation": ("[[2, 0, 0], [0, 2, 0], [0, 0, 2]]", r"is not a rotation matrix .*\|\|R\^T R - I\|\|_F"),
+    "a reflection": ("[[1, 0, 0], [0, 1, 0], [0, 0, -1]]", r"reflection|det"),
+    "not 3 x 3": ("[[1, 0, 0], [0, 1, 0]]", r"must be a 3 x 3 rotation matrix, got shape \(2, 3\)"),
+    "a stack": ("[[[1, 0, 0], [0, 1, 0], [0, 0, 1]]]", r"must be a 3 x 3 rotation matrix, got shape \(1, 3, 3\)"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(TRUTH_CASES))
+def test_loader_refuses_a_truth_that_is_not_a_rotation(lab_dir, case):
+    value, message = TRUTH_CASES[case]
+    path = lab_dir / "truth.json"
+    lines = path.read_text().splitlines()
+    assert lines[1].startswith('  "camera_from_sensor": [[')
+    lines[1] = f'  "camera_from_sensor": {value},'
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DataFileError, match=r"truth.json, line 2, column 25: key 'camera_from_sensor' " + message):
         lab.load_lab(lab_dir)
 
 

@@ -6,7 +6,7 @@ The columns and units are named here once. A recording is a folder (schema: ``da
 * ``static_imu.csv``, ``static_markers.csv`` -- the static data sets (columns ``set``,
   ``pose``, ``t`` and the samples);
 * ``dynamic_imu.csv``, ``dynamic_markers.csv`` -- the dynamic trial (``t`` and samples);
-* ``truth.json`` (optional, simulation only) -- the true ``camera_from_sensor``.
+* ``truth.json`` (optional, simulation only) -- the true ``camera_from_sensor`` (a rotation: checked).
 
 :func:`load_lab` checks every file before returning and raises
 :class:`~replication.datafile.DataFileError` (a ``ValueError``) naming the file, the line
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from .._io import write_atomic
+from ..checks import check_rotation_matrices
 from ..datafile import fail as _fail
 from ..datafile import read_text
 from ..streams import GyroStream, integrate_gyro
@@ -305,6 +307,31 @@ def _check_pixels(path, df, rig):
             _fail(path, f"pixel {values[i, j]:.6g} is outside the image (0..{limit})", line=int(i) + 2, column=cols[j])
 
 
+#: Tolerance of the truth's rotation test (it is written rounded to 12 decimals).
+TRUTH_ATOL = 1e-5
+
+
+def _load_truth(path: Path) -> np.ndarray:
+    """``camera_from_sensor`` of ``truth.json``: a rotation, else an error at the line and column of its value."""
+    text = read_text(path)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        _fail(path, f"not valid JSON ({exc.msg})", line=exc.lineno, column=exc.colno)
+    try:
+        R = np.asarray(data["camera_from_sensor"], dtype=float)
+    except (KeyError, TypeError, ValueError):
+        _fail(path, "no numeric key 'camera_from_sensor'")
+    try:
+        if R.shape != (3, 3):
+            raise ValueError(f"key 'camera_from_sensor' must be a 3 x 3 rotation matrix, got shape {R.shape}")
+        return check_rotation_matrices(R, "key 'camera_from_sensor'", atol=TRUTH_ATOL)
+    except ValueError as err:
+        found = re.search(r'"camera_from_sensor"\s*:\s*', text)
+        at = found.end() if found else 0
+        _fail(path, str(err), line=text.count("\n", 0, at) + 1, column=at - (text.rfind("\n", 0, at) + 1) + 1)
+
+
 def load_lab(directory=None, *, min_static_seconds: float = 5.0, min_poses: int = 3) -> LabRecording:
     """Load and validate a lab recording folder (schema: ``data/README.md``).
 
@@ -371,13 +398,6 @@ def load_lab(directory=None, *, min_static_seconds: float = 5.0, min_poses: int 
     truth = {}
     path = directory / "truth.json"
     if path.is_file():
-        try:
-            data = json.loads(read_text(path))
-        except json.JSONDecodeError as exc:
-            _fail(path, f"not valid JSON ({exc.msg})", line=exc.lineno, column=exc.colno)
-        try:
-            truth = {"camera_from_sensor": np.asarray(data["camera_from_sensor"], dtype=float)}
-        except (KeyError, TypeError, ValueError):
-            _fail(path, "no numeric key 'camera_from_sensor'")
+        truth = {"camera_from_sensor": _load_truth(path)}
     return LabRecording(rig, tables["static_imu"], tables["static_markers"], tables["dynamic_imu"],
                         tables["dynamic_markers"], truth=truth)
