@@ -411,12 +411,19 @@ def test_cli_refuses_edited_records_and_leaves_readme_alone(project, collected, 
     assert (project / "README.md").read_text(encoding="utf-8") == before
 
 
-def test_cli_reports_a_readme_it_cannot_write(project, capsys):
+def test_cli_reports_a_readme_it_cannot_write(project, capsys, monkeypatch):
     readme = project / "README.md"
-    readme.write_text(readme.read_text(encoding="utf-8").replace("| `theorem1` |", "| `x` |"), encoding="utf-8")
-    (project / "README.md.part").mkdir()  # where the atomic write puts the new text first
+    before = readme.read_text(encoding="utf-8").replace("| `theorem1` |", "| `x` |")
+    readme.write_text(before, encoding="utf-8")
+    import replication._io as io
+
+    def refuse(src, dst):
+        raise PermissionError(13, "Permission denied", str(dst))
+
+    monkeypatch.setattr(io.os, "replace", refuse)  # the atomic write's rename fails, as in a read-only folder
     assert _claims_cli("--readme") == 2
     assert capsys.readouterr().err.startswith("error: ")
+    assert readme.read_text(encoding="utf-8") == before and not list(project.glob("README.md.*.part"))
 
 
 def test_cli_names_a_truncated_notebook(project, collected, capsys):
