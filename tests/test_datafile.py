@@ -141,10 +141,31 @@ def test_utf16_file(family, encoding, problem):
     assert "UTF-16" in err.message
 
 
-def test_a_valid_file_loads(family):
+def test_a_valid_file_loads_with_its_values(family):
+    """The loaded values are those of the text (a loader that drops, shifts or mis-scales a column fails)."""
     path, text, load = family
     path.write_text(text)
-    load(path)
+    loaded = load(path)
+    if path.name == "traj.txt":  # TUM: nanosecond stamps in seconds, rotations 0, 1, 2 deg about x
+        assert loaded.t[0] == pytest.approx(1520530313.24973568, abs=1e-6)
+        np.testing.assert_allclose(np.diff(loaded.t), [0.0500019, 0.0500012], atol=1e-6)
+        angles = np.degrees(np.arccos(np.clip((np.trace(loaded.R, axis1=1, axis2=2) - 1) / 2, -1, 1)))
+        np.testing.assert_allclose(angles, [0.0, 1.0, 2.0], atol=1e-4)  # the quaternions carry 7 digits
+        np.testing.assert_allclose(loaded.R[2, 2, 1], 0.0348995, atol=1e-6)  # +2 deg about x: qx > 0, not qw first
+    elif path.name == "table1.csv":
+        rows = [line.split(",") for line in text.splitlines()[1:] if line]
+        assert len(loaded) == len(rows)
+        for it, method, mean, _ in rows[:6]:
+            assert loaded.loc[(int(it), method), "mean"] == float(mean)
+    elif path.name == "rig.json":
+        import json
+
+        assert loaded.rig == json.loads(text)
+    else:  # static_imu.csv
+        header, *lines = text.splitlines()
+        expected = np.array([[float(v) for v in line.split(",")] for line in lines])
+        assert list(loaded.static_imu.columns) == header.split(",")
+        np.testing.assert_array_equal(loaded.static_imu.to_numpy(float), expected)
 
 
 def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
