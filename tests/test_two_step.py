@@ -47,10 +47,13 @@ def test_batched_equals_looped(rng):
         assert np.allclose(batched.cost_left[n], one.cost_left, atol=1e-12)
 
 
-def test_deterministic(problem):
+def test_the_default_start_is_the_identity(problem):
+    """``init=None`` is documented as the identity: the same iterates, bit for bit; another start gives others."""
     _, A, B = problem
-    a, b = two_step(A, B, iterations=20), two_step(A, B, iterations=20)
-    assert np.array_equal(a.left, b.left) and np.array_equal(a.cost_right, b.cost_right)
+    default, identity = two_step(A, B, iterations=20), two_step(A, B, iterations=20, init=np.eye(3))
+    assert np.array_equal(default.left, identity.left) and np.array_equal(default.cost_right, identity.cost_right)
+    other = two_step(A, B, iterations=20, init=so3.exp_map(np.array([0.0, 0.0, 1.0])))
+    assert so3.frobenius_error(other.left[0], default.left[0]) > 1e-3  # the start matters to the first iterate
 
 
 def test_raw_iterates_follow_eqs_14_15_literally(problem):
