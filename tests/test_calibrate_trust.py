@@ -167,7 +167,8 @@ def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
     r = calibrate(camera.between(10.0, 12.5), gyro, **_fast())
     reasons = _reasons(r)
     assert math.isnan(r.bootstrap_ci95_deg) and r.to_dict()["bootstrap_ci95_deg"] is None
-    assert reasons["blocks"].level == "fail" and reasons["overlap_intervals"].level in ("warning", "fail")
+    assert reasons["blocks"].level == "fail" and reasons["blocks"].measured < 3  # measured 1.55
+    assert reasons["overlap_intervals"].level == "warning" and reasons["overlap_intervals"].measured == pytest.approx(2.5)
 
 
 def test_nearly_single_axis_motion_warns_with_its_spread():
@@ -190,7 +191,7 @@ def test_static_pose_sets_get_a_verdict_and_name_their_pairs(rig):
     camera, _, sensor = rig
     C, S = np.swapaxes(camera.R[::60], -1, -2), np.swapaxes(sensor.at(camera.t[::60]), -1, -2)
     r = calibrate_poses(C, S, reference=R0, n_bootstrap=20)
-    assert r.verdict.level == "ok" and r.reference_error_deg < 1e-6
+    assert r.verdict.level == "ok" and r.reference_error_deg < 1e-10  # noise-free: measured 6e-14
     assert "pairs of static poses" in r.summary() and "nan" not in r.summary()
 
 

@@ -87,7 +87,7 @@ def test_noisy_iterates_converge_to_the_fixed_point(problem, rng):
     right, left = two_step_fixed_point(An, Bn)
     assert_rotations_close(res.R_right, right, 1e-8, name="R_right")
     assert_rotations_close(res.R_left, left, 1e-8, name="R_left")
-    assert 0.001 < so3.angle_between_deg(res.R_right, R0) < 2
+    assert 0.05 < so3.angle_between_deg(res.R_right, R0) < 0.5  # the noise moves it (measured 0.23 deg)
 
 
 def test_small_motions_warn(rng):

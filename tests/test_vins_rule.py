@@ -189,4 +189,4 @@ def test_repeated_smallest_singular_value_is_resolved_without_rounding():
             v.update(exp_map(rng.normal(size=3) * eps) @ a, b)
             estimates.append(v.R)
         runs.append(np.array(estimates))
-    assert angle_between_deg(runs[0], runs[1]).max() < 1e-6
+    assert angle_between_deg(runs[0], runs[1]).max() < 1e-8  # measured 5.4e-10 deg
