@@ -11,7 +11,26 @@ finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 
 def test_check_rotation_accepts_rotations(rng):
     R = so3.random_rotations(rng, (4, 5))
-    assert so3.check_rotation_matrices(R).shape == (4, 5, 3, 3)
+    assert np.array_equal(so3.check_rotation_matrices(R), R)
+
+
+@pytest.mark.parametrize("atol", [None, 1e-4, 1e-2])  # None: the default, ROTATION_ATOL = 1e-6
+def test_check_rotation_tolerance_boundary(rng, atol):
+    """``||R^T R - I||_F <= atol``: a rotation scaled by ``s`` has ``|s^2 - 1| sqrt 3`` there."""
+    R = so3.random_rotations(rng, 3)
+    bound, options = (1e-6, {}) if atol is None else (atol, {"atol": atol})
+    for share, accepted in ((1 - 1e-3, True), (1 + 1e-3, False)):
+        M = R.copy()
+        M[1] *= np.sqrt(1 + share * bound / np.sqrt(3))
+        residual = so3.orthonormality_residual(M[1])
+        assert residual == pytest.approx(share * bound, rel=1e-6)
+        if accepted:
+            assert np.array_equal(so3.check_rotation_matrices(M, **options), M)
+        else:
+            with pytest.raises(ValueError, match=r"not a rotation matrix at index \(1,\)"):
+                so3.check_rotation_matrices(M, **options)
+    with pytest.raises(ValueError, match=r"atol must be <= 0.01"):
+        so3.check_rotation_matrices(R, atol=1e-2 * (1 + 1e-9))  # MAX_ROTATION_ATOL, just above
 
 
 @pytest.mark.parametrize(
