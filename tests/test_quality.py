@@ -155,6 +155,16 @@ def test_a_nan_offset_correlation_fails():
     assert "no time-offset correlation" in reasons[0].message
 
 
+def test_a_peak_margin_without_the_second_peak_offset_is_judged():
+    """``second_peak_offset_s`` defaults to None: judge used to format it into the message before comparing, and
+    raised TypeError for any margin, even one far above the bound."""
+    assert judge(dataclasses.replace(GOOD, second_peak_offset_s=None)).reasons == ()
+    reason, = judge(dataclasses.replace(GOOD, offset_peak_margin=0.005, second_peak_offset_s=None)).reasons
+    assert (reason.check, reason.level) == ("offset_peak_margin", "fail") and "another clock offset" in reason.message
+    reason, = judge(dataclasses.replace(GOOD, offset_peak_margin=0.005)).reasons
+    assert "another clock offset (+400.0 ms)" in reason.message
+
+
 def test_a_nan_peak_margin_is_no_reason():
     assert judge(dataclasses.replace(GOOD, offset_peak_margin=float("nan"), second_peak_offset_s=float("nan"))
                  ).reasons == ()
