@@ -249,10 +249,12 @@ def judge(e: Evidence, extra=()) -> Verdict:
                               "the two streams' angular speeds do not match (unrelated streams, wrong units or "
                               "columns, or a clock offset beyond the search)"))
     if e.offset_peak_margin is not None and math.isfinite(e.offset_peak_margin):
+        second = e.second_peak_offset_s
+        where = f" ({1e3 * second:+.1f} ms)" if second is not None and math.isfinite(second) else ""
         reasons.append(_below("offset_peak_margin", e.offset_peak_margin, "margin of the time-offset correlation peak "
-                              "over the next one", "", f"another clock offset ({1e3 * e.second_peak_offset_s:+.1f} ms) "
-                              f"matches the angular speeds almost as well (periodic motion): the offset may be that "
-                              f"one; record motion that is not periodic"))
+                              "over the next one", "", f"another clock offset{where} matches the angular speeds "
+                              f"almost as well (periodic motion): the offset may be that one; record motion that is "
+                              f"not periodic"))
     if e.offset_s is not None and e.max_offset_s is not None:
         margin = THRESHOLDS["offset_at_bound_resolutions"][1] * (e.offset_resolution_s or 0.0)
         if abs(e.offset_s) >= e.max_offset_s - margin:

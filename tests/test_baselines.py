@@ -67,17 +67,18 @@ def test_robust_survives_outlier_pairs_that_break_least_squares(rng):
     err_ls = so3.angle_between_deg(chordal_optimal(A, B).R, sim.R0)
     oracle = np.array([chordal_optimal(A[n][~bad[n]], B[n][~bad[n]]).R for n in range(20)])
     err_oracle = so3.angle_between_deg(oracle, sim.R0)  # least squares told which pairs are good
-    assert err_robust.max() < 1.0
-    assert np.median(err_robust) < 1.5 * np.median(err_oracle)
-    assert np.median(err_ls) > 5 * np.median(err_robust)
+    # measured: worst 0.58 deg, median 0.99 x the oracle's, least squares 30 x worse
+    assert err_robust.max() < 0.75
+    assert np.median(err_robust) < 1.2 * np.median(err_oracle)
+    assert np.median(err_ls) > 10 * np.median(err_robust)
 
 
 def test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise(problem):
     R0, A, B = problem
-    assert pair_residual_deg(R0, A, B).max() < 1e-6
+    assert pair_residual_deg(R0, A, B).max() < 1e-12  # measured 3e-14
     tilt = Rotation.from_rotvec([0, 0, np.radians(10)]).as_matrix()
     r = pair_residual_deg(R0, A, B @ tilt)
-    np.testing.assert_allclose(r, 10.0, atol=1e-8)
+    np.testing.assert_allclose(r, 10.0, rtol=0, atol=1e-12)  # measured 5e-15
 
 
 def test_opencv_pose_chain_reproduces_the_pairs(problem):

@@ -167,7 +167,8 @@ def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
     r = calibrate(camera.between(10.0, 12.5), gyro, **_fast())
     reasons = _reasons(r)
     assert math.isnan(r.bootstrap_ci95_deg) and r.to_dict()["bootstrap_ci95_deg"] is None
-    assert reasons["blocks"].level == "fail" and reasons["overlap_intervals"].level in ("warning", "fail")
+    assert reasons["blocks"].level == "fail" and reasons["blocks"].measured < 3  # measured 1.55
+    assert reasons["overlap_intervals"].level == "warning" and reasons["overlap_intervals"].measured == pytest.approx(2.5)
 
 
 def test_nearly_single_axis_motion_warns_with_its_spread():
@@ -190,7 +191,7 @@ def test_static_pose_sets_get_a_verdict_and_name_their_pairs(rig):
     camera, _, sensor = rig
     C, S = np.swapaxes(camera.R[::60], -1, -2), np.swapaxes(sensor.at(camera.t[::60]), -1, -2)
     r = calibrate_poses(C, S, reference=R0, n_bootstrap=20)
-    assert r.verdict.level == "ok" and r.reference_error_deg < 1e-6
+    assert r.verdict.level == "ok" and r.reference_error_deg < 1e-10  # noise-free: measured 6e-14
     assert "pairs of static poses" in r.summary() and "nan" not in r.summary()
 
 
@@ -356,9 +357,8 @@ def test_cli_fail_exits_3_unless_accepted(rig_files, tmp_path, capsys):
     (("--seed", "x"), "not an integer"),
 ])
 def test_cli_bad_numbers_exit_2_naming_the_option(rig_files, extra, message, capsys):
-    with pytest.raises(SystemExit) as err:
+    with pytest.raises(SystemExit, match="^2$"):  # a usage error
         main(["calibrate", "--camera", str(rig_files / "cam.txt"), "--sensor", str(rig_files / "imu.csv"), *extra])
-    assert err.value.code == 2
     stderr = capsys.readouterr().err
     assert extra[0] in stderr and message in stderr
 
@@ -494,19 +494,3 @@ def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsy
                 "gyro", "--method", "sqp", "--bootstrap", "0")
     assert code == EXIT_FAIL and "LocalMinimumWarning" in capsys.readouterr().out
 
-
-def test_every_case_above_is_named_in_this_file():
-    """The issue asks for at least 40 bad-input cases: count the parametrised and plain cases of this module."""
-    import inspect
-    import sys
-
-    module = sys.modules[__name__]
-    count = 0
-    for name, fn in inspect.getmembers(module, inspect.isfunction):
-        if not name.startswith("test_") or name in ("test_every_case_above_is_named_in_this_file",
-                                                     "test_clean_rig_is_ok_and_right", "test_judge_levels_and_thresholds",
-                                                     "test_diagnostic_figure_has_every_panel"):
-            continue
-        marks = [m for m in getattr(fn, "pytestmark", []) if m.name == "parametrize"]
-        count += math.prod(len(m.args[1]) for m in marks) if marks else 1
-    assert count >= 40, count

@@ -39,6 +39,23 @@ def test_registry_holds_the_required_solvers():
         assert solver_info(name).reference, name
 
 
+#: Worst angle (deg) from R0 over the three problems of :func:`noisy`, measured per solver with the NumPy, SciPy
+#: and OpenCV of requirements.lock. The optimum of eq. (8) (chordal_optimal, sqp, andreff,
+#: horaud_dornaika) is 0.262 deg; OpenCV's Tsai, which is not frame-invariant, is the worst at 0.749 deg.
+MEASURED_WORST_DEG = {
+    "andreff": 0.2624, "chordal_optimal": 0.2624, "horaud_dornaika": 0.2624, "sqp": 0.2624, "robust": 0.2558,
+    "park_martin": 0.2632, "tsai_lenz": 0.2724, "two_step_right": 0.3737, "two_step_left": 0.3930,
+    "opencv_horaud": 0.5253, "opencv_park": 0.5293, "opencv_tsai": 0.7486,
+}
+#: The problems are fixed (seed 7), so only rounding moves these numbers (by far less than 1e-6 deg); a solver that
+#: becomes 20 % worse on them fails.
+MARGIN = 1.2
+
+
+def test_every_solver_has_a_measured_accuracy():
+    assert set(MEASURED_WORST_DEG) == set(ALL), "measure a new solver's worst error on noisy() and add it"
+
+
 @pytest.mark.parametrize("method", ALL)
 def test_output_is_a_rotation(method, noisy):
     R0, A, B = noisy
@@ -46,8 +63,8 @@ def test_output_is_a_rotation(method, noisy):
     assert R.shape == (3, 3, 3)
     so3.check_rotation_matrices(R, atol=1e-10)
     assert np.all(np.linalg.det(R) > 0)
-    # a sane estimate: the paper's noise (<= 1.15 deg per rotation) moves R0 by well under 2 deg
-    assert_rotations_close(R, R0, 2.0)
+    # as accurate as measured: the paper's noise (<= 1.15 deg per rotation) moves the optimum 0.26 deg from R0
+    assert_rotations_close(R, R0, MARGIN * MEASURED_WORST_DEG[method])
 
 
 @pytest.mark.parametrize("method", ALL)
@@ -56,7 +73,7 @@ def test_noise_free_recovery_of_a_random_R0(method, rng):
     A = so3.random_rotations(rng, 12)
     B = R0.T @ A @ R0  # eq. (7) exactly
     R = solve(method, A, B, **_start_options(method, R0))
-    assert so3.frobenius_error(R, R0) < 1e-8
+    assert so3.frobenius_error(R, R0) < 1e-10  # measured: 1.4e-12 (sqp), 6.5e-13 (two-step), others < 1e-14
 
 
 @pytest.mark.parametrize("method", ALL)
@@ -77,8 +94,10 @@ def test_equivariance_under_a_change_of_frame(method, side, noisy):
         expected = R @ G.T
     gap = so3.frobenius_error(R2, expected).max()
     if solver_info(method).equivariant:
-        assert gap < 1e-6
-    else:  # the registry's flag must be true: a non-equivariant solver visibly moves
+        # measured: 1.3e-8 for the local solver (sqp stops at its tolerance from the moved start), below 1e-12 for
+        # the others
+        assert gap < (1e-7 if solver_info(method).local else 1e-10)
+    else:  # the registry's flag must be true: a non-equivariant solver visibly moves (measured 9e-4 and more)
         assert gap > 1e-4
 
 

@@ -1,6 +1,7 @@
 """Every loader family reports an unreadable or malformed file with one error, DataFileError: the file,
 the line and the column of the problem (realdata, lab.recording, paper)."""
 import pickle
+import re
 
 import numpy as np
 
@@ -36,7 +37,7 @@ def test_error_prints_file_line_and_column_and_stays_a_value_error(tmp_path):
 
 
 def test_not_found_is_also_a_file_not_found_error(tmp_path):
-    with pytest.raises(FileNotFoundError) as info:
+    with pytest.raises(FileNotFoundError, match=r"none.txt: no such file \(the rig description\)") as info:
         read_text(tmp_path / "none.txt", "the rig description")
     err = info.value
     assert isinstance(err, DataFileNotFound) and isinstance(err, ValueError)
@@ -103,7 +104,7 @@ def test_missing_file(family):
     path, _, load = family
     if path.exists():
         path.unlink()
-    with pytest.raises(FileNotFoundError) as info:
+    with pytest.raises(FileNotFoundError, match="no such file") as info:
         load(path)
     err = info.value
     assert isinstance(err, DataFileNotFound) and err.path == path and "no such file" in err.message
@@ -114,7 +115,7 @@ def test_directory_instead_of_a_file(family):
     if path.exists():
         path.unlink()
     path.mkdir()
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match="is a directory, not a file") as info:
         load(path)
     assert info.value.path == path and info.value.message == "is a directory, not a file"
     assert isinstance(info.value, FileNotFoundError)  # as the loaders raised before
@@ -123,7 +124,7 @@ def test_directory_instead_of_a_file(family):
 def test_binary_file(family):
     path, _, load = family
     path.write_bytes(BINARY)
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match=r"line 1: not UTF-8 text \(invalid start byte at byte 0") as info:
         load(path)
     err = info.value
     assert err.path == path and err.line == 1 and err.message.startswith("not UTF-8 text (invalid start byte at byte 0")
@@ -134,23 +135,44 @@ def test_binary_file(family):
 def test_utf16_file(family, encoding, problem):
     path, text, load = family
     path.write_bytes(text.encode(encoding))
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match=re.escape(f"not UTF-8 text ({problem}")) as info:
         load(path)
     err = info.value
     assert err.path == path and err.line == 1 and err.message.startswith(f"not UTF-8 text ({problem}")
     assert "UTF-16" in err.message
 
 
-def test_a_valid_file_loads(family):
+def test_a_valid_file_loads_with_its_values(family):
+    """The loaded values are those of the text (a loader that drops, shifts or mis-scales a column fails)."""
     path, text, load = family
     path.write_text(text)
-    load(path)
+    loaded = load(path)
+    if path.name == "traj.txt":  # TUM: nanosecond stamps in seconds, rotations 0, 1, 2 deg about x
+        assert loaded.t[0] == pytest.approx(1520530313.24973568, abs=1e-6)
+        np.testing.assert_allclose(np.diff(loaded.t), [0.0500019, 0.0500012], atol=1e-6)
+        angles = np.degrees(np.arccos(np.clip((np.trace(loaded.R, axis1=1, axis2=2) - 1) / 2, -1, 1)))
+        np.testing.assert_allclose(angles, [0.0, 1.0, 2.0], atol=1e-4)  # the quaternions carry 7 digits
+        np.testing.assert_allclose(loaded.R[2, 2, 1], 0.0348995, atol=1e-6)  # +2 deg about x: qx > 0, not qw first
+    elif path.name == "table1.csv":
+        rows = [line.split(",") for line in text.splitlines()[1:] if line]
+        assert len(loaded) == len(rows)
+        for it, method, mean, _ in rows[:6]:
+            assert loaded.loc[(int(it), method), "mean"] == float(mean)
+    elif path.name == "rig.json":
+        import json
+
+        assert loaded.rig == json.loads(text)
+    else:  # static_imu.csv
+        header, *lines = text.splitlines()
+        expected = np.array([[float(v) for v in line.split(",")] for line in lines])
+        assert list(loaded.static_imu.columns) == header.split(",")
+        np.testing.assert_array_equal(loaded.static_imu.to_numpy(float), expected)
 
 
 def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
     path = tmp_path / "traj.txt"
     path.write_text("\n".join(TUM_LINES + ["1520530313399738752.0 0 0 0 0 0 0 1x"]) + "\n")
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match=r"line 5, column 8 \('qw'\): not a number: '1x'") as info:
         rd.load_tum_trajectory(path)
     err = info.value
     assert (err.path, err.line, err.column, err.column_name) == (path, 5, 8, "qw")
@@ -158,7 +180,7 @@ def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
 
     table = paper_dir / "table1.csv"
     table.write_text(TABLE1.replace("2.339", "2.3x9"))
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match=r"line 3, column 'mean': not a number \('2\.3x9'\)") as info:
         paper.load_table1()
     assert (info.value.path, info.value.line, info.value.column) == (table, 3, "mean")
 
@@ -168,7 +190,7 @@ def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
     cells[lines[0].split(",").index("gyr_y")] = "abc"
     lines[5] = ",".join(cells)
     imu.write_text("\n".join(lines) + "\n")
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match=r"line 6, column 'gyr_y': not a number: 'abc'") as info:
         lab.load_lab(lab_dir)
     assert (info.value.path, info.value.line, info.value.column) == (imu, 6, "gyr_y")
     assert info.value.message == "not a number: 'abc'"
@@ -177,17 +199,17 @@ def test_malformed_value_has_line_and_column(tmp_path, paper_dir, lab_dir):
 def test_other_realdata_loaders_raise_it_too(tmp_path):
     yaml_file = tmp_path / "c.yaml"
     yaml_file.write_text("cam0:\n  T_cam_imu: [[1, 0,\n  - 2\n")
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match="not valid YAML") as info:
         rd.load_kalibr_camchain(yaml_file)
     assert info.value.path == yaml_file and info.value.line is not None and "not valid YAML" in info.value.message
-    with pytest.raises(DataFileNotFound):
+    with pytest.raises(DataFileNotFound, match="none.yaml: no such file"):
         rd.load_orbslam3_stereo(tmp_path / "none.yaml")
     (tmp_path / "dir.yaml").mkdir()
     with pytest.raises(DataFileNotFound, match="is a directory, not a file"):
         rd.load_orbslam3_stereo(tmp_path / "dir.yaml")
     robot = tmp_path / "robot.txt"
     robot.write_text("x\n")
-    with pytest.raises(DataFileError) as info:
+    with pytest.raises(DataFileError, match="number of poses") as info:
         rd.load_tabb_poses(robot)
     assert (info.value.line, info.value.column) == (1, 1) and "number of poses" in info.value.message
 
@@ -199,7 +221,7 @@ def test_read_table_is_the_loaders_parser_with_a_header_and_quaternion_check(tmp
     path = tmp_path / "poses.csv"
     path.write_text("t_ns,qw,qx,qy,qz\n1,1,0,0,0\n2,0,1,0,0\n3,0.5,x,0.5,0.5\n")
     names = ("t_ns", "qw", "qx", "qy", "qz")
-    with pytest.raises(DataFileError) as err:
+    with pytest.raises(DataFileError, match=r"line 4, column 3 \('qx'\): not a number: 'x'") as err:
         read_table(path, names, delimiter=",", header=True)
     assert (err.value.line, err.value.column, err.value.column_name) == (4, 3, "qx")
     path.write_text("t_ns,qw,qx,qy,qz\n1,1,0,0,0\n2,0,1,0,0\n3,0.5,0.5,0.5,0.6\n")

@@ -36,6 +36,28 @@ def test_cost_zero_at_truth_and_kron_form_exact_for_any_matrix(problem, rng):
     assert np.allclose(handeye.handeye_cost_kron(X, K, len(A)), handeye.handeye_cost(X, A[None], B[None]))
 
 
+def test_batched_weights_are_normalised_per_problem(rng):
+    """A (2, 3) batch of problems, each with its own weights on its own scale (1e-3 .. 1e3): every K equals the
+    problem's own ``sum_j w_j kron(B_j, A_j) / sum_j w_j``, as if computed alone (a normalisation over the whole
+    batch would scale each K by its share of the batch's total weight)."""
+    J = 7
+    A, B = so3.random_rotations(rng, (2, 2, 3, J))  # unrelated A and B: any scale error in K shows
+    w = rng.uniform(0.1, 1.0, (2, 3, J)) * np.logspace(-3, 3, 6).reshape(2, 3, 1)
+    w[1, 2, :3] = 0.0  # a problem with some pairs switched off
+    K = handeye.kronecker_operator(A, B, weights=w)
+    assert K.shape == (2, 3, 9, 9)
+    for idx in np.ndindex(2, 3):
+        alone = handeye.kronecker_operator(A[idx], B[idx], weights=w[idx])
+        by_definition = sum(w[idx][j] * np.kron(B[idx][j], A[idx][j]) for j in range(J)) / w[idx].sum()
+        np.testing.assert_allclose(K[idx], alone, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(K[idx], by_definition, rtol=0, atol=1e-14)
+    # one weight vector for the whole batch broadcasts, normalised within each problem just the same
+    shared = handeye.kronecker_operator(A, B, weights=w[0, 0])
+    for idx in np.ndindex(2, 3):
+        np.testing.assert_allclose(shared[idx], handeye.kronecker_operator(A[idx], B[idx], weights=w[0, 0]),
+                                   rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("convention", ["body_from_world", "world_from_body"])
 def test_relative_rotations_satisfy_eq7(rng, convention):
     R0 = so3.random_rotations(rng, ())

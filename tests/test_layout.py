@@ -14,7 +14,9 @@ import replication
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "replication"
-MODULES = sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.") if m.name != "replication.__main__")
+#: The packages (only they have submodules a name could shadow), the top one included.
+PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
+                                    if m.ispkg)
 
 
 def test_every_subpackage_is_installed():
@@ -40,12 +42,17 @@ def test_maths_and_data_layers_load_no_solver(module):
     assert loaded == "[]", f"import {module} loads {loaded}"
 
 
-@pytest.mark.parametrize("module", MODULES)
+def test_the_shadowing_check_sees_every_package():
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]
+    assert sorted(PACKAGES) == sorted(declared)
+
+
+@pytest.mark.parametrize("module", PACKAGES)
 def test_no_name_shadows_a_submodule(module):
     mod = importlib.import_module(module)
-    if not hasattr(mod, "__path__"):
-        return
-    for sub in pkgutil.iter_modules(mod.__path__):
+    subs = list(pkgutil.iter_modules(mod.__path__))
+    assert subs, f"{module} has no submodules"
+    for sub in subs:
         value = getattr(mod, sub.name, None)
         assert value is None or isinstance(value, types.ModuleType), f"{module}.{sub.name} is a {type(value).__name__}"
 

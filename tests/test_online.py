@@ -200,8 +200,10 @@ def test_cli_online_writes_the_track(tmp_path, capsys):
     rows = pd.read_csv(track)
     assert {"t", "n_pairs", "radius_deg", "ready", "alarm", "qw"} <= set(rows.columns) and rows["ready"].iloc[-1]
     assert "online:" in capsys.readouterr().out
-    with pytest.raises(SystemExit):
+    capsys.readouterr()
+    with pytest.raises(SystemExit, match="^2$"):  # a usage error
         main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--target", "0"])
+    assert "--target" in capsys.readouterr().err
     assert main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--track", str(track)]) == 2
 
 

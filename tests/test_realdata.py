@@ -119,7 +119,7 @@ def test_calibrate_poses_recovers_R0(rng):
     S = so3.random_rotations(rng, 15)  # sensor_from_world
     C = R0 @ S  # camera_from_world = camera_from_sensor sensor_from_world
     res = calibrate_poses(C, S, reference=R0, n_bootstrap=0)
-    assert res.reference_error_deg < 1e-6 and res.n_pairs == 105
+    assert res.reference_error_deg < 1e-10 and res.n_pairs == 105  # noise-free: measured 5e-14
 
 
 @needs_real

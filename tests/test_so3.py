@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
@@ -11,7 +11,26 @@ finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 
 def test_check_rotation_accepts_rotations(rng):
     R = so3.random_rotations(rng, (4, 5))
-    assert so3.check_rotation_matrices(R).shape == (4, 5, 3, 3)
+    assert np.array_equal(so3.check_rotation_matrices(R), R)
+
+
+@pytest.mark.parametrize("atol", [None, 1e-4, 1e-2])  # None: the default, ROTATION_ATOL = 1e-6
+def test_check_rotation_tolerance_boundary(rng, atol):
+    """``||R^T R - I||_F <= atol``: a rotation scaled by ``s`` has ``|s^2 - 1| sqrt 3`` there."""
+    R = so3.random_rotations(rng, 3)
+    bound, options = (1e-6, {}) if atol is None else (atol, {"atol": atol})
+    for share, accepted in ((1 - 1e-3, True), (1 + 1e-3, False)):
+        M = R.copy()
+        M[1] *= np.sqrt(1 + share * bound / np.sqrt(3))
+        residual = so3.orthonormality_residual(M[1])
+        assert residual == pytest.approx(share * bound, rel=1e-6)
+        if accepted:
+            assert np.array_equal(so3.check_rotation_matrices(M, **options), M)
+        else:
+            with pytest.raises(ValueError, match=r"not a rotation matrix at index \(1,\)"):
+                so3.check_rotation_matrices(M, **options)
+    with pytest.raises(ValueError, match=r"atol must be <= 0.01"):
+        so3.check_rotation_matrices(R, atol=1e-2 * (1 + 1e-9))  # MAX_ROTATION_ATOL, just above
 
 
 @pytest.mark.parametrize(
@@ -39,8 +58,7 @@ def test_check_rotation_names_the_index(rng):
 @settings(max_examples=60, deadline=None)
 @given(arrays(float, (3, 3), elements=finite))
 def test_nearest_rotation_is_a_rotation_and_nearest(M):
-    if abs(np.linalg.det(M)) < 1e-6 or np.linalg.cond(M) > 1e8:
-        return  # the projection is not unique for (nearly) singular M
+    assume(abs(np.linalg.det(M)) >= 1e-6 and np.linalg.cond(M) <= 1e8)  # else the projection is not unique
     P = so3.nearest_rotation(M)
     so3.check_rotation_matrices(P)
     others = so3.random_rotations(np.random.default_rng(0), 500)
@@ -133,3 +151,127 @@ def test_yaw_pitch_roll_order_is_in_the_name():
     np.testing.assert_allclose(R, so3.from_euler("z", [30.0], degrees=True) @ so3.from_euler("y", [-20.0], degrees=True)
                                @ so3.from_euler("x", [10.0], degrees=True))
     assert so3.yaw_pitch_roll_deg(np.broadcast_to(R, (4, 5, 3, 3))).shape == (4, 5, 3)
+
+
+# ----------------------------------------------------------------------------------------- conversions, round trips
+#
+# Measured (NumPy/SciPy of requirements.lock, 2 000 rotations per band): every round trip below is within 1.1e-15
+# (absolute, for vectors of norm <= pi and for matrix entries) and, near angle 0, within 4e-16 of the angle
+# (relative). The tolerances are 1e-14 absolute and 1e-14 relative: 10 to 25 times what is measured.
+ABS, REL = 1e-14, 1e-14
+
+#: Angle bands (rad): near 0 (1e-12 .. 1e-6), generic (log-uniform 1e-6 .. 1, and uniform 1e-3 .. pi - 1e-3), and
+#: near a half-turn (pi - 1e-9 .. pi, where the axis no longer follows from the antisymmetric part of R).
+BANDS = {
+    "near 0": lambda rng, n: 10 ** rng.uniform(-12, -6, n),
+    "small": lambda rng, n: 10 ** rng.uniform(-6, 0, n),
+    "generic": lambda rng, n: rng.uniform(1e-3, np.pi - 1e-3, n),
+    "near pi": lambda rng, n: np.pi - rng.uniform(0, 1e-9, n),
+}
+
+
+def _rotvecs(rng, band, shape=(400,)):
+    n = int(np.prod(shape))
+    axis = rng.normal(size=(n, 3))
+    axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+    return (axis * BANDS[band](rng, n)[:, None]).reshape(shape + (3,))
+
+
+@pytest.mark.parametrize("band", list(BANDS))
+def test_exp_map_is_rodrigues(rng, band):
+    from scipy.spatial.transform import Rotation
+
+    w = _rotvecs(rng, band)
+    np.testing.assert_allclose(so3.exp_map(w), Rotation.from_rotvec(w).as_matrix(), rtol=0, atol=ABS)
+
+
+@pytest.mark.parametrize("band", list(BANDS))
+def test_log_map_inverts_exp_map(rng, band):
+    w = _rotvecs(rng, band)
+    theta = np.linalg.norm(w, axis=-1)
+    back = so3.log_map(so3.exp_map(w))
+    err = np.linalg.norm(back - w, axis=-1)
+    assert np.all(err <= np.maximum(ABS * (theta >= 1e-6), REL * theta)), err.max()  # near 0: relative to the angle
+    assert np.all(np.linalg.norm(back, axis=-1) <= np.pi)
+    np.testing.assert_allclose(np.radians(so3.rotation_angle_deg(so3.exp_map(w))), theta, rtol=REL, atol=0)
+
+
+def test_log_map_at_a_half_turn_is_either_sign(rng):
+    """At exactly pi, ``w`` and ``-w`` are one rotation: ``log`` may return either, but exp(log R) is R."""
+    w = _rotvecs(rng, "generic", (50,))
+    w *= np.pi / np.linalg.norm(w, axis=-1, keepdims=True)
+    w = np.concatenate([w, np.pi * np.eye(3), -np.pi * np.eye(3)])
+    R = so3.exp_map(w)
+    back = so3.log_map(R)
+    err = np.minimum(np.linalg.norm(back - w, axis=-1), np.linalg.norm(back + w, axis=-1))
+    assert err.max() <= ABS
+    np.testing.assert_allclose(so3.exp_map(back), R, rtol=0, atol=ABS)
+
+
+@pytest.mark.parametrize("band", list(BANDS))
+def test_exp_map_inverts_log_map(rng, band):
+    R = so3.exp_map(_rotvecs(rng, band))
+    np.testing.assert_allclose(so3.exp_map(so3.log_map(R)), R, rtol=0, atol=ABS)
+
+
+@pytest.mark.parametrize("band", list(BANDS))
+def test_quaternion_round_trips_and_sign(rng, band):
+    from scipy.spatial.transform import Rotation
+
+    w = _rotvecs(rng, band)
+    R = so3.exp_map(w)
+    q = so3.as_quaternion(R)
+    assert q.shape == (400, 4) and np.all(q[:, 0] >= 0)  # scalar first, w >= 0
+    np.testing.assert_allclose(np.linalg.norm(q, axis=-1), 1.0, rtol=0, atol=ABS)
+    reference = Rotation.from_rotvec(w).as_quat(scalar_first=True)  # SciPy's, with w >= 0 too
+    reference *= np.where(reference[:, :1] < 0, -1.0, 1.0)
+    np.testing.assert_allclose(q, reference, rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.quaternion_to_matrix(q), R, rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.quaternion_to_matrix(-q), R, rtol=0, atol=ABS)  # q and -q: one rotation
+    np.testing.assert_allclose(so3.quaternion_to_matrix(3.0 * q), R, rtol=0, atol=ABS)  # normalised first
+
+
+def test_quaternion_order_is_scalar_first():
+    """A quarter-turn about z is (cos 45, 0, 0, sin 45); read scalar-last it would be another rotation."""
+    R = so3.exp_map(np.array([0.0, 0.0, np.pi / 2]))
+    np.testing.assert_allclose(so3.as_quaternion(R), [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)], atol=ABS)
+    np.testing.assert_allclose(so3.quaternion_to_matrix([0.0, 1.0, 0.0, 0.0]), np.diag([1.0, -1.0, -1.0]), atol=ABS)
+    scalar_last = so3.quaternion_to_matrix([0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)])  # (x, y, z, w) read as (w, x, y, z)
+    assert so3.angle_between_deg(scalar_last, R) > 90
+
+
+def test_the_quaternion_of_a_half_turn_has_w_zero(rng):
+    axis = np.array([2.0, -1.0, 2.0]) / 3.0
+    q = so3.as_quaternion(so3.exp_map(np.pi * axis))
+    assert abs(q[0]) <= ABS and np.allclose(np.abs(q[1:]), np.abs(axis), atol=ABS)
+
+
+def test_yaw_pitch_roll_round_trips(rng):
+    n = 400
+    ypr = np.column_stack([rng.uniform(-180, 180, n), rng.uniform(-89.9, 89.9, n), rng.uniform(-180, 180, n)])
+    R = so3.from_euler("ZYX", ypr, degrees=True)
+    # measured: 4e-13 deg (the angles of a rotation 0.1 deg from gimbal lock are ill-conditioned); bound 1e-10 deg
+    np.testing.assert_allclose(so3.yaw_pitch_roll_deg(R), ypr, rtol=0, atol=1e-10)
+    # any rotation, gimbal lock included: the angles give the rotation back
+    R = np.concatenate([so3.random_rotations(rng, n), so3.from_euler("ZYX", [[10.0, 90.0, 0.0], [0.0, -90.0, 5.0]],
+                                                                        degrees=True)])
+    with pytest.warns(UserWarning, match="Gimbal lock detected"):  # SciPy's, for the last two
+        angles = so3.yaw_pitch_roll_deg(R)
+    assert np.all(np.abs(angles[:, 1]) <= 90.0) and np.all(np.abs(angles[:, [0, 2]]) <= 180.0)
+    np.testing.assert_allclose(so3.from_euler("ZYX", angles, degrees=True), R, rtol=0, atol=ABS)
+
+
+@pytest.mark.parametrize("shape", [(), (5,), (2, 3, 4), (0,), (3, 0)])
+def test_conversions_keep_batch_shapes(rng, shape):
+    w = _rotvecs(rng, "generic", shape) if np.prod(shape) else np.zeros(shape + (3,))
+    R = so3.exp_map(w)
+    assert R.shape == shape + (3, 3) and so3.log_map(R).shape == shape + (3,)
+    q = so3.as_quaternion(R)
+    assert q.shape == shape + (4,) and so3.quaternion_to_matrix(q).shape == shape + (3, 3)
+    assert so3.yaw_pitch_roll_deg(R).shape == shape + (3,) and so3.rotation_angle_deg(R).shape == shape
+    if np.prod(shape):  # batched equals one at a time
+        flat_w, flat_R = w.reshape(-1, 3), R.reshape(-1, 3, 3)
+        for k in (0, len(flat_w) - 1):
+            np.testing.assert_array_equal(so3.exp_map(flat_w[k]), flat_R[k])
+            np.testing.assert_array_equal(so3.log_map(flat_R[k]), so3.log_map(R).reshape(-1, 3)[k])
+            np.testing.assert_array_equal(so3.as_quaternion(flat_R[k]), q.reshape(-1, 4)[k])

@@ -141,7 +141,7 @@ def test_opencv_regression_24871_orthogonal_start():
         ok = so3.frobenius_error(R, X) < max(1e-10, PRECISION[method])
         assert ok or caught, (method, so3.frobenius_error(R, X))
     # the paper's iteration from the identity cannot leave the orthogonal complement: 50 iterations end far off
-    with pytest.warns(ConvergenceWarning):
+    with pytest.warns(ConvergenceWarning, match=r"two_step stopped 90 deg from its fixed point after 50 iterations"):
         assert so3.angle_between_deg(two_step(A, B, iterations=50).R_left, X) > 45
     with pytest.warns(IterationCapWarning, match="started orthogonal to the limit"):
         res = two_step(A, B)
@@ -294,7 +294,7 @@ def test_sqp_from_far_starts_warns_with_a_local_minimum_warning():
     assert far[wrong].mean() > 0.5
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        with pytest.warns(LocalMinimumWarning):
+        with pytest.warns(LocalMinimumWarning, match=r"sqp did not reach the global minimum of eq\. \(8\) in 1 of 1"):
             sqp(sim.A[wrong][:1], sim.B[wrong][:1])  # the exported function checks too
 
 
@@ -327,24 +327,25 @@ EXPORTED = {
 
 
 def _bad_inputs(A, B):
+    """case -> (A, B, the message that names the problem)."""
     nan = A.copy()
     nan[3, 0, 0] = np.nan
     return {
-        "not rotations": (2 * A, B),
-        "reflections": (A, -B),
-        "NaN": (nan, B),
-        "shape mismatch": (A, B[:-1]),
-        "not 3x3": (A[..., :2], B[..., :2]),
-        "one pair": (A[:1], B[:1]),
-        "no motion axis": (A[:, None, None], B),
+        "not rotations": (2 * A, B, r"A \(camera relative rotations\) is not a rotation matrix at index \(0,\)"),
+        "reflections": (A, -B, r"B \(sensor relative rotations\) is not a rotation matrix .* det = -1"),
+        "NaN": (nan, B, r"A \(camera relative rotations\) contains NaN or inf \(first at index \(3,\)\)"),
+        "shape mismatch": (A, B[:-1], r"must have the same shape; got A \(20, 3, 3\), B \(19, 3, 3\)"),
+        "not 3x3": (A[..., :2], B[..., :2], r"must have shape \(\.\.\., 3, 3\), got \(20, 3, 2\)"),
+        "one pair": (A[:1], B[:1], r"need at least [23] motion pairs \(J >= [23]\), got J = 1"),
+        "no motion axis": (A[0], B[0], r"must have shape \(\.\.\., J, 3, 3\) with J motions; got A \(3, 3\)"),
     }
 
 
 @pytest.mark.parametrize("name", list(EXPORTED))
 def test_every_exported_solver_refuses_bad_input(name, problem):
     _, A, B = problem
-    for case, (a, b) in _bad_inputs(A, B).items():
-        with pytest.raises(ValueError):
+    for case, (a, b, message) in _bad_inputs(A, B).items():
+        with pytest.raises(ValueError, match=message):
             EXPORTED[name](a, b)
     # and degenerate motion, except the paper-literal fixed-point diagnostic which documents it
     axis = Rotation.from_rotvec(np.outer(np.linspace(0.2, 1.5, 10), [0.0, 0.6, 0.8])).as_matrix()
@@ -380,7 +381,7 @@ def test_motions_object_is_read_only_and_caches_K(problem):
     _, A, B = problem
     m = Motions(A, B)
     assert m.K is m.K and m.svd is m.svd
-    with pytest.raises(AttributeError):
+    with pytest.raises(AttributeError, match="Motions is read-only"):
         m.A = B
     with pytest.raises(ValueError, match="either a Motions object or the arrays"):
         solve("andreff", m, B)
@@ -504,7 +505,7 @@ def test_exported_wrapper_warnings_point_at_the_caller(rng):
     R0 = so3.random_rotations(rng, ())
     w = np.outer(np.linspace(0.2, 1.5, 10), [0.0, 0.6, 0.8]) + rng.normal(scale=0.002, size=(10, 3))
     A = Rotation.from_rotvec(w).as_matrix()
-    with pytest.warns(ObservabilityWarning) as caught:
+    with pytest.warns(ObservabilityWarning, match="nearly single-axis motion: axis spread") as caught:
         park_martin(A, R0.T @ A @ R0)
     assert caught[0].filename == __file__
 

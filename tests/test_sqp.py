@@ -19,7 +19,7 @@ def test_noise_free_recovery_and_history(problem):
     res = sqp(A, B, max_iterations=60, init=near(R0))
     assert res.iterates.shape == (60, 3, 3) and res.cost.shape == (60,)
     assert res.success and 1 <= res.n_iterations <= 60
-    assert so3.frobenius_error(res.R, R0) < 1e-6
+    assert so3.frobenius_error(res.R, R0) < 1e-8  # SLSQP's ftol: measured 7e-10
     # after it stops, the history repeats the last iterate
     assert np.array_equal(res.iterates[-1], res.iterates[res.n_iterations - 1])
 

@@ -50,9 +50,9 @@ def test_R_is_world_from_body_and_read_only(stream, rng):
     assert stream.R is stream.world_from_body
     same = OrientationStream(t=stream.t, world_from_body=stream.R, source="kw")
     assert np.array_equal(same.R, stream.R)
-    with pytest.raises(AttributeError):
+    with pytest.raises(AttributeError, match="cannot assign to field 'R'"):
         stream.R = so3.random_rotations(rng, 50)
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(dataclasses.FrozenInstanceError, match="cannot assign to field 'world_from_body'"):
         stream.world_from_body = stream.R
     with pytest.raises(ValueError, match="not a rotation matrix"):
         OrientationStream(stream.t, 2 * stream.R)

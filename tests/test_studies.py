@@ -26,7 +26,7 @@ def test_compare_rows_errors_and_ratio_on_noise_free_problems():
     table = compare(sim.A, sim.B, sim.R0, methods=["two_step_right", "park_martin"], ratio_to="park_martin",
                     rng=np.random.default_rng(0))
     assert list(table.index) == ["two_step_right", "park_martin"]
-    assert (table["max_deg"] < 1e-6).all() and (table["failures"] == 0).all()
+    assert (table["max_deg"] < 1e-9).all() and (table["failures"] == 0).all()  # measured 1.1e-11 (two-step)
     assert (table["n_pairs"] == sim.A.shape[-3]).all()
     assert table.loc["park_martin", "ratio"] == pytest.approx(1.0)
     with pytest.raises(ValueError, match="ratio_to must be one of the methods"):
@@ -39,8 +39,8 @@ def test_compare_takes_one_problem_other_pairs_per_method_and_ignores_named_warn
     R1 = so3.random_rotations(rng, ())
     other = (A[:5], R1.T @ A[:5] @ R1)
     table = compare(A, B, R0, methods=["chordal_optimal", "park_martin"], pairs_for={"park": other})
-    assert table.loc["chordal_optimal", "mean_deg"] < 1e-6 and table.loc["chordal_optimal", "n_pairs"] == 20
-    assert table.loc["park_martin", "mean_deg"] == pytest.approx(float(so3.angle_between_deg(R1, R0)), abs=1e-6)
+    assert table.loc["chordal_optimal", "mean_deg"] < 1e-10 and table.loc["chordal_optimal", "n_pairs"] == 20  # 3e-14
+    assert table.loc["park_martin", "mean_deg"] == pytest.approx(float(so3.angle_between_deg(R1, R0)), abs=1e-9)
     assert table.loc["park_martin", "n_pairs"] == 5
     # nearly single-axis motions: the data set's ObservabilityWarning is listed unless ignored
     axis = np.array([1.0, 0.0, 0.0]) + 1e-4 * rng.normal(size=(8, 3))
@@ -127,13 +127,14 @@ def test_real_studies_recover_a_known_r0_and_shape_their_tables(synthetic_rig):
     poses = {"poses": (C, np.swapaxes(sensor.R[::40], -1, -2), "truth")}
     head = calibration_table(calibrations(streams, poses, refs, ("chordal_optimal",), seed=1))
     assert list(head.index) == [("rig", "chordal_optimal"), ("poses", "chordal_optimal")]
-    assert (head["error_deg"] < 1e-3).all() and np.isnan(head.loc[("poses", "chordal_optimal"), "offset_ms"])
+    # noise-free streams, interpolated between samples: errors measured up to 2.3e-7 deg
+    assert (head["error_deg"] < 1e-5).all() and np.isnan(head.loc[("poses", "chordal_optimal"), "offset_ms"])
     solvers = solver_tables(streams, {}, refs)
     assert list(solvers.columns) == ["error_deg", "n_pairs", "warnings", "seconds"]
-    assert solvers.loc[("rig", "chordal_optimal"), "error_deg"] < 1e-3
+    assert solvers.loc[("rig", "chordal_optimal"), "error_deg"] < 1e-5
     assert solvers.loc[("rig", "opencv_park"), "n_pairs"] < solvers.loc[("rig", "chordal_optimal"), "n_pairs"]
     proto = protocol_table(streams, refs, intervals=(1.0,))
-    assert proto.index.names == ["data", "interval (s)"] and proto.loc[("rig", 1.0), "default: error (deg)"] < 1e-3
+    assert proto.index.names == ["data", "interval (s)"] and proto.loc[("rig", 1.0), "default: error (deg)"] < 1e-5
     sens = sensitivity_table(camera, sensor, R0, intervals=(0.5,), shares=(0.5,), methods=("chordal_optimal",),
                              n_bootstrap=5, seed=1)
-    assert len(sens) == 2 and (sens["error_deg"] < 1e-3).all()
+    assert len(sens) == 2 and (sens["error_deg"] < 1e-5).all()

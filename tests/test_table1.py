@@ -23,7 +23,8 @@ def test_iterate_errors_shapes_and_noise_free_convergence():
     errs = iterate_errors(sim, iterations=30, sqp_variants=("analytic", "capped"), sqp_runs={"capped": 2})
     assert set(errs) == {"optimization (analytic)", "optimization (capped)", "ours_right", "ours_left"}
     assert errs["ours_right"].shape == (4, 30) and errs["optimization (capped)"].shape == (2, 30)
-    assert errs["ours_right"][:, -1].max() < 1e-9 and errs["optimization (analytic)"][:, -1].max() < 1e-6
+    # measured: 7e-16 and (SLSQP's ftol) 8e-9
+    assert errs["ours_right"][:, -1].max() < 1e-13 and errs["optimization (analytic)"][:, -1].max() < 1e-7
     assert set(iterate_errors(sim, iterations=30, with_sqp=False)) == {"ours_right", "ours_left"}
 
 
@@ -133,32 +134,65 @@ def test_two_step_means_mismatch_is_the_mean_absolute_log_ratio():
     assert two_step_means(sim, None, fake)[1] == pytest.approx(0.5)
 
 
-def test_sensitivity_grid_order_values_and_left_closer():
-    pm = paper_two_step_means()
-    motions, starts, noise = {"Haar": None, "0-90": (0.0, 90.0)}, {"identity": None, "far": matched_start()}, \
-        {"ball": "uniform"}
-    sens, left_closer = sensitivity_grid(7, 3, motions, starts, noise, pm)
-    assert list(sens.index) == [("Haar", "identity", "ball"), ("Haar", "far", "ball"), ("0-90", "identity", "ball"),
-                                ("0-90", "far", "ball")]
-    assert list(sens.columns) == ["R^r @2", "R^r @5", "R^r @10", "R^r @20", "R^r @50", "mismatch"]
-    means, mismatch = two_step_means(simulate(7, 3, motion_angle_range_deg=(0.0, 90.0)), matched_start(), pm)
-    assert sens.loc[("0-90", "far", "ball"), "R^r @5"] == means.loc[5, "ours_right"]
-    assert sens.loc[("0-90", "far", "ball"), "mismatch"] == mismatch
-    # the early cells counted are those still above twice the floor
-    expected = 0
-    for m in motions.values():
-        for s in starts.values():
-            mm, _ = two_step_means(simulate(7, 3, motion_angle_range_deg=m), s, pm)
-            expected += sum(mm.loc[n, "ours_right"] > 2 * mm.loc[50, "ours_right"] for n in (2, 5, 10))
-    assert len(left_closer) == expected > 0
+#: Crafted means of the fake two-step runs, per (motion range, start, noise distribution): R^r and R^l at
+#: iterations 2, 5, 10, 20, 50 and the mismatch. Cells not listed sit at their floor from iteration 2 on.
+_ITERS = (2, 5, 10, 20, 50)
+_CELLS = {
+    (None, None, "uniform"): ([0.5, 0.3, 0.2, 0.1, 0.1], [0.5, 0.29, 0.1, 0.1, 0.1], 0.25),
+    # R^r @2 just above twice the floor (counted), @5 exactly twice (not: "above"), @10 just below (not)
+    ((0.0, 90.0), "far", "sphere"): ([0.2 + 1e-9, 0.2, 0.2 - 1e-9, 0.15, 0.1], [0.1] * 5, 0.75),
+}
+_FLOOR = ([0.1] * 5, [0.1] * 5, 0.5)
 
 
-def test_fresh_mismatch_averages_over_noise_distributions():
-    pm = paper_two_step_means()
+@pytest.fixture
+def fake_runs(monkeypatch):
+    """simulate and two_step_means replaced by fakes that record their calls and return :data:`_CELLS`."""
+    import replication.table1.study as study
+
+    calls = {"simulate": [], "means": []}
+
+    def fake_simulate(seed, n_runs, *, motion_angle_range_deg=None, noise_distribution="uniform"):
+        calls["simulate"].append((seed, n_runs, motion_angle_range_deg, noise_distribution))
+        return SimpleNamespace(key=(motion_angle_range_deg, noise_distribution), draw=len(calls["simulate"]))
+
+    def fake_means(problems, start, paper_means):
+        calls["means"].append((problems.draw, start))
+        right, left, mismatch = _CELLS.get((problems.key[0], start, problems.key[1]), _FLOOR)
+        return pd.DataFrame({"ours_right": right, "ours_left": left}, index=_ITERS), mismatch
+
+    monkeypatch.setattr(study, "simulate", fake_simulate)
+    monkeypatch.setattr(study, "two_step_means", fake_means)
+    return calls
+
+
+def test_sensitivity_grid_order_values_and_left_closer(fake_runs):
+    motions, starts = {"Haar": None, "0-90": (0.0, 90.0)}, {"identity": None, "far": "far"}
     noise = {"ball": "uniform", "sphere": "sphere"}
-    fresh = fresh_mismatch([("Haar", "identity")], 9, 3, {"Haar": None}, {"identity": None}, noise, pm)
-    each = [two_step_means(simulate(9, 3, noise_distribution=d), None, pm)[1] for d in noise.values()]
-    assert list(fresh) == [("Haar", "identity")] and fresh[("Haar", "identity")] == pytest.approx(np.mean(each))
+    sens, left_closer = sensitivity_grid(7, 3, motions, starts, noise, paper_two_step_means())
+    # noise outermost, start innermost; one draw per (noise, motions), the same seed for all, shared by the starts
+    assert fake_runs["simulate"] == [(7, 3, None, "uniform"), (7, 3, (0.0, 90.0), "uniform"),
+                                     (7, 3, None, "sphere"), (7, 3, (0.0, 90.0), "sphere")]
+    assert fake_runs["means"] == [(1, None), (1, "far"), (2, None), (2, "far"), (3, None), (3, "far"),
+                                  (4, None), (4, "far")]
+    assert list(sens.index) == [(m, s, n) for n in noise for m in motions for s in starts]
+    assert list(sens.columns) == ["R^r @2", "R^r @5", "R^r @10", "R^r @20", "R^r @50", "mismatch"]
+    assert sens.loc[("Haar", "identity", "ball")].tolist() == [0.5, 0.3, 0.2, 0.1, 0.1, 0.25]
+    assert sens.loc[("0-90", "far", "sphere"), "mismatch"] == 0.75 and sens.loc[("Haar", "far", "ball"),
+                                                                                  "mismatch"] == 0.5
+    # counted: (Haar, identity, ball) @2 (R^l equal: not closer) and @5 (closer); (0-90, far, sphere) @2 only
+    assert left_closer == [False, True, True]
+
+
+def test_fresh_mismatch_averages_over_noise_distributions(fake_runs):
+    noise = {"ball": "uniform", "sphere": "sphere"}
+    fresh = fresh_mismatch([("Haar", "identity"), ("0-90", "far")], 9, 3, {"Haar": None, "0-90": (0.0, 90.0)},
+                           {"identity": None, "far": "far"}, noise, paper_two_step_means())
+    assert fresh == {("Haar", "identity"): pytest.approx((0.25 + 0.5) / 2),
+                     ("0-90", "far"): pytest.approx((0.5 + 0.75) / 2)}
+    assert [c[:2] for c in fake_runs["simulate"]] == [(9, 3)] * 4
+    assert [c[2:] for c in fake_runs["simulate"]] == [(None, "uniform"), (None, "sphere"), ((0.0, 90.0), "uniform"),
+                                                      ((0.0, 90.0), "sphere")]
 
 
 def test_failure_table_and_its_display():
@@ -197,7 +231,7 @@ def test_cost_scale_study_noise_free():
     assert list(table.index) == [("s", "as printed"), ("s", "/ 40")]
     assert list(table.columns) == ["failed", "below_1pct", "below_1pct_low", "below_1pct_high", "settled",
                                    "settled_low", "settled_high", "mean @30", "mean @50"]
-    assert (table["failed"] == 0).all() and (table["mean @50"] < 1e-6).all()
+    assert (table["failed"] == 0).all() and (table["mean @50"] < 1e-7).all()  # measured 4e-9
     r, e = runs[("s", "/ 40")]
     assert e.shape == (2, 50) and table.loc[("s", "/ 40"), "mean @30"] == e.mean(axis=0)[29]
 

@@ -48,7 +48,7 @@ def test_single_sample_protocol_equals_the_mean_without_noise_and_is_validated()
                                                dynamic_seconds=4.0))
     mean, single = lab.static_motions(rec), lab.static_motions(rec, sample="single")
     for k in mean:
-        assert np.abs(mean[k][0] - single[k][0]).max() < 1e-6 and np.abs(mean[k][1] - single[k][1]).max() < 1e-6
+        assert np.abs(mean[k][0] - single[k][0]).max() < 1e-12 and np.abs(mean[k][1] - single[k][1]).max() < 1e-12
     noisy = lab.simulate_lab(SMALL)
     assert np.abs(lab.static_motions(noisy)[0][1] - lab.static_motions(noisy, sample="single")[0][1]).max() > 1e-5
     with pytest.raises(ValueError, match="sample"):

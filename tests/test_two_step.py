@@ -47,10 +47,13 @@ def test_batched_equals_looped(rng):
         assert np.allclose(batched.cost_left[n], one.cost_left, atol=1e-12)
 
 
-def test_deterministic(problem):
+def test_the_default_start_is_the_identity(problem):
+    """``init=None`` is documented as the identity: the same iterates, bit for bit; another start gives others."""
     _, A, B = problem
-    a, b = two_step(A, B, iterations=20), two_step(A, B, iterations=20)
-    assert np.array_equal(a.left, b.left) and np.array_equal(a.cost_right, b.cost_right)
+    default, identity = two_step(A, B, iterations=20), two_step(A, B, iterations=20, init=np.eye(3))
+    assert np.array_equal(default.left, identity.left) and np.array_equal(default.cost_right, identity.cost_right)
+    other = two_step(A, B, iterations=20, init=so3.exp_map(np.array([0.0, 0.0, 1.0])))
+    assert so3.frobenius_error(other.left[0], default.left[0]) > 1e-3  # the start matters to the first iterate
 
 
 def test_raw_iterates_follow_eqs_14_15_literally(problem):
@@ -84,7 +87,7 @@ def test_noisy_iterates_converge_to_the_fixed_point(problem, rng):
     right, left = two_step_fixed_point(An, Bn)
     assert_rotations_close(res.R_right, right, 1e-8, name="R_right")
     assert_rotations_close(res.R_left, left, 1e-8, name="R_left")
-    assert 0.001 < so3.angle_between_deg(res.R_right, R0) < 2
+    assert 0.05 < so3.angle_between_deg(res.R_right, R0) < 0.5  # the noise moves it (measured 0.23 deg)
 
 
 def test_small_motions_warn(rng):
