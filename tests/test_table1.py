@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from replication import paper
-from replication.simulation import matched_start, simulate
+from replication.simulation import simulate
 from replication.so3 import exp_map
 from replication.solvers import chordal_optimal
 from replication.stats import share_range
