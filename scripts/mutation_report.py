@@ -88,8 +88,21 @@ def describe(key: str, path: Path, source: str) -> tuple[int, str, str]:
     return guess, " ".join(m.strip() for m in minus), " ".join(p.strip() for p in plus)
 
 
+def rerun_names() -> list[str]:
+    """The target mutants of the last run that were not killed (survivors, untested, timeouts, suspicious, not run)."""
+    names = []
+    for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
+        for key, code in json.loads(meta.read_text())["exit_code_by_key"].items():
+            if targeted(key) and STATUS.get(code, "suspicious") != "killed":
+                names.append(key)
+    return names
+
+
 def main() -> int:
     sys.path.insert(0, str(ROOT))
+    if sys.argv[1:] == ["--rerun-names"]:
+        print("\n".join(rerun_names()))
+        return 0
     equivalent = equivalent_ids()
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors = []
