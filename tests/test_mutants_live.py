@@ -1,0 +1,197 @@
+"""The live front end (:class:`replication.live.LiveRig`) on an orientation sensor, exactly: which poses pair
+(``interval`` reached exactly, no shared pose, the stride), the sensor slerped to the camera time plus the clock
+offset (``B = R0^T A R0`` to rounding for a constant-rate motion), gaps at ``GAP_FACTOR`` typical steps, the
+buffer and the early window kept, the refusals, and the evidence it adds to the verdict. Mutation testing
+(scripts/mutation) found these unguarded by the fast tests."""
+import math
+
+import numpy as np
+import pytest
+
+from replication import so3
+from replication.live import OFFSET_RESOLUTION, LiveRig
+from replication.online import OnlineCalibrator
+
+R0 = so3.exp_map(np.array([0.3, -0.5, 0.8]))
+W = np.array([0.2, 0.9, -0.4])  # rad/s, a constant rate about a fixed axis: slerp between samples is exact
+DT_CAM, DT_SEN = 1 / 32, 1 / 128  # binary fractions: time stamps and differences are exact
+
+
+def _C(t):
+    return so3.exp_map(W * t)  # world_from_camera
+
+
+def _feed(rig, t_end, offset=0.0, sensor_skip=()):
+    """Camera poses every DT_CAM and sensor orientations every DT_SEN (stamped t + offset) up to t_end, in time
+    order; sensor samples whose index is in ``sensor_skip`` are left out (a gap)."""
+    events = [(k * DT_CAM, 1, k) for k in range(int(round(t_end / DT_CAM)) + 1)]
+    events += [(k * DT_SEN + offset, 0, k) for k in range(-128, int(round((t_end + 1) / DT_SEN)) + 1)
+               if k not in sensor_skip]
+    for t, kind, k in sorted(events):
+        if kind:
+            rig.add_camera(t, _C(t))
+        else:
+            rig.add_orientation(t, _C(t - offset) @ R0)
+
+
+def _rig(**kw):
+    pairs = []
+    kw.setdefault("offset", 0.0)
+    rig = LiveRig(OnlineCalibrator(), interval=kw.pop("interval", 0.25), diagnose=False,
+                  on_pair=lambda t, A, B: pairs.append((t, A, B)), **kw)
+    return rig, pairs
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.0123, -0.04])
+def test_pairs_are_exact_at_the_offset_and_share_no_pose(offset):
+    rig, pairs = _rig(offset=offset)
+    _feed(rig, 3.0, offset=offset)
+    rig.finish()
+    # the interval (8 camera steps) is reached exactly: pairs end at poses 8, 17, 26, ...
+    assert [t for t, _, _ in pairs] == [k * 9 * DT_CAM - DT_CAM for k in range(1, len(pairs) + 1)]
+    assert len(pairs) == 10 and rig.pairs_formed == 10 and rig.pairs_dropped == 0
+    for t, A, B in pairs:
+        assert np.allclose(A, _C(t).T @ _C(t - 8 * DT_CAM), atol=1e-12)
+        assert np.allclose(B, R0.T @ A @ R0, atol=1e-9)
+    assert len(rig.events) == 10  # every pair reaches the calibrator (which counts these equal motions as repeats)
+
+
+def test_the_stride_uses_every_other_pair_formed():
+    rig, pairs = _rig(stride=2)
+    _feed(rig, 3.0)
+    assert rig.pairs_formed == 10 and len(pairs) == 5
+    assert [t for t, _, _ in pairs] == [(k * 18 + 8) * DT_CAM for k in range(5)]
+    assert rig._evidence()["pairs_before_gaps"] == 5
+
+
+def test_a_pair_across_a_sensor_gap_is_dropped_at_five_typical_steps():
+    # pair 2 runs over poses 9..17 (t 0.28..0.53); leave sensor samples out in the middle of it
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(50, 55)))  # a 6-step hole: beyond 5 typical steps
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
+    assert rig._evidence()["pairs_dropped_at_gaps"] == 1
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(50, 54)))  # a 5-step hole: not a gap
+    assert rig.pairs_dropped == 0 and len(pairs) == 4
+
+
+def test_a_gap_at_a_pair_end_drops_it_too():
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(66, 71)))  # the hole holds the end of pair 2 (t = 17/32 = 68/128)
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
+
+
+def test_the_typical_sensor_step_is_a_running_average():
+    rig, _ = _rig()
+    assert rig._gyro_dt is None
+    rig.add_orientation(0.0, R0)
+    assert rig._gyro_dt is None
+    rig.add_orientation(0.5, R0)
+    assert rig._gyro_dt == 0.5
+    rig.add_orientation(0.75, R0)
+    assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
+
+
+def test_orientation_samples_are_refused_when_not_later_or_not_one_rotation():
+    rig, _ = _rig()
+    rig.add_orientation(1.0, R0)
+    for t in (1.0, 0.5):
+        with pytest.raises(ValueError, match=rf"^sensor time going backwards or repeated: {t!r} after 1\.0$"):
+            rig.add_orientation(t, R0)
+    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=2\.0, shape "
+                                         r"\(2, 3, 3\)$"):
+        rig.add_orientation(2.0, np.stack([R0, R0]))
+    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=nan"):
+        rig.add_orientation(math.nan, R0)
+    with pytest.raises(ValueError, match="world_from_sensor is not a rotation matrix"):
+        rig.add_orientation(2.0, 2 * R0)
+    with pytest.raises(ValueError, match=r"^this rig's sensor gives orientation samples; got a gyro sample$"):
+        rig.add_gyro(3.0, np.zeros(3))
+    rig2, _ = _rig()
+    rig2.add_gyro(0.0, np.zeros(3))
+    with pytest.raises(ValueError, match=r"^this rig's sensor gives gyro samples; got a orientation sample$"):
+        rig2.add_orientation(1.0, R0)
+
+
+def test_the_buffer_keeps_the_last_interval_plus_the_offset_search_plus_a_second():
+    rig, _ = _rig(interval=0.25, max_offset=0.125)
+    keep = 0.25 + 2 * 0.125 + 1.0
+    for k in range(800):
+        rig.add_orientation(k * DT_SEN, R0)
+    t = 799 * DT_SEN
+    times = [g[0] for g in rig._gyro]
+    assert times[0] == t - keep and times[-1] == t  # a sample exactly keep seconds old stays
+    rig2, _ = _rig(offset=None, offset_window=4.0, max_offset=0.125, interval=0.25)
+    for k in range(800):
+        rig2.add_orientation(k * DT_SEN, R0)
+    assert [g[0] for g in rig2._gyro][0] == max(0.0, t - keep - 4.0)  # unknown offset: the window is held too
+
+
+def test_the_early_window_keeps_samples_up_to_offset_window_inclusive():
+    rig, _ = _rig(offset_window=1.0)
+    for k in range(200):
+        rig.add_orientation(k * DT_SEN, R0)
+        rig.add_camera(k * DT_SEN + 1 / 256, _C(k * DT_SEN))
+    assert [s[0] for s in rig._early_sensor] == [k * DT_SEN for k in range(129)]
+    assert rig._early_camera[0][0] == 1 / 256 and rig._early_camera[-1][0] == 128 * DT_SEN + 1 / 256
+    cam, sen = rig._streams()
+    assert np.array_equal(cam.t, [c[0] for c in rig._early_camera]) and cam.source == "camera (live)"
+    assert np.array_equal(sen.t, [s[0] for s in rig._early_sensor]) and sen.source == "sensor (live)"
+    assert np.allclose(sen.world_from_body, R0) and type(sen).__name__ == "OrientationStream"
+    rig2, _ = _rig(offset_window=1.0)
+    for k in range(3):
+        rig2.add_gyro(k * 0.5, np.array([0.0, 0.0, k]))
+        rig2.add_camera(k * 0.5, np.eye(3))
+    cam, sen = rig2._streams()
+    assert type(sen).__name__ == "GyroStream" and sen.source == "gyro (live)"
+    assert np.array_equal(sen.omega, [[0, 0, 0], [0, 0, 1], [0, 0, 2]])
+
+
+def test_used_offset_and_the_evidence():
+    assert _rig(offset=None)[0].used_offset is None
+    assert _rig(offset=0.25)[0].used_offset == 0.25
+    assert _rig(offset=0.25, correct_offset=False)[0].used_offset == 0.25  # a given offset is always used
+    rig, _ = _rig(offset=None, correct_offset=False)
+    rig.offset = 0.5
+    assert rig.used_offset == 0.0
+    assert rig._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1,
+                               "offset_s": 0.5, "offset_correlation": None, "max_offset_s": 0.2,
+                               "offset_resolution_s": OFFSET_RESOLUTION, "offset_applied": False}
+    rig.correct_offset = True
+    assert rig.used_offset == 0.5 and rig._evidence()["offset_applied"] is True
+    given, _ = _rig(offset=0.5)
+    assert given._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1}
+    gyro, _ = _rig()
+    gyro.add_gyro(0.0, np.zeros(3))
+    gyro.add_gyro(0.01, np.zeros(3))
+    assert gyro._evidence()["gyro_rate_hz"] == pytest.approx(100.0)
+    ori, _ = _rig()
+    ori.add_orientation(0.0, R0)
+    ori.add_orientation(0.01, R0)
+    assert "gyro_rate_hz" not in ori._evidence()
+
+
+def test_the_offset_is_estimated_once_both_streams_span_the_window():
+    rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1)
+    motion = lambda t: so3.exp_map(np.array([math.sin(3 * t), math.cos(2 * t), 0.5 * math.sin(5 * t)]))  # noqa: E731
+    for k in range(int(2.0 / DT_SEN)):  # just short of the window on the sensor side
+        rig.add_orientation(k * DT_SEN, motion(k * DT_SEN) @ R0)
+        if k % 4 == 0:
+            rig.add_camera(k * DT_SEN, motion(k * DT_SEN))
+    assert rig.offset is None and pairs == []
+    rig.add_camera(2.0, motion(2.0))
+    assert rig.offset is None
+    rig.add_orientation(2.0, motion(2.0) @ R0)
+    assert rig.offset == pytest.approx(0.0, abs=2 * OFFSET_RESOLUTION) and rig.offset_correlation > 0.99
+    assert len(pairs) > 0
+
+
+def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
+    rig, pairs = _rig(offset=None, offset_window=30.0)
+    _feed(rig, 0.1)
+    assert rig.offset is None
+    rig.finish()
+    assert rig.offset is None and rig.offset_note.startswith(
+        "no clock offset: the streams ended after 1.1 s of camera data, before the 30 s offset window (")
+    rig.finish()  # idempotent
+    assert pairs == []
