@@ -1,0 +1,228 @@
+"""The online change detector's rules (:mod:`replication.online_events`) at their boundaries: repeats within the
+tolerance, never at rest; the CUSUM's arithmetic, its reference level, held-out outliers, onset and alarms; the drift
+test; the event sentences and record. Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+import math
+
+import numpy as np
+import pytest
+
+from replication import so3
+from replication.online_events import (CONFIRM_LEVEL, DUPLICATE_DEG, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent,
+                                       RepeatFilter, chi2_quantile, combined_threshold, describe, drift_test, pair_d2,
+                                       residual_angle_deg)
+from replication.stats import radius_deg
+
+
+def _flat(R):
+    return [float(v) for v in np.asarray(R).reshape(9)]
+
+
+def _rot(deg, axis=(0.3, -0.5, 0.8)):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return so3.exp_map(np.radians(deg) * axis)
+
+
+def test_a_repeat_is_within_the_tolerance_elementwise_on_both_motions():
+    f = RepeatFilter()
+    A, B = _rot(20.0), _rot(15.0, (1.0, 0.2, 0.0))
+    assert f.seen(_flat(A), _flat(B)) is False and f.remembered == 1
+    assert f.seen(_flat(A), _flat(B)) is True and f.remembered == 1
+    tol = math.radians(DUPLICATE_DEG)
+    for k in range(9):  # one entry of either matrix off by just under / just over the tolerance
+        for which in (0, 1):
+            near = [_flat(A), _flat(B)]
+            near[which][k] += 0.999 * tol
+            assert f.seen(*near) is True
+            far = [_flat(A), _flat(B)]
+            far[which][k] += 1.001 * tol
+            g = RepeatFilter()
+            g.seen(_flat(A), _flat(B))
+            assert g.seen(*far) is False and g.remembered == 2
+
+
+def test_neighbouring_cells_are_searched_near_an_edge():
+    # sensor motions whose antisymmetric parts fall either side of a cell edge, within the tolerance
+    tol = math.radians(DUPLICATE_DEG)
+    cell = 16.0 * tol
+    for axis in range(3):
+        for edge_side in (-1, 1):
+            w = np.full(3, 5.3 * cell)
+            w[axis] = 7 * cell + edge_side * 0.2 * tol  # just inside one cell
+            B1 = so3.exp_map(w)
+            w2 = w.copy()
+            w2[axis] = 7 * cell - edge_side * 0.2 * tol  # just across the edge
+            B2 = so3.exp_map(w2)
+            A = _rot(30.0)
+            f = RepeatFilter()
+            assert f.seen(_flat(A), _flat(B1)) is False
+            assert np.abs(B1 - B2).max() <= tol
+            assert f.seen(_flat(A), _flat(B2)) is True
+
+
+def test_a_rig_at_rest_never_repeats_but_a_motion_at_the_bound_does():
+    f = RepeatFilter()
+    rest_a, rest_b = _rot(0.9 * SMALL_MOTION_DEG), _rot(0.8 * SMALL_MOTION_DEG, (1, 0, 0))
+    assert f.seen(_flat(rest_a), _flat(rest_b)) is False
+    assert f.seen(_flat(rest_a), _flat(rest_b)) is False and f.remembered == 0
+    moving = _rot(1.1 * SMALL_MOTION_DEG)
+    assert f.seen(_flat(moving), _flat(rest_b)) is False and f.seen(_flat(moving), _flat(rest_b)) is True
+    g = RepeatFilter()
+    assert g.seen(_flat(rest_a), _flat(moving)) is False and g.seen(_flat(rest_a), _flat(moving)) is True
+
+
+def test_a_zero_tolerance_takes_exact_repeats_only():
+    f = RepeatFilter(0.0)
+    A, B = _rot(20.0), _rot(15.0, (1, 0, 0))
+    assert f.seen(_flat(A), _flat(B)) is False
+    assert f.seen(_flat(A), _flat(B)) is True
+    nudged = _flat(B)
+    nudged[3] += 1e-15
+    assert f.seen(_flat(A), nudged) is False and f.remembered == 2
+
+
+def test_remembered_pairs_grow_beyond_the_first_block():
+    f = RepeatFilter()
+    rng = np.random.default_rng(0)
+    pairs = [(_flat(so3.random_rotations(rng, ())), _flat(so3.random_rotations(rng, ()))) for _ in range(150)]
+    assert not any(f.seen(a, b) for a, b in pairs) and f.remembered == 150
+    assert all(f.seen(a, b) for a, b in pairs)
+
+
+def test_pair_d2_and_the_residual_angle():
+    R = _rot(40.0, (0, 1, 0))
+    A = np.stack([_rot(30.0), _rot(50.0, (1, 0, 0))])
+    B = np.swapaxes(R, -1, -2) @ A @ R
+    B[1] = B[1] @ _rot(2.0, (0, 0, 1))
+    d2 = pair_d2(R, A, B)
+    assert d2[0] == pytest.approx(0.0, abs=1e-12) and d2[1] == pytest.approx(8 * math.sin(math.radians(1.0)) ** 2)
+    assert residual_angle_deg(d2[1]) == pytest.approx(2.0)
+    assert residual_angle_deg(-1e-12) == 0.0 and residual_angle_deg(8.0) == 180.0 and residual_angle_deg(9.0) == 180.0
+
+
+def test_chi2_quantile_and_the_combined_radius():
+    # Wilson-Hilferty: dof (1 - 2 / (9 dof) + z sqrt(2 / (9 dof)))^3 (the exact quantiles: 2.366, 40.256)
+    assert chi2_quantile(0.5, 3) == pytest.approx(3 * (1 - 2 / 27) ** 3, rel=1e-9)
+    z = 1.2815515655446004
+    assert chi2_quantile(0.9, 30) == pytest.approx(30 * (1 - 2 / 270 + z * math.sqrt(2 / 270)) ** 3, rel=1e-6)
+    cov = np.diag([1e-4, 2e-4, 3e-4])
+    assert combined_threshold(cov, cov) == radius_deg(2 * cov, CONFIRM_LEVEL)
+    assert combined_threshold(None, cov) == math.inf and combined_threshold(cov, None) == math.inf
+
+
+def test_describe_says_each_kind_with_its_numbers():
+    info = {"angle_deg": 1.23456, "threshold_deg": 0.5, "median_z_before": 3.5, "median_z_after": 0.75}
+    assert describe("remount", info, 10, 2) == ("the 10 pairs after the alarm agree on a new R0 1.23 deg from the "
+                                                "estimate (> 0.5 deg, the 99.9 % combined radius): re-mounted; "
+                                                "started over")
+    assert describe("noise_change", info, 10, 2) == ("no new R0 (1.23 deg <= 0.5 deg), but the 10 pairs fit no rotation"
+                                                     " at the old noise level (median d^2/m 0.75 > 2): the noise level "
+                                                     "changed")
+    assert describe("outliers", info, 10, 2) == ("no new R0 (1.23 deg <= 0.5 deg) and most of the 10 pairs still fit "
+                                                 "the estimate (median d^2/m 3.5 <= 2): outlier pairs, 2 kept out")
+    assert describe("new_information", info, 10, 2) == (
+        "the 10 pairs fit a rotation 1.23 deg away, within the combined radius 0.5 deg, better than the estimate "
+        "(median d^2/m 0.75 vs 3.5): new information (typically better-excited motion), added")
+
+
+def test_an_event_record_holds_every_field():
+    ev = OnlineEvent("outliers", 12, 9, "cusum", 7, 10, 0.5, 1.5, 3.0, 0.8, 2, np.eye(3), 2 * np.eye(3), "m")
+    assert ev.to_dict() == {"kind": "outliers", "pair": 12, "alarm_pair": 9, "source": "cusum", "onset_pair": 7,
+                            "window_pairs": 10, "angle_deg": 0.5, "threshold_deg": 1.5, "median_z_before": 3.0,
+                            "median_z_after": 0.8, "pairs_dropped": 2, "R_before": np.eye(3).tolist(),
+                            "R_after": (2 * np.eye(3)).tolist(), "message": "m"}
+
+
+def _window(R, n, noise_deg, rng, shift=None):
+    A = so3.random_rotations(rng, n)
+    B = np.swapaxes(R, -1, -2) @ A @ R
+    B = B @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((n, 3)))
+    if shift is not None:
+        B = np.swapaxes(shift, -1, -2) @ B @ shift
+    return A, B
+
+
+def test_drift_test_alarms_only_beyond_the_combined_radius():
+    rng = np.random.default_rng(5)
+    R = _rot(30.0)
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2 = 2 * (1 - math.cos(math.radians(0.2)))
+    A, B = _window(R, 40, 0.2, rng)
+    alarm, angle, thr = drift_test(R, cov, s2, A, B, min_excitation_deg=1.0)
+    assert not alarm and angle < thr < math.inf
+    A, B = _window(R, 40, 0.2, rng, shift=_rot(3.0, (0, 0, 1)))
+    alarm, angle, thr = drift_test(R, cov, s2, A, B, min_excitation_deg=1.0)
+    assert alarm and angle == pytest.approx(3.0, abs=0.3) and angle > thr
+    # the threshold is the combined radius of the estimate's covariance and the window's
+    alarm2, angle2, thr2 = drift_test(R, 4 * cov, s2, A, B, min_excitation_deg=1.0)
+    assert angle2 == angle and thr2 > thr
+    assert drift_test(R, None, s2, A, B, min_excitation_deg=1.0)[0] is False
+    assert drift_test(R, None, s2, A, B, min_excitation_deg=1.0)[2] == math.inf
+    single = np.stack([_rot(20.0 + k, (0, 0, 1)) for k in range(10)])
+    alarm, angle, thr = drift_test(R, cov, s2, single, np.swapaxes(R, -1, -2) @ single @ R, min_excitation_deg=1.0)
+    assert (alarm, math.isnan(angle), thr) == (False, True, math.inf)
+
+
+def _detector(**kw):
+    args = dict(k=2.0, h=30.0, cap=10.0, reference_rate=0.25, confirm_pairs=10, max_confirm_pairs=60, drift_pairs=50,
+                min_excitation_deg=1.0, noise_floor_deg=0.01, d2_floor=1e-9)
+    args.update(kw)
+    return ChangeDetector(**args)
+
+
+def test_cusum_arithmetic_reference_level_and_onset():
+    d = _detector()
+    assert (d.armed, math.isnan(d.level), d.cusum, d.checking, d.target) == (False, True, 0.0, False, 10)
+    d.arm(1e-12, 5)  # below the floor: the floor
+    assert (d.armed, d.level, d.cusum, d.onset) == (True, 1e-9, 0.0, 5)
+    d.arm(2.0, 5)
+    A = B = np.eye(3)
+    # z = d2 / level; cusum += min(z, cap) - k, floored at 0; the level follows while cusum <= h / 3
+    assert d.observe(A, B, 2.0, 5, None, None, None) == (True, False)  # z = 1: cusum stays 0
+    assert d.cusum == 0.0 and d.onset == 6 and d.level == 2.0
+    d.observe(A, B, 10.0, 6, None, None, None)  # z = 5: cusum 3, level += 0.25 (10 - 2)
+    assert d.cusum == 3.0 and d.level == 4.0 and d.onset == 6
+    d.observe(A, B, 4.0 * 12, 7, None, None, None)  # z = 12 > cap: counts cap, held out; cusum 11 > h / 3: level kept
+    assert d.cusum == 11.0 and d.level == 4.0
+    assert [h for _, _, h in d.since_onset] == [False, True] and len(d.recent) == 2
+    level = d.level
+    d.observe(A, B, level * 10.0, 8, None, None, None)  # z = cap exactly: not held; cusum 19 > h / 3: level frozen
+    assert d.cusum == 19.0 and d.level == level and [h for _, _, h in d.since_onset][-1] is False
+    d.observe(A, B, level * 10.0, 9, None, None, None)  # 27
+    assert not d.checking
+    d.observe(A, B, level * 5.0, 10, None, None, None)  # 30 = h: not yet
+    assert d.cusum == 30.0 and not d.checking
+    d.observe(A, B, level * 2.5, 11, None, None, None)  # 30.5 > h: alarm
+    assert d.checking and d.alarm_pair == 11 and d.source == "cusum" and d.target == 10 and d.window == []
+    assert d.observe(A, B, 1.0, 12, None, None, None) == (False, False)
+    for k in range(8):
+        d.observe(A, B, 1.0, 13 + k, None, None, None)
+    assert d.observe(A, B, 1.0, 21, None, None, None) == (False, True) and len(d.window) == 10
+
+
+def test_the_level_follows_exactly_at_a_third_of_h():
+    d = _detector(h=30.0, k=0.0, cap=100.0)
+    d.arm(1.0, 0)
+    d.observe(np.eye(3), np.eye(3), 10.0, 0, None, None, None)  # cusum 10 = h / 3: the level still follows
+    assert d.cusum == 10.0 and d.level == pytest.approx(1.0 + 0.25 * 9.0)
+
+
+def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pairs():
+    rng = np.random.default_rng(9)
+    R = _rot(30.0)
+    shift = _rot(4.0, (0, 0, 1))
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2 = 2 * (1 - math.cos(math.radians(0.2)))
+    d = _detector(drift_pairs=20, max_confirm_pairs=60, k=0.9)  # z = 1: the CUSUM creeps up (0.1 a pair), far below h
+    d.arm(1.0, 0)
+    A, B = _window(R, 40, 0.2, rng, shift=shift)
+    for j in range(19):
+        d.observe(A[j], B[j], 1.0, j, R, cov, s2)
+    assert not d.checking and d.since_drift == 19
+    d.observe(A[19], B[19], 1.0, 19, R, cov, s2)  # 20 pairs: the window is full and half of it new
+    assert d.checking and d.source == "drift" and d.alarm_pair == 19 and d.target == 10 and d.since_drift == 0
+    d2 = _detector(drift_pairs=20, k=0.9)
+    d2.arm(1.0, 0)
+    A2, B2 = _window(R, 40, 0.2, rng)
+    for j in range(40):
+        d2.observe(A2[j], B2[j], 1.0, j, R, cov, s2)
+    assert not d2.checking and d2.since_drift == 0  # tested at 20, 30 and 40 pairs, no alarm
