@@ -226,3 +226,69 @@ def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pair
     for j in range(40):
         d2.observe(A2[j], B2[j], 1.0, j, R, cov, s2)
     assert not d2.checking and d2.since_drift == 0  # tested at 20, 30 and 40 pairs, no alarm
+
+
+from replication.online_events import NOISE_Z, classify  # noqa: E402
+
+CAP, FLOOR = 10.0, 1e-9
+
+
+def _classify(R_old, A, B, *, cov_deg=0.05, noise_deg=0.2, m=None):
+    sigma = math.radians(noise_deg)  # per axis: a pair's d^2 is about sigma^2 chi^2_3, mean 3 sigma^2
+    s2 = 1.5 * sigma ** 2            # the estimate's mean square residual (half the mean d^2)
+    m = 3 * sigma ** 2 if m is None else m
+    cov = np.eye(3) * np.radians(cov_deg) ** 2
+    return classify(R_old, cov, s2, m, A, B, cap=CAP, min_excitation_deg=1.0, d2_floor=FLOOR), s2, m
+
+
+def test_classify_a_remount_and_every_number_it_returns():
+    rng = np.random.default_rng(11)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(5.0, (0, 0, 1))
+    A, B = _window(new, 20, 0.2, rng)
+    info, s2, m = _classify(R_old, A, B)
+    assert info["kind"] == "remount" and info["undecided"] is False
+    assert so3.angle_between_deg(info["R_new"], new) < 0.3
+    assert info["angle_deg"] == pytest.approx(float(so3.angle_between_deg(R_old, info["R_new"])))
+    assert 0 < info["threshold_deg"] < 1.0
+    assert info["keep"].all() and info["keep"].shape == (20,)
+    assert np.array_equal(info["z_old"], pair_d2(R_old, A, B) / m)
+    assert np.array_equal(info["z_new"], pair_d2(info["R_new"], A, B) / m)
+    assert info["median_z_before"] == float(np.median(info["z_old"]))
+    assert info["median_z_after"] == float(np.median(info["z_new"]))
+    assert info["level_new"] == max(float(np.mean(pair_d2(info["R_new"], A, B))), FLOOR)
+
+
+def test_classify_pairs_that_fit_the_old_estimate_are_outliers_not_a_change():
+    rng = np.random.default_rng(12)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 20, 0.15, rng)  # a little below the old noise level (0.2 deg)
+    info, _, _ = _classify(R_old, A, B)
+    assert info["kind"] == "outliers" and info["median_z_before"] <= NOISE_Z
+    # a few gross pairs among fitting ones: outliers
+    B2 = B.copy()
+    B2[:3] = B2[:3] @ _rot(30.0, (1, 0, 0))
+    info, _, _ = _classify(R_old, A, B2)
+    assert info["kind"] == "outliers" and (info["z_old"] > CAP).sum() == 3
+
+
+def test_classify_a_higher_noise_is_a_noise_change():
+    rng = np.random.default_rng(13)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 30, 0.8, rng)  # four times the old noise: d^2 / m about 16
+    info, _, _ = _classify(R_old, A, B)
+    assert info["kind"] == "noise_change" and info["median_z_after"] > NOISE_Z
+
+
+def test_classify_a_better_fit_within_the_radius_is_new_information():
+    rng = np.random.default_rng(14)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(0.3, (0, 1, 0))
+    A, B = _window(new, 30, 0.1, rng)
+    # a poorly known old estimate (1 deg per axis): 0.3 deg is within the combined radius, yet the window fits the
+    # new rotation far better than the old one at the noise level
+    info, _, _ = _classify(R_old, A, B, cov_deg=1.0, noise_deg=0.1)
+    assert info["angle_deg"] < info["threshold_deg"]
+    assert info["median_z_before"] > NOISE_Z >= info["median_z_after"]
+    assert info["kind"] == "new_information"
+    assert info["undecided"] is (info["angle_deg"] > 0.5 * info["threshold_deg"])
