@@ -195,3 +195,74 @@ def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
         "no clock offset: the streams ended after 1.1 s of camera data, before the 30 s offset window (")
     rig.finish()  # idempotent
     assert pairs == []
+
+
+from replication.live import replay  # noqa: E402
+from replication.report import RADIUS_COVERS  # noqa: E402
+from replication.streams import OrientationStream  # noqa: E402
+
+
+def _motion(t):
+    return so3.exp_map(np.array([math.sin(1.3 * t), math.cos(0.7 * t), 0.8 * math.sin(0.5 * t + 1.0)]))
+
+
+def _streams(t_end=20.0, t0=100.0):
+    tc = t0 + np.arange(0, t_end, DT_CAM)
+    ts = t0 + np.arange(-1.0, t_end + 1.0, 1 / 64)
+    cam = OrientationStream(tc, np.array([_motion(t - t0) for t in tc]), "cam")
+    sen = OrientationStream(ts, np.array([_motion(t - t0) @ R0 for t in ts]), "sen")
+    return cam, sen
+
+
+def test_replay_rows_and_summary_of_a_clean_rig():
+    cam, sen = _streams()
+    cal = OnlineCalibrator(target_deg=2.0)
+    out = replay(cam, sen, cal, interval=0.25, offset=0.0, reference=R0)
+    assert list(out.columns) == ["t", "t_seen", "n_pairs", "radius_deg", "ready", "alarm", "event", "determined",
+                                 "checking", "qw", "qx", "qy", "qz", "error_deg"]
+    assert len(out) > 60
+    assert np.allclose(np.diff(out["t"]), 9 * DT_CAM)  # pairs share no pose
+    first = out.iloc[0]
+    assert math.isnan(first["qw"]) and math.isnan(first["radius_deg"]) and math.isnan(first["error_deg"])
+    last = out.iloc[-1]
+    assert last["ready"] and last["determined"] and not last["checking"] and last["error_deg"] < 0.2
+    q = so3.as_quaternion(cal.R)
+    assert [last["qw"], last["qx"], last["qy"], last["qz"]] == pytest.approx(list(q))
+    assert out.attrs["offset_s"] == 0.0 and out.attrs["pairs_dropped"] == 0 and out.attrs["alarms"] == []
+    s = out.attrs["summary"]
+    ready_row = out[out["ready"]].iloc[0]
+    assert s["ready"] is True and s["ready_at_s"] == ready_row["t_seen"] - 100.0
+    assert s["ready_pair_end_s"] == ready_row["t"] - 100.0
+    assert s["target_deg"] == 2.0 and s["pairs"] == cal.n_total and s["pairs_formed"] == len(out)
+    assert (s["repeated_pairs"], s["pairs_dropped_outliers"], s["pairs_dropped_at_gaps"]) == (0, 0, 0)
+    assert s["R0_camera_from_sensor"] == np.round(cal.R, 12).tolist()
+    assert s["quaternion_wxyz"] == np.round(q, 12).tolist()
+    assert s["radius_deg"] == cal.radius and s["radius_level"] == 0.95 and s["radius_covers"] == RADIUS_COVERS
+    status = cal.status()
+    assert s["excitation_deg"] == status["excitation_deg"] and s["effective_pairs"] == status["effective_pairs"]
+    assert (s["clock_offset_s"], s["clock_offset_given"], s["clock_offset_correlation"]) == (0.0, True, None)
+    assert s["clock_offset_applied"] is True and s["note"] is None and s["events"] == [] and s["not_ready"] == []
+    assert s["verdict"]["level"] == "ok"
+    assert isinstance(s["pairs"], int) and isinstance(s["ready"], bool)
+
+
+def test_replay_with_an_estimated_offset_and_a_remount():
+    cam, sen = _streams(36.0)
+    cal = OnlineCalibrator(target_deg=2.0)
+    R_re = so3.exp_map(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
+    out = replay(cam, sen, cal, interval=0.25, offset=None, offset_window=8.0, max_offset=0.1, reference=R0,
+                 remount=(118.0, R_re))
+    s = out.attrs["summary"]
+    assert abs(s["clock_offset_s"]) < 2e-3 and s["clock_offset_given"] is False and s["clock_offset_correlation"] > 0.9
+    assert s["clock_offset_applied"] is (s["clock_offset_s"] != 0.0)
+    assert out["t_seen"].iloc[0] >= 100.0 + 8.0 > out["t"].iloc[0]  # held until the offset window was full
+    assert cal.alarms and out.attrs["alarms"] == cal.alarms and "remount" in out.attrs["events"]
+    alarm_row = out[out["alarm"]].iloc[0]
+    assert alarm_row["t"] > 118.0 and alarm_row["event"] == "remount"
+    after = out[out["t"] > alarm_row["t"] + 5.0]
+    # the reference follows the re-mount: the error is against R0 R_re after it
+    assert after["error_deg"].dropna().iloc[-1] < 0.5
+    ev = s["events"][0]
+    assert ev["kind"] == "remount" and ev["pair_end_s"] > 18.0 and ev["t_s"] >= ev["pair_end_s"]
+    assert ev["alarm_t_s"] <= ev["t_s"] and ev["angle_deg"] == pytest.approx(10.0, abs=1.0)
+    assert ev["threshold_deg"] < ev["angle_deg"] and ev["message"].startswith("the ")
