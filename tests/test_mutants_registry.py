@@ -124,24 +124,6 @@ def test_local_check_skips_failures_and_reflections():
     assert "in 1 of 3 problems" in caught[0][1]
 
 
-def _direct_caller(fn, *args):
-    return fn(*args)  # the warning's default stacklevel (3) points at the caller of this function
-
-
-def test_default_stacklevel_points_at_the_callers_caller():
-    m = _motions()
-    R = _rotated(optimal.global_certificate(m).R, 20.0)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        _direct_caller(_registry.check_local_answer, m, R, "fake"); line = __import__("inspect").currentframe().f_lineno
-    assert caught[0].filename == __file__ and caught[0].lineno == line
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        R2 = -optimal.global_certificate(m).R
-        _direct_caller(_registry.check_answer, m, R2, "fake"); line = __import__("inspect").currentframe().f_lineno
-    assert caught[0].filename == __file__ and caught[0].lineno == line
-
-
 def _geodesic(R_from, R_to, t):
     return R_from @ so3.exp_map(t * so3.log_map(np.swapaxes(R_from, -1, -2) @ R_to))
 
