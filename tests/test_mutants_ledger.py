@@ -78,6 +78,22 @@ def test_record_displays_the_claim_payload_in_a_notebook(monkeypatch):
                                        "setting": "s", "condition": ""}}
 
 
+def test_record_displays_the_condition_and_prints_without_ipython(monkeypatch, capsys):
+    import IPython
+    import IPython.display
+
+    shown = []
+    monkeypatch.setattr(IPython, "get_ipython", lambda: object())
+    monkeypatch.setattr(IPython.display, "display", lambda obj, **kw: shown.append(obj))
+    ledger.record("theorem1", "holds only if", evidence="e", uncertainty="u", setting="s", condition="J >= 3")
+    assert shown[0][ledger.CLAIM_MIME]["condition"] == "J >= 3"
+    assert shown[0]["text/plain"].startswith("[theorem1] holds only if J >= 3\n")
+    monkeypatch.setitem(sys.modules, "IPython", None)  # IPython not installed: the record is printed
+    ledger.record("theorem1", "fails", evidence="e", uncertainty="u", setting="s")
+    assert capsys.readouterr().out == "[theorem1] fails\n  evidence: e\n  uncertainty: u\n  setting: s\n"
+    assert len(shown) == 1
+
+
 @pytest.mark.parametrize("field", ["evidence", "uncertainty", "setting"])
 def test_record_names_the_empty_field(field):
     kwargs = {"evidence": "e", "uncertainty": "u", "setting": "s", field: "  "}

@@ -92,6 +92,25 @@ def test_the_typical_sensor_step_is_a_running_average():
     assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
 
 
+def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_bad():
+    rig, _ = _rig()
+    w0, w1 = np.array([0.1, 0.2, 0.3]), np.array([0.5, -0.2, 0.1])
+    rig.add_gyro(1.0, w0)
+    rig.add_gyro(1.5, w1)
+    assert np.allclose(rig._gyro[-1][1], so3.exp_map(0.5 * (w0 + w1) * 0.5), atol=1e-15)
+    assert rig._gyro_dt == 0.5
+    rig.add_gyro(1.75, [0, 0, 0])
+    assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
+    assert rig._evidence()["gyro_rate_hz"] == pytest.approx(1 / (0.99 * 0.5 + 0.01 * 0.25))
+    for t in (1.75, 1.5):
+        with pytest.raises(ValueError, match=rf"^gyro time going backwards or repeated: {t!r} after 1\.75$"):
+            rig.add_gyro(t, w0)
+    for t, w in ((2.0, [0.0, 0.0]), (2.0, [0.0, math.nan, 0.0]), (math.inf, [0.0, 0.0, 0.0])):
+        with pytest.raises(ValueError, match=r"^a gyro sample is a finite time and 3 finite rates, got t="):
+            rig.add_gyro(t, w)
+    assert len(rig._gyro) == 3
+
+
 def test_orientation_samples_are_refused_when_not_later_or_not_one_rotation():
     rig, _ = _rig()
     rig.add_orientation(1.0, R0)

@@ -114,6 +114,24 @@ def test_real_local_answers_are_classified_by_angle():
     assert "in 1 of 3 problems: up to 0.3 deg" in caught[1][1]
 
 
+def test_the_gradient_in_the_message_is_that_of_eq_8_at_the_answer():
+    m = _motions()  # one problem: batch shape ()
+    R = _rotated(optimal.global_certificate(m).R, 3.0)
+    K = m.K
+    grad = optimal._derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), R)[1]
+    _, caught = _warned(_registry.check_local_answer, m, R, "fake")
+    assert f"1 where eq. (8) still has a gradient (up to {2 * float(np.linalg.norm(grad)):.3g} J)" in caught[0][1]
+    # in a batch, the largest over the problems that are off and moving only
+    mb = _motions((3,))
+    Rb = optimal.global_certificate(mb).R.copy()
+    Rb[0] = _rotated(Rb[0], 3.0)
+    Rb[2] = _rotated(Rb[2], 0.5)  # short of the minimum (a ConvergenceWarning), with a gradient of its own
+    Kb = mb.K
+    g = optimal._derivatives(0.5 * (Kb + np.swapaxes(Kb, -1, -2)), Rb)[1]
+    _, caught = _warned(_registry.check_local_answer, mb, Rb, "fake")
+    assert f"(up to {2 * float(np.linalg.norm(g[0])):.3g} J)" in caught[0][1]
+
+
 def test_local_check_skips_failures_and_reflections():
     m = _motions((3,))
     R = _rotated(optimal.global_certificate(m).R, 20.0)
@@ -166,7 +184,7 @@ def test_gross_screen_in_a_batch_flags_only_the_gross_ones():
 def test_reflections_are_flagged_and_said_with_the_two_step_hint():
     m = _motions((3,))
     R = optimal.global_certificate(m).R.copy()
-    R[0], R[2] = -R[0], -R[2]
+    R[0], R[2] = -_rotated(R[0], 120.0), -R[2]  # a reflection far off is only said as a reflection
     flagged, caught = _warned(_registry.check_answer, m, R, "two_step_x")
     assert flagged.tolist() == [True, False, True]
     assert caught == [(AccuracyWarning, "two_step_x returned a reflection (det -1), not a rotation, in 2 of 3 problems"

@@ -111,6 +111,12 @@ def test_summary_of_a_stream_calibration_line_by_line():
     ]
 
 
+def test_summary_prints_the_quaternion_to_six_decimals():
+    q = np.array([0.123456789, 0.2, 0.3, 0.923456789])
+    line = next(x for x in _result(quaternion_wxyz=q).summary().split("\n") if x.startswith("quaternion"))
+    assert line == "quaternion (w, x, y, z): [0.123457 0.2      0.3      0.923457]"
+
+
 def test_summary_variants():
     lines = _result(time_offset_applied=False, time_offset_ci95_s=(math.nan, 0.02), bootstrap_ci95_deg=math.nan,
                     change_test={"run": True, "split_time_s": 3.0, "angle_deg": 2.0, "significant": True,
