@@ -292,3 +292,78 @@ def test_classify_a_better_fit_within_the_radius_is_new_information():
     assert info["median_z_before"] > NOISE_Z >= info["median_z_after"]
     assert info["kind"] == "new_information"
     assert info["undecided"] is (info["angle_deg"] > 0.5 * info["threshold_deg"])
+
+
+def _armed(level, **kw):
+    d = _detector(reference_rate=1 / 30, confirm_pairs=10, **kw)
+    d.arm(level, 0)
+    return d
+
+
+def test_decide_a_remount_keeps_the_pairs_that_fit_the_new_estimate_and_resets():
+    rng = np.random.default_rng(21)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(5.0, (0, 0, 1))
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    d = _armed(m)
+    A, B = _window(new, 40, 0.2, rng)
+    k = 0
+    while not d.checking:
+        d.observe(A[k], B[k], float(pair_d2(R_old, A[k:k + 1], B[k:k + 1])[0]), k, R_old, cov, s2)
+        k += 1
+    alarm_at, held = k - 1, [h for _, _, h in d.since_onset]
+    assert d.alarm_pair == alarm_at and d.source == "cusum"
+    while True:
+        add, ready = d.observe(A[k], B[k], 0.0, k, R_old, cov, s2)
+        assert add is False
+        k += 1
+        if ready:
+            break
+    assert len(d.window) == 10
+    out = d.decide(R_old, cov, s2, k - 1)
+    ev = out["event"]
+    assert out["restart"] is True and out["rearm"] is False and ev.kind == "remount"
+    assert (ev.pair, ev.alarm_pair, ev.source, ev.window_pairs) == (k - 1, alarm_at, "cusum", 10)
+    assert out["held_before"] == sum(held)
+    assert len(out["kept"]) + ev.pairs_dropped == len(held) + 10  # the pairs since the onset and the window
+    assert ev.pairs_dropped == 0  # they all fit the new estimate
+    assert np.array_equal(ev.R_before, R_old) and so3.angle_between_deg(ev.R_after, new) < 0.5
+    assert so3.angle_between_deg(out["R_new"], ev.R_after) == 0.0
+    assert ev.message.startswith("the 10 pairs after the alarm agree on a new R0 ")
+    assert ev.angle_deg > ev.threshold_deg and ev.median_z_before > ev.median_z_after
+    assert d.armed is False and d.checking is False and d.window == [] and len(d.recent) == len(out["kept"])
+
+
+def test_decide_outliers_drops_the_held_pairs_and_carries_on():
+    rng = np.random.default_rng(22)
+    R_old = _rot(30.0)
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    d = _armed(m)
+    A, B = _window(R_old, 40, 0.15, rng)
+    B[3:8] = B[3:8] @ _rot(20.0, (1, 0, 0))  # five gross outliers in a row: the CUSUM rises by cap - k each
+    k = 0
+    while not d.checking:
+        d.observe(A[k], B[k], float(pair_d2(R_old, A[k:k + 1], B[k:k + 1])[0]), k, R_old, cov, s2)
+        k += 1
+    onset, level = d.onset, d.level  # the reference level stands while the window fills
+    held = sum(h for _, _, h in d.since_onset)
+    assert held == 4 and d.alarm_pair == 6  # 8 x 4 = 32 > h at the fourth outlier (pair 6)
+    out = None
+    while out is None:
+        _, ready = d.observe(A[k], B[k], 0.0, k, R_old, cov, s2)
+        k += 1
+        if ready:
+            out = d.decide(R_old, cov, s2, k - 1)
+    ev = out["event"]
+    assert ev.kind == "outliers" and out["restart"] is False and out["rearm"] is False
+    assert ev.onset_pair == onset == 3 and out["held_before"] == 4
+    assert ev.pairs_dropped == 5  # the four held before the alarm and the one in the window
+    assert len(out["kept"]) == 4 + 10 - 5
+    assert ev.message.endswith(f"outlier pairs, 5 kept out") and ev.R_after is not ev.R_before
+    assert np.array_equal(ev.R_after, R_old) or so3.angle_between_deg(ev.R_after, R_old) < 0.5
+    assert (d.checking, d.window, d.cusum, d.level, d.onset, d.since_drift) == (False, [], 0.0, level, k, 0)
+    assert d.armed is True and len(d.since_onset) == 0

@@ -147,3 +147,19 @@ def test_defaults_of_a_result():
     assert res.warnings == () and res.parameters == {} and res.inputs == {} and res.diagnostics == {}
     assert all(math.isnan(v) for v in res.time_offset_ci95_s) and math.isnan(res.time_offset_peak_margin)
     assert res.reference_error_deg is None and res.change_test is None and res.online is None
+
+
+def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from replication import figures
+    from replication._io import png_bytes
+
+    fig = Figure(figsize=(2, 1))
+    fig.add_subplot().plot([0, 1], [0, 1])
+    monkeypatch.setattr(figures, "calibration_figure", lambda res: fig)
+    monkeypatch.chdir(tmp_path)
+    assert _result().plot() is fig and list(tmp_path.iterdir()) == []
+    assert _result().plot(tmp_path / "f.png") is fig
+    data = (tmp_path / "f.png").read_bytes()
+    assert data == png_bytes(fig, dpi=110) and data != png_bytes(fig, dpi=100)
