@@ -186,3 +186,34 @@ def test_pairs_are_refused_unless_two_rotations():
     with pytest.raises(ValueError, match=r"^need two \(J, 3, 3\) arrays of the same J, got \(2, 3, 3\) and \(3, 3, 3\)$"):
         c.update_many(np.stack([R0] * 2), np.stack([R0] * 3))
     assert c.n_total == 0
+
+
+def test_outliers_decided_online_count_as_dropped_once_and_the_refinement_schedule_resumes():
+    rng = np.random.default_rng(7)
+    A, B = _pairs(180, rng, 0.2)
+    B[125:130] = B[125:130] @ so3.exp_map(np.radians(20.0) * np.array([1.0, 0.0, 0.0]))
+    c = OnlineCalibrator()
+    kinds = [s.event for s in c.update_many(A, B)]
+    assert "outliers" in kinds and c.alarms == []
+    ev = c.events[0]
+    assert ev.kind == "outliers" and c.pairs_dropped == ev.pairs_dropped == 5
+    k = kinds.index("outliers")
+    assert c.n_pairs == c.n_total == 180
+    c2 = OnlineCalibrator()
+    c2.update_many(A[:k + 1], B[:k + 1])
+    assert c2._next_refine == c2.n_pairs + max(c2.refine_every, c2.n_pairs // 10)
+
+
+def test_a_remount_online_starts_over_from_the_new_estimate():
+    rng = np.random.default_rng(8)
+    A, B = _pairs(260, rng, 0.2)
+    turn = so3.exp_map(np.radians(6.0) * np.array([0.0, 1.0, 0.0]))
+    B[150:] = turn.T @ B[150:] @ turn  # R0 becomes R0 turn from pair 150 on
+    c = OnlineCalibrator()
+    states = c.update_many(A, B)
+    assert len(c.alarms) == 1 and c.events[0].kind == "remount" and c.alarms[0] == c.events[0].pair
+    at = c.alarms[0]
+    assert states[at].alarm and states[at].event == "remount"
+    assert so3.angle_between_deg(c.R, R0 @ turn) < 0.3
+    assert c.n_pairs < 260 - 150 + 40 and c.n_total == 260
+    assert c._next_refine > c.n_pairs

@@ -225,6 +225,13 @@ def test_outlying_poses_beyond_three_times_the_median():
     five = [1.0] * 10 + [4.0] * 5
     assert "and" not in _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=tuple(five)))[
         "pose_outliers"].message.split(" > ")[0]
+    six = [2.0] * 20 + [7.0, 8.0, 9.0, 10.0, 11.0, 12.0]  # the stations' median 2 deg: the bound 6 deg
+    r = _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=tuple(six)))["pose_outliers"]
+    assert "25 (12 deg), 24 (11 deg), 23 (10 deg), 22 (9 deg), 21 (8 deg) and 1 more > 3 x the stations' median 2 deg " \
+           "= 6 deg: a bad measurement" in r.message
+    two = [2.0] * 20 + [7.0, 8.0]
+    assert _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=tuple(two)))["pose_outliers"].message\
+        .startswith("outlying poses (0-based index, median residual of its pairs): 21 (8 deg), 20 (7 deg) > 3 x")
     # a zero or undefined median of the stations: nothing to compare with
     assert "pose_outliers" not in _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=(0.0, 0.0, 5.0)))
     assert "pose_outliers" not in _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=(math.nan,) * 3))

@@ -79,10 +79,13 @@ def test_to_dict_holds_every_field():
 
 
 def test_to_dict_rounds_the_rotation_to_12_digits():
-    noisy = R + 1e-14
-    d = _result(R=noisy, quaternion_wxyz=np.array([1.0 + 4e-13, 0.0, 0.0, 0.0])).to_dict()
-    assert d["R0_camera_from_sensor"] == R.tolist()
-    assert d["quaternion_wxyz"] == [1.0, 0.0, 0.0, 0.0]
+    c, s = 0.123456789012345, math.sqrt(1 - 0.123456789012345 ** 2)
+    Rf = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    q = np.array([0.987654321098765, 0.0, 0.0, math.sqrt(1 - 0.987654321098765 ** 2)])
+    d = _result(R=Rf + 1e-13, quaternion_wxyz=q + 1e-13).to_dict()
+    assert d["R0_camera_from_sensor"] == np.round(Rf + 1e-13, 12).tolist()
+    assert d["R0_camera_from_sensor"][0][0] == 0.123456789012
+    assert d["quaternion_wxyz"] == np.round(q + 1e-13, 12).tolist() and d["quaternion_wxyz"][0] == 0.987654321099
 
 
 def test_summary_of_a_stream_calibration_line_by_line():
