@@ -152,3 +152,53 @@ def test_remounted_changes_the_samples_from_exactly_the_time_on():
         remounted(g, 1.0, 2 * R)
     with pytest.raises(ValueError, match=r"^time must be a finite number"):
         remounted(g, math.nan, R)
+
+
+def test_the_numbers_of_two_seeded_tests():
+    """The statistic, its threshold and p-value, the inflation and the noise radius of two seeded problems: a 3 deg
+    re-mount (block 1) and no change with overlapping pairs (block 3, inflation above 1). Any change to a side's
+    fit, its noise, the long-run covariance or the false-alarm formula moves them (rounding: 1e-6)."""
+    rng = np.random.default_rng(1)
+    A, B, t = _pairs(150, rng, change_at=90, change_deg=3.0)
+    r = two_segment_test(A, B, t)
+    assert (r.split_index, r.n_before, r.n_after) == (90, 89, 60)
+    got = (r.statistic, r.threshold, r.p_value, r.inflation, r.difference_radius_deg, r.angle_deg)
+    assert got == pytest.approx((13444.08197420018, 24.446175092831254, 1.0622066549727772e-28, 1.0,
+                                 0.07081396888712639, 2.9743675924121535), rel=1e-6)
+    rng = np.random.default_rng(5)
+    A, B, t = _pairs(150, rng)
+    r = two_segment_test(A, B, t, block=3)
+    assert (r.split_index, r.n_before, r.n_after) == (91, 88, 59)
+    got = (r.statistic, r.threshold, r.p_value, r.inflation, r.difference_radius_deg, r.angle_deg)
+    assert got == pytest.approx((5.4891908178927995, 36.55394856631756, 0.7388327706134166, 1.1954174754907039,
+                                 0.07330909266416821, 0.027217424997702102), rel=1e-6)
+
+
+def test_the_false_alarm_formula():
+    assert threshold(0.01, 40.0, 0.15, 0.85) == pytest.approx(26.361175277270377, rel=1e-6)
+    assert p_value(12.0, 40.0, 0.15, 0.85) == pytest.approx(0.23699144885006215, rel=1e-9)
+    assert changepoint._tail(np.array([5.0, 12.0]), 0.2, 0.8).tolist() == pytest.approx(
+        [0.6989447861244862, 0.09918176789611755], rel=1e-12)
+    # batched over the statistic
+    assert changepoint._false_alarm(np.array([8.0, 15.0]), 20.0, 0.2, 0.8).tolist() == pytest.approx(
+        [0.517878604071865, 0.18213156507180198], rel=1e-12)
+
+
+def test_the_tail_is_quiet_at_zero_and_at_tiny_statistics():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert changepoint._tail(np.array([0.0, 1e-310, 3.0]), 0.2, 0.8).tolist() == [1.0, 1.0, 1.0]
+
+
+def test_the_degenerate_side_message():
+    rng = np.random.default_rng(3)
+    A, B, t = _pairs(60, rng)
+    A[:30] = so3.exp_map(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
+    B[:30] = R0.T @ A[:30] @ R0
+    with pytest.raises(ValueError) as err:
+        two_segment_test(A, B, t)
+    assert str(err.value) == ("degenerate motion on one side of a split: the sensor turns about one axis only there, "
+                              "so R0 is not determined on that side (G = sum_j (2I - B_j - B_j^T) is singular); a "
+                              "change test needs motions about other axes on both sides")
