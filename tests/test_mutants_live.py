@@ -284,4 +284,22 @@ def test_replay_with_an_estimated_offset_and_a_remount():
     ev = s["events"][0]
     assert ev["kind"] == "remount" and ev["pair_end_s"] > 18.0 and ev["t_s"] >= ev["pair_end_s"]
     assert ev["alarm_t_s"] <= ev["t_s"] and ev["angle_deg"] == pytest.approx(10.0, abs=1.0)
+    row = out[out["event"] == "remount"].iloc[0]
+    assert ev["t_s"] == row["t_seen"] - 100.0 and ev["pair_end_s"] == row["t"] - 100.0
+    assert ev["alarm_t_s"] == out["t_seen"].iloc[cal.events[0].alarm_pair] - 100.0
     assert ev["threshold_deg"] < ev["angle_deg"] and ev["message"].startswith("the ")
+
+
+def test_summary_times_default_to_the_clock_itself():
+    rig, _ = _rig(offset=0.0)
+    rig.calibrator.target_deg = 2.0
+    for k in range(int(12.0 / DT_CAM)):
+        t = k * DT_CAM
+        for j in range(4):
+            ts = t + j * DT_SEN
+            rig.add_orientation(ts - 1.0 if k == 0 and j == 0 else ts, _motion(ts - 1.0 if k == 0 and j == 0 else ts) @ R0)
+        rig.add_camera(t, _motion(t))
+    assert rig.ready_at is not None
+    s = rig.summary()
+    assert s["ready_at_s"] == rig.ready_at[1] and s["ready_pair_end_s"] == rig.ready_at[0]
+    assert rig.summary(t0=2.0)["ready_at_s"] == rig.ready_at[1] - 2.0
