@@ -212,14 +212,15 @@ def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pair
     shift = _rot(4.0, (0, 0, 1))
     cov = np.eye(3) * np.radians(0.05) ** 2
     s2 = 2 * (1 - math.cos(math.radians(0.2)))
-    d = _detector(drift_pairs=20, max_confirm_pairs=60, k=0.9)  # z = 1: the CUSUM creeps up (0.1 a pair), far below h
+    d = _detector(drift_pairs=30, max_confirm_pairs=60, k=0.9)  # z = 1: the CUSUM creeps up (0.1 a pair), far below h
     d.arm(1.0, 0)
     A, B = _window(R, 40, 0.2, rng, shift=shift)
-    for j in range(19):
+    for j in range(29):
         d.observe(A[j], B[j], 1.0, j, R, cov, s2)
-    assert not d.checking and d.since_drift == 19
-    d.observe(A[19], B[19], 1.0, 19, R, cov, s2)  # 20 pairs: the window is full and half of it new
-    assert d.checking and d.source == "drift" and d.alarm_pair == 19 and d.target == 10 and d.since_drift == 0
+    assert not d.checking and d.since_drift == 29
+    d.observe(A[29], B[29], 1.0, 29, R, cov, s2)  # 30 pairs: the window is full and half of it new
+    # a drift is confirmed on half the drift window (15 pairs), not on confirm_pairs (10)
+    assert d.checking and d.source == "drift" and d.alarm_pair == 29 and d.target == 15 and d.since_drift == 0
     d2 = _detector(drift_pairs=20, k=0.9)
     d2.arm(1.0, 0)
     A2, B2 = _window(R, 40, 0.2, rng)
@@ -367,3 +368,69 @@ def test_decide_outliers_drops_the_held_pairs_and_carries_on():
     assert np.array_equal(ev.R_after, R_old) or so3.angle_between_deg(ev.R_after, R_old) < 0.5
     assert (d.checking, d.window, d.cusum, d.level, d.onset, d.since_drift) == (False, [], 0.0, level, k, 0)
     assert d.armed is True and len(d.since_onset) == 0
+
+
+from replication.online_events import TRIM_FACTOR, _excitation_deg, chi2_quantile as _chi2, solve_window  # noqa: E402
+
+
+def test_excitation_of_a_window():
+    rng = np.random.default_rng(31)
+    B = so3.random_rotations(rng, 12)
+    deg, G = _excitation_deg(B)
+    G_ref = 2 * 12 * np.eye(3) - B.sum(0) - B.sum(0).T
+    assert np.allclose(G, G_ref)
+    assert deg == pytest.approx(math.degrees(math.sqrt(np.linalg.eigvalsh(G_ref)[0] / 12)))
+    Bz = so3.exp_map(np.radians(rng.uniform(10, 40, 8))[:, None] * np.array([0.0, 0.0, 1.0]))
+    assert _excitation_deg(Bz)[0] == pytest.approx(0.0, abs=1e-5)
+
+
+def test_solve_window_trims_solves_and_gives_the_covariance():
+    rng = np.random.default_rng(32)
+    R = _rot(30.0)
+    A, B = _window(R, 20, 0.3, rng)
+    B[:3] = B[:3] @ _rot(40.0, (1, 0, 0))  # three outliers: trimmed
+    floor = 1e-12
+    Rw, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=floor, d2_floor=1e-12)
+    assert keep.tolist() == [False] * 3 + [True] * 17 and keep.dtype == bool
+    assert so3.angle_between_deg(Rw, R) < 0.3
+    d2 = pair_d2(Rw, A[keep], B[keep])
+    s2 = float(np.mean(d2)) / 2.0 * 17 / 14.0
+    G = 2 * 17 * np.eye(3) - B[keep].sum(0) - B[keep].sum(0).T
+    assert np.allclose(cov, (s2 / 3.0) * np.linalg.inv(G), rtol=1e-6)
+    # the estimate's own level is a floor
+    _, _, cov2 = solve_window(A, B, min_excitation_deg=1.0, s2_floor=10 * s2, d2_floor=1e-12)
+    assert np.allclose(cov2, (10 * s2 / 3.0) * np.linalg.inv(G), rtol=1e-6)
+    # the trim bound: d^2 up to TRIM_FACTOR times the consensus median
+    assert np.all(pair_d2(Rw, A, B)[keep] <= TRIM_FACTOR * np.median(pair_d2(Rw, A, B)) * 1.5)
+
+
+def test_solve_window_gives_no_covariance_without_enough_pairs_or_excitation():
+    rng = np.random.default_rng(33)
+    R = _rot(30.0)
+    A, B = _window(R, 12, 0.3, rng)
+    _, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert cov is not None and keep.all()
+    exc = _excitation_deg(B)[0]
+    assert solve_window(A, B, min_excitation_deg=exc * 1.0001, s2_floor=1e-12, d2_floor=1e-12)[2] is None
+    assert solve_window(A, B, min_excitation_deg=exc * 0.9999, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
+    Az = so3.exp_map(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
+    Rz, keep, cov = solve_window(Az, R.T @ Az @ R, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert cov is None and np.array_equal(Rz, np.eye(3)) and keep.all() and keep.shape == (12,)
+
+
+def test_a_remount_needs_the_window_to_misfit_the_old_estimate_at_its_level():
+    rng = np.random.default_rng(34)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(1.5, (0, 0, 1))
+    A, B = _window(new, 20, 0.2, rng)
+    sigma = math.radians(0.2)
+    m = 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.02) ** 2
+    S = float(np.sum(pair_d2(R_old, A, B)))
+    edge = 1.5 * S / _chi2(0.9, 3 * 20)  # the old level at which the window's misfit is exactly the 90 % quantile
+    kinds = []
+    for s2_old in (edge * 0.999, edge * 1.001):
+        info = classify(R_old, cov, s2_old, m, A, B, cap=1e9, min_excitation_deg=1.0, d2_floor=FLOOR)
+        assert info["keep"].all() and info["angle_deg"] > info["threshold_deg"]
+        kinds.append(info["kind"])
+    assert kinds[0] == "remount" and kinds[1] != "remount"
