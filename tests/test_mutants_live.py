@@ -303,3 +303,14 @@ def test_summary_times_default_to_the_clock_itself():
     s = rig.summary()
     assert s["ready_at_s"] == rig.ready_at[1] and s["ready_pair_end_s"] == rig.ready_at[0]
     assert rig.summary(t0=2.0)["ready_at_s"] == rig.ready_at[1] - 2.0
+
+
+def test_the_offset_search_spans_the_rigs_max_offset():
+    rig, _ = _rig(offset=None, offset_window=6.0, max_offset=0.3)
+    d = 0.25  # beyond the default search of 0.2 s
+    for k in range(int(7.0 / DT_SEN)):
+        t = k * DT_SEN
+        rig.add_orientation(t + d, _motion(t) @ R0)
+        if k % 4 == 0:
+            rig.add_camera(t, _motion(t))
+    assert rig.offset == pytest.approx(d, abs=1e-3) and rig.offset_correlation > 0.99

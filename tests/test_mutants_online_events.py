@@ -221,6 +221,7 @@ def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pair
     d.observe(A[29], B[29], 1.0, 29, R, cov, s2)  # 30 pairs: the window is full and half of it new
     # a drift is confirmed on half the drift window (15 pairs), not on confirm_pairs (10)
     assert d.checking and d.source == "drift" and d.alarm_pair == 29 and d.target == 15 and d.since_drift == 0
+    assert type(d.target) is int
     d2 = _detector(drift_pairs=20, k=0.9)
     d2.arm(1.0, 0)
     A2, B2 = _window(R, 40, 0.2, rng)
