@@ -132,3 +132,14 @@ def test_flat_rotation_check_at_its_tolerance():
         F[k, :] = -F[k, :]
         with pytest.raises(ValueError, match="reflection"):
             check_rotation_flat("R", _flat(F))
+
+
+def test_flat_check_edge_cases():
+    # a rotation with a zero (0, 0) entry: the determinant is a sum of products, never a quotient
+    check_rotation_flat("R", _flat(np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])))
+    # the tolerance is inclusive: a column whose squared norm rounds to exactly 1 + 2**-29
+    M = np.eye(3)
+    M[0, 0] = 1.0 + 2.0 ** -30
+    check_rotation_flat("R", _flat(M), atol=2.0 ** -29)
+    with pytest.raises(ValueError, match="max"):
+        check_rotation_flat("R", _flat(M), atol=2.0 ** -29 * (1 - 1e-9))

@@ -241,6 +241,9 @@ def test_replay_rows_and_summary_of_a_clean_rig():
                                  "checking", "qw", "qx", "qy", "qz", "error_deg"]
     assert len(out) > 60
     assert np.allclose(np.diff(out["t"]), 9 * DT_CAM)  # pairs share no pose
+    flags = out[["ready", "alarm", "determined", "checking"]]
+    assert not flags.isna().any().any() and all(out[c].dtype == bool for c in flags.columns)
+    assert set(out["event"]) == {""} and out["n_pairs"].iloc[-1] == cal.n_pairs
     first = out.iloc[0]
     assert math.isnan(first["qw"]) and math.isnan(first["radius_deg"]) and math.isnan(first["error_deg"])
     last = out.iloc[-1]
@@ -314,3 +317,33 @@ def test_the_offset_search_spans_the_rigs_max_offset():
         if k % 4 == 0:
             rig.add_camera(t, _motion(t))
     assert rig.offset == pytest.approx(d, abs=1e-3) and rig.offset_correlation > 0.99
+
+
+def test_the_rigs_options_are_checked():
+    cal = OnlineCalibrator()
+    with pytest.raises(ValueError, match=r"^calibrator must be an OnlineCalibrator, got dict$"):
+        LiveRig({})
+    for kw, msg in (({"interval": 0}, r"^interval must be > 0, got 0$"),
+                    ({"max_offset": 0}, r"^max_offset must be > 0, got 0$"),
+                    ({"offset": math.nan}, r"^offset must be a finite number, got nan$"),
+                    ({"offset": 0.0, "offset_window": 0}, r"^offset_window must be > 0, got 0$"),
+                    ({"stride": 0}, r"^stride must be >= 1, got 0$"),
+                    ({"stride": 1.5}, r"^stride must be a finite integer, got 1\.5$"),
+                    ({"correct_offset": 1}, r"^correct_offset must be True or False, got 1$"),
+                    ({"diagnose": "yes"}, r"^diagnose must be True or False, got 'yes'$"),
+                    ({"on_pair": 5}, r"^on_pair must be callable or None, got 5$")):
+        with pytest.raises(ValueError, match=msg):
+            LiveRig(cal, **kw)
+    # the offset window must exceed the search both ways plus a second, only when the offset is estimated
+    with pytest.raises(ValueError, match=r"^offset_window must exceed 2 max_offset \+ 1 s = 1\.6 s \(the offset search "
+                                         r"shifts the window by up to max_offset both ways\), got 1\.6$"):
+        LiveRig(cal, max_offset=0.3, offset_window=1.6)
+    assert LiveRig(cal, max_offset=0.3, offset_window=1.6000001).offset_window == 1.6000001
+    assert LiveRig(cal, offset=0.1, max_offset=0.3, offset_window=1.0).offset_window == 1.0
+    rig = LiveRig(cal, max_offset=0.3, stride=np.int64(2), correct_offset=np.bool_(False))
+    assert rig.offset_window == 20.0 and rig.stride == 2 and rig.correct_offset is False
+    assert LiveRig(cal, max_offset=6.0).offset_window == 22.0  # max(20, 2 max_offset + 10)
+    rig = LiveRig(cal)
+    assert (rig.interval, rig.max_offset, rig.offset, rig.offset_given, rig.stride, rig.diagnose) == (
+        1.0, 0.2, None, False, 1, True)
+    assert rig.correct_offset is True and rig.on_pair is None and rig.GAP_FACTOR == 5.0
