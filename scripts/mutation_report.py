@@ -1,0 +1,152 @@
+"""Score of a mutmut run (``scripts/mutation``) per judging module and overall, and its surviving mutants.
+
+Reads ``mutants/**/*.meta`` (mutmut 3's results) and prints, for the mutants that ``scripts/mutation`` runs
+(:data:`TARGETS`), one row per module: killed / tested, with timeouts, suspicious and untested mutants counted
+separately, then every survivor as ``module:line  - original / + mutant``. Survivors listed in
+``docs/mutation_survivors.md`` as equivalent are marked ``[equivalent]`` and the score is given both over all
+mutants and over the non-equivalent ones. Run with the mutation venv's python from the project root.
+"""
+from __future__ import annotations
+
+import ast
+import fnmatch
+import json
+import re
+import sys
+from collections import Counter, defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: The mutants scripts/mutation runs: every function of the judging modules; in _registry.py and checks.py only the
+#: answer checks and the atol / rotation checks.
+TARGETS = [
+    "replication.quality.*", "replication.diagnose.*", "replication.online.*", "replication.online_events.*",
+    "replication.live.*", "replication.ledger.*", "replication.association.*", "replication.report.*",
+    "replication.changepoint.*",
+    "replication.solvers._registry.x_check_answer__mutmut_*", "replication.solvers._registry.x__checked_answer__mutmut_*",
+    "replication.solvers._registry.x__screen_gross__mutmut_*",
+    "replication.solvers._registry.x__warn_not_rotations__mutmut_*",
+    "replication.solvers._registry.x_check_local_answer__mutmut_*",
+    "replication.checks.x_check_atol__mutmut_*", "replication.checks.x_check_number__mutmut_*",
+    "replication.checks.x_check_rotation_matrices__mutmut_*", "replication.checks.x_check_rotation_flat__mutmut_*",
+]
+
+STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", None: "not checked",
+          36: "timeout", -24: "timeout", 24: "timeout", 152: "timeout", 255: "timeout", -11: "segfault", -9: "segfault"}
+
+
+def targeted(key: str) -> bool:
+    return any(fnmatch.fnmatch(key, t) for t in TARGETS)
+
+
+def equivalent_ids() -> set[str]:
+    """Mutant ids declared equivalent in docs/mutation_survivors.md (the first column of its tables)."""
+    doc = ROOT / "docs" / "mutation_survivors.md"
+    if not doc.exists():
+        return set()
+    return set(re.findall(r"^\|\s*`?(replication\.[^|`\s]+__mutmut_\d+)`?\s*\|", doc.read_text(), flags=re.M))
+
+
+def function_span(source: str, mangled: str) -> tuple[int, int]:
+    """First and last line of the function ``x_name`` or method ``xǁClassǁname`` in ``source``."""
+    if "ǁ" in mangled:
+        _, cls, name = mangled.split("ǁ")
+    else:
+        cls, name = None, mangled[2:]
+    tree = ast.parse(source)
+    body = tree.body
+    if cls:
+        body = next(n.body for n in ast.walk(tree) if isinstance(n, ast.ClassDef) and n.name == cls)
+    node = next(n for n in body if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef)) and n.name == name)
+    start = min([node.lineno] + [d.lineno for d in node.decorator_list])
+    return start, node.end_lineno
+
+
+def describe(key: str, path: Path, source: str) -> tuple[int, str, str]:
+    """(line in the source, original line, mutated line) of a mutant."""
+    from mutmut.mutation.diff_apply import get_diff_for_mutant
+
+    diff = get_diff_for_mutant(key, path=str(path)).splitlines()
+    minus = [line[1:] for line in diff if line.startswith("-") and not line.startswith("---")]
+    plus = [line[1:] for line in diff if line.startswith("+") and not line.startswith("+++")]
+    hunk, offset = 1, 0  # line of the first removed line within the function's code
+    for i, line in enumerate(diff):
+        if m := re.match(r"@@ -(\d+)", line):
+            hunk = int(m.group(1))
+            offset = next((j for j, l in enumerate(diff[i + 1:]) if l.startswith("-")), 0)
+            break
+    mangled = key.partition("__mutmut_")[0].rpartition(".")[2]
+    start, end = function_span(source, mangled)
+    lines = source.splitlines()
+    guess = start + hunk - 1 + offset
+    if minus:
+        want = minus[0].strip()
+        hits = [n for n in range(start, end + 1) if lines[n - 1].strip() == want]
+        if hits:
+            guess = min(hits, key=lambda n: abs(n - guess))
+    return guess, " ".join(m.strip() for m in minus), " ".join(p.strip() for p in plus)
+
+
+def rerun_names() -> list[str]:
+    """The target mutants of the last run that were not killed (survivors, untested, timeouts, suspicious, not run)."""
+    names = []
+    for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
+        for key, code in json.loads(meta.read_text())["exit_code_by_key"].items():
+            if targeted(key) and STATUS.get(code, "suspicious") != "killed":
+                names.append(key)
+    return names
+
+
+def main() -> int:
+    sys.path.insert(0, str(ROOT))
+    if sys.argv[1:] == ["--rerun-names"]:
+        print("\n".join(rerun_names()))
+        return 0
+    equivalent = equivalent_ids()
+    counts: dict[str, Counter] = defaultdict(Counter)
+    survivors = []
+    for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
+        path = meta.relative_to(ROOT / "mutants").with_suffix("")
+        source = (ROOT / path).read_text()
+        module = str(path.with_suffix("")).replace("/", ".")
+        exit_codes = json.loads(meta.read_text())["exit_code_by_key"]
+        for key, code in exit_codes.items():
+            if not targeted(key):
+                continue
+            status = STATUS.get(code, "suspicious")
+            if status == "survived" and key in equivalent:
+                status = "equivalent"
+            counts[module][status] += 1
+            if status in ("survived", "equivalent"):
+                survivors.append((module, key, path, source, status))
+    if not counts:
+        print("no mutmut results under mutants/: run scripts/mutation first")
+        return 1
+
+    cols = ["killed", "survived", "equivalent", "timeout", "suspicious", "segfault", "no tests", "not checked"]
+    print(f"{'module':36} {'total':>6} " + " ".join(f"{c:>11}" for c in cols) + f" {'score':>7} {'non-eq':>7}")
+    total = Counter()
+    for module in sorted(counts):
+        total.update(counts[module])
+    for module, c in sorted(counts.items()) + [("OVERALL", total)]:
+        n = sum(c.values())
+        # killed over everything run (timeouts, suspicious, no tests count against it); non-eq: equivalents left out
+        score = c["killed"] / n if n else float("nan")
+        nonequiv = c["killed"] / (n - c["equivalent"]) if n > c["equivalent"] else float("nan")
+        print(f"{module:36} {n:>6} " + " ".join(f"{c[k]:>11}" for k in cols) + f" {score:>7.1%} {nonequiv:>7.1%}")
+
+    print(f"\nsurvivors ({sum(1 for s in survivors if s[4] == 'survived')} surviving, "
+          f"{sum(1 for s in survivors if s[4] == 'equivalent')} declared equivalent in docs/mutation_survivors.md):")
+    for module, key, path, source, status in sorted(survivors, key=lambda s: (s[0], s[1])):
+        try:
+            line, old, new = describe(key, path, source)
+        except Exception as exc:  # a report line, never a crash of the report
+            line, old, new = 0, f"(diff unavailable: {exc})", ""
+        mark = " [equivalent]" if status == "equivalent" else ""
+        print(f"{path}:{line}  {key.rpartition('.')[2]}{mark}\n    - {old}\n    + {new}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

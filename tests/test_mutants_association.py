@@ -1,0 +1,130 @@
+"""The clock-offset search's pieces and the pairing (:mod:`replication.association`) at their boundaries: the
+parabola's vertex, which maxima count, the overlap's ten samples, the offset in words, which camera samples pair at
+an interval and offset, and ``stream_pairs``. Mutation testing (scripts/mutation) found these unguarded by the fast
+tests."""
+import math
+
+import numpy as np
+import pytest
+
+from replication import association, so3
+from replication.association import motion_pairs, offset_in_words, stream_pairs
+from replication.streams import GyroStream, OrientationStream, integrate_gyro
+
+
+def test_vertex_of_the_parabola_through_the_maximum_and_its_neighbours():
+    x = np.array([0.0, 1.0, 2.0, 4.0, 5.0])
+    y = -(x - 2.3) ** 2  # a parabola: its vertex exactly, though the points are unequally spaced
+    assert association._vertex(x, y) == pytest.approx(2.3, abs=1e-12)
+    ys = np.stack([y, -(x - 0.8) ** 2, -(x - 4.4) ** 2])
+    assert association._vertex(x, ys) == pytest.approx([2.3, 0.8, 4.4], abs=1e-12)
+    # a maximum at either end is not refined; nor a flat (non-concave) top; no finite value: NaN
+    assert association._vertex(x, x) == 5.0 and association._vertex(x, -x) == 0.0
+    lone = np.array([np.nan, 1.0, np.nan, 0.0, 0.0])  # no finite neighbours: no parabola
+    assert association._vertex(x, lone) == 1.0
+    assert math.isnan(association._vertex(x, np.full(5, np.nan)))
+    with_nan = np.array([np.nan, 1.0, 3.0, 2.0, np.nan])
+    assert 1.0 < association._vertex(x, with_nan) < 4.0
+    # the vertex is clipped to the three points' span
+    skew = np.array([0.0, 0.0, 1.0, 0.999, 0.0])
+    v = association._vertex(x, skew)
+    assert 1.0 <= v <= 4.0 and v == pytest.approx(
+        0.5 * (1 + 2) - (1.0 / 1.0) / (2 * ((0.999 - 1.0) / 2.0 - 1.0) / 3.0))
+
+
+def test_local_maxima_are_interior_strict_on_the_left():
+    c = np.array([0.0, 1.0, 0.5, 0.5, 0.7, 0.7, 0.2, 0.9])
+    assert association._local_maxima(c).tolist() == [1, 4]  # 5 ties 4 from the left: not a maximum; 7 is an end
+    assert association._local_maxima(np.array([3.0, 2.0, 1.0])).tolist() == []
+
+
+def _streams(n_cam=40, dt=0.05, sensor_span=(-1.0, 3.0), rate=(0.4, 0.9, -0.3)):
+    w = np.array(rate)
+    tc = np.arange(n_cam) * dt
+    ts = np.arange(sensor_span[0], sensor_span[1], 0.01)
+    cam = OrientationStream(tc, so3.exp_map(tc[:, None] * w), "cam")
+    sen = OrientationStream(ts, so3.exp_map(ts[:, None] * w), "sen")
+    return cam, sen
+
+
+def test_the_overlap_needs_ten_camera_samples_inside_the_shifted_sensor_stream():
+    cam, sen = _streams(n_cam=40)
+    t, speed = association._overlap(cam, sen, 0.2)
+    assert np.array_equal(t, cam.t) and speed.shape == (39,)
+    assert np.allclose(speed, np.linalg.norm([0.4, 0.9, -0.3]))
+    # the sensor covers camera times 0 .. 0.45 + 0.2 exactly: ten samples (0 .. 0.45), inclusive at both ends
+    sen10 = OrientationStream(np.linspace(-0.2, 0.65, 86), so3.exp_map(np.linspace(-0.2, 0.65, 86)[:, None]
+                                                                         * np.array([0.4, 0.9, -0.3])))
+    t, _ = association._overlap(cam, sen10, 0.2)
+    assert len(t) == 10 and t[0] == 0.0 and t[-1] == pytest.approx(0.45)
+    sen9 = OrientationStream(np.linspace(-0.2, 0.6, 81), so3.exp_map(np.linspace(-0.2, 0.6, 81)[:, None]
+                                                                        * np.array([0.4, 0.9, -0.3])))
+    with pytest.raises(ValueError, match=r"^the streams overlap in fewer than 10 camera samples \(overlap "
+                                         r"0\.000\.\.0\.400 s\)$"):
+        association._overlap(cam, sen9, 0.2)
+
+
+def test_offset_in_words():
+    assert offset_in_words(0.0123) == ("+12.3 ms: the sensor sample stamped t + 12.3 ms matches the camera sample "
+                                       "stamped t (sensor clock ahead of the camera's by 12.3 ms; Kalibr's "
+                                       "timeshift_cam_imu, t_imu = t_cam + shift)")
+    assert offset_in_words(-0.0123, decimals=2).startswith("-12.30 ms: the sensor sample stamped t - 12.30 ms matches"
+                                                           " the camera sample stamped t (sensor clock behind the "
+                                                           "camera's by 12.30 ms;")
+    assert offset_in_words(0.00004) == ("0.0 ms: the sensor sample stamped t matches the camera sample stamped t (the "
+                                        "clocks agree to 0.05 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift)")
+    assert offset_in_words(-0.00004, decimals=0).startswith("0 ms: the sensor sample stamped t matches the camera "
+                                                            "sample stamped t (the clocks agree to 0.5 ms;")
+    assert offset_in_words(0.00005, decimals=1).startswith("+0.1 ms")  # rounds half to even, away from 0 here
+    with pytest.raises(ValueError, match=r"^decimals must be >= 0, got -1$"):
+        offset_in_words(0.01, decimals=-1)
+    with pytest.raises(ValueError, match=r"^offset_s must be a finite number"):
+        offset_in_words(math.nan)
+
+
+def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
+    cam, sen = _streams(n_cam=40, dt=0.05)
+    A, B, t = motion_pairs(cam, sen, 0.25)
+    assert np.allclose(t, np.arange(35) * 0.05)  # 0.25 s = 5 samples later, for every sample with one
+    w = np.array([0.4, 0.9, -0.3])
+    assert np.allclose(A, so3.exp_map(np.broadcast_to(-0.25 * w, (35, 3))), atol=1e-9)
+    assert np.allclose(B, A, atol=1e-6)
+    # within half a camera step of the interval
+    A2, _, t2 = motion_pairs(cam, sen, 0.27)
+    assert np.allclose(t2, t) and np.allclose(A2, A)
+    A3, _, t3 = motion_pairs(cam, sen, 0.2249)
+    assert len(t3) == 36 and np.allclose(A3[0], so3.exp_map(-0.2 * w), atol=1e-9)
+    # the offset: the sensor read at t + offset; camera samples whose shifted time leaves the sensor are dropped
+    _, B4, t4 = motion_pairs(cam, sen, 0.25, offset=0.1)
+    assert np.allclose(t4, t) and np.allclose(B4, A, atol=1e-6)
+    short = OrientationStream(np.arange(0.0, 1.0, 0.01), so3.exp_map(np.arange(0.0, 1.0, 0.01)[:, None] * w))
+    _, _, t5 = motion_pairs(cam, short, 0.25, offset=0.1)
+    assert t5[0] == 0.0 and t5[-1] == pytest.approx(0.85 - 0.25 + 1e-12, abs=1e-9)
+    with pytest.raises(ValueError, match=r"^interval must be positive, got 0$"):
+        motion_pairs(cam, sen, 0)
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s \(streams overlap 1\.95 s\)$"):
+        motion_pairs(cam, sen, 1.95)
+    assert len(motion_pairs(cam, sen, 1.9)[2]) == 2
+
+
+def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_to():
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 30.0, 0.005)
+    omega = np.stack([np.sin(1.1 * t), np.cos(0.7 * t), 0.6 * np.sin(2.3 * t + 0.5)], axis=1) + 0.01 * rng.standard_normal((len(t), 3))
+    gyro = GyroStream(t, omega, "g")
+    Q = integrate_gyro(gyro)
+    d = 0.03
+    tc = np.arange(1.0, 29.0, 0.05)
+    cam = OrientationStream(tc, Q.at(tc + d), "c")
+    A, B, offset, corr = stream_pairs(cam, gyro, interval=0.5)
+    assert offset == pytest.approx(d, abs=1e-3) and corr > 0.99
+    assert np.max(so3.angle_between_deg(A, B)) < 0.05
+    A2, B2, offset2, _ = stream_pairs(cam, gyro, interval=0.5, correct_offset=False)
+    assert offset2 == offset and np.max(so3.angle_between_deg(A2, B2)) > 0.1
+    _, _, offset3, _ = stream_pairs(cam, Q, interval=0.5, max_offset=0.1)
+    assert offset3 == pytest.approx(offset, abs=1e-9)
+    with pytest.raises(ValueError, match=r"^camera must be an OrientationStream and sensor an OrientationStream or "
+                                         r"GyroStream$"):
+        stream_pairs(gyro, Q)
+    with pytest.raises(ValueError, match="camera must be an OrientationStream"):
+        stream_pairs(cam, omega)

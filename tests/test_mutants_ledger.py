@@ -1,0 +1,170 @@
+"""The claims ledger's rules that mutation testing found unguarded (scripts/mutation): what :func:`record` displays,
+how :func:`collect` reads records back (which notebook and cell, the claims file's order), the Markdown table and the
+README update."""
+import json
+import sys
+import types
+from dataclasses import asdict
+
+import pytest
+
+from replication import ledger
+
+CLAIMS_CSV = ("claim,statement,where,paper_value,unit\n"
+              "zeta,the last id alphabetically comes first,Sec. 1,,\n"
+              "alpha,a | pipe in the statement,Eq. (2),0.5,deg\n"
+              "mid,a third claim,Table 1,,\n")
+
+
+def _record(claim, verdict="holds", condition="", evidence="e 1.0", uncertainty="u", setting="s"):
+    return asdict(ledger.ClaimRecord(claim, verdict, evidence, uncertainty, setting, condition))
+
+
+def _notebook(path, cells):
+    """A notebook whose cells carry these outputs (a list of output lists; None: a cell without outputs)."""
+    nb = {"cells": [{"cell_type": "code", "source": ""} if outs is None else
+                    {"cell_type": "code", "source": "", "outputs": outs} for outs in cells]}
+    path.write_text(json.dumps(nb), encoding="utf-8")
+    return path
+
+
+def _out(rec):
+    return {"output_type": "display_data", "data": {"text/plain": "x", ledger.CLAIM_MIME: rec}}
+
+
+@pytest.fixture
+def claims_path(tmp_path):
+    p = tmp_path / "claims.csv"
+    p.write_text(CLAIMS_CSV)
+    return p
+
+
+@pytest.fixture
+def two_notebooks(tmp_path):
+    a = _notebook(tmp_path / "01_a.ipynb", [
+        None,
+        [{"output_type": "stream", "text": "no data"}, _out(_record("alpha", evidence="from a, cell 1"))],
+        [{"output_type": "execute_result", "data": {"text/plain": "2"}}],
+        [_out(_record("zeta", evidence="z in a"))],
+    ])
+    b = _notebook(tmp_path / "02_b.ipynb", [
+        [_out(_record("mid", "holds only if", condition="J >= 3", evidence="m"))],
+        [_out(_record("alpha", "fails", evidence="from b"))],
+    ])
+    empty = tmp_path / "03_empty.ipynb"
+    empty.write_text(json.dumps({"metadata": {}}), encoding="utf-8")  # no "cells" at all
+    return [b, empty, a]
+
+
+def test_record_prints_the_readable_line_outside_a_notebook(capsys):
+    ledger.record("theorem1", "holds", evidence="e 1", uncertainty="exact", setting="sim")
+    assert capsys.readouterr().out == "[theorem1] holds\n  evidence: e 1\n  uncertainty: exact\n  setting: sim\n"
+    ledger.record("theorem1", "holds only if", evidence="e 2", uncertainty="u", setting="s", condition="J >= 3")
+    assert capsys.readouterr().out == "[theorem1] holds only if J >= 3\n  evidence: e 2\n  uncertainty: u\n  setting: s\n"
+
+
+def test_record_displays_the_claim_payload_in_a_notebook(monkeypatch):
+    import IPython
+    import IPython.display
+
+    shown = []
+    monkeypatch.setattr(IPython, "get_ipython", lambda: object())
+    monkeypatch.setattr(IPython.display, "display", lambda obj, **kw: shown.append((obj, kw)))
+    ledger.record("theorem1", "fails", evidence="e 3", uncertainty="u", setting="s")
+    (obj, kw), = shown
+    assert kw == {"raw": True}
+    assert obj == {"text/plain": "[theorem1] fails\n  evidence: e 3\n  uncertainty: u\n  setting: s",
+                   ledger.CLAIM_MIME: {"claim": "theorem1", "verdict": "fails", "evidence": "e 3", "uncertainty": "u",
+                                       "setting": "s", "condition": ""}}
+
+
+def test_record_displays_the_condition_and_prints_without_ipython(monkeypatch, capsys):
+    import IPython
+    import IPython.display
+
+    shown = []
+    monkeypatch.setattr(IPython, "get_ipython", lambda: object())
+    monkeypatch.setattr(IPython.display, "display", lambda obj, **kw: shown.append(obj))
+    ledger.record("theorem1", "holds only if", evidence="e", uncertainty="u", setting="s", condition="J >= 3")
+    assert shown[0][ledger.CLAIM_MIME]["condition"] == "J >= 3"
+    assert shown[0]["text/plain"].startswith("[theorem1] holds only if J >= 3\n")
+    monkeypatch.setitem(sys.modules, "IPython", None)  # IPython not installed: the record is printed
+    ledger.record("theorem1", "fails", evidence="e", uncertainty="u", setting="s")
+    assert capsys.readouterr().out == "[theorem1] fails\n  evidence: e\n  uncertainty: u\n  setting: s\n"
+    assert len(shown) == 1
+
+
+@pytest.mark.parametrize("field", ["evidence", "uncertainty", "setting"])
+def test_record_names_the_empty_field(field):
+    kwargs = {"evidence": "e", "uncertainty": "u", "setting": "s", field: "  "}
+    with pytest.raises(ValueError, match=rf"^claim 'theorem1': {field} is empty$"):
+        ledger.record("theorem1", "holds", **kwargs)
+
+
+def test_record_messages_name_the_known_claims_and_verdicts():
+    with pytest.raises(ValueError, match=r"unknown claim 'nope'; known: eq7_relative, theorem1, "):
+        ledger.record("nope", "holds", evidence="e", uncertainty="u", setting="s")
+    with pytest.raises(ValueError, match=r"verdict must be one of \('holds', 'fails', .*got 'maybe'"):
+        ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s")
+
+
+def test_collect_reads_every_record_with_its_notebook_and_cell_in_the_claims_order(two_notebooks, claims_path):
+    got = ledger.collect(two_notebooks, claims_path=claims_path)
+    assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "notebook",
+                                 "cell", "statement", "where", "paper_value"]
+    assert list(got.index) == [0, 1, 2, 3]
+    # claims in the claims file's order (zeta, alpha, mid: not alphabetical), then notebook, then cell
+    assert list(got["claim"]) == ["zeta", "alpha", "alpha", "mid"]
+    assert list(got["notebook"]) == ["01_a", "01_a", "02_b", "02_b"]
+    assert list(got["cell"]) == [3, 1, 1, 0]
+    assert list(got["evidence"]) == ["z in a", "from a, cell 1", "from b", "m"]
+    assert list(got["condition"]) == ["", "", "", "J >= 3"]
+    assert got.loc[1, "statement"] == "a | pipe in the statement" and got.loc[1, "paper_value"] == "0.5"
+
+
+def test_collect_refuses_unknown_and_missing_claims(tmp_path, two_notebooks, claims_path):
+    extra = _notebook(tmp_path / "04_x.ipynb", [[_out(_record("ghost"))], [_out(_record("boo"))]])
+    with pytest.raises(ValueError, match=r"^records for unknown claims \['boo', 'ghost'\]$"):
+        ledger.collect(two_notebooks + [extra], claims_path=claims_path)
+    partial = [two_notebooks[2]]  # mid has no record there
+    with pytest.raises(ValueError, match=r"^claims without a verdict and evidence: \['mid'\]$"):
+        ledger.collect(partial, claims_path=claims_path)
+    got = ledger.collect(partial, claims_path=claims_path, complete=False)
+    assert list(got["claim"]) == ["zeta", "alpha"]
+
+
+def test_collect_without_notebooks_reads_the_projects_own():
+    got = ledger.collect()
+    assert set(got["notebook"]) <= {p.stem for p in (ledger.ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")}
+    assert len(set(got["notebook"])) > 1
+
+
+def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path):
+    got = ledger.collect(two_notebooks, claims_path=claims_path)
+    got.loc[0, "evidence"] = "two\nlines"
+    md = ledger.to_markdown(got).splitlines()
+    assert md[:2] == ["| claim | the paper | verdict | evidence | uncertainty | where measured |",
+                      "|---|---|---|---|---|---|"]
+    assert md[2] == ("| `zeta` | the last id alphabetically comes first (Sec. 1) | holds | two lines | u | "
+                     "s; notebook 01_a, cell 3 |")
+    assert md[3] == "| `alpha` | a \\| pipe in the statement (Eq. (2)) | holds | from a, cell 1 | u | s; notebook 01_a, cell 1 |"
+    assert md[5] == "| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | s; notebook 02_b, cell 0 |"
+    assert len(md) == 6 and ledger.to_markdown(got).endswith(" |\n")
+
+
+def test_update_readme_writes_between_the_markers_and_checks(tmp_path, two_notebooks, claims_path):
+    got = ledger.collect(two_notebooks, claims_path=claims_path)
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# head\n{ledger.README_START}\nold table\n{ledger.README_END}\ntail\n", encoding="utf-8")
+    assert ledger.update_readme(got, readme, check=True) is False
+    assert "old table" in readme.read_text()  # check only: nothing written
+    assert ledger.update_readme(got, readme) is True
+    assert readme.read_text(encoding="utf-8") == (f"# head\n{ledger.README_START}\n{ledger.to_markdown(got)}"
+                                                  f"{ledger.README_END}\ntail\n")
+    assert ledger.update_readme(got, readme, check=True) is True
+    before = readme.stat().st_mtime_ns
+    assert ledger.update_readme(got, readme) is True and readme.stat().st_mtime_ns == before
+    for text in (f"{ledger.README_START} only", f"{ledger.README_END} only"):
+        readme.write_text(text)
+        with pytest.raises(ValueError, match="markers .* not found"):
+            ledger.update_readme(got, readme)

@@ -1,0 +1,349 @@
+"""The live front end (:class:`replication.live.LiveRig`) on an orientation sensor, exactly: which poses pair
+(``interval`` reached exactly, no shared pose, the stride), the sensor slerped to the camera time plus the clock
+offset (``B = R0^T A R0`` to rounding for a constant-rate motion), gaps at ``GAP_FACTOR`` typical steps, the
+buffer and the early window kept, the refusals, and the evidence it adds to the verdict. Mutation testing
+(scripts/mutation) found these unguarded by the fast tests."""
+import math
+
+import numpy as np
+import pytest
+
+from replication import so3
+from replication.live import OFFSET_RESOLUTION, LiveRig
+from replication.online import OnlineCalibrator
+
+R0 = so3.exp_map(np.array([0.3, -0.5, 0.8]))
+W = np.array([0.2, 0.9, -0.4])  # rad/s, a constant rate about a fixed axis: slerp between samples is exact
+DT_CAM, DT_SEN = 1 / 32, 1 / 128  # binary fractions: time stamps and differences are exact
+
+
+def _C(t):
+    return so3.exp_map(W * t)  # world_from_camera
+
+
+def _feed(rig, t_end, offset=0.0, sensor_skip=()):
+    """Camera poses every DT_CAM and sensor orientations every DT_SEN (stamped t + offset) up to t_end, in time
+    order; sensor samples whose index is in ``sensor_skip`` are left out (a gap)."""
+    events = [(k * DT_CAM, 1, k) for k in range(int(round(t_end / DT_CAM)) + 1)]
+    events += [(k * DT_SEN + offset, 0, k) for k in range(-128, int(round((t_end + 1) / DT_SEN)) + 1)
+               if k not in sensor_skip]
+    for t, kind, k in sorted(events):
+        if kind:
+            rig.add_camera(t, _C(t))
+        else:
+            rig.add_orientation(t, _C(t - offset) @ R0)
+
+
+def _rig(**kw):
+    pairs = []
+    kw.setdefault("offset", 0.0)
+    rig = LiveRig(OnlineCalibrator(), interval=kw.pop("interval", 0.25), diagnose=False,
+                  on_pair=lambda t, A, B: pairs.append((t, A, B)), **kw)
+    return rig, pairs
+
+
+@pytest.mark.parametrize("offset", [0.0, 0.0123, -0.04])
+def test_pairs_are_exact_at_the_offset_and_share_no_pose(offset):
+    rig, pairs = _rig(offset=offset)
+    _feed(rig, 3.0, offset=offset)
+    rig.finish()
+    # the interval (8 camera steps) is reached exactly: pairs end at poses 8, 17, 26, ...
+    assert [t for t, _, _ in pairs] == [k * 9 * DT_CAM - DT_CAM for k in range(1, len(pairs) + 1)]
+    assert len(pairs) == 10 and rig.pairs_formed == 10 and rig.pairs_dropped == 0
+    for t, A, B in pairs:
+        assert np.allclose(A, _C(t).T @ _C(t - 8 * DT_CAM), atol=1e-12)
+        assert np.allclose(B, R0.T @ A @ R0, atol=1e-9)
+    assert len(rig.events) == 10  # every pair reaches the calibrator (which counts these equal motions as repeats)
+
+
+def test_the_stride_uses_every_other_pair_formed():
+    rig, pairs = _rig(stride=2)
+    _feed(rig, 3.0)
+    assert rig.pairs_formed == 10 and len(pairs) == 5
+    assert [t for t, _, _ in pairs] == [(k * 18 + 8) * DT_CAM for k in range(5)]
+    assert rig._evidence()["pairs_before_gaps"] == 5
+
+
+def test_a_pair_across_a_sensor_gap_is_dropped_at_five_typical_steps():
+    # pair 2 runs over poses 9..17 (t 0.28..0.53); leave sensor samples out in the middle of it
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(50, 55)))  # a 6-step hole: beyond 5 typical steps
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
+    assert rig._evidence()["pairs_dropped_at_gaps"] == 1
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(50, 54)))  # a 5-step hole: not a gap
+    assert rig.pairs_dropped == 0 and len(pairs) == 4
+
+
+def test_a_gap_at_a_pair_end_drops_it_too():
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(66, 71)))  # the hole holds the end of pair 2 (t = 17/32 = 68/128)
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
+
+
+def test_the_typical_sensor_step_is_a_running_average():
+    rig, _ = _rig()
+    assert rig._gyro_dt is None
+    rig.add_orientation(0.0, R0)
+    assert rig._gyro_dt is None
+    rig.add_orientation(0.5, R0)
+    assert rig._gyro_dt == 0.5
+    rig.add_orientation(0.75, R0)
+    assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
+
+
+def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_bad():
+    rig, _ = _rig()
+    w0, w1 = np.array([0.1, 0.2, 0.3]), np.array([0.5, -0.2, 0.1])
+    rig.add_gyro(1.0, w0)
+    rig.add_gyro(1.5, w1)
+    assert np.allclose(rig._gyro[-1][1], so3.exp_map(0.5 * (w0 + w1) * 0.5), atol=1e-15)
+    assert rig._gyro_dt == 0.5
+    rig.add_gyro(1.75, [0, 0, 0])
+    assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
+    assert rig._evidence()["gyro_rate_hz"] == pytest.approx(1 / (0.99 * 0.5 + 0.01 * 0.25))
+    for t in (1.75, 1.5):
+        with pytest.raises(ValueError, match=rf"^gyro time going backwards or repeated: {t!r} after 1\.75$"):
+            rig.add_gyro(t, w0)
+    for t, w in ((2.0, [0.0, 0.0]), (2.0, [0.0, math.nan, 0.0]), (math.inf, [0.0, 0.0, 0.0])):
+        with pytest.raises(ValueError, match=r"^a gyro sample is a finite time and 3 finite rates, got t="):
+            rig.add_gyro(t, w)
+    assert len(rig._gyro) == 3
+
+
+def test_orientation_samples_are_refused_when_not_later_or_not_one_rotation():
+    rig, _ = _rig()
+    rig.add_orientation(1.0, R0)
+    for t in (1.0, 0.5):
+        with pytest.raises(ValueError, match=rf"^sensor time going backwards or repeated: {t!r} after 1\.0$"):
+            rig.add_orientation(t, R0)
+    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=2\.0, shape "
+                                         r"\(2, 3, 3\)$"):
+        rig.add_orientation(2.0, np.stack([R0, R0]))
+    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=nan"):
+        rig.add_orientation(math.nan, R0)
+    with pytest.raises(ValueError, match="world_from_sensor is not a rotation matrix"):
+        rig.add_orientation(2.0, 2 * R0)
+    with pytest.raises(ValueError, match=r"^this rig's sensor gives orientation samples; got a gyro sample$"):
+        rig.add_gyro(3.0, np.zeros(3))
+    rig2, _ = _rig()
+    rig2.add_gyro(0.0, np.zeros(3))
+    with pytest.raises(ValueError, match=r"^this rig's sensor gives gyro samples; got a orientation sample$"):
+        rig2.add_orientation(1.0, R0)
+
+
+def test_the_buffer_keeps_the_last_interval_plus_the_offset_search_plus_a_second():
+    rig, _ = _rig(interval=0.25, max_offset=0.125)
+    keep = 0.25 + 2 * 0.125 + 1.0
+    for k in range(800):
+        rig.add_orientation(k * DT_SEN, R0)
+    t = 799 * DT_SEN
+    times = [g[0] for g in rig._gyro]
+    assert times[0] == t - keep and times[-1] == t  # a sample exactly keep seconds old stays
+    rig2, _ = _rig(offset=None, offset_window=4.0, max_offset=0.125, interval=0.25)
+    for k in range(800):
+        rig2.add_orientation(k * DT_SEN, R0)
+    assert [g[0] for g in rig2._gyro][0] == max(0.0, t - keep - 4.0)  # unknown offset: the window is held too
+
+
+def test_the_early_window_keeps_samples_up_to_offset_window_inclusive():
+    rig, _ = _rig(offset_window=1.0)
+    for k in range(200):
+        rig.add_orientation(k * DT_SEN, R0)
+        rig.add_camera(k * DT_SEN + 1 / 256, _C(k * DT_SEN))
+    assert [s[0] for s in rig._early_sensor] == [k * DT_SEN for k in range(129)]
+    assert rig._early_camera[0][0] == 1 / 256 and rig._early_camera[-1][0] == 128 * DT_SEN + 1 / 256
+    cam, sen = rig._streams()
+    assert np.array_equal(cam.t, [c[0] for c in rig._early_camera]) and cam.source == "camera (live)"
+    assert np.array_equal(sen.t, [s[0] for s in rig._early_sensor]) and sen.source == "sensor (live)"
+    assert np.allclose(sen.world_from_body, R0) and type(sen).__name__ == "OrientationStream"
+    rig2, _ = _rig(offset_window=1.0)
+    for k in range(3):
+        rig2.add_gyro(k * 0.5, np.array([0.0, 0.0, k]))
+        rig2.add_camera(k * 0.5, np.eye(3))
+    cam, sen = rig2._streams()
+    assert type(sen).__name__ == "GyroStream" and sen.source == "gyro (live)"
+    assert np.array_equal(sen.omega, [[0, 0, 0], [0, 0, 1], [0, 0, 2]])
+
+
+def test_used_offset_and_the_evidence():
+    assert _rig(offset=None)[0].used_offset is None
+    assert _rig(offset=0.25)[0].used_offset == 0.25
+    assert _rig(offset=0.25, correct_offset=False)[0].used_offset == 0.25  # a given offset is always used
+    rig, _ = _rig(offset=None, correct_offset=False)
+    rig.offset = 0.5
+    assert rig.used_offset == 0.0
+    assert rig._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1,
+                               "offset_s": 0.5, "offset_correlation": None, "max_offset_s": 0.2,
+                               "offset_resolution_s": OFFSET_RESOLUTION, "offset_applied": False}
+    rig.correct_offset = True
+    assert rig.used_offset == 0.5 and rig._evidence()["offset_applied"] is True
+    given, _ = _rig(offset=0.5)
+    assert given._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1}
+    gyro, _ = _rig()
+    gyro.add_gyro(0.0, np.zeros(3))
+    gyro.add_gyro(0.01, np.zeros(3))
+    assert gyro._evidence()["gyro_rate_hz"] == pytest.approx(100.0)
+    ori, _ = _rig()
+    ori.add_orientation(0.0, R0)
+    ori.add_orientation(0.01, R0)
+    assert "gyro_rate_hz" not in ori._evidence()
+
+
+def test_the_offset_is_estimated_once_both_streams_span_the_window():
+    rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1)
+    motion = lambda t: so3.exp_map(np.array([math.sin(3 * t), math.cos(2 * t), 0.5 * math.sin(5 * t)]))  # noqa: E731
+    for k in range(int(2.0 / DT_SEN)):  # just short of the window on the sensor side
+        rig.add_orientation(k * DT_SEN, motion(k * DT_SEN) @ R0)
+        if k % 4 == 0:
+            rig.add_camera(k * DT_SEN, motion(k * DT_SEN))
+    assert rig.offset is None and pairs == []
+    rig.add_camera(2.0, motion(2.0))
+    assert rig.offset is None
+    rig.add_orientation(2.0, motion(2.0) @ R0)
+    assert rig.offset == pytest.approx(0.0, abs=2 * OFFSET_RESOLUTION) and rig.offset_correlation > 0.99
+    assert len(pairs) > 0
+
+
+def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
+    rig, pairs = _rig(offset=None, offset_window=30.0)
+    _feed(rig, 0.1)
+    assert rig.offset is None
+    rig.finish()
+    assert rig.offset is None and rig.offset_note.startswith(
+        "no clock offset: the streams ended after 1.1 s of camera data, before the 30 s offset window (")
+    rig.finish()  # idempotent
+    assert pairs == []
+
+
+from replication.live import replay  # noqa: E402
+from replication.report import RADIUS_COVERS  # noqa: E402
+from replication.streams import OrientationStream  # noqa: E402
+
+
+def _motion(t):
+    return so3.exp_map(np.array([math.sin(1.3 * t), math.cos(0.7 * t), 0.8 * math.sin(0.5 * t + 1.0)]))
+
+
+def _streams(t_end=20.0, t0=100.0):
+    tc = t0 + np.arange(0, t_end, DT_CAM)
+    ts = t0 + np.arange(-1.0, t_end + 1.0, 1 / 64)
+    cam = OrientationStream(tc, np.array([_motion(t - t0) for t in tc]), "cam")
+    sen = OrientationStream(ts, np.array([_motion(t - t0) @ R0 for t in ts]), "sen")
+    return cam, sen
+
+
+def test_replay_rows_and_summary_of_a_clean_rig():
+    cam, sen = _streams()
+    cal = OnlineCalibrator(target_deg=2.0)
+    out = replay(cam, sen, cal, interval=0.25, offset=0.0, reference=R0)
+    assert list(out.columns) == ["t", "t_seen", "n_pairs", "radius_deg", "ready", "alarm", "event", "determined",
+                                 "checking", "qw", "qx", "qy", "qz", "error_deg"]
+    assert len(out) > 60
+    assert np.allclose(np.diff(out["t"]), 9 * DT_CAM)  # pairs share no pose
+    flags = out[["ready", "alarm", "determined", "checking"]]
+    assert not flags.isna().any().any() and all(out[c].dtype == bool for c in flags.columns)
+    assert set(out["event"]) == {""} and out["n_pairs"].iloc[-1] == cal.n_pairs
+    first = out.iloc[0]
+    assert math.isnan(first["qw"]) and math.isnan(first["radius_deg"]) and math.isnan(first["error_deg"])
+    last = out.iloc[-1]
+    assert last["ready"] and last["determined"] and not last["checking"] and last["error_deg"] < 0.2
+    q = so3.as_quaternion(cal.R)
+    assert [last["qw"], last["qx"], last["qy"], last["qz"]] == pytest.approx(list(q))
+    assert out.attrs["offset_s"] == 0.0 and out.attrs["pairs_dropped"] == 0 and out.attrs["alarms"] == []
+    s = out.attrs["summary"]
+    ready_row = out[out["ready"]].iloc[0]
+    assert s["ready"] is True and s["ready_at_s"] == ready_row["t_seen"] - 100.0
+    assert s["ready_pair_end_s"] == ready_row["t"] - 100.0
+    assert s["target_deg"] == 2.0 and s["pairs"] == cal.n_total and s["pairs_formed"] == len(out)
+    assert (s["repeated_pairs"], s["pairs_dropped_outliers"], s["pairs_dropped_at_gaps"]) == (0, 0, 0)
+    assert s["R0_camera_from_sensor"] == np.round(cal.R, 12).tolist()
+    assert s["quaternion_wxyz"] == np.round(q, 12).tolist()
+    assert s["radius_deg"] == cal.radius and s["radius_level"] == 0.95 and s["radius_covers"] == RADIUS_COVERS
+    status = cal.status()
+    assert s["excitation_deg"] == status["excitation_deg"] and s["effective_pairs"] == status["effective_pairs"]
+    assert (s["clock_offset_s"], s["clock_offset_given"], s["clock_offset_correlation"]) == (0.0, True, None)
+    assert s["clock_offset_applied"] is True and s["note"] is None and s["events"] == [] and s["not_ready"] == []
+    assert s["verdict"]["level"] == "ok"
+    assert isinstance(s["pairs"], int) and isinstance(s["ready"], bool)
+
+
+def test_replay_with_an_estimated_offset_and_a_remount():
+    cam, sen = _streams(36.0)
+    cal = OnlineCalibrator(target_deg=2.0)
+    R_re = so3.exp_map(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
+    out = replay(cam, sen, cal, interval=0.25, offset=None, offset_window=8.0, max_offset=0.1, reference=R0,
+                 remount=(118.0, R_re))
+    s = out.attrs["summary"]
+    assert abs(s["clock_offset_s"]) < 2e-3 and s["clock_offset_given"] is False and s["clock_offset_correlation"] > 0.9
+    assert s["clock_offset_applied"] is (s["clock_offset_s"] != 0.0)
+    assert out["t_seen"].iloc[0] >= 100.0 + 8.0 > out["t"].iloc[0]  # held until the offset window was full
+    assert cal.alarms and out.attrs["alarms"] == cal.alarms and "remount" in out.attrs["events"]
+    alarm_row = out[out["alarm"]].iloc[0]
+    assert alarm_row["t"] > 118.0 and alarm_row["event"] == "remount"
+    after = out[out["t"] > alarm_row["t"] + 5.0]
+    # the reference follows the re-mount: the error is against R0 R_re after it
+    assert after["error_deg"].dropna().iloc[-1] < 0.5
+    ev = s["events"][0]
+    assert ev["kind"] == "remount" and ev["pair_end_s"] > 18.0 and ev["t_s"] >= ev["pair_end_s"]
+    assert ev["alarm_t_s"] <= ev["t_s"] and ev["angle_deg"] == pytest.approx(10.0, abs=1.0)
+    row = out[out["event"] == "remount"].iloc[0]
+    assert ev["t_s"] == row["t_seen"] - 100.0 and ev["pair_end_s"] == row["t"] - 100.0
+    assert ev["alarm_t_s"] == out["t_seen"].iloc[cal.events[0].alarm_pair] - 100.0
+    assert ev["threshold_deg"] < ev["angle_deg"] and ev["message"].startswith("the ")
+
+
+def test_summary_times_default_to_the_clock_itself():
+    rig, _ = _rig(offset=0.0)
+    rig.calibrator.target_deg = 2.0
+    for k in range(int(12.0 / DT_CAM)):
+        t = k * DT_CAM
+        for j in range(4):
+            ts = t + j * DT_SEN
+            rig.add_orientation(ts - 1.0 if k == 0 and j == 0 else ts, _motion(ts - 1.0 if k == 0 and j == 0 else ts) @ R0)
+        rig.add_camera(t, _motion(t))
+    assert rig.ready_at is not None
+    s = rig.summary()
+    assert s["ready_at_s"] == rig.ready_at[1] and s["ready_pair_end_s"] == rig.ready_at[0]
+    assert rig.summary(t0=2.0)["ready_at_s"] == rig.ready_at[1] - 2.0
+
+
+def test_the_offset_search_spans_the_rigs_max_offset():
+    rig, _ = _rig(offset=None, offset_window=6.0, max_offset=0.3)
+    d = 0.25  # beyond the default search of 0.2 s
+    for k in range(int(7.0 / DT_SEN)):
+        t = k * DT_SEN
+        rig.add_orientation(t + d, _motion(t) @ R0)
+        if k % 4 == 0:
+            rig.add_camera(t, _motion(t))
+    assert rig.offset == pytest.approx(d, abs=1e-3) and rig.offset_correlation > 0.99
+
+
+def test_the_rigs_options_are_checked():
+    cal = OnlineCalibrator()
+    with pytest.raises(ValueError, match=r"^calibrator must be an OnlineCalibrator, got dict$"):
+        LiveRig({})
+    for kw, msg in (({"interval": 0}, r"^interval must be > 0, got 0$"),
+                    ({"max_offset": 0}, r"^max_offset must be > 0, got 0$"),
+                    ({"offset": math.nan}, r"^offset must be a finite number, got nan$"),
+                    ({"offset": 0.0, "offset_window": 0}, r"^offset_window must be > 0, got 0$"),
+                    ({"stride": 0}, r"^stride must be >= 1, got 0$"),
+                    ({"stride": 1.5}, r"^stride must be a finite integer, got 1\.5$"),
+                    ({"correct_offset": 1}, r"^correct_offset must be True or False, got 1$"),
+                    ({"diagnose": "yes"}, r"^diagnose must be True or False, got 'yes'$"),
+                    ({"on_pair": 5}, r"^on_pair must be callable or None, got 5$")):
+        with pytest.raises(ValueError, match=msg):
+            LiveRig(cal, **kw)
+    # the offset window must exceed the search both ways plus a second, only when the offset is estimated
+    with pytest.raises(ValueError, match=r"^offset_window must exceed 2 max_offset \+ 1 s = 1\.6 s \(the offset search "
+                                         r"shifts the window by up to max_offset both ways\), got 1\.6$"):
+        LiveRig(cal, max_offset=0.3, offset_window=1.6)
+    assert LiveRig(cal, max_offset=0.3, offset_window=1.6000001).offset_window == 1.6000001
+    assert LiveRig(cal, offset=0.1, max_offset=0.3, offset_window=1.0).offset_window == 1.0
+    rig = LiveRig(cal, max_offset=0.3, stride=np.int64(2), correct_offset=np.bool_(False))
+    assert rig.offset_window == 20.0 and rig.stride == 2 and rig.correct_offset is False
+    assert LiveRig(cal, max_offset=6.0).offset_window == 22.0  # max(20, 2 max_offset + 10)
+    rig = LiveRig(cal)
+    assert (rig.interval, rig.max_offset, rig.offset, rig.offset_given, rig.stride, rig.diagnose) == (
+        1.0, 0.2, None, False, 1, True)
+    assert rig.correct_offset is True and rig.on_pair is None and rig.GAP_FACTOR == 5.0

@@ -1,0 +1,437 @@
+"""The online change detector's rules (:mod:`replication.online_events`) at their boundaries: repeats within the
+tolerance, never at rest; the CUSUM's arithmetic, its reference level, held-out outliers, onset and alarms; the drift
+test; the event sentences and record. Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+import math
+
+import numpy as np
+import pytest
+
+from replication import so3
+from replication.online_events import (CONFIRM_LEVEL, DUPLICATE_DEG, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent,
+                                       RepeatFilter, chi2_quantile, combined_threshold, describe, drift_test, pair_d2,
+                                       residual_angle_deg)
+from replication.stats import radius_deg
+
+
+def _flat(R):
+    return [float(v) for v in np.asarray(R).reshape(9)]
+
+
+def _rot(deg, axis=(0.3, -0.5, 0.8)):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return so3.exp_map(np.radians(deg) * axis)
+
+
+def test_a_repeat_is_within_the_tolerance_elementwise_on_both_motions():
+    f = RepeatFilter()
+    A, B = _rot(20.0), _rot(15.0, (1.0, 0.2, 0.0))
+    assert f.seen(_flat(A), _flat(B)) is False and f.remembered == 1
+    assert f.seen(_flat(A), _flat(B)) is True and f.remembered == 1
+    tol = math.radians(DUPLICATE_DEG)
+    for k in range(9):  # one entry of either matrix off by just under / just over the tolerance
+        for which in (0, 1):
+            near = [_flat(A), _flat(B)]
+            near[which][k] += 0.999 * tol
+            assert f.seen(*near) is True
+            far = [_flat(A), _flat(B)]
+            far[which][k] += 1.001 * tol
+            g = RepeatFilter()
+            g.seen(_flat(A), _flat(B))
+            assert g.seen(*far) is False and g.remembered == 2
+
+
+def test_neighbouring_cells_are_searched_near_an_edge():
+    # sensor motions whose antisymmetric parts fall either side of a cell edge, within the tolerance
+    tol = math.radians(DUPLICATE_DEG)
+    cell = 16.0 * tol
+    for axis in range(3):
+        for edge_side in (-1, 1):
+            w = np.full(3, 5.3 * cell)
+            w[axis] = 7 * cell + edge_side * 0.2 * tol  # just inside one cell
+            B1 = so3.exp_map(w)
+            w2 = w.copy()
+            w2[axis] = 7 * cell - edge_side * 0.2 * tol  # just across the edge
+            B2 = so3.exp_map(w2)
+            A = _rot(30.0)
+            f = RepeatFilter()
+            assert f.seen(_flat(A), _flat(B1)) is False
+            assert np.abs(B1 - B2).max() <= tol
+            assert f.seen(_flat(A), _flat(B2)) is True
+
+
+def test_a_rig_at_rest_never_repeats_but_a_motion_at_the_bound_does():
+    f = RepeatFilter()
+    rest_a, rest_b = _rot(0.9 * SMALL_MOTION_DEG), _rot(0.8 * SMALL_MOTION_DEG, (1, 0, 0))
+    assert f.seen(_flat(rest_a), _flat(rest_b)) is False
+    assert f.seen(_flat(rest_a), _flat(rest_b)) is False and f.remembered == 0
+    moving = _rot(1.1 * SMALL_MOTION_DEG)
+    assert f.seen(_flat(moving), _flat(rest_b)) is False and f.seen(_flat(moving), _flat(rest_b)) is True
+    g = RepeatFilter()
+    assert g.seen(_flat(rest_a), _flat(moving)) is False and g.seen(_flat(rest_a), _flat(moving)) is True
+
+
+def test_a_zero_tolerance_takes_exact_repeats_only():
+    f = RepeatFilter(0.0)
+    A, B = _rot(20.0), _rot(15.0, (1, 0, 0))
+    assert f.seen(_flat(A), _flat(B)) is False
+    assert f.seen(_flat(A), _flat(B)) is True
+    nudged = _flat(B)
+    nudged[3] += 1e-15
+    assert f.seen(_flat(A), nudged) is False and f.remembered == 2
+
+
+def test_remembered_pairs_grow_beyond_the_first_block():
+    f = RepeatFilter()
+    rng = np.random.default_rng(0)
+    pairs = [(_flat(so3.random_rotations(rng, ())), _flat(so3.random_rotations(rng, ()))) for _ in range(150)]
+    assert not any(f.seen(a, b) for a, b in pairs) and f.remembered == 150
+    assert all(f.seen(a, b) for a, b in pairs)
+
+
+def test_pair_d2_and_the_residual_angle():
+    R = _rot(40.0, (0, 1, 0))
+    A = np.stack([_rot(30.0), _rot(50.0, (1, 0, 0))])
+    B = np.swapaxes(R, -1, -2) @ A @ R
+    B[1] = B[1] @ _rot(2.0, (0, 0, 1))
+    d2 = pair_d2(R, A, B)
+    assert d2[0] == pytest.approx(0.0, abs=1e-12) and d2[1] == pytest.approx(8 * math.sin(math.radians(1.0)) ** 2)
+    assert residual_angle_deg(d2[1]) == pytest.approx(2.0)
+    assert residual_angle_deg(-1e-12) == 0.0 and residual_angle_deg(8.0) == 180.0 and residual_angle_deg(9.0) == 180.0
+
+
+def test_chi2_quantile_and_the_combined_radius():
+    # Wilson-Hilferty: dof (1 - 2 / (9 dof) + z sqrt(2 / (9 dof)))^3 (the exact quantiles: 2.366, 40.256)
+    assert chi2_quantile(0.5, 3) == pytest.approx(3 * (1 - 2 / 27) ** 3, rel=1e-9)
+    z = 1.2815515655446004
+    assert chi2_quantile(0.9, 30) == pytest.approx(30 * (1 - 2 / 270 + z * math.sqrt(2 / 270)) ** 3, rel=1e-6)
+    cov = np.diag([1e-4, 2e-4, 3e-4])
+    assert combined_threshold(cov, cov) == radius_deg(2 * cov, CONFIRM_LEVEL)
+    assert combined_threshold(None, cov) == math.inf and combined_threshold(cov, None) == math.inf
+
+
+def test_describe_says_each_kind_with_its_numbers():
+    info = {"angle_deg": 1.23456, "threshold_deg": 0.5, "median_z_before": 3.5, "median_z_after": 0.75}
+    assert describe("remount", info, 10, 2) == ("the 10 pairs after the alarm agree on a new R0 1.23 deg from the "
+                                                "estimate (> 0.5 deg, the 99.9 % combined radius): re-mounted; "
+                                                "started over")
+    assert describe("noise_change", info, 10, 2) == ("no new R0 (1.23 deg <= 0.5 deg), but the 10 pairs fit no rotation"
+                                                     " at the old noise level (median d^2/m 0.75 > 2): the noise level "
+                                                     "changed")
+    assert describe("outliers", info, 10, 2) == ("no new R0 (1.23 deg <= 0.5 deg) and most of the 10 pairs still fit "
+                                                 "the estimate (median d^2/m 3.5 <= 2): outlier pairs, 2 kept out")
+    assert describe("new_information", info, 10, 2) == (
+        "the 10 pairs fit a rotation 1.23 deg away, within the combined radius 0.5 deg, better than the estimate "
+        "(median d^2/m 0.75 vs 3.5): new information (typically better-excited motion), added")
+
+
+def test_an_event_record_holds_every_field():
+    ev = OnlineEvent("outliers", 12, 9, "cusum", 7, 10, 0.5, 1.5, 3.0, 0.8, 2, np.eye(3), 2 * np.eye(3), "m")
+    assert ev.to_dict() == {"kind": "outliers", "pair": 12, "alarm_pair": 9, "source": "cusum", "onset_pair": 7,
+                            "window_pairs": 10, "angle_deg": 0.5, "threshold_deg": 1.5, "median_z_before": 3.0,
+                            "median_z_after": 0.8, "pairs_dropped": 2, "R_before": np.eye(3).tolist(),
+                            "R_after": (2 * np.eye(3)).tolist(), "message": "m"}
+
+
+def _window(R, n, noise_deg, rng, shift=None):
+    A = so3.random_rotations(rng, n)
+    B = np.swapaxes(R, -1, -2) @ A @ R
+    B = B @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((n, 3)))
+    if shift is not None:
+        B = np.swapaxes(shift, -1, -2) @ B @ shift
+    return A, B
+
+
+def test_drift_test_alarms_only_beyond_the_combined_radius():
+    rng = np.random.default_rng(5)
+    R = _rot(30.0)
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2 = 2 * (1 - math.cos(math.radians(0.2)))
+    A, B = _window(R, 40, 0.2, rng)
+    alarm, angle, thr = drift_test(R, cov, s2, A, B, min_excitation_deg=1.0)
+    assert not alarm and angle < thr < math.inf
+    A, B = _window(R, 40, 0.2, rng, shift=_rot(3.0, (0, 0, 1)))
+    alarm, angle, thr = drift_test(R, cov, s2, A, B, min_excitation_deg=1.0)
+    assert alarm and angle == pytest.approx(3.0, abs=0.3) and angle > thr
+    # the threshold is the combined radius of the estimate's covariance and the window's
+    alarm2, angle2, thr2 = drift_test(R, 4 * cov, s2, A, B, min_excitation_deg=1.0)
+    assert angle2 == angle and thr2 > thr
+    assert drift_test(R, None, s2, A, B, min_excitation_deg=1.0)[0] is False
+    assert drift_test(R, None, s2, A, B, min_excitation_deg=1.0)[2] == math.inf
+    single = np.stack([_rot(20.0 + k, (0, 0, 1)) for k in range(10)])
+    alarm, angle, thr = drift_test(R, cov, s2, single, np.swapaxes(R, -1, -2) @ single @ R, min_excitation_deg=1.0)
+    assert (alarm, math.isnan(angle), thr) == (False, True, math.inf)
+
+
+def _detector(**kw):
+    args = dict(k=2.0, h=30.0, cap=10.0, reference_rate=0.25, confirm_pairs=10, max_confirm_pairs=60, drift_pairs=50,
+                min_excitation_deg=1.0, noise_floor_deg=0.01, d2_floor=1e-9)
+    args.update(kw)
+    return ChangeDetector(**args)
+
+
+def test_cusum_arithmetic_reference_level_and_onset():
+    d = _detector()
+    assert (d.armed, math.isnan(d.level), d.cusum, d.checking, d.target) == (False, True, 0.0, False, 10)
+    d.arm(1e-12, 5)  # below the floor: the floor
+    assert (d.armed, d.level, d.cusum, d.onset) == (True, 1e-9, 0.0, 5)
+    d.arm(2.0, 5)
+    A = B = np.eye(3)
+    # z = d2 / level; cusum += min(z, cap) - k, floored at 0; the level follows while cusum <= h / 3
+    assert d.observe(A, B, 2.0, 5, None, None, None) == (True, False)  # z = 1: cusum stays 0
+    assert d.cusum == 0.0 and d.onset == 6 and d.level == 2.0
+    d.observe(A, B, 10.0, 6, None, None, None)  # z = 5: cusum 3, level += 0.25 (10 - 2)
+    assert d.cusum == 3.0 and d.level == 4.0 and d.onset == 6
+    d.observe(A, B, 4.0 * 12, 7, None, None, None)  # z = 12 > cap: counts cap, held out; cusum 11 > h / 3: level kept
+    assert d.cusum == 11.0 and d.level == 4.0
+    assert [h for _, _, h in d.since_onset] == [False, True] and len(d.recent) == 2
+    level = d.level
+    d.observe(A, B, level * 10.0, 8, None, None, None)  # z = cap exactly: not held; cusum 19 > h / 3: level frozen
+    assert d.cusum == 19.0 and d.level == level and [h for _, _, h in d.since_onset][-1] is False
+    d.observe(A, B, level * 10.0, 9, None, None, None)  # 27
+    assert not d.checking
+    d.observe(A, B, level * 5.0, 10, None, None, None)  # 30 = h: not yet
+    assert d.cusum == 30.0 and not d.checking
+    d.observe(A, B, level * 2.5, 11, None, None, None)  # 30.5 > h: alarm
+    assert d.checking and d.alarm_pair == 11 and d.source == "cusum" and d.target == 10 and d.window == []
+    assert d.observe(A, B, 1.0, 12, None, None, None) == (False, False)
+    for k in range(8):
+        d.observe(A, B, 1.0, 13 + k, None, None, None)
+    assert d.observe(A, B, 1.0, 21, None, None, None) == (False, True) and len(d.window) == 10
+
+
+def test_the_level_follows_exactly_at_a_third_of_h():
+    d = _detector(h=30.0, k=0.0, cap=100.0)
+    d.arm(1.0, 0)
+    d.observe(np.eye(3), np.eye(3), 10.0, 0, None, None, None)  # cusum 10 = h / 3: the level still follows
+    assert d.cusum == 10.0 and d.level == pytest.approx(1.0 + 0.25 * 9.0)
+
+
+def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pairs():
+    rng = np.random.default_rng(9)
+    R = _rot(30.0)
+    shift = _rot(4.0, (0, 0, 1))
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2 = 2 * (1 - math.cos(math.radians(0.2)))
+    d = _detector(drift_pairs=30, max_confirm_pairs=60, k=0.9)  # z = 1: the CUSUM creeps up (0.1 a pair), far below h
+    d.arm(1.0, 0)
+    A, B = _window(R, 40, 0.2, rng, shift=shift)
+    for j in range(29):
+        d.observe(A[j], B[j], 1.0, j, R, cov, s2)
+    assert not d.checking and d.since_drift == 29
+    d.observe(A[29], B[29], 1.0, 29, R, cov, s2)  # 30 pairs: the window is full and half of it new
+    # a drift is confirmed on half the drift window (15 pairs), not on confirm_pairs (10)
+    assert d.checking and d.source == "drift" and d.alarm_pair == 29 and d.target == 15 and d.since_drift == 0
+    assert type(d.target) is int
+    d2 = _detector(drift_pairs=20, k=0.9)
+    d2.arm(1.0, 0)
+    A2, B2 = _window(R, 40, 0.2, rng)
+    for j in range(40):
+        d2.observe(A2[j], B2[j], 1.0, j, R, cov, s2)
+    assert not d2.checking and d2.since_drift == 0  # tested at 20, 30 and 40 pairs, no alarm
+
+
+from replication.online_events import NOISE_Z, classify  # noqa: E402
+
+CAP, FLOOR = 10.0, 1e-9
+
+
+def _classify(R_old, A, B, *, cov_deg=0.05, noise_deg=0.2, m=None):
+    sigma = math.radians(noise_deg)  # per axis: a pair's d^2 is about sigma^2 chi^2_3, mean 3 sigma^2
+    s2 = 1.5 * sigma ** 2            # the estimate's mean square residual (half the mean d^2)
+    m = 3 * sigma ** 2 if m is None else m
+    cov = np.eye(3) * np.radians(cov_deg) ** 2
+    return classify(R_old, cov, s2, m, A, B, cap=CAP, min_excitation_deg=1.0, d2_floor=FLOOR), s2, m
+
+
+def test_classify_a_remount_and_every_number_it_returns():
+    rng = np.random.default_rng(11)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(5.0, (0, 0, 1))
+    A, B = _window(new, 20, 0.2, rng)
+    info, s2, m = _classify(R_old, A, B)
+    assert info["kind"] == "remount" and info["undecided"] is False
+    assert so3.angle_between_deg(info["R_new"], new) < 0.3
+    assert info["angle_deg"] == pytest.approx(float(so3.angle_between_deg(R_old, info["R_new"])))
+    assert 0 < info["threshold_deg"] < 1.0
+    assert info["keep"].all() and info["keep"].shape == (20,)
+    assert np.array_equal(info["z_old"], pair_d2(R_old, A, B) / m)
+    assert np.array_equal(info["z_new"], pair_d2(info["R_new"], A, B) / m)
+    assert info["median_z_before"] == float(np.median(info["z_old"]))
+    assert info["median_z_after"] == float(np.median(info["z_new"]))
+    assert info["level_new"] == max(float(np.mean(pair_d2(info["R_new"], A, B))), FLOOR)
+
+
+def test_classify_pairs_that_fit_the_old_estimate_are_outliers_not_a_change():
+    rng = np.random.default_rng(12)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 20, 0.15, rng)  # a little below the old noise level (0.2 deg)
+    info, _, _ = _classify(R_old, A, B)
+    assert info["kind"] == "outliers" and info["median_z_before"] <= NOISE_Z
+    # a few gross pairs among fitting ones: outliers
+    B2 = B.copy()
+    B2[:3] = B2[:3] @ _rot(30.0, (1, 0, 0))
+    info, _, _ = _classify(R_old, A, B2)
+    assert info["kind"] == "outliers" and (info["z_old"] > CAP).sum() == 3
+
+
+def test_classify_a_higher_noise_is_a_noise_change():
+    rng = np.random.default_rng(13)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 30, 0.8, rng)  # four times the old noise: d^2 / m about 16
+    info, _, _ = _classify(R_old, A, B)
+    assert info["kind"] == "noise_change" and info["median_z_after"] > NOISE_Z
+
+
+def test_classify_a_better_fit_within_the_radius_is_new_information():
+    rng = np.random.default_rng(14)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(0.3, (0, 1, 0))
+    A, B = _window(new, 30, 0.1, rng)
+    # a poorly known old estimate (1 deg per axis): 0.3 deg is within the combined radius, yet the window fits the
+    # new rotation far better than the old one at the noise level
+    info, _, _ = _classify(R_old, A, B, cov_deg=1.0, noise_deg=0.1)
+    assert info["angle_deg"] < info["threshold_deg"]
+    assert info["median_z_before"] > NOISE_Z >= info["median_z_after"]
+    assert info["kind"] == "new_information"
+    assert info["undecided"] is (info["angle_deg"] > 0.5 * info["threshold_deg"])
+
+
+def _armed(level, **kw):
+    d = _detector(reference_rate=1 / 30, confirm_pairs=10, **kw)
+    d.arm(level, 0)
+    return d
+
+
+def test_decide_a_remount_keeps_the_pairs_that_fit_the_new_estimate_and_resets():
+    rng = np.random.default_rng(21)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(5.0, (0, 0, 1))
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    d = _armed(m)
+    A, B = _window(new, 40, 0.2, rng)
+    k = 0
+    while not d.checking:
+        d.observe(A[k], B[k], float(pair_d2(R_old, A[k:k + 1], B[k:k + 1])[0]), k, R_old, cov, s2)
+        k += 1
+    alarm_at, held = k - 1, [h for _, _, h in d.since_onset]
+    assert d.alarm_pair == alarm_at and d.source == "cusum"
+    while True:
+        add, ready = d.observe(A[k], B[k], 0.0, k, R_old, cov, s2)
+        assert add is False
+        k += 1
+        if ready:
+            break
+    assert len(d.window) == 10
+    out = d.decide(R_old, cov, s2, k - 1)
+    ev = out["event"]
+    assert out["restart"] is True and out["rearm"] is False and ev.kind == "remount"
+    assert (ev.pair, ev.alarm_pair, ev.source, ev.window_pairs) == (k - 1, alarm_at, "cusum", 10)
+    assert out["held_before"] == sum(held)
+    assert len(out["kept"]) + ev.pairs_dropped == len(held) + 10  # the pairs since the onset and the window
+    assert ev.pairs_dropped == 0  # they all fit the new estimate
+    assert np.array_equal(ev.R_before, R_old) and so3.angle_between_deg(ev.R_after, new) < 0.5
+    assert so3.angle_between_deg(out["R_new"], ev.R_after) == 0.0
+    assert ev.message.startswith("the 10 pairs after the alarm agree on a new R0 ")
+    assert ev.angle_deg > ev.threshold_deg and ev.median_z_before > ev.median_z_after
+    assert d.armed is False and d.checking is False and d.window == [] and len(d.recent) == len(out["kept"])
+
+
+def test_decide_outliers_drops_the_held_pairs_and_carries_on():
+    rng = np.random.default_rng(22)
+    R_old = _rot(30.0)
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    d = _armed(m)
+    A, B = _window(R_old, 40, 0.15, rng)
+    B[3:8] = B[3:8] @ _rot(20.0, (1, 0, 0))  # five gross outliers in a row: the CUSUM rises by cap - k each
+    k = 0
+    while not d.checking:
+        d.observe(A[k], B[k], float(pair_d2(R_old, A[k:k + 1], B[k:k + 1])[0]), k, R_old, cov, s2)
+        k += 1
+    onset, level = d.onset, d.level  # the reference level stands while the window fills
+    held = sum(h for _, _, h in d.since_onset)
+    assert held == 4 and d.alarm_pair == 6  # 8 x 4 = 32 > h at the fourth outlier (pair 6)
+    out = None
+    while out is None:
+        _, ready = d.observe(A[k], B[k], 0.0, k, R_old, cov, s2)
+        k += 1
+        if ready:
+            out = d.decide(R_old, cov, s2, k - 1)
+    ev = out["event"]
+    assert ev.kind == "outliers" and out["restart"] is False and out["rearm"] is False
+    assert ev.onset_pair == onset == 3 and out["held_before"] == 4
+    assert ev.pairs_dropped == 5  # the four held before the alarm and the one in the window
+    assert len(out["kept"]) == 4 + 10 - 5
+    assert ev.message.endswith(f"outlier pairs, 5 kept out") and ev.R_after is not ev.R_before
+    assert np.array_equal(ev.R_after, R_old) or so3.angle_between_deg(ev.R_after, R_old) < 0.5
+    assert (d.checking, d.window, d.cusum, d.level, d.onset, d.since_drift) == (False, [], 0.0, level, k, 0)
+    assert d.armed is True and len(d.since_onset) == 0
+
+
+from replication.online_events import TRIM_FACTOR, _excitation_deg, chi2_quantile as _chi2, solve_window  # noqa: E402
+
+
+def test_excitation_of_a_window():
+    rng = np.random.default_rng(31)
+    B = so3.random_rotations(rng, 12)
+    deg, G = _excitation_deg(B)
+    G_ref = 2 * 12 * np.eye(3) - B.sum(0) - B.sum(0).T
+    assert np.allclose(G, G_ref)
+    assert deg == pytest.approx(math.degrees(math.sqrt(np.linalg.eigvalsh(G_ref)[0] / 12)))
+    Bz = so3.exp_map(np.radians(rng.uniform(10, 40, 8))[:, None] * np.array([0.0, 0.0, 1.0]))
+    assert _excitation_deg(Bz)[0] == pytest.approx(0.0, abs=1e-5)
+
+
+def test_solve_window_trims_solves_and_gives_the_covariance():
+    rng = np.random.default_rng(32)
+    R = _rot(30.0)
+    A, B = _window(R, 20, 0.3, rng)
+    B[:3] = B[:3] @ _rot(40.0, (1, 0, 0))  # three outliers: trimmed
+    floor = 1e-12
+    Rw, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=floor, d2_floor=1e-12)
+    assert keep.tolist() == [False] * 3 + [True] * 17 and keep.dtype == bool
+    assert so3.angle_between_deg(Rw, R) < 0.3
+    d2 = pair_d2(Rw, A[keep], B[keep])
+    s2 = float(np.mean(d2)) / 2.0 * 17 / 14.0
+    G = 2 * 17 * np.eye(3) - B[keep].sum(0) - B[keep].sum(0).T
+    assert np.allclose(cov, (s2 / 3.0) * np.linalg.inv(G), rtol=1e-6)
+    # the estimate's own level is a floor
+    _, _, cov2 = solve_window(A, B, min_excitation_deg=1.0, s2_floor=10 * s2, d2_floor=1e-12)
+    assert np.allclose(cov2, (10 * s2 / 3.0) * np.linalg.inv(G), rtol=1e-6)
+    # the trim bound: d^2 up to TRIM_FACTOR times the consensus median
+    assert np.all(pair_d2(Rw, A, B)[keep] <= TRIM_FACTOR * np.median(pair_d2(Rw, A, B)) * 1.5)
+
+
+def test_solve_window_gives_no_covariance_without_enough_pairs_or_excitation():
+    rng = np.random.default_rng(33)
+    R = _rot(30.0)
+    A, B = _window(R, 12, 0.3, rng)
+    _, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert cov is not None and keep.all()
+    exc = _excitation_deg(B)[0]
+    assert solve_window(A, B, min_excitation_deg=exc * 1.0001, s2_floor=1e-12, d2_floor=1e-12)[2] is None
+    assert solve_window(A, B, min_excitation_deg=exc * 0.9999, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
+    Az = so3.exp_map(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
+    Rz, keep, cov = solve_window(Az, R.T @ Az @ R, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert cov is None and np.array_equal(Rz, np.eye(3)) and keep.all() and keep.shape == (12,)
+
+
+def test_a_remount_needs_the_window_to_misfit_the_old_estimate_at_its_level():
+    rng = np.random.default_rng(34)
+    R_old = _rot(30.0)
+    new = R_old @ _rot(1.5, (0, 0, 1))
+    A, B = _window(new, 20, 0.2, rng)
+    sigma = math.radians(0.2)
+    m = 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.02) ** 2
+    S = float(np.sum(pair_d2(R_old, A, B)))
+    edge = 1.5 * S / _chi2(0.9, 3 * 20)  # the old level at which the window's misfit is exactly the 90 % quantile
+    kinds = []
+    for s2_old in (edge * 0.999, edge * 1.001):
+        info = classify(R_old, cov, s2_old, m, A, B, cap=1e9, min_excitation_deg=1.0, d2_floor=FLOOR)
+        assert info["keep"].all() and info["angle_deg"] > info["threshold_deg"]
+        kinds.append(info["kind"])
+    assert kinds[0] == "remount" and kinds[1] != "remount"

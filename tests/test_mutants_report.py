@@ -1,0 +1,168 @@
+"""What a calibration reports (:mod:`replication.report`): strict JSON (``json_safe``), every field of ``to_dict`` and
+every line of ``summary``, for streams and static poses, with and without a change test, a reference, an offset.
+Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from replication import __version__
+from replication.motions import MotionObservability
+from replication.quality import Reason, Verdict
+from replication.report import OFFSET_CONVENTION, RADIUS_COVERS, CalibrationResult, json_safe
+
+OBS = MotionObservability(kron_singular_values=np.ones(9), spectral_ratio=np.float64(0.5), two_step_rate=0.9,
+                          camera_axis_spread_deg=np.float64(12.34), sensor_axis_spread_deg=np.float64(11.0),
+                          camera_rms_motion_deg=20.0, symmetric_gap=0.3, inconsistency=0.01)
+R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _result(**kw):
+    base = dict(R=R, quaternion_wxyz=np.array([0.5, 0.5, 0.5, 0.5]), euler_zyx_deg=np.array([90.0, 1.5, -2.25]),
+                method="chordal_optimal", interval_s=0.5, n_pairs=42, time_offset_s=0.0123,
+                time_offset_correlation=0.98765, time_offset_applied=True,
+                residual_deg={"mean": 0.2, "median": 0.125, "rms": 0.25, "p95": 0.5, "max": 1.0},
+                bootstrap_ci95_deg=0.3456, observability=OBS)
+    base.update(kw)
+    return CalibrationResult(**base)
+
+
+def test_json_safe_makes_native_types_and_nulls():
+    got = json_safe({1: np.float32(1.5), "a": (np.int64(3), [np.nan, np.inf, -np.inf, 2.0]), "b": np.bool_(True),
+                     "c": np.array([[1, 2]]), "d": None, "e": "s", "f": True, "g": 7, "h": np.float64(np.nan)})
+    assert got == {"1": 1.5, "a": [3, [None, None, None, 2.0]], "b": True, "c": [[1, 2]], "d": None, "e": "s",
+                   "f": True, "g": 7, "h": None}
+    assert type(got["a"][0]) is int and type(got["b"]) is bool and type(got["1"]) is float
+    assert type(got["c"][0][0]) is int and type(got["f"]) is bool and type(got["g"]) is int
+    json.dumps(got, allow_nan=False)
+
+
+def test_to_dict_holds_every_field():
+    reason = Reason("n_pairs", "warning", 42.0, 30.0, "m")
+    res = _result(verdict=Verdict.of([reason]), warnings=("W: x",), parameters={"p": 1}, inputs={"i": 2},
+                  reference_error_deg=0.75, time_offset_ci95_s=(0.01, np.inf), time_offset_peak_margin=0.4,
+                  bootstrap_resamples="pairs in moving blocks of 4", pose_residual_median_deg=[0.1, np.nan],
+                  change_test={"run": False, "note": "n"}, online={"o": 1})
+    d = res.to_dict()
+    assert d == {
+        "package": {"name": "replication", "version": __version__},
+        "R0_camera_from_sensor": R.tolist(),
+        "quaternion_wxyz": [0.5, 0.5, 0.5, 0.5],
+        "euler_zyx_deg": {"yaw": 90.0, "pitch": 1.5, "roll": -2.25},
+        "conventions": "R0 maps sensor-frame vectors into the camera frame (A_j R0 = R0 B_j); quaternion scalar "
+                       "first; Euler intrinsic z-y'-x'' (yaw, pitch, roll)",
+        "verdict": {"level": "warning", "reasons": [reason.to_dict()]},
+        "warnings": ["W: x"],
+        "method": "chordal_optimal",
+        "parameters": {"p": 1},
+        "inputs": {"i": 2},
+        "interval_s": 0.5,
+        "n_pairs": 42,
+        "time_offset_s": 0.0123,
+        "time_offset_correlation": 0.98765,
+        "time_offset_applied": True,
+        "time_offset_convention": OFFSET_CONVENTION,
+        "time_offset_ci95_s": [0.01, None],
+        "time_offset_peak_margin": 0.4,
+        "residual_deg": {"mean": 0.2, "median": 0.125, "rms": 0.25, "p95": 0.5, "max": 1.0},
+        "bootstrap_ci95_deg": 0.3456,
+        "bootstrap_resamples": "pairs in moving blocks of 4",
+        "bootstrap_covers": RADIUS_COVERS,
+        "pose_residual_median_deg": [0.1, None],
+        "change_test": {"run": False, "note": "n"},
+        "online": {"o": 1},
+        "observability": {"spectral_ratio": 0.5, "camera_axis_spread_deg": 12.34, "sensor_axis_spread_deg": 11.0},
+        "reference_error_deg": 0.75,
+    }
+    json.dumps(d, allow_nan=False)
+
+
+def test_to_dict_rounds_the_rotation_to_12_digits():
+    c, s = 0.123456789012345, math.sqrt(1 - 0.123456789012345 ** 2)
+    Rf = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    q = np.array([0.987654321098765, 0.0, 0.0, math.sqrt(1 - 0.987654321098765 ** 2)])
+    d = _result(R=Rf + 1e-13, quaternion_wxyz=q + 1e-13).to_dict()
+    assert d["R0_camera_from_sensor"] == np.round(Rf + 1e-13, 12).tolist()
+    assert d["R0_camera_from_sensor"][0][0] == 0.123456789012
+    assert d["quaternion_wxyz"] == np.round(q + 1e-13, 12).tolist() and d["quaternion_wxyz"][0] == 0.987654321099
+
+
+def test_summary_of_a_stream_calibration_line_by_line():
+    res = _result(verdict=Verdict.of([Reason("x", "warning", 1.0, 2.0, "a reason")]),
+                  time_offset_ci95_s=(0.0101, 0.0145), reference_error_deg=0.5,
+                  bootstrap_resamples="pairs in moving blocks of 4",
+                  change_test={"run": True, "split_time_s": 12.34, "angle_deg": 0.1234, "significant": False,
+                               "p_value": 0.25})
+    assert res.summary().split("\n") == [
+        "verdict: WARNING",
+        "  warning: a reason",
+        "R0 (camera_from_sensor), chordal_optimal, 42 pairs at 0.5 s:",
+        "  [+0.000000  -1.000000  +0.000000]",
+        "  [+1.000000  +0.000000  +0.000000]",
+        "  [+0.000000  +0.000000  +1.000000]",
+        "quaternion (w, x, y, z): [0.5 0.5 0.5 0.5]",
+        "yaw / pitch / roll (z-y'-x''): 90.000 / 1.500 / -2.250 deg",
+        "time offset: +12.30 ms: the sensor sample stamped t + 12.30 ms matches the camera sample stamped t (sensor "
+        "clock ahead of the camera's by 12.30 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift) (95 % interval "
+        "[+10.10, +14.50] ms, correlation 0.9877, applied)",
+        "pair residuals: median 0.125 deg, rms 0.250 deg",
+        f"bootstrap 95% radius: 0.346 deg (resampling pairs in moving blocks of 4); it covers {RADIUS_COVERS}",
+        "axis spread camera 12.3 deg",
+        "change test: R0 before and after 12.3 s differ by 0.123 deg, within their noise (p = 0.25)",
+        "angle to the reference: 0.500 deg",
+    ]
+
+
+def test_summary_prints_the_quaternion_to_six_decimals():
+    q = np.array([0.123456789, 0.2, 0.3, 0.923456789])
+    line = next(x for x in _result(quaternion_wxyz=q).summary().split("\n") if x.startswith("quaternion"))
+    assert line == "quaternion (w, x, y, z): [0.123457 0.2      0.3      0.923457]"
+
+
+def test_summary_variants():
+    lines = _result(time_offset_applied=False, time_offset_ci95_s=(math.nan, 0.02), bootstrap_ci95_deg=math.nan,
+                    change_test={"run": True, "split_time_s": 3.0, "angle_deg": 2.0, "significant": True,
+                                 "p_value": 1e-5}).summary().split("\n")
+    assert lines[0] == "verdict: OK"
+    offset = next(line for line in lines if line.startswith("time offset: "))
+    assert offset.endswith(" (95 % interval [+nan, +20.00] ms, correlation 0.9877, not applied)")
+    assert "bootstrap 95% radius: not available (resampling none); it covers " in "\n".join(lines)
+    assert lines[-1] == "change test: R0 before and after 3.0 s differ by 2.000 deg, beyond their noise (p = 1e-05)"
+    lines = _result(time_offset_ci95_s=(-math.inf, math.inf), change_test={"run": False, "note": "too short"})\
+        .summary().split("\n")
+    offset = next(line for line in lines if line.startswith("time offset: "))
+    assert offset.endswith("shift) (correlation 0.9877, applied)")
+    assert lines[-1] == "change test: too short"
+    assert not any(line.startswith("angle to the reference") for line in lines)
+
+
+def test_summary_of_static_poses_has_no_clock():
+    lines = _result(interval_s=math.nan, time_offset_s=math.nan, time_offset_correlation=math.nan).summary().split("\n")
+    assert "R0 (camera_from_sensor), chordal_optimal, 42 pairs of static poses:" in lines
+    assert not any(line.startswith("time offset") or line.startswith("change test") for line in lines)
+
+
+def test_defaults_of_a_result():
+    res = _result()
+    assert res.verdict.level == "ok" and res.verdict.reasons == ()
+    assert res.bootstrap_resamples == "none" and res.bootstrap_covers == RADIUS_COVERS
+    assert res.warnings == () and res.parameters == {} and res.inputs == {} and res.diagnostics == {}
+    assert all(math.isnan(v) for v in res.time_offset_ci95_s) and math.isnan(res.time_offset_peak_margin)
+    assert res.reference_error_deg is None and res.change_test is None and res.online is None
+
+
+def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from replication import figures
+    from replication._io import png_bytes
+
+    fig = Figure(figsize=(2, 1))
+    fig.add_subplot().plot([0, 1], [0, 1])
+    monkeypatch.setattr(figures, "calibration_figure", lambda res: fig)
+    monkeypatch.chdir(tmp_path)
+    assert _result().plot() is fig and list(tmp_path.iterdir()) == []
+    assert _result().plot(tmp_path / "f.png") is fig
+    data = (tmp_path / "f.png").read_bytes()
+    assert data == png_bytes(fig, dpi=110) and data != png_bytes(fig, dpi=100)
