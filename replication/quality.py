@@ -210,7 +210,8 @@ def _quaternion(R) -> str:
 def _outlying_poses(medians):
     """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
     factor = THRESHOLDS["pose_residual_ratio"][0]
-    base = float(np.nanmedian(medians))
+    finite = np.isfinite(medians)
+    base = float(np.median(np.asarray(medians)[finite])) if finite.any() else np.nan  # no station: nothing to compare
     if not base > 0:
         return None
     ratio = medians / base
