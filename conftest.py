@@ -1,6 +1,8 @@
 """Test-session set-up.
 
 * Notebooks run under nbval write results/ into a temporary folder.
+* Under pytest-xdist (``scripts/test`` runs two workers with ``--dist loadgroup``) every cell of a notebook
+  goes to the same worker, in order: one kernel runs the notebook from top to bottom.
 * Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
   reason, when the real-data folder (``$REPLICATION_REAL_DATA`` or ``../shared/data/real``)
   is absent.
@@ -20,6 +22,10 @@ def pytest_collection_modifyitems(config, items):
     from replication.__main__ import needs_real_data
     from replication.realdata import data_root, real_data_available
 
+    if config.pluginmanager.hasplugin("xdist"):
+        for item in items:
+            if item.path.suffix == ".ipynb":  # nbval cells share one kernel: one xdist worker per notebook
+                item.add_marker(pytest.mark.xdist_group(item.path.name))
     if real_data_available():
         return
     try:

@@ -1,10 +1,10 @@
 """Stored notebook outputs hold on another machine: strict nbval under other BLAS kernels, one thread, Agg.
 
-Re-executes every notebook in a subprocess with OpenBLAS forced to another CPU's kernels
+Re-executes every notebook (one test per notebook, so that two xdist workers share them) in a subprocess with OpenBLAS forced to another CPU's kernels
 (``OPENBLAS_CORETYPE=Sandybridge``: no FMA, other summation order), one thread, and ``MPLBACKEND=Agg``
 (a common CI setting), and compares every stored output as the normal nbval run does. A stored digit that
 depends on last-bit rounding (a diverging or chaotic computation printed as digits) fails here.
-Deselect with ``-m "not portability"`` (about 90 s).
+Deselect with ``-m "not portability"`` (as long as the normal nbval run: notebooks 07 and 08 take 2-3 min each).
 """
 import os
 import subprocess
@@ -18,11 +18,21 @@ OTHER_MACHINE = {"OPENBLAS_CORETYPE": "Sandybridge", "OMP_NUM_THREADS": "1", "OP
                  "MKL_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
 
 
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+
+
+def test_every_numbered_notebook_is_rerun():
+    assert [p.name[:2] for p in NOTEBOOKS] == [f"{k:02d}" for k in range(1, len(NOTEBOOKS) + 1)]
+    assert len(NOTEBOOKS) >= 8
+
+
 @pytest.mark.portability
-def test_every_notebook_passes_strict_nbval_on_other_blas_kernels_one_thread_and_agg(tmp_path):
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_the_notebook_passes_strict_nbval_on_other_blas_kernels_one_thread_and_agg(notebook, tmp_path):
     env = {**os.environ, **OTHER_MACHINE, "REPLICATION_RESULTS_DIR": str(tmp_path)}
     out = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "notebooks"],
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+         str(notebook.relative_to(ROOT))],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=1800,
     )
     tail = "\n".join(out.stdout.splitlines()[-40:])
