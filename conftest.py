@@ -1,8 +1,9 @@
 """Test-session set-up.
 
 * Notebooks run under nbval write results/ into a temporary folder.
-* Under pytest-xdist (``scripts/test`` runs two workers with ``--dist loadgroup``) every cell of a notebook
-  goes to the same worker, in order: one kernel runs the notebook from top to bottom.
+* Under pytest-xdist, ``scripts/test`` runs two workers with ``--dist loadfile``: every cell of a notebook goes
+  to the same worker, in order, so one kernel runs the notebook from top to bottom. (``loadgroup`` with
+  ``xdist_group`` marks does not group with pytest 9, whose node ids xdist 3.8 cannot suffix.)
 * Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
   reason, when the real-data folder (``$REPLICATION_REAL_DATA`` or ``../shared/data/real``)
   is absent.
@@ -22,10 +23,6 @@ def pytest_collection_modifyitems(config, items):
     from replication.__main__ import needs_real_data
     from replication.realdata import data_root, real_data_available
 
-    if config.pluginmanager.hasplugin("xdist"):
-        for item in items:
-            if item.path.suffix == ".ipynb":  # nbval cells share one kernel: one xdist worker per notebook
-                item.add_marker(pytest.mark.xdist_group(item.path.name))
     if real_data_available():
         return
     try:

@@ -1,6 +1,6 @@
 """Stored notebook outputs hold on another machine: strict nbval under other BLAS kernels, one thread, Agg.
 
-Re-executes every notebook (one test per notebook, so that two xdist workers share them) in a subprocess with OpenBLAS forced to another CPU's kernels
+Re-executes every notebook (one test per notebook, so that a failure names it) in a subprocess with OpenBLAS forced to another CPU's kernels
 (``OPENBLAS_CORETYPE=Sandybridge``: no FMA, other summation order), one thread, and ``MPLBACKEND=Agg``
 (a common CI setting), and compares every stored output as the normal nbval run does. A stored digit that
 depends on last-bit rounding (a diverging or chaotic computation printed as digits) fails here.
