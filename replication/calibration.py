@@ -26,6 +26,8 @@ Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pi
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .association import (estimate_time_offset, motion_pairs, offset_analysis,  # re-exported: public names here
@@ -174,10 +176,31 @@ def _time_unit_reason(camera, sensor):
                   f"--camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by format)")
 
 
-def _same_stream(camera, sensor) -> bool:
-    """Whether the 'sensor' is the camera stream itself (same times, same orientations)."""
-    return (isinstance(sensor, OrientationStream) and len(sensor.t) == len(camera.t)
-            and np.array_equal(sensor.t, camera.t) and np.array_equal(sensor.world_from_body, camera.world_from_body))
+#: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of one recording
+#: (a copy re-saved with fewer digits, a line dropped, times shifted by rounding); real camera and sensor streams
+#: never agree to 0.006 deg sample after sample.
+SAME_SAMPLE_TIME_S, SAME_SAMPLE_ANGLE_RAD = 1e-6, 1e-4
+
+
+def _same_stream(camera, sensor) -> str | None:
+    """Whether the 'sensor' is the camera stream itself: a sentence saying how many samples coincide, or None.
+
+    A copy counts too: at least half of the sensor's samples (and 10) lie within :data:`SAME_SAMPLE_TIME_S` of a
+    camera sample and within :data:`SAME_SAMPLE_ANGLE_RAD` of its orientation (a line dropped, times shifted by a
+    nanosecond, orientations re-saved with 5 decimals)."""
+    if not isinstance(sensor, OrientationStream):
+        return None
+    j = np.clip(np.searchsorted(camera.t, sensor.t), 1, len(camera.t) - 1)
+    j = np.where(np.abs(camera.t[j - 1] - sensor.t) <= np.abs(camera.t[j] - sensor.t), j - 1, j)
+    near = np.abs(camera.t[j] - sensor.t) <= SAME_SAMPLE_TIME_S
+    if near.sum() < max(10, 0.5 * len(sensor.t)):
+        return None
+    cos = (np.einsum("nab,nab->n", camera.world_from_body[j[near]], sensor.world_from_body[near]) - 1.0) / 2.0
+    same = int(np.sum(cos >= math.cos(SAME_SAMPLE_ANGLE_RAD)))
+    if same < max(10, 0.5 * len(sensor.t)):
+        return None
+    return (f"{same} of the sensor's {len(sensor.t)} samples are camera samples (time within "
+            f"{SAME_SAMPLE_TIME_S:g} s, orientation within {math.degrees(SAME_SAMPLE_ANGLE_RAD):.2g} deg)")
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
@@ -289,9 +312,10 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     check_number("max_offset", max_offset, minimum=0)
     if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
         raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
-    if _same_stream(camera, sensor):
-        raise ValueError("the sensor stream is the camera stream itself (same times and orientations): give the "
-                         "sensor's own recording")
+    same = _same_stream(camera, sensor)
+    if same:
+        raise ValueError(f"the sensor stream is the camera stream itself, or a copy of it: {same}; give the "
+                         f"sensor's own recording")
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)

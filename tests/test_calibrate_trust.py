@@ -14,7 +14,7 @@ import pytest
 
 from replication import lab, so3
 from replication.__main__ import main
-from replication.calibration import calibrate, calibrate_poses
+from replication.calibration import _same_stream, calibrate, calibrate_poses
 from replication.datafile import DataFileError
 from replication.quality import EXIT_FAIL, Evidence, judge
 from replication.realdata import data_root, real_data_available
@@ -416,6 +416,30 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
     camera, _, _ = rig
     with pytest.raises(ValueError, match="the sensor stream is the camera stream itself"):
         calibrate(camera, OrientationStream(camera.t, camera.R, "copy"))
+
+
+def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
+    """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
+    recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
+    from replication.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
+    from replication.so3 import exp_map
+
+    camera, _, _ = rig
+    t, R = camera.t, camera.R
+    with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's {len(t) - 1} samples are camera"):
+        calibrate(camera, OrientationStream(t[1:], R[1:], "copy"))
+    turn = exp_map(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
+    with pytest.raises(ValueError, match="the sensor stream is the camera stream itself, or a copy of it"):
+        calibrate(camera, OrientationStream(t + 0.9 * SAME_SAMPLE_TIME_S, R @ turn, "copy"))
+    # just beyond either tolerance, or half of the samples only: not a copy (the calibration runs)
+    assert _same_stream(camera, OrientationStream(t, R @ exp_map(np.array([0.0, 0.0, 1.1 * SAME_SAMPLE_ANGLE_RAD])),
+                                                  "s")) is None
+    assert _same_stream(camera, OrientationStream(t + 1.1 * SAME_SAMPLE_TIME_S, R, "s")) is None
+    n = len(t)
+    half = np.r_[R[: n // 2], R[n // 2:] @ exp_map(np.array([0.0, 0.01, 0.0]))]
+    assert _same_stream(camera, OrientationStream(t, half, "s")) is not None  # exactly half coincide
+    assert _same_stream(camera, OrientationStream(t, np.r_[half[: n // 2 - 1], half[n // 2 - 1:] @
+                                                           exp_map(np.array([0.0, 0.01, 0.0]))], "s")) is None
 
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
