@@ -14,6 +14,7 @@ import numpy as np
 
 from .checks import check_number, check_rotation_matrices
 from .online import OnlineCalibrator
+from .quality import Verdict
 from .report import RADIUS_COVERS
 from .so3 import angle_between_deg, as_quaternion, exp_map, log_map
 
@@ -353,6 +354,9 @@ class LiveRig:
         deciding pair was formed, ``ready_pair_end_s`` when its motion ended)."""
         cal = self.calibrator
         verdict = self.verdict()
+        undecided = cal.unresolved_end()
+        if undecided is not None:  # the stream ended while the detector was undecided: not ready, said
+            verdict = Verdict.of((*verdict.reasons, undecided))
         estimated = bool(self.events) and cal.n_pairs >= cal.min_pairs
         events = []
         for ev in cal.events:
@@ -363,7 +367,7 @@ class LiveRig:
                            "pairs_dropped": ev.pairs_dropped, "message": ev.message})
         status = cal.status()
         return {
-            "ready": bool(cal.ready),
+            "ready": bool(cal.ready) and undecided is None,
             "ready_at_s": None if self.ready_at is None else self.ready_at[1] - t0,
             "ready_pair_end_s": None if self.ready_at is None else self.ready_at[0] - t0,
             "target_deg": cal.target_deg,

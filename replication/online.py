@@ -79,6 +79,10 @@ NOISE_FLOOR_DEG = 0.01
 MIN_EXCITATION_DEG = 1.0
 #: Pairs before the radius, ``ready`` and the change detector mean anything (3 unknowns, noise from J - 3).
 MIN_PAIRS = 10
+#: ``ready`` is withdrawn once this many pairs since the CUSUM last stood at 0 were gross misfits (held out): the
+#: estimate no longer fits what the rig does now, whether a change or outliers (the detector decides which).
+#: Without a change a gross misfit (``d^2`` above 10 times its level) comes about once in 10^5 pairs.
+MISFITS_WITHDRAW_READY = 2
 #: Recent pairs whose residuals and motions the online verdict reads (its medians).
 RECENT_PAIRS = 200
 
@@ -284,7 +288,27 @@ class OnlineCalibrator:
     @property
     def ready(self) -> bool:
         return bool(self.determined and not self._detector.checking and self._radius < self.target_deg
+                    and self._detector.misfits < MISFITS_WITHDRAW_READY
                     and (self._verdict is None or self._verdict.level != "fail"))
+
+    def unresolved_end(self):
+        """A warning :class:`replication.quality.Reason` when the stream stops while the detector is undecided (an
+        alarm being confirmed, or gross misfits since the CUSUM last stood at 0), else None: a change of ``R0``
+        in the last pairs can be neither confirmed nor ruled out."""
+        from .quality import Reason
+
+        d = self._detector
+        if d.checking:
+            return Reason("end_undecided", "warning", float(len(d.window)), float(d.target),
+                          f"the stream ended while an alarm (pair {d.alarm_pair}) was being confirmed, "
+                          f"{len(d.window)} of {d.target} pairs: a change of R0 at the end is neither confirmed nor "
+                          f"ruled out; the estimate is the one before the alarm (record longer)")
+        if d.misfits >= MISFITS_WITHDRAW_READY:
+            return Reason("end_undecided", "warning", float(d.misfits), float(MISFITS_WITHDRAW_READY),
+                          f"the last {len(d.since_onset)} pairs include {d.misfits} that do not fit the estimate "
+                          f"(d^2 above {d.cap:g} x its level; CUSUM {d.cusum:.3g} of {d.h:g}) when the stream "
+                          f"ended: a change of R0 at the end is neither confirmed nor ruled out (record longer)")
+        return None
 
     def _state(self, event) -> OnlineState:
         return OnlineState(self._n, self._R, self._radius, self.ready, event == "remount", event, self.determined,
@@ -357,14 +381,20 @@ class OnlineCalibrator:
         self._warm = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
 
     def _refine(self, max_iterations: int = 30) -> None:
-        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate (warm start), then the radius, the
-        detector's start and the residual checks."""
+        """Newton on SO(3) to the minimiser of eq. (8), then the radius, the detector's start and the residual checks.
+
+        Newton starts from the two-step iterate (warm start) and from the relaxed minimiser of ``K`` (the linear
+        solution projected onto SO(3)); the lower cost wins. From a warm start 150 deg or more from ``R0`` (the
+        identity at the start, for a camera mounted upside down) Newton alone can end at another critical point
+        of eq. (8), about 180 deg away."""
+        from .solvers.classic import relaxed_rotation
         from .solvers.optimal import chordal_newton
 
         K = self.K
         if not self._w:
             return
-        self._R = self._warm = chordal_newton(K, self._warm, max_iterations=max_iterations)[0]
+        R, g = chordal_newton(K, np.stack([self._warm, relaxed_rotation(K)]), max_iterations=max_iterations)[:2]
+        self._R = self._warm = R[int(np.argmax(g))]
         self._refined = True
         cost = self._update_radius()
         if self.determined and (not self._detector.armed or self._rearm):
@@ -484,6 +514,9 @@ class OnlineCalibrator:
                        f"{self._excitation:.3g} deg < {self.min_excitation_deg:g} deg; rotate about other axes")
         if self._detector.checking:
             why.append(f"a change is being confirmed ({len(self._detector.window)} of {self._detector.target} pairs)")
+        elif self._detector.misfits >= MISFITS_WITHDRAW_READY:
+            why.append(f"{self._detector.misfits} recent pairs do not fit the estimate (d^2 above "
+                       f"{self._detector.cap:g} x its level): a change or outliers, not decided yet")
         if not self._radius < self.target_deg:
             why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
         if self._verdict is not None and self._verdict.level == "fail":

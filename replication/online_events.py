@@ -349,6 +349,12 @@ class ChangeDetector:
         self.recent = deque(maxlen=self.drift_pairs)    # the drift test's window: the last pairs added
         self.since_drift = 0
 
+    @property
+    def misfits(self) -> int:
+        """Pairs held out as gross misfits (``d^2`` above ``cap`` times the level) since the CUSUM last stood at 0:
+        the start of a change or of an outlier burst that the CUSUM has not decided yet."""
+        return sum(held for *_, held in self.since_onset) if self.cusum > 0.0 else 0
+
     def arm(self, level: float, index: int) -> None:
         """Start (or restart) at reference level ``level``; ``index`` is the next pair's."""
         self.armed, self.level, self.cusum = True, max(level, self.d2_floor), 0.0

@@ -251,3 +251,50 @@ def test_the_reference_level_stops_following_once_a_change_builds_up(rng, R0):
         oc.update(a[0] @ so3.exp_map(np.radians([0.5, 0.0, 0.0])), b[0])  # an in-between residual
         assert bool(det.level != level) == follows
         a, b = pair_stream(rng, 1, R0)
+
+
+# ------------------------------------------------------------------------------------------------ an undecided end
+
+def test_ready_is_withdrawn_at_the_second_gross_misfit_and_said(rng, R0):
+    """A re-mount shows first as pairs that do not fit: one gross misfit leaves ``ready`` (outliers happen), the
+    second withdraws it, naming the misfits, before the CUSUM decides."""
+    from replication.online import MISFITS_WITHDRAW_READY
+
+    A, B = pair_stream(rng, 300, R0)
+    oc, _ = _feed(A, B)
+    assert oc.ready and oc.unresolved_end() is None
+    R1 = R0 @ so3.exp_map(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
+    A2, B2 = pair_stream(rng, MISFITS_WITHDRAW_READY, R1)
+    oc.update(A2[0], B2[0])
+    assert oc.ready and oc.unresolved_end() is None and not oc.alarms
+    oc.update(A2[1], B2[1])
+    assert not oc.ready and not oc.checking and not oc.alarms
+    assert any("2 recent pairs do not fit the estimate" in w for w in oc.status()["not_ready"])
+    reason = oc.unresolved_end()
+    assert (reason.check, reason.level, reason.measured, reason.threshold) == ("end_undecided", "warning", 2.0, 2.0)
+    assert "a change of R0 at the end is neither confirmed nor ruled out" in reason.message
+
+
+def test_an_alarm_being_confirmed_at_the_end_is_an_undecided_end(rng, R0):
+    A, B = pair_stream(rng, 300, R0)
+    R1 = R0 @ so3.exp_map(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
+    A2, B2 = pair_stream(rng, 8, R1)
+    oc, _ = _feed(np.concatenate([A, A2]), np.concatenate([B, B2]))
+    assert oc.checking and not oc.ready
+    reason = oc.unresolved_end()
+    assert reason.check == "end_undecided" and "was being confirmed" in reason.message
+
+
+def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned():
+    """A 5 deg re-mount 3 s before the end of a 60 s replay (three pairs, too few for the CUSUM to alarm): the
+    summary is not ready and its verdict warns; without the re-mount, ready and no such warning."""
+    from replication.live import replay
+    from replication.simulation import rig_streams
+
+    R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(900), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
+    R = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    late = replay(camera, gyro, OnlineCalibrator(target_deg=0.5), reference=R0, remount=(57.0, R)).attrs["summary"]
+    assert not late["ready"] and late["verdict"]["level"] == "warning" and not late["events"]
+    assert [r["check"] for r in late["verdict"]["reasons"]] == ["end_undecided"]
+    clean = replay(camera, gyro, OnlineCalibrator(target_deg=0.5), reference=R0).attrs["summary"]
+    assert clean["ready"] and clean["verdict"]["level"] == "ok"
