@@ -3,6 +3,7 @@ parabola's vertex, which maxima count, the overlap's ten samples, the offset in 
 an interval and offset, and ``stream_pairs``. Mutation testing (scripts/mutation) found these unguarded by the fast
 tests."""
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -128,3 +129,130 @@ def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_t
         stream_pairs(gyro, Q)
     with pytest.raises(ValueError, match="camera must be an OrientationStream"):
         stream_pairs(cam, omega)
+
+
+# ------------------------------------------------------------------ offset_analysis: parameters, block, interval
+
+def _turning_rig(n_cam=61, dt=0.05, offset=0.0):
+    """A camera at 20 Hz (3 s) and a 200 Hz orientation sensor over a wider span, turning at a varying speed."""
+    def Q(t):
+        t = np.asarray(t, float)
+        return so3.exp_map(np.stack([np.sin(1.3 * t) + 0.5 * t, 0.8 * np.cos(2.1 * t), 0.3 * t * t], axis=-1))
+    tc = np.arange(n_cam) * dt
+    ts = np.arange(-1.0, n_cam * dt + 1.0, 0.005)
+    return OrientationStream(tc, Q(tc), "cam"), OrientationStream(ts, Q(ts + offset), "sen")
+
+
+@pytest.mark.parametrize("name, value, match", [
+    ("n_bootstrap", -1, r"^n_bootstrap must be >= 0, got -1$"),
+    ("seed", -1, r"^seed must be >= 0, got -1$"),
+    ("block_s", 0.0, r"^block_s must be > 0, got 0.0$"),
+    ("resolution", 0.0, r"^resolution must be > 0, got 0.0$"),
+    ("max_offset", -0.1, r"^max_offset must be > 0, got -0.1$"),
+])
+def test_offset_analysis_names_the_parameter_it_refuses(name, value, match):
+    cam, sen = _turning_rig()
+    with pytest.raises(ValueError, match=match):
+        association.offset_analysis(cam, sen, **{name: value})
+
+
+@pytest.fixture
+def replicates(monkeypatch):
+    """offset_analysis with the bootstrap's replicate offsets set by the test; records the block length asked."""
+    state = {"blocks": []}
+
+    def fake(a, rows, x, n_bootstrap, block, rng):
+        state["blocks"].append(block)
+        return state["boot"][:n_bootstrap]
+
+    monkeypatch.setattr(association, "_bootstrap_offsets", fake)
+    return state
+
+
+def test_the_interval_ends_are_order_statistics_at_or_outside_2_5_and_97_5_percent(replicates):
+    cam, sen = _turning_rig()
+    replicates["boot"] = np.random.default_rng(4).permutation(np.arange(200.0))
+    found = association.offset_analysis(cam, sen, n_bootstrap=200)
+    # 2.5 % of 199 gaps is 4.975 -> the 5th smallest (index 4); 97.5 % is 194.025 -> index 195
+    assert found.ci95_s == (4.0, 195.0)
+    boot = np.arange(200.0)
+    boot[0] = np.nan  # a replicate without a peak is left out: 1 .. 199, 2.5 % of 198 gaps is 4.95 -> 5
+    replicates["boot"] = boot
+    assert association.offset_analysis(cam, sen, n_bootstrap=200).ci95_s == (5.0, 195.0)
+    replicates["boot"] = np.array([0.0123])  # one replicate is an interval too
+    assert association.offset_analysis(cam, sen, n_bootstrap=1).ci95_s == (0.0123, 0.0123)
+    found = association.offset_analysis(cam, sen, n_bootstrap=0)
+    assert all(math.isnan(v) for v in found.ci95_s)
+
+
+def test_a_block_holds_block_s_over_the_camera_interval_speeds_at_least_one(replicates):
+    cam, sen = _turning_rig()
+    replicates["boot"] = np.zeros(10)
+    for block_s in (0.001, 0.024, 0.05, 0.074, 0.076, 0.5):
+        association.offset_analysis(cam, sen, n_bootstrap=10, block_s=block_s)
+    assert replicates["blocks"] == [1, 1, 1, 1, 2, 10]
+
+
+def test_the_overlap_must_hold_two_blocks():
+    cam, sen = _turning_rig(n_cam=21)  # 21 camera samples: 20 speeds
+    found = association.offset_analysis(cam, sen, n_bootstrap=4, block_s=0.5)  # blocks of 10: exactly two
+    assert found.block_s == 0.5 and found.n_bootstrap == 4 and np.all(np.isfinite(found.ci95_s))
+    with pytest.raises(ValueError, match=r"^block_s=0\.55 s makes blocks of 11 camera speeds, more than half of the 20 "
+                                         r"in the overlap: use a shorter block_s$"):
+        association.offset_analysis(cam, sen, n_bootstrap=4, block_s=0.55)
+
+
+def test_offset_analysis_defaults_and_its_returned_fields():
+    cam, sen = _turning_rig(offset=0.012)
+    found = association.offset_analysis(cam, sen)
+    assert found.n_bootstrap == 200 and found.block_s == 1.0
+    assert found.ci95_s == association.offset_analysis(cam, sen, n_bootstrap=200, seed=0, block_s=1.0).ci95_s
+    assert found.ci95_s != association.offset_analysis(cam, sen, n_bootstrap=200, seed=1, block_s=1.0).ci95_s
+    offset, corr, (x, y) = association.estimate_time_offset(cam, sen, full_output=True)
+    assert found.offset_s == offset and found.correlation == corr
+    assert np.array_equal(found.curve[0], x) and np.array_equal(found.curve[1], y)
+
+
+# ------------------------------------------------------------------ the bootstrap's replicates
+
+def _spike(n=10, seed=1):
+    """Camera speeds with a spike at sample 0 (and an exact 0 at sample 1), and sensor rows at three offsets: the
+    first matches the spike only, the last matches the rest only, the middle neither."""
+    rng = np.random.default_rng(seed)
+    p = np.concatenate([[0.0, 0.0], rng.standard_normal(n - 2)])
+    e0 = np.eye(n)[0]
+    a = 10.0 * e0 + p
+    rows = np.stack([10.0 * e0 + 0.3, 0.5 * p + rng.standard_normal(n), p])
+    return a, rows, np.array([-0.01, 0.0, 0.01])
+
+
+def test_a_replicate_peaking_at_the_first_or_last_offset_is_minus_or_plus_infinity():
+    a, rows, x = _spike()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a replicate without the spike has a constant first row: 0/0, silently
+        out = association._bootstrap_offsets(a, rows, x, 200, 1, np.random.default_rng(0))
+    # with the spike drawn the first offset matches best (-inf), without it the last (+inf); every sample, the
+    # first too, is drawn with probability 1 - 0.9^10 = 65 % per replicate
+    assert np.all(np.isinf(out))
+    assert 110 <= np.sum(out == -np.inf) <= 150 and np.sum(out == np.inf) == 200 - np.sum(out == -np.inf)
+
+
+def test_a_replicate_peaking_inside_is_refined_near_that_offset():
+    rng = np.random.default_rng(2)
+    a = rng.standard_normal(40)
+    z = rng.standard_normal(40)
+    x = np.arange(5) * 0.001
+    for k in (1, 2, 3):
+        rows = np.stack([a + 0.2 * abs(j - k) * z for j in range(5)])
+        out = association._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
+        assert np.all(np.abs(out - x[k]) < 0.001), (k, out)
+
+
+def test_the_replicates_do_not_depend_on_the_speeds_scale():
+    rng = np.random.default_rng(3)
+    a = rng.standard_normal(40)
+    x = np.arange(5) * 0.001
+    rows = np.stack([a + 0.3 * abs(j - 2.4) * rng.standard_normal(40) for j in range(5)])
+    out = association._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
+    small = association._bootstrap_offsets(1e-3 * a, 1e-3 * rows, x, 30, 4, np.random.default_rng(0))
+    assert np.allclose(small, out, rtol=0, atol=1e-12)
