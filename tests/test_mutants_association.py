@@ -256,3 +256,61 @@ def test_the_replicates_do_not_depend_on_the_speeds_scale():
     out = association._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
     small = association._bootstrap_offsets(1e-3 * a, 1e-3 * rows, x, 30, 4, np.random.default_rng(0))
     assert np.allclose(small, out, rtol=0, atol=1e-12)
+
+
+# ------------------------------------------------------------------ motion_pairs: which samples pair
+
+def _dyadic_streams(tc, w=(0.4, 0.9, -0.3), sensor_t=None):
+    """A camera at times ``tc`` and a sensor (at ``sensor_t``, default the camera's own stamps) turning at ``w``."""
+    w = np.asarray(w)
+    ts = np.asarray(tc if sensor_t is None else sensor_t, float)
+    tc = np.asarray(tc, float)
+    return OrientationStream(tc, so3.exp_map(tc[:, None] * w), "cam"), OrientationStream(ts, so3.exp_map(ts[:, None] * w))
+
+
+def test_camera_samples_at_the_sensor_s_first_and_last_stamps_are_inside():
+    cam, sen = _dyadic_streams(np.arange(40) * 0.0625)  # the sensor stamps are the camera's: both ends shared
+    _, _, t = motion_pairs(cam, sen, 0.25)
+    assert np.array_equal(t, np.arange(36) * 0.0625)  # pairs (0, 4) .. (35, 39): the first and last samples pair
+
+
+def test_pairs_at_one_and_a_half_steps_take_the_later_sample_within_the_inclusive_half_step():
+    cam, sen = _dyadic_streams(np.arange(20) * 0.0625)
+    A, _, t = motion_pairs(cam, sen, 1.5 * 0.0625)  # equidistant from 1 and 2 steps, half a step from both
+    w = np.array([0.4, 0.9, -0.3])
+    assert np.array_equal(t, np.arange(19) * 0.0625)  # the 19th's only neighbour is one step on, at the tolerance
+    assert np.allclose(A[:18], so3.exp_map(np.broadcast_to(-2 * 0.0625 * w, (18, 3))), atol=1e-12)
+    assert np.allclose(A[18], so3.exp_map(-0.0625 * w), atol=1e-12)
+
+
+def test_an_interval_nearer_the_sample_itself_pairs_nothing():
+    cam, sen = _dyadic_streams(np.arange(20) * 0.0625)
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.01 s \(streams overlap 1\.19 s\)$"):
+        motion_pairs(cam, sen, 0.01)
+
+
+def test_the_first_sample_pairs_only_with_its_nearest_neighbour_at_the_interval():
+    # irregular stamps: the median step is 0.05 (tolerance 0.025); 0.009 s after sample 0 is nearest sample 0 itself
+    tc = np.array([0.0, 0.02, 0.03, 0.04, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5])
+    cam, sen = _dyadic_streams(tc, sensor_t=np.arange(-0.5, 1.0, 0.005))
+    _, _, t = motion_pairs(cam, sen, 0.009)
+    assert np.allclose(t, [0.02, 0.03, 0.04])
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no sample inside: NumPy's median of no steps warns first
+def test_too_few_pairs_says_the_overlap_of_the_streams():
+    cam, sen = _dyadic_streams(1.0 + np.arange(40) * 0.05, sensor_t=np.arange(0.0, 4.0, 0.01))
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s \(streams overlap 1\.95 s\)$"):
+        motion_pairs(cam, sen, 1.95)
+    elsewhere = OrientationStream(np.arange(10.0, 11.0, 0.01), so3.exp_map(np.zeros((100, 3))))
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.25 s \(streams overlap 0\.00 s\)$"):
+        motion_pairs(cam, elsewhere, 0.25)
+
+
+def test_orientations_off_orthogonal_by_a_few_millionths_still_pair():
+    tc = np.arange(20) * 0.0625
+    R = so3.exp_map(tc[:, None] * np.array([0.4, 0.9, -0.3])) * (1.0 + 2e-6)  # ||R^T R - I||_F ~ 7e-6 < 1e-5
+    cam = OrientationStream(tc, R, "cam")
+    sen = OrientationStream(tc, R.copy(), "sen")
+    A, B, t = motion_pairs(cam, sen, 0.25)
+    assert len(t) == 16 and np.allclose(A, B)
