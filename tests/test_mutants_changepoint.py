@@ -219,3 +219,11 @@ def test_the_p_value_never_exceeds_one():
     # over a wide span of splits the tail formula exceeds 1 just above 3 degrees of freedom; a probability does not
     assert p_value(5.0, 1000.0, 0.01, 0.99) == 1.0
     assert 0.9 < p_value(8.0, 1000.0, 0.01, 0.99) < 1.0
+
+
+def test_too_few_pairs_at_two_per_block_says_how_many_are_needed():
+    A, B, t = _pairs(40, np.random.default_rng(2))
+    # (40 - 2) / 5 = 7.6 stretches; 10 need 10 (2 x 2 + 1) + 2 = 52 pairs
+    with pytest.raises(ValueError, match=r"^too few pairs for a change test: 40 pairs at 2 per block are 7\.6 "
+                                         r"independent stretches, fewer than 10 \(need 52 pairs\)$"):
+        two_segment_test(A, B, t, block=2)
