@@ -202,3 +202,28 @@ def test_the_degenerate_side_message():
     assert str(err.value) == ("degenerate motion on one side of a split: the sensor turns about one axis only there, "
                               "so R0 is not determined on that side (G = sum_j (2I - B_j - B_j^T) is singular); a "
                               "change test needs motions about other axes on both sides")
+
+
+def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
+    # the sensor turns about z tilted +-3e-6 rad: G's eigenvalues ~ (T delta^2, T, T), a ratio ~1e-11 < 1e-10
+    rng = np.random.default_rng(5)
+    J, delta = 80, 3e-6
+    axes = np.stack([delta * (-1.0) ** np.arange(J), np.zeros(J), np.ones(J)], axis=1)
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    B = so3.exp_map(rng.uniform(0.3, 1.0, J)[:, None] * axes)
+    with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split"):
+        two_segment_test(B, B.copy(), np.arange(J) * 0.5)
+
+
+def test_the_p_value_never_exceeds_one():
+    # over a wide span of splits the tail formula exceeds 1 just above 3 degrees of freedom; a probability does not
+    assert p_value(5.0, 1000.0, 0.01, 0.99) == 1.0
+    assert 0.9 < p_value(8.0, 1000.0, 0.01, 0.99) < 1.0
+
+
+def test_too_few_pairs_at_two_per_block_says_how_many_are_needed():
+    A, B, t = _pairs(40, np.random.default_rng(2))
+    # (40 - 2) / 5 = 7.6 stretches; 10 need 10 (2 x 2 + 1) + 2 = 52 pairs
+    with pytest.raises(ValueError, match=r"^too few pairs for a change test: 40 pairs at 2 per block are 7\.6 "
+                                         r"independent stretches, fewer than 10 \(need 52 pairs\)$"):
+        two_segment_test(A, B, t, block=2)

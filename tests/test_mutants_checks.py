@@ -143,3 +143,12 @@ def test_flat_check_edge_cases():
     check_rotation_flat("R", _flat(M), atol=2.0 ** -29)
     with pytest.raises(ValueError, match="max"):
         check_rotation_flat("R", _flat(M), atol=2.0 ** -29 * (1 - 1e-9))
+
+
+@pytest.mark.parametrize("k", range(1, 9))
+def test_a_finite_matrix_whose_entries_cancel_is_judged_by_its_orthogonality_not_as_nan(k):
+    # entries +-1e308: finite, their sum 0; the squares overflow, so |R^T R - I| is inf
+    flat = [0.0] * 9
+    flat[0], flat[k] = 1e308, -1e308
+    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: max \|R\^T R - I\| = inf$"):
+        check_rotation_flat("R", flat)

@@ -1,6 +1,7 @@
 """The answer checks of :mod:`replication.solvers._registry` at their boundaries: which local answers get a
 :class:`LocalMinimumWarning` or a :class:`ConvergenceWarning` (cost gap, angle, gradient), and when a closed form's
 answer is grossly off. Mutation testing (scripts/mutation) found these rules unguarded by the fast tests."""
+import math
 import warnings
 
 import numpy as np
@@ -193,3 +194,134 @@ def test_reflections_are_flagged_and_said_with_the_two_step_hint():
     assert caught == [(AccuracyWarning, "other returned a reflection (det -1), not a rotation, in 2 of 3 problems")]
     flagged, caught = _warned(_registry.check_answer, m, optimal.global_certificate(m).R, "other")
     assert not flagged.any() and caught == []
+
+
+# ------------------------------------------------------------------ what solve() accepts from a core, at the door
+
+@pytest.fixture
+def core(monkeypatch):
+    """``make(answer, local=False) -> name``: a solver whose core returns ``answer(motions)``, registered for the test."""
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    count = []
+
+    def make(answer, local=False):
+        name = f"test_core_{len(count)}"
+        count.append(name)
+        _registry.register(name, reference="test", local=local)(lambda motions, **_: answer(motions))
+        return name
+
+    return make
+
+
+def _identity_motions(batch=(), seed=3):
+    """Motions with ``R0 = I`` (``B = A``): the identity is their exact minimiser."""
+    A = so3.random_rotations(np.random.default_rng(seed), batch + (J,))
+    return A, A.copy()
+
+
+def test_an_answer_exactly_at_the_answer_tolerance_is_accepted(core):
+    x = 7.071067811865475e-07  # columns 0 and 1 at a cosine x: ||R^T R - I||_F = sqrt(2) x = ANSWER_ATOL exactly
+    M = np.array([[1.0, x, 0.0], [0.0, math.sqrt(1.0 - x * x), 0.0], [0.0, 0.0, 1.0]])
+    assert np.linalg.norm(M.T @ M - np.eye(3)) == _registry.ANSWER_ATOL
+    name = core(lambda motions: M.copy())
+    R = _registry.solve(name, *_identity_motions())
+    assert np.array_equal(R, M)
+    wider = core(lambda motions: np.array([[1.0, 1.01 * x, 0.0], [0.0, math.sqrt(1.0 - x * x), 0.0],
+                                           [0.0, 0.0, 1.0]]))
+    with pytest.raises(ValueError, match=r"not a rotation at batch index \(\): \|\|R\^T R - I\|\|_F = 1.01e-06"):
+        _registry.solve(wider, *_identity_motions())
+
+
+@pytest.mark.parametrize("scale, words", [(2.0, r"det R = 8: \| \|det R\| - 1 \| = 7 "),
+                                          (-2.0, r"det R = -8: \| \|det R\| - 1 \| = 7 "),
+                                          (0.5, r"det R = 0.125: \| \|det R\| - 1 \| = 0.875 ")])
+def test_a_refused_answer_states_its_determinant_s_distance_from_plus_or_minus_one(core, scale, words):
+    name = core(lambda motions: scale * np.eye(3))
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a matrix that is not a rotation at batch index "
+                                         rf"\(\): \|\|R\^T R - I\|\|_F = [0-9.]+, {words}\(tolerance ANSWER_ATOL"):
+        _registry.solve(name, *_identity_motions())
+
+
+@pytest.mark.parametrize("value", [1e200, np.inf, -np.inf])
+def test_an_overflowing_or_infinite_answer_is_refused_without_a_numpy_warning(core, value):
+    M = np.eye(3)
+    M[1, 2] = value
+    name = core(lambda motions: M.copy())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an overflow or invalid value in the check would raise RuntimeWarning here
+        with pytest.raises(ValueError, match=r"not a rotation at batch index \(\): "):
+            _registry.solve(name, *_identity_motions())
+
+
+@pytest.mark.parametrize("local", [False, True])
+def test_a_rotation_whose_determinant_rounds_below_one_is_not_a_reflection(core, local):
+    m = _motions(noise_deg=3.0)
+    # the minimiser shrunk: det = 1 - 5e-7, within ANSWER_ATOL of 1: a rotation to the tolerance, not a reflection
+    M = optimal.global_certificate(m).R @ np.diag([1.0 - 2.5e-7, 1.0 - 2.5e-7, 1.0])
+    name = core(lambda motions: M.copy(), local=local)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sol = _registry.solve(name, m, full_output=True)
+    assert np.isfinite(sol.duality_gap)  # a reflection's gap is NaN: never certified
+
+
+def test_the_gross_screen_keeps_a_two_dimensional_batch_shape():
+    m = _motions((2, 3), noise_deg=3.0)
+    R = optimal.global_certificate(m).R.copy()
+    R[1, 2] = _rotated(R[1, 2], 150.0, (1.0, 0.0, 0.0))
+    flagged, caught = _warned(_registry.check_answer, m, R, "fake")
+    assert flagged.shape == (2, 3) and flagged.tolist() == [[False, False, False], [False, False, True]]
+    assert "in 1 of 6 problems" in caught[0][1]
+    one = _motions(noise_deg=3.0)
+    flagged, _ = _warned(_registry.check_answer, one, optimal.global_certificate(one).R, "fake")
+    assert flagged.shape == () and not flagged
+
+
+def test_the_gross_threshold_is_ten_times_the_minimum_plus_the_absolute_tolerance():
+    """Answers whose cost (8) lies 0.5 LOCAL_ATOL J below and above ``GROSS_FACTOR f* + LOCAL_ATOL J``."""
+    m = _motions(noise_deg=3.0)
+    cert = optimal.global_certificate(m)
+    far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
+    bound = _registry.GROSS_FACTOR * float(cert.cost) + _registry.LOCAL_ATOL * J
+    cost = lambda R: float(_registry.handeye_cost(R, m.A, m.B))  # noqa: E731
+
+    def at(target):  # the answer on the geodesic from the minimiser towards `far` whose cost is `target`
+        lo, hi = 0.0, 1.0
+        for _ in range(60):
+            mid = (lo + hi) / 2
+            lo, hi = (mid, hi) if cost(_geodesic(cert.R, far, mid)) <= target else (lo, mid)
+        return _geodesic(cert.R, far, lo)
+
+    half = 0.5 * _registry.LOCAL_ATOL * J
+    below, above = at(bound - half), at(bound + half)
+    assert cost(below) == pytest.approx(bound - half, abs=1e-9) and cost(above) == pytest.approx(bound + half, abs=1e-9)
+    flagged, caught = _warned(_registry.check_answer, m, below, "fake")
+    assert not flagged and caught == []
+    flagged, caught = _warned(_registry.check_answer, m, above, "fake")
+    assert flagged and [c for c, _ in caught] == [AccuracyWarning]
+
+
+def test_check_answer_reads_an_object_array_of_numbers_as_floats():
+    m = _motions((2,), noise_deg=3.0)
+    R = optimal.global_certificate(m).R.copy()
+    R[1] = -R[1]
+    flagged, caught = _warned(_registry.check_answer, m, R.astype(object), "fake")
+    assert flagged.tolist() == [False, True]
+    assert caught == [(AccuracyWarning, "fake returned a reflection (det -1), not a rotation, in 1 of 2 problems")]
+
+
+def test_the_gradient_quoted_is_the_largest_over_problems_off_and_moving_only(crafted, monkeypatch):
+    m = _motions((3,))
+    R = optimal.global_certificate(m).R
+    tol = _tolerance(0.0)
+    crafted["lower"] = np.zeros(3)
+    crafted["gap"] = np.array([2 * tol, 0.0, 2 * tol])
+    crafted["angle"] = np.array([5.0, 0.5, 5.0])  # 0 and 2: another point; 1: short of the minimum
+    stat = _registry.STATIONARY_TOL
+    grad = np.zeros((3, 3))
+    grad[:, 0] = [2 * stat, 50 * stat, 0.0]  # 0 moving; 1 (short, not off) has the largest gradient; 2 stationary
+    monkeypatch.setattr(optimal, "_derivatives", lambda M, R: (None, grad, None))
+    _, caught = _warned(_registry.check_local_answer, m, R, "fake")
+    assert [c for c, _ in caught] == [LocalMinimumWarning, ConvergenceWarning]
+    assert f"1 where eq. (8) still has a gradient (up to {4 * stat:.3g} J)" in caught[0][1]
+    assert "; 1 at another stationary point of (8)" in caught[0][1]
