@@ -94,10 +94,10 @@ def test_the_typical_sensor_step_is_a_running_average():
 
 def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_bad():
     rig, _ = _rig()
-    w0, w1 = np.array([0.1, 0.2, 0.3]), np.array([0.5, -0.2, 0.1])
+    w0, w1 = np.array([0.1, 0.2, 0.3]), np.array([0.5, -0.1, 0.1])
     rig.add_gyro(1.0, w0)
     rig.add_gyro(1.5, w1)
-    assert np.allclose(rig._gyro[-1][1], so3.exp_map(0.5 * (w0 + w1) * 0.5), atol=1e-15)
+    assert np.allclose(rig._gyro[-1][1], so3.exp_map(0.5 * (w0 + w1) * 0.5), rtol=0, atol=1e-15)
     assert rig._gyro_dt == 0.5
     rig.add_gyro(1.75, [0, 0, 0])
     assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
@@ -347,3 +347,119 @@ def test_the_rigs_options_are_checked():
     assert (rig.interval, rig.max_offset, rig.offset, rig.offset_given, rig.stride, rig.diagnose) == (
         1.0, 0.2, None, False, 1, True)
     assert rig.correct_offset is True and rig.on_pair is None and rig.GAP_FACTOR == 5.0
+
+
+# ------------------------------------------------------------------ pairing boundaries, gaps and the buffer
+def _feed_orientations(rig, cam_times, sen_times, offset=0.0):
+    """The constant-rate rig: camera poses at ``cam_times``, sensor orientations stamped ``t`` (true time
+    ``t - offset``) at ``sen_times``, merged in time order (a sensor sample before a camera pose at the same time)."""
+    events = sorted([(t, 1) for t in cam_times] + [(t, 0) for t in sen_times])
+    for t, kind in events:
+        if kind:
+            rig.add_camera(t, _C(t))
+        else:
+            rig.add_orientation(t, _C(t - offset) @ R0)
+
+
+def test_a_pair_forms_as_soon_as_the_sensor_reaches_its_last_pose_exactly():
+    rig, pairs = _rig()
+    _feed_orientations(rig, [k * DT_CAM for k in range(18)], [k * DT_SEN for k in range(-8, 69)])  # to 68/128 = 17/32
+    assert [round(t / DT_CAM) for t, _, _ in pairs] == [8, 17]
+    assert rig.events[-1][:2] == (17 * DT_CAM, 17 * DT_CAM)  # formed the moment the pose arrived
+
+
+def test_poses_the_interval_apart_to_within_a_nanosecond_form_a_pair():
+    rig, pairs = _rig()
+    end = 0.25 - 1e-9
+    _feed_orientations(rig, [0.0, end], [k * DT_SEN for k in range(-8, 48)])
+    assert [t for t, _, _ in pairs] == [end]
+    rig, pairs = _rig()
+    _feed_orientations(rig, [0.0, 0.25 - 2e-9], [k * DT_SEN for k in range(-8, 48)])
+    assert pairs == [] and rig.pairs_formed == 0
+
+
+def test_a_stride_of_three_uses_the_first_of_every_three_pairs():
+    rig, pairs = _rig(stride=3)
+    _feed(rig, 3.0)
+    assert rig.pairs_formed == 10 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 35, 62, 89]
+
+
+def test_the_pairs_held_for_the_offset_are_all_formed_when_it_is_known_past_skips_and_drops():
+    rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1, stride=2)
+    hole = {k for k in range(int(2.0 / DT_SEN)) if 0.6 < k * DT_SEN < 0.66}  # a gap inside the second used pair
+    for k in range(int(2.0 / DT_SEN) + 1):
+        if k not in hole:
+            rig.add_orientation(k * DT_SEN, _motion(k * DT_SEN) @ R0)
+        if k % 4 == 0:
+            rig.add_camera(k * DT_SEN, _motion(k * DT_SEN))
+    assert rig.offset is not None  # estimated at t = 2 s, on the sensor sample that filled the window
+    assert rig.pairs_formed == 7 and rig.pairs_dropped == 1 and len(pairs) == 3
+    assert [e[1] for e in rig.events] == [2.0, 2.0, 2.0]
+
+
+@pytest.mark.parametrize("hole, dropped", [
+    (range(22, 28), [8]),       # sensor time 30..35/128: inside pair 1's span only (pair 2's starts at 44/128)
+    (range(61, 67), [17]),      # sensor time 69..74/128: inside pair 2's span [44, 76]/128, short of its end
+    (range(22, 28) and list(range(22, 28)) + list(range(61, 67)), [8, 17]),
+])
+def test_the_gap_check_spans_the_sensor_interval_at_the_offset(hole, dropped):
+    offset = 1 / 16
+    rig, pairs = _rig(offset=offset)
+    _feed(rig, 1.2, offset=offset, sensor_skip=set(hole))
+    assert rig.pairs_dropped == len(dropped)
+    assert [round(t / DT_CAM) for t, _, _ in pairs] == [k for k in (8, 17, 26, 35) if k not in dropped]
+
+
+def test_a_gap_starting_at_a_pairs_first_sensor_sample_drops_it():
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(37, 43)))  # pair 2 starts at 9/32 = 36/128: the hole runs 36..43
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
+
+
+def test_a_gap_between_the_only_two_samples_inside_a_pair_drops_it():
+    rig, pairs = _rig(interval=1 / 16, offset=1 / 256)  # spans fall half-way between sensor samples
+    sen = [k * DT_SEN for k in range(-8, 40) if k not in range(2, 8)]  # hole: 1 -> 8 (7 steps)
+    _feed_orientations(rig, [0.0, 1 / 16, 3 / 32, 5 / 32], sen)
+    # pair 1 spans [0.5, 8.5]/128: its ends are bracketed by (0, 1) and (8, 9), only 1 and 8 lie inside
+    assert rig.pairs_dropped == 1 and [t for t, _, _ in pairs] == [5 / 32]
+
+
+def test_a_sensor_slower_than_the_pairs_is_slerped_not_refused():
+    rig, pairs = _rig(interval=0.25)
+    _feed_orientations(rig, [k / 8 for k in range(17)], [k / 2 for k in range(-1, 6)])  # 2 Hz: 0 or 1 inside a span
+    assert rig.pairs_dropped == 0 and len(pairs) == 5
+    for t, A, B in pairs:
+        assert np.allclose(B, R0.T @ A @ R0, atol=1e-12)
+
+
+def test_a_sensor_slower_than_the_buffer_still_brackets_a_pose_with_its_last_two_samples():
+    # keep = interval + 2 max_offset + 1 = 2.2 s < the 3 s sensor step: the buffer holds the last two samples
+    rig, pairs = _rig(interval=1.0, max_offset=0.1)
+    _feed_orientations(rig, [0.5, 1.5], [0.0, 3.0])
+    assert [g[0] for g in rig._gyro] == [0.0, 3.0]
+    assert len(pairs) == 1 and np.allclose(pairs[0][2], R0.T @ pairs[0][1] @ R0, atol=1e-12)
+    # a pose that arrives after the sensor moved two samples on is no longer bracketed: dropped
+    late, late_pairs = _rig(interval=1.0, max_offset=0.1)
+    _feed_orientations(late, [], [0.0, 3.0, 6.0])
+    assert [g[0] for g in late._gyro] == [3.0, 6.0]
+    _feed_orientations(late, [0.5, 1.5], [])
+    assert late_pairs == [] and late.pairs_dropped == 1
+
+
+def test_a_pose_before_the_first_sensor_sample_is_dropped():
+    rig, pairs = _rig()
+    _feed_orientations(rig, [k * DT_CAM for k in range(27)], [k * DT_SEN for k in range(4, 120)])
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [17, 26]
+
+
+def test_integrating_a_very_slow_rotation_stays_exact():
+    rig, _ = _rig()
+    w = np.array([3e-6, -4e-6, 5e-6])  # rad/s: steps of 7e-9 rad, under the second-order branch
+    for k in range(201):
+        rig.add_gyro(k * 1e-3, w)
+    assert np.allclose(rig._gyro[-1][1], so3.exp_map(w * 0.2), rtol=0, atol=1e-13)
+    rig, _ = _rig()
+    w = np.array([10.0, -4.0, 6.0])  # steps of 0.6 rad: Rodrigues, not the second-order branch
+    rig.add_gyro(0.0, w)
+    rig.add_gyro(0.05, w)
+    assert np.allclose(rig._gyro[-1][1], so3.exp_map(w * 0.05), rtol=0, atol=1e-15)
