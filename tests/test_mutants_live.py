@@ -634,3 +634,34 @@ def test_without_diagnose_a_failing_verdict_names_no_input_mistake():
     out = replay(cam, gyro, OnlineCalibrator(), interval=0.25, offset=0.0, offset_window=2.5, max_offset=0.05,
                  diagnose=False)
     assert _fails(out) and "input_mistake" not in _fails(out)
+
+
+def test_the_pair_times_kept_for_the_events_are_bounded():
+    cal = OnlineCalibrator(confirm_pairs=5)  # keeps at most 4 x 5 + 256 = 276 pair times, then forgets the older half
+    rig = LiveRig(cal, interval=0.125, offset=0.0, diagnose=False)
+    t = np.arange(-2, 555) / 8
+    C = so3.exp_map(np.stack([np.sin(1.3 * t), np.cos(0.7 * t), 0.8 * np.sin(0.5 * t + 1.0)], axis=1))
+    S = C @ R0
+    for k in range(len(t)):  # camera poses at 8 Hz from t = 0 form pairs (0, 1), (2, 3), ...; the sensor at 4 Hz
+        if k % 2 == 0:
+            rig.add_orientation(t[k], S[k])
+        if k == 554:  # the sample after pose 551 formed the 276th pair
+            assert cal.n_total == 276 and sorted(rig._times) == list(range(276))
+        if k >= 2:
+            rig.add_camera(t[k], C[k])
+    assert cal.n_total == 277 and sorted(rig._times) == list(range(138, 277))
+    assert rig._times[276] == (rig.events[-1][0], rig.events[-1][1])
+
+
+def test_an_event_of_pairs_the_rig_did_not_form_has_no_times():
+    rng = np.random.default_rng(5)
+    cal = OnlineCalibrator(confirm_pairs=5)
+    R_re = so3.exp_map(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
+    for j in range(60):  # pairs given to the calibrator directly, a re-mount half-way
+        R = R0 if j < 30 else R0 @ R_re
+        A = so3.exp_map(rng.normal(size=3) * 0.5)
+        cal.update(A, so3.exp_map(rng.normal(size=3) * math.radians(0.1)) @ R.T @ A @ R)
+    assert [e.kind for e in cal.events] == ["remount"]
+    ev = LiveRig(cal, offset=0.0, diagnose=False).summary()["events"][0]
+    assert ev["kind"] == "remount" and math.isnan(ev["t_s"]) and math.isnan(ev["pair_end_s"])
+    assert math.isnan(ev["alarm_t_s"])
