@@ -665,3 +665,21 @@ def test_an_event_of_pairs_the_rig_did_not_form_has_no_times():
     ev = LiveRig(cal, offset=0.0, diagnose=False).summary()["events"][0]
     assert ev["kind"] == "remount" and math.isnan(ev["t_s"]) and math.isnan(ev["pair_end_s"])
     assert math.isnan(ev["alarm_t_s"])
+
+
+def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
+    # sample times whose step 1 -> T2 is exactly GAP_FACTOR x the running typical step (0.99 x 1 + 0.01 x step) in
+    # floating point, and T2 -> T3 leaves the typical step there (found by search over the last bits)
+    T2, T3 = 6.2105263157894735, 7.252631578947368
+    slow = lambda t: so3.exp_map(0.1 * W * t)  # noqa: E731  (0.52 rad over the long step: slerp stays exact)
+    for (t0, t1), samples in (((1.5, 2.5), (0.0, 1.0, T2)),   # both poses bracketed by the long step
+                              ((0.5, 7.0), (0.0, 1.0, T2, T3))):  # the long step inside the pair
+        rig, pairs = _rig(interval=t1 - t0)
+        for t, kind in sorted([(t, 0) for t in samples] + [(t0, 1), (t1, 1)]):
+            if kind:
+                rig.add_camera(t, slow(t))
+            else:
+                rig.add_orientation(t, slow(t) @ R0)
+        assert 5.0 * rig._gyro_dt == T2 - 1.0
+        assert rig.pairs_dropped == 0 and len(pairs) == 1
+        assert np.allclose(pairs[0][2], R0.T @ pairs[0][1] @ R0, atol=1e-12)
