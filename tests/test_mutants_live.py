@@ -577,6 +577,14 @@ def test_replay_without_pairs_has_the_columns_and_no_rows():
                                                    "determined", "checking", "qw", "qx", "qy", "qz", "error_deg"]
 
 
+def test_replay_before_any_estimate_has_nan_numbers():
+    cam, sen = _streams(1.0)
+    out = replay(cam, sen, OnlineCalibrator(), interval=0.25, offset=0.0, reference=R0)
+    assert len(out) == 3
+    for column in ("radius_deg", "qw", "qx", "qy", "qz", "error_deg"):
+        assert out[column].dtype == float and out[column].isna().all()
+
+
 def test_replay_remounts_from_the_remount_time_inclusive():
     cam, sen = _streams(1.6)
     R_re = so3.exp_map(np.array([0.0, 0.0, math.pi / 2]))
