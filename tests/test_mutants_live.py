@@ -105,10 +105,12 @@ def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_ba
     for t in (1.75, 1.5):
         with pytest.raises(ValueError, match=rf"^gyro time going backwards or repeated: {t!r} after 1\.75$"):
             rig.add_gyro(t, w0)
-    for t, w in ((2.0, [0.0, 0.0]), (2.0, [0.0, math.nan, 0.0]), (math.inf, [0.0, 0.0, 0.0])):
+    for t, w in ((2.0, [0.0, 0.0]), (2.0, [0.0, math.nan, 0.0]), (math.inf, [0.0, 0.0, 0.0]), (2.0, [1j, 0.0, 0.0])):
         with pytest.raises(ValueError, match=r"^a gyro sample is a finite time and 3 finite rates, got t="):
-            rig.add_gyro(t, w)
+            rig.add_gyro(t, w)  # a complex rate is refused, not cast to its real part
     assert len(rig._gyro) == 3
+    rig.add_gyro(2.0, [[0.5, -0.1, 0.1]])  # 3 rates in any shape: a 1 x 3 row
+    assert rig._last_gyro[1] == (0.5, -0.1, 0.1) and len(rig._gyro) == 4
 
 
 def test_orientation_samples_are_refused_when_not_later_or_not_one_rotation():
