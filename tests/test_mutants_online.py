@@ -428,3 +428,26 @@ def test_the_first_refinement_gives_a_verdict_that_ready_reads():
     assert c.current_verdict is not None and c.current_verdict.level == "warning" and c.ready
     c.set_context(gyro_rate_hz=100.0, interval_s=0.02)  # 2 gyro samples per pair: fail
     assert c.current_verdict.level == "fail" and not c.ready
+
+
+def test_after_a_large_remount_the_estimate_restarts_from_the_windows_own_estimate():
+    # Newton from the estimate before a 170 deg re-mount would stop at another critical point of eq. (8)
+    rng = np.random.default_rng(0)
+    A, B = _pairs(60, rng, 0.2)
+    turn = so3.exp_map(np.radians(170.0) * np.array([0.0, 0.6, 0.8]))
+    B[30:] = turn.T @ B[30:] @ turn
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    assert [e.kind for e in c.events] == ["remount"] and c.alarms == [43]
+    assert so3.angle_between_deg(c.R, R0 @ turn) < 0.2
+
+
+def test_a_refinement_does_not_restart_the_cusum_building_up():
+    # the noise triples from pair 27 on; the estimate is refined at pair 29 (its 30th) while the CUSUM rises
+    rng = np.random.default_rng(12)
+    A, B = _pairs(60, rng, 0.2)
+    B[27:] = B[27:] @ so3.exp_map(np.radians(0.6) * rng.standard_normal((33, 3)))
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    ev = c.events[0]
+    assert ev.kind == "noise_change" and ev.source == "cusum" and 27 <= ev.onset_pair <= 29 and ev.alarm_pair == 35
