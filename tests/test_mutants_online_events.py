@@ -746,3 +746,52 @@ def test_the_drift_test_runs_every_half_of_an_odd_drift_window_rounded_down():
         if j == 20:
             assert d.since_drift == 0  # the window full: tested
     assert d.since_drift == 0 and not d.checking  # 10 more pairs (21 // 2): tested again
+
+
+def test_every_pair_within_the_tolerance_is_found_wherever_it_falls_in_the_grid():
+    rng = np.random.default_rng(49)
+    tol = math.radians(DUPLICATE_DEG)
+    for _ in range(100):
+        A, B = so3.random_rotations(rng, 2)
+        f = RepeatFilter()
+        f.seen(_flat(A), _flat(B))
+        near = (np.array(_flat(B)) + 0.99 * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
+        assert f.seen(_flat(A), near) is True
+
+
+def test_solve_window_keeps_a_pair_exactly_at_the_trim_bound():
+    from replication.solvers import solve
+
+    A, B = _gross_window(8, 3)
+    d2 = pair_d2(solve("robust", A, B), A, B)  # the consensus solve_window trims at (seeded: the same)
+    j = int(np.argmax(d2))
+    floor = float(d2[j]) / TRIM_FACTOR
+    for _ in range(100):  # the floor at which TRIM_FACTOR times it is that pair's d^2, to the last bit
+        if TRIM_FACTOR * floor == d2[j]:
+            break
+        floor = np.nextafter(floor, math.inf if TRIM_FACTOR * floor < d2[j] else -math.inf)
+    assert TRIM_FACTOR * floor == d2[j] and floor > np.median(d2)
+    _, keep, _ = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=floor)
+    assert keep.all()
+
+
+def test_decide_outliers_keeps_a_held_pair_exactly_at_cap_times_the_level():
+    rng = np.random.default_rng(22)
+    R_old = _rot(30.0)
+    s2 = 1.5 * math.radians(0.2) ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    A, B = _window(R_old, 20, 0.15, rng)
+    B[:4] = B[:4] @ _rot(20.0, (1, 0, 0))  # the four held pairs
+    d = _armed(3 * math.radians(0.2) ** 2)
+    k = _fill(d, R_old, A, B, cov, s2)
+    d2_held = [float(pair_d2(R_old, A[j][None], B[j][None])[0]) for j in range(4)]
+    j = int(np.argmin(d2_held))
+    level = d2_held[j] / d.cap
+    for _ in range(100):  # a reference level at which that pair is exactly at cap times it
+        if d.cap * level == d2_held[j]:
+            break
+        level = np.nextafter(level, math.inf if d.cap * level < d2_held[j] else -math.inf)
+    assert d.cap * level == d2_held[j]
+    d.level = level
+    out = d.decide(R_old, cov, s2, k)
+    assert out["event"].kind == "outliers" and out["event"].pairs_dropped == 3 and len(out["kept"]) == 1 + 10
