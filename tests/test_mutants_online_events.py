@@ -748,12 +748,13 @@ def test_the_drift_test_runs_every_half_of_an_odd_drift_window_rounded_down():
     assert d.since_drift == 0 and not d.checking  # 10 more pairs (21 // 2): tested again
 
 
-def test_every_pair_within_the_tolerance_is_found_wherever_it_falls_in_the_grid():
+@pytest.mark.parametrize("tol_deg", [DUPLICATE_DEG, math.degrees(1.0)])
+def test_every_pair_within_the_tolerance_is_found_wherever_it_falls_in_the_grid(tol_deg):
     rng = np.random.default_rng(49)
-    tol = math.radians(DUPLICATE_DEG)
+    tol = math.radians(tol_deg)
     for _ in range(100):
         A, B = so3.random_rotations(rng, 2)
-        f = RepeatFilter()
+        f = RepeatFilter(tol_deg)
         f.seen(_flat(A), _flat(B))
         near = (np.array(_flat(B)) + 0.99 * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
         assert f.seen(_flat(A), near) is True
