@@ -451,3 +451,40 @@ def test_a_refinement_does_not_restart_the_cusum_building_up():
     c.update_many(A, B)
     ev = c.events[0]
     assert ev.kind == "noise_change" and ev.source == "cusum" and 27 <= ev.onset_pair <= 29 and ev.alarm_pair == 35
+
+
+def test_before_any_pair_the_evidence_is_the_floor_and_nothing_estimated():
+    c = OnlineCalibrator()
+    e = c.evidence()
+    assert e["rms_residual_deg"] == pytest.approx(NOISE_FLOOR_DEG) and e["effective_pairs"] == 0.0
+    assert c.status()["not_ready"][0] == "0.0 effective distinct pairs < 10"
+    rng = np.random.default_rng(31)
+    A, B = _pairs(1, rng, 0.2)
+    assert c.update(A[0], B[0]).estimated is False
+
+
+def test_restart_forgets_the_pairs_and_starts_from_the_last_estimate():
+    rng = np.random.default_rng(32)
+    A, B = _pairs(12, rng, 0.2)
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    last = c.R.copy()
+    c.restart()
+    assert np.array_equal(c.R, last) and c.n_pairs == 0 and c.radius == math.inf and not c.determined
+    c.restart(init=[[1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    assert np.array_equal(c.R, np.eye(3)) and c.R.dtype == float
+
+
+def test_the_motion_median_reads_the_last_recent_pairs_only():
+    from replication.online import RECENT_PAIRS
+
+    rng = np.random.default_rng(33)
+    n_big, n_small = 150, 110
+    axes = rng.standard_normal((n_big + n_small, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    angles = np.r_[np.full(n_big, 50.0), np.full(n_small, 10.0)] + rng.uniform(-1, 1, n_big + n_small)
+    A = so3.exp_map(np.radians(angles)[:, None] * axes)
+    c = OnlineCalibrator()
+    c.update_many(A, R0.T @ A @ R0)
+    assert RECENT_PAIRS == 200 and c.n_total == 260
+    assert c.evidence()["motion_median_deg"] < 12.0  # the last 200: 110 of about 10 deg, 90 of about 50

@@ -796,3 +796,13 @@ def test_decide_outliers_keeps_a_held_pair_exactly_at_cap_times_the_level():
     d.level = level
     out = d.decide(R_old, cov, s2, k)
     assert out["event"].kind == "outliers" and out["event"].pairs_dropped == 3 and len(out["kept"]) == 1 + 10
+
+
+def test_a_pair_exactly_the_tolerance_away_is_a_repeat():
+    tol = math.radians(DUPLICATE_DEG)
+    A, B = _rot(20.0), _turn_z(15.0)  # B[0][2] is 0: moved by tol, it is exactly tol away
+    f = RepeatFilter()
+    assert f.seen(_flat(A), _flat(B)) is False
+    near = _flat(B)
+    near[2] += tol
+    assert abs(near[2] - _flat(B)[2]) == tol and f.seen(_flat(A), near) is True
