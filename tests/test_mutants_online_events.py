@@ -435,3 +435,374 @@ def test_a_remount_needs_the_window_to_misfit_the_old_estimate_at_its_level():
         assert info["keep"].all() and info["angle_deg"] > info["threshold_deg"]
         kinds.append(info["kind"])
     assert kinds[0] == "remount" and kinds[1] != "remount"
+
+
+# ------------------------------------------------------------------------------------ classify at its boundaries
+def _classify_m(R_old, A, B, m, *, cap=CAP, cov_deg=0.05, s2=1.5 * math.radians(0.2) ** 2):
+    cov = np.eye(3) * np.radians(cov_deg) ** 2
+    return classify(R_old, cov, s2, m, A, B, cap=cap, min_excitation_deg=1.0, d2_floor=FLOOR)
+
+
+def _mostly_gross_window():
+    """21 pairs fitting ``_rot(30)`` at 0.2 deg, 11 of them with an error of about 30 deg."""
+    rng = np.random.default_rng(40)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 21, 0.2, rng)
+    B[:11] = B[:11] @ so3.exp_map(np.radians(30.0) * rng.standard_normal((11, 3)) / math.sqrt(3))
+    return R_old, A, B
+
+
+def test_classify_mostly_gross_pairs_among_fitting_ones_are_outliers_up_to_a_median_of_exactly_noise_z():
+    R_old, A, B = _mostly_gross_window()
+    d2 = pair_d2(R_old, A, B)
+    for m in (3 * math.radians(0.2) ** 2, float(np.median(np.sort(d2)[:10])) / NOISE_Z):
+        info = _classify_m(R_old, A, B, m)
+        gross = info["z_old"] > CAP
+        assert gross.sum() == 11 and info["median_z_before"] > CAP  # the overall median is a gross pair's
+        assert float(np.median(info["z_old"][~gross])) <= NOISE_Z and info["median_z_after"] > NOISE_Z
+        assert info["kind"] == "outliers"
+    assert float(np.median(info["z_old"][~gross])) == NOISE_Z  # the second level: exactly at the bound
+
+
+def test_classify_a_window_that_does_not_determine_r0_is_judged_at_the_old_estimate():
+    rng = np.random.default_rng(41)
+    R_old = _rot(30.0)
+    Az = so3.exp_map(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
+    info = _classify_m(R_old, Az, R_old.T @ Az @ R_old, 3 * math.radians(0.2) ** 2)
+    assert np.array_equal(info["R_new"], R_old) and info["angle_deg"] == 0.0 and info["threshold_deg"] == math.inf
+    assert info["kind"] == "outliers" and info["undecided"] is False
+
+
+def test_classify_a_pair_exactly_at_cap_times_the_level_is_not_gross():
+    rng = np.random.default_rng(42)
+    R_old = _rot(30.0)
+    A, B = _window(R_old, 21, 0.2, rng)
+    d = np.sort(pair_d2(R_old, A, B))
+    # a level at which the window's median z (its 11th) is above NOISE_Z, and the median of the other 20 is not
+    m = float((d[9] + d[10]) / 4 + d[10] / 2) / 2
+    cap = float(d[-1] / m)  # the largest pair's z, exactly
+    info = _classify_m(R_old, A, B, m, cap=cap, cov_deg=1.0)
+    assert info["median_z_before"] > NOISE_Z >= float(np.median(np.sort(info["z_old"])[:-1]))
+    assert float(info["z_old"].max()) == cap
+    assert info["kind"] != "outliers"  # a gross pair at the cap would have made the rest "fit": outliers
+
+
+def _offset_window(x_deg, n=31):
+    """``n`` pairs fitting ``_rot(30) _rot(x_deg, y)`` at 0.1 deg per axis."""
+    rng = np.random.default_rng(14)
+    R_old = _rot(30.0)
+    A, B = _window(R_old @ _rot(x_deg, (0, 1, 0)), n, 0.1, rng)
+    return R_old, A, B
+
+
+def test_classify_medians_exactly_at_noise_z_fit_the_old_level():
+    R_old, A, B = _offset_window(0.3)
+    s2 = 1.5 * math.radians(0.1) ** 2
+    d2_new = _classify_m(R_old, A, B, 1.0, cap=1e9, cov_deg=1.0, s2=s2)["z_new"]  # z at m = 1: d^2 itself
+    d2_old = pair_d2(R_old, A, B)
+    # the window's own median exactly NOISE_Z, the old estimate's above: new information, not a noise change
+    info = _classify_m(R_old, A, B, float(np.median(d2_new)) / NOISE_Z, cap=1e9, cov_deg=1.0, s2=s2)
+    assert info["median_z_after"] == NOISE_Z < info["median_z_before"] and info["kind"] == "new_information"
+    # the old estimate's median exactly NOISE_Z: the pairs still fit it (outliers, none dropped here)
+    info = _classify_m(R_old, A, B, float(np.median(d2_old)) / NOISE_Z, cap=1e9, cov_deg=1.0, s2=s2)
+    assert info["median_z_before"] == NOISE_Z > info["median_z_after"] and info["kind"] == "outliers"
+
+
+def test_classify_undecided_between_half_the_threshold_and_a_remount():
+    R_old, A, B = _offset_window(3.0)
+    info = _classify_m(R_old, A, B, 1.0, cap=1e9, cov_deg=1.0, s2=1.5 * math.radians(0.1) ** 2)
+    assert 0.5 * info["threshold_deg"] < info["angle_deg"] < info["threshold_deg"]
+    assert info["kind"] != "remount" and info["undecided"] is True
+
+
+def test_classify_a_remount_whose_window_fits_its_own_estimate_exactly_at_cap():
+    rng = np.random.default_rng(11)
+    R_old = _rot(30.0)
+    A, B = _window(R_old @ _rot(5.0, (0, 0, 1)), 20, 0.2, rng)
+    m = 3 * math.radians(0.2) ** 2
+    cap = _classify_m(R_old, A, B, m)["median_z_after"]
+    info = _classify_m(R_old, A, B, m, cap=cap)
+    assert info["median_z_after"] == cap and info["kind"] == "remount"
+
+
+def test_classify_a_misfit_exactly_at_the_fit_quantile_is_no_remount():
+    rng = np.random.default_rng(34)
+    R_old = _rot(30.0)
+    A, B = _window(R_old @ _rot(1.5, (0, 0, 1)), 20, 0.2, rng)
+    m = 3 * math.radians(0.2) ** 2
+    cov = np.eye(3) * np.radians(0.02) ** 2
+    S = 1.5 * float(np.sum(pair_d2(R_old, A, B)))
+    q = chi2_quantile(0.9, 3 * 20)
+    s2_old = S / q
+    for _ in range(200):  # the old level at which 1.5 sum d^2 / s2_old is the 90 % quantile, to the last bit
+        if S / s2_old == q:
+            break
+        s2_old = np.nextafter(s2_old, math.inf if S / s2_old > q else -math.inf)
+    assert S / s2_old == q
+    info = classify(R_old, cov, s2_old, m, A, B, cap=1e9, min_excitation_deg=1.0, d2_floor=FLOOR)
+    assert info["keep"].all() and info["angle_deg"] > info["threshold_deg"] and info["kind"] != "remount"
+    assert info["undecided"] is True  # beyond the threshold but fitting the old estimate: more pairs may decide
+
+
+# ------------------------------------------------------------------------------------ the drift test's numbers
+def test_drift_test_measures_a_drift_about_each_axis():
+    rng = np.random.default_rng(43)
+    R = _rot(30.0)
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    for axis in ((1, 0, 0), (0, 1, 0), (0, 0, 1)):
+        A, B = _window(R @ _rot(0.5, axis), 30, 0.0, rng)
+        alarm, angle, thr = drift_test(R, cov, 1e-12, A, B, min_excitation_deg=1.0)
+        assert angle == pytest.approx(0.5, abs=0.01) and alarm
+
+
+def test_drift_test_needs_the_windows_excitation_at_least_the_minimum():
+    from replication.online_events import _excitation_deg
+
+    rng = np.random.default_rng(44)
+    R = _rot(30.0)
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    A, B = _window(R, 20, 0.2, rng)
+    exc = _excitation_deg(B)[0]
+    alarm, angle, thr = drift_test(R, cov, 1e-8, A, B, min_excitation_deg=exc)
+    assert math.isfinite(angle) and math.isfinite(thr)
+    alarm, angle, thr = drift_test(R, cov, 1e-8, A, B, min_excitation_deg=exc * 1.0001)
+    assert (alarm, math.isnan(angle), thr) == (False, True, math.inf)
+
+
+def test_drift_test_takes_the_windows_noise_as_its_mean_square_residual_over_n_minus_3():
+    # pairs in couples with the same sensor motion and opposite residual rotations: the step is w = 0 and every
+    # residual, of angle theta, stays: s^2 = n sin^2(theta) / (n - 3)
+    rng = np.random.default_rng(45)
+    R = _rot(30.0)
+    n, theta = 20, math.radians(0.5)
+    Bh = so3.random_rotations(rng, n // 2)
+    u = rng.standard_normal((n // 2, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    B = np.concatenate([Bh, Bh])
+    rho = np.concatenate([theta * u, -theta * u])
+    A = R @ so3.exp_map(rho) @ B @ R.T
+    cov = np.eye(3) * np.radians(0.01) ** 2
+    alarm, angle, thr = drift_test(R, cov, 1e-12, A, B, min_excitation_deg=1.0)
+    G = 2 * n * np.eye(3) - B.sum(0) - B.sum(0).T
+    s2 = n * math.sin(theta) ** 2 / (n - 3)
+    assert angle < 1e-9 and not alarm
+    assert thr == pytest.approx(combined_threshold(cov, (s2 / 3) * np.linalg.inv(G)), rel=1e-9)
+
+
+def test_drift_test_no_alarm_when_the_window_agrees_exactly_at_zero_noise():
+    R = np.eye(3)
+    quarter = [so3.exp_map(0.5 * math.pi * np.eye(3)[k]) for k in range(3)]
+    B = np.round(np.stack(quarter + [q.T for q in quarter]))  # exact quarter turns: B B^T = I to the bit
+    alarm, angle, thr = drift_test(R, np.zeros((3, 3)), 0.0, B.copy(), B, min_excitation_deg=1.0)
+    assert (alarm, angle, thr) == (False, 0.0, 0.0)
+
+
+# ------------------------------------------------------------------------------------ the repeat filter's edges
+def _turn_z(deg):
+    c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def test_a_motion_of_exactly_the_small_motion_bound_is_not_at_rest():
+    bound, rest = _turn_z(SMALL_MOTION_DEG), _rot(0.2, (1, 0, 0))  # trace of bound: 1 + 2 cos(0.5 deg), to the bit
+    for a, b in ((bound, rest), (rest, bound)):
+        f = RepeatFilter()
+        assert f.seen(_flat(a), _flat(b)) is False and f.seen(_flat(a), _flat(b)) is True
+
+
+def test_a_tolerance_of_one_radian_takes_near_repeats():
+    f = RepeatFilter(math.degrees(1.0))
+    assert f._tol == 1.0
+    A, B = _rot(20.0), _rot(15.0, (1, 0, 0))
+    assert f.seen(_flat(A), _flat(B)) is False
+    assert f.seen(_flat(A @ _rot(5.0)), _flat(B)) is True  # 5 deg: every entry within 1 (radian) of the first's
+
+
+def test_pairs_sharing_a_cell_are_all_remembered():
+    f = RepeatFilter()
+    B = _rot(15.0, (1, 0, 0))
+    firsts = [_rot(20.0 + 5 * k) for k in range(3)]  # same sensor motion (one cell), different camera motions
+    assert not any(f.seen(_flat(a), _flat(B)) for a in firsts) and f.remembered == 3
+    assert all(f.seen(_flat(a), _flat(B)) for a in firsts)
+
+
+def test_beyond_its_memory_the_filter_compares_but_does_not_remember(monkeypatch):
+    from replication import online_events
+
+    monkeypatch.setattr(online_events, "DUPLICATE_MEMORY", 100)
+    f = RepeatFilter()
+    rng = np.random.default_rng(0)
+    pairs = [(_flat(so3.random_rotations(rng, ())), _flat(so3.random_rotations(rng, ()))) for _ in range(120)]
+    assert not any(f.seen(a, b) for a, b in pairs) and f.remembered == 100
+    assert all(f.seen(a, b) for a, b in pairs[:100]) and not any(f.seen(a, b) for a, b in pairs[100:])
+
+
+# ------------------------------------------------------------------------------------ solve_window's bounds
+def _gross_window(n, n_gross):
+    """``n`` pairs at 0.2 deg, the first ``n_gross`` with an error of 40 deg."""
+    rng = np.random.default_rng(46)
+    A, B = _window(_rot(30.0), n, 0.2, rng)
+    axes = rng.standard_normal((n_gross, 3))
+    B[:n_gross] = B[:n_gross] @ so3.exp_map(np.radians(40.0) * axes / np.linalg.norm(axes, axis=1)[:, None])
+    return A, B
+
+
+def test_solve_window_needs_five_pairs_kept():
+    A, B = _gross_window(8, 3)
+    _, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert keep.sum() == 5 and cov is not None  # exactly five
+    A, B = _gross_window(7, 3)
+    _, keep, cov = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
+    assert keep.sum() == 4 and cov is None
+
+
+def test_solve_window_takes_an_excitation_exactly_at_the_minimum():
+    rng = np.random.default_rng(33)
+    A, B = _window(_rot(30.0), 12, 0.3, rng)
+    exc = _excitation_deg(B)[0]
+    assert solve_window(A, B, min_excitation_deg=exc, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
+
+
+# ------------------------------------------------------------------------------------ decide on each kind
+def _fill(d, R_old, A, B, cov, s2):
+    """The first four pairs reported far off (held out: the CUSUM rises by cap - k = 8 each, above h at the fourth)
+    raise the alarm; the next fill the confirmation window. Returns the index of the last pair observed."""
+    for k in range(4):
+        d.observe(A[k], B[k], 100.0 * d.level, k, R_old, cov, s2)
+    assert d.checking and d.alarm_pair == 3
+    for k in range(4, len(A)):
+        if d.observe(A[k], B[k], 0.0, k, R_old, cov, s2)[1]:
+            return k
+    raise AssertionError("the window never filled")
+
+
+def test_decide_new_information_adds_every_pair_and_rearms():
+    rng = np.random.default_rng(15)
+    R_old = _rot(30.0)
+    sigma = math.radians(0.1)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(1.0) ** 2
+    A, B = _window(R_old @ _rot(0.3, (0, 1, 0)), 14, 0.1, rng)
+    d = _armed(m)
+    k = _fill(d, R_old, A, B, cov, s2)
+    out = d.decide(R_old, cov, s2, k)
+    ev = out["event"]
+    assert ev.kind == "new_information" and out["rearm"] is True and out["restart"] is False
+    assert (pair_d2(R_old, A[4:], B[4:]) > d.cap * m).any()  # some of them far from the old estimate, yet added
+    assert len(out["kept"]) == 14 and ev.pairs_dropped == 0 and out["held_before"] == 4
+
+
+def test_decide_a_noise_change_moves_the_reference_level_to_the_windows():
+    rng = np.random.default_rng(47)
+    R_old = _rot(30.0)
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    A, B = _window(R_old, 40, 0.8, rng)
+    d = _armed(m)
+    k = _fill(d, R_old, A, B, cov, s2)
+    out = d.decide(R_old, cov, s2, k)
+    assert out["event"].kind == "noise_change"
+    assert d.level > 4 * m and d.level == pytest.approx(float(np.mean(pair_d2(out["R_new"], A[4:k + 1], B[4:k + 1]))),
+                                                          rel=0.5)
+
+
+def test_decide_an_undecided_window_waits_for_confirm_pairs_more_up_to_the_most():
+    R_old, A, B = _offset_window(3.0, n=40)
+    s2 = 1.5 * math.radians(0.1) ** 2
+    cov = np.eye(3) * np.radians(1.0) ** 2
+    d = _armed(1.0)
+    k = _fill(d, R_old, A, B, cov, s2)
+    assert d.decide(R_old, cov, s2, k) is None and d.target == 20 and d.checking
+    last = _armed(1.0, max_confirm_pairs=10)
+    k = _fill(last, R_old, A, B, cov, s2)
+    out = last.decide(R_old, cov, s2, k)
+    assert out is not None and out["event"].window_pairs == 10
+
+
+def test_decide_a_remount_drops_a_window_pair_that_does_not_fit_the_new_estimate():
+    rng = np.random.default_rng(21)
+    R_old = _rot(30.0)
+    sigma = math.radians(0.2)
+    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    A, B = _window(R_old @ _rot(5.0, (0, 0, 1)), 20, 0.2, rng)
+    B[6] = B[6] @ _rot(30.0, (1, 0, 0))
+    d = _armed(m)
+    k = _fill(d, R_old, A, B, cov, s2)
+    out = d.decide(R_old, cov, s2, k)
+    assert out["event"].kind == "remount" and out["event"].pairs_dropped == 1 and len(out["kept"]) == 13
+
+
+def test_the_drift_test_runs_every_half_of_an_odd_drift_window_rounded_down():
+    rng = np.random.default_rng(48)
+    R = _rot(30.0)
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    d = _detector(drift_pairs=21, k=0.9)
+    d.arm(1.0, 0)
+    A, B = _window(R, 31, 0.2, rng)
+    for j in range(31):
+        d.observe(A[j], B[j], 1.0, j, R, cov, 1e-5)
+        if j == 20:
+            assert d.since_drift == 0  # the window full: tested
+    assert d.since_drift == 0 and not d.checking  # 10 more pairs (21 // 2): tested again
+
+
+@pytest.mark.parametrize("tol_deg", [DUPLICATE_DEG, math.degrees(1.0)])
+def test_every_pair_within_the_tolerance_is_found_wherever_it_falls_in_the_grid(tol_deg):
+    rng = np.random.default_rng(49)
+    tol = math.radians(tol_deg)
+    for _ in range(100):
+        A, B = so3.random_rotations(rng, 2)
+        f = RepeatFilter(tol_deg)
+        f.seen(_flat(A), _flat(B))
+        near = (np.array(_flat(B)) + 0.99 * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
+        assert f.seen(_flat(A), near) is True
+
+
+def test_solve_window_keeps_a_pair_exactly_at_the_trim_bound():
+    from replication.solvers import solve
+
+    A, B = _gross_window(8, 3)
+    d2 = pair_d2(solve("robust", A, B), A, B)  # the consensus solve_window trims at (seeded: the same)
+    j = int(np.argmax(d2))
+    floor = float(d2[j]) / TRIM_FACTOR
+    for _ in range(100):  # the floor at which TRIM_FACTOR times it is that pair's d^2, to the last bit
+        if TRIM_FACTOR * floor == d2[j]:
+            break
+        floor = np.nextafter(floor, math.inf if TRIM_FACTOR * floor < d2[j] else -math.inf)
+    assert TRIM_FACTOR * floor == d2[j] and floor > np.median(d2)
+    _, keep, _ = solve_window(A, B, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=floor)
+    assert keep.all()
+
+
+def test_decide_outliers_keeps_a_held_pair_exactly_at_cap_times_the_level():
+    rng = np.random.default_rng(22)
+    R_old = _rot(30.0)
+    s2 = 1.5 * math.radians(0.2) ** 2
+    cov = np.eye(3) * np.radians(0.05) ** 2
+    A, B = _window(R_old, 20, 0.15, rng)
+    B[:4] = B[:4] @ _rot(20.0, (1, 0, 0))  # the four held pairs
+    d = _armed(3 * math.radians(0.2) ** 2)
+    k = _fill(d, R_old, A, B, cov, s2)
+    d2_held = [float(pair_d2(R_old, A[j][None], B[j][None])[0]) for j in range(4)]
+    j = int(np.argmin(d2_held))
+    level = d2_held[j] / d.cap
+    for _ in range(100):  # a reference level at which that pair is exactly at cap times it
+        if d.cap * level == d2_held[j]:
+            break
+        level = np.nextafter(level, math.inf if d.cap * level < d2_held[j] else -math.inf)
+    assert d.cap * level == d2_held[j]
+    d.level = level
+    out = d.decide(R_old, cov, s2, k)
+    assert out["event"].kind == "outliers" and out["event"].pairs_dropped == 3 and len(out["kept"]) == 1 + 10
+
+
+def test_a_pair_exactly_the_tolerance_away_is_a_repeat():
+    tol = math.radians(DUPLICATE_DEG)
+    A, B = _rot(20.0), _turn_z(15.0)  # B[0][2] is 0: moved by tol, it is exactly tol away
+    f = RepeatFilter()
+    assert f.seen(_flat(A), _flat(B)) is False
+    near = _flat(B)
+    near[2] += tol
+    assert abs(near[2] - _flat(B)[2]) == tol and f.seen(_flat(A), near) is True
