@@ -177,8 +177,12 @@ def check_rotation_flat(name: str, flat, atol: float = ROTATION_ATOL) -> None:
     Python (a per-sample hot path: :class:`replication.online.OnlineCalibrator`); the largest entry of ``R^T R - I``
     against ``atol``."""
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = flat
+    if atol != ROTATION_ATOL:
+        check_atol(atol)
     if not math.isfinite(a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8):
-        raise ValueError(f"{name} is not a rotation matrix: it holds NaN or inf")
+        bad = not all(map(math.isfinite, flat))  # else finite entries whose sum overflows: not a rotation either
+        raise ValueError(f"{name} is not a rotation matrix: it holds NaN or inf" if bad else
+                         f"{name} is not a rotation matrix: entries of magnitude {max(map(abs, flat)):.3g}")
     err = max(abs(a0 * a0 + a3 * a3 + a6 * a6 - 1.0), abs(a1 * a1 + a4 * a4 + a7 * a7 - 1.0),
               abs(a2 * a2 + a5 * a5 + a8 * a8 - 1.0), abs(a0 * a1 + a3 * a4 + a6 * a7),
               abs(a0 * a2 + a3 * a5 + a6 * a8), abs(a1 * a2 + a4 * a5 + a7 * a8))

@@ -313,7 +313,7 @@ class LiveRig:
     def _evidence(self) -> dict:
         """The front end's part of the verdict's evidence (the batch's fields and thresholds)."""
         e = {"interval_s": self.interval, "pairs_dropped_at_gaps": self.pairs_dropped,
-             "pairs_before_gaps": max(1, self.pairs_formed // self.stride)}
+             "pairs_before_gaps": max(1, -(-self.pairs_formed // self.stride))}  # pairs 1, 1 + stride, ... used
         if self.offset is not None and not self.offset_given:
             e.update(offset_s=self.offset, offset_correlation=self.offset_correlation, max_offset_s=self.max_offset,
                      offset_resolution_s=OFFSET_RESOLUTION, offset_applied=self.correct_offset)

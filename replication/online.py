@@ -317,6 +317,8 @@ class OnlineCalibrator:
     # ------------------------------------------------------------------------------------------------ update
     def update(self, A, B) -> OnlineState:
         """Add one pair ``(A_j, B_j)`` (camera and sensor motion over the same interval). O(1) work and memory."""
+        if np.iscomplexobj(A) or np.iscomplexobj(B):  # float() would drop the imaginary part with a warning only
+            raise ValueError("a pair is two 3x3 rotations, real-valued; got a complex array")
         try:
             M = np.array((A, B), dtype=float)
         except (TypeError, ValueError) as err:

@@ -123,9 +123,9 @@ class RepeatFilter:
         x, y, z = 0.5 * (fb[7] - fb[5]) * inv, 0.5 * (fb[2] - fb[6]) * inv, 0.5 * (fb[3] - fb[1]) * inv
         bx, by, bz = math.floor(x), math.floor(y), math.floor(z)
         x, y, z = x - bx, y - by, z - bz
-        for dx in (_DOWN if x < edge else _UP if x > 1.0 - edge else _STAY):
-            for dy in (_DOWN if y < edge else _UP if y > 1.0 - edge else _STAY):
-                for dz in (_DOWN if z < edge else _UP if z > 1.0 - edge else _STAY):
+        for dx in (_DOWN if x < edge else _UP if x >= 1.0 - edge else _STAY):  # a repeat edge away is a neighbour
+            for dy in (_DOWN if y < edge else _UP if y >= 1.0 - edge else _STAY):
+                for dz in (_DOWN if z < edge else _UP if z >= 1.0 - edge else _STAY):
                     held = cells.get(((bx + dx) * _KEY + by + dy) * _KEY + bz + dz)
                     if held is not None:
                         rows = self._rows[held if isinstance(held, list) else [held]]

@@ -152,3 +152,18 @@ def test_a_finite_matrix_whose_entries_cancel_is_judged_by_its_orthogonality_not
     flat[0], flat[k] = 1e308, -1e308
     with pytest.raises(ValueError, match=r"^R is not a rotation matrix: max \|R\^T R - I\| = inf$"):
         check_rotation_flat("R", flat)
+
+
+def test_finite_entries_whose_sum_overflows_are_said_as_magnitudes_not_nan():
+    flat = [1e308, 1e308] + [0.0] * 7
+    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: entries of magnitude 1e\+308$"):
+        check_rotation_flat("R", flat)
+    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: it holds NaN or inf$"):
+        check_rotation_flat("R", [math.inf] + [0.0] * 8)
+
+
+@pytest.mark.parametrize("atol", [0.0, -1e-6, MAX_ROTATION_ATOL * 1.01, math.nan])
+def test_the_flat_check_validates_its_tolerance_like_the_array_check(atol):
+    with pytest.raises(ValueError, match="atol"):
+        check_rotation_flat("R", [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0], atol=atol)
+    check_rotation_flat("R", [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0], atol=MAX_ROTATION_ATOL)

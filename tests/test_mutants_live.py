@@ -693,3 +693,13 @@ def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
         assert 5.0 * rig._gyro_dt == T2 - 1.0
         assert rig.pairs_dropped == 0 and len(pairs) == 1
         assert np.allclose(pairs[0][2], R0.T @ pairs[0][1] @ R0, atol=1e-12)
+
+
+@pytest.mark.parametrize("formed, used", [(9, 3), (10, 4), (11, 4), (12, 4), (1, 1)])
+def test_the_pairs_before_gaps_count_the_pairs_a_stride_uses_like_the_batch(formed, used):
+    """Pairs 1, 1 + stride, 1 + 2 stride, ... are used: ceil(formed / stride), as the batch's len(A[::stride])."""
+    from replication.live import LiveRig
+
+    rig = LiveRig(OnlineCalibrator(), stride=3, offset=0.0)
+    rig.pairs_formed = formed
+    assert rig._evidence()["pairs_before_gaps"] == used == len(range(formed)[::3])

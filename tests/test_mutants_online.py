@@ -488,3 +488,11 @@ def test_the_motion_median_reads_the_last_recent_pairs_only():
     c.update_many(A, R0.T @ A @ R0)
     assert RECENT_PAIRS == 200 and c.n_total == 260
     assert c.evidence()["motion_median_deg"] < 12.0  # the last 200: 110 of about 10 deg, 90 of about 50
+
+
+def test_a_complex_pair_is_refused_by_update_as_by_update_many():
+    A = np.eye(3) + 0j
+    with pytest.raises(ValueError, match="real-valued; got a complex array"):
+        OnlineCalibrator().update(A, np.eye(3))
+    with pytest.raises(ValueError, match="real-valued"):
+        OnlineCalibrator().update_many(A[None], np.eye(3)[None])

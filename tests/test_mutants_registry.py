@@ -196,6 +196,17 @@ def test_reflections_are_flagged_and_said_with_the_two_step_hint():
     assert not flagged.any() and caught == []
 
 
+def test_a_singular_answer_is_flagged_and_said_not_an_error():
+    """det 0 is neither a rotation nor a reflection: flagged and said, never handed to the gross screen (which
+    measured its angle and raised SciPy's "Non-positive determinant")."""
+    m = _motions((3,))
+    R = optimal.global_certificate(m).R.copy()
+    R[1] = np.diag([1.0, 1.0, 0.0])
+    flagged, caught = _warned(_registry.check_answer, m, R, "fake")
+    assert flagged.tolist() == [False, True, False]
+    assert caught == [(AccuracyWarning, "fake returned a singular matrix (det 0), not a rotation, in 1 of 3 problems")]
+
+
 # ------------------------------------------------------------------ what solve() accepts from a core, at the door
 
 @pytest.fixture

@@ -309,9 +309,14 @@ def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int =
     """
     R = np.asarray(R, dtype=float)
     finite = np.isfinite(R).all(axis=(-2, -1))
-    reflection = finite & (det3(np.where(finite[..., None, None], R, np.eye(3))) < 0)
+    det = det3(np.where(finite[..., None, None], R, np.eye(3)))
+    reflection = finite & (det < 0)
+    singular = finite & ~(np.abs(det) > 0)  # no rotation either; the gross screen needs det > 0
+    if np.any(singular):
+        warnings.warn(f"{method} returned a singular matrix (det 0), not a rotation, in {int(np.sum(singular))} of "
+                      f"{singular.size} problems", AccuracyWarning, stacklevel=stacklevel)
     _warn_not_rotations(method, np.zeros_like(finite), reflection, stacklevel + 1)
-    return reflection | _screen_gross(motions, R, finite & ~reflection, method, stacklevel + 1)
+    return reflection | singular | _screen_gross(motions, R, finite & (det > 0), method, stacklevel + 1)
 
 
 def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray, stacklevel: int) -> None:
