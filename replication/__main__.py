@@ -116,7 +116,8 @@ def claims_command(args: argparse.Namespace) -> int:
         ledger = collect()
         if args.check:
             if update_readme(ledger, check=True):
-                print("README's claims table matches the executed notebooks")
+                print("README's claims table matches the records stored in the executed notebooks (that each record "
+                      "is what its cell computes is checked by strict nbval: bash scripts/test)")
                 return 0
             print("README's claims table is out of date: run 'python -m replication claims --readme'",
                   file=sys.stderr)
@@ -177,5 +178,17 @@ def main(argv: list[str] | None = None) -> int:
     return args.func(args)
 
 
+def _main_closing_pipes():
+    """``main`` for the command line: a reader that stops early (``| head``) ends the output quietly, exit 141."""
+    try:
+        code = main()
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # Python would flush into the closed pipe again at exit
+        return 128 + 13
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(_main_closing_pipes())

@@ -4,9 +4,12 @@
 if it gives one). A notebook that checks a claim calls :func:`record` in the cell that computes the evidence;
 the record is displayed (a readable line) and stored in the executed notebook as a
 ``application/vnd.replication.claim+json`` output. :func:`collect` reads the records back from the notebooks
-(no re-execution), adds the notebook and cell each came from, checks every record again (the stored outputs
-could have been edited), and refuses a ledger in which any claim lacks a verdict, evidence or uncertainty, or has
-more than one record. ``python -m replication reproduce`` writes it to
+(no re-execution), adds the notebook and cell each came from, checks every record's form again (a stored output
+edited into nonsense is refused), and refuses a ledger in which any claim lacks a verdict, evidence or
+uncertainty, or has more than one record. It does not show that a stored record is what its cell computes: a
+record edited by hand into another well-formed verdict reads back as that verdict. That is checked by strict nbval
+(``bash scripts/test`` re-executes every notebook and compares each stored output, claim records included, with
+the new one), and ``claims --check`` says so. ``python -m replication reproduce`` writes it to
 ``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it and updates the
 README's findings table from it.
 

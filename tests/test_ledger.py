@@ -452,4 +452,21 @@ def test_the_repository_ledger_passes_check():
                          timeout=120, cwd=ledger.ROOT, env={k: v for k, v in os.environ.items()
                                                             if k != "REPLICATION_DATA_DIR"})
     assert out.returncode == 0, out.stderr
-    assert out.stdout == "README's claims table matches the executed notebooks\n"
+    assert out.stdout == ("README's claims table matches the records stored in the executed notebooks (that each "
+                          "record is what its cell computes is checked by strict nbval: bash scripts/test)\n")
+
+
+def test_a_reader_that_stops_early_ends_the_output_quietly():
+    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback (red team), exit 141 (SIGPIPE's). The
+    output (1 MB) is larger than a pipe's buffer, so the pipe does break; without the wrapper it prints a traceback."""
+    script = ("import sys, replication.__main__ as m\n"
+              "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
+              "sys.exit(m._main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
+    runs = {}
+    for how in ("wrapped", "bare"):
+        runs[how] = subprocess.run(f"'{sys.executable}' -c \"$S\" {how} | head -n 1; exit ${{PIPESTATUS[0]}}",
+                                   shell=True, executable="/bin/bash", capture_output=True, text=True, timeout=60,
+                                   env={**os.environ, "S": script})
+    assert runs["bare"].returncode != 0 and "BrokenPipeError" in runs["bare"].stderr  # the pipe did break
+    out = runs["wrapped"]
+    assert out.stdout == "| claim |\n" and out.stderr == "" and out.returncode == 141
