@@ -68,6 +68,10 @@ angle to a given reference  > 1 deg          > 5 deg          the real recording
                                                               rectified frame); a gyro with permuted or flipped axes
                                                               is a fixed rotation only a reference reveals
 clock offset left in        > 5 ms           --               ``correct_offset=False`` with a measured offset
+gyro frame mirrored about   < 3 x the fit's  --               the gyro's rates stay near one plane, so one with an
+its least-turned axis:                                        axis's sign flipped (a left-handed frame) is exactly
+median residual (only                                         a right-handed one mounted otherwise; planar rates:
+where the fit is good)                                        0.99-1.01; TUM-VI 97; three-axis rigs 44-76
 ==========================  ===============  ===============  =========================================================
 
 A reason may also come from :mod:`replication.diagnose`, which names an input mistake (quaternion order, pose
@@ -108,6 +112,7 @@ THRESHOLDS = {
     "reference_error_deg": (1.0, 5.0),         # above
     "remount_deg": (0.5, 0.75),                # above, where the change test is significant
     "offset_left_ms": (5.0, None),             # above (an offset measured but not removed)
+    "mirror_fit_ratio": (3.0, None),           # below: the sensor's frame mirrored fits almost as well
 }
 
 _FAIL_WARNINGS = ("LocalMinimumWarning", "AccuracyWarning")
@@ -179,6 +184,8 @@ class Evidence:
     change_sides_fit: float | None = None   # the larger median residual / median motion of its two sides
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
+    mirror_fit_ratio: float | None = None   # the fit with the sensor's frame mirrored: its median residual / ours
+    mirror_normal: tuple | None = None      # the sensor axis turned about least
 
 
 def _above(check, value, name, unit, why):
@@ -298,6 +305,14 @@ def judge(e: Evidence, extra=()) -> Verdict:
             continue
         reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
+    if e.mirror_fit_ratio is not None:
+        normal = "" if e.mirror_normal is None else f" (about {np.round(e.mirror_normal, 2).tolist()}, sensor frame)"
+        reasons.append(_below("mirror_fit_ratio", e.mirror_fit_ratio, "median residual with the sensor's frame "
+                              "mirrored / this fit's", "", f"a sensor with one axis's sign flipped (a left-handed "
+                              f"frame, e.g. in a driver) fits these pairs almost as well, with another R0, so the data "
+                              f"cannot show which it is: the sensor turns about axes near one plane "
+                              f"and little about its normal{normal}; rotate about that axis too, or check the "
+                              f"sensor's axes"))
     if e.pose_residual_medians_deg is not None:
         reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
     sides_fit = e.change_sides_fit is None or e.change_sides_fit <= THRESHOLDS["residual_to_motion"][1]

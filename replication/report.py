@@ -199,7 +199,8 @@ class CalibrationResult:
         if c is not None:
             lines.append(f"change test: {c['note']}" if not c["run"] else (
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
-                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g})"))
+                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g}; splits "
+                f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
         if self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
         return "\n".join(lines)

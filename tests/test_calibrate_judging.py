@@ -242,3 +242,71 @@ def test_an_input_mistake_is_not_called_a_remount(rng):
     r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
     assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
     assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
+
+
+# ------------------------------------------------------------------------------------------------ handedness
+
+def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40.0):
+    """A camera turning about its x and y axes (and ``out_of_plane`` rad/s about z), a gyro on the same body."""
+    from replication.streams import GyroStream, OrientationStream
+
+    rng = np.random.default_rng(seed)
+    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    dt = 2e-3
+    t = np.arange(-1.0, seconds + 1.0, dt)
+    w = np.stack([0.7 * np.sin(0.9 * t), 0.6 * np.sin(1.3 * t + 1.0), out_of_plane * np.sin(0.5 * t + 2.0)], -1)
+    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.exp_map(w[:-1] * dt))])
+    k = np.arange(int(1.0 / dt), int((seconds + 1.0) / dt), 25)  # the camera at 20 Hz
+    camera = OrientationStream(t[k], C[k] @ so3.exp_map(rng.normal(0, np.radians(0.1) / np.sqrt(3), (len(k), 3))),
+                               "camera")
+    Q = C[::2] @ R0  # the gyro at 250 Hz
+    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
+    omega += rng.normal(0, np.radians(0.2), omega.shape)
+    return R0, camera, GyroStream(t[::2][:-1] + dt, omega, "gyro")
+
+
+def test_rates_in_one_plane_cannot_show_a_flipped_gyro_axis_and_the_verdict_says_so():
+    """Red team: a gyro with one axis's sign flipped and rates in one plane gave ok, radius 0.02 deg, R0 126 deg off.
+    The flipped gyro is exactly a right-handed one mounted otherwise; both now warn, naming the unturned axis."""
+    from replication.streams import GyroStream
+
+    R0, camera, gyro = _rig_from_body_rates(0.0)
+    normal = R0.T @ np.array([0.0, 0.0, 1.0])  # the camera's z axis in the sensor frame
+    for g, n in ((gyro, normal), (GyroStream(gyro.t, gyro.omega * [1.0, 1.0, -1.0], "gyro"), normal * [1, 1, -1])):
+        r = calibrate(camera, g, n_bootstrap=0)
+        reason = _reasons(r)["mirror_fit_ratio"]
+        assert r.verdict.level == "warning" and reason.level == "warning" and reason.measured < 1.5
+        assert reason.threshold == THRESHOLDS["mirror_fit_ratio"][0]
+        assert "one axis's sign flipped (a left-handed frame" in reason.message
+        assert abs(np.dot(r.diagnostics["mirror_normal"], n)) > 0.99  # in the gyro's frame
+
+
+def test_rates_about_a_third_axis_tell_the_flip_and_leave_no_such_warning():
+    R0, camera, gyro = _rig_from_body_rates(0.3)
+    r = calibrate(camera, gyro, n_bootstrap=0)
+    assert "mirror_fit_ratio" not in _reasons(r) and r.diagnostics["mirror_fit_ratio"] > 10
+    assert so3.angle_between_deg(r.R, R0) < 0.2
+
+
+def test_the_mirror_ratio_threshold_at_its_boundary():
+    bound = THRESHOLDS["mirror_fit_ratio"][0]
+    kw = dict(n_pairs=100, residual_median_deg=0.1, motion_median_deg=20.0, bootstrap_deg=0.05)
+    below = judge(Evidence(**kw, mirror_fit_ratio=bound * (1 - 1e-9), mirror_normal=(0.0, 0.0, 1.0)))
+    assert [(x.check, x.level) for x in below.reasons] == [("mirror_fit_ratio", "warning")]
+    assert "[0.0, 0.0, 1.0], sensor frame" in below.reasons[0].message
+    assert judge(Evidence(**kw, mirror_fit_ratio=bound)).reasons == ()
+
+
+def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_are_said():
+    """Red team: a 5 deg re-mount at 55 s of 60 s gave ok (the splits left 15 % on each side)."""
+    from replication.calibration import CHANGE_MIN_SHARE
+    from replication.changepoint import remounted
+
+    R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(3), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
+    turn = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    r = calibrate(camera, remounted(gyro, 55.0, turn), n_bootstrap=0)
+    reason = _reasons(r)["remount_deg"]
+    assert reason.level == "fail" and 54.0 <= r.change_test["split_time_s"] <= 56.0
+    # the last split leaves 5 % of the pairs and 5 blocks (of 1 s) after it: later than 0.15's 51 s
+    assert 60.0 * (1 - 0.15) < r.change_test["splits_to_s"] <= 60.0 * (1 - CHANGE_MIN_SHARE)
+    assert "a change outside cannot be told" in r.summary()

@@ -93,7 +93,7 @@ def test_summary_of_a_stream_calibration_line_by_line():
                   time_offset_ci95_s=(0.0101, 0.0145), reference_error_deg=0.5,
                   bootstrap_resamples="pairs in moving blocks of 4",
                   change_test={"run": True, "split_time_s": 12.34, "angle_deg": 0.1234, "significant": False,
-                               "p_value": 0.25})
+                               "p_value": 0.25, "splits_from_s": 3.04, "splits_to_s": 57.06})
     assert res.summary().split("\n") == [
         "verdict: WARNING",
         "  warning: a reason",
@@ -109,7 +109,8 @@ def test_summary_of_a_stream_calibration_line_by_line():
         "pair residuals: median 0.125 deg, rms 0.250 deg",
         f"bootstrap 95% radius: 0.346 deg (resampling pairs in moving blocks of 4); it covers {RADIUS_COVERS}",
         "axis spread camera 12.3 deg",
-        "change test: R0 before and after 12.3 s differ by 0.123 deg, within their noise (p = 0.25)",
+        "change test: R0 before and after 12.3 s differ by 0.123 deg, within their noise (p = 0.25; splits tested from "
+        "3.0 to 57.1 s: a change outside cannot be told)",
         "angle to the reference: 0.500 deg",
     ]
 
@@ -123,12 +124,13 @@ def test_summary_prints_the_quaternion_to_six_decimals():
 def test_summary_variants():
     lines = _result(time_offset_applied=False, time_offset_ci95_s=(math.nan, 0.02), bootstrap_ci95_deg=math.nan,
                     change_test={"run": True, "split_time_s": 3.0, "angle_deg": 2.0, "significant": True,
-                                 "p_value": 1e-5}).summary().split("\n")
+                                 "p_value": 1e-5, "splits_from_s": 1.0, "splits_to_s": 9.0}).summary().split("\n")
     assert lines[0] == "verdict: OK"
     offset = next(line for line in lines if line.startswith("time offset: "))
     assert offset.endswith(" (95 % interval [+nan, +20.00] ms, correlation 0.9877, not applied)")
     assert "bootstrap 95% radius: not available (resampling none); it covers " in "\n".join(lines)
-    assert lines[-1] == "change test: R0 before and after 3.0 s differ by 2.000 deg, beyond their noise (p = 1e-05)"
+    assert lines[-1] == ("change test: R0 before and after 3.0 s differ by 2.000 deg, beyond their noise (p = 1e-05; "
+                         "splits tested from 1.0 to 9.0 s: a change outside cannot be told)")
     lines = _result(time_offset_ci95_s=(-math.inf, math.inf), change_test={"run": False, "note": "too short"})\
         .summary().split("\n")
     offset = next(line for line in lines if line.startswith("time offset: "))
