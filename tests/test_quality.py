@@ -71,6 +71,7 @@ DRIVERS = {
     "reference_error_deg": ("above", "reference_error_deg", lambda v: dict(reference_error_deg=v)),
     "remount_deg": ("above", "remount_deg", lambda v: dict(change=_change(v))),
     "offset_left_ms": ("above", "offset_left_ms", lambda v: dict(offset_s=v / 1e3, offset_applied=False)),
+    "mirror_fit_ratio": ("below", "mirror_fit_ratio", lambda v: dict(mirror_fit_ratio=v)),
 }
 
 #: Checks whose value is a count: "just below / above" is one less / more.
@@ -99,6 +100,7 @@ DOCUMENTED = {
     "excitation_deg": (1.0, None), "motion_median_deg": (1.0, 0.5), "pose_residual_ratio": (3.0, None),
     "gap_share_dropped": (0.0, 0.5), "gyro_rate_hz": (50.0, None), "gyro_samples_per_interval": (None, 5.0),
     "n_pairs": (30, 10), "reference_error_deg": (1.0, 5.0), "remount_deg": (0.5, 0.75), "offset_left_ms": (5.0, None),
+    "mirror_fit_ratio": (3.0, None),
 }
 
 
