@@ -32,7 +32,7 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and
 thresholds as the batch verdict, :mod:`replication.quality`). :meth:`OnlineCalibrator.status` says which of these
 fails, with its number.
 
@@ -52,14 +52,13 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import NamedTuple
 
 import numpy as np
 
 from .checks import check_number, check_range, check_rotation_flat, check_rotation_matrices
 from .handeye import unvec, vec
-from .online_events import (DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, RepeatFilter,
-                            residual_angle_deg)
+from .online_events import (DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, OnlineState,
+                            RepeatFilter, residual_angle_deg)
 from .so3 import angle_between_deg, nearest_rotation_up_to_sign
 from .stats import radius_deg
 
@@ -79,26 +78,11 @@ NOISE_FLOOR_DEG = 0.01
 MIN_EXCITATION_DEG = 1.0
 #: Pairs before the radius, ``ready`` and the change detector mean anything (3 unknowns, noise from J - 3).
 MIN_PAIRS = 10
-#: ``ready`` is withdrawn once this many pairs since the CUSUM last stood at 0 were gross misfits (held out): the
-#: estimate no longer fits what the rig does now, whether a change or outliers (the detector decides which).
-#: Without a change a gross misfit (``d^2`` above 10 times its level) comes about once in 10^5 pairs.
+#: ``ready`` is withdrawn at this many gross misfits (``d^2`` above 10 times its level; about 1 in 10^5 pairs without a
+#: change) since the CUSUM last stood at 0: a change or outliers, which the detector has not decided yet.
 MISFITS_WITHDRAW_READY = 2
 #: Recent pairs whose residuals and motions the online verdict reads (its medians).
 RECENT_PAIRS = 200
-
-
-class OnlineState(NamedTuple):
-    """What :meth:`OnlineCalibrator.update` returns after each pair (an immutable record)."""
-
-    n_pairs: int          # pairs since the last (re)start, repeats excluded
-    R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
-    radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
-    ready: bool           # determined, radius below the target, no change being confirmed, verdict not fail
-    alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
-    event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
-    determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
-    checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
-    estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
 
 
 class OnlineCalibrator:
@@ -292,23 +276,8 @@ class OnlineCalibrator:
                     and (self._verdict is None or self._verdict.level != "fail"))
 
     def unresolved_end(self):
-        """A warning :class:`replication.quality.Reason` when the stream stops while the detector is undecided (an
-        alarm being confirmed, or gross misfits since the CUSUM last stood at 0), else None: a change of ``R0``
-        in the last pairs can be neither confirmed nor ruled out."""
-        from .quality import Reason
-
-        d = self._detector
-        if d.checking:
-            return Reason("end_undecided", "warning", float(len(d.window)), float(d.target),
-                          f"the stream ended while an alarm (pair {d.alarm_pair}) was being confirmed, "
-                          f"{len(d.window)} of {d.target} pairs: a change of R0 at the end is neither confirmed nor "
-                          f"ruled out; the estimate is the one before the alarm (record longer)")
-        if d.misfits >= MISFITS_WITHDRAW_READY:
-            return Reason("end_undecided", "warning", float(d.misfits), float(MISFITS_WITHDRAW_READY),
-                          f"the last {len(d.since_onset)} pairs include {d.misfits} that do not fit the estimate "
-                          f"(d^2 above {d.cap:g} x its level; CUSUM {d.cusum:.3g} of {d.h:g}) when the stream "
-                          f"ended: a change of R0 at the end is neither confirmed nor ruled out (record longer)")
-        return None
+        """:meth:`replication.online_events.ChangeDetector.undecided` at the end of a stream, or None."""
+        return self._detector.undecided(MISFITS_WITHDRAW_READY)
 
     def _state(self, event) -> OnlineState:
         return OnlineState(self._n, self._R, self._radius, self.ready, event == "remount", event, self.determined,
@@ -383,12 +352,9 @@ class OnlineCalibrator:
         self._warm = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
 
     def _refine(self, max_iterations: int = 30) -> None:
-        """Newton on SO(3) to the minimiser of eq. (8), then the radius, the detector's start and the residual checks.
-
-        Newton starts from the two-step iterate (warm start) and from the relaxed minimiser of ``K`` (the linear
-        solution projected onto SO(3)); the lower cost wins. From a warm start 150 deg or more from ``R0`` (the
-        identity at the start, for a camera mounted upside down) Newton alone can end at another critical point
-        of eq. (8), about 180 deg away."""
+        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate and from the relaxed minimiser of
+        ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg or more away can end at another critical
+        point, about 180 deg off), then the radius, the detector's start and the residual checks."""
         from .solvers.classic import relaxed_rotation
         from .solvers.optimal import chordal_newton
 

@@ -32,6 +32,7 @@ import math
 import warnings
 from collections import deque
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -316,6 +317,20 @@ def describe(kind: str, info: dict, n_window: int, dropped: int) -> str:
     }[kind]
 
 
+class OnlineState(NamedTuple):
+    """What :meth:`OnlineCalibrator.update` returns after each pair (an immutable record)."""
+
+    n_pairs: int          # pairs since the last (re)start, repeats excluded
+    R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
+    radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
+    ready: bool           # determined, radius below the target, no change being confirmed, verdict not fail
+    alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
+    event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
+    determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
+    checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
+    estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
+
+
 class ChangeDetector:
     """The online estimator's change detector (see :mod:`replication.online`'s notes): a CUSUM on the pair
     residuals against a reference level, the drift test, the confirmation window after an alarm, and its decision
@@ -354,6 +369,24 @@ class ChangeDetector:
         """Pairs held out as gross misfits (``d^2`` above ``cap`` times the level) since the CUSUM last stood at 0:
         the start of a change or of an outlier burst that the CUSUM has not decided yet."""
         return sum(held for *_, held in self.since_onset) if self.cusum > 0.0 else 0
+
+    def undecided(self, misfits: int):
+        """A warning :class:`replication.quality.Reason` when a stream stops while this detector is undecided (an
+        alarm being confirmed, or at least ``misfits`` gross misfits since the CUSUM last stood at 0), else None:
+        a change of ``R0`` in the last pairs can be neither confirmed nor ruled out."""
+        from .quality import Reason
+
+        if self.checking:
+            return Reason("end_undecided", "warning", float(len(self.window)), float(self.target),
+                          f"the stream ended while an alarm (pair {self.alarm_pair}) was being confirmed, "
+                          f"{len(self.window)} of {self.target} pairs: a change of R0 at the end is neither confirmed "
+                          f"nor ruled out; the estimate is the one before the alarm (record longer)")
+        if self.misfits >= misfits:
+            return Reason("end_undecided", "warning", float(self.misfits), float(misfits),
+                          f"the last {len(self.since_onset)} pairs include {self.misfits} that do not fit the estimate "
+                          f"(d^2 above {self.cap:g} x its level; CUSUM {self.cusum:.3g} of {self.h:g}) when the stream "
+                          f"ended: a change of R0 at the end is neither confirmed nor ruled out (record longer)")
+        return None
 
     def arm(self, level: float, index: int) -> None:
         """Start (or restart) at reference level ``level``; ``index`` is the next pair's."""

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from replication import diagnose, so3
-from replication.diagnose import FIT_SHARE, FIT_TO_MOTION, HYPOTHESES, POSE_FIT_SHARE, TIE_ATOL, TIE_SHARE
+from replication.diagnose import FIT_SHARE, FIT_TO_MOTION, POSE_FIT_SHARE, TIE_ATOL, TIE_SHARE
 from replication.quality import THRESHOLDS
 from replication.streams import GyroStream, OrientationStream
 

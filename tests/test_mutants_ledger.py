@@ -3,7 +3,6 @@ how :func:`collect` reads records back (which notebook and cell, the claims file
 README update."""
 import json
 import sys
-import types
 from dataclasses import asdict
 
 import pytest

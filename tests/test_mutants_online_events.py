@@ -365,7 +365,7 @@ def test_decide_outliers_drops_the_held_pairs_and_carries_on():
     assert ev.onset_pair == onset == 3 and out["held_before"] == 4
     assert ev.pairs_dropped == 5  # the four held before the alarm and the one in the window
     assert len(out["kept"]) == 4 + 10 - 5
-    assert ev.message.endswith(f"outlier pairs, 5 kept out") and ev.R_after is not ev.R_before
+    assert ev.message.endswith("outlier pairs, 5 kept out") and ev.R_after is not ev.R_before
     assert np.array_equal(ev.R_after, R_old) or so3.angle_between_deg(ev.R_after, R_old) < 0.5
     assert (d.checking, d.window, d.cusum, d.level, d.onset, d.since_drift) == (False, [], 0.0, level, k, 0)
     assert d.armed is True and len(d.since_onset) == 0

@@ -5,7 +5,6 @@ import json
 import math
 
 import numpy as np
-import pytest
 
 from replication import __version__
 from replication.motions import MotionObservability
