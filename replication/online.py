@@ -32,8 +32,9 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and
-thresholds as the batch verdict, :mod:`replication.quality`). :meth:`OnlineCalibrator.status` says which of these
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, and the residuals are plausible
+(:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and thresholds as the batch verdict,
+:mod:`replication.quality`). :meth:`OnlineCalibrator.status` says which of these
 fails, with its number.
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
@@ -353,8 +354,8 @@ class OnlineCalibrator:
 
     def _refine(self, max_iterations: int = 30) -> None:
         """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate and from the relaxed minimiser of
-        ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg or more away can end at another critical
-        point, about 180 deg off), then the radius, the detector's start and the residual checks."""
+        ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg or more away can end at another
+        critical point, about 180 deg off), then the radius, the detector's start and the residual checks."""
         from .solvers.classic import relaxed_rotation
         from .solvers.optimal import chordal_newton
 
