@@ -37,7 +37,7 @@ from .checks import check_number
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .handeye import pair_residual_deg, relative_rotations
 from .poses import calibrate_poses, pose_pairs  # re-exported: public names here
-from .quality import THRESHOLDS, Evidence, judge
+from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
 from .so3 import rotation_angle_deg
 from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
@@ -209,9 +209,11 @@ def _same_stream(camera, sensor) -> str | None:
 MIRROR_FLOOR_DEG = 0.01
 
 
-def _mirror_fit(camera, gyro, interval, offset, stride, keep):
-    """How much worse the pairs fit with the gyro's frame mirrored about the axis it turns about least:
-    ``(ratio of the median residuals, that axis)``, each fit by ``chordal_optimal``.
+def _mirror_fit(camera, gyro, A, B, interval, offset, stride, keep) -> dict:
+    """How much worse the pairs ``A, B`` fit with the gyro's frame mirrored about the axis it turns about least:
+    ``{"mirror_fit_ratio": ratio of the median residuals, "mirror_normal": that axis}``, each fit by
+    ``chordal_optimal``; empty where the pairs themselves fit poorly (the verdict fails them already, and the
+    diagnosis names a sign-flipped axis) or are too few.
 
     A gyro with one axis's sign flipped (a left-handed frame, e.g. in a driver) reports ``D omega``
     (``D = diag(1, 1, -1)``). Where the rates stay in one plane (normal ``n``), ``D omega = (D P) omega`` with the
@@ -220,16 +222,20 @@ def _mirror_fit(camera, gyro, interval, offset, stride, keep):
     axis and fitting again measures how far the data are from that case (three-axis motion fits far worse)."""
     from .solvers import solve
 
-    w = gyro.omega
-    n = np.linalg.eigh(w.T @ w)[1][:, 0]
-    fits = []
-    for rates in (w, w - 2.0 * np.outer(w @ n, n)):
-        A, B, _ = motion_pairs(camera, integrate_gyro(GyroStream(gyro.t, rates, gyro.source)), interval, offset=offset)
-        A, B = A[::stride][keep], B[::stride][keep]
+    def median_residual(A, B):
         with warnings.catch_warnings():  # the mirrored fit may be poor: that is what it measures
             warnings.simplefilter("ignore")
-            fits.append(float(np.median(pair_residual_deg(solve("chordal_optimal", A, B), A, B))))
-    return fits[1] / max(fits[0], MIRROR_FLOOR_DEG), tuple(float(v) for v in n * np.sign(n[np.argmax(abs(n))]))
+            return float(np.median(pair_residual_deg(solve("chordal_optimal", A, B), A, B)))
+
+    plain = median_residual(A, B) if len(A) >= 3 else math.inf
+    if not plain <= THRESHOLDS["residual_to_motion"][0] * float(np.median(rotation_angle_deg(A))):
+        return {}
+    w = gyro.omega
+    n = np.linalg.eigh(w.T @ w)[1][:, 0]
+    mirrored = integrate_gyro(GyroStream(gyro.t, w - 2.0 * np.outer(w @ n, n), gyro.source))
+    A_m, B_m, _ = motion_pairs(camera, mirrored, interval, offset=offset)
+    ratio = median_residual(A_m[::stride][keep], B_m[::stride][keep]) / max(plain, MIRROR_FLOOR_DEG)
+    return {"mirror_fit_ratio": ratio, "mirror_normal": tuple(float(v) for v in n * np.sign(n[np.argmax(abs(n))]))}
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
@@ -384,23 +390,16 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
                     pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
+    mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
+    evidence.update(mirror)
     result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
                           time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
                           change_test=_change_report(change, change_fit),
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,
-                          pair_times=t_start, progress=progress)
+                          pair_times=t_start, progress=progress, extra_diagnostics=mirror)
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
                               change=change)
-    fit = result.residual_deg["median"] / max(result.diagnostics["motion_median_deg"], 1e-12)
-    if gyro is not None and len(A) >= 3 and fit <= THRESHOLDS["residual_to_motion"][0]:
-        # only where the fit is good: a poor one fails already, and the diagnosis names a sign-flipped axis
-        ratio, normal = _mirror_fit(camera, gyro, interval, used, stride, ~drop)
-        reason = judge(Evidence(n_pairs=len(A), residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None,
-                                mirror_fit_ratio=ratio, mirror_normal=normal)).reasons
-        result.diagnostics.update(mirror_fit_ratio=ratio, mirror_normal=normal)
-        if reason:
-            result = with_reasons(result, [r for r in reason if r.check == "mirror_fit_ratio"])
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])
