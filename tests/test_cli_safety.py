@@ -325,20 +325,26 @@ def test_an_output_onto_a_pipe_is_refused(files, no_work, capsys):
 
 # ------------------------------------------------------------------------------------------- file-system errors
 
-@pytest.mark.parametrize("option", ["--out", "--plot"])
-def test_an_output_in_an_unwritable_folder_is_refused_before_any_work(files, tmp_path, option, no_work, capsys):
-    locked = tmp_path / "locked"
-    locked.mkdir()
-    locked.chmod(0o500)
+@pytest.fixture
+def locked(tmp_path):
+    """A folder this user cannot write in (skipped where permissions are not enforced: root), restored afterwards."""
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o500)
     try:
-        if os.access(locked, os.W_OK):
+        if os.access(folder, os.W_OK):
             pytest.skip("folder permissions are not enforced for this user (root)")
-        target = locked / ("r.json" if option == "--out" else "f.png")
-        assert _calibrate(files, option, target) == 2
-        assert f"{option} {target}: cannot write in {locked} (Permission denied)" in capsys.readouterr().err
-        assert not list(locked.iterdir())
+        yield folder
     finally:
-        locked.chmod(0o700)
+        folder.chmod(0o700)
+
+
+@pytest.mark.parametrize("option", ["--out", "--plot"])
+def test_an_output_in_an_unwritable_folder_is_refused_before_any_work(files, locked, option, no_work, capsys):
+    target = locked / ("r.json" if option == "--out" else "f.png")
+    assert _calibrate(files, option, target) == 2
+    assert f"{option} {target}: cannot write in {locked} (Permission denied)" in capsys.readouterr().err
+    assert not list(locked.iterdir())
 
 
 def _disk_full(*args, **kwargs):
@@ -360,19 +366,11 @@ def test_a_disk_error_while_writing_an_output_is_a_message(files, tmp_path, opti
     assert not target.exists()
 
 
-def test_a_read_only_folder_refuses_the_write_and_leaves_nothing(tmp_path):
+def test_a_read_only_folder_refuses_the_write_and_leaves_nothing(locked):
     """:func:`replication._io.write_atomic` in a folder it cannot write: an ``OSError``, no file, no temporary."""
-    folder = tmp_path / "ro"
-    folder.mkdir()
-    folder.chmod(0o500)
-    try:
-        if os.access(folder, os.W_OK):
-            pytest.skip("folder permissions are not enforced for this user (root)")
-        with pytest.raises(PermissionError, match="Permission denied"):
-            _io.write_atomic(folder / "r.json", "{}")
-        assert not list(folder.iterdir())
-    finally:
-        folder.chmod(0o700)
+    with pytest.raises(PermissionError, match="Permission denied"):
+        _io.write_atomic(locked / "r.json", "{}")
+    assert not list(locked.iterdir())
 
 
 # ------------------------------------------------------------------------------------------- fetch-data
@@ -401,20 +399,12 @@ def test_fetch_data_into_a_path_under_a_file_is_refused_before_downloading(tmp_p
     assert not one_entry and blocker.read_text() == "keep"
 
 
-def test_fetch_data_into_a_read_only_folder_is_refused_before_downloading(tmp_path, one_entry, capsys):
-    locked = tmp_path / "locked"
-    locked.mkdir()
-    locked.chmod(0o500)
-    try:
-        if os.access(locked, os.W_OK):
-            pytest.skip("folder permissions are not enforced for this user (root)")
-        assert main(["fetch-data", str(locked / "real")]) == 2
-        assert f"DEST {locked / 'real'}: cannot create this folder (Permission denied)" in capsys.readouterr().err
-        assert main(["fetch-data", str(locked)]) == 2
-        assert f"cannot write in {locked} (Permission denied)" in capsys.readouterr().err
-        assert not one_entry
-    finally:
-        locked.chmod(0o700)
+def test_fetch_data_into_a_read_only_folder_is_refused_before_downloading(locked, one_entry, capsys):
+    assert main(["fetch-data", str(locked / "real")]) == 2
+    assert f"DEST {locked / 'real'}: cannot create this folder (Permission denied)" in capsys.readouterr().err
+    assert main(["fetch-data", str(locked)]) == 2
+    assert f"cannot write in {locked} (Permission denied)" in capsys.readouterr().err
+    assert not one_entry
 
 
 def test_fetch_data_reports_a_disk_error_while_writing(tmp_path, one_entry, monkeypatch, capsys):

@@ -132,6 +132,13 @@ def test_an_event_record_holds_every_field():
                             "R_after": (2 * np.eye(3)).tolist(), "message": "m"}
 
 
+def _old_estimate(noise_deg, sd_deg):
+    """The old estimate's mean square residual ``s2`` and reference level ``m`` at pair noise ``noise_deg``, and its
+    covariance (``sd_deg`` per axis)."""
+    sigma = math.radians(noise_deg)
+    return 1.5 * sigma ** 2, 3 * sigma ** 2, np.eye(3) * np.radians(sd_deg) ** 2
+
+
 def _window(R, n, noise_deg, rng, shift=None):
     A = so3.random_rotations(rng, n)
     B = np.swapaxes(R, -1, -2) @ A @ R
@@ -306,9 +313,7 @@ def test_decide_a_remount_keeps_the_pairs_that_fit_the_new_estimate_and_resets()
     rng = np.random.default_rng(21)
     R_old = _rot(30.0)
     new = R_old @ _rot(5.0, (0, 0, 1))
-    sigma = math.radians(0.2)
-    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
-    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2, m, cov = _old_estimate(0.2, 0.05)
     d = _armed(m)
     A, B = _window(new, 40, 0.2, rng)
     k = 0
@@ -341,9 +346,7 @@ def test_decide_a_remount_keeps_the_pairs_that_fit_the_new_estimate_and_resets()
 def test_decide_outliers_drops_the_held_pairs_and_carries_on():
     rng = np.random.default_rng(22)
     R_old = _rot(30.0)
-    sigma = math.radians(0.2)
-    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
-    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2, m, cov = _old_estimate(0.2, 0.05)
     d = _armed(m)
     A, B = _window(R_old, 40, 0.15, rng)
     B[3:8] = B[3:8] @ _rot(20.0, (1, 0, 0))  # five gross outliers in a row: the CUSUM rises by cap - k each
@@ -679,9 +682,7 @@ def _fill(d, R_old, A, B, cov, s2):
 def test_decide_new_information_adds_every_pair_and_rearms():
     rng = np.random.default_rng(15)
     R_old = _rot(30.0)
-    sigma = math.radians(0.1)
-    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
-    cov = np.eye(3) * np.radians(1.0) ** 2
+    s2, m, cov = _old_estimate(0.1, 1.0)
     A, B = _window(R_old @ _rot(0.3, (0, 1, 0)), 14, 0.1, rng)
     d = _armed(m)
     k = _fill(d, R_old, A, B, cov, s2)
@@ -695,9 +696,7 @@ def test_decide_new_information_adds_every_pair_and_rearms():
 def test_decide_a_noise_change_moves_the_reference_level_to_the_windows():
     rng = np.random.default_rng(47)
     R_old = _rot(30.0)
-    sigma = math.radians(0.2)
-    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
-    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2, m, cov = _old_estimate(0.2, 0.05)
     A, B = _window(R_old, 40, 0.8, rng)
     d = _armed(m)
     k = _fill(d, R_old, A, B, cov, s2)
@@ -723,9 +722,7 @@ def test_decide_an_undecided_window_waits_for_confirm_pairs_more_up_to_the_most(
 def test_decide_a_remount_drops_a_window_pair_that_does_not_fit_the_new_estimate():
     rng = np.random.default_rng(21)
     R_old = _rot(30.0)
-    sigma = math.radians(0.2)
-    s2, m = 1.5 * sigma ** 2, 3 * sigma ** 2
-    cov = np.eye(3) * np.radians(0.05) ** 2
+    s2, m, cov = _old_estimate(0.2, 0.05)
     A, B = _window(R_old @ _rot(5.0, (0, 0, 1)), 20, 0.2, rng)
     B[6] = B[6] @ _rot(30.0, (1, 0, 0))
     d = _armed(m)
