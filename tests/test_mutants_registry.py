@@ -147,17 +147,28 @@ def _geodesic(R_from, R_to, t):
     return R_from @ so3.exp_map(t * so3.log_map(np.swapaxes(R_from, -1, -2) @ R_to))
 
 
-def test_gross_screen_at_ten_times_the_certified_minimum():
+def _gross_case():
+    """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* + LOCAL_ATOL J`` and cost (8)."""
     m = _motions(noise_deg=3.0)
     cert = optimal.global_certificate(m)
     far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
     bound = _registry.GROSS_FACTOR * float(cert.cost) + _registry.LOCAL_ATOL * J
-    cost = lambda R: float(_registry.handeye_cost(R, m.A, m.B))  # noqa: E731
-    lo, hi = 0.0, 1.0  # bisect the geodesic from the minimiser to a far answer for cost = the bound
-    assert cost(_geodesic(cert.R, far, hi)) > bound
+    return m, cert, far, bound, lambda R: float(_registry.handeye_cost(R, m.A, m.B))
+
+
+def _bisect(cert, far, cost, target):
+    """The bracket ``(lo, hi)`` of the fraction along the geodesic from the minimiser to ``far`` where cost = target."""
+    lo, hi = 0.0, 1.0
     for _ in range(60):
         mid = (lo + hi) / 2
-        lo, hi = (mid, hi) if cost(_geodesic(cert.R, far, mid)) <= bound else (lo, mid)
+        lo, hi = (mid, hi) if cost(_geodesic(cert.R, far, mid)) <= target else (lo, mid)
+    return lo, hi
+
+
+def test_gross_screen_at_ten_times_the_certified_minimum():
+    m, cert, far, bound, cost = _gross_case()
+    assert cost(_geodesic(cert.R, far, 1.0)) > bound
+    lo, hi = _bisect(cert, far, cost, bound)
     inside, outside = _geodesic(cert.R, far, lo - 1e-6), _geodesic(cert.R, far, hi + 1e-6)
     flagged, caught = _warned(_registry.check_answer, m, inside, "fake")
     assert not flagged and caught == []
@@ -290,18 +301,10 @@ def test_the_gross_screen_keeps_a_two_dimensional_batch_shape():
 
 def test_the_gross_threshold_is_ten_times_the_minimum_plus_the_absolute_tolerance():
     """Answers whose cost (8) lies 0.5 LOCAL_ATOL J below and above ``GROSS_FACTOR f* + LOCAL_ATOL J``."""
-    m = _motions(noise_deg=3.0)
-    cert = optimal.global_certificate(m)
-    far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
-    bound = _registry.GROSS_FACTOR * float(cert.cost) + _registry.LOCAL_ATOL * J
-    cost = lambda R: float(_registry.handeye_cost(R, m.A, m.B))  # noqa: E731
+    m, cert, far, bound, cost = _gross_case()
 
     def at(target):  # the answer on the geodesic from the minimiser towards `far` whose cost is `target`
-        lo, hi = 0.0, 1.0
-        for _ in range(60):
-            mid = (lo + hi) / 2
-            lo, hi = (mid, hi) if cost(_geodesic(cert.R, far, mid)) <= target else (lo, mid)
-        return _geodesic(cert.R, far, lo)
+        return _geodesic(cert.R, far, _bisect(cert, far, cost, target)[0])
 
     half = 0.5 * _registry.LOCAL_ATOL * J
     below, above = at(bound - half), at(bound + half)
