@@ -21,7 +21,7 @@ def pytest_configure(config):
 
 def pytest_collection_modifyitems(config, items):
     from replication.__main__ import needs_real_data
-    from replication.realdata import data_root, real_data_available
+    from replication.rig.realdata import data_root, real_data_available
 
     # the longest files first (the portability re-run, then the notebooks), so that two xdist workers finish together
     # (in collection order the portability re-run started last and ran alone for minutes); the order within a file

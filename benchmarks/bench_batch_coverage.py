@@ -15,13 +15,13 @@ import warnings
 
 import numpy as np
 
-from replication import so3
-from replication.calibration import calibrate, calibrate_poses
-from replication.estimate import bootstrap_replicates, block_indices
-from replication.motions import prepare_motions
-from replication.poses import pose_pairs
-from replication.simulation import rig_streams
-from replication.stats import wilson_interval
+from replication.core import so3
+from replication.rig.calibration import calibrate, calibrate_poses
+from replication.rig.estimate import bootstrap_replicates, block_indices
+from replication.core.motions import prepare_motions
+from replication.rig.poses import pose_pairs
+from replication.study.simulation import rig_streams
+from replication.core.stats import wilson_interval
 
 
 def _share(hits):

@@ -2,7 +2,7 @@
 
 * ``robust`` (MSAC + IRLS) through its public door at J = 1e4, 1e5, 1e6 pairs (30 % outliers);
 * one ``cv2.calibrateHandEye`` call against the number of poses N (the wrappers refuse more than
-  ``replication.solvers.opencv.MAX_PAIRS`` pairs);
+  ``replication.core.solvers.opencv.MAX_PAIRS`` pairs);
 * ``estimate_time_offset`` at ``max_offset`` 0.2, 2 and 30 s on a synthetic stream of TUM-VI room1's size
   (2800 camera poses at 20 Hz, a 200 Hz gyro integrated).
 
@@ -24,8 +24,8 @@ METHODS = ("CALIB_HAND_EYE_TSAI", "CALIB_HAND_EYE_PARK", "CALIB_HAND_EYE_HORAUD"
 
 def robust_problem(J: int, *, outliers: float = 0.3, noise_deg: float = 0.5, seed: int = 0):
     """``(R0, A, B)``: Haar camera motions, sensor motions ``R0^T A R0`` with noise, a share replaced at random."""
-    from replication import so3
-    from replication.baselines import corrupt_pairs
+    from replication.core import so3
+    from replication.study.baselines import corrupt_pairs
 
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
@@ -40,10 +40,10 @@ def tumvi_like(seconds: float = 140.0, camera_hz: float = 20.0, gyro_hz: float =
 
     The attitude follows smooth sines as in ``tests/test_studies.py::synthetic_rig`` plus faster terms; the
     gyro's body rates are central differences of the sensor attitude, integrated by
-    :func:`replication.streams.integrate_gyro`.
+    :func:`replication.rig.streams.integrate_gyro`.
     """
-    from replication import so3
-    from replication.streams import GyroStream, OrientationStream, integrate_gyro
+    from replication.core import so3
+    from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
     R0 = so3.random_rotations(np.random.default_rng(seed), ())
 
@@ -77,19 +77,19 @@ def one(kind: str, value: float) -> dict:
     """One measurement (run in a subprocess by :func:`main`)."""
     import warnings
 
-    from replication import so3
+    from replication.core import so3
 
     warnings.simplefilter("ignore")
     if kind == "opencv":
         return opencv_times(int(value))
     if kind == "robust":
-        from replication.solvers import solve
+        from replication.core.solvers import solve
 
         R0, A, B = robust_problem(int(value))
         R, fig = _measure(lambda: solve("robust", A, B))
         fig["error_deg"] = float(so3.angle_between_deg(R, R0))
     else:
-        from replication.association import estimate_time_offset
+        from replication.rig.association import estimate_time_offset
 
         _, camera, sensor = tumvi_like()
         sensor.at(camera.t[10:12])  # build the interpolator outside the measurement
@@ -104,7 +104,7 @@ def opencv_times(N: int) -> dict:
 
     import cv2
 
-    from replication.solvers.opencv import _chain
+    from replication.core.solvers.opencv import _chain
 
     _, A, B = robust_problem(N - 1, outliers=0.0, seed=N)
     Hg, Hc = _chain(A, B)
@@ -132,8 +132,8 @@ def main():
     if args.one:
         print(json.dumps(one(args.one[0], float(args.one[1]))))
         return
-    from replication.solvers.msac import MAX_ENUMERATED_PAIRS
-    from replication.solvers.opencv import MAX_PAIRS
+    from replication.core.solvers.msac import MAX_ENUMERATED_PAIRS
+    from replication.core.solvers.opencv import MAX_PAIRS
 
     print(f"robust (public door; MAX_ENUMERATED_PAIRS = {MAX_ENUMERATED_PAIRS}), 30 % outliers, 0.5 deg noise:")
     for J in (10_000, 100_000) + (() if args.quick else (1_000_000,)):

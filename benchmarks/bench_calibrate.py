@@ -7,8 +7,9 @@ Nothing is asserted; the figures go to environment.md.
 import argparse
 import time
 
-from replication import calibrate, realdata as rd
-from replication.notebook import best_of
+from replication import calibrate
+from replication.rig import realdata as rd
+from replication.study.notebook import best_of
 
 
 def main():

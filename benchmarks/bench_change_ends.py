@@ -1,7 +1,7 @@
 """The batch change test near the ends of a recording: the share of pairs its splits leave on each side.
 
-``calibrate`` runs :func:`replication.changepoint.two_segment_test` with ``min_share =
-replication.calibration.CHANGE_MIN_SHARE`` (0.05). This compares it with the test's default 0.15 on
+``calibrate`` runs :func:`replication.rig.changepoint.two_segment_test` with ``min_share =
+replication.rig.calibration.CHANGE_MIN_SHARE`` (0.05). This compares it with the test's default 0.15 on
 ``bench_changepoint.py``'s rigs: false alarms without a change (N rigs from seed BASE, over its 8 settings), and
 2 and 5 deg re-mounts at 92 % and 95 % of 60 s rigs (20 each). Run twice with disjoint seeds.
 
@@ -13,8 +13,8 @@ import warnings
 import numpy as np
 
 from bench_changepoint import CONFIGS, rig, rig_pairs, wilson
-from replication import so3
-from replication.changepoint import two_segment_test
+from replication.core import so3
+from replication.rig.changepoint import two_segment_test
 
 SHARES = (0.15, 0.05)
 

@@ -1,4 +1,4 @@
-"""The batch change test (replication.changepoint.two_segment_test): its threshold, false alarms, re-mounts, cost.
+"""The batch change test (replication.rig.changepoint.two_segment_test): its threshold, false alarms, re-mounts, cost.
 
 1. the tail approximation of the threshold against simulated 3-dimensional Brownian bridges;
 2. false alarms without a change on synthetic rigs (a camera at 20 Hz and a gyro at 200 Hz on one rigid body, 60
@@ -22,14 +22,14 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from scipy.stats import binomtest
 
-from replication import so3
-from replication.association import estimate_time_offset, motion_pairs
-from replication.calibration import calibrate
-from replication.changepoint import remounted, threshold, two_segment_test
-from replication.live_study import REMOUNT_AXIS
-from replication.quality import THRESHOLDS
-from replication.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.core import so3
+from replication.rig.association import estimate_time_offset, motion_pairs
+from replication.rig.calibration import calibrate
+from replication.rig.changepoint import remounted, threshold, two_segment_test
+from replication.study.live_study import REMOUNT_AXIS
+from replication.rig.quality import THRESHOLDS
+from replication.rig.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
@@ -264,4 +264,4 @@ if __name__ == "__main__":
         as_recorded(recordings)
         remount_study(recordings)
     else:
-        print("3.-5. skipped: the real recordings are not available (replication.realdata.data_root)")
+        print("3.-5. skipped: the real recordings are not available (replication.rig.realdata.data_root)")

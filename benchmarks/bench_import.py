@@ -1,6 +1,6 @@
 """The package face (issue 14): import time of each layer in a fresh interpreter, and what it loads.
 
-``import replication.so3`` should load NumPy only (SciPy's rotations on first use); the loaders and the lab's
+``import replication.core.so3`` should load NumPy only (SciPy's rotations on first use); the loaders and the lab's
 recording I/O must not load the solvers or SciPy's optimiser. Each figure is the median wall time of the import
 over ``REPEATS`` fresh interpreters; a bare ``import numpy`` is printed first (most modules pay it).
 
@@ -11,11 +11,11 @@ import subprocess
 import sys
 
 REPEATS = 7
-MODULES = ["replication.so3", "replication", "replication.handeye", "replication.motions", "replication.streams",
-           "replication.datafile", "replication.paper", "replication.realdata", "replication.lab.recording",
-           "replication.solvers", "replication.calibration", "replication.lab"]
+MODULES = ["replication.core.so3", "replication", "replication.core.handeye", "replication.core.motions", "replication.rig.streams",
+           "replication.rig.datafile", "replication.study.paper", "replication.rig.realdata", "replication.study.lab.recording",
+           "replication.core.solvers", "replication.rig.calibration", "replication.study.lab"]
 PROBE = ("import time, sys; t = time.perf_counter(); import {m}; dt = time.perf_counter() - t; "
-         "print(dt, 'scipy.optimize' in sys.modules, 'replication.solvers' in sys.modules, 'scipy' in sys.modules)")
+         "print(dt, 'scipy.optimize' in sys.modules, 'replication.core.solvers' in sys.modules, 'scipy' in sys.modules)")
 
 
 def measure(module):

@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 from replication.__main__ import execute_notebook
-from replication.lab import load_lab, run_lab, simulate_lab, write_lab
+from replication.study.lab import load_lab, run_lab, simulate_lab, write_lab
 
 ROOT = Path(__file__).resolve().parent.parent
 

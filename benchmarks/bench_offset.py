@@ -4,7 +4,7 @@
   truth): the gyro's (ground truth's) time stamps are shifted by off-grid offsets (the issue's five and a dozen
   uniform in +-20 ms); the error of each is ``estimate(shifted) - estimate(unshifted) - shift``, before (the
   0.5 ms fine grid's maximum, the computation of before) and after (the refined offset), with the 95 % interval
-  of :func:`replication.association.offset_analysis` on each shifted stream;
+  of :func:`replication.rig.association.offset_analysis` on each shifted stream;
 * coverage of that interval over synthetic rigs (the rig of ``tests/test_association.py``, 30 s) with independent
   noise on the camera's poses and the gyro, each with an injected off-grid offset: the share of intervals holding
   it, with a Wilson 95 % interval on the share;
@@ -19,10 +19,11 @@ import time
 
 import numpy as np
 
-from replication import association, realdata, so3
-from replication.association import estimate_time_offset, offset_analysis
-from replication.calibration import _gap_free_window
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.rig import association, realdata
+from replication.core import so3
+from replication.rig.association import estimate_time_offset, offset_analysis
+from replication.rig.calibration import _gap_free_window
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 ISSUE_MS = (0.13, 0.37, 1.71, 2.29, -3.43)
 

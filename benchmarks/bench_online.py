@@ -7,10 +7,10 @@ Run: python benchmarks/bench_online.py
 """
 import tracemalloc
 
-from replication.live_study import update_costs
-from replication.online import OnlineCalibrator
-from replication.online_events import DUPLICATE_MEMORY
-from replication.simulation import simulate
+from replication.study.live_study import update_costs
+from replication.rig.online import OnlineCalibrator
+from replication.rig.online_events import DUPLICATE_MEMORY
+from replication.study.simulation import simulate
 
 if __name__ == "__main__":
     for n in (2000, 20000):

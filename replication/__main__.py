@@ -69,7 +69,7 @@ def _check_results(results, folder, paths) -> Path:
 def reproduce(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from .realdata import data_root, real_data_available
+    from .rig.realdata import data_root, real_data_available
 
     paths = notebooks(Path(args.notebooks))
     try:
@@ -95,7 +95,7 @@ def reproduce(args: argparse.Namespace) -> int:
             times[path.name] = execute_notebook(path)
     for name, seconds in times.items():
         print(f"{name}: {seconds:.1f} s")
-    from .ledger import collect, to_markdown
+    from .study.ledger import collect, to_markdown
 
     ledger = collect(complete=not args.only)
     (results / "tables").mkdir(parents=True, exist_ok=True)
@@ -110,7 +110,7 @@ def reproduce(args: argparse.Namespace) -> int:
 def claims_command(args: argparse.Namespace) -> int:
     """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
     file or README refused: the message on stderr)."""
-    from .ledger import collect, to_markdown, update_readme
+    from .study.ledger import collect, to_markdown, update_readme
 
     try:
         ledger = collect()
@@ -136,8 +136,8 @@ def claims_command(args: argparse.Namespace) -> int:
 def generate_lab_command(args: argparse.Namespace) -> int:
     import time
 
-    from .lab import LabSettings, simulate_lab
-    from .lab import default_lab_dir, write_lab
+    from .study.lab import LabSettings, simulate_lab
+    from .study.lab import default_lab_dir, write_lab
 
     start = time.perf_counter()
     settings = LabSettings() if args.seed is None else LabSettings(seed=args.seed)
@@ -154,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     rep.add_argument("--results", default=str(ROOT / "results"), help="output folder (tables/, figures/)")
     rep.add_argument("--only", nargs="*", help="run only notebooks whose name contains one of these")
     rep.set_defaults(func=reproduce)
-    from .calibrate_cli import add_parser as add_calibrate_parser
+    from .rig.calibrate_cli import add_parser as add_calibrate_parser
 
     add_calibrate_parser(sub)
     gen = sub.add_parser("generate-lab", help="write the simulated lab recordings (default: data/lab)")
@@ -165,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
     cla.add_argument("--readme", action="store_true", help="write it into README.md between the claims markers")
     cla.add_argument("--check", action="store_true", help="exit 1 if README.md's table is out of date")
     cla.set_defaults(func=claims_command)
-    from .fetch import FETCH_HELP, fetch_command
+    from .rig.fetch import FETCH_HELP, fetch_command
 
     fet = sub.add_parser("fetch-data", help="download and verify the real recordings (data/real_data_manifest.csv)",
                          description=FETCH_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .so3 import angle_between_deg, check_matrices
+from .core.so3 import angle_between_deg, check_matrices
 
 __all__ = ["assert_rotations_close"]
 

@@ -21,15 +21,15 @@ ROOT = Path(__file__).resolve().parent.parent
 #: The mutants scripts/mutation runs: every function of the judging modules; in _registry.py and checks.py only the
 #: answer checks and the atol / rotation checks.
 TARGETS = [
-    "replication.quality.*", "replication.diagnose.*", "replication.online.*", "replication.online_events.*",
-    "replication.live.*", "replication.ledger.*", "replication.association.*", "replication.report.*",
-    "replication.changepoint.*",
-    "replication.solvers._registry.x_check_answer__mutmut_*", "replication.solvers._registry.x__checked_answer__mutmut_*",
-    "replication.solvers._registry.x__screen_gross__mutmut_*",
-    "replication.solvers._registry.x__warn_not_rotations__mutmut_*",
-    "replication.solvers._registry.x_check_local_answer__mutmut_*",
-    "replication.checks.x_check_atol__mutmut_*", "replication.checks.x_check_number__mutmut_*",
-    "replication.checks.x_check_rotation_matrices__mutmut_*", "replication.checks.x_check_rotation_flat__mutmut_*",
+    "replication.rig.quality.*", "replication.rig.diagnose.*", "replication.rig.online.*", "replication.rig.online_events.*",
+    "replication.rig.live.*", "replication.study.ledger.*", "replication.rig.association.*", "replication.rig.report.*",
+    "replication.rig.changepoint.*",
+    "replication.core.solvers._registry.x_check_answer__mutmut_*", "replication.core.solvers._registry.x__checked_answer__mutmut_*",
+    "replication.core.solvers._registry.x__screen_gross__mutmut_*",
+    "replication.core.solvers._registry.x__warn_not_rotations__mutmut_*",
+    "replication.core.solvers._registry.x_check_local_answer__mutmut_*",
+    "replication.core.checks.x_check_atol__mutmut_*", "replication.core.checks.x_check_number__mutmut_*",
+    "replication.core.checks.x_check_rotation_matrices__mutmut_*", "replication.core.checks.x_check_rotation_flat__mutmut_*",
 ]
 
 STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", None: "not checked",

@@ -4,8 +4,8 @@ import shutil
 import numpy as np
 import pytest
 
-from replication.lab.settings import LabSettings
-from replication.so3 import random_rotations
+from replication.study.lab.settings import LabSettings
+from replication.core.so3 import random_rotations
 
 
 @pytest.fixture
@@ -28,7 +28,7 @@ SMALL_LAB = dataclasses.replace(LabSettings(), n_sets=2, poses_per_set=(4, 4), d
 @pytest.fixture(scope="session")
 def lab_recording(tmp_path_factory):
     """A folder written by ``write_lab`` from :data:`SMALL_LAB` (shared: do not modify, use ``lab_dir``)."""
-    from replication.lab import simulate_lab, write_lab
+    from replication.study.lab import simulate_lab, write_lab
 
     return write_lab(simulate_lab(SMALL_LAB), tmp_path_factory.mktemp("lab") / "rec")
 

@@ -1,4 +1,4 @@
-"""The clock offset of :mod:`replication.association`: refined below the search grid, with a block-bootstrap interval,
+"""The clock offset of :mod:`replication.rig.association`: refined below the search grid, with a block-bootstrap interval,
 the margin of its correlation peak over the next one, and its sign in words.
 
 The synthetic rig is the one of ``tests/test_calibrate_trust.py`` (a 20 Hz camera and, rigidly attached, a 200 Hz
@@ -10,10 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from replication import association, so3
-from replication.association import OffsetEstimate, estimate_time_offset, offset_analysis, offset_in_words
-from replication.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.rig import association
+from replication.core import so3
+from replication.rig.association import OffsetEstimate, estimate_time_offset, offset_analysis, offset_in_words
+from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
 

@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, so3
-from replication.simulation import simulate
-from replication.solvers import (
+from replication.core import handeye, so3
+from replication.study.simulation import simulate
+from replication.core.solvers import (
     ObservabilityWarning, Solution, andreff, chordal_optimal, horaud_dornaika, pair_residual_deg,
     park_martin, robust,
     solve, two_step,
 )
-from replication.solvers.opencv import UNUSABLE_FOR_ROTATION_ONLY, _chain, all_pairs
-from replication.solvers.optimal import chordal_newton
+from replication.core.solvers.opencv import UNUSABLE_FOR_ROTATION_ONLY, _chain, all_pairs
+from replication.core.solvers.optimal import chordal_newton
 from replication.testing import assert_rotations_close
 
 

@@ -8,13 +8,13 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.calibration import calibrate, calibrate_poses
-from replication.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
-from replication.quality import THRESHOLDS, Evidence, judge
-from replication.association import offset_in_words
-from replication.report import RADIUS_COVERS
-from replication.simulation import rig_streams
+from replication.core import so3
+from replication.rig.calibration import calibrate, calibrate_poses
+from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
+from replication.rig.quality import THRESHOLDS, Evidence, judge
+from replication.rig.association import offset_in_words
+from replication.rig.report import RADIUS_COVERS
+from replication.study.simulation import rig_streams
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())
@@ -46,12 +46,12 @@ def test_pose_sets_resample_stations_not_pairs(rng):
     pairs = calibrate_poses(C, S, n_bootstrap=100, seed=1, pairs="consecutive")
     assert pairs.bootstrap_resamples == "pairs in moving blocks of 2"
     # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations' information
-    import replication.estimate as est
+    import replication.rig.estimate as est
 
     J = r.n_pairs
     by_pairs = est.block_indices(np.random.default_rng(1), J, 1, 100)
-    motions = __import__("replication.motions", fromlist=["prepare_motions"]).prepare_motions(
-        *__import__("replication.poses", fromlist=["pose_pairs"]).pose_pairs(C, S))
+    motions = __import__("replication.core.motions", fromlist=["prepare_motions"]).prepare_motions(
+        *__import__("replication.rig.poses", fromlist=["pose_pairs"]).pose_pairs(C, S))
     R_boot = est.bootstrap_replicates(motions, "chordal_optimal", {}, by_pairs, progress=False)
     naive = float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95))
     assert r.bootstrap_ci95_deg > 2.5 * naive
@@ -126,7 +126,7 @@ def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
     """The summary states the sign right for both signs (it printed 'ahead' whatever the sign)."""
     assert offset_in_words(offset) == words
     R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.02)
-    from replication.streams import GyroStream
+    from replication.rig.streams import GyroStream
 
     r = calibrate(camera, GyroStream(gyro.t + offset, gyro.omega, "gyro"), n_bootstrap=20)
     line = next(x for x in r.summary().splitlines() if x.startswith("time offset"))
@@ -184,7 +184,7 @@ def test_judge_tolerates_missing_residuals():
 # ------------------------------------------------------------------------------------------- a change inside a recording
 
 def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
-    from replication.changepoint import remounted
+    from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(90.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
     step = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
@@ -237,7 +237,7 @@ def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, r
 def test_an_input_mistake_is_not_called_a_remount(rng):
     R0, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05)
     q = so3.as_quaternion(camera.R)[:, [1, 2, 3, 0]]
-    from replication.streams import OrientationStream
+    from replication.rig.streams import OrientationStream
 
     r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
     assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
@@ -248,7 +248,7 @@ def test_an_input_mistake_is_not_called_a_remount(rng):
 
 def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40.0):
     """A camera turning about its x and y axes (and ``out_of_plane`` rad/s about z), a gyro on the same body."""
-    from replication.streams import GyroStream, OrientationStream
+    from replication.rig.streams import GyroStream, OrientationStream
 
     rng = np.random.default_rng(seed)
     R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
@@ -268,7 +268,7 @@ def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40
 def test_rates_in_one_plane_cannot_show_a_flipped_gyro_axis_and_the_verdict_says_so():
     """Red team: a gyro with one axis's sign flipped and rates in one plane gave ok, radius 0.02 deg, R0 126 deg off.
     The flipped gyro is exactly a right-handed one mounted otherwise; both now warn, naming the unturned axis."""
-    from replication.streams import GyroStream
+    from replication.rig.streams import GyroStream
 
     R0, camera, gyro = _rig_from_body_rates(0.0)
     normal = R0.T @ np.array([0.0, 0.0, 1.0])  # the camera's z axis in the sensor frame
@@ -299,8 +299,8 @@ def test_the_mirror_ratio_threshold_at_its_boundary():
 
 def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_are_said():
     """Red team: a 5 deg re-mount at 55 s of 60 s gave ok (the splits left 15 % on each side)."""
-    from replication.calibration import CHANGE_MIN_SHARE
-    from replication.changepoint import remounted
+    from replication.rig.calibration import CHANGE_MIN_SHARE
+    from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(3), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
     turn = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))

@@ -12,13 +12,14 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication import lab, so3
+from replication.study import lab
+from replication.core import so3
 from replication.__main__ import main
-from replication.calibration import _same_stream, calibrate, calibrate_poses
-from replication.datafile import DataFileError
-from replication.quality import EXIT_FAIL, Evidence, judge
-from replication.realdata import data_root, real_data_available
-from replication.streams import GyroStream, OrientationStream
+from replication.rig.calibration import _same_stream, calibrate, calibrate_poses
+from replication.rig.datafile import DataFileError
+from replication.rig.quality import EXIT_FAIL, Evidence, judge
+from replication.rig.realdata import data_root, real_data_available
+from replication.rig.streams import GyroStream, OrientationStream
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())
@@ -180,7 +181,7 @@ def test_nearly_single_axis_motion_warns_with_its_spread():
     assert _reasons(r)["axis_spread_deg"].level == "warning" and r.verdict.level != "ok"
 
 
-@pytest.mark.filterwarnings("ignore::replication.solvers.ConvergenceWarning")
+@pytest.mark.filterwarnings("ignore::replication.core.solvers.ConvergenceWarning")
 def test_sqp_away_from_the_certified_optimum_fails(rig):
     camera, gyro, _ = rig
     r = calibrate(camera, gyro, method="sqp", max_iterations=2, **_fast(n_bootstrap=0))
@@ -249,7 +250,7 @@ def test_lab_recording_with_times_in_ms_is_refused(lab_dir):
 ])
 def test_bad_parameters_are_refused_before_any_work(rig, kwargs, message, monkeypatch):
     camera, gyro, _ = rig
-    import replication.calibration as cal
+    import replication.rig.calibration as cal
 
     monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(ValueError, match=message):
@@ -367,7 +368,7 @@ def test_cli_bad_numbers_exit_2_naming_the_option(rig_files, extra, message, cap
                                   "trailing slash"])
 def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_files, tmp_path, case, capsys,
                                                                           monkeypatch):
-    import replication.calibration as cal
+    import replication.rig.calibration as cal
 
     monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
     blocker = tmp_path / "file"
@@ -421,8 +422,8 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
     """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
     recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
-    from replication.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
-    from replication.so3 import exp_map
+    from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
+    from replication.core.so3 import exp_map
 
     camera, _, _ = rig
     t, R = camera.t, camera.R
@@ -444,7 +445,7 @@ def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig)
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
     camera, gyro, _ = rig
-    import replication.estimate as est
+    import replication.rig.estimate as est
 
     def refuse(*a, **k):
         raise ValueError("degenerate motion: a resample")
@@ -467,7 +468,7 @@ def test_the_time_unit_reason_blames_the_implausible_stream(rig, side, unit):
 
 def test_unknown_or_refused_solver_options_are_named_before_the_work(rig, monkeypatch):
     camera, gyro, _ = rig
-    import replication.calibration as cal
+    import replication.rig.calibration as cal
 
     monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(ValueError, match=r"does not take the option\(s\) \['foo'\]"):
@@ -511,7 +512,7 @@ def test_cli_euroc_with_repeated_lines(tmp_path):
 
 
 @needs_real
-@pytest.mark.filterwarnings("ignore::replication.solvers.ConvergenceWarning")
+@pytest.mark.filterwarnings("ignore::replication.core.solvers.ConvergenceWarning")
 def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsys):
     d = data_root() / "tumvi_room1_orbslam3mono"
     code = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",

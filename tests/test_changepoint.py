@@ -13,14 +13,14 @@ import warnings
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.association import motion_pairs
-from replication.calibration import calibrate
-from replication.changepoint import ChangeTest, remounted, threshold, two_segment_test
-from replication.quality import THRESHOLDS
-from replication.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
-from replication.solvers import chordal_optimal
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.core import so3
+from replication.rig.association import motion_pairs
+from replication.rig.calibration import calibrate
+from replication.rig.changepoint import ChangeTest, remounted, threshold, two_segment_test
+from replication.rig.quality import THRESHOLDS
+from replication.rig.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
+from replication.core.solvers import chordal_optimal
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import assert_rotations_close
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]

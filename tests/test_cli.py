@@ -9,9 +9,9 @@ def test_reproduce_executes_notebooks_in_order_and_writes_results(tmp_path):
     nbdir, results = tmp_path / "nb", tmp_path / "results"
     nbdir.mkdir()
     for name, code in [
-        ("01_a.ipynb", "from replication.notebook import save_table\nimport pandas as pd\n"
+        ("01_a.ipynb", "from replication.study.notebook import save_table\nimport pandas as pd\n"
                        "save_table(pd.DataFrame({'x': [1]}), 'first')"),
-        ("02_b.ipynb", "from replication.notebook import results_dir\n"
+        ("02_b.ipynb", "from replication.study.notebook import results_dir\n"
                        "assert (results_dir() / 'tables' / 'first.csv').exists()\nprint('ok')"),
     ]:
         nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
@@ -50,7 +50,7 @@ def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
 def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
     """(That the committed data/lab equal the generator's output is tests/test_lab.py's check.)"""
     from replication.__main__ import main
-    from replication.lab import load_lab
+    from replication.study.lab import load_lab
 
     assert main(["generate-lab", "--out", str(tmp_path / "a"), "--seed", "7"]) == 0
     assert "seed 7" in capsys.readouterr().out

@@ -3,7 +3,7 @@ file-system problem in a clear message with exit code 2, never a traceback.
 
 Each refused run is checked for its exit code, its message on standard error, no work done (the calibration,
 the downloads or the notebooks replaced by a failure) and its inputs byte-identical afterwards. The synthetic rig
-(:func:`replication.simulation.rig_streams`) is written as a TUM trajectory and an EuRoC IMU CSV on Unix-like
+(:func:`replication.study.simulation.rig_streams`) is written as a TUM trajectory and an EuRoC IMU CSV on Unix-like
 absolute times (1.52e9 s), the scale at which the old overlap message printed ``1.52053e+09..1.52053e+09``.
 """
 import errno
@@ -20,11 +20,13 @@ import jsonschema
 import numpy as np
 import pytest
 
-import replication.calibration as cal
-from replication import _io, fetch, so3
+import replication.rig.calibration as cal
+from replication import _io
+from replication.rig import fetch
+from replication.core import so3
 from replication.__main__ import main
-from replication.calibration import OverlapError, calibrate
-from replication.simulation import rig_streams
+from replication.rig.calibration import OverlapError, calibrate
+from replication.study.simulation import rig_streams
 
 ROOT = Path(__file__).resolve().parent.parent
 SCHEMA = json.loads((ROOT / "docs" / "calibration_report.schema.json").read_text())
@@ -170,7 +172,7 @@ def test_the_api_plot_honours_the_extension_or_refuses_before_drawing(rig, tmp_p
     for suffix, magic in MAGIC.items():
         result.plot(tmp_path / f"f{suffix}")
         assert (tmp_path / f"f{suffix}").read_bytes().startswith(magic)
-    import replication.figures as figures
+    import replication.rig.figure as figures
 
     monkeypatch.setattr(figures, "calibration_figure", lambda *a: pytest.fail("drawn before the format was checked"))
     with pytest.raises(ValueError, match=r"f\.jpeg: unknown figure format \.jpeg; supported: \.png, \.pdf, \.svg"):
@@ -354,7 +356,7 @@ def _disk_full(*args, **kwargs):
 @pytest.mark.parametrize("option, name", [("--out", "r.json"), ("--plot", "f.pdf"), ("--track", "t.csv")])
 def test_a_disk_error_while_writing_an_output_is_a_message(files, tmp_path, option, name, monkeypatch, capsys):
     """The write itself fails (a full disk), after the checks passed: exit 2 naming the output and the reason."""
-    import replication.calibrate_cli as cli
+    import replication.rig.calibrate_cli as cli
 
     monkeypatch.setattr(cli, "write_atomic", _disk_full)
     monkeypatch.setattr(_io, "write_atomic", _disk_full)  # CalibrationResult.plot's
@@ -463,7 +465,7 @@ def test_reproduce_refuses_a_results_folder_that_clashes_or_cannot_be_made(noteb
 
 def test_a_max_offset_beyond_the_overlap_is_named_with_durations(rig):
     _, camera, gyro, _ = rig
-    from replication.streams import GyroStream, OrientationStream
+    from replication.rig.streams import GyroStream, OrientationStream
 
     cam = OrientationStream(camera.t + T0, camera.R, "camera")
     imu = GyroStream(gyro.t + T0, gyro.omega, "imu")
@@ -487,7 +489,7 @@ def test_the_cli_names_its_max_offset_option(files, capsys):
 
 def test_streams_on_different_clocks_keep_the_start_times_that_show_it(rig):
     _, camera, gyro, _ = rig
-    from replication.streams import GyroStream, OrientationStream
+    from replication.rig.streams import GyroStream, OrientationStream
 
     cam = OrientationStream(camera.t, camera.R, "camera")  # relative times
     imu = GyroStream(gyro.t + T0, gyro.omega, "imu")  # absolute times

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication import so3
-from replication.simulation import simulate
-from replication.solvers import available, solve, solver_info
+from replication.core import so3
+from replication.study.simulation import simulate
+from replication.core.solvers import available, solve, solver_info
 from replication.testing import assert_rotations_close
 
 ALL = available()

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from conftest import SMALL_LAB
 
-from replication import lab, paper
-from replication import realdata as rd
-from replication.datafile import DataFileError, DataFileNotFound, fail, read_lines, read_text
+from replication.study import lab, paper
+from replication.rig import realdata as rd
+from replication.rig.datafile import DataFileError, DataFileNotFound, fail, read_lines, read_text
 
 TUM_LINES = [
     "# t tx ty tz qx qy qz qw",
@@ -216,7 +216,7 @@ def test_other_realdata_loaders_raise_it_too(tmp_path):
 
 def test_read_table_is_the_loaders_parser_with_a_header_and_quaternion_check(tmp_path):
     """A new format's loader needs only the toolkit: header, file/line/column errors, quaternion norms."""
-    from replication.datafile import read_table, unit_quaternion_rotations
+    from replication.rig.datafile import read_table, unit_quaternion_rotations
 
     path = tmp_path / "poses.csv"
     path.write_text("t_ns,qw,qx,qy,qz\n1,1,0,0,0\n2,0,1,0,0\n3,0.5,x,0.5,0.5\n")

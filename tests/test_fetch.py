@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from replication import fetch, realdata as rd
+from replication.rig import fetch, realdata as rd
 
 ROOT = Path(__file__).resolve().parent.parent
 HAVE_REAL = rd.real_data_available()
@@ -143,7 +143,7 @@ def test_missing_data_names_the_command(tmp_path):
 @needs_real
 def test_stereo_rectification_rotation_of_the_euroc_run():
     cfg = rd.load_orbslam3_stereo(rd.data_root() / "euroc_mh01_orbslam3" / "orbslam3_Stereo_EuRoC.yaml")
-    from replication.so3 import rotation_angle_deg
+    from replication.core.so3 import rotation_angle_deg
     assert abs(float(rotation_angle_deg(cfg.rectification_rotation())) - 0.620) < 0.002  # the shared README's
 
 

@@ -3,10 +3,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.fig5 import (
+from replication.study.fig5 import (
     fig5_figure, noise_sweep, ratio_range, resilience, sqp_configs_for, summary_table, sweep_grid, two_step_growth,
 )
-from replication.stats import share_range
+from replication.core.stats import share_range
 
 
 def test_sqp_configs_for_the_grid():

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, motions, so3
+from replication.core import handeye, motions, so3
 
 
 @settings(max_examples=30, deadline=None)

@@ -9,10 +9,11 @@ import pandas as pd
 import pytest
 from conftest import SMALL_LAB
 
-from replication import lab, so3
-from replication.datafile import DataFileError
-from replication.lab.simulate import _look_at
-from replication.handeye import relative_rotations
+from replication.study import lab
+from replication.core import so3
+from replication.rig.datafile import DataFileError
+from replication.study.lab.simulate import _look_at
+from replication.core.handeye import relative_rotations
 
 SMALL = SMALL_LAB
 

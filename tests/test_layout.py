@@ -1,6 +1,13 @@
-"""The house rules of the package layout (README, "Layout"): every subpackage is installed, no module is over 500
-lines, the maths and data layers load neither the solvers nor SciPy's optimiser, and no name shadows a submodule."""
+"""The house rules of the package layout (README, "Layout").
+
+Three rooms and a hall: ``replication/core`` (the maths and the solvers), ``replication/rig`` (calibrating a real rig),
+``replication/study`` (the paper's replication), and at the top the package face, the command line, the atomic writer
+and the testing helpers. Arrows run study -> rig -> core only, at module level and inside functions; no import cycle
+anywhere; every name has one home; notebooks call public names in short cells.
+"""
+import ast
 import importlib
+import json
 import pkgutil
 import subprocess
 import sys
@@ -14,9 +21,70 @@ import replication
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "replication"
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 #: The packages (only they have submodules a name could shadow), the top one included.
 PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
                                     if m.ispkg)
+#: Rank of each room: a module imports only from its own room or a lower one. The two leaves of the hall (the atomic
+#: writer and the version) import nothing of the package and serve every room; the rest of the hall is on top.
+ROOMS = {"_io": 0, "_version": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4, "__main__": 4, "testing": 4}
+MAX_TOP_LEVEL_MODULES = 8
+MAX_CELL_LINES = 60
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+    return ".".join(parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _room(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else "__init__"
+
+
+def _type_checking_lines(tree) -> set:
+    lines = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            for child in node.body:
+                lines.update(range(child.lineno, child.end_lineno + 1))
+    return lines
+
+
+def imports_of(module: str):
+    """``(line, target)`` for every import of a package module in ``module``, at any depth (functions included) and
+    of every name that is itself a module (``from . import so3``); ``if TYPE_CHECKING:`` blocks left out."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    skip = _type_checking_lines(tree)
+    package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+    for node in ast.walk(tree):
+        if getattr(node, "lineno", None) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if alias.name.split(".")[0] == "replication":
+                    yield node.lineno, _existing(alias.name)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = ".".join(package[: len(package) - node.level + 1] + ([node.module] if node.module else []))
+            elif (node.module or "").split(".")[0] == "replication":
+                base = node.module
+            else:
+                continue
+            yield node.lineno, _existing(base)
+            for alias in node.names:
+                if f"{base}.{alias.name}" in MODULES:
+                    yield node.lineno, f"{base}.{alias.name}"
+
+
+def _existing(name: str) -> str:
+    assert name in MODULES, f"{name} is not a module of the package"
+    return name
 
 
 def test_every_subpackage_is_installed():
@@ -25,19 +93,28 @@ def test_every_subpackage_is_installed():
     assert declared == found
 
 
+def test_the_top_level_is_three_rooms_and_a_small_hall():
+    modules = sorted(p.name for p in PACKAGE.glob("*.py"))
+    folders = sorted(p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists())
+    assert folders == ["core", "rig", "study"]
+    assert len(modules) <= MAX_TOP_LEVEL_MODULES, modules
+    assert {m.removesuffix(".py") for m in modules} <= set(ROOMS), f"{modules}: a module in no room of ROOMS"
+
+
 @pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
 def test_no_god_module(path):
     assert len(path.read_text(encoding="utf-8").splitlines()) <= 500
 
 
-@pytest.mark.parametrize("module", ["replication.so3", "replication.checks", "replication.handeye",
-                                    "replication.motions", "replication.streams", "replication.datafile",
-                                    "replication.paper", "replication.realdata", "replication.lab.recording",
-                                    "replication.lab_io", "replication.table2", "replication.ledger"])
-def test_maths_and_data_layers_load_no_solver(module):
+@pytest.mark.parametrize("module", ["replication.core.so3", "replication.core.checks", "replication.core.handeye",
+                                    "replication.core.motions", "replication.rig.streams", "replication.rig.datafile",
+                                    "replication.study.paper", "replication.rig.realdata",
+                                    "replication.study.lab.recording", "replication.study.table2",
+                                    "replication.study.ledger"])
+def test_maths_and_data_modules_load_no_solver(module):
     probe = (f"import sys; import {module}; "
-             "print(sorted(m for m in ('scipy.optimize', 'replication.solvers', 'replication.calibration', 'cv2') "
-             "if m in sys.modules))")
+             "print(sorted(m for m in ('scipy.optimize', 'replication.core.solvers', 'replication.rig.calibration', "
+             "'cv2') if m in sys.modules))")
     loaded = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == "[]", f"import {module} loads {loaded}"
 
@@ -57,59 +134,113 @@ def test_no_name_shadows_a_submodule(module):
         assert value is None or isinstance(value, types.ModuleType), f"{module}.{sub.name} is a {type(value).__name__}"
 
 
-#: The layers of README's "Layout", top first; a module imports (at module level) only from its own layer or above.
-LAYERS = {
-    "foundation": ["_io", "checks", "datafile"],
-    "maths": ["so3", "handeye", "motions", "stats"],
-    "data": ["streams", "realdata", "paper", "fetch"],
-    "solvers": ["solvers"],
-    "pipeline": ["simulation", "association", "quality", "report", "diagnose", "calibration", "estimate", "poses",
-                 "changepoint", "table2", "online_events", "online", "live", "vins_rule", "lab",
-                 "lab.settings", "lab.recording", "lab.simulate", "lab.chain"],
-    "studies": ["table1", "fig5", "baselines", "real_study", "live_study", "lab.study", "ledger", "figures",
-                "notebook"],
-    "entry points and tools": ["__init__", "__main__", "calibrate_cli", "lab_io", "testing"],
-}
-RANK = {name: rank for rank, names in enumerate(LAYERS.values()) for name in names}
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_arrows_run_study_rig_core_only(module):
+    own = ROOMS[_room(module)]
+    for line, target in imports_of(module):
+        assert ROOMS[_room(target)] <= own, (f"{MODULES[module].relative_to(ROOT)}:{line} imports {target}: "
+                                             f"{_room(module)} may import only from its own room or below")
 
 
-def _layer_of(module: str) -> int:
-    """Rank of ``replication.<module>``: its longest listed prefix."""
-    parts = module.split(".")
-    for k in range(len(parts), 0, -1):
-        if ".".join(parts[:k]) in RANK:
-            return RANK[".".join(parts[:k])]
-    raise KeyError(f"replication.{module} is in no layer of README's Layout (add it to tests/test_layout.py:LAYERS)")
+def find_cycle(graph: dict):
+    """One import cycle of ``graph`` (module -> set of modules) as a list that starts and ends at the same module,
+    or None."""
+    state, stack = {}, []
+
+    def visit(node):
+        state[node] = "open"
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == "open":
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state and (cycle := visit(nxt)):
+                return cycle
+        state[node] = "done"
+        stack.pop()
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (cycle := visit(node)):
+            return cycle
+    return None
 
 
-def _module_level_imports(path: Path, module: str):
-    """Intra-package modules imported at module level (``if TYPE_CHECKING:`` blocks left out)."""
-    import ast
-
-    package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
-    for node in ast.parse(path.read_text(encoding="utf-8")).body:
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            continue
-        if isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package[: len(package) - node.level + 1]
-                target = ".".join(base + ([node.module] if node.module else []))
-                names = [target] if node.module else [f"{target}.{a.name}" for a in node.names]
-            elif (node.module or "").startswith("replication"):
-                names = [node.module]
-            else:
-                continue
-            for name in names:
-                yield name.removeprefix("replication.").removeprefix("replication")
+def test_the_cycle_finder_finds_a_cycle_inside_a_function_and_none_in_a_chain():
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": set()}) is None
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"a"}}) == ["a", "a"]
 
 
-@pytest.mark.parametrize("path", sorted(PACKAGE.rglob("*.py")), ids=lambda p: str(p.relative_to(ROOT)))
-def test_imports_go_only_to_the_same_layer_or_above(path):
-    rel = path.relative_to(PACKAGE).with_suffix("")
-    module = ".".join(rel.parts[:-1] if rel.name == "__init__" else rel.parts) or "__init__"
-    own = _layer_of(module)
-    for target in _module_level_imports(path, "replication." + module if module != "__init__" else "replication"):
-        if not target:
-            continue
-        assert _layer_of(target) <= own, (f"replication.{module} ({list(LAYERS)[own]}) imports replication.{target} "
-                                           f"({list(LAYERS)[_layer_of(target)]}), a lower layer")
+def test_no_import_cycle_even_inside_functions():
+    graph = {m: {t for _, t in imports_of(m) if t != m} for m in MODULES}
+    # a package's face imports its modules; a module importing its own package's face is the cycle this finds
+    assert find_cycle(graph) is None, " -> ".join(find_cycle(graph))
+
+
+def _defined_names(tree) -> set:
+    names = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+            for target in (node.targets if isinstance(node, ast.Assign) else [node.target]):
+                names.update(n.id for n in ast.walk(target) if isinstance(n, ast.Name))
+    return names
+
+
+@pytest.mark.parametrize("module", sorted(m for m, p in MODULES.items() if p.name != "__init__.py"))
+def test_every_public_name_has_one_home(module):
+    """A module (not a package's face) exports only what it defines, and has no module ``__getattr__``: no alias of
+    a name that lives elsewhere."""
+    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
+    defined = _defined_names(tree)
+    assert "__getattr__" not in defined, f"{module} answers names it does not define (__getattr__)"
+    exported = next((ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign)
+                     and any(getattr(t, "id", None) == "__all__" for t in n.targets)), [])
+    elsewhere = [name for name in exported if name not in defined]
+    assert not elsewhere, f"{module}.__all__ lists names defined elsewhere: {elsewhere}"
+
+
+def test_the_package_face_exports_what_it_lists():
+    for name in replication.__all__:
+        assert getattr(replication, name) is not None, name
+    with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
+        replication.nonexistent  # noqa: B018
+
+
+def _code_cells(path):
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    return [(i, "".join(c["source"])) for i, c in enumerate(nb["cells"]) if c["cell_type"] == "code"]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_notebook_cells_are_short(path):
+    long = [(i, n) for i, src in _code_cells(path) if (n := len(src.splitlines())) > MAX_CELL_LINES]
+    assert not long, f"{path.name}: cells (index, lines) over {MAX_CELL_LINES} lines: {long}"
+
+
+def private_imports(source: str) -> list:
+    """The private names (or modules) a piece of code imports from the package."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "replication":
+            found += [f"{node.module}.{a.name}" for a in node.names if a.name.startswith("_")]
+            found += [node.module] if any(p.startswith("_") for p in node.module.split(".")) else []
+        elif isinstance(node, ast.Import):
+            found += [a.name for a in node.names if a.name.split(".")[0] == "replication"
+                      and any(p.startswith("_") for p in a.name.split("."))]
+    return found
+
+
+def test_the_private_import_finder_sees_names_and_modules():
+    assert private_imports("from replication.core.solvers import solve") == []
+    assert private_imports("from replication.core.solvers import _registry") == ["replication.core.solvers._registry"]
+    assert private_imports("from replication.core.solvers._registry import check_answer") == [
+        "replication.core.solvers._registry"]
+    assert private_imports("import replication._io") == ["replication._io"]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_notebooks_import_no_private_name(path):
+    found = {i: names for i, src in _code_cells(path) if (names := private_imports(src))}
+    assert not found, f"{path.name} imports private names (cell index: names): {found}"

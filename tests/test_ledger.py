@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from replication import ledger
-from replication.datafile import DataFileError, DataFileNotFound
+from replication.study import ledger
+from replication.rig.datafile import DataFileError, DataFileNotFound
 
 CLAIMS = ledger.load_claims()
 

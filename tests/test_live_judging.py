@@ -7,12 +7,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication import so3
+from replication.core import so3
 from replication.__main__ import main
-from replication.live import LiveRig, replay
-from replication.online import OnlineCalibrator
-from replication.simulation import rig_streams
-from replication.streams import GyroStream, OrientationStream
+from replication.rig.live import LiveRig, replay
+from replication.rig.online import OnlineCalibrator
+from replication.study.simulation import rig_streams
+from replication.rig.streams import GyroStream, OrientationStream
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())

@@ -1,4 +1,4 @@
-"""The simulation half of notebook 08 (``replication.live_study``) at small sizes, without the real recordings.
+"""The simulation half of notebook 08 (``replication.study.live_study``) at small sizes, without the real recordings.
 
 The notebook runs these studies at full size (100-200 runs, 12-hour streams) and only where the real recordings are
 present; here each runs in about a second on a few runs, and the assertions are the notebook's claims, loosened to
@@ -7,11 +7,11 @@ what so few runs can show.
 import numpy as np
 import pytest
 
-from replication.live_study import (coverage_study, degenerate_streams, detection_study, event_rates, online_mistakes,
+from replication.study.live_study import (coverage_study, degenerate_streams, detection_study, event_rates, online_mistakes,
                                     pair_stream, ready_coverage, update_costs)
-from replication.online import MIN_PAIRS
-from replication.online_events import EVENT_KINDS
-from replication.so3 import angle_between_deg, random_rotations, rotation_angle_deg
+from replication.rig.online import MIN_PAIRS
+from replication.rig.online_events import EVENT_KINDS
+from replication.core.so3 import angle_between_deg, random_rotations, rotation_angle_deg
 
 
 def test_pair_stream_is_a_rig_with_the_stated_motions_and_noise(rng):

@@ -1,4 +1,4 @@
-"""The clock-offset search's pieces and the pairing (:mod:`replication.association`) at their boundaries: the
+"""The clock-offset search's pieces and the pairing (:mod:`replication.rig.association`) at their boundaries: the
 parabola's vertex, which maxima count, the overlap's ten samples, the offset in words, which camera samples pair at
 an interval and offset, and ``stream_pairs``. Mutation testing (scripts/mutation) found these unguarded by the fast
 tests."""
@@ -8,9 +8,10 @@ import warnings
 import numpy as np
 import pytest
 
-from replication import association, so3
-from replication.association import motion_pairs, offset_in_words, stream_pairs
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.rig import association
+from replication.core import so3
+from replication.rig.association import motion_pairs, offset_in_words, stream_pairs
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 
 def test_vertex_of_the_parabola_through_the_maximum_and_its_neighbours():

@@ -1,4 +1,4 @@
-"""The change test's rules (:mod:`replication.changepoint`) at their boundaries: parameter ranges, the candidate
+"""The change test's rules (:mod:`replication.rig.changepoint`) at their boundaries: parameter ranges, the candidate
 splits and the least pairs, the split and each side's counts, the statistic against the threshold, the sentence, and
 a synthetic re-mount from exactly its time. Mutation testing (scripts/mutation) found these unguarded by the fast
 tests."""
@@ -7,10 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from replication import changepoint, so3
-from replication.changepoint import (MIN_EFFECTIVE_BLOCKS, ChangeTest, p_value, remounted, threshold,
+from replication.rig import changepoint
+from replication.core import so3
+from replication.rig.changepoint import (MIN_EFFECTIVE_BLOCKS, ChangeTest, p_value, remounted, threshold,
                                      two_segment_test)
-from replication.streams import GyroStream, OrientationStream
+from replication.rig.streams import GyroStream, OrientationStream
 
 R0 = so3.exp_map(np.array([0.3, 0.2, -0.6]))
 

@@ -1,4 +1,4 @@
-"""The rotation and number checks of :mod:`replication.checks` at their boundaries: ``atol`` in
+"""The rotation and number checks of :mod:`replication.core.checks` at their boundaries: ``atol`` in
 ``(0, MAX_ROTATION_ATOL]``, orthonormality and determinant at exactly ``atol``, the first offending index and the
 counts in the messages, numbers strictly or not above a minimum, and the per-sample check of one flat rotation.
 Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from replication.checks import (MAX_ROTATION_ATOL, ROTATION_ATOL, check_atol, check_number, check_rotation_flat,
+from replication.core.checks import (MAX_ROTATION_ATOL, ROTATION_ATOL, check_atol, check_number, check_rotation_flat,
                                 check_rotation_matrices)
 
 

@@ -1,4 +1,4 @@
-"""The input-mistake diagnosis (:mod:`replication.diagnose`) at its boundaries, with a stand-in calibration whose
+"""The input-mistake diagnosis (:mod:`replication.rig.diagnose`) at its boundaries, with a stand-in calibration whose
 residual per hypothesis the test sets: which mistakes are tried on which streams and how each is undone, when a
 hypothesis fits (strictly below both shares), which fits tie, how a reference splits a tie, and the sentence.
 Mutation testing (scripts/mutation) found these rules unguarded by the fast tests."""
@@ -7,10 +7,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from replication import diagnose, so3
-from replication.diagnose import FIT_SHARE, FIT_TO_MOTION, POSE_FIT_SHARE, TIE_ATOL, TIE_SHARE
-from replication.quality import THRESHOLDS
-from replication.streams import GyroStream, OrientationStream
+from replication.rig import diagnose
+from replication.core import so3
+from replication.rig.diagnose import FIT_SHARE, FIT_TO_MOTION, POSE_FIT_SHARE, TIE_ATOL, TIE_SHARE
+from replication.rig.quality import THRESHOLDS
+from replication.rig.streams import GyroStream, OrientationStream
 
 RNG = np.random.default_rng(3)
 T = np.arange(6) * 0.1

@@ -7,7 +7,7 @@ from dataclasses import asdict
 
 import pytest
 
-from replication import ledger
+from replication.study import ledger
 
 CLAIMS_CSV = ("claim,statement,where,paper_value,unit\n"
               "zeta,the last id alphabetically comes first,Sec. 1,,\n"

@@ -1,4 +1,4 @@
-"""The live front end (:class:`replication.live.LiveRig`) on an orientation sensor, exactly: which poses pair
+"""The live front end (:class:`replication.rig.live.LiveRig`) on an orientation sensor, exactly: which poses pair
 (``interval`` reached exactly, no shared pose, the stride), the sensor slerped to the camera time plus the clock
 offset (``B = R0^T A R0`` to rounding for a constant-rate motion), gaps at ``GAP_FACTOR`` typical steps, the
 buffer and the early window kept, the refusals, and the evidence it adds to the verdict. Mutation testing
@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.live import OFFSET_RESOLUTION, LiveRig
-from replication.online import OnlineCalibrator
+from replication.core import so3
+from replication.rig.live import OFFSET_RESOLUTION, LiveRig
+from replication.rig.online import OnlineCalibrator
 
 R0 = so3.exp_map(np.array([0.3, -0.5, 0.8]))
 W = np.array([0.2, 0.9, -0.4])  # rad/s, a constant rate about a fixed axis: slerp between samples is exact
@@ -220,9 +220,9 @@ def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
     assert pairs == []
 
 
-from replication.live import replay  # noqa: E402
-from replication.report import RADIUS_COVERS  # noqa: E402
-from replication.streams import GyroStream, OrientationStream  # noqa: E402
+from replication.rig.live import replay  # noqa: E402
+from replication.rig.report import RADIUS_COVERS  # noqa: E402
+from replication.rig.streams import GyroStream, OrientationStream  # noqa: E402
 
 
 def _motion(t):
@@ -698,7 +698,7 @@ def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
 @pytest.mark.parametrize("formed, used", [(9, 3), (10, 4), (11, 4), (12, 4), (1, 1)])
 def test_the_pairs_before_gaps_count_the_pairs_a_stride_uses_like_the_batch(formed, used):
     """Pairs 1, 1 + stride, 1 + 2 stride, ... are used: ceil(formed / stride), as the batch's len(A[::stride])."""
-    from replication.live import LiveRig
+    from replication.rig.live import LiveRig
 
     rig = LiveRig(OnlineCalibrator(), stride=3, offset=0.0)
     rig.pairs_formed = formed

@@ -1,4 +1,4 @@
-"""The online calibrator's rules (:class:`replication.online.OnlineCalibrator`) at their boundaries: every option's
+"""The online calibrator's rules (:class:`replication.rig.online.OnlineCalibrator`) at their boundaries: every option's
 range and default, the running sums and their forgetting, the radius (``inf`` until the motion determines ``R0``),
 ``determined`` and ``ready``, the evidence and the not-ready sentences. Mutation testing (scripts/mutation) found
 these unguarded by the fast tests."""
@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.handeye import kronecker_operator
-from replication.online import MIN_EXCITATION_DEG, MIN_PAIRS, NOISE_FLOOR_DEG, OnlineCalibrator
-from replication.online_events import DUPLICATE_DEG
-from replication.stats import radius_deg
+from replication.core import so3
+from replication.core.handeye import kronecker_operator
+from replication.rig.online import MIN_EXCITATION_DEG, MIN_PAIRS, NOISE_FLOOR_DEG, OnlineCalibrator
+from replication.rig.online_events import DUPLICATE_DEG
+from replication.core.stats import radius_deg
 
 R0 = so3.exp_map(np.array([0.4, -0.2, 0.9]))
 
@@ -229,7 +229,7 @@ def _small_noisy_pairs(n, rng, noise_deg):
 
 
 def test_the_online_verdict_judges_what_the_estimator_measured_and_the_front_ends_context():
-    from replication.quality import Reason
+    from replication.rig.quality import Reason
 
     rng = np.random.default_rng(21)
     A, B = _small_noisy_pairs(20, rng, 1.5)
@@ -476,7 +476,7 @@ def test_restart_forgets_the_pairs_and_starts_from_the_last_estimate():
 
 
 def test_the_motion_median_reads_the_last_recent_pairs_only():
-    from replication.online import RECENT_PAIRS
+    from replication.rig.online import RECENT_PAIRS
 
     rng = np.random.default_rng(33)
     n_big, n_small = 150, 110

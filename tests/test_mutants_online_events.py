@@ -1,4 +1,4 @@
-"""The online change detector's rules (:mod:`replication.online_events`) at their boundaries: repeats within the
+"""The online change detector's rules (:mod:`replication.rig.online_events`) at their boundaries: repeats within the
 tolerance, never at rest; the CUSUM's arithmetic, its reference level, held-out outliers, onset and alarms; the drift
 test; the event sentences and record. Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
 import math
@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.online_events import (CONFIRM_LEVEL, DUPLICATE_DEG, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent,
+from replication.core import so3
+from replication.rig.online_events import (CONFIRM_LEVEL, DUPLICATE_DEG, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent,
                                        RepeatFilter, chi2_quantile, combined_threshold, describe, drift_test, pair_d2,
                                        residual_angle_deg)
-from replication.stats import radius_deg
+from replication.core.stats import radius_deg
 
 
 def _flat(R):
@@ -237,7 +237,7 @@ def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pair
     assert not d2.checking and d2.since_drift == 0  # tested at 20, 30 and 40 pairs, no alarm
 
 
-from replication.online_events import NOISE_Z, classify  # noqa: E402
+from replication.rig.online_events import NOISE_Z, classify  # noqa: E402
 
 CAP, FLOOR = 10.0, 1e-9
 
@@ -374,7 +374,7 @@ def test_decide_outliers_drops_the_held_pairs_and_carries_on():
     assert d.armed is True and len(d.since_onset) == 0
 
 
-from replication.online_events import TRIM_FACTOR, _excitation_deg, chi2_quantile as _chi2, solve_window  # noqa: E402
+from replication.rig.online_events import TRIM_FACTOR, _excitation_deg, chi2_quantile as _chi2, solve_window  # noqa: E402
 
 
 def test_excitation_of_a_window():
@@ -559,7 +559,7 @@ def test_drift_test_measures_a_drift_about_each_axis():
 
 
 def test_drift_test_needs_the_windows_excitation_at_least_the_minimum():
-    from replication.online_events import _excitation_deg
+    from replication.rig.online_events import _excitation_deg
 
     rng = np.random.default_rng(44)
     R = _rot(30.0)
@@ -630,7 +630,7 @@ def test_pairs_sharing_a_cell_are_all_remembered():
 
 
 def test_beyond_its_memory_the_filter_compares_but_does_not_remember(monkeypatch):
-    from replication import online_events
+    from replication.rig import online_events
 
     monkeypatch.setattr(online_events, "DUPLICATE_MEMORY", 100)
     f = RepeatFilter()
@@ -758,7 +758,7 @@ def test_every_pair_within_the_tolerance_is_found_wherever_it_falls_in_the_grid(
 
 
 def test_solve_window_keeps_a_pair_exactly_at_the_trim_bound():
-    from replication.solvers import solve
+    from replication.core.solvers import solve
 
     A, B = _gross_window(8, 3)
     d2 = pair_d2(solve("robust", A, B), A, B)  # the consensus solve_window trims at (seeded: the same)

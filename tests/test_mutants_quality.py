@@ -1,4 +1,4 @@
-"""The verdict rules of :func:`replication.quality.judge` at their boundaries, one check at a time: mutation testing
+"""The verdict rules of :func:`replication.rig.quality.judge` at their boundaries, one check at a time: mutation testing
 (scripts/mutation) found loosened thresholds, flipped comparisons and removed branches that no test saw."""
 import dataclasses
 import math
@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from replication.quality import LEVELS, THRESHOLDS, Evidence, Reason, Verdict, judge
+from replication.rig.quality import LEVELS, THRESHOLDS, Evidence, Reason, Verdict, judge
 
 #: Evidence that every check passes: no reason at all.
 GOOD = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1, axis_spread_deg=20.0)

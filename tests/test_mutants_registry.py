@@ -1,4 +1,4 @@
-"""The answer checks of :mod:`replication.solvers._registry` at their boundaries: which local answers get a
+"""The answer checks of :mod:`replication.core.solvers._registry` at their boundaries: which local answers get a
 :class:`LocalMinimumWarning` or a :class:`ConvergenceWarning` (cost gap, angle, gradient), and when a closed form's
 answer is grossly off. Mutation testing (scripts/mutation) found these rules unguarded by the fast tests."""
 import math
@@ -7,10 +7,10 @@ import warnings
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.motions import prepare_motions
-from replication.solvers import _registry, optimal
-from replication.solvers._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning
+from replication.core import so3
+from replication.core.motions import prepare_motions
+from replication.core.solvers import _registry, optimal
+from replication.core.solvers._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning
 
 J = 10
 

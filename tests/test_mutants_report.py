@@ -1,4 +1,4 @@
-"""What a calibration reports (:mod:`replication.report`): strict JSON (``json_safe``), every field of ``to_dict`` and
+"""What a calibration reports (:mod:`replication.rig.report`): strict JSON (``json_safe``), every field of ``to_dict`` and
 every line of ``summary``, for streams and static poses, with and without a change test, a reference, an offset.
 Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
 import json
@@ -7,9 +7,9 @@ import math
 import numpy as np
 
 from replication import __version__
-from replication.motions import MotionObservability
-from replication.quality import Reason, Verdict
-from replication.report import OFFSET_CONVENTION, RADIUS_COVERS, CalibrationResult, json_safe
+from replication.core.motions import MotionObservability
+from replication.rig.quality import Reason, Verdict
+from replication.rig.report import OFFSET_CONVENTION, RADIUS_COVERS, CalibrationResult, json_safe
 
 OBS = MotionObservability(kron_singular_values=np.ones(9), spectral_ratio=np.float64(0.5), two_step_rate=0.9,
                           camera_axis_spread_deg=np.float64(12.34), sensor_axis_spread_deg=np.float64(11.0),
@@ -156,7 +156,7 @@ def test_defaults_of_a_result():
 def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_path, monkeypatch):
     from matplotlib.figure import Figure
 
-    from replication import figures
+    from replication.rig import figure as figures
     from replication._io import png_bytes
 
     fig = Figure(figsize=(2, 1))

@@ -3,12 +3,12 @@ detection on synthetic steps, and bad input refused like the rest of the package
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.handeye import kronecker_operator
-from replication.online import OnlineCalibrator
-from replication.stats import radius_deg
-from replication.simulation import simulate
-from replication.solvers import chordal_optimal
+from replication.core import so3
+from replication.core.handeye import kronecker_operator
+from replication.rig.online import OnlineCalibrator
+from replication.core.stats import radius_deg
+from replication.study.simulation import simulate
+from replication.core.solvers import chordal_optimal
 from replication.testing import assert_rotations_close
 
 
@@ -126,7 +126,7 @@ def test_bad_settings_are_refused(kwargs, message):
 # ------------------------------------------------------------------------------------------------ the live front end
 
 def _streams(seconds=60.0, phase=0.0):
-    from replication.streams import GyroStream, OrientationStream
+    from replication.rig.streams import GyroStream, OrientationStream
 
     R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
     t = np.arange(0.0, seconds, 0.05)
@@ -140,7 +140,7 @@ def _streams(seconds=60.0, phase=0.0):
 
 
 def test_live_replay_of_gyro_and_of_orientations_converges_with_one_pair_per_interval():
-    from replication.live import replay
+    from replication.rig.live import replay
 
     R0, camera, gyro, sensor = _streams()
     for s in (gyro, sensor):
@@ -150,7 +150,7 @@ def test_live_replay_of_gyro_and_of_orientations_converges_with_one_pair_per_int
 
 
 def test_live_replay_detects_a_synthetic_remount():
-    from replication.live import replay
+    from replication.rig.live import replay
 
     R0, camera, gyro, _ = _streams(120.0)
     R = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
@@ -161,7 +161,7 @@ def test_live_replay_detects_a_synthetic_remount():
 
 
 def test_live_rig_refuses_time_going_back_and_drops_pairs_across_a_gap():
-    from replication.live import LiveRig
+    from replication.rig.live import LiveRig
 
     R0, camera, gyro, _ = _streams()
     rig = LiveRig(OnlineCalibrator(), offset=0.0)
@@ -218,7 +218,7 @@ def test_between_refinements_the_estimate_is_the_last_minimiser(rng):
 
 
 def test_live_pairs_share_no_pose():
-    from replication.live import replay
+    from replication.rig.live import replay
 
     R0, camera, gyro, _ = _streams()
     spans = []
@@ -231,7 +231,7 @@ def test_a_mounting_far_from_the_identity_is_found_like_the_batch_solver():
     """R0 150-180 deg from the identity (a camera upside down relative to the sensor), Haar-distributed motions:
     Newton from the identity alone ended about 180 deg off in 21 of these 30 (a critical point of eq. (8)); the
     refinement also starts from the relaxed minimiser and lands where the batch solver does."""
-    from replication.solvers import solve
+    from replication.core.solvers import solve
 
     rng = np.random.default_rng(3)
     for _ in range(30):

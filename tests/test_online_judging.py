@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.live_study import pair_stream
-from replication.online import MIN_EXCITATION_DEG, NOISE_FLOOR_DEG, OnlineCalibrator
-from replication.stats import radius_deg
-from replication.online_events import DUPLICATE_DEG, SMALL_MOTION_DEG, RepeatFilter
+from replication.core import so3
+from replication.study.live_study import pair_stream
+from replication.rig.online import MIN_EXCITATION_DEG, NOISE_FLOOR_DEG, OnlineCalibrator
+from replication.core.stats import radius_deg
+from replication.rig.online_events import DUPLICATE_DEG, SMALL_MOTION_DEG, RepeatFilter
 
 
 @pytest.fixture
@@ -258,7 +258,7 @@ def test_the_reference_level_stops_following_once_a_change_builds_up(rng, R0):
 def test_ready_is_withdrawn_at_the_second_gross_misfit_and_said(rng, R0):
     """A re-mount shows first as pairs that do not fit: one gross misfit leaves ``ready`` (outliers happen), the
     second withdraws it, naming the misfits, before the CUSUM decides."""
-    from replication.online import MISFITS_WITHDRAW_READY
+    from replication.rig.online import MISFITS_WITHDRAW_READY
 
     A, B = pair_stream(rng, 300, R0)
     oc, _ = _feed(A, B)
@@ -288,8 +288,8 @@ def test_an_alarm_being_confirmed_at_the_end_is_an_undecided_end(rng, R0):
 def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned():
     """A 5 deg re-mount 3 s before the end of a 60 s replay (three pairs, too few for the CUSUM to alarm): the
     summary is not ready and its verdict warns; without the re-mount, ready and no such warning."""
-    from replication.live import replay
-    from replication.simulation import rig_streams
+    from replication.rig.live import replay
+    from replication.study.simulation import rig_streams
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(900), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
     R = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))

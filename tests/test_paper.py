@@ -3,7 +3,8 @@ import shutil
 import numpy as np
 import pytest
 
-from replication import paper, so3
+from replication.study import paper
+from replication.core import so3
 
 
 def test_r0_as_printed_is_nearly_a_rotation():

@@ -1,4 +1,4 @@
-"""Every threshold of the verdict (``replication.quality.THRESHOLDS``) at its boundary, through ``judge(Evidence)``.
+"""Every threshold of the verdict (``replication.rig.quality.THRESHOLDS``) at its boundary, through ``judge(Evidence)``.
 
 For each check and each of its bounds (warning, fail): a value just below and just above the bound, and the bound
 itself. A check is either a "below" check (a value under the bound reaches its level) or an "above" check; all are
@@ -11,8 +11,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from replication.changepoint import ChangeTest
-from replication.quality import THRESHOLDS, Evidence, judge
+from replication.rig.changepoint import ChangeTest
+from replication.rig.quality import THRESHOLDS, Evidence, judge
 
 #: Evidence that passes every check by a wide margin (asserted in test_the_good_evidence_is_ok).
 GOOD = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.1,
@@ -91,7 +91,7 @@ def _below_the(level, check):
     return "warning" if level == "fail" and THRESHOLDS[check][0] is not None else None
 
 
-#: The bounds the module notes of replication/quality.py state and argue for (warning, fail). The tests below read
+#: The bounds the module notes of replication/rig/quality.py state and argue for (warning, fail). The tests below read
 #: THRESHOLDS, so they follow any change of it; this pins the values so that a change must also update the notes.
 DOCUMENTED = {
     "offset_correlation": (0.9, 0.5), "offset_at_bound_resolutions": (None, 2), "offset_peak_margin": (0.1, 0.01),

@@ -6,8 +6,10 @@ import sys
 import numpy as np
 import pytest
 
-from replication import calibrate, realdata as rd, so3
-from replication.calibration import calibrate_poses, integrate_gyro
+from replication import calibrate
+from replication.rig import realdata as rd
+from replication.core import so3
+from replication.rig.calibration import calibrate_poses, integrate_gyro
 
 HAVE_REAL = rd.real_data_available()
 needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "

@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication import so3
-from replication.motions import Motions
-from replication.handeye import handeye_cost, relative_rotations
-from replication.simulation import simulate
-from replication.solvers import AccuracyWarning, _registry, available, register, solve, solver_info
+from replication.core import so3
+from replication.core.motions import Motions
+from replication.core.handeye import handeye_cost, relative_rotations
+from replication.study.simulation import simulate
+from replication.core.solvers import AccuracyWarning, _registry, available, register, solve, solver_info
 from replication.testing import assert_rotations_close
 
 

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from replication import so3
-from replication.paper import r0_camera_from_sensor
-from replication.simulation import SimulationSettings, noise_bound_for_angle_deg, simulate
+from replication.core import so3
+from replication.study.paper import r0_camera_from_sensor
+from replication.study.simulation import SimulationSettings, noise_bound_for_angle_deg, simulate
 
 
 def test_shapes_truth_and_noise_bound():

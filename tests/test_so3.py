@@ -4,7 +4,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from replication import so3
+from replication.core import so3
 
 finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 

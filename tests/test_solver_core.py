@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, motions, so3
-from replication.baselines import corrupt_pairs
-from replication.simulation import opencv_protocol, simulate
-from replication.solvers import (
+from replication.core import handeye, motions, so3
+from replication.study.baselines import corrupt_pairs
+from replication.study.simulation import opencv_protocol, simulate
+from replication.core.solvers import (
     GAP_TOL, LOCAL_ANGLE_TOL_DEG, AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning,
     LocalMinimumWarning, Motions, ObservabilityWarning, global_certificate,
     ReplicationWarning, andreff, available, calibrate_hand_eye, chordal_optimal, horaud_dornaika, park_martin,
     robust, solve, solver_info, sqp, tsai_lenz, two_step, two_step_fixed_point,
 )
-from replication.solvers.optimal import _lagrangian_upper_bound, chordal_newton
+from replication.core.solvers.optimal import _lagrangian_upper_bound, chordal_newton
 from replication.testing import assert_rotations_close
 
 ALL = available()
@@ -308,7 +308,7 @@ def test_sqp_says_when_slsqp_stops_early():
 
 def test_uncertified_answers_warn(monkeypatch, outlier_problems):
     """If the relaxation cannot certify (simulated here by a failing solver), the user is told."""
-    import replication.solvers.optimal as optimal
+    import replication.core.solvers.optimal as optimal
 
     monkeypatch.setattr(optimal, "relaxation", lambda M: (np.full(22, np.nan), np.eye(3), np.nan, "NumericalError"))
     A, B = outlier_problems[0]
@@ -472,7 +472,7 @@ def test_motions_are_private_read_only_copies(problem):
 
 
 def test_sdp_bound_is_valid_and_tight_only_at_the_global_minimum(outlier_problems):
-    from replication.solvers._sdp import relaxation, upper_bound
+    from replication.core.solvers._sdp import relaxation, upper_bound
 
     A, B = outlier_problems[0]
     newton = chordal_optimal(A, B, certify=False)
@@ -512,8 +512,8 @@ def test_exported_wrapper_warnings_point_at_the_caller(rng):
 
 def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     """SLSQP is not scale-invariant: the objective's scale (unstated in the paper) changes its path, not its answer."""
-    from replication.simulation import simulate
-    from replication.solvers import sqp
+    from replication.study.simulation import simulate
+    from replication.core.solvers import sqp
 
     sim = simulate(3, 5)
     as_printed, per_pair = sqp(sim.A, sim.B), sqp(sim.A, sim.B, cost="per-pair")

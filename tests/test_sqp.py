@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, so3
-from replication.simulation import simulate
-from replication.solvers import available, solve, sqp, two_step
+from replication.core import handeye, so3
+from replication.study.simulation import simulate
+from replication.core.solvers import available, solve, sqp, two_step
 from replication.testing import assert_rotations_close
 
 

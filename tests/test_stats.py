@@ -1,8 +1,8 @@
-"""Uncertainty helpers of the verdicts (replication.stats)."""
+"""Uncertainty helpers of the verdicts (replication.core.stats)."""
 import numpy as np
 import pytest
 
-from replication.stats import bracket, format_ci, mean_se, paired_ratio_ci, share_range, z_score
+from replication.core.stats import bracket, format_ci, mean_se, paired_ratio_ci, share_range, z_score
 
 
 def test_mean_se_and_z():

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 import scipy.spatial.transform as sst
 
-from replication import calibration, realdata, so3, streams
-from replication.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.rig import calibration, realdata, streams
+from replication.core import so3
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 
 @pytest.fixture
@@ -83,11 +84,11 @@ def test_gyro_stream_validation():
 
 
 def test_importing_streams_loads_no_solver_and_no_optimiser():
-    code = ("import sys, replication.streams as s; import numpy as np; "
+    code = ("import sys, replication.rig.streams as s; import numpy as np; "
             "s.OrientationStream([0.0, 1.0], np.stack([np.eye(3)] * 2)).at([0.5]); "
-            "bad = [m for m in sys.modules if m.startswith(('scipy.optimize', 'replication.solvers', "
-            "'replication.calibration', 'replication.handeye'))]; print(bad)")
+            "bad = [m for m in sys.modules if m.startswith(('scipy.optimize', 'replication.core.solvers', "
+            "'replication.rig.calibration', 'replication.core.handeye'))]; print(bad)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
-    assert streams.__name__ == "replication.streams"
+    assert streams.__name__ == "replication.rig.streams"

@@ -4,12 +4,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication import paper
-from replication.simulation import simulate
-from replication.so3 import exp_map
-from replication.solvers import chordal_optimal
-from replication.stats import share_range
-from replication.table1 import (
+from replication.study import paper
+from replication.study.simulation import simulate
+from replication.core.so3 import exp_map
+from replication.core.solvers import chordal_optimal
+from replication.core.stats import share_range
+from replication.study.table1 import (
     ONE_PERCENT, RISE_TOL, at_other_minimum, compact, converged_at, convergence_by_setting, convergence_summary,
     cost_against_minimum, cost_scale_study, diverting_runs, diverting_table, failure_display, failure_table,
     first_below, fresh_mismatch, interval_text, iterate_errors, paper_two_step_means, per_setting_text, scales_text,
@@ -148,7 +148,7 @@ _FLOOR = ([0.1] * 5, [0.1] * 5, 0.5)
 @pytest.fixture
 def fake_runs(monkeypatch):
     """simulate and two_step_means replaced by fakes that record their calls and return :data:`_CELLS`."""
-    import replication.table1.study as study
+    import replication.study.table1.study as study
 
     calls = {"simulate": [], "means": []}
 

@@ -1,14 +1,14 @@
-"""What Table II measures (replication.table2): re-projection with any R0 and reference frame, the seed study
+"""What Table II measures (replication.study.table2): re-projection with any R0 and reference frame, the seed study
 and its interventions, and the single-sample protocol of lab.static_motions."""
 import dataclasses
 
 import numpy as np
 import pytest
 
-from replication import lab
-from replication.so3 import exp_map
-from replication.lab import seed_study
-from replication.table2 import attitude_statistics, projection_statistics, reference_frame_dependence
+from replication.study import lab
+from replication.core.so3 import exp_map
+from replication.study.lab import seed_study
+from replication.study.table2 import attitude_statistics, projection_statistics, reference_frame_dependence
 
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
 

@@ -6,9 +6,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from replication import handeye, so3
-from replication.so3 import random_rotations
-from replication.solvers import ConvergenceWarning, two_step, two_step_fixed_point
+from replication.core import handeye, so3
+from replication.core.so3 import random_rotations
+from replication.core.solvers import ConvergenceWarning, two_step, two_step_fixed_point
 from replication.testing import assert_rotations_close
 
 

@@ -1,11 +1,11 @@
-"""Tests of the VINS-Mono extrinsic-rotation initialiser port (replication/vins_rule.py)."""
+"""Tests of the VINS-Mono extrinsic-rotation initialiser port (replication/rig/vins_rule.py)."""
 import numpy as np
 import pytest
 
-from replication.handeye import relative_rotations
-from replication.so3 import angle_between_deg, exp_map, quaternion_to_matrix, random_rotations
+from replication.core.handeye import relative_rotations
+from replication.core.so3 import angle_between_deg, exp_map, quaternion_to_matrix, random_rotations
 from replication.testing import assert_rotations_close
-from replication.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
+from replication.rig.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
 
 
 def _three_axis_pairs(rng, R0, n_pairs, step_deg=20.0):

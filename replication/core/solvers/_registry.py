@@ -1,0 +1,476 @@
+"""Registry of rotation-only hand-eye solvers: adding a baseline is one decorated function.
+
+Every solver has one public door that validates (:func:`solve`, or the function
+:func:`register` returns) and one private core that receives a validated
+:class:`replication.core.motions.Motions` and never validates again (the pattern of
+OpenCV's ``calibration_handeye.cpp``).
+"""
+from __future__ import annotations
+
+import functools
+import warnings
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..checks import _first_index, det3
+from ..handeye import handeye_cost, vec
+from ..motions import Motions, MotionObservability, prepare_motions
+from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
+
+__all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve",
+           "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
+           "ANSWER_ATOL", "check_answer", "warn_if_weak"]
+
+#: A local solver's answer is flagged (:class:`LocalMinimumWarning`) when its cost (8) exceeds the
+#: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
+#: the excess grows like ``J delta^2`` (``delta`` the angle to the minimiser, radians, times a curvature
+#: of order 2-3), so either term corresponds to about 0.03 deg at the paper's noise: well above
+#: SLSQP's own stopping jitter (0.01 deg seen), far below an answer in another basin or stopped far away at
+#: an iteration limit (0.3-43 % of ``f*`` and tens of degrees off).
+LOCAL_RTOL = 1e-3
+LOCAL_ATOL = 1e-6
+#: Within the basin of the global minimum, a local solver's answer farther than this from the certified
+#: minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's objective tolerance).
+LOCAL_ANGLE_TOL_DEG = 1e-4
+#: An answer above the certified minimum and farther than this from the minimiser did not reach the global
+#: minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before converging); closer, it stopped short (:class:`ConvergenceWarning`). The minima of eq. (8)
+#: seen here lie 100 deg and more apart (notebook 06); SLSQP's short stops are hundredths of a degree.
+WRONG_POINT_DEG = 1.0
+#: ``|grad f| / J`` above which an answer is not a stationary point of eq. (8) (the warning then says the solver
+#: stopped before converging rather than on another stationary point).
+STATIONARY_TOL = 1e-3
+#: A non-local solver's answer gets an :class:`AccuracyWarning` when its cost (8) exceeds ``GROSS_FACTOR`` times
+#: the certified minimum plus ``LOCAL_ATOL * J``: a failure, not a less efficient estimate. Measured on 300
+#: problems each at the paper's noise and J = 3, 5, 20 (and 5 deg noise): the closed forms stay within 1.2x of
+#: the minimum cost, OpenCV (whose pose chain accumulates noise) within 6x, the two-step fixed point within
+#: 4.4x at J >= 5; the half-turn sign flips of Park & Martin, Horaud & Dornaika and Tsai & Lenz cost 35-8000x.
+GROSS_FACTOR = 10.0
+#: The motions count as weakly determining ``R0`` (:class:`ObservabilityWarning`) when the gap between the two
+#: largest eigenvalues of ``sym(K)`` is below this many times the data's inconsistency ``1 - lambda_1``.
+WEAK_GAP_FACTOR = 3.0
+#: :func:`solve` refuses (``ValueError``) a core's answer block with ``||R^T R - I||_F`` or ``| |det R| - 1 |``
+#: above this. Measured over the contract, solver-core, baseline and registry tests' problems and 1700 harsher ones
+#: (J = 3-20, noise up to 17 deg, motions of 0.5-3 deg and of 150-180 deg, 40 % outliers): every registered solver
+#: stays within 1.1e-14 except OpenCV's Park & Martin ((M^T M)^(-1/2) M^T of an ill-conditioned M: 4e-11 in the tests,
+#: 8e-9 at 17 deg noise with small motions). 1e-6 is 100x above that, and the tolerance at which every door of the
+#: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
+#: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
+ANSWER_ATOL = 1e-6
+
+
+@dataclass(frozen=True)
+class SolverInfo:
+    """A registered solver.
+
+    Attributes
+    ----------
+    name : str
+        The ``method`` name given to :func:`solve`.
+    core : callable
+        ``core(motions, **options) -> ndarray (..., 3, 3)``; receives a validated
+        :class:`replication.core.motions.Motions`. It returns one rotation per problem (a reflection is
+        warned about), or a whole 3x3 block of NaN for a problem it declares failed; :func:`solve`
+        refuses anything else (see :data:`ANSWER_ATOL`).
+    reference : str
+        The paper the solver implements.
+    min_motions : int
+        Fewest motion pairs ``J`` it accepts.
+    local : bool
+        ``True`` for a local method whose answer depends on a start ``init``
+        (an option it accepts); from a start far from ``R0`` it may stop short of
+        the minimum (an iteration limit) or on another stationary point. :func:`solve` then checks its answer against
+        the certified global minimum of eq. (8).
+    equivariant : bool
+        ``True`` if re-expressing the camera frame by ``G`` (``A -> G A G^T``)
+        maps the estimate to ``G R``, and likewise for the sensor frame
+        (``B -> G B G^T``, ``R -> R G^T``), also with noisy data. Tsai & Lenz's
+        Gibbs-vector parametrisation is not.
+    """
+
+    name: str
+    core: Callable[..., np.ndarray]
+    reference: str
+    min_motions: int
+    local: bool = False
+    equivariant: bool = True
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What :func:`solve` returns with ``full_output=True``.
+
+    Attributes
+    ----------
+    R : ndarray, shape (..., 3, 3)
+        Estimate of ``R0`` (camera_from_sensor); NaN where the solver declared a failure.
+    method : str
+    cost : ndarray, shape (...)
+        Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2`` (NaN where ``R`` is NaN).
+    observability : MotionObservability
+        How well the motions determine ``R0`` (see
+        :class:`replication.core.motions.MotionObservability`).
+    lower_bound : ndarray, shape (...)
+        Certified lower bound on the minimum of eq. (8) over SO(3)
+        (:func:`replication.core.solvers.chordal_optimal`'s certificate).
+    duality_gap : ndarray, shape (...)
+        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8) over SO(3);
+        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection).
+    global_optimum : ndarray of bool, shape (...)
+        ``R`` is a rotation certified to be the global minimiser of eq. (8) (``duality_gap`` at most
+        ``GAP_TOL * J``); never for a NaN or a reflection. The paper's two-step method is not, once
+        there is noise: its fixed point is not the minimiser of its own cost.
+    """
+
+    R: np.ndarray
+    method: str
+    cost: np.ndarray
+    observability: MotionObservability
+    lower_bound: np.ndarray
+    duality_gap: np.ndarray
+    global_optimum: np.ndarray
+
+
+_REGISTRY: dict[str, SolverInfo] = {}
+
+
+def register(name: str, *, reference: str, min_motions: int = 2, local: bool = False,
+             equivariant: bool = True):
+    """Decorator adding a solver core to the registry; returns its public, validating door.
+
+    The decorated ``core(motions, **options)`` receives a
+    :class:`replication.core.motions.Motions` already validated by :func:`solve`
+    (rotations, same shape, ``J >= min_motions``, not degenerate): ``motions.A``
+    (camera relative rotations), ``motions.B`` (sensor relative rotations), both
+    ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
+    ``camera_from_sensor``, a numpy array of shape ``(..., 3, 3)``: a rotation per problem, or a whole
+    3x3 block of NaN for a problem it declares failed; :func:`solve` refuses anything else.
+
+    The decorator returns ``public(A, B, **options) = solve(name, A, B, **options)``,
+    so the exported name validates its input like every other door.
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is already registered or ``min_motions < 1``.
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"solver name must be a non-empty string, got {name!r}")
+    if min_motions < 1:
+        raise ValueError(f"min_motions must be >= 1, got {min_motions}")
+
+    def decorate(core):
+        if name in _REGISTRY:
+            raise ValueError(f"a solver named {name!r} is already registered")
+        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant))
+
+        @functools.wraps(core)
+        def public(A, B=None, **options):
+            return solve(name, A, B, _stacklevel=4, **options)
+
+        public.core = core
+        return public
+
+    return decorate
+
+
+def available() -> list[str]:
+    """Names of all registered solvers, sorted."""
+    return sorted(_REGISTRY)
+
+
+def solver_info(method: str) -> SolverInfo:
+    """The :class:`SolverInfo` of ``method``; unknown names raise ``ValueError`` listing all."""
+    try:
+        return _REGISTRY[method]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown solver {method!r}; available: {', '.join(available())}"
+        ) from None
+
+
+def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel: int = 3) -> None:
+    """Issue an :class:`ObservabilityWarning` where the motions weakly determine ``R0``.
+
+    Two tests, each naming what it measured: nearly single-axis motion (axis spread below
+    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small), and a
+    second rotation fitting eq. (8) almost as well (gap between the two largest eigenvalues of ``sym(K)``
+    below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
+    outlier pairs, or near-symmetric motions).
+    """
+    obs = motions.observability
+    spread = np.minimum(obs.camera_axis_spread_deg, obs.sensor_axis_spread_deg)
+    weak = spread < warn_axis_spread_deg
+    if np.any(weak):
+        small = weak & (obs.camera_rms_motion_deg < warn_axis_spread_deg)
+        what = (f"small motions (RMS rotation down to {float(np.min(obs.camera_rms_motion_deg[weak])):.3g} deg)"
+                if np.all(small[weak]) else "nearly single-axis motion")
+        warnings.warn(
+            f"{int(np.sum(weak))} of {weak.size} problems have {what}: axis spread down to "
+            f"{float(np.min(spread)):.3g} deg < {warn_axis_spread_deg:g} deg, so the rotation about the dominant axis "
+            f"is poorly determined; add larger motions about other axes",
+            ObservabilityWarning,
+            stacklevel=stacklevel,
+        )
+    flat = obs.symmetric_gap < WEAK_GAP_FACTOR * np.maximum(obs.inconsistency, 0.0)
+    flat &= ~weak  # already reported
+    if np.any(flat):
+        i = np.unravel_index(int(np.argmin(np.where(flat, obs.symmetric_gap / np.maximum(obs.inconsistency, 1e-300),
+                                                    np.inf))), flat.shape) if flat.ndim else ()
+        warnings.warn(
+            f"{int(np.sum(flat))} of {flat.size} problems determine R0 poorly: another rotation fits eq. (8) almost "
+            f"as well (gap between the two largest eigenvalues of sym(K) {float(obs.symmetric_gap[i]):.3g} < "
+            f"{WEAK_GAP_FACTOR:g} x the data's inconsistency 1 - lambda_1 = {float(obs.inconsistency[i]):.3g}): "
+            f"motions small for the noise, outlier pairs (use robust), or motions that nearly admit a second "
+            f"solution",
+            ObservabilityWarning,
+            stacklevel=stacklevel,
+        )
+
+
+def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
+    """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
+    from .optimal import global_certificate  # the certificate is itself a registered solver's core
+
+    cert = global_certificate(motions) if cert is None else cert
+    K, J = motions.K, motions.J
+    x = vec(R)
+    g = np.einsum("...a,...ab,...b->...", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
+    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J * 3
+    gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
+    return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
+
+
+def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
+    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8).
+
+    * :class:`LocalMinimumWarning`: cost (8) above the certified minimum ``f*`` by more than
+      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than ``WRONG_POINT_DEG`` from the minimiser (another
+      stationary point, or stopped far away; the gradient of (8) tells which);
+    * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
+      certified minimiser (it stopped short of the minimum).
+
+    Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
+    about itself, are skipped. Returns the boolean mask of problems flagged either way.
+    """
+    from ..so3 import angle_between_deg
+    from .optimal import global_certificate
+
+    cert_R = global_certificate(motions).R
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    rotation = finite & (det3(np.where(finite[..., None, None], R, np.eye(3))) > 0)
+    R = np.where(rotation[..., None, None], R, cert_R)  # stands in as the minimiser: never flagged here
+    _, lower, gap = _gap_to_global(motions, R)
+    angle = angle_between_deg(R, cert_R)
+    above = gap > LOCAL_RTOL * np.abs(lower) + LOCAL_ATOL * motions.J
+    off = above & (angle > WRONG_POINT_DEG)  # another stationary point
+    short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)  # in the right basin, not at its bottom
+    if np.any(off):
+        from .optimal import _derivatives
+
+        K = motions.K
+        grad = _derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), np.asarray(R, dtype=float))[1]
+        moving = 2.0 * np.linalg.norm(grad, axis=-1) > STATIONARY_TOL  # |grad (8)| / J: not a stationary point
+        parts = []
+        if np.any(off & moving):
+            parts.append(f"{int(np.sum(off & moving))} where eq. (8) still has a gradient (up to "
+                         f"{float(np.max((2.0 * np.linalg.norm(grad, axis=-1))[off & moving])):.3g} J): the solver stopped "
+                         f"before converging (e.g. its iteration limit)")
+        if np.any(off & ~moving):
+            parts.append(f"{int(np.sum(off & ~moving))} at another stationary point of (8)")
+        warnings.warn(
+            f"{method} did not reach the global minimum of eq. (8) in {int(np.sum(off))} of {off.size} problems: "
+            f"its cost exceeds the certified minimum f* by up to {float(np.max(gap[off])):.3g} (tolerance "
+            f"{LOCAL_RTOL:g} f* + {LOCAL_ATOL:g} J) and its answer is {float(np.min(angle[off])):.3g}-"
+            f"{float(np.max(angle[off])):.3g} deg from the certified minimiser; " + "; ".join(parts)
+            + ". A local method from a start far from R0 does this; use chordal_optimal, or a start near R0",
+            LocalMinimumWarning,
+            stacklevel=stacklevel,
+        )
+    if np.any(short):
+        warnings.warn(
+            f"{method} stopped short of the minimum of eq. (8) in {int(np.sum(short))} of {short.size} problems: "
+            f"up to {float(np.max(angle[short])):.3g} deg from the certified minimiser (tolerance "
+            f"{LOCAL_ANGLE_TOL_DEG:g} deg); tighten its tolerance or use chordal_optimal",
+            ConvergenceWarning,
+            stacklevel=stacklevel,
+        )
+    return off | short
+
+
+def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
+    """Warn (:class:`AccuracyWarning`) where a non-local solver's answer is grossly off or not a rotation.
+
+    A cheap screen first: the relaxation ``g <= 3 lambda_1(sym K)`` bounds the minimum of (8) from below,
+    ``f* >= 6 J (1 - lambda_1)``; only answers whose cost exceeds ``GROSS_FACTOR`` times that bound (plus
+    ``LOCAL_ATOL * J``) are compared with the certified minimum. NaN answers (a solver's declared
+    failures) are skipped. Returns the boolean mask of flagged problems.
+    """
+    R = np.asarray(R, dtype=float)
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    det = det3(np.where(finite[..., None, None], R, np.eye(3)))
+    reflection = finite & (det < 0)
+    singular = finite & ~(np.abs(det) > 0)  # no rotation either; the gross screen needs det > 0
+    if np.any(singular):
+        warnings.warn(f"{method} returned a singular matrix (det 0), not a rotation, in {int(np.sum(singular))} of "
+                      f"{singular.size} problems", AccuracyWarning, stacklevel=stacklevel)
+    _warn_not_rotations(method, np.zeros_like(finite), reflection, stacklevel + 1)
+    return reflection | singular | _screen_gross(motions, R, finite & (det > 0), method, stacklevel + 1)
+
+
+def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray, stacklevel: int) -> None:
+    """:class:`AccuracyWarning` for declared failures (NaN blocks) and for reflections among a solver's answers."""
+    if np.any(failed):
+        warnings.warn(
+            f"{method} declared a failure (returned NaN) in {int(np.sum(failed))} of {failed.size} problems, first at "
+            f"batch index {_first_index(failed)}: no estimate there (with full_output: cost and duality_gap NaN, "
+            f"global_optimum False)",
+            AccuracyWarning, stacklevel=stacklevel)
+    if np.any(reflection):
+        warnings.warn(
+            f"{method} returned a reflection (det -1), not a rotation, in {int(np.sum(reflection))} of "
+            f"{reflection.size} problems" + (": the paper-literal variant fails so from a start more than 120 deg "
+                                             "from R0" if method.startswith("two_step") else ""),
+            AccuracyWarning, stacklevel=stacklevel)
+
+
+def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: str, stacklevel: int) -> np.ndarray:
+    """The gross-error screen of :func:`check_answer` over the ``usable`` answers (rotations); returns its mask."""
+    from ..so3 import angle_between_deg
+    from .optimal import global_certificate
+
+    batch, J = R.shape[:-2], motions.J
+    flat, usable = R.reshape(-1, 3, 3), usable.reshape(-1)
+    safe = np.where(usable[:, None, None], flat, np.eye(3))
+    flagged = np.zeros(len(flat), dtype=bool)
+    K = motions.K.reshape(-1, 9, 9)
+    x = vec(safe)
+    g = np.einsum("na,nab,nb->n", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
+    cost = 2.0 * J * (3.0 - g)
+    lower = 6.0 * J * np.maximum(1.0 - motions.sym_eigvals[..., 0].reshape(-1), 0.0)  # relaxation bound on f*
+    screen = usable & (cost > GROSS_FACTOR * lower + LOCAL_ATOL * J)
+    if np.any(screen):
+        A = motions.A.reshape((-1,) + motions.A.shape[-3:])[screen]
+        B = motions.B.reshape((-1,) + motions.B.shape[-3:])[screen]
+        cert = global_certificate(Motions._trusted(A, B))
+        gross = cost[screen] > GROSS_FACTOR * cert.cost + LOCAL_ATOL * J
+        if np.any(gross):
+            angle = angle_between_deg(safe[screen][gross], cert.R[gross])
+            ratio = cost[screen][gross] / np.maximum(cert.cost[gross], 1e-300)
+            warnings.warn(
+                f"{method} is far from the certified minimiser of eq. (8) in {int(np.sum(gross))} of {len(flat)} "
+                f"problems: up to {float(np.max(angle)):.3g} deg from it, cost (8) up to {float(np.max(ratio)):.3g} x "
+                f"the minimum (tolerance {GROSS_FACTOR:g} x + {LOCAL_ATOL:g} J); e.g. a motion of nearly 180 deg whose "
+                f"axis or quaternion sign differs between the two sides, or an ill-conditioned limit; use "
+                f"chordal_optimal",
+                AccuracyWarning, stacklevel=stacklevel)
+            flagged[np.flatnonzero(screen)[gross]] = True
+    return flagged.reshape(batch)
+
+
+def _checked_answer(method: str, motions: Motions, R):
+    """A core's answer as a float array, with its masks ``(failed, reflection)``; ``ValueError`` if it breaks the
+    contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem).
+
+    One vectorised pass over the batch: orthogonality ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against
+    :data:`ANSWER_ATOL` (a reflection passes both and is only warned about); any NaN or inf in a block that is not
+    all NaN fails them.
+    """
+    expected = motions.batch_shape + (3, 3)
+    if not isinstance(R, np.ndarray) or R.shape != expected:
+        got = (f"an array of shape {R.shape}" if isinstance(R, np.ndarray) else
+               "None" if R is None else f"a {type(R).__name__}")
+        raise ValueError(f"solver {method!r} returned {got}; expected a numpy array of shape {expected} (one 3x3 "
+                         f"rotation per problem of batch shape {motions.batch_shape})")
+    if R.dtype.kind not in "fiu":
+        raise ValueError(f"solver {method!r} returned an array of dtype {R.dtype}; expected real numbers, shape "
+                         f"{expected}")
+    R = np.asarray(R, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
+        ortho = np.sqrt(np.einsum("...ij,...ij->...", E, E))
+        det = det3(R)
+        violation = np.maximum(ortho, np.abs(np.abs(det) - 1.0))  # NaN wherever the block holds NaN or inf
+    failed = np.isnan(R).all(axis=(-2, -1))
+    bad = ~(violation <= ANSWER_ATOL) & ~failed
+    if np.any(bad):
+        i = _first_index(bad)
+        what = ("NaN or inf in part of the block (a declared failure is a whole block of NaN)"
+                if not np.isfinite(R[i]).all() else
+                f"||R^T R - I||_F = {ortho[i]:.3g}, det R = {det[i]:.6g}: | |det R| - 1 | = {abs(abs(det[i]) - 1):.3g}")
+        raise ValueError(f"solver {method!r} returned a matrix that is not a rotation at batch index {i}: {what} "
+                         f"(tolerance ANSWER_ATOL = {ANSWER_ATOL:g}; {int(np.sum(bad))} bad of {bad.size})")
+    return R, failed, ~failed & (det < 0)
+
+
+def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread_deg: float = 1.0,
+          _stacklevel: int = 3, **options):
+    """Estimate ``R0`` (camera_from_sensor) from pairs ``A_j R0 = R0 B_j`` (eq. (7)).
+
+    Parameters
+    ----------
+    method : str
+        A name from :func:`available`.
+    A : array_like, shape (..., J, 3, 3), or Motions
+        Camera relative rotations ``Delta R_c``; or a
+        :class:`replication.core.motions.Motions` prepared once for several solvers (then ``B=None``).
+    B : array_like, shape (..., J, 3, 3)
+        Sensor relative rotations ``Delta R_i``.
+    full_output : bool
+        ``False``: return the rotations. ``True``: return a :class:`Solution`
+        with the cost (8), the observability diagnostic and the certified global
+        minimum of eq. (8) (``global_optimum``, ``duality_gap``).
+    warn_axis_spread_deg : float
+        Issue an :class:`ObservabilityWarning` when the camera or sensor axis
+        spread (:class:`replication.core.motions.MotionObservability`) of a problem is
+        below this: nearly single-axis (or small) motion leaves the rotation about that
+        axis poorly determined. Exactly single-axis motion raises instead.
+    **options
+        Passed to the solver.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 3, 3), or Solution
+        Rotation matrices (det +1), unless a warning says otherwise.
+
+    Warns
+    -----
+    ObservabilityWarning
+        The motions weakly determine ``R0`` (see :func:`warn_if_weak`).
+    LocalMinimumWarning, ConvergenceWarning
+        A ``local`` solver (e.g. ``sqp``) ended above, or short of, the certified global minimum of eq. (8).
+    AccuracyWarning
+        Any solver returned a reflection (det -1) or declared a failure (a 3x3 block of NaN); any other solver
+        (except ``chordal_optimal``, which certifies itself) returned an answer far from the certified
+        minimiser (see :func:`check_answer`).
+    IterationCapWarning, CertificateWarning
+        From the solvers themselves (see each).
+
+    Raises
+    ------
+    ValueError
+        Unknown method (the message lists the available ones), malformed input
+        (see :func:`replication.core.handeye.check_motion_pairs`), fewer motions than
+        the solver needs, or degenerate motion (``R0`` not unique); or the solver's core broke its contract
+        (:class:`SolverInfo`): not an array of shape ``batch shape + (3, 3)``, not real, a block partly NaN
+        or inf, or a block farther than :data:`ANSWER_ATOL` from orthogonal (the message names the solver, the
+        first offending batch index and the measured violation).
+    """
+    info = solver_info(method)
+    motions = prepare_motions(A, B, min_motions=info.min_motions)
+    warn_if_weak(motions, warn_axis_spread_deg, stacklevel=_stacklevel)
+    R, failed, reflection = _checked_answer(method, motions, info.core(motions, **options))
+    _warn_not_rotations(method, failed, reflection, _stacklevel)
+    if info.local:
+        check_local_answer(motions, R, method, stacklevel=_stacklevel)
+    elif method != "chordal_optimal":
+        _screen_gross(motions, R, ~failed & ~reflection, method, _stacklevel)
+    if not full_output:
+        return R
+    from .optimal import GAP_TOL
+
+    cost, lower, gap = _gap_to_global(motions, R)
+    gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
+    return Solution(R=R, method=method, cost=cost, observability=motions.observability, lower_bound=lower,
+                    duality_gap=gap, global_optimum=gap <= GAP_TOL * motions.J)

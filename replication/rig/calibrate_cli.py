@@ -1,0 +1,325 @@
+"""``python -m replication calibrate``: the command line of :func:`replication.rig.calibration.calibrate`.
+
+Every parameter is checked when the command line is parsed (its name in the message); the paths before any work:
+every output (``--out``, ``--plot``, ``--track``) against every input (``--camera``, ``--sensor``, ``--reference``)
+and every other output, as files after resolving links (and hard links), the inputs (a regular file or a pipe,
+readable), the outputs (folders created, a directory or an unwritable place refused) and the figure's format (its
+extension). A pipe is read once, at the start, and the report records it as such with the SHA-256 of what was read;
+a regular input is hashed at the start too. The report, track and figure are written atomically. Exit codes: 0
+(verdict ``ok`` or ``warning``), 2 (bad input, or a file-system error: the path and the reason named, nothing
+computed or nothing written), :data:`replication.rig.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``).
+"""
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import json
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+from .._io import check_clashes, check_input, figure_format, os_reason, prepare_output, same_file, write_atomic
+from .quality import EXIT_FAIL
+
+__all__ = ["CALIBRATE_HELP", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
+
+#: Exit code for bad input (argparse's own, too).
+EXIT_BAD_INPUT = 2
+
+CALIBRATE_HELP = """\
+Estimate R0 = camera_from_sensor (A_j R0 = R0 B_j) from two timestamped streams, or from two static pose sets
+(--poses), and judge the answer: the verdict (ok / warning / fail, every reason with its measured number and
+threshold) is printed first and stored in the report; a fail exits with code 3 unless --accept.
+
+Formats (recognised by --sensor-kind and the file name):
+  camera / orientation sensor:
+    *.txt  TUM / ORB-SLAM3 trajectory, lines "t tx ty tz qx qy qz qw" (t in s or ns: --time-unit), world<-body
+    *.csv  EuRoC / TUM-VI mocap or ground truth, "t[ns], px, py, pz, qw, qx, qy, qz", world<-body
+  gyro sensor (--sensor-kind gyro):
+    *.csv  EuRoC / TUM-VI imu0/data.csv, "t[ns], wx, wy, wz [rad/s], ax, ay, az [m/s^2]"
+  static pose sets (--poses): Tabb & Ahmad Yousef's cali.txt (camera) and robot_cali.txt (robot hand)
+  reference (optional):
+    Kalibr camchain YAML (<cam>.T_cam_imu), EuRoC sensor.yaml (T_BS, cam -> body), Tabb transformations.txt (Z)
+The clock offset is estimated by cross-correlating angular speeds and removed unless --keep-clock; the report
+states its sign: the sensor sample stamped t + offset matches the camera sample stamped t.
+Outputs: --out, --plot (.png, .pdf or .svg, by its extension) and --track may not be an input file or one another
+(after resolving links); an input may be a pipe (read once: --camera <(...)). Refused before any work, exit 2.
+Exit codes: 0 ok or warning, 2 bad input or a file-system error (the path and the reason named), 3 verdict fail
+(0 with --accept).
+"""
+
+
+def _number(kind, *, minimum=None, strict=True):
+    """An argparse type: a finite ``kind`` above ``minimum`` (``>=`` if not ``strict``)."""
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a{'n integer' if kind is int else ' number'}: {text!r}") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"not finite: {text!r}")
+        if minimum is not None and (value <= minimum if strict else value < minimum):
+            raise argparse.ArgumentTypeError(f"must be {'>' if strict else '>='} {minimum:g}, got {text}")
+        return value
+    return parse
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer",
+                         description=CALIBRATE_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera), or camera poses (--poses)")
+    cal.add_argument("--sensor", required=True, help="sensor trajectory, raw gyro samples, or robot poses (--poses)")
+    cal.add_argument("--sensor-kind", choices=["orientation", "gyro"], default="orientation")
+    cal.add_argument("--poses", action="store_true", help="both files are static pose sets (Tabb format)")
+    cal.add_argument("--method", default="chordal_optimal", help="a solver from replication.core.solvers.available()")
+    cal.add_argument("--interval", type=_number(float, minimum=0), default=1.0,
+                     help="seconds between the two poses of a pair")
+    cal.add_argument("--stride", type=_number(int, minimum=1, strict=False), default=1,
+                     help="keep every stride-th pair (non-overlapping pairs: interval x camera rate)")
+    cal.add_argument("--max-offset", type=_number(float, minimum=0), default=0.2,
+                     help="largest clock offset searched (s)")
+    cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
+    cal.add_argument("--bootstrap", type=_number(int, minimum=0, strict=False), default=200,
+                     help="bootstrap replicates (0: none)")
+    cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
+    units = ["auto", "s", "ms", "us", "ns"]
+    cal.add_argument("--time-unit", choices=units, default=None,
+                     help="time unit of both files when they are TUM trajectories (auto: ns above 1e12, else s)")
+    cal.add_argument("--camera-time-unit", choices=units, default=None, help="time unit of the camera file only")
+    cal.add_argument("--sensor-time-unit", choices=units, default=None, help="time unit of the sensor file only")
+    cal.add_argument("--drop-repeated", action="store_true",
+                     help="skip lines of a TUM trajectory that repeat the previous line verbatim")
+    cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
+    cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
+    cal.add_argument("--out", help="write the JSON report here (folders are created)")
+    cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension (folders are "
+                                    "created)")
+    cal.add_argument("--accept", action="store_true", help="exit 0 even when the verdict is fail")
+    cal.add_argument("--online", action="store_true",
+                     help="also replay the streams through the online estimator (replication.rig.online), as if live")
+    cal.add_argument("--track", help="with --online: write its estimate, 95 %% radius, ready and alarms per pair (CSV)")
+    cal.add_argument("--target", type=_number(float, minimum=0), default=0.5,
+                     help="with --online: ready once the 95 %% radius is below this (deg)")
+    cal.add_argument("--quiet", action="store_true", help="no progress bar")
+    cal.set_defaults(func=calibrate_command)
+    return cal
+
+
+#: The inputs and outputs of ``calibrate``: (option, attribute).
+INPUTS = (("--camera", "camera"), ("--sensor", "sensor"), ("--reference", "reference"))
+OUTPUTS = (("--out", "out"), ("--plot", "plot"), ("--track", "track"))
+
+
+def _check_paths(args) -> dict:
+    """Every path before any work; ``{option: "file" | "pipe"}`` of the inputs given.
+
+    Inputs exist and are regular files or pipes (a pipe is given once); no output is an input or another output;
+    the figure's extension is a known format; each output's folder is created and writable.
+    """
+    inputs = {option: getattr(args, attr) for option, attr in INPUTS}
+    kinds = {option: check_input(path, option) for option, path in inputs.items() if path is not None}
+    pipes = [option for option, kind in kinds.items() if kind == "pipe"]
+    for i, option in enumerate(pipes):
+        for other in pipes[:i]:
+            if same_file(inputs[option], inputs[other]):
+                raise ValueError(f"{option} is the same pipe as {other} ({inputs[option]}): a pipe can be read once")
+    check_clashes({option: getattr(args, attr) for option, attr in OUTPUTS}, inputs)
+    if args.plot is not None:
+        try:
+            figure_format(args.plot)
+        except ValueError as err:
+            raise ValueError(f"--plot {err}") from None
+    return kinds
+
+
+@contextlib.contextmanager
+def _read_inputs(args, kinds: dict):
+    """Read every input once: ``(paths to load from, report entries, {copy: shown name})``.
+
+    A regular file is loaded from its path and hashed now; a pipe is read whole into a temporary copy (its name's
+    extension kept: the loaders recognise formats by it) that the loaders read, and its entry records the pipe, the
+    bytes and the SHA-256 of what was read, no path to read again.
+    """
+    from .fetch import sha256_of
+
+    paths, files, copies = {}, {}, {}
+    with tempfile.TemporaryDirectory(prefix="replication-inputs-") as tmp:
+        for option, kind in kinds.items():
+            given = getattr(args, option[2:])
+            try:
+                if kind == "pipe":
+                    with open(given, "rb") as f:
+                        data = f.read()
+                    entry = {"bytes": len(data), "sha256": sha256_of(data)}
+                else:  # hashed in blocks, not held in memory
+                    entry = {"bytes": os.path.getsize(given), "sha256": sha256_of(given)}
+            except OSError as err:
+                raise ValueError(f"{option} {given}: cannot be read ({os_reason(err)})") from None
+            if kind == "pipe":
+                copy = Path(tmp) / (option[2:] + Path(given).suffix)
+                copy.write_bytes(data)
+                paths[option], copies[str(copy)] = copy, f"{given} (a pipe, read once)"
+                files[option[2:]] = {"pipe": True, "given": str(given), **entry}
+            else:
+                paths[option] = given
+                files[option[2:]] = {"path": str(Path(given).resolve()), **entry}
+        yield paths, files, copies
+
+
+def _named(stream, copies: dict, given):
+    """``stream`` with its source the name given on the command line where it was loaded from a pipe's copy."""
+    if str(stream.source) in copies:
+        return dataclasses.replace(stream, source=str(given))
+    return stream
+
+
+def _load(args, paths):
+    from . import realdata
+
+    if args.poses:
+        return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
+    camera = realdata.load_stream(paths["--camera"], "orientation", time_unit=_unit(args, "camera"),
+                                  drop_repeated=args.drop_repeated)
+    sensor = realdata.load_stream(paths["--sensor"], args.sensor_kind, time_unit=_unit(args, "sensor"),
+                                  drop_repeated=args.drop_repeated)
+    return camera, sensor
+
+
+def _unit(args, side: str) -> str:
+    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM files), else auto."""
+    own = getattr(args, f"{side}_time_unit")
+    if own is not None:
+        return own
+    path = args.camera if side == "camera" else args.sensor
+    csv = side == "sensor" and args.sensor_kind == "gyro" or str(path).lower().endswith(".csv")
+    return "auto" if args.time_unit is None or csv else args.time_unit
+
+
+def _online(args, camera, sensor, reference, result):
+    """Replay the streams through the online estimator with the batch options (interval, stride, clock offset
+    search and whether to apply it); print what it found; return the result with the online summary and track."""
+    import dataclasses
+
+    from .live import replay
+    from .online import OnlineCalibrator
+
+    rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
+                  max_offset=args.max_offset, correct_offset=not args.keep_clock, stride=args.stride,
+                  reference=reference)
+    summary = rows.attrs["summary"]
+    offset = summary["clock_offset_s"]
+    head = (f"online: {len(rows)} pairs at {args.interval:g} s"
+            + (f", clock offset {1e3 * offset:+.1f} ms" if offset is not None else "")
+            + f"; verdict {summary['verdict']['level'].upper()}")
+    if not len(rows):
+        print(f"{head}; no pairs were formed" + (f" ({summary['note']})" if summary["note"] else
+                                                   " (the streams overlap too little for one pair)"))
+    elif summary["ready_at_s"] is not None:
+        print(f"{head}; ready ({100 * summary['radius_level']:g} % radius < {args.target:g} deg) when the pair ending "
+              f"at {summary['ready_pair_end_s']:.1f} s was formed, {summary['ready_at_s']:.1f} s after the camera's "
+              f"first sample; final radius {summary['radius_deg']:.3g} deg")
+    else:
+        print(f"{head}; never ready: " + "; ".join(summary["not_ready"]))
+    for line in summary["verdict"]["reasons"]:
+        if line["level"] == "fail":
+            print(f"  online fail: {line['message']}")
+    print("  events: " + ("none" if not summary["events"] else ", ".join(
+        f"{ev['kind']} at {ev['t_s']:.1f} s" for ev in summary["events"])))
+    print(f"  the online radius covers {summary['radius_covers']}")
+    diagnostics = {**result.diagnostics, "online_track": rows}
+    return dataclasses.replace(result, online=summary, diagnostics=diagnostics), rows
+
+
+def _load_all(args, kinds):
+    """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors about a pipe's
+    copy name the pipe as given."""
+    from .realdata import load_reference
+
+    with _read_inputs(args, kinds) as (paths, files, copies):
+        try:
+            camera, sensor = _load(args, paths)
+            reference = load_reference(paths["--reference"], args.reference_camera) if args.reference else None
+        except (ValueError, OSError) as err:
+            text = str(err)
+            for copy, shown in copies.items():
+                text = text.replace(copy, shown)
+            raise ValueError(text) from None
+        if not args.poses:
+            camera, sensor = _named(camera, copies, args.camera), _named(sensor, copies, args.sensor)
+    return camera, sensor, reference, files
+
+
+def _error(text) -> int:
+    print(f"error: {text}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def _write(path, data, what: str) -> bool:
+    """Write an output atomically; False (the path and the reason said on standard error) if the file system
+    refuses."""
+    try:
+        write_atomic(path, data)
+    except OSError as err:
+        _error(f"{what} {path}: cannot write ({os_reason(err)}); nothing was written there")
+        return False
+    return True
+
+
+def calibrate_command(args: argparse.Namespace) -> int:
+    from .calibration import OverlapError, calibrate, calibrate_poses
+    from ..core.solvers import solver_info
+
+    try:
+        solver_info(args.method)
+        if args.track is not None and not args.online:
+            raise ValueError("--track needs --online")
+        if args.online and args.poses:
+            raise ValueError("--online needs streams, not static pose sets (--poses)")
+        kinds = _check_paths(args)
+        out = prepare_output(args.out, "--out") if args.out is not None else None
+        plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
+        track = prepare_output(args.track, "--track") if args.track is not None else None
+        camera, sensor, reference, files = _load_all(args, kinds)
+        common = dict(method=args.method, n_bootstrap=args.bootstrap, seed=args.seed, reference=reference,
+                      progress=not args.quiet and sys.stderr.isatty())
+        if args.poses:
+            result = calibrate_poses(camera, sensor, **common)
+        else:
+            result = calibrate(camera, sensor, interval=args.interval, stride=args.stride,
+                               max_offset=args.max_offset, correct_offset=not args.keep_clock, **common)
+    except OverlapError as err:
+        return _error(err.named("--max-offset"))
+    except (ValueError, OSError) as err:
+        return _error(err)
+    print(result.summary())
+    if args.online:
+        result, rows = _online(args, camera, sensor, reference, result)
+        if track is not None:
+            if not _write(track, rows.to_csv(index=False), "--track"):
+                return EXIT_BAD_INPUT
+            print(f"online track written to {track}")
+    if out is not None:
+        if args.reference:
+            files["reference"] = {**files["reference"], "camera_entry": args.reference_camera}
+        report = {"command": ["python", "-m", "replication", *sys.argv[1:]] if sys.argv else [],
+                  "cwd": os.getcwd(), "files": files,
+                  "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
+                          "time_units": {"camera": _unit(args, "camera"), "sensor": _unit(args, "sensor")},
+                          "drop_repeated": args.drop_repeated, "accept": args.accept},
+                  **result.to_dict()}
+        if not _write(out, json.dumps(report, indent=2, allow_nan=False) + "\n", "--out"):  # never half-written
+            return EXIT_BAD_INPUT
+        print(f"report written to {out}")
+    if plot is not None:
+        try:
+            result.plot(plot)  # the format its extension names, written atomically
+        except OSError as err:
+            return _error(f"--plot {plot}: cannot write ({os_reason(err)}); nothing was written there")
+        print(f"figure written to {plot}")
+    if result.verdict.level == "fail" and not args.accept:
+        print(f"verdict FAIL: exit code {EXIT_FAIL} (--accept to exit 0)", file=sys.stderr)
+        return EXIT_FAIL
+    return 0

@@ -1,0 +1,414 @@
+"""Calibrate a real rig: ``R0`` from a camera orientation stream and a sensor stream.
+
+:func:`calibrate` turns two timestamped streams into motion pairs and solves
+``A_j R0 = R0 B_j`` (the paper's eq. (7)) with any registered solver:
+
+1. the sensor stream becomes an orientation stream (raw gyro samples are integrated,
+   trapezoidal rate, body frame: ``Q(t + dt) = Q(t) exp([omega] dt)``);
+2. the clock offset between the streams is estimated by cross-correlating their
+   angular speeds, refined below the search grid, with a 95 % block-bootstrap interval and the margin of its
+   correlation peak over any other (:func:`replication.rig.association.offset_analysis`), reported (and by default
+   removed);
+3. pairs at ``interval`` seconds (steps 2-3: :mod:`replication.rig.association`);
+4. the solver, the residual of every pair, the observability diagnostic, and a
+   moving-block bootstrap over the pairs (overlapping pairs are correlated, so
+   blocks span ``interval``) for a confidence radius in degrees;
+5. a change test (:mod:`replication.rig.changepoint`: do the pairs before and after some time agree on the same
+   ``R0``? a re-mount during the recording fails the verdict, naming the time and both estimates);
+6. a verdict (:mod:`replication.rig.quality`: ``ok`` / ``warning`` / ``fail`` with every reason
+   measured) and, where it is not ``ok``, a search for the usual input mistakes by name
+   (:mod:`replication.rig.diagnose`). Pairs whose interval crosses a gap in a stream are dropped.
+
+Every parameter is checked before any work, with its name in the message.
+
+Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
+``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from .association import (estimate_time_offset, motion_pairs, offset_analysis,  # re-exported: public names here
+                          stream_pairs)
+from ..core.checks import check_number
+from .estimate import check_common, check_options, solve_pairs, with_reasons
+from ..core.handeye import pair_residual_deg, relative_rotations
+from .poses import calibrate_poses, pose_pairs  # re-exported: public names here
+from .quality import THRESHOLDS
+from .report import CalibrationResult  # re-exported: a public name here
+from ..core.so3 import rotation_angle_deg
+from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
+
+__all__ = [
+    "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
+    "stream_pairs", "pose_pairs", "OverlapError",
+]
+
+
+#: A stream has a gap where more than this many of its median sample intervals pass without a sample.
+GAP_FACTOR = 5.0
+#: Resolution of the clock-offset search (s), as :func:`replication.rig.association.estimate_time_offset` uses.
+OFFSET_RESOLUTION = 0.5e-3
+
+
+def _gaps(t) -> np.ndarray:
+    """``(start, end)`` of every gap of a stream: more than :data:`GAP_FACTOR` median intervals without a sample."""
+    dt = np.diff(t)
+    k = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
+    return np.stack([t[k], t[k + 1]], axis=-1)
+
+
+def _span(stream) -> dict:
+    return {"kind": type(stream).__name__, "source": stream.source, "samples": int(len(stream.t)),
+            "start_s": float(stream.t[0]), "end_s": float(stream.t[-1]), "span_s": float(stream.t[-1] - stream.t[0]),
+            "median_rate_hz": float(1.0 / np.median(np.diff(stream.t)))}
+
+
+class OverlapError(ValueError):
+    """The streams overlap in too few camera samples for the clock-offset search.
+
+    The message names the option that sets the search (``max_offset`` from the API; the command line shows its own
+    ``--max-offset`` with :meth:`named`) and gives the spans as durations.
+    """
+
+    def __init__(self, template: str, option: str = "max_offset"):
+        self.template, self.option = template, option
+        super().__init__(template.format(option=option))
+
+    def __str__(self) -> str:
+        return self.template.format(option=self.option)
+
+    def __reduce__(self):
+        return type(self), (self.template, self.option)
+
+    def named(self, option: str) -> "OverlapError":
+        """The same error naming the option as ``option`` (e.g. ``"--max-offset"``)."""
+        return type(self)(self.template, option)
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.1f} s" if abs(seconds) >= 1 else f"{seconds:.3g} s"
+
+
+def _overlap_samples(camera, sensor, max_offset) -> int:
+    """Camera samples inside the sensor's span shrunk by ``max_offset`` at each end (what the search compares)."""
+    lo, hi = max(camera.t[0], sensor.t[0] + max_offset), min(camera.t[-1], sensor.t[-1] - max_offset)
+    return int(np.sum((camera.t >= lo) & (camera.t <= hi)))
+
+
+def _check_overlap(camera, sensor, max_offset):
+    """Refuse streams that overlap in fewer than 10 camera samples once the offset search (+-max_offset) is allowed
+    for: :class:`OverlapError` with the spans as durations, the largest ``max_offset`` that would do where the streams
+    do overlap, and the likely time-unit mistake (with the absolute start times that show it) where there is one."""
+    if _overlap_samples(camera, sensor, max_offset) >= 10:
+        return
+    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
+    spans = f"camera {_duration(cs)}, sensor {_duration(ss)} long"
+    unit = _time_unit_reason(camera, sensor)
+    if _overlap_samples(camera, sensor, 0.0) >= 10:
+        overlap = min(camera.t[-1], sensor.t[-1]) - max(camera.t[0], sensor.t[0])
+        lo, hi = 0.0, float(max_offset)  # the largest max_offset keeping 10 samples lies in [lo, hi)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if _overlap_samples(camera, sensor, mid) >= 10 else (lo, mid)
+        digits = max(0, 1 - int(np.floor(np.log10(lo)))) if lo > 0 else 3
+        largest = np.floor(lo * 10 ** digits) / 10 ** digits
+        text = (f"the streams overlap by {_duration(overlap)} ({spans}), but the clock-offset search removes "
+                f"{{option}} from each end of the sensor's span: {{option}} {max_offset:g} s is larger than the "
+                f"overlap allows and leaves fewer than 10 camera samples to compare (above {largest:.{digits}f} s; "
+                f"a useful search stays well below half the overlap, and clock offsets are rarely more than a "
+                f"second)")
+    else:
+        if camera.t[-1] <= sensor.t[0]:
+            where = f"the sensor starts {_duration(sensor.t[0] - camera.t[-1])} after the camera ends"
+        elif sensor.t[-1] <= camera.t[0]:
+            where = f"the sensor ends {_duration(camera.t[0] - sensor.t[-1])} before the camera starts"
+        else:
+            where = f"they overlap by {_duration(min(camera.t[-1], sensor.t[-1]) - max(camera.t[0], sensor.t[0]))}"
+        text = f"the streams overlap in fewer than 10 camera samples ({spans}; {where}; {{option}} {max_offset:g} s)"
+        gap = max(sensor.t[0] - camera.t[-1], camera.t[0] - sensor.t[-1])
+        if unit is not None or gap > PLAUSIBLE_SPAN_S[1]:
+            text += (f"; the camera starts at t = {camera.t[0]:.3f} s, the sensor at t = {sensor.t[0]:.3f} s"
+                     + ("" if unit is not None else ": their clocks differ (one relative, one absolute time?)"))
+    if unit is not None:
+        text += "; " + unit.message.replace("{", "{{").replace("}", "}}")
+    raise OverlapError(text)
+
+
+def _gap_free_window(camera, sensor, max_offset):
+    """The camera samples inside the sensor stream's longest stretch without a gap (the whole stream if it has none):
+    across a gap the sensor's orientation is interpolated or integrated through missing data, and its angular speed
+    there would bias the clock-offset search."""
+    gaps = _gaps(sensor.t)
+    if not len(gaps):
+        return camera
+    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]]).reshape(-1, 2)  # gap-free stretches
+    best = edges[np.argmax(np.diff(edges, axis=1)[:, 0])]
+    part = camera.between(best[0] + max_offset, best[1] - max_offset)
+    return part if len(part.t) >= 10 else camera
+
+
+#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit mistake puts one
+#: stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach that in 2286).
+PLAUSIBLE_SPAN_S = (1.0, 1e4)
+
+
+def _time_unit_reason(camera, sensor):
+    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file's time stamps in
+    another unit than its loader read them in); it blames the stream whose span is implausible for a recording."""
+    from .quality import Reason
+
+    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
+    if not (cs > 0 and ss > 0):
+        return None
+    ratio = max(cs, ss) / min(cs, ss)
+    factor = next((f for f in (1e3, 1e6, 1e9) if 0.5 < ratio / f < 2.0), None)
+    if factor is None:
+        return None
+    lo, hi = PLAUSIBLE_SPAN_S
+    odd = [name for name, span, start in (("camera", cs, camera.t[0]), ("sensor", ss, sensor.t[0]))
+           if not lo <= span <= hi or abs(start) > 1e10]
+    culprit = f"the {odd[0]} file's" if len(odd) == 1 else "one of the two files'"
+    return Reason("time_unit", "fail", float(ratio), factor,
+                  f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about {factor:.0e}: "
+                  f"{culprit} time stamps are likely in another unit than they were read in (TUM trajectories: "
+                  f"--camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by format)")
+
+
+#: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of one recording
+#: (a copy re-saved with fewer digits, a line dropped, times shifted by rounding); real camera and sensor streams
+#: never agree to 0.006 deg sample after sample.
+SAME_SAMPLE_TIME_S, SAME_SAMPLE_ANGLE_RAD = 1e-6, 1e-4
+
+
+def _same_stream(camera, sensor) -> str | None:
+    """Whether the 'sensor' is the camera stream itself: a sentence saying how many samples coincide, or None.
+
+    A copy counts too: at least half of the sensor's samples (and 10) lie within :data:`SAME_SAMPLE_TIME_S` of a
+    camera sample and within :data:`SAME_SAMPLE_ANGLE_RAD` of its orientation (a line dropped, times shifted by a
+    nanosecond, orientations re-saved with 5 decimals)."""
+    if not isinstance(sensor, OrientationStream):
+        return None
+    j = np.clip(np.searchsorted(camera.t, sensor.t), 1, len(camera.t) - 1)
+    j = np.where(np.abs(camera.t[j - 1] - sensor.t) <= np.abs(camera.t[j] - sensor.t), j - 1, j)
+    near = np.abs(camera.t[j] - sensor.t) <= SAME_SAMPLE_TIME_S
+    if near.sum() < max(10, 0.5 * len(sensor.t)):
+        return None
+    cos = (np.einsum("nab,nab->n", camera.world_from_body[j[near]], sensor.world_from_body[near]) - 1.0) / 2.0
+    same = int(np.sum(cos >= math.cos(SAME_SAMPLE_ANGLE_RAD)))
+    if same < max(10, 0.5 * len(sensor.t)):
+        return None
+    return (f"{same} of the sensor's {len(sensor.t)} samples are camera samples (time within "
+            f"{SAME_SAMPLE_TIME_S:g} s, orientation within {math.degrees(SAME_SAMPLE_ANGLE_RAD):.2g} deg)")
+
+
+#: The residual level the handedness test divides by is at least this (deg): noise-free pairs fit exactly either way.
+MIRROR_FLOOR_DEG = 0.01
+
+
+def _mirror_fit(camera, gyro, A, B, interval, offset, stride, keep) -> dict:
+    """How much worse the pairs ``A, B`` fit with the gyro's frame mirrored about the axis it turns about least:
+    ``{"mirror_fit_ratio": ratio of the median residuals, "mirror_normal": that axis}``, each fit by
+    ``chordal_optimal``; empty where the pairs themselves fit poorly (the verdict fails them already, and the
+    diagnosis names a sign-flipped axis) or are too few.
+
+    A gyro with one axis's sign flipped (a left-handed frame, e.g. in a driver) reports ``D omega``
+    (``D = diag(1, 1, -1)``). Where the rates stay in one plane (normal ``n``), ``D omega = (D P) omega`` with the
+    mirror ``P = I - 2 n n^T``, which leaves them unchanged, and ``D P`` is a rotation: the flipped gyro is exactly
+    a right-handed one mounted otherwise, and both fit with different R0. Mirroring the rates about the least-turned
+    axis and fitting again measures how far the data are from that case (three-axis motion fits far worse)."""
+    from ..core.solvers import solve
+
+    def median_residual(A, B):
+        with warnings.catch_warnings():  # the mirrored fit may be poor: that is what it measures
+            warnings.simplefilter("ignore")
+            return float(np.median(pair_residual_deg(solve("chordal_optimal", A, B), A, B)))
+
+    plain = median_residual(A, B) if len(A) >= 3 else math.inf
+    if not plain <= THRESHOLDS["residual_to_motion"][0] * float(np.median(rotation_angle_deg(A))):
+        return {}
+    w = gyro.omega
+    n = np.linalg.eigh(w.T @ w)[1][:, 0]
+    mirrored = integrate_gyro(GyroStream(gyro.t, w - 2.0 * np.outer(w @ n, n), gyro.source))
+    A_m, B_m, _ = motion_pairs(camera, mirrored, interval, offset=offset)
+    ratio = median_residual(A_m[::stride][keep], B_m[::stride][keep]) / max(plain, MIRROR_FLOOR_DEG)
+    return {"mirror_fit_ratio": ratio, "mirror_normal": tuple(float(v) for v in n * np.sign(n[np.argmax(abs(n))]))}
+
+
+def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
+    """Mask of pairs to drop: an end in a gap of the sensor stream (interpolated across it), or, for an integrated
+    gyro, any gap within the pair (the integration across it is wrong)."""
+    gaps = _gaps(sensor_t)
+    s, e = t_start + offset, t_start + interval + offset
+    drop = np.zeros(len(t_start), bool)
+    for g0, g1 in gaps:
+        inside = ((s > g0) & (s < g1)) | ((e > g0) & (e < g1))
+        drop |= inside | ((s < g1) & (e > g0)) if integrated else inside
+    return drop
+
+
+def _speeds(camera, sensor, offset, lo, hi):
+    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by ``offset``, in the overlap."""
+    t = camera.t[(camera.t >= lo) & (camera.t <= hi)]
+    if len(t) < 2:
+        return None
+    cam = camera.at(t)
+    sen = sensor.at(t + offset)
+    dt = np.diff(t)
+    speed = [rotation_angle_deg(relative_rotations(Q, convention="world_from_body", atol=1e-5)) / dt for Q in (cam, sen)]
+    return 0.5 * (t[1:] + t[:-1]), speed[0], speed[1]
+
+
+#: The change test's splits leave at least this share of the pairs (and 5 blocks) on each side. 0.15 missed
+#: re-mounts in the last 8 % of a recording (red team: ok, 4.6 deg off); 0.05 found a 2 or 5 deg re-mount at 92 %
+#: of 60 s rigs in 20/20 each (0.15: 8/20 and 4/20); false alarms on rigs without a change 1 of 320 (0.15: 2 of
+#: 320), two disjoint sets of 160 seeds (benchmarks/bench_change_ends.py).
+CHANGE_MIN_SHARE = 0.05
+
+
+def _change_test(A, B, t_start, block, t0):
+    """The change test on the pairs (:func:`replication.rig.changepoint.two_segment_test`), its times since ``t0``, and
+    how well each side fits its own estimate (the larger median residual / median motion of the two sides: a
+    re-mount leaves each side fitting, an input mistake neither); or ``(None, why)`` where it cannot run (too short
+    a recording, one side's motions about one axis)."""
+    import dataclasses
+
+    from .changepoint import two_segment_test
+
+    try:
+        c = two_segment_test(A, B, t_start, block=block, min_share=CHANGE_MIN_SHARE)
+    except ValueError as err:
+        return None, f"not run: {err}"
+    k = c.split_index
+    fit = max(float(np.median(pair_residual_deg(R, a, b)) / max(np.median(rotation_angle_deg(a)), 1e-12))
+              for R, a, b in ((c.R_before, A[:max(k - block, 1)], B[:max(k - block, 1)]), (c.R_after, A[k:], B[k:])))
+    return dataclasses.replace(c, split_time=c.split_time - t0, split_times=c.split_times - t0), fit
+
+
+def _change_report(c, fit) -> dict:
+    """The change test for the JSON report (times since the camera's first sample)."""
+    if c is None:
+        return {"run": False, "note": fit}
+    return {"run": True, "note": None, "significant": bool(c.significant), "sides_fit": fit, "statistic": c.statistic,
+            "threshold": c.threshold, "p_value": c.p_value, "level": c.level, "split_time_s": c.split_time,
+            "angle_deg": c.angle_deg, "difference_radius_deg": c.difference_radius_deg, "n_before": c.n_before,
+            "n_after": c.n_after, "R0_before": c.R_before.tolist(), "R0_after": c.R_after.tolist(),
+            "splits_from_s": float(c.split_times[0]), "splits_to_s": float(c.split_times[-1])}
+
+
+def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
+              stride: int = 1, max_offset: float = 0.2, correct_offset: bool = True, n_bootstrap: int = 200,
+              seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False,
+              **options) -> CalibrationResult:
+    """``R0`` (camera_from_sensor) of a real rig from two timestamped streams, with a verdict on it.
+
+    Parameters
+    ----------
+    camera : OrientationStream
+        Camera ``world_from_camera`` orientations (a SLAM trajectory, PnP poses inverted, ...).
+    sensor : OrientationStream or GyroStream
+        Sensor ``world_from_sensor`` orientations, or raw body-frame rates (integrated here).
+    method : str
+        A registered solver (:func:`replication.core.solvers.available`).
+    interval : float
+        Seconds between the two orientations of a pair.
+    stride : int
+        Keep every ``stride``-th pair (pairs start at every camera time and overlap; a stride
+        of ``interval`` times the camera rate gives non-overlapping pairs, e.g. for OpenCV,
+        which forms all pairs of the pose chain itself).
+    max_offset : float
+        Largest clock offset searched (s).
+    correct_offset : bool
+        Shift the sensor clock by the estimated offset before pairing.
+    n_bootstrap : int
+        Moving-block bootstrap replicates (0: none).
+    seed : int
+        Seeds the bootstrap.
+    reference : None or array_like (3, 3)
+        A reference ``R0``; the result then reports the angle to it.
+    diagnose : bool
+        Where the verdict is not ``ok``, look for the usual input mistakes (:mod:`replication.rig.diagnose`).
+    progress : bool
+        Show a progress bar over the bootstrap (on standard error).
+    **options
+        Passed to the solver.
+
+    Returns
+    -------
+    CalibrationResult
+        With ``verdict``: read it before using ``R``.
+
+    Raises
+    ------
+    ValueError
+        A bad parameter (named), streams of the wrong type, or streams that do not overlap (:class:`OverlapError`,
+        naming ``max_offset``, with the spans as durations and the likely
+        time-unit mistake when their spans show one).
+    """
+    reference = check_common(method, n_bootstrap, seed, reference)
+    check_options(method, options)
+    check_number("interval", interval, minimum=0)
+    check_number("stride", stride, minimum=1, integer=True, strict=False)
+    check_number("max_offset", max_offset, minimum=0)
+    if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
+        raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
+    same = _same_stream(camera, sensor)
+    if same:
+        raise ValueError(f"the sensor stream is the camera stream itself, or a copy of it: {same}; give the "
+                         f"sensor's own recording")
+    gyro = sensor if isinstance(sensor, GyroStream) else None
+    oriented = integrate_gyro(sensor) if gyro is not None else sensor
+    _check_overlap(camera, oriented, max_offset)
+    window = _gap_free_window(camera, oriented, max_offset)
+    span = window.t[-1] - window.t[0]
+    clock = offset_analysis(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
+                            n_bootstrap=n_bootstrap, seed=seed, block_s=min(1.0, 0.25 * span))
+    offset, corr, curve = clock.offset_s, clock.correlation, clock.curve
+    used = offset if correct_offset else 0.0
+    A, B, t_start = motion_pairs(camera, oriented, interval, offset=used)
+    A, B, t_start = A[::stride], B[::stride], t_start[::stride]
+    drop = _pairs_across_gaps(t_start, interval, used, oriented.t, integrated=gyro is not None)
+    before = len(A)
+    if drop.all():
+        raise ValueError(f"every one of the {before} pairs spans a gap in the sensor stream")
+    A, B, t_start = A[~drop], B[~drop], t_start[~drop]
+    # overlapping pairs are correlated: bootstrap blocks span one interval
+    block = max(1, round(interval / np.median(np.diff(camera.t)) / stride))
+    lo, hi = max(camera.t[0], oriented.t[0] - used), min(camera.t[-1], oriented.t[-1] - used)
+    parameters = {"method": method, "interval_s": interval, "stride": stride, "max_offset_s": max_offset,
+                  "correct_offset": bool(correct_offset), "n_bootstrap": n_bootstrap, "seed": seed,
+                  "diagnose": bool(diagnose), "solver_options": {k: repr(v) for k, v in options.items()}}
+    inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
+              "reference_camera_from_sensor": reference}
+    rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
+    change, change_fit = _change_test(A, B, t_start, block, float(camera.t[0]))
+    evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
+                    second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
+                    offset_applied=bool(correct_offset),
+                    offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
+                    pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
+    mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
+    evidence.update(mirror)
+    result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
+                          seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
+                          time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
+                          change_test=_change_report(change, change_fit),
+                          options=options, evidence=evidence, parameters=parameters, inputs=inputs,
+                          pair_times=t_start, progress=progress, extra_diagnostics=mirror)
+    result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
+                              change=change)
+    unit = _time_unit_reason(camera, sensor)
+    if unit is not None:
+        result = with_reasons(result, [unit])
+    if diagnose and result.verdict.level != "ok":
+        from .diagnose import input_mistakes
+
+        found = input_mistakes(camera, sensor, base_residual_deg=result.residual_deg["median"],
+                               motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
+                               max_offset=max_offset, calibrate=calibrate, reference=reference)
+        if found:
+            result = with_reasons(result, found)
+    return result

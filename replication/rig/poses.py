@@ -1,0 +1,91 @@
+"""Calibrate from static pose sets: ``R0`` from poses measured by both sides at the same stations (e.g. a robot
+and a chessboard camera, Tabb & Ahmad Yousef's data), with a verdict.
+
+Every pair of stations ``(i, j)`` (or consecutive ones) gives a motion pair (eqs. (3)-(4)); the solve, the
+residuals and the verdict are :func:`replication.rig.estimate.solve_pairs`'s, the bootstrap resamples *stations*
+(each station's measurement error is in every pair that uses it), each station's median residual is reported, and
+an outlying station is named in the verdict. The pose direction is always checked
+(:func:`replication.rig.diagnose.pose_direction`). Conventions: ``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..core.checks import check_number
+from .estimate import check_common, check_options, solve_pairs, with_reasons
+from ..core.handeye import relative_rotations
+from .report import CalibrationResult
+from ..core.so3 import check_rotation_matrices, rotation_angle_deg
+
+__all__ = ["calibrate_poses", "pose_pairs"]
+
+
+def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
+                    pairs: str = "all", min_motion_deg: float = 2.0, n_bootstrap: int = 200, seed: int = 0,
+                    reference=None, diagnose: bool = True, progress: bool = False, **options) -> CalibrationResult:
+    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with a verdict.
+
+    Parameters
+    ----------
+    camera_attitudes : array_like (N, 3, 3)
+        ``camera_from_world`` (e.g. ``R_target2cam``: chessboard = world).
+    sensor_attitudes : array_like (N, 3, 3)
+        ``sensor_from_world`` (e.g. a robot's ``base -> hand`` rotation: base = world).
+    pairs : {"all", "consecutive"}
+        ``"all"``: every ``(i, j)``, ``i < j``, with ``A = C_j C_i^T``, ``B = S_j S_i^T``
+        (eqs. (3)-(4)); ``"consecutive"``: ``(i, i + 1)`` only (the OpenCV wrappers rebuild the
+        pose chain from these and form all pairs themselves).
+    min_motion_deg : float
+        Drop pairs whose sensor rotation is smaller than this.
+    n_bootstrap, seed, reference, progress, **options
+        As in :func:`replication.rig.calibration.calibrate`. The bootstrap resamples stations (with ``pairs="all"``;
+        blocks of two pairs with ``"consecutive"``): see :mod:`replication.rig.estimate`.
+    diagnose : bool
+        Also calibrate with either pose set inverted, and fail naming the pose direction when one of them fits
+        clearly better (:func:`replication.rig.diagnose.pose_direction`). Both sets inverted is a consistent problem
+        for another unknown: only a reference reveals it.
+    """
+    reference = check_common(method, n_bootstrap, seed, reference)
+    check_options(method, options)
+    check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
+    C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
+    S = check_rotation_matrices(sensor_attitudes, "sensor_attitudes", atol=1e-5)
+    if C.shape != S.shape or C.ndim != 3:
+        raise ValueError(f"need two (N, 3, 3) arrays of the same N, got {C.shape} and {S.shape}")
+    A, B, i, j = pose_pairs(C, S, pairs=pairs, min_motion_deg=min_motion_deg, stations=True)
+    parameters = {"method": method, "pairs": pairs, "min_motion_deg": min_motion_deg, "n_bootstrap": n_bootstrap,
+                  "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
+    inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
+              "sensor": {"kind": "static poses", "samples": int(len(S))}, "reference_camera_from_sensor": reference}
+    if len(A) < 2:
+        raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
+                         f"lower it or give poses that differ more")
+    result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
+                          seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
+                          evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
+                         stations=(i, j, len(C)))
+    if diagnose:
+        from .diagnose import pose_direction
+
+        found = pose_direction(C, S, base_residual_deg=result.residual_deg["median"], pairs=pairs,
+                               min_motion_deg=min_motion_deg, calibrate_poses=calibrate_poses, reference=reference)
+        if found:
+            result = with_reasons(result, found)
+    return result
+
+
+def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0, stations: bool = False):
+    """Relative rotations from static attitudes (see :func:`calibrate_poses`); returns ``(A, B)``, and with
+    ``stations`` the two station indices of each pair, ``(A, B, i, j)``."""
+    if pairs == "all":
+        i, j = np.triu_indices(len(C), k=1)
+    elif pairs == "consecutive":
+        i, j = np.arange(len(C) - 1), np.arange(1, len(C))
+    else:
+        raise ValueError(f"pairs must be 'all' or 'consecutive', got {pairs!r}")
+    A = relative_rotations(C, pairs=(i, j), atol=1e-5)  # eq. (3)
+    B = relative_rotations(S, pairs=(i, j), atol=1e-5)  # eq. (4)
+    if pairs == "all":
+        keep = rotation_angle_deg(B) > min_motion_deg
+        A, B, i, j = A[keep], B[keep], i[keep], j[keep]
+    return (A, B, i, j) if stations else (A, B)

@@ -1,0 +1,338 @@
+"""The quality verdict of a calibration: ``ok``, ``warning`` or ``fail``, with every reason measured.
+
+:func:`judge` compares what a calibration measured about itself (its :class:`Evidence`) with the thresholds
+below. Each reason names the check, the measured number, the threshold and the likely cause; the verdict is the
+worst level of its reasons. :func:`replication.rig.calibration.calibrate` attaches it to its result, the summary
+prints it, the JSON report stores it, and ``python -m replication calibrate`` exits with :data:`EXIT_FAIL`
+on ``fail`` unless told to ``--accept`` it.
+
+The thresholds and the reasoning behind them (measured on the real recordings of notebook 07, where every
+calibration is within 0.7 deg of its published reference, and on the mistakes of the issue's bad-input campaign):
+
+==========================  ===============  ===============  =========================================================
+check                       warning below /  fail below /     why
+                            above            above
+==========================  ===============  ===============  =========================================================
+time-offset correlation     < 0.9            < 0.5            the angular speeds of the two streams are the same signal
+                                                              when both see one rigid motion: 0.990-0.999 on the real
+                                                              recordings; unrelated streams, wrong units or columns
+                                                              give -0.2 to 0.5
+offset peak margin          < 0.1            < 0.01           another offset matches the speeds almost as well:
+(correlation at the peak                                      periodic motion aliases the offset (a pure oscillation:
+minus the next peak's)                                        0.0000; the real recordings: no other peak within
+                                                              +-0.2 s, 0.44-0.66 within +-2 s)
+offset at the search bound  --               within 2         the correlation peaks at the edge of the search: the
+                                             resolutions      true offset may lie outside it (raise ``max_offset``)
+pairs per bootstrap block   < 10             < 3              overlapping pairs are resampled in blocks spanning one
+                                                              interval; with fewer than 3 independent blocks the
+                                                              bootstrap radius means nothing (it is reported as null)
+overlap                     < 10 intervals   < 2 intervals    the calibration rests on a few seconds of motion
+median residual / median    > 0.1            > 0.3            with the right ``R0`` the residual of a pair is the
+motion angle                                                  streams' noise over one interval: 0.003-0.025 of the
+                                                              motion on the real recordings; a wrong ``R0`` or
+                                                              mismatched streams leave residuals of the order of the
+                                                              motion itself
+median residual             > 2 deg          > 10 deg         the same, in absolute terms (real recordings: 0.09-0.41)
+bootstrap 95 % radius       > 1 deg          > 5 deg          real recordings: 0.02-0.34 deg; the issue's silent
+                                                              failures: 24-171 deg
+camera axis spread          < 1 deg          --               motions nearly about one axis leave the rotation about
+                                                              it poorly determined (``ObservabilityWarning``)
+excitation (online)         < 1 deg          --               the RMS rotation about axes perpendicular to the least-
+                                                              excited direction (:mod:`replication.rig.online`): the
+                                                              motion so far does not determine R0
+outlying station (pose      > 3 x the        --               a station whose pairs all fit badly holds a bad
+sets): median residual of   stations'                         measurement (a chessboard detection, a robot pose);
+its pairs                   median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x
+median motion per pair      < 1 deg          < 0.5 deg        a rig at rest, or an interval too short, leaves pairs of
+                                                              noise (real recordings: 1.75 deg on EuRoC at 0.25 s,
+                                                              3.9-52 deg at 1 s, 12.7 deg between Tabb's stations)
+solver warnings             any other        ``Local-         a local solver away from the certified optimum of
+                            ``Replication-   MinimumWarning``, eq. (8), or a closed form off by a half-turn, is a wrong
+                            Warning``        ``Accuracy-      answer, whatever the other checks say
+                                             Warning``
+pairs across stream gaps    any dropped      more than half   a pair whose interval contains a gap in either stream
+                                             dropped          (more than 5 sample intervals without data) is dropped
+sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow gyro over one interval leaves an
+                                             interval         integration error in every pair
+motion pairs                < 30             < 10             a handful of pairs fits R0 almost exactly whatever the
+                                                              input's errors, so the residual checks see nothing
+a change of R0 during the   > 0.5 deg        > 0.75 deg       the pairs before and after some time agree on different
+recording (change test                                        R0 beyond their noise (replication.rig.changepoint), each
+significant, each side                                        side fitting its own: a re-mount, or a trajectory
+fitting; angle between                                        whose frame wanders (an input mistake fits neither
+the two sides)                                                side and is named by its own reasons). The
+                                                              recordings as recorded: 0.04-0.23 deg (one significant,
+                                                              0.04 deg); re-mounts inside them of 0.5 / 1 / 2 / 5
+                                                              deg: 0.22-0.68 / 0.97-1.16 / 1.97-2.15 / 4.96-5.16 deg
+angle to a given reference  > 1 deg          > 5 deg          the real recordings: 0.06-0.63 deg (the stereo run's
+                                                              rectified frame); a gyro with permuted or flipped axes
+                                                              is a fixed rotation only a reference reveals
+clock offset left in        > 5 ms           --               ``correct_offset=False`` with a measured offset
+gyro frame mirrored about   < 3 x the fit's  --               the gyro's rates stay near one plane, so one with an
+its least-turned axis:                                        axis's sign flipped (a left-handed frame) is exactly
+median residual (only                                         a right-handed one mounted otherwise; planar rates:
+where the fit is good)                                        0.99-1.01; TUM-VI 97; three-axis rigs 44-76
+==========================  ===============  ===============  =========================================================
+
+A reason may also come from :mod:`replication.rig.diagnose`, which names an input mistake (quaternion order, pose
+direction, gyro or time units) when reordering or rescaling the input makes the residual collapse.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS"]
+
+#: Verdict levels, best first.
+LEVELS = ("ok", "warning", "fail")
+#: Exit code of ``python -m replication calibrate`` for a ``fail`` verdict (2 is bad input).
+EXIT_FAIL = 3
+
+#: ``(warning, fail)`` bounds of each check (see the module notes for the reasoning).
+THRESHOLDS = {
+    "offset_correlation": (0.9, 0.5),          # below
+    "offset_at_bound_resolutions": (None, 2),  # within this many resolutions of the bound: fail
+    "offset_peak_margin": (0.1, 0.01),         # below: another clock offset matches the speeds almost as well
+    "blocks": (10, 3),                         # below
+    "overlap_intervals": (10, 2),              # below
+    "residual_to_motion": (0.1, 0.3),          # above
+    "residual_median_deg": (2.0, 10.0),        # above
+    "bootstrap_deg": (1.0, 5.0),               # above
+    "axis_spread_deg": (1.0, None),            # below
+    "excitation_deg": (1.0, None),             # below (online: the motion so far does not determine R0)
+    "motion_median_deg": (1.0, 0.5),           # below
+    "pose_residual_ratio": (3.0, None),        # above: a station's median residual / the stations' median
+    "gap_share_dropped": (0.0, 0.5),           # above
+    "gyro_rate_hz": (50.0, None),              # below
+    "gyro_samples_per_interval": (None, 5.0),  # below
+    "n_pairs": (30, 10),                       # below
+    "reference_error_deg": (1.0, 5.0),         # above
+    "remount_deg": (0.5, 0.75),                # above, where the change test is significant
+    "offset_left_ms": (5.0, None),             # above (an offset measured but not removed)
+    "mirror_fit_ratio": (3.0, None),           # below: the sensor's frame mirrored fits almost as well
+}
+
+_FAIL_WARNINGS = ("LocalMinimumWarning", "AccuracyWarning")
+
+
+@dataclass(frozen=True)
+class Reason:
+    """One finding: ``check`` measured ``measured`` against ``threshold`` and reached ``level``."""
+
+    check: str
+    level: str
+    measured: float | None
+    threshold: float | None
+    message: str
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``level`` (the worst of the reasons, ``ok`` if none) and the ``reasons``."""
+
+    level: str
+    reasons: tuple
+
+    @classmethod
+    def of(cls, reasons) -> "Verdict":
+        reasons = tuple(reasons)
+        level = max((r.level for r in reasons), key=LEVELS.index, default="ok")
+        return cls(level, reasons)
+
+    def to_dict(self) -> dict:
+        return {"level": self.level, "reasons": [r.to_dict() for r in self.reasons]}
+
+    def lines(self) -> list[str]:
+        """The verdict and one line per reason, for a summary."""
+        return [f"verdict: {self.level.upper()}"] + [f"  {r.level}: {r.message}" for r in self.reasons]
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What a calibration measured about itself (``None`` where it does not apply, e.g. static poses)."""
+
+    n_pairs: int
+    residual_median_deg: float | None
+    motion_median_deg: float | None
+    bootstrap_deg: float | None
+    axis_spread_deg: float | None = None
+    warnings: tuple = ()
+    offset_s: float | None = None
+    offset_correlation: float | None = None
+    max_offset_s: float | None = None
+    offset_resolution_s: float | None = None
+    blocks: float | None = None
+    overlap_s: float | None = None
+    interval_s: float | None = None
+    pairs_dropped_at_gaps: int = 0
+    pairs_before_gaps: int | None = None
+    gyro_rate_hz: float | None = None
+    reference_error_deg: float | None = None
+    bootstrap_failed: str | None = None
+    offset_applied: bool = True
+    radius_kind: str = "bootstrap"          # what the radius is: "bootstrap" (batch) or "curvature" (online)
+    excitation_deg: float | None = None     # online: RMS rotation about axes perpendicular to the least-excited one
+    offset_peak_margin: float | None = None  # correlation at the offset minus the best other peak's (NaN: none)
+    second_peak_offset_s: float | None = None
+    change: object | None = None            # streams: replication.rig.changepoint.ChangeTest (t relative to the camera)
+    change_sides_fit: float | None = None   # the larger median residual / median motion of its two sides
+    repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
+    pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
+    mirror_fit_ratio: float | None = None   # the fit with the sensor's frame mirrored: its median residual / ours
+    mirror_normal: tuple | None = None      # the sensor axis turned about least
+
+
+def _above(check, value, name, unit, why):
+    warn, fail = THRESHOLDS[check]
+    if value is None:
+        return None
+    for level, bound in (("fail", fail), ("warning", warn)):
+        if bound is not None and value > bound:
+            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} > {bound:g}{unit}: {why}")
+    return None
+
+
+def _below(check, value, name, unit, why):
+    warn, fail = THRESHOLDS[check]
+    if value is None:
+        return None
+    for level, bound in (("fail", fail), ("warning", warn)):
+        if bound is not None and value < bound:
+            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
+    return None
+
+
+def _quaternion(R) -> str:
+    from ..core.so3 import as_quaternion
+
+    return "(" + ", ".join(f"{v:.4f}" for v in as_quaternion(R)) + ")"
+
+
+def _outlying_poses(medians):
+    """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
+    factor = THRESHOLDS["pose_residual_ratio"][0]
+    finite = np.isfinite(medians)
+    base = float(np.median(np.asarray(medians)[finite])) if finite.any() else np.nan  # no station: nothing to compare
+    if not base > 0:
+        return None
+    ratio = medians / base
+    bad = np.flatnonzero(ratio > factor)
+    if not len(bad):
+        return None
+    bad = bad[np.argsort(-ratio[bad])]
+    named = ", ".join(f"{int(k)} ({medians[k]:.3g} deg)" for k in bad[:5]) + (f" and {len(bad) - 5} more"
+                                                                                if len(bad) > 5 else "")
+    return Reason("pose_outliers", "warning", float(ratio[bad[0]]), factor,
+                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): {named} > "
+                  f"{factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: a bad measurement "
+                  f"at that station (a target detection, a robot pose); its pairs pull R0")
+
+
+def judge(e: Evidence, extra=()) -> Verdict:
+    """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g. diagnoses)."""
+    reasons = [_below("n_pairs", e.n_pairs, "motion pairs", "", "too few for R0 and a check of it (3 unknowns; a "
+                      "smaller stride or interval, or a longer recording)")]
+    if e.bootstrap_failed:
+        reasons.append(Reason("bootstrap_failed", "warning", None, None, f"no bootstrap radius: a resample of the "
+                              f"pairs was refused ({e.bootstrap_failed}); too few or too similar pairs"))
+    if e.reference_error_deg is not None:
+        reasons.append(_above("reference_error_deg", e.reference_error_deg, "angle to the given reference", " deg",
+                              "the data agree with another R0 than the reference: gyro axes permuted or sign-flipped "
+                              "(a fixed rotation the data alone cannot show), or a reference for another rig or camera"))
+    if e.offset_s is not None and not e.offset_applied:
+        reasons.append(_above("offset_left_ms", abs(1e3 * e.offset_s), "clock offset measured but not removed", " ms",
+                              "the pairs were formed with the clocks as recorded (keep-clock)"))
+    if e.offset_correlation is not None and not math.isfinite(e.offset_correlation):
+        reasons.append(Reason("offset_correlation", "fail", None, THRESHOLDS["offset_correlation"][1],
+                              "no time-offset correlation: a stream's angular speed does not vary (a rig at rest, or "
+                              "a constant stream), so no clock offset could be estimated"))
+    elif e.offset_correlation is not None:
+        reasons.append(_below("offset_correlation", e.offset_correlation, "time-offset correlation", "",
+                              "the two streams' angular speeds do not match (unrelated streams, wrong units or "
+                              "columns, or a clock offset beyond the search)"))
+    if e.offset_peak_margin is not None and math.isfinite(e.offset_peak_margin):
+        second = e.second_peak_offset_s
+        where = f" ({1e3 * second:+.1f} ms)" if second is not None and math.isfinite(second) else ""
+        reasons.append(_below("offset_peak_margin", e.offset_peak_margin, "margin of the time-offset correlation peak "
+                              "over the next one", "", f"another clock offset{where} matches the angular speeds "
+                              f"almost as well (periodic motion): the offset may be that one; record motion that is "
+                              f"not periodic"))
+    if e.offset_s is not None and e.max_offset_s is not None:
+        margin = THRESHOLDS["offset_at_bound_resolutions"][1] * (e.offset_resolution_s or 0.0)
+        if abs(e.offset_s) >= e.max_offset_s - margin:
+            reasons.append(Reason("offset_at_bound", "fail", float(e.offset_s), float(e.max_offset_s),
+                                  f"the clock offset {1e3 * e.offset_s:+.1f} ms lies at the search bound "
+                                  f"+-{1e3 * e.max_offset_s:g} ms: the true offset may be larger (raise max_offset)"))
+    if e.blocks is not None:
+        reasons.append(_below("blocks", e.blocks, "independent bootstrap blocks", "",
+                              "too few for a meaningful bootstrap radius (a longer overlap or a shorter interval)"))
+    if e.overlap_s is not None and e.interval_s:
+        reasons.append(_below("overlap_intervals", e.overlap_s / e.interval_s, "overlap of the streams in pairing "
+                              "intervals", "", f"the streams overlap {e.overlap_s:.1f} s only"))
+    reasons.append(_below("motion_median_deg", e.motion_median_deg, "median motion per pair", " deg",
+                          "the rig barely moves over a pairing interval (at rest, or an interval too short): the "
+                          "pairs carry noise, not motion"))
+    if e.motion_median_deg is not None and e.residual_median_deg is not None and e.motion_median_deg > 0:
+        reasons.append(_above("residual_to_motion", e.residual_median_deg / e.motion_median_deg,
+                              "median pair residual / median motion", "",
+                              "R0 does not map one stream's motions onto the other's"))
+    reasons.append(_above("residual_median_deg", e.residual_median_deg, "median pair residual", " deg",
+                          "far above what stream noise leaves with the right R0"))
+    radius = "bootstrap 95 % radius" if e.radius_kind == "bootstrap" else "95 % radius (curvature of eq. (8))"
+    reasons.append(_above("bootstrap_deg", e.bootstrap_deg, radius, " deg", "the pairs disagree on R0"))
+    reasons.append(_below("axis_spread_deg", e.axis_spread_deg, "camera axis spread", " deg",
+                          "nearly single-axis motion: the rotation about that axis is poorly determined"))
+    reasons.append(_below("excitation_deg", e.excitation_deg, "RMS rotation about the least-excited axes", " deg",
+                          "the motion so far does not determine R0 (rotate about other axes)"))
+    if e.repeated_pairs:
+        reasons.append(Reason("repeated_pairs", "warning", float(e.repeated_pairs), 0.0,
+                              f"{e.repeated_pairs} pairs repeated earlier ones (a stalled stream, or data fed twice) "
+                              f"and were not counted"))
+    for name in sorted(set(e.warnings)):
+        level = "fail" if name in _FAIL_WARNINGS else "warning"
+        if name == "ObservabilityWarning":
+            if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
+                continue  # the axis spread above says it, with its number
+            reasons.append(Reason("observability", "warning", None, None,
+                                  "the solver issued ObservabilityWarning: another rotation fits eq. (8) almost as "
+                                  "well (motions small for the noise, outlier pairs, or nearly a second solution)"))
+            continue
+        reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
+                              + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
+    if e.mirror_fit_ratio is not None:
+        normal = "" if e.mirror_normal is None else f" (about {np.round(e.mirror_normal, 2).tolist()}, sensor frame)"
+        reasons.append(_below("mirror_fit_ratio", e.mirror_fit_ratio, "median residual with the sensor's frame "
+                              "mirrored / this fit's", "", f"a sensor with one axis's sign flipped (a left-handed "
+                              f"frame, e.g. in a driver) fits these pairs almost as well, with another R0, so the data "
+                              f"cannot show which it is: the sensor turns about axes near one plane "
+                              f"and little about its normal{normal}; rotate about that axis too, or check the "
+                              f"sensor's axes"))
+    if e.pose_residual_medians_deg is not None:
+        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
+    sides_fit = e.change_sides_fit is None or e.change_sides_fit <= THRESHOLDS["residual_to_motion"][1]
+    if e.change is not None and e.change.significant and sides_fit:  # a re-mount leaves each side fitting its R0
+        c = e.change
+        reasons.append(_above("remount_deg", c.angle_deg, f"angle between R0 before and after {c.split_time:.1f} s",
+                              " deg", f"the {c.n_before} pairs before and the {c.n_after} after agree on different R0 "
+                              f"beyond their noise (change test p = {c.p_value:.2g}, 95 % noise radius "
+                              f"{c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, or a "
+                              f"trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
+                              f"{_quaternion(c.R_after)} (w, x, y, z); calibrate each part on its own"))
+    if e.pairs_dropped_at_gaps:
+        share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)
+        reasons.append(_above("gap_share_dropped", share, "share of pairs dropped across stream gaps", "",
+                              f"{e.pairs_dropped_at_gaps} pairs spanned a gap in a stream and were dropped"))
+    if e.gyro_rate_hz is not None:
+        reasons.append(_below("gyro_rate_hz", e.gyro_rate_hz, "gyro rate", " Hz",
+                              "integrating a slow gyro leaves an error in every pair"))
+        if e.interval_s:
+            reasons.append(_below("gyro_samples_per_interval", e.gyro_rate_hz * e.interval_s,
+                                  "gyro samples per pairing interval", "",
+                                  "too few to integrate the motion of one pair"))
+    return Verdict.of([r for r in [*reasons, *extra] if r is not None])

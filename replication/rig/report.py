@@ -1,0 +1,219 @@
+"""What a calibration returns (:class:`CalibrationResult`): the estimate, its evidence, its verdict, its report.
+
+``to_dict()`` is the self-describing JSON report (strict JSON: ``null`` where a number is undefined; schema:
+``docs/calibration_report.schema.json``); ``summary()`` the human-readable one; ``plot()`` the diagnostic
+figure. Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
+``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .association import offset_in_words
+from ..core.motions import MotionObservability
+from .quality import Verdict
+
+__all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]
+
+#: The sign convention of the clock offset, in words (stored in every report).
+OFFSET_CONVENTION = ("time_offset_s = d means the sensor sample stamped t + d matches the camera sample stamped t "
+                     "(d > 0: the sensor clock runs d ahead of the camera's; d < 0: behind by |d|); Kalibr's "
+                     "timeshift_cam_imu (t_imu = t_cam + shift) is d; the pairs use sensor times t + d when the offset "
+                     "is applied")
+#: What every radius of this package covers, and what it does not (stated in reports, summaries and figures).
+RADIUS_COVERS = ("the pairs' own noise only (their scatter about the estimate); errors every pair shares (a "
+                 "trajectory's bias, a clock or scale error, the reference's own error) are not in it")
+
+
+def json_safe(value):
+    """``value`` with NumPy types made native and every NaN or infinity made ``None`` (strict JSON)."""
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """What :func:`replication.rig.calibration.calibrate` (and ``calibrate_poses``) return.
+
+    Attributes
+    ----------
+    R : ndarray (3, 3)
+        ``camera_from_sensor`` (det +1).
+    quaternion_wxyz : ndarray (4,)
+        The same rotation, scalar first, ``w >= 0``.
+    euler_zyx_deg : ndarray (3,)
+        Yaw, pitch, roll (intrinsic z-y'-x''), degrees.
+    method : str
+    interval_s : float
+        Pairing interval (NaN for static pose sets).
+    n_pairs : int
+    time_offset_s, time_offset_correlation : float
+        Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the angular speeds
+        there (NaN for static pose sets).
+    time_offset_applied : bool
+    time_offset_ci95_s : (float, float)
+        95 % block-bootstrap interval of the offset (:func:`replication.rig.association.offset_analysis`; NaN without a
+        bootstrap, infinite at an end where the replicates leave the offsets searched).
+    time_offset_peak_margin : float
+        Correlation at the offset minus that at the best other peak (NaN: no other peak in the search).
+    residual_deg : dict
+        Per-pair residual angle (angle of ``R^T A_j R B_j^T``): mean, median, rms, p95, max.
+    bootstrap_ci95_deg : float
+        95th percentile of the angle between bootstrap estimates and ``R``; NaN without a bootstrap or with
+        too few independent blocks for one to mean anything (see :mod:`replication.rig.quality`).
+    observability : MotionObservability
+    reference_error_deg : float or None
+        Angle to a reference rotation, when one was given.
+    bootstrap_resamples : str
+        What the bootstrap resampled ("pairs in moving blocks of N", "stations", or "none").
+    bootstrap_covers : str
+        What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
+    pose_residual_median_deg : list of float or None
+        Static pose sets: each station's median pair residual (0-based station order).
+    change_test : dict or None
+        Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
+        recording? times since the camera's first sample), or why it was not run; None for static pose sets.
+    online : dict or None
+        ``calibrate --online``: what the online replay found (:meth:`replication.rig.live.LiveRig.summary`).
+    verdict : Verdict
+        ``ok`` / ``warning`` / ``fail`` and every reason with its measured number and threshold
+        (:mod:`replication.rig.quality`).
+    warnings : tuple of str
+        ``"<class>: <message>"`` of every warning of ours the calibration issued.
+    parameters : dict
+        Every parameter of the call.
+    inputs : dict
+        The streams: kind, source, samples, span (s), and their overlap; the reference matrix if any.
+    diagnostics : dict
+        Arrays for :meth:`plot`: ``pair_times`` (s), ``residuals_deg``, ``bootstrap_rotvec_deg`` (bootstrap
+        estimates as rotation vectors of ``R_boot R^T``), ``offset_curve`` (offsets, correlations),
+        ``speeds`` (times, camera and aligned sensor angular speed, deg/s). Not in the JSON report.
+    """
+
+    R: np.ndarray
+    quaternion_wxyz: np.ndarray
+    euler_zyx_deg: np.ndarray
+    method: str
+    interval_s: float
+    n_pairs: int
+    time_offset_s: float
+    time_offset_correlation: float
+    time_offset_applied: bool
+    residual_deg: dict
+    bootstrap_ci95_deg: float
+    observability: MotionObservability = field(repr=False)
+    reference_error_deg: float | None = None
+    time_offset_ci95_s: tuple = (math.nan, math.nan)
+    time_offset_peak_margin: float = math.nan
+    bootstrap_resamples: str = "none"
+    bootstrap_covers: str = RADIUS_COVERS
+    pose_residual_median_deg: list | None = None
+    change_test: dict | None = None
+    online: dict | None = None
+    verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
+    warnings: tuple = ()
+    parameters: dict = field(default_factory=dict)
+    inputs: dict = field(default_factory=dict)
+    diagnostics: dict = field(default_factory=dict, repr=False)
+
+    def to_dict(self) -> dict:
+        """The JSON report: strict JSON (``null``, never NaN), conventions and the offset's sign in words."""
+        from .._version import __version__
+
+        obs = self.observability
+        return json_safe({
+            "package": {"name": "replication", "version": __version__},
+            "R0_camera_from_sensor": np.round(self.R, 12),
+            "quaternion_wxyz": np.round(self.quaternion_wxyz, 12),
+            "euler_zyx_deg": {"yaw": self.euler_zyx_deg[0], "pitch": self.euler_zyx_deg[1],
+                              "roll": self.euler_zyx_deg[2]},
+            "conventions": "R0 maps sensor-frame vectors into the camera frame (A_j R0 = R0 B_j); "
+                           "quaternion scalar first; Euler intrinsic z-y'-x'' (yaw, pitch, roll)",
+            "verdict": self.verdict.to_dict(),
+            "warnings": list(self.warnings),
+            "method": self.method,
+            "parameters": self.parameters,
+            "inputs": self.inputs,
+            "interval_s": self.interval_s,
+            "n_pairs": self.n_pairs,
+            "time_offset_s": self.time_offset_s,
+            "time_offset_correlation": self.time_offset_correlation,
+            "time_offset_applied": self.time_offset_applied,
+            "time_offset_convention": OFFSET_CONVENTION,
+            "time_offset_ci95_s": list(self.time_offset_ci95_s),
+            "time_offset_peak_margin": self.time_offset_peak_margin,
+            "residual_deg": self.residual_deg,
+            "bootstrap_ci95_deg": self.bootstrap_ci95_deg,
+            "bootstrap_resamples": self.bootstrap_resamples,
+            "bootstrap_covers": self.bootstrap_covers,
+            "pose_residual_median_deg": self.pose_residual_median_deg,
+            "change_test": self.change_test,
+            "online": self.online,
+            "observability": {
+                "spectral_ratio": float(obs.spectral_ratio),
+                "camera_axis_spread_deg": float(obs.camera_axis_spread_deg),
+                "sensor_axis_spread_deg": float(obs.sensor_axis_spread_deg),
+            },
+            "reference_error_deg": self.reference_error_deg,
+        })
+
+    def summary(self) -> str:
+        """A short human-readable report, verdict first."""
+        yaw, pitch, roll = self.euler_zyx_deg
+        pairs = (f"{self.n_pairs} pairs at {self.interval_s:g} s" if math.isfinite(self.interval_s)
+                 else f"{self.n_pairs} pairs of static poses")
+        boot = (f"{self.bootstrap_ci95_deg:.3f} deg" if math.isfinite(self.bootstrap_ci95_deg)
+                else "not available")
+        lines = [
+            *self.verdict.lines(),
+            f"R0 (camera_from_sensor), {self.method}, {pairs}:",
+            *("  [" + "  ".join(f"{v:+.6f}" for v in row) + "]" for row in self.R),
+            f"quaternion (w, x, y, z): {np.array2string(self.quaternion_wxyz, precision=6)}",
+            f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
+        ]
+        if math.isfinite(self.time_offset_correlation):
+            lo, hi = (1e3 * v for v in self.time_offset_ci95_s)
+            ci = f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms, " if math.isfinite(lo) or math.isfinite(hi) else ""
+            lines.append(f"time offset: {offset_in_words(self.time_offset_s, decimals=2)} ({ci}correlation "
+                         f"{self.time_offset_correlation:.4f}, {'applied' if self.time_offset_applied else 'not applied'})")
+        lines += [
+            f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
+            f"bootstrap 95% radius: {boot} (resampling {self.bootstrap_resamples}); it covers {self.bootstrap_covers}",
+            f"axis spread camera {float(self.observability.camera_axis_spread_deg):.1f} deg",
+        ]
+        c = self.change_test
+        if c is not None:
+            lines.append(f"change test: {c['note']}" if not c["run"] else (
+                f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
+                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g}; splits "
+                f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
+        if self.reference_error_deg is not None:
+            lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
+        return "\n".join(lines)
+
+    def plot(self, path=None):
+        """The diagnostic figure (:func:`replication.rig.figure.calibration_figure`); saved to ``path`` if given, in the
+        format its extension names (``.png``, ``.pdf``, ``.svg``; another extension is refused with a
+        ``ValueError`` before the figure is drawn), written atomically."""
+        from .._io import figure_bytes, figure_format, write_atomic
+        from .figure import calibration_figure
+
+        fmt = figure_format(path) if path is not None else None
+        fig = calibration_figure(self)
+        if path is not None:
+            write_atomic(path, figure_bytes(fig, fmt, dpi=110))
+        return fig

@@ -1,0 +1,123 @@
+"""Timestamped rotation streams: orientations, gyroscope rates, and gyro integration.
+
+* An :class:`OrientationStream` holds ``world_from_body`` rotations (a SLAM / mocap
+  trajectory's quaternions rotate body vectors into the world) at times in seconds;
+  :meth:`OrientationStream.at` slerp-interpolates them. In the paper's notation the
+  body-from-world attitude is ``C_t = Q_t^T``.
+* A :class:`GyroStream` holds angular velocity in rad/s, in the body (IMU) frame.
+* :func:`integrate_gyro` turns a :class:`GyroStream` into an :class:`OrientationStream`.
+
+This module needs only NumPy, :mod:`replication.core.so3` and (when interpolating)
+``scipy.spatial.transform``: no solver, no optimiser. :mod:`replication.rig.realdata` and
+:mod:`replication.rig.calibration` re-export its names.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.so3 import check_rotation_matrices, cumulative_product, exp_map, slerp_interpolator
+
+__all__ = ["OrientationStream", "GyroStream", "integrate_gyro"]
+
+
+@dataclass(frozen=True)
+class OrientationStream:
+    """Timestamped orientations: ``world_from_body[k]`` at time ``t[k]`` (s, strictly increasing).
+
+    Parameters
+    ----------
+    t : array_like (N,)
+        Times in seconds, N >= 2, finite, strictly increasing.
+    world_from_body : array_like (N, 3, 3)
+        Rotations mapping body-frame vectors into the world (checked to 1e-5).
+    source : str
+        Where the stream comes from (used in error messages).
+
+    Notes
+    -----
+    ``R`` is a read-only alias of ``world_from_body``; ``OrientationStream(t, R, source)``
+    (positional) builds the same stream.
+    """
+
+    t: np.ndarray
+    world_from_body: np.ndarray
+    source: str = ""
+    _interpolator: object = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        R = check_rotation_matrices(self.world_from_body, f"{self.source or 'orientation stream'} R", atol=1e-5)
+        _validate_stream(self, "world_from_body", R, (3, 3))
+
+    @property
+    def R(self) -> np.ndarray:
+        """``world_from_body`` (the same array)."""
+        return self.world_from_body
+
+    def at(self, times) -> np.ndarray:
+        """``world_from_body`` slerp-interpolated at ``times`` (which must lie inside the stream).
+
+        The interpolator (:func:`replication.core.so3.slerp_interpolator`) is built on the first call
+        and kept on the stream.
+        """
+        interpolator = self._interpolator
+        if interpolator is None:
+            interpolator = slerp_interpolator(self.t, self.world_from_body)
+            object.__setattr__(self, "_interpolator", interpolator)
+        return interpolator(times)
+
+    def between(self, start: float, stop: float) -> "OrientationStream":
+        """The samples with ``start <= t <= stop``."""
+        keep = (self.t >= start) & (self.t <= stop)
+        return OrientationStream(self.t[keep], self.world_from_body[keep], self.source)
+
+
+@dataclass(frozen=True)
+class GyroStream:
+    """Angular velocity ``omega[k]`` (rad/s, body frame) at time ``t[k]`` (s, strictly increasing)."""
+
+    t: np.ndarray
+    omega: np.ndarray
+    source: str = ""
+
+    def __post_init__(self):
+        w = np.asarray(self.omega, dtype=float)
+        if not np.all(np.isfinite(w)):
+            raise ValueError(f"{self.source}: angular velocity contains NaN or inf")
+        _validate_stream(self, "omega", w, (3,))
+
+
+def _validate_stream(stream, name: str, values: np.ndarray, tail: tuple) -> None:
+    """Check shapes and timestamps of a frozen stream and store the converted arrays on it."""
+    t = np.asarray(stream.t, dtype=float)
+    if t.ndim != 1 or values.shape != t.shape + tail:
+        raise ValueError(f"{stream.source}: need t of shape (N,) and {name} of shape (N, {', '.join(map(str, tail))}), "
+                         f"got {t.shape}, {values.shape}")
+    _check_times(t, stream.source)
+    object.__setattr__(stream, "t", t)
+    object.__setattr__(stream, name, values)
+
+
+def _check_times(t, source):
+    """At least 2 finite, strictly increasing timestamps."""
+    if len(t) < 2:
+        raise ValueError(f"{source}: need at least 2 samples, got {len(t)}")
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"{source}: timestamps contain NaN or inf")
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        raise ValueError(f"{source}: timestamps not strictly increasing at sample {bad[0] + 1} "
+                         f"({t[bad[0]]!r} then {t[bad[0] + 1]!r})")
+
+
+def integrate_gyro(gyro: GyroStream) -> OrientationStream:
+    """Orientation ``world_from_body`` (``Q(t_0) = I``) from body-frame rates, trapezoidal rule.
+
+    ``Q_{k+1} = Q_k exp([(omega_k + omega_{k+1}) / 2] dt_k)``; the products are a batched
+    prefix scan (:func:`replication.core.so3.cumulative_product`). No bias is removed.
+    """
+    dt = np.diff(gyro.t)
+    steps = exp_map(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
+    Q = np.concatenate([np.eye(3)[None], cumulative_product(steps)])
+    return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")

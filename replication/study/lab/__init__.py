@@ -1,0 +1,51 @@
+"""A simulated version of the paper's lab experiment (Sec. III-B, Fig. 6-7, Table II).
+
+The paper's recordings (a BSN node on a robot's top camera, a 9-marker calibration wand)
+are not public. This package simulates that lab from first principles, so that the full
+chain of the experiment runs from raw data. One module per job:
+
+============  ==========================================================================
+settings      :class:`LabSettings` (every setting, its default and the reason for it),
+              the error sources (:data:`SOURCES`, :data:`PARTS`), Table II's solvers
+simulate      :func:`simulate_lab`: camera + wand (``cv2.projectPoints``), IMU with
+              datasheet-sized errors, the static protocol and the dynamic trial
+recording     :class:`LabRecording`, its columns and units; :func:`write_lab` /
+              :func:`load_lab` (the files of ``data/lab/``, validated on load)
+chain         the processing chain: PnP, ``ecompass`` / Madgwick, motions (eqs. (3)-(4)),
+              one solve per data set, the dynamic trial (:func:`run_lab`)
+study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`seed_study`
+============  ==========================================================================
+
+Table II's statistics and its comparison with the paper live beside Table I's in
+:mod:`replication.study.table2`. Frames and conventions: ``docs/conventions.md``.
+"""
+import importlib
+
+from .recording import (ACC_COLUMNS, FILES, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, UNITS, LabRecording, default_lab_dir,
+                        load_lab, marker_pixels, static_hold_seconds, write_lab)
+from .settings import GRAVITY, NOMINAL_CAMERA_FROM_SENSOR, PARTS, SOURCES, TABLE2_SOLVERS, WAND_POINTS, LabSettings
+
+#: Names of the modules that need OpenCV, ``ahrs`` or the solvers, loaded on first use so that reading or writing a
+#: recording (:mod:`.recording`) imports none of them.
+_LAZY = {
+    "simulate_lab": "simulate",
+    "camera_orientations": "chain", "static_sensor_orientations": "chain", "dynamic_sensor_orientations": "chain",
+    "static_motions": "chain", "LabResult": "chain", "run_lab": "chain",
+    "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study",
+}
+
+__all__ = [
+    "GRAVITY", "WAND_POINTS", "NOMINAL_CAMERA_FROM_SENSOR", "SOURCES", "PARTS", "TABLE2_SOLVERS", "LabSettings",
+    "LabRecording", "ACC_COLUMNS", "GYR_COLUMNS", "MAG_COLUMNS", "IMU_COLUMNS", "UNITS", "marker_pixels",
+    "static_hold_seconds", "FILES", "write_lab", "load_lab", "default_lab_dir", *_LAZY,
+]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -1,0 +1,285 @@
+"""The claims ledger: every checkable statement of the paper, its verdict, the evidence and its uncertainty.
+
+``data/paper/claims.csv`` lists the claims (id, the statement, where the paper makes it, the paper's number
+if it gives one). A notebook that checks a claim calls :func:`record` in the cell that computes the evidence;
+the record is displayed (a readable line) and stored in the executed notebook as a
+``application/vnd.replication.claim+json`` output. :func:`collect` reads the records back from the notebooks
+(no re-execution), adds the notebook and cell each came from, checks every record's form again (a stored output
+edited into nonsense is refused), and refuses a ledger in which any claim lacks a verdict, evidence or
+uncertainty, or has more than one record. It does not show that a stored record is what its cell computes: a
+record edited by hand into another well-formed verdict reads back as that verdict. That is checked by strict nbval
+(``bash scripts/test`` re-executes every notebook and compares each stored output, claim records included, with
+the new one), and ``claims --check`` says so. ``python -m replication reproduce`` writes it to
+``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it and updates the
+README's findings table from it.
+
+Verdicts (:data:`VERDICTS`): ``holds``, ``fails``, ``holds only if`` (the condition says what must hold) and
+``undecidable from the text`` (the paper does not give what the verdict depends on).
+
+The rules, checked by :func:`record` in the notebook and again by :func:`collect` (:func:`check_record`): the
+claim is an id of ``data/paper/claims.csv``; the verdict is one of :data:`VERDICTS`; evidence, uncertainty and
+setting are non-blank text; a condition goes with, and only with, ``holds only if``; and (:func:`collect`) one
+record per claim across all notebooks: a second record of a claim is refused even when it repeats the first
+word for word, because the README table gives one row, one source cell, per claim, and two copies of the
+evidence would drift apart the first time one cell changes.
+"""
+from __future__ import annotations
+
+import difflib
+import json
+import re
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+import pandas as pd
+
+from .._io import write_atomic
+from ..rig.datafile import DataFileError, fail, read_text
+from .paper import data_dir
+from .paper import load_claim_table as load_claims  # the ledger's claims: a public name here
+
+__all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "load_claims", "check_record", "record",
+           "collect", "to_markdown", "update_readme"]
+
+#: The verdict that needs a condition.
+HOLDS_ONLY_IF = "holds only if"
+#: The only verdicts a record may give.
+VERDICTS = ("holds", "fails", HOLDS_ONLY_IF, "undecidable from the text")
+CLAIM_MIME = "application/vnd.replication.claim+json"
+ROOT = Path(__file__).resolve().parent.parent
+README_START, README_END = "<!-- claims:start -->", "<!-- claims:end -->"
+
+
+@dataclass(frozen=True)
+class ClaimRecord:
+    """One verdict on one claim.
+
+    Attributes
+    ----------
+    claim : str
+        An id of ``data/paper/claims.csv``.
+    verdict : str
+        One of :data:`VERDICTS`.
+    evidence : str
+        What was computed, with the number(s) the verdict rests on (asserted in the same cell).
+    uncertainty : str
+        Its uncertainty: a confidence interval or standard error, a count out of a total, or
+        ``exact (deterministic)`` for a computation without sampling.
+    setting : str
+        Where it was measured (simulation settings, solver variant, data set).
+    condition : str
+        For ``holds only if``: the condition.
+    """
+
+    claim: str
+    verdict: str
+    evidence: str
+    uncertainty: str
+    setting: str
+    condition: str = ""
+
+
+#: The fields of a stored record, in order.
+RECORD_FIELDS = tuple(f.name for f in fields(ClaimRecord))
+
+
+def _claims_file(claims_path=None) -> Path:
+    return Path(claims_path) if claims_path else data_dir() / "paper" / "claims.csv"
+
+
+def _unknown_claim(claim, known, claims_path) -> str:
+    close = difflib.get_close_matches(str(claim), list(known), n=5, cutoff=0.6)
+    hint = (f"close known ids: {', '.join(close)}" if close
+            else f"no known id is close; known: {', '.join(known)}")
+    return f"unknown claim {claim!r} (not an id of {_claims_file(claims_path)}); {hint}"
+
+
+def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *, claims=None,
+                 claims_path=None) -> ClaimRecord:
+    """The record if it keeps the rules of the module notes, else ``ValueError`` naming the claim and the problem.
+
+    ``claims``: the claims table (:func:`load_claims`), read from ``claims_path`` (default
+    ``data/paper/claims.csv``) when not given.
+    """
+    values = dict(claim=claim, verdict=verdict, evidence=evidence, uncertainty=uncertainty, setting=setting,
+                  condition=condition)
+    for name, value in values.items():
+        if not isinstance(value, str):
+            raise ValueError(f"claim {claim!r}: {name} must be text, got {type(value).__name__} {value!r}")
+    claims = load_claims(claims_path) if claims is None else claims
+    if claim not in claims.index:
+        raise ValueError(_unknown_claim(claim, claims.index, claims_path))
+    if verdict not in VERDICTS:
+        raise ValueError(f"claim {claim!r}: verdict must be one of {VERDICTS}, got {verdict!r}")
+    for name in ("evidence", "uncertainty", "setting"):
+        if not values[name].strip():
+            raise ValueError(f"claim {claim!r}: {name} is blank (empty or white space only)")
+    if (verdict == HOLDS_ONLY_IF) != bool(condition.strip()):
+        raise ValueError(f"claim {claim!r}: a condition goes with, and only with, {HOLDS_ONLY_IF!r} "
+                         f"(verdict {verdict!r}, condition {condition!r})")
+    return ClaimRecord(**values)
+
+
+def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting: str, condition: str = "") -> None:
+    """Record a verdict in the executed notebook (see the module notes); it is displayed, nothing is returned.
+
+    Raises
+    ------
+    ValueError
+        A record that breaks a rule of :func:`check_record`: an unknown claim id (the close known ids
+        named), a verdict not in :data:`VERDICTS`, a field that is not text, blank evidence, uncertainty or
+        setting, ``holds only if`` without a condition or a condition with another verdict.
+        (A second record of the same claim is found by :func:`collect`.)
+    """
+    rec = check_record(claim, verdict, evidence, uncertainty, setting, condition)
+    verdict_text = f"{HOLDS_ONLY_IF} {condition}" if verdict == HOLDS_ONLY_IF else verdict
+    text = f"[{claim}] {verdict_text}\n  evidence: {evidence}\n  uncertainty: {uncertainty}\n  setting: {setting}"
+    try:
+        from IPython import get_ipython
+        from IPython.display import display
+    except ImportError:  # pragma: no cover
+        get_ipython = lambda: None  # noqa: E731
+    if get_ipython() is not None:
+        display({"text/plain": text, CLAIM_MIME: asdict(rec)}, raw=True)
+    else:
+        print(text)
+
+
+def _read_notebook(path: Path) -> dict:
+    """A notebook's JSON; ``DataFileError`` naming the file (and line and column of a JSON error)."""
+    text = read_text(path, "a notebook")
+    try:
+        nb = json.loads(text)
+    except json.JSONDecodeError as err:
+        fail(path, f"not a notebook: not valid JSON ({err.msg}; a truncated file?)", line=err.lineno,
+             column=err.colno)
+    if not isinstance(nb, dict) or not isinstance(nb.get("cells"), list):
+        fail(path, "not a notebook: no list of 'cells'")
+    return nb
+
+
+def _stored_records(path: Path, nb: dict):
+    """``(cell index, stored record)`` of every claim output of a notebook, in order."""
+    for index, cell in enumerate(nb["cells"]):
+        outputs = cell.get("outputs", []) if isinstance(cell, dict) else None
+        if not isinstance(outputs, list):
+            fail(path, f"cell {index}: not a notebook cell (a cell object with a list of 'outputs')")
+        for out in outputs:
+            data = out.get("data", {}) if isinstance(out, dict) else None
+            if not isinstance(data, dict):
+                fail(path, f"cell {index}: an output that is not an object with a 'data' object")
+            if CLAIM_MIME in data:
+                yield index, data[CLAIM_MIME]
+
+
+def collect(notebooks=None, *, claims_path=None, complete: bool = True) -> pd.DataFrame:
+    """The ledger from executed notebooks: one row per record, with its notebook and cell.
+
+    Parameters
+    ----------
+    notebooks : list of paths, optional
+        Default: ``notebooks/NN_*.ipynb`` of this project.
+    claims_path : path, optional
+        Default: ``data/paper/claims.csv``.
+    complete : bool
+        Raise ``ValueError`` naming every claim without a record.
+
+    Raises
+    ------
+    DataFileError
+        (a ``ValueError``) naming the notebook: not valid JSON (line and column), not a notebook, a stored
+        record that is not an object of the :class:`ClaimRecord` fields, one that breaks a rule of
+        :func:`check_record` (with its cell), or a second record of a claim (both notebooks and cells);
+        or naming the claims file and line (:func:`load_claims`).
+    ValueError
+        ``complete`` and a claim without a record.
+    """
+    paths = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")) if notebooks is None else list(notebooks)
+    claims = load_claims(claims_path)
+    rows, first = [], {}
+    for path in map(Path, paths):
+        nb = _read_notebook(path)
+        for index, stored in _stored_records(path, nb):
+            if not isinstance(stored, dict) or set(stored) != set(RECORD_FIELDS):
+                got = sorted(stored) if isinstance(stored, dict) else type(stored).__name__
+                fail(path, f"cell {index}: a stored claim record must have the fields {list(RECORD_FIELDS)}, "
+                     f"got {got}")
+            try:
+                rec = check_record(**stored, claims=claims, claims_path=claims_path)
+            except ValueError as err:
+                raise DataFileError(path, f"cell {index}: {err}") from None
+            if rec.claim in first:
+                other_path, other_index, other = first[rec.claim]
+                how = "repeats" if other == rec else "contradicts" if other.verdict != rec.verdict else "differs from"
+                fail(path, f"cell {index}: a second record of claim {rec.claim!r} ({rec.verdict!r}) {how} the one in "
+                     f"{other_path.name}, cell {other_index} ({other.verdict!r}): one record per claim")
+            first[rec.claim] = (path, index, rec)
+            rows.append({**asdict(rec), "notebook": path.stem, "cell": index})
+    ledger = pd.DataFrame(rows, columns=["claim", "verdict", "condition", "evidence", "uncertainty", "setting",
+                                         "notebook", "cell"])
+    if complete:
+        missing = [c for c in claims.index if c not in set(ledger["claim"])]
+        if missing:
+            raise ValueError(f"claims without a verdict and evidence: {missing}")
+    ledger = ledger.merge(claims[["statement", "where", "paper_value"]], left_on="claim", right_index=True)
+    order = {c: k for k, c in enumerate(claims.index)}
+    return ledger.sort_values(["claim", "notebook", "cell"], key=lambda s: s.map(order) if s.name == "claim" else s)\
+        .reset_index(drop=True)
+
+
+def _verdict_text(row) -> str:
+    return f"{HOLDS_ONLY_IF} {row.condition}" if row.verdict == HOLDS_ONLY_IF else row.verdict
+
+
+def to_markdown(ledger: pd.DataFrame) -> str:
+    """A compact Markdown table: claim, where, verdict, evidence, uncertainty, source (notebook, cell)."""
+    lines = ["| claim | the paper | verdict | evidence | uncertainty | where measured |", "|---|---|---|---|---|---|"]
+    for row in ledger.itertuples(index=False):
+        cells = [f"`{row.claim}`", f"{row.statement} ({row.where})", _verdict_text(row), row.evidence,
+                 row.uncertainty, f"{row.setting}; notebook {row.notebook}, cell {row.cell}"]
+        lines.append("| " + " | ".join(c.replace("|", "\\|").replace("\n", " ") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
+    """The README's text before its start marker and from its end marker on; ``DataFileError`` naming the file,
+    and the marker, if a marker is missing or repeated or the end comes before the start."""
+    found = {}
+    for marker in (README_START, README_END):
+        at = [text.count("\n", 0, m.start()) + 1 for m in re.finditer(re.escape(marker), text)]
+        if len(at) > 1:
+            fail(readme, f"the claims marker {marker} appears {len(at)} times (lines {at}); it must appear once",
+                 line=at[1])
+        found[marker] = at[0] if at else None
+    missing = [m for m, line in found.items() if line is None]
+    if missing:
+        fail(readme, f"no claims marker {' and no '.join(missing)}: the claims table goes between "
+             f"{README_START} and a later {README_END}")
+    if text.index(README_END) < text.index(README_START):
+        fail(readme, f"the claims marker {README_END} (line {found[README_END]}) comes before "
+             f"{README_START} (line {found[README_START]}); it must come after", line=found[README_END])
+    head, rest = text.split(README_START, 1)
+    _, tail = rest.split(README_END, 1)
+    return head, tail
+
+
+def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
+    """Write the ledger table between the README's claims markers; ``check``: only say whether it is current.
+
+    Raises
+    ------
+    DataFileNotFound
+        No README (also a ``FileNotFoundError``).
+    DataFileError
+        A claims marker (:data:`README_START`, :data:`README_END`) missing or repeated, or the end marker not
+        after the start marker.
+    """
+    readme = Path(readme) if readme else ROOT / "README.md"
+    text = read_text(readme, "the README with the claims table")
+    head, tail = _readme_parts(readme, text)
+    new = f"{head}{README_START}\n{to_markdown(ledger)}{README_END}{tail}"
+    if check:
+        return new == text
+    if new != text:
+        write_atomic(readme, new)
+    return True
