@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 import pandas as pd
 
+from replication.core.solvers import ReplicationWarning, available, solve
 from replication.study.notebook import best_of
 from replication.study.simulation import simulate
-from replication.core.solvers import ReplicationWarning, available, solve
 
 #: Solvers that loop over problems in Python: timed on fewer problems.
 LOOPED = {"sqp": 100, "opencv_tsai": 500, "opencv_park": 500, "opencv_horaud": 500}

@@ -16,12 +16,12 @@ import warnings
 import numpy as np
 
 from replication.core import so3
-from replication.rig.calibration import calibrate, calibrate_poses
-from replication.rig.estimate import bootstrap_replicates, block_indices
 from replication.core.motions import prepare_motions
-from replication.rig.poses import pose_pairs
-from replication.study.simulation import rig_streams
 from replication.core.stats import wilson_interval
+from replication.rig.calibration import calibrate
+from replication.rig.estimate import block_indices, bootstrap_replicates
+from replication.rig.poses import calibrate_poses, pose_pairs
+from replication.study.simulation import rig_streams
 
 
 def _share(hits):

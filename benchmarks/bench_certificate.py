@@ -13,9 +13,9 @@ import warnings
 import numpy as np
 import pandas as pd
 
+from replication.core.solvers import ReplicationWarning, chordal_optimal
 from replication.study.baselines import corrupt_pairs
 from replication.study.simulation import simulate
-from replication.core.solvers import ReplicationWarning, chordal_optimal
 
 
 def main():

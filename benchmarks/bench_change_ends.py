@@ -11,8 +11,8 @@ import sys
 import warnings
 
 import numpy as np
-
 from bench_changepoint import CONFIGS, rig, rig_pairs, wilson
+
 from replication.core import so3
 from replication.rig.changepoint import two_segment_test
 

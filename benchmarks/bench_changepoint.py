@@ -26,10 +26,16 @@ from replication.core import so3
 from replication.rig.association import estimate_time_offset, motion_pairs
 from replication.rig.calibration import calibrate
 from replication.rig.changepoint import remounted, threshold, two_segment_test
-from replication.study.live_study import REMOUNT_AXIS
 from replication.rig.quality import THRESHOLDS
-from replication.rig.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
+from replication.rig.realdata import (
+    data_root,
+    load_euroc_imu,
+    load_euroc_mocap,
+    load_tum_trajectory,
+    real_data_available,
+)
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.study.live_study import REMOUNT_AXIS
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 

@@ -19,8 +19,8 @@ import time
 
 import numpy as np
 
-from replication.rig import association, realdata
 from replication.core import so3
+from replication.rig import association, realdata
 from replication.rig.association import estimate_time_offset, offset_analysis
 from replication.rig.calibration import _gap_free_window
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro

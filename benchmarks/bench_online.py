@@ -7,9 +7,9 @@ Run: python benchmarks/bench_online.py
 """
 import tracemalloc
 
-from replication.study.live_study import update_costs
 from replication.rig.online import OnlineCalibrator
 from replication.rig.online_events import DUPLICATE_MEMORY
+from replication.study.live_study import update_costs
 from replication.study.simulation import simulate
 
 if __name__ == "__main__":

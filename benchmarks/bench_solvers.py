@@ -14,9 +14,9 @@ import warnings
 
 import numpy as np
 
+from replication.core.solvers import SQP_VARIANTS, ReplicationWarning, sqp, two_step
 from replication.study.notebook import best_of
 from replication.study.simulation import simulate
-from replication.core.solvers import SQP_VARIANTS, ReplicationWarning, sqp, two_step
 
 
 def main():

@@ -12,9 +12,8 @@ import sys
 import time
 from pathlib import Path
 
-from ._io import write_atomic
+from ._io import PROJECT_ROOT, write_atomic
 
-ROOT = Path(__file__).resolve().parent.parent
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
 
 
@@ -136,8 +135,7 @@ def claims_command(args: argparse.Namespace) -> int:
 def generate_lab_command(args: argparse.Namespace) -> int:
     import time
 
-    from .study.lab import LabSettings, simulate_lab
-    from .study.lab import default_lab_dir, write_lab
+    from .study.lab import LabSettings, default_lab_dir, simulate_lab, write_lab
 
     start = time.perf_counter()
     settings = LabSettings() if args.seed is None else LabSettings(seed=args.seed)
@@ -150,8 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m replication", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     rep = sub.add_parser("reproduce", help="re-execute every notebook in order and write results/")
-    rep.add_argument("--notebooks", default=str(ROOT / "notebooks"), help="folder of NN_*.ipynb")
-    rep.add_argument("--results", default=str(ROOT / "results"), help="output folder (tables/, figures/)")
+    rep.add_argument("--notebooks", default=str(PROJECT_ROOT / "notebooks"), help="folder of NN_*.ipynb")
+    rep.add_argument("--results", default=str(PROJECT_ROOT / "results"), help="output folder (tables/, figures/)")
     rep.add_argument("--only", nargs="*", help="run only notebooks whose name contains one of these")
     rep.set_defaults(func=reproduce)
     from .rig.calibrate_cli import add_parser as add_calibrate_parser

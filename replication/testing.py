@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .core.so3 import angle_between_deg, check_matrices
+from .core.checks import check_matrices
+from .core.so3 import angle_between_deg
 
 __all__ = ["assert_rotations_close"]
 

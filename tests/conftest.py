@@ -4,8 +4,8 @@ import shutil
 import numpy as np
 import pytest
 
-from replication.study.lab.settings import LabSettings
 from replication.core.so3 import random_rotations
+from replication.study.lab.settings import LabSettings
 
 
 @pytest.fixture

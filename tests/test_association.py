@@ -10,8 +10,8 @@ import math
 import numpy as np
 import pytest
 
-from replication.rig import association
 from replication.core import so3
+from replication.rig import association
 from replication.rig.association import OffsetEstimate, estimate_time_offset, offset_analysis, offset_in_words
 from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro

@@ -10,15 +10,14 @@ from itertools import combinations
 import numpy as np
 import pytest
 
-from replication.rig import association
 from replication.core import so3
 from replication.core.handeye import pair_residual_deg
-from replication.study.baselines import corrupt_pairs
 from replication.core.motions import prepare_motions
-from replication.study.simulation import simulate
-from replication.core.solvers import calibrate_hand_eye, chordal_optimal, robust, solve
-from replication.core.solvers import msac, opencv
+from replication.core.solvers import calibrate_hand_eye, chordal_optimal, msac, opencv, robust, solve
+from replication.rig import association
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.study.baselines import corrupt_pairs
+from replication.study.simulation import simulate
 
 
 def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
@@ -32,7 +31,7 @@ def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
 def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_iterations=10):
     """``robust`` as it was before the cost was bounded (all pairs listed, one (..., H, J) residual array)."""
     from replication.core.handeye import kronecker_operator
-    from replication.core.solvers.optimal import chordal_newton
+    from replication.core.solvers.certificate import chordal_newton
 
     A, B, J = motions.A, motions.B, motions.J
     idx = np.array(list(combinations(range(J), 2)))

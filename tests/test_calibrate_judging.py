@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from replication.core import so3
-from replication.rig.calibration import calibrate, calibrate_poses
-from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
-from replication.rig.quality import THRESHOLDS, Evidence, judge
 from replication.rig.association import offset_in_words
+from replication.rig.calibration import calibrate
+from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
+from replication.rig.poses import calibrate_poses
+from replication.rig.quality import THRESHOLDS, Evidence, judge
 from replication.rig.report import RADIUS_COVERS
 from replication.study.simulation import rig_streams
 

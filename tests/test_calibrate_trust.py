@@ -12,14 +12,15 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication.study import lab
-from replication.core import so3
 from replication.__main__ import main
-from replication.rig.calibration import _same_stream, calibrate, calibrate_poses
+from replication.core import so3
+from replication.rig.calibration import _same_stream, calibrate
 from replication.rig.datafile import DataFileError
+from replication.rig.poses import calibrate_poses
 from replication.rig.quality import EXIT_FAIL, Evidence, judge
 from replication.rig.realdata import data_root, real_data_available
 from replication.rig.streams import GyroStream, OrientationStream
+from replication.study import lab
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())
@@ -252,7 +253,7 @@ def test_bad_parameters_are_refused_before_any_work(rig, kwargs, message, monkey
     camera, gyro, _ = rig
     import replication.rig.calibration as cal
 
-    monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(ValueError, match=message):
         calibrate(camera, gyro, **kwargs)
 
@@ -370,7 +371,7 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
                                                                           monkeypatch):
     import replication.rig.calibration as cal
 
-    monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
     blocker = tmp_path / "file"
     blocker.write_text("x")
     extra = {"directory": ("--out", tmp_path), "under a file": ("--out", blocker / "r.json"),
@@ -422,8 +423,8 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
     """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
     recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
-    from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
     from replication.core.so3 import exp_map
+    from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
 
     camera, _, _ = rig
     t, R = camera.t, camera.R
@@ -470,7 +471,7 @@ def test_unknown_or_refused_solver_options_are_named_before_the_work(rig, monkey
     camera, gyro, _ = rig
     import replication.rig.calibration as cal
 
-    monkeypatch.setattr(cal, "estimate_time_offset", lambda *a, **k: pytest.fail("work started"))
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
     with pytest.raises(ValueError, match=r"does not take the option\(s\) \['foo'\]"):
         calibrate(camera, gyro, foo=1)
     with pytest.raises(ValueError, match="refuses the option"):

@@ -14,12 +14,18 @@ import numpy as np
 import pytest
 
 from replication.core import so3
+from replication.core.solvers import chordal_optimal
 from replication.rig.association import motion_pairs
 from replication.rig.calibration import calibrate
 from replication.rig.changepoint import ChangeTest, remounted, threshold, two_segment_test
 from replication.rig.quality import THRESHOLDS
-from replication.rig.realdata import data_root, load_euroc_imu, load_euroc_mocap, load_tum_trajectory, real_data_available
-from replication.core.solvers import chordal_optimal
+from replication.rig.realdata import (
+    data_root,
+    load_euroc_imu,
+    load_euroc_mocap,
+    load_tum_trajectory,
+    real_data_available,
+)
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import assert_rotations_close
 

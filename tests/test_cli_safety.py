@@ -21,10 +21,11 @@ import numpy as np
 import pytest
 
 import replication.rig.calibration as cal
+import replication.rig.poses as poses
 from replication import _io
-from replication.rig import fetch
-from replication.core import so3
 from replication.__main__ import main
+from replication.core import so3
+from replication.rig import fetch
 from replication.rig.calibration import OverlapError, calibrate
 from replication.study.simulation import rig_streams
 
@@ -86,7 +87,7 @@ def no_work(monkeypatch):
         pytest.fail("the calibration ran: the check must come before any work")
 
     monkeypatch.setattr(cal, "calibrate", reached)
-    monkeypatch.setattr(cal, "calibrate_poses", reached)
+    monkeypatch.setattr(poses, "calibrate_poses", reached)
 
 
 def _calibrate(files, *extra):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication.core import so3
-from replication.study.simulation import simulate
+from replication.core import checks, so3
 from replication.core.solvers import available, solve, solver_info
+from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
 
 ALL = available()
@@ -61,7 +61,7 @@ def test_output_is_a_rotation(method, noisy):
     R0, A, B = noisy
     R = solve(method, A, B, **_start_options(method, R0))
     assert R.shape == (3, 3, 3)
-    so3.check_rotation_matrices(R, atol=1e-10)
+    checks.check_rotation_matrices(R, atol=1e-10)
     assert np.all(np.linalg.det(R) > 0)
     # as accurate as measured: the paper's noise (<= 1.15 deg per rotation) moves the optimum 0.26 deg from R0
     assert_rotations_close(R, R0, MARGIN * MEASURED_WORST_DEG[method])

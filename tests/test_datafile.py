@@ -4,13 +4,12 @@ import pickle
 import re
 
 import numpy as np
-
 import pytest
-from conftest import SMALL_LAB
 
-from replication.study import lab, paper
+from conftest import SMALL_LAB
 from replication.rig import realdata as rd
 from replication.rig.datafile import DataFileError, DataFileNotFound, fail, read_lines, read_text
+from replication.study import lab, paper
 
 TUM_LINES = [
     "# t tx ty tz qx qy qz qw",

@@ -12,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from replication.rig import fetch, realdata as rd
+from replication.rig import fetch
+from replication.rig import realdata as rd
 
 ROOT = Path(__file__).resolve().parent.parent
 HAVE_REAL = rd.real_data_available()

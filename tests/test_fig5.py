@@ -3,10 +3,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.study.fig5 import (
-    fig5_figure, noise_sweep, ratio_range, resilience, sqp_configs_for, summary_table, sweep_grid, two_step_growth,
-)
 from replication.core.stats import share_range
+from replication.study.fig5 import (
+    fig5_figure,
+    noise_sweep,
+    ratio_range,
+    resilience,
+    sqp_configs_for,
+    summary_table,
+    sweep_grid,
+    two_step_growth,
+)
 
 
 def test_sqp_configs_for_the_grid():

@@ -7,13 +7,13 @@ import cv2
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import SMALL_LAB
 
-from replication.study import lab
+from conftest import SMALL_LAB
 from replication.core import so3
-from replication.rig.datafile import DataFileError
-from replication.study.lab.simulate import _look_at
 from replication.core.handeye import relative_rotations
+from replication.rig.datafile import DataFileError
+from replication.study import lab
+from replication.study.lab.simulate import _look_at
 
 SMALL = SMALL_LAB
 

@@ -11,11 +11,11 @@ import json
 import pkgutil
 import subprocess
 import sys
-import tomllib
 import types
 from pathlib import Path
 
 import pytest
+import tomllib
 
 import replication
 

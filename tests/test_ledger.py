@@ -9,10 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from replication.study import ledger
 from replication.rig.datafile import DataFileError, DataFileNotFound
+from replication._io import PROJECT_ROOT
+from replication.study import ledger, paper
 
-CLAIMS = ledger.load_claims()
+CLAIMS = paper.load_claim_table()
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def test_readme_findings_table_is_the_ledger(collected):
 
 def test_a_missing_claim_is_refused(tmp_path, collected):
     extra = tmp_path / "claims.csv"
-    extra.write_text(ledger.ROOT.joinpath("data", "paper", "claims.csv").read_text()
+    extra.write_text(PROJECT_ROOT.joinpath("data", "paper", "claims.csv").read_text()
                      + 'new_claim,"A statement nobody checked","Sec. IV",,\n')
     with pytest.raises(ValueError, match=r"claims without a verdict and evidence: \['new_claim'\]"):
         ledger.collect(claims_path=extra)
@@ -59,10 +60,10 @@ def test_malformed_claims_file_names_line_and_column(tmp_path):
     path = tmp_path / "claims.csv"
     path.write_text("claim,statement,where,paper_value,unit\ntheorem1,,Sec. II,,\n")
     with pytest.raises(ValueError, match=r"line 2, column 'statement': empty"):
-        ledger.load_claims(path)
+        paper.load_claim_table(path)
     path.write_text("claim,statement,where,paper_value,unit\ntheorem1,s,w,ten,\n")
     with pytest.raises(ValueError, match=r"line 2, column 'paper_value': not a number"):
-        ledger.load_claims(path)
+        paper.load_claim_table(path)
 
 
 # ---- the claims file: every problem named with file and line --------------------------------------------------
@@ -98,7 +99,7 @@ def test_malformed_claims_file_is_refused_with_file_and_line(tmp_path, text, mes
     path = tmp_path / "claims.csv"
     path.write_text(text, encoding="utf-8")
     with pytest.raises(DataFileError, match=message):
-        ledger.load_claims(path)
+        paper.load_claim_table(path)
     with pytest.raises(DataFileError, match=message):  # and the ledger, which reads it
         ledger.collect([], claims_path=path)
 
@@ -106,14 +107,14 @@ def test_malformed_claims_file_is_refused_with_file_and_line(tmp_path, text, mes
 def test_a_well_formed_claims_file_reads_as_text(tmp_path):
     path = tmp_path / "claims.csv"
     path.write_text(HEADER + 'theorem1,"two\nlines, a comma",w,,\n\nother,s,w,0.5,deg\n', encoding="utf-8")
-    table = ledger.load_claims(path)
+    table = paper.load_claim_table(path)
     assert list(table.index) == ["theorem1", "other"]
     assert table.loc["theorem1", "statement"] == "two\nlines, a comma" and table.loc["other", "paper_value"] == "0.5"
 
 
 def test_a_missing_claims_file_is_named(tmp_path):
     with pytest.raises(DataFileNotFound, match=r"nowhere\.csv: no such file"):
-        ledger.load_claims(tmp_path / "nowhere.csv")
+        paper.load_claim_table(tmp_path / "nowhere.csv")
 
 
 # ---- ledger.record in the notebook: the rules ------------------------------------------------------------------
@@ -156,12 +157,12 @@ def test_the_vocabulary_is_the_documented_one():
 
 # ---- collecting: stored outputs checked again (they could have been edited) --------------------------------------
 
-NOTEBOOKS = sorted((ledger.ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+NOTEBOOKS = sorted((PROJECT_ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 
 
 def _where(collected, claim):
     row = collected.loc[collected["claim"] == claim].iloc[0]
-    return ledger.ROOT / "notebooks" / f"{row.notebook}.ipynb", int(row.cell)
+    return PROJECT_ROOT / "notebooks" / f"{row.notebook}.ipynb", int(row.cell)
 
 
 def _copy(path, folder, name=None):
@@ -339,10 +340,10 @@ def project(tmp_path, monkeypatch):
     (tmp_path / "notebooks").mkdir()
     for path in NOTEBOOKS:
         _copy(path, tmp_path / "notebooks")
-    _copy(ledger.ROOT / "README.md", tmp_path)
+    _copy(PROJECT_ROOT / "README.md", tmp_path)
     (tmp_path / "data" / "paper").mkdir(parents=True)
-    _copy(ledger.ROOT / "data" / "paper" / "claims.csv", tmp_path / "data" / "paper")
-    monkeypatch.setattr(ledger, "ROOT", tmp_path)
+    _copy(PROJECT_ROOT / "data" / "paper" / "claims.csv", tmp_path / "data" / "paper")
+    monkeypatch.setattr(ledger, "PROJECT_ROOT", tmp_path)
     monkeypatch.setenv("REPLICATION_DATA_DIR", str(tmp_path / "data"))
     return tmp_path
 
@@ -440,7 +441,7 @@ def test_cli_names_a_malformed_claims_file_in_a_fresh_process(tmp_path):
     (tmp_path / "paper" / "claims.csv").write_text(HEADER + "theorem1,s,w,,\ntheorem1,t,w,,\n", encoding="utf-8")
     env = {**os.environ, "REPLICATION_DATA_DIR": str(tmp_path)}
     out = subprocess.run([sys.executable, "-m", "replication", "claims", "--check"], capture_output=True, text=True,
-                         timeout=120, env=env, cwd=ledger.ROOT)
+                         timeout=120, env=env, cwd=PROJECT_ROOT)
     assert out.returncode == 2, out.stderr
     assert "Traceback" not in out.stderr
     assert re.fullmatch(r"error: .*claims\.csv, line 3, column 'claim': claim id 'theorem1' repeated "
@@ -449,7 +450,7 @@ def test_cli_names_a_malformed_claims_file_in_a_fresh_process(tmp_path):
 
 def test_the_repository_ledger_passes_check():
     out = subprocess.run([sys.executable, "-m", "replication", "claims", "--check"], capture_output=True, text=True,
-                         timeout=120, cwd=ledger.ROOT, env={k: v for k, v in os.environ.items()
+                         timeout=120, cwd=PROJECT_ROOT, env={k: v for k, v in os.environ.items()
                                                             if k != "REPLICATION_DATA_DIR"})
     assert out.returncode == 0, out.stderr
     assert out.stdout == ("README's claims table matches the records stored in the executed notebooks (that each "

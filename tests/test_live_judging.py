@@ -7,12 +7,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.core import so3
 from replication.__main__ import main
+from replication.core import so3
 from replication.rig.live import LiveRig, replay
 from replication.rig.online import OnlineCalibrator
-from replication.study.simulation import rig_streams
 from replication.rig.streams import GyroStream, OrientationStream
+from replication.study.simulation import rig_streams
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())

@@ -7,11 +7,19 @@ what so few runs can show.
 import numpy as np
 import pytest
 
-from replication.study.live_study import (coverage_study, degenerate_streams, detection_study, event_rates, online_mistakes,
-                                    pair_stream, ready_coverage, update_costs)
+from replication.core.so3 import angle_between_deg, random_rotations, rotation_angle_deg
 from replication.rig.online import MIN_PAIRS
 from replication.rig.online_events import EVENT_KINDS
-from replication.core.so3 import angle_between_deg, random_rotations, rotation_angle_deg
+from replication.study.live_study import (
+    coverage_study,
+    degenerate_streams,
+    detection_study,
+    event_rates,
+    online_mistakes,
+    pair_stream,
+    ready_coverage,
+    update_costs,
+)
 
 
 def test_pair_stream_is_a_rig_with_the_stated_motions_and_noise(rng):

@@ -8,8 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from replication.rig import association
 from replication.core import so3
+from replication.rig import association
 from replication.rig.association import motion_pairs, offset_in_words, stream_pairs
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 

@@ -7,10 +7,16 @@ import math
 import numpy as np
 import pytest
 
-from replication.rig import changepoint
 from replication.core import so3
-from replication.rig.changepoint import (MIN_EFFECTIVE_BLOCKS, ChangeTest, p_value, remounted, threshold,
-                                     two_segment_test)
+from replication.rig import changepoint
+from replication.rig.changepoint import (
+    MIN_EFFECTIVE_BLOCKS,
+    ChangeTest,
+    p_value,
+    remounted,
+    threshold,
+    two_segment_test,
+)
 from replication.rig.streams import GyroStream, OrientationStream
 
 R0 = so3.exp_map(np.array([0.3, 0.2, -0.6]))

@@ -7,8 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from replication.core.checks import (MAX_ROTATION_ATOL, ROTATION_ATOL, check_atol, check_number, check_rotation_flat,
-                                check_rotation_matrices)
+from replication.core.checks import (
+    MAX_ROTATION_ATOL,
+    ROTATION_ATOL,
+    check_atol,
+    check_number,
+    check_rotation_flat,
+    check_rotation_matrices,
+)
 
 
 def _stretched(eps):

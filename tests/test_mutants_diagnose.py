@@ -7,8 +7,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from replication.rig import diagnose
 from replication.core import so3
+from replication.rig import diagnose
 from replication.rig.diagnose import FIT_SHARE, FIT_TO_MOTION, POSE_FIT_SHARE, TIE_ATOL, TIE_SHARE
 from replication.rig.quality import THRESHOLDS
 from replication.rig.streams import GyroStream, OrientationStream

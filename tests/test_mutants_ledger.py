@@ -132,7 +132,7 @@ def test_collect_refuses_unknown_and_missing_claims(tmp_path, two_notebooks, cla
 
 def test_collect_without_notebooks_reads_the_projects_own():
     got = ledger.collect()
-    assert set(got["notebook"]) <= {p.stem for p in (ledger.ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")}
+    assert set(got["notebook"]) <= {p.stem for p in (ledger.PROJECT_ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")}
     assert len(set(got["notebook"])) > 1
 
 

@@ -9,9 +9,9 @@ import pytest
 
 from replication.core import so3
 from replication.core.handeye import kronecker_operator
+from replication.core.stats import radius_deg
 from replication.rig.online import MIN_EXCITATION_DEG, MIN_PAIRS, NOISE_FLOOR_DEG, OnlineCalibrator
 from replication.rig.online_events import DUPLICATE_DEG
-from replication.core.stats import radius_deg
 
 R0 = so3.exp_map(np.array([0.4, -0.2, 0.9]))
 

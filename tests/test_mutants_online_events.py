@@ -7,10 +7,21 @@ import numpy as np
 import pytest
 
 from replication.core import so3
-from replication.rig.online_events import (CONFIRM_LEVEL, DUPLICATE_DEG, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent,
-                                       RepeatFilter, chi2_quantile, combined_threshold, describe, drift_test, pair_d2,
-                                       residual_angle_deg)
 from replication.core.stats import radius_deg
+from replication.rig.online_events import (
+    CONFIRM_LEVEL,
+    DUPLICATE_DEG,
+    SMALL_MOTION_DEG,
+    ChangeDetector,
+    OnlineEvent,
+    RepeatFilter,
+    chi2_quantile,
+    combined_threshold,
+    describe,
+    drift_test,
+    pair_d2,
+    residual_angle_deg,
+)
 
 
 def _flat(R):
@@ -374,7 +385,8 @@ def test_decide_outliers_drops_the_held_pairs_and_carries_on():
     assert d.armed is True and len(d.since_onset) == 0
 
 
-from replication.rig.online_events import TRIM_FACTOR, _excitation_deg, chi2_quantile as _chi2, solve_window  # noqa: E402
+from replication.rig.online_events import TRIM_FACTOR, _excitation_deg, solve_window  # noqa: E402
+from replication.rig.online_events import chi2_quantile as _chi2
 
 
 def test_excitation_of_a_window():

@@ -9,7 +9,7 @@ import pytest
 
 from replication.core import so3
 from replication.core.motions import prepare_motions
-from replication.core.solvers import _registry, optimal
+from replication.core.solvers import _registry, certificate
 from replication.core.solvers._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning
 
 J = 10
@@ -45,7 +45,7 @@ def crafted(monkeypatch):
         return np.zeros(state["gap"].shape), state["lower"], state["gap"]
 
     monkeypatch.setattr(_registry, "_gap_to_global", gap_to_global)
-    monkeypatch.setattr(so3, "angle_between_deg", lambda R, S: state["angle"])
+    monkeypatch.setattr(_registry, "angle_between_deg", lambda R, S: state["angle"])
     return state
 
 
@@ -55,7 +55,7 @@ def _tolerance(lower):
 
 def test_local_answer_boundaries_of_gap_and_angles(crafted):
     m = _motions((6,))
-    R = optimal.global_certificate(m).R
+    R = certificate.global_certificate(m).R
     lower = -2.0  # |f*| enters the tolerance (the certified bound can be a negative number near 0)
     tol = _tolerance(lower)
     crafted["lower"] = np.full(6, lower)
@@ -80,7 +80,7 @@ def test_local_answer_boundaries_of_gap_and_angles(crafted):
 
 def test_gradient_tells_a_stop_before_converging_from_another_stationary_point(crafted, monkeypatch):
     m = _motions((4,))
-    R = optimal.global_certificate(m).R
+    R = certificate.global_certificate(m).R
     crafted["lower"] = np.zeros(4)
     crafted["gap"] = np.ones(4)
     crafted["angle"] = np.full(4, 90.0)
@@ -89,7 +89,7 @@ def test_gradient_tells_a_stop_before_converging_from_another_stationary_point(c
     norms = np.array([0.0, tol / 2, 3 * tol, tol / 2 * 1.01])
     grad = np.zeros((4, 3))
     grad[:, 1] = -norms
-    monkeypatch.setattr(optimal, "_derivatives", lambda M, R: (None, grad, None))
+    monkeypatch.setattr(_registry, "_derivatives", lambda M, R: (None, grad, None))
     _, caught = _warned(_registry.check_local_answer, m, R, "fake")
     (kind, msg), = caught
     assert kind is LocalMinimumWarning
@@ -105,7 +105,7 @@ def test_gradient_tells_a_stop_before_converging_from_another_stationary_point(c
 
 def test_real_local_answers_are_classified_by_angle():
     m = _motions((3,))
-    R0 = optimal.global_certificate(m).R
+    R0 = certificate.global_certificate(m).R
     R = np.stack([_rotated(R0[0], 3.0), _rotated(R0[1], 0.3), _rotated(R0[2], 5e-5)])
     flagged, caught = _warned(_registry.check_local_answer, m, R, "fake")
     assert flagged.tolist() == [True, True, False]
@@ -117,25 +117,25 @@ def test_real_local_answers_are_classified_by_angle():
 
 def test_the_gradient_in_the_message_is_that_of_eq_8_at_the_answer():
     m = _motions()  # one problem: batch shape ()
-    R = _rotated(optimal.global_certificate(m).R, 3.0)
+    R = _rotated(certificate.global_certificate(m).R, 3.0)
     K = m.K
-    grad = optimal._derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), R)[1]
+    grad = certificate._derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), R)[1]
     _, caught = _warned(_registry.check_local_answer, m, R, "fake")
     assert f"1 where eq. (8) still has a gradient (up to {2 * float(np.linalg.norm(grad)):.3g} J)" in caught[0][1]
     # in a batch, the largest over the problems that are off and moving only
     mb = _motions((3,))
-    Rb = optimal.global_certificate(mb).R.copy()
+    Rb = certificate.global_certificate(mb).R.copy()
     Rb[0] = _rotated(Rb[0], 3.0)
     Rb[2] = _rotated(Rb[2], 0.5)  # short of the minimum (a ConvergenceWarning), with a gradient of its own
     Kb = mb.K
-    g = optimal._derivatives(0.5 * (Kb + np.swapaxes(Kb, -1, -2)), Rb)[1]
+    g = certificate._derivatives(0.5 * (Kb + np.swapaxes(Kb, -1, -2)), Rb)[1]
     _, caught = _warned(_registry.check_local_answer, mb, Rb, "fake")
     assert f"(up to {2 * float(np.linalg.norm(g[0])):.3g} J)" in caught[0][1]
 
 
 def test_local_check_skips_failures_and_reflections():
     m = _motions((3,))
-    R = _rotated(optimal.global_certificate(m).R, 20.0)
+    R = _rotated(certificate.global_certificate(m).R, 20.0)
     R[0] = np.nan
     R[1] = -R[1]  # a reflection, far off
     flagged, caught = _warned(_registry.check_local_answer, m, R, "fake")
@@ -150,7 +150,7 @@ def _geodesic(R_from, R_to, t):
 def _gross_case():
     """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* + LOCAL_ATOL J`` and cost (8)."""
     m = _motions(noise_deg=3.0)
-    cert = optimal.global_certificate(m)
+    cert = certificate.global_certificate(m)
     far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
     bound = _registry.GROSS_FACTOR * float(cert.cost) + _registry.LOCAL_ATOL * J
     return m, cert, far, bound, lambda R: float(_registry.handeye_cost(R, m.A, m.B))
@@ -183,7 +183,7 @@ def test_gross_screen_at_ten_times_the_certified_minimum():
 
 def test_gross_screen_in_a_batch_flags_only_the_gross_ones():
     m = _motions((4,), noise_deg=3.0)
-    R = optimal.global_certificate(m).R.copy()
+    R = certificate.global_certificate(m).R.copy()
     R[1] = _rotated(R[1], 150.0, (1.0, 0.0, 0.0))
     R[3] = _rotated(R[3], 150.0, (0.0, 1.0, 0.0))
     R[2] = np.nan
@@ -195,7 +195,7 @@ def test_gross_screen_in_a_batch_flags_only_the_gross_ones():
 
 def test_reflections_are_flagged_and_said_with_the_two_step_hint():
     m = _motions((3,))
-    R = optimal.global_certificate(m).R.copy()
+    R = certificate.global_certificate(m).R.copy()
     R[0], R[2] = -_rotated(R[0], 120.0), -R[2]  # a reflection far off is only said as a reflection
     flagged, caught = _warned(_registry.check_answer, m, R, "two_step_x")
     assert flagged.tolist() == [True, False, True]
@@ -203,7 +203,7 @@ def test_reflections_are_flagged_and_said_with_the_two_step_hint():
                                         ": the paper-literal variant fails so from a start more than 120 deg from R0")]
     _, caught = _warned(_registry.check_answer, m, R, "other")
     assert caught == [(AccuracyWarning, "other returned a reflection (det -1), not a rotation, in 2 of 3 problems")]
-    flagged, caught = _warned(_registry.check_answer, m, optimal.global_certificate(m).R, "other")
+    flagged, caught = _warned(_registry.check_answer, m, certificate.global_certificate(m).R, "other")
     assert not flagged.any() and caught == []
 
 
@@ -211,7 +211,7 @@ def test_a_singular_answer_is_flagged_and_said_not_an_error():
     """det 0 is neither a rotation nor a reflection: flagged and said, never handed to the gross screen (which
     measured its angle and raised SciPy's "Non-positive determinant")."""
     m = _motions((3,))
-    R = optimal.global_certificate(m).R.copy()
+    R = certificate.global_certificate(m).R.copy()
     R[1] = np.diag([1.0, 1.0, 0.0])
     flagged, caught = _warned(_registry.check_answer, m, R, "fake")
     assert flagged.tolist() == [False, True, False]
@@ -279,7 +279,7 @@ def test_an_overflowing_or_infinite_answer_is_refused_without_a_numpy_warning(co
 def test_a_rotation_whose_determinant_rounds_below_one_is_not_a_reflection(core, local):
     m = _motions(noise_deg=3.0)
     # the minimiser shrunk: det = 1 - 5e-7, within ANSWER_ATOL of 1: a rotation to the tolerance, not a reflection
-    M = optimal.global_certificate(m).R @ np.diag([1.0 - 2.5e-7, 1.0 - 2.5e-7, 1.0])
+    M = certificate.global_certificate(m).R @ np.diag([1.0 - 2.5e-7, 1.0 - 2.5e-7, 1.0])
     name = core(lambda motions: M.copy(), local=local)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -289,13 +289,13 @@ def test_a_rotation_whose_determinant_rounds_below_one_is_not_a_reflection(core,
 
 def test_the_gross_screen_keeps_a_two_dimensional_batch_shape():
     m = _motions((2, 3), noise_deg=3.0)
-    R = optimal.global_certificate(m).R.copy()
+    R = certificate.global_certificate(m).R.copy()
     R[1, 2] = _rotated(R[1, 2], 150.0, (1.0, 0.0, 0.0))
     flagged, caught = _warned(_registry.check_answer, m, R, "fake")
     assert flagged.shape == (2, 3) and flagged.tolist() == [[False, False, False], [False, False, True]]
     assert "in 1 of 6 problems" in caught[0][1]
     one = _motions(noise_deg=3.0)
-    flagged, _ = _warned(_registry.check_answer, one, optimal.global_certificate(one).R, "fake")
+    flagged, _ = _warned(_registry.check_answer, one, certificate.global_certificate(one).R, "fake")
     assert flagged.shape == () and not flagged
 
 
@@ -317,7 +317,7 @@ def test_the_gross_threshold_is_ten_times_the_minimum_plus_the_absolute_toleranc
 
 def test_check_answer_reads_an_object_array_of_numbers_as_floats():
     m = _motions((2,), noise_deg=3.0)
-    R = optimal.global_certificate(m).R.copy()
+    R = certificate.global_certificate(m).R.copy()
     R[1] = -R[1]
     flagged, caught = _warned(_registry.check_answer, m, R.astype(object), "fake")
     assert flagged.tolist() == [False, True]
@@ -326,7 +326,7 @@ def test_check_answer_reads_an_object_array_of_numbers_as_floats():
 
 def test_the_gradient_quoted_is_the_largest_over_problems_off_and_moving_only(crafted, monkeypatch):
     m = _motions((3,))
-    R = optimal.global_certificate(m).R
+    R = certificate.global_certificate(m).R
     tol = _tolerance(0.0)
     crafted["lower"] = np.zeros(3)
     crafted["gap"] = np.array([2 * tol, 0.0, 2 * tol])
@@ -334,7 +334,7 @@ def test_the_gradient_quoted_is_the_largest_over_problems_off_and_moving_only(cr
     stat = _registry.STATIONARY_TOL
     grad = np.zeros((3, 3))
     grad[:, 0] = [2 * stat, 50 * stat, 0.0]  # 0 moving; 1 (short, not off) has the largest gradient; 2 stationary
-    monkeypatch.setattr(optimal, "_derivatives", lambda M, R: (None, grad, None))
+    monkeypatch.setattr(_registry, "_derivatives", lambda M, R: (None, grad, None))
     _, caught = _warned(_registry.check_local_answer, m, R, "fake")
     assert [c for c, _ in caught] == [LocalMinimumWarning, ConvergenceWarning]
     assert f"1 where eq. (8) still has a gradient (up to {4 * stat:.3g} J)" in caught[0][1]

@@ -156,8 +156,8 @@ def test_defaults_of_a_result():
 def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_path, monkeypatch):
     from matplotlib.figure import Figure
 
-    from replication.rig import figure as figures
     from replication._io import png_bytes
+    from replication.rig import figure as figures
 
     fig = Figure(figsize=(2, 1))
     fig.add_subplot().plot([0, 1], [0, 1])

@@ -5,10 +5,10 @@ import pytest
 
 from replication.core import so3
 from replication.core.handeye import kronecker_operator
-from replication.rig.online import OnlineCalibrator
-from replication.core.stats import radius_deg
-from replication.study.simulation import simulate
 from replication.core.solvers import chordal_optimal
+from replication.core.stats import radius_deg
+from replication.rig.online import OnlineCalibrator
+from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
 
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from replication.core import so3
-from replication.study.live_study import pair_stream
-from replication.rig.online import MIN_EXCITATION_DEG, NOISE_FLOOR_DEG, OnlineCalibrator
 from replication.core.stats import radius_deg
+from replication.rig.online import MIN_EXCITATION_DEG, NOISE_FLOOR_DEG, OnlineCalibrator
 from replication.rig.online_events import DUPLICATE_DEG, SMALL_MOTION_DEG, RepeatFilter
+from replication.study.live_study import pair_stream
 
 
 @pytest.fixture

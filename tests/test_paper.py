@@ -3,15 +3,15 @@ import shutil
 import numpy as np
 import pytest
 
+from replication.core import checks
 from replication.study import paper
-from replication.core import so3
 
 
 def test_r0_as_printed_is_nearly_a_rotation():
     R = paper.load_r0()
     assert R.shape == (3, 3)
     assert 1e-4 < np.linalg.norm(R.T @ R - np.eye(3)) < 1e-3
-    so3.check_rotation_matrices(paper.r0_camera_from_sensor(), atol=1e-12)
+    checks.check_rotation_matrices(paper.r0_camera_from_sensor(), atol=1e-12)
 
 
 def test_tables_are_complete():

@@ -1,7 +1,6 @@
 """The other half of the portability re-runs (see ``test_portability.py``): a second file, so that the second xdist
 worker takes it."""
 import pytest
-
 from test_portability import check_on_another_machine, notebooks
 
 

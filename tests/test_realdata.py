@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from replication import calibrate
-from replication.rig import realdata as rd
 from replication.core import so3
-from replication.rig.calibration import calibrate_poses, integrate_gyro
+from replication.rig import realdata as rd
+from replication.rig.poses import calibrate_poses
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 HAVE_REAL = rd.real_data_available()
 needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
@@ -83,7 +84,7 @@ def test_cumulative_product_matches_a_loop(rng):
 
 def test_integrate_gyro_constant_rate():
     t = np.linspace(0.0, 1.0, 201)
-    g = rd.GyroStream(t, np.tile([0.0, 0.0, 0.5], (201, 1)))
+    g = GyroStream(t, np.tile([0.0, 0.0, 0.5], (201, 1)))
     Q = integrate_gyro(g).R
     np.testing.assert_allclose(so3.rotation_angle_deg(Q[-1]), np.degrees(0.5), atol=1e-9)
     np.testing.assert_allclose(Q[-1][:2, :2], [[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]], atol=1e-12)
@@ -95,11 +96,11 @@ def _synthetic_rig(offset, rng):
     fine = np.arange(0.0, 60.0, 1e-3)
     freqs, phases = rng.uniform(0.1, 0.7, (3, 3)), rng.uniform(0, 2 * np.pi, (3, 3))
     w_cam = sum(np.sin(2 * np.pi * freqs[k] * fine[:, None] + phases[k]) for k in range(3))  # rad/s, body frame
-    Qc = integrate_gyro(rd.GyroStream(fine, w_cam)).R
+    Qc = integrate_gyro(GyroStream(fine, w_cam)).R
     cam_idx = np.arange(0, len(fine), 50)
-    camera = rd.OrientationStream(fine[cam_idx], Qc[cam_idx])
+    camera = OrientationStream(fine[cam_idx], Qc[cam_idx])
     imu_idx = np.arange(0, len(fine), 5)
-    gyro = rd.GyroStream(fine[imu_idx] + offset, w_cam[imu_idx] @ R0)  # omega_sensor = R0^T omega_camera
+    gyro = GyroStream(fine[imu_idx] + offset, w_cam[imu_idx] @ R0)  # omega_sensor = R0^T omega_camera
     return R0, camera, gyro
 
 

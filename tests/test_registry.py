@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication.core import so3
-from replication.core.motions import Motions
+from replication.core import checks, so3
 from replication.core.handeye import handeye_cost, relative_rotations
-from replication.study.simulation import simulate
+from replication.core.motions import Motions
 from replication.core.solvers import AccuracyWarning, _registry, available, register, solve, solver_info
+from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
 
 
@@ -22,7 +22,7 @@ def test_solve_recovers_and_returns_rotations(problem, method):
     R0, A, B = problem
     R = solve(method, np.stack([A, A]), np.stack([B, B]))
     assert R.shape == (2, 3, 3)
-    so3.check_rotation_matrices(R)
+    checks.check_rotation_matrices(R)
     assert_rotations_close(R, R0, 5e-8)
 
 
@@ -123,11 +123,11 @@ def _stretched(R, violation):
 
 def test_answer_tolerance_boundary(bad_core, two_noisy):
     A, B, X = two_noisy
-    assert _registry.ANSWER_ATOL <= so3.ROTATION_ATOL  # an accepted answer passes every door as a rotation
+    assert _registry.ANSWER_ATOL <= checks.ROTATION_ATOL  # an accepted answer passes every door as a rotation
     for factor in (0.5, 0.99):
         name = bad_core(lambda motions, f=factor: _edited(X, 1, _stretched(X[1], f * _registry.ANSWER_ATOL)))
         R = solve(name, A, B)
-        so3.check_rotation_matrices(R)
+        checks.check_rotation_matrices(R)
     name = bad_core(lambda motions: _edited(X, 1, _stretched(X[1], 1.01 * _registry.ANSWER_ATOL)))
     with pytest.raises(ValueError, match=rf"solver '{name}' {NOT_ROTATION} \(1,\): \|\|R\^T R - I\|\|_F = 1.01e-06"
                                          r".*tolerance ANSWER_ATOL = 1e-06"):

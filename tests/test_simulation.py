@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from replication.core import so3
+from replication.core import checks, so3
 from replication.study.paper import r0_camera_from_sensor
 from replication.study.simulation import SimulationSettings, noise_bound_for_angle_deg, simulate
 
@@ -10,8 +10,8 @@ def test_shapes_truth_and_noise_bound():
     sim = simulate(7, 50)
     assert sim.A.shape == sim.B.shape == (50, 20, 3, 3) and sim.R0.shape == (50, 3, 3)
     assert np.allclose(sim.R0, r0_camera_from_sensor())
-    so3.check_rotation_matrices(sim.A)
-    so3.check_rotation_matrices(sim.B)
+    checks.check_rotation_matrices(sim.A)
+    checks.check_rotation_matrices(sim.B)
     # residual of eq. (7) comes only from the two noise rotations, each below arctan(0.02)
     resid = so3.angle_between_deg(sim.A @ sim.R0[:, None], sim.R0[:, None] @ sim.B)
     assert 0 < resid.max() <= 2 * np.degrees(np.arctan(0.02)) + 1e-9

@@ -4,14 +4,14 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from replication.core import so3
+from replication.core import checks, so3
 
 finite = st.floats(-10, 10, allow_nan=False, allow_infinity=False)
 
 
 def test_check_rotation_accepts_rotations(rng):
     R = so3.random_rotations(rng, (4, 5))
-    assert np.array_equal(so3.check_rotation_matrices(R), R)
+    assert np.array_equal(checks.check_rotation_matrices(R), R)
 
 
 @pytest.mark.parametrize("atol", [None, 1e-4, 1e-2])  # None: the default, ROTATION_ATOL = 1e-6
@@ -25,12 +25,12 @@ def test_check_rotation_tolerance_boundary(rng, atol):
         residual = so3.orthonormality_residual(M[1])
         assert residual == pytest.approx(share * bound, rel=1e-6)
         if accepted:
-            assert np.array_equal(so3.check_rotation_matrices(M, **options), M)
+            assert np.array_equal(checks.check_rotation_matrices(M, **options), M)
         else:
             with pytest.raises(ValueError, match=r"not a rotation matrix at index \(1,\)"):
-                so3.check_rotation_matrices(M, **options)
+                checks.check_rotation_matrices(M, **options)
     with pytest.raises(ValueError, match=r"atol must be <= 0.01"):
-        so3.check_rotation_matrices(R, atol=1e-2 * (1 + 1e-9))  # MAX_ROTATION_ATOL, just above
+        checks.check_rotation_matrices(R, atol=1e-2 * (1 + 1e-9))  # MAX_ROTATION_ATOL, just above
 
 
 @pytest.mark.parametrize(
@@ -45,14 +45,14 @@ def test_check_rotation_tolerance_boundary(rng, atol):
 )
 def test_check_rotation_rejects(bad, message):
     with pytest.raises(ValueError, match=message):
-        so3.check_rotation_matrices(bad)
+        checks.check_rotation_matrices(bad)
 
 
 def test_check_rotation_names_the_index(rng):
     R = so3.random_rotations(rng, 6)
     R[4] *= 1.01
     with pytest.raises(ValueError, match=r"index \(4,\)"):
-        so3.check_rotation_matrices(R, "R")
+        checks.check_rotation_matrices(R, "R")
 
 
 @settings(max_examples=60, deadline=None)
@@ -60,7 +60,7 @@ def test_check_rotation_names_the_index(rng):
 def test_nearest_rotation_is_a_rotation_and_nearest(M):
     assume(abs(np.linalg.det(M)) >= 1e-6 and np.linalg.cond(M) <= 1e8)  # else the projection is not unique
     P = so3.nearest_rotation(M)
-    so3.check_rotation_matrices(P)
+    checks.check_rotation_matrices(P)
     others = so3.random_rotations(np.random.default_rng(0), 500)
     assert np.all(np.linalg.norm(M - P) <= np.linalg.norm(M - others, axis=(-2, -1)) + 1e-12)
 
@@ -111,7 +111,7 @@ def test_sample_ball_rejects():
 
 def test_random_rotations_angle_range_and_determinism():
     R = so3.random_rotations(np.random.default_rng(1), (10, 20), angle_range_deg=(5, 15))
-    so3.check_rotation_matrices(R)
+    checks.check_rotation_matrices(R)
     ang = so3.rotation_angle_deg(R)
     assert ang.min() >= 5 - 1e-9 and ang.max() <= 15 + 1e-9
     again = so3.random_rotations(np.random.default_rng(1), (10, 20), angle_range_deg=(5, 15))

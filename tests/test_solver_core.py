@@ -14,15 +14,35 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from replication.core import handeye, motions, so3
+from replication.core.solvers import (
+    GAP_TOL,
+    LOCAL_ANGLE_TOL_DEG,
+    AccuracyWarning,
+    CertificateWarning,
+    ConvergenceWarning,
+    IterationCapWarning,
+    LocalMinimumWarning,
+    Motions,
+    ObservabilityWarning,
+    ReplicationWarning,
+    andreff,
+    available,
+    calibrate_hand_eye,
+    chordal_optimal,
+    global_certificate,
+    horaud_dornaika,
+    park_martin,
+    robust,
+    solve,
+    solver_info,
+    sqp,
+    tsai_lenz,
+    two_step,
+    two_step_fixed_point,
+)
+from replication.core.solvers.certificate import _lagrangian_upper_bound, chordal_newton
 from replication.study.baselines import corrupt_pairs
 from replication.study.simulation import opencv_protocol, simulate
-from replication.core.solvers import (
-    GAP_TOL, LOCAL_ANGLE_TOL_DEG, AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning,
-    LocalMinimumWarning, Motions, ObservabilityWarning, global_certificate,
-    ReplicationWarning, andreff, available, calibrate_hand_eye, chordal_optimal, horaud_dornaika, park_martin,
-    robust, solve, solver_info, sqp, tsai_lenz, two_step, two_step_fixed_point,
-)
-from replication.core.solvers.optimal import _lagrangian_upper_bound, chordal_newton
 from replication.testing import assert_rotations_close
 
 ALL = available()
@@ -308,9 +328,9 @@ def test_sqp_says_when_slsqp_stops_early():
 
 def test_uncertified_answers_warn(monkeypatch, outlier_problems):
     """If the relaxation cannot certify (simulated here by a failing solver), the user is told."""
-    import replication.core.solvers.optimal as optimal
+    import replication.core.solvers.certificate as certificate
 
-    monkeypatch.setattr(optimal, "relaxation", lambda M: (np.full(22, np.nan), np.eye(3), np.nan, "NumericalError"))
+    monkeypatch.setattr(certificate, "relaxation", lambda M: (np.full(22, np.nan), np.eye(3), np.nan, "NumericalError"))
     A, B = outlier_problems[0]
     with pytest.warns(CertificateWarning, match="could not certify the global minimum"):
         res = chordal_optimal(A, B)
@@ -512,8 +532,8 @@ def test_exported_wrapper_warnings_point_at_the_caller(rng):
 
 def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     """SLSQP is not scale-invariant: the objective's scale (unstated in the paper) changes its path, not its answer."""
-    from replication.study.simulation import simulate
     from replication.core.solvers import sqp
+    from replication.study.simulation import simulate
 
     sim = simulate(3, 5)
     as_printed, per_pair = sqp(sim.A, sim.B), sqp(sim.A, sim.B, cost="per-pair")

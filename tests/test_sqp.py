@@ -3,8 +3,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from replication.core import handeye, so3
-from replication.study.simulation import simulate
 from replication.core.solvers import available, solve, sqp, two_step
+from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
 
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import scipy.spatial.transform as sst
 
-from replication.rig import calibration, realdata, streams
 from replication.core import so3
+from replication.rig import streams
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 
@@ -59,12 +59,6 @@ def test_R_is_world_from_body_and_read_only(stream, rng):
         OrientationStream(stream.t, 2 * stream.R)
     with pytest.raises(ValueError, match="not strictly increasing at sample 1"):
         OrientationStream([0.0, 0.0], stream.R[:2])
-
-
-def test_old_homes_re_export_the_same_objects():
-    assert realdata.OrientationStream is OrientationStream and realdata.GyroStream is GyroStream
-    assert calibration.integrate_gyro is integrate_gyro
-    assert calibration.OrientationStream is OrientationStream
 
 
 def test_integrate_gyro_of_a_constant_rate_is_exp_of_w_t():

@@ -7,14 +7,20 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.study import lab
 from replication.core import so3
-from replication.study.baselines import compare, sweep
-from replication.study.paper import TABLE2_ANGLES, TABLE2_METHODS
-from replication.study.real_study import calibration_table, calibrations, protocol_table, sensitivity_table, solver_tables
-from replication.study.simulation import simulate
 from replication.core.solvers import ObservabilityWarning
 from replication.rig.streams import OrientationStream
+from replication.study import lab
+from replication.study.baselines import compare, sweep
+from replication.study.paper import TABLE2_ANGLES, TABLE2_METHODS
+from replication.study.real_study import (
+    calibration_table,
+    calibrations,
+    protocol_table,
+    sensitivity_table,
+    solver_tables,
+)
+from replication.study.simulation import simulate
 from replication.study.table2 import table2_versus_paper
 
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)

@@ -4,17 +4,41 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.study import paper
-from replication.study.simulation import simulate
 from replication.core.so3 import exp_map
 from replication.core.solvers import chordal_optimal
 from replication.core.stats import share_range
+from replication.study import paper
+from replication.study.simulation import simulate
 from replication.study.table1 import (
-    ONE_PERCENT, RISE_TOL, at_other_minimum, compact, converged_at, convergence_by_setting, convergence_summary,
-    cost_against_minimum, cost_scale_study, diverting_runs, diverting_table, failure_display, failure_table,
-    first_below, fresh_mismatch, interval_text, iterate_errors, paper_two_step_means, per_setting_text, scales_text,
-    sensitivity_grid, share_text, shown_convergence, shown_cost_scales, sqp_failures, sqp_per_setting_text, table1,
-    two_step_means, versus_paper,
+    ONE_PERCENT,
+    RISE_TOL,
+    at_other_minimum,
+    compact,
+    converged_at,
+    convergence_by_setting,
+    convergence_summary,
+    cost_against_minimum,
+    cost_scale_study,
+    diverting_runs,
+    diverting_table,
+    failure_display,
+    failure_table,
+    first_below,
+    fresh_mismatch,
+    interval_text,
+    iterate_errors,
+    paper_two_step_means,
+    per_setting_text,
+    scales_text,
+    sensitivity_grid,
+    share_text,
+    shown_convergence,
+    shown_cost_scales,
+    sqp_failures,
+    sqp_per_setting_text,
+    table1,
+    two_step_means,
+    versus_paper,
 )
 
 

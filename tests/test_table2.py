@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from replication.study import lab
 from replication.core.so3 import exp_map
+from replication.study import lab
 from replication.study.lab import seed_study
 from replication.study.table2 import attitude_statistics, projection_statistics, reference_frame_dependence
 

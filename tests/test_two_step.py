@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from replication.core import handeye, so3
+from replication.core import checks, handeye, so3
 from replication.core.so3 import random_rotations
 from replication.core.solvers import ConvergenceWarning, two_step, two_step_fixed_point
 from replication.testing import assert_rotations_close
@@ -140,6 +140,6 @@ def test_no_underflow_when_sigma1_is_well_below_one(rng):
     B = random_rotations(rng, (2, 20))  # unrelated: sigma_1(K) around 0.5
     res = two_step(A, B, iterations=2000, convergence_tol_deg=180)
     assert np.all(res.left_raw[..., -1, :, :] == 0)  # the printed iteration has underflowed
-    so3.check_rotation_matrices(res.R_left)
+    checks.check_rotation_matrices(res.R_left)
     fixed = two_step_fixed_point(A, B)[1]
     assert_rotations_close(res.R_left, fixed, 1e-6, name="R_left")

@@ -4,8 +4,8 @@ import pytest
 
 from replication.core.handeye import relative_rotations
 from replication.core.so3 import angle_between_deg, exp_map, quaternion_to_matrix, random_rotations
-from replication.testing import assert_rotations_close
 from replication.rig.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
+from replication.testing import assert_rotations_close
 
 
 def _three_axis_pairs(rng, R0, n_pairs, step_deg=20.0):

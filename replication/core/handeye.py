@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .so3 import check_matrices, check_rotation_matrices, chordal_to_angle_deg
+from .checks import check_matrices, check_rotation_matrices
+from .so3 import chordal_to_angle_deg
 
 __all__ = [
     "check_motion_pairs",
@@ -97,7 +98,7 @@ def relative_rotations(orientations, *, reference: int | None = None, pairs=None
         What ``orientations`` hold. ``"world_from_body"`` (e.g. a SLAM or mocap
         trajectory's quaternions, ``Q_t = C_t^T``) gives ``Delta R = Q_k^T Q_t``.
     atol : float
-        Tolerance of the rotation test of ``orientations`` (see :func:`~replication.core.so3.check_rotation_matrices`).
+        Tolerance of the rotation test of ``orientations`` (see :func:`~replication.core.checks.check_rotation_matrices`).
 
     Returns
     -------
@@ -301,16 +302,3 @@ def handeye_cost_kron(R, K, n_motions: int) -> np.ndarray:
     x = vec(R)
     quad = np.einsum("...a,...ab,...b->...", x, K, x)
     return 2.0 * n_motions * (np.einsum("...a,...a->...", x, x) - quad)
-
-
-#: Names that moved to :mod:`replication.core.motions`; still importable from here.
-_MOVED = ("MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions",
-          "NONUNIQUE_TOL")
-
-
-def __getattr__(name):
-    if name in _MOVED:
-        from . import motions
-
-        return getattr(motions, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

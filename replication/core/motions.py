@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .handeye import check_motion_pairs, kronecker_operator
 from .checks import _first_index
+from .handeye import check_motion_pairs, kronecker_operator
 from .so3 import log_map
 
 __all__ = ["MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions"]
@@ -146,7 +146,7 @@ class Motions:
         raise AttributeError("Motions is read-only")
 
     @classmethod
-    def _trusted(cls, A: np.ndarray, B: np.ndarray) -> "Motions":
+    def _trusted(cls, A: np.ndarray, B: np.ndarray) -> Motions:
         """Wrap arrays that come from validated motions (a resample, a sub-batch) without re-validating."""
         m = object.__new__(cls)
         m._set(A, B)
@@ -215,7 +215,7 @@ class Motions:
         return self._cached("observability", compute)
 
     def require(self, *, min_motions: int = 2, observable: bool = True,
-                min_axis_spread_deg: float = 1e-6) -> "Motions":
+                min_axis_spread_deg: float = 1e-6) -> Motions:
         """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) ``R0`` is determined.
 
         Degenerate: on the camera or the sensor side every rotation axis is parallel (axis spread
@@ -248,11 +248,11 @@ class Motions:
                 )
         return self
 
-    def subset(self, index) -> "Motions":
+    def subset(self, index) -> Motions:
         """The pairs ``A[..., index, :, :]`` (a resample or a selection), without re-validating."""
         return Motions._trusted(self.A[..., index, :, :], self.B[..., index, :, :])
 
-    def batch(self, index) -> "Motions":
+    def batch(self, index) -> Motions:
         """Problems ``A[index]`` of the batch, without re-validating."""
         return Motions._trusted(self.A[index], self.B[index])
 

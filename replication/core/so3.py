@@ -10,16 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .checks import ROTATION_ATOL, check_init, check_matrices, check_rotation_matrices, det3  # re-exported
+from .checks import check_matrices, det3
 
 __all__ = [
-    "ROTATION_ATOL",
-    "check_matrices",
-    "check_rotation_matrices",
-    "check_init",
     "skew",
     "nearest_rotation",
-    "det3",
     "noise_rotations",
     "sample_ball",
     "random_rotations",

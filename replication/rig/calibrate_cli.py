@@ -269,8 +269,9 @@ def _write(path, data, what: str) -> bool:
 
 
 def calibrate_command(args: argparse.Namespace) -> int:
-    from .calibration import OverlapError, calibrate, calibrate_poses
     from ..core.solvers import solver_info
+    from .calibration import OverlapError, calibrate
+    from .poses import calibrate_poses
 
     try:
         solver_info(args.method)

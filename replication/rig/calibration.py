@@ -31,21 +31,19 @@ import warnings
 
 import numpy as np
 
-from .association import (estimate_time_offset, motion_pairs, offset_analysis,  # re-exported: public names here
-                          stream_pairs)
 from ..core.checks import check_number
-from .estimate import check_common, check_options, solve_pairs, with_reasons
 from ..core.handeye import pair_residual_deg, relative_rotations
-from .poses import calibrate_poses, pose_pairs  # re-exported: public names here
+from ..core.so3 import rotation_angle_deg
+from .association import (  # re-exported: public names here
+    motion_pairs,
+    offset_analysis,
+)
+from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
-from ..core.so3 import rotation_angle_deg
 from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
 
-__all__ = [
-    "CalibrationResult", "calibrate", "calibrate_poses", "integrate_gyro", "estimate_time_offset", "motion_pairs",
-    "stream_pairs", "pose_pairs", "OverlapError",
-]
+__all__ = ["calibrate", "OverlapError"]
 
 
 #: A stream has a gap where more than this many of its median sample intervals pass without a sample.
@@ -84,7 +82,7 @@ class OverlapError(ValueError):
     def __reduce__(self):
         return type(self), (self.template, self.option)
 
-    def named(self, option: str) -> "OverlapError":
+    def named(self, option: str) -> OverlapError:
         """The same error naming the option as ``option`` (e.g. ``"--max-offset"``)."""
         return type(self)(self.template, option)
 

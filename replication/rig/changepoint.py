@@ -9,7 +9,7 @@ pairs after it agree on ``R0``. Notation and frames: ``docs/conventions.md``.
 (:func:`replication.core.handeye.kronecker_operator`). Prefix sums of ``B_j kron A_j`` (9x9) and of ``B_j`` (3x3) give
 both sides' ``K`` and ``G = sum_j (2I - B_j - B_j^T)`` for every split in O(1), so the whole scan is O(J): each
 side's minimiser of (8) is the top eigenvector of ``sym(K)``, projected, refined by batched Newton steps on SO(3)
-(:func:`replication.core.solvers.optimal.chordal_newton`), and its cost comes from ``K``. Pairs overlap (every camera
+(:func:`replication.core.solvers.certificate.chordal_newton`), and its cost comes from ``K``. Pairs overlap (every camera
 time starts a pair ``interval`` seconds long, ``block`` pairs per interval): the ``block`` pairs that span the
 split belong to neither side, so the two sides share no pose.
 
@@ -68,10 +68,9 @@ import numpy as np
 
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import check_motion_pairs
-from ..core.stats import radius_deg
 from ..core.so3 import angle_between_deg, log_map
-from ..core.solvers.classic import relaxed_rotation
-from ..core.solvers.optimal import chordal_newton
+from ..core.solvers.certificate import chordal_newton, relaxed_rotation
+from ..core.stats import radius_deg
 from .streams import GyroStream, OrientationStream
 
 __all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS"]

@@ -27,8 +27,8 @@ import warnings
 
 import numpy as np
 
-from .quality import THRESHOLDS, Reason
 from ..core.so3 import angle_between_deg, as_quaternion, quaternion_to_matrix
+from .quality import THRESHOLDS, Reason
 from .streams import GyroStream, OrientationStream
 
 __all__ = ["input_mistakes", "pose_direction", "HYPOTHESES", "POSE_HYPOTHESES", "FIT_SHARE", "FIT_TO_MOTION",

@@ -22,14 +22,13 @@ import warnings
 
 import numpy as np
 
+from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import pair_residual_deg
 from ..core.motions import prepare_motions
+from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map, rotation_angle_deg, yaw_pitch_roll_deg
+from ..core.solvers import ReplicationWarning, solve, solver_info
 from .quality import Evidence, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
-from ..core.checks import check_number
-from ..core.so3 import (angle_between_deg, as_quaternion, check_rotation_matrices, exp_map, log_map, rotation_angle_deg,
-                  yaw_pitch_roll_deg)
-from ..core.solvers import ReplicationWarning, solve, solver_info
 
 __all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices", "station_indices", "per_station_median"]
 

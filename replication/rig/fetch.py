@@ -23,13 +23,13 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._io import os_reason, prepare_folder, same_file, write_atomic
+from .._io import PROJECT_ROOT, os_reason, prepare_folder, same_file, write_atomic
 from .datafile import fail, read_text
 
 __all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
 
 #: The manifest shipped with the project.
-MANIFEST = Path(__file__).resolve().parent.parent / "data" / "real_data_manifest.csv"
+MANIFEST = PROJECT_ROOT / "data" / "real_data_manifest.csv"
 COLUMNS = ["folder", "file", "bytes", "sha256", "repository", "commit", "path", "licence", "citation"]
 _LFS_POINTER = b"version https://git-lfs.github.com/spec/v1"
 

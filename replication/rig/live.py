@@ -13,10 +13,10 @@ from collections import deque
 import numpy as np
 
 from ..core.checks import check_number, check_rotation_matrices
+from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 from .online import OnlineCalibrator
 from .quality import Verdict
 from .report import RADIUS_COVERS
-from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 
 __all__ = ["LiveRig", "replay", "OFFSET_RESOLUTION"]
 

@@ -5,7 +5,7 @@ The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (
 new pair costs O(1): :class:`OnlineCalibrator` keeps the running sums of ``B_j kron A_j`` and of ``2I - B_j - B_j^T``
 (optionally with exponential forgetting), takes warm-started two-step steps (eqs. (14)-(17)) until the motion
 determines ``R0``, and publishes the minimiser of eq. (8) (Newton from the two-step iterate or the last minimiser,
-:func:`replication.core.solvers.optimal.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs or every
+:func:`replication.core.solvers.certificate.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs or every
 tenth of the pairs so far, whichever is more: fed the same pairs, it equals the batch ``chordal_optimal``.
 
 **When the motion determines R0.** Near the minimiser, perturbing ``R`` to ``R exp([w]x)`` changes pair ``j``'s
@@ -58,13 +58,18 @@ import numpy as np
 
 from ..core.checks import check_number, check_range, check_rotation_flat, check_rotation_matrices
 from ..core.handeye import unvec, vec
-from .online_events import (DUPLICATE_DEG, EVENT_KINDS, SMALL_MOTION_DEG, ChangeDetector, OnlineEvent, OnlineState,
-                            RepeatFilter, residual_angle_deg)
 from ..core.so3 import angle_between_deg, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
+from .online_events import (
+    DUPLICATE_DEG,
+    ChangeDetector,
+    OnlineEvent,
+    OnlineState,
+    RepeatFilter,
+    residual_angle_deg,
+)
 
-__all__ = ["OnlineCalibrator", "OnlineState", "OnlineEvent", "MIN_PAIRS", "EVENT_KINDS",
-           "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG", "DUPLICATE_DEG", "SMALL_MOTION_DEG"]
+__all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
 _EYE = np.eye(3)
 #: Floor of the change detector's reference level ``d^2``: a residual of 0.01 deg (``d^2 ~ 2 theta^2``), below any
@@ -356,8 +361,7 @@ class OnlineCalibrator:
         """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate and from the relaxed minimiser of
         ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg or more away can end at another
         critical point, about 180 deg off), then the radius, the detector's start and the residual checks."""
-        from ..core.solvers.classic import relaxed_rotation
-        from ..core.solvers.optimal import chordal_newton
+        from ..core.solvers.certificate import chordal_newton, relaxed_rotation
 
         K = self.K
         if not self._w:

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.checks import check_number
-from .estimate import check_common, check_options, solve_pairs, with_reasons
+from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import relative_rotations
+from ..core.so3 import rotation_angle_deg
+from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .report import CalibrationResult
-from ..core.so3 import check_rotation_matrices, rotation_angle_deg
 
 __all__ = ["calibrate_poses", "pose_pairs"]
 

@@ -140,7 +140,7 @@ class Verdict:
     reasons: tuple
 
     @classmethod
-    def of(cls, reasons) -> "Verdict":
+    def of(cls, reasons) -> Verdict:
         reasons = tuple(reasons)
         level = max((r.level for r in reasons), key=LEVELS.index, default="ok")
         return cls(level, reasons)

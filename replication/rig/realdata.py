@@ -24,13 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .._io import PROJECT_ROOT
+from ..core.checks import check_rotation_matrices
+from ..core.so3 import nearest_rotation
 from .datafile import fail, is_number, read_lines, read_table, read_text, unit_quaternion_rotations
-from ..core.so3 import check_rotation_matrices, nearest_rotation
 from .streams import GyroStream, OrientationStream  # re-exported: defined in replication.rig.streams
 
 __all__ = [
-    "OrientationStream",
-    "GyroStream",
     "DEFAULT_REAL_DATA",
     "data_root",
     "StereoCalibration",
@@ -49,7 +49,7 @@ __all__ = [
 ]
 
 #: Where the shared recordings are when neither an argument nor ``$REPLICATION_REAL_DATA`` says otherwise.
-DEFAULT_REAL_DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "real"
+DEFAULT_REAL_DATA = PROJECT_ROOT.parent / "shared" / "data" / "real"
 
 
 def data_root(path=None) -> Path:

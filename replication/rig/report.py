@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .association import offset_in_words
 from ..core.motions import MotionObservability
+from .association import offset_in_words
 from .quality import Verdict
 
 __all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]

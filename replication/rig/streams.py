@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.so3 import check_rotation_matrices, cumulative_product, exp_map, slerp_interpolator
+from ..core.checks import check_rotation_matrices
+from ..core.so3 import cumulative_product, exp_map, slerp_interpolator
 
 __all__ = ["OrientationStream", "GyroStream", "integrate_gyro"]
 
@@ -67,7 +68,7 @@ class OrientationStream:
             object.__setattr__(self, "_interpolator", interpolator)
         return interpolator(times)
 
-    def between(self, start: float, stop: float) -> "OrientationStream":
+    def between(self, start: float, stop: float) -> OrientationStream:
         """The samples with ``start <= t <= stop``."""
         keep = (self.t >= start) & (self.t <= stop)
         return OrientationStream(self.t[keep], self.world_from_body[keep], self.source)

@@ -62,7 +62,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.so3 import angle_between_deg, as_quaternion, check_rotation_matrices, quaternion_to_matrix, skew
+from ..core.checks import check_rotation_matrices
+from ..core.so3 import angle_between_deg, as_quaternion, quaternion_to_matrix, skew
 
 __all__ = ["VinsExRotation"]
 

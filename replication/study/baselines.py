@@ -17,11 +17,12 @@ import warnings
 import numpy as np
 import pandas as pd
 
+from ..core.checks import check_rotation_matrices
 from ..core.handeye import handeye_cost
-from .simulation import noise_bound_for_angle_deg, simulate
-from ..core.so3 import angle_between_deg, check_rotation_matrices, random_rotations
-from ..core.stats import paired_ratio_ci
+from ..core.so3 import angle_between_deg, random_rotations
 from ..core.solvers import ReplicationWarning, available, solve
+from ..core.stats import paired_ratio_ci
+from .simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["corrupt_pairs", "compare", "sweep", "SWEEPS"]
 

@@ -25,10 +25,10 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .simulation import noise_bound_for_angle_deg, simulate
 from ..core.so3 import angle_between_deg, frobenius_error
 from ..core.solvers import SQP_VARIANTS, ReplicationWarning, chordal_optimal, sqp, two_step
 from ..core.stats import mean_se
+from .simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
            "fig5_figure", "two_step_growth", "ratio_range"]

@@ -33,12 +33,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from .._io import write_atomic
+from .._io import PROJECT_ROOT, write_atomic
 from ..rig.datafile import DataFileError, fail, read_text
-from .paper import data_dir
-from .paper import load_claim_table as load_claims  # the ledger's claims: a public name here
+from .paper import data_dir, load_claim_table
 
-__all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "load_claims", "check_record", "record",
+__all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record",
            "collect", "to_markdown", "update_readme"]
 
 #: The verdict that needs a condition.
@@ -46,7 +45,6 @@ HOLDS_ONLY_IF = "holds only if"
 #: The only verdicts a record may give.
 VERDICTS = ("holds", "fails", HOLDS_ONLY_IF, "undecidable from the text")
 CLAIM_MIME = "application/vnd.replication.claim+json"
-ROOT = Path(__file__).resolve().parent.parent
 README_START, README_END = "<!-- claims:start -->", "<!-- claims:end -->"
 
 
@@ -98,7 +96,7 @@ def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *
                  claims_path=None) -> ClaimRecord:
     """The record if it keeps the rules of the module notes, else ``ValueError`` naming the claim and the problem.
 
-    ``claims``: the claims table (:func:`load_claims`), read from ``claims_path`` (default
+    ``claims``: the claims table (:func:`~replication.study.paper.load_claim_table`), read from ``claims_path`` (default
     ``data/paper/claims.csv``) when not given.
     """
     values = dict(claim=claim, verdict=verdict, evidence=evidence, uncertainty=uncertainty, setting=setting,
@@ -106,7 +104,7 @@ def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *
     for name, value in values.items():
         if not isinstance(value, str):
             raise ValueError(f"claim {claim!r}: {name} must be text, got {type(value).__name__} {value!r}")
-    claims = load_claims(claims_path) if claims is None else claims
+    claims = load_claim_table(claims_path) if claims is None else claims
     if claim not in claims.index:
         raise ValueError(_unknown_claim(claim, claims.index, claims_path))
     if verdict not in VERDICTS:
@@ -190,12 +188,12 @@ def collect(notebooks=None, *, claims_path=None, complete: bool = True) -> pd.Da
         (a ``ValueError``) naming the notebook: not valid JSON (line and column), not a notebook, a stored
         record that is not an object of the :class:`ClaimRecord` fields, one that breaks a rule of
         :func:`check_record` (with its cell), or a second record of a claim (both notebooks and cells);
-        or naming the claims file and line (:func:`load_claims`).
+        or naming the claims file and line (:func:`~replication.study.paper.load_claim_table`).
     ValueError
         ``complete`` and a claim without a record.
     """
-    paths = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")) if notebooks is None else list(notebooks)
-    claims = load_claims(claims_path)
+    paths = sorted((PROJECT_ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")) if notebooks is None else list(notebooks)
+    claims = load_claim_table(claims_path)
     rows, first = [], {}
     for path in map(Path, paths):
         nb = _read_notebook(path)
@@ -274,7 +272,7 @@ def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> 
         A claims marker (:data:`README_START`, :data:`README_END`) missing or repeated, or the end marker not
         after the start marker.
     """
-    readme = Path(readme) if readme else ROOT / "README.md"
+    readme = Path(readme) if readme else PROJECT_ROOT / "README.md"
     text = read_text(readme, "the README with the claims table")
     head, tail = _readme_parts(readme, text)
     new = f"{head}{README_START}\n{to_markdown(ledger)}{README_END}{tail}"

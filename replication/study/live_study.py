@@ -12,11 +12,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..core.so3 import angle_between_deg, exp_map, random_rotations
+from ..core.stats import mean_se, poisson_upper, wilson_interval
 from ..rig.live import replay
 from ..rig.online import MIN_PAIRS, OnlineCalibrator
 from ..rig.online_events import EVENT_KINDS
-from ..core.so3 import angle_between_deg, exp_map, random_rotations
-from ..core.stats import mean_se, poisson_upper, wilson_interval
 from ..rig.vins_rule import VinsExRotation
 
 __all__ = ["coverage_study", "ready_coverage", "pair_stream", "degenerate_streams", "online_mistakes",
@@ -183,8 +183,8 @@ def degenerate_streams(*, n_runs: int, n_pairs: int = 200, seed: int, target_deg
 def online_mistakes(*, seed: int, seconds: float = 90.0, target_deg: float = 0.5):
     """The usual input mistakes made on purpose on a synthetic rig (camera at 20 Hz, gyro at 200 Hz, small noise),
     replayed as if live: whether the estimator ever says ``ready``, its final verdict and the reasons it names."""
-    from .simulation import rig_streams
     from ..rig.streams import GyroStream, OrientationStream
+    from .simulation import rig_streams
 
     rng = np.random.default_rng(seed)
     R0, camera, gyro, sensor = rig_streams(seconds, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)

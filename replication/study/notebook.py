@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .._io import png_bytes, write_atomic
+from .._io import PROJECT_ROOT, png_bytes, write_atomic
 
 __all__ = ["setup", "results_dir", "save_table", "save_figure", "best_of"]
 
@@ -56,7 +56,7 @@ def setup() -> None:
 def results_dir() -> Path:
     """``results/`` of this project, or ``$REPLICATION_RESULTS_DIR``."""
     env = os.environ.get("REPLICATION_RESULTS_DIR")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "results"
+    return Path(env) if env else PROJECT_ROOT / "results"
 
 
 def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:

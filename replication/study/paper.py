@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..rig.datafile import fail, read_text
+from .._io import PROJECT_ROOT
 from ..core.so3 import nearest_rotation
+from ..rig.datafile import fail, read_text
 
 __all__ = ["data_dir", "load_r0", "r0_camera_from_sensor", "load_table1", "load_table2", "load_claims",
            "load_claim_table", "CLAIM_COLUMNS", "CLAIM_ID"]
@@ -32,7 +33,7 @@ TABLE2_METHODS = ("optimization", "ours_right", "ours_left", "sensor_frame")
 def data_dir() -> Path:
     """``data/`` of this project; ``$REPLICATION_DATA_DIR`` overrides it."""
     env = os.environ.get("REPLICATION_DATA_DIR")
-    return Path(env) if env else Path(__file__).resolve().parent.parent / "data"
+    return Path(env) if env else PROJECT_ROOT / "data"
 
 
 def _read(name: str, columns: list[str], numeric: list[str]) -> pd.DataFrame:

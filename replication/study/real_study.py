@@ -5,7 +5,7 @@ notebook shows the tables, states what they decide and records its verdicts. Dat
 given as ``{name: (camera, sensor, reference name)}`` with ``camera`` an
 :class:`~replication.rig.streams.OrientationStream` and ``sensor`` an orientation or gyro stream
 (for :func:`replication.rig.calibration.calibrate`), or ``camera`` and ``sensor`` as arrays of
-absolute attitudes of a static pose set (for :func:`replication.rig.calibration.calibrate_poses`).
+absolute attitudes of a static pose set (for :func:`replication.rig.poses.calibrate_poses`).
 Warnings are recorded, never shown: :class:`~replication.core.solvers.ObservabilityWarning` (a
 property of the data set) apart from the others (a property of the solver's answer).
 """
@@ -16,10 +16,12 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .baselines import compare
-from ..rig.calibration import calibrate, calibrate_poses, pose_pairs, stream_pairs
 from ..core.so3 import rotation_angle_deg
 from ..core.solvers import ConvergenceWarning, ObservabilityWarning, ReplicationWarning, two_step
+from ..rig.association import stream_pairs
+from ..rig.calibration import calibrate
+from ..rig.poses import calibrate_poses, pose_pairs
+from .baselines import compare
 
 __all__ = ["station_bootstrap", "recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table",
            "calibrations", "usual_mistakes", "verdict_table"]
@@ -73,8 +75,8 @@ def calibration_table(results: dict) -> pd.DataFrame:
 def solver_tables(streams: dict, pose_sets: dict, references: dict, *, interval: float = 1.0) -> pd.DataFrame:
     """Every registered solver on the same pairs of each data set (:func:`replication.study.baselines.compare`).
 
-    Streams are paired at ``interval`` seconds (:func:`~replication.rig.calibration.stream_pairs`), pose sets
-    over all pairs (:func:`~replication.rig.calibration.pose_pairs`). The ``opencv_*`` solvers rebuild a pose
+    Streams are paired at ``interval`` seconds (:func:`~replication.rig.association.stream_pairs`), pose sets
+    over all pairs (:func:`~replication.rig.poses.pose_pairs`). The ``opencv_*`` solvers rebuild a pose
     chain from the pairs and form all its pairs, so they get non-overlapping pairs: every ``interval / dt``-th
     pair of a stream, the consecutive pairs of a pose set.
 
@@ -217,10 +219,10 @@ def verdict_table(results: dict) -> pd.DataFrame:
 def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
     """A static pose set's 95 % bootstrap radius resampling its stations (what :func:`calibrate_poses` does) and
     resampling its pairs one by one (what it did before, treating the ``N (N - 1) / 2`` pairs as independent)."""
-    from ..rig.estimate import block_indices, bootstrap_replicates
     from ..core.motions import prepare_motions
-    from ..rig.poses import calibrate_poses, pose_pairs
     from ..core.so3 import angle_between_deg
+    from ..rig.estimate import block_indices, bootstrap_replicates
+    from ..rig.poses import calibrate_poses, pose_pairs
 
     r = calibrate_poses(C, S, n_bootstrap=n_bootstrap, seed=seed)
     motions = prepare_motions(*pose_pairs(C, S))

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .paper import r0_camera_from_sensor
 from ..core.so3 import exp_map, log_map, noise_rotations, random_rotations, sample_ball
+from .paper import r0_camera_from_sensor
 
 __all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg",
            "OpenCVProtocolProblem", "opencv_protocol", "MATCHED_MOTIONS_DEG", "MATCHED_START_DEG",

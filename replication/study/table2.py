@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from ..core.checks import check_rotation_matrices
 from ..core.handeye import relative_rotations
+from ..core.so3 import rotation_angle_deg, yaw_pitch_roll_deg
 from .paper import TABLE2_ANGLES, TABLE2_METHODS, load_table2
-from ..core.so3 import check_rotation_matrices, rotation_angle_deg, yaw_pitch_roll_deg
 
 if TYPE_CHECKING:  # the lab's chain computes Table II with this module; no import cycle at run time
     from .lab import LabResult

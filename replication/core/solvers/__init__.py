@@ -24,16 +24,35 @@ Warnings (:mod:`._warnings`) name the measured cause whenever an answer may be w
 """
 from ..handeye import pair_residual_deg
 from ..motions import Motions, prepare_motions
-from ._registry import LOCAL_ANGLE_TOL_DEG, LOCAL_ATOL, LOCAL_RTOL, Solution, SolverInfo, available, register, solve, solver_info
+from ._registry import (
+    LOCAL_ANGLE_TOL_DEG,
+    LOCAL_ATOL,
+    LOCAL_RTOL,
+    WEAK_GAP_FACTOR,
+    Solution,
+    SolverInfo,
+    available,
+    check_answer,
+    register,
+    solve,
+    solver_info,
+)
 from ._warnings import (
-    AccuracyWarning, CertificateWarning, ConvergenceWarning, IterationCapWarning, LocalMinimumWarning, ObservabilityWarning,
+    AccuracyWarning,
+    CertificateWarning,
+    ConvergenceWarning,
+    IterationCapWarning,
+    LocalMinimumWarning,
+    ObservabilityWarning,
     ReplicationWarning,
 )
+from .certificate import GAP_TOL, ChordalResult, global_certificate
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
-from .opencv import calibrate_hand_eye
-from .iteration import TwoStepResult, two_step, two_step_fixed_point
+from .iteration import TwoStepResult, two_step
+from .limit import two_step_fixed_point
 from .msac import robust
-from .optimal import GAP_TOL, ChordalResult, chordal_optimal, global_certificate
+from .opencv import calibrate_hand_eye
+from .optimal import chordal_optimal
 from .slsqp import SQP_VARIANTS, SQPResult, sqp
 
 __all__ = [
@@ -56,6 +75,8 @@ __all__ = [
     "LOCAL_RTOL",
     "LOCAL_ATOL",
     "LOCAL_ANGLE_TOL_DEG",
+    "WEAK_GAP_FACTOR",
+    "check_answer",
     "two_step",
     "two_step_fixed_point",
     "TwoStepResult",

@@ -9,17 +9,19 @@ from __future__ import annotations
 
 import functools
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from ..checks import _first_index, det3
 from ..handeye import handeye_cost, vec
-from ..motions import Motions, MotionObservability, prepare_motions
+from ..motions import MotionObservability, Motions, prepare_motions
+from ..so3 import angle_between_deg
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
+from .certificate import GAP_TOL, _derivatives, global_certificate
 
-__all__ = ["SolverInfo", "Solution", "ObservabilityWarning", "register", "available", "solver_info", "solve",
+__all__ = ["SolverInfo", "Solution", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
            "ANSWER_ATOL", "check_answer", "warn_if_weak"]
 
@@ -231,8 +233,6 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
 
 def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
     """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
-    from .optimal import global_certificate  # the certificate is itself a registered solver's core
-
     cert = global_certificate(motions) if cert is None else cert
     K, J = motions.K, motions.J
     x = vec(R)
@@ -254,9 +254,6 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
     about itself, are skipped. Returns the boolean mask of problems flagged either way.
     """
-    from ..so3 import angle_between_deg
-    from .optimal import global_certificate
-
     cert_R = global_certificate(motions).R
     finite = np.isfinite(R).all(axis=(-2, -1))
     rotation = finite & (det3(np.where(finite[..., None, None], R, np.eye(3))) > 0)
@@ -267,8 +264,6 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     off = above & (angle > WRONG_POINT_DEG)  # another stationary point
     short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)  # in the right basin, not at its bottom
     if np.any(off):
-        from .optimal import _derivatives
-
         K = motions.K
         grad = _derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), np.asarray(R, dtype=float))[1]
         moving = 2.0 * np.linalg.norm(grad, axis=-1) > STATIONARY_TOL  # |grad (8)| / J: not a stationary point
@@ -337,9 +332,6 @@ def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray,
 
 def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: str, stacklevel: int) -> np.ndarray:
     """The gross-error screen of :func:`check_answer` over the ``usable`` answers (rotations); returns its mask."""
-    from ..so3 import angle_between_deg
-    from .optimal import global_certificate
-
     batch, J = R.shape[:-2], motions.J
     flat, usable = R.reshape(-1, 3, 3), usable.reshape(-1)
     safe = np.where(usable[:, None, None], flat, np.eye(3))
@@ -468,7 +460,6 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         _screen_gross(motions, R, ~failed & ~reflection, method, _stacklevel)
     if not full_output:
         return R
-    from .optimal import GAP_TOL
 
     cost, lower, gap = _gap_to_global(motions, R)
     gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified

@@ -20,13 +20,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..handeye import unvec
 from ..so3 import (
-    as_quaternion, exp_map, log_map, nearest_rotation, nearest_rotation_up_to_sign, quaternion_to_matrix, skew,
+    as_quaternion,
+    exp_map,
+    log_map,
+    nearest_rotation,
+    quaternion_to_matrix,
+    skew,
 )
 from ._registry import register
+from .certificate import relaxed_rotation
 
-__all__ = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "relaxed_rotation"]
+__all__ = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz"]
 
 
 @register(
@@ -113,25 +118,6 @@ def horaud_dornaika(motions):
     _, vecs = np.linalg.eigh(S)
     x = vecs[..., :, 0]  # eq. (41): eigenvector of the smallest eigenvalue
     return quaternion_to_matrix(x)
-
-
-def relaxed_rotation(K) -> np.ndarray:
-    """The relaxed minimiser of eq. (8), projected onto SO(3), from ``K`` (see :func:`andreff`).
-
-    Parameters
-    ----------
-    K : ndarray, shape (..., 9, 9)
-        A (possibly weighted) mean of ``B_j kron A_j``
-        (:func:`replication.core.handeye.kronecker_operator`).
-
-    Returns
-    -------
-    ndarray, shape (..., 3, 3)
-    """
-    M = 0.5 * (K + np.swapaxes(K, -1, -2))
-    _, vecs = np.linalg.eigh(M)
-    # eigenvector of the largest eigenvalue of sym(K); it has no sign, so take the one with det > 0
-    return nearest_rotation_up_to_sign(unvec(vecs[..., :, -1]))
 
 
 @register(

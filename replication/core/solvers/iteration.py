@@ -50,15 +50,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..checks import check_init, det3
 from ..handeye import handeye_cost_kron, unvec, vec
-from ..motions import Motions, MotionObservability, prepare_motions
-from ..so3 import check_init, chordal_to_angle_deg, det3, frobenius_error
+from ..motions import MotionObservability, Motions, prepare_motions
+from ..so3 import chordal_to_angle_deg, frobenius_error
 from ._registry import register, warn_if_weak
 from ._warnings import AccuracyWarning, ConvergenceWarning, IterationCapWarning
-from .limit import REPEATED_TOL, _check_unique_limit, _check_variant, _fixed_point, _project, two_step_fixed_point
+from .limit import REPEATED_TOL, _check_unique_limit, _check_variant, _fixed_point, _project
 
-__all__ = ["TwoStepResult", "ConvergenceWarning", "IterationCapWarning", "two_step", "two_step_fixed_point",
-           "REPEATED_TOL"]
+__all__ = ["TwoStepResult", "two_step"]
 
 REFERENCE = (
     "Z.-Q. Zhang, 'Cameras and Inertial/Magnetic Sensor Units Alignment Calibration', "

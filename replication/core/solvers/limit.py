@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..checks import _first_index, check_init
 from ..handeye import unvec, vec
 from ..motions import Motions, prepare_motions
-from ..checks import _first_index
-from ..so3 import check_init, nearest_rotation, nearest_rotation_up_to_sign
+from ..so3 import nearest_rotation, nearest_rotation_up_to_sign
 
 __all__ = ["two_step_fixed_point", "REPEATED_TOL", "VARIANTS"]
 

@@ -9,7 +9,7 @@ Method: MSAC hypothesise-and-verify (Torr & Zisserman 2000) over minimal
 samples of two pairs (Park & Martin's solution of two pairs is exact for
 noise-free, non-parallel motions), then iteratively re-weighted least squares
 with the Cauchy weight on the exact minimiser of the weighted eq. (8)
-(:func:`replication.core.solvers.optimal.chordal_newton`).
+(:func:`replication.core.solvers.certificate.chordal_newton`).
 
 Cost: memory ``O(J + H)`` and time ``O(H J)`` for ``H`` hypotheses (``max_hypotheses``), at any ``J``:
 the ``J (J - 1) / 2`` two-pair samples are enumerated only up to :data:`MAX_ENUMERATED_PAIRS`, above it
@@ -25,7 +25,7 @@ import numpy as np
 from ..handeye import kronecker_operator, pair_residual_deg
 from ..so3 import chordal_to_angle_deg, log_map, nearest_rotation
 from ._registry import register
-from .optimal import chordal_newton
+from .certificate import chordal_newton
 
 __all__ = ["robust", "MAX_ENUMERATED_PAIRS", "SCORE_BLOCK"]
 

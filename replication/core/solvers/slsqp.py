@@ -35,16 +35,16 @@ SciPy's SLSQP solves one problem per call; batches are looped in Python.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize
 
-import warnings
-
+from ..checks import check_init
 from ..handeye import handeye_cost_kron, unvec, vec
 from ..motions import Motions, prepare_motions
-from ..so3 import check_init, nearest_rotation
+from ..so3 import nearest_rotation
 from ._registry import check_local_answer, register, warn_if_weak
 from ._warnings import ConvergenceWarning
 

@@ -21,8 +21,20 @@ Table II's statistics and its comparison with the paper live beside Table I's in
 """
 import importlib
 
-from .recording import (ACC_COLUMNS, FILES, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, UNITS, LabRecording, default_lab_dir,
-                        load_lab, marker_pixels, static_hold_seconds, write_lab)
+from .recording import (
+    ACC_COLUMNS,
+    FILES,
+    GYR_COLUMNS,
+    IMU_COLUMNS,
+    MAG_COLUMNS,
+    UNITS,
+    LabRecording,
+    default_lab_dir,
+    load_lab,
+    marker_pixels,
+    static_hold_seconds,
+    write_lab,
+)
 from .settings import GRAVITY, NOMINAL_CAMERA_FROM_SENSOR, PARTS, SOURCES, TABLE2_SOLVERS, WAND_POINTS, LabSettings
 
 #: Names of the modules that need OpenCV, ``ahrs`` or the solvers, loaded on first use so that reading or writing a

@@ -22,9 +22,9 @@ import numpy as np
 import pandas as pd
 
 from ...core.handeye import relative_rotations
-from ...rig.streams import OrientationStream
 from ...core.so3 import angle_between_deg, log_map, nearest_rotation, quaternion_to_matrix, yaw_pitch_roll_deg
 from ...core.solvers import ReplicationWarning, solve
+from ...rig.streams import OrientationStream
 from ..table2 import attitude_statistics
 from .recording import ACC_COLUMNS, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, LabRecording, marker_pixels
 from .settings import TABLE2_SOLVERS

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..._io import write_atomic
+from ..._io import PROJECT_ROOT, write_atomic
 from ...core.checks import check_rotation_matrices
 from ...rig.datafile import fail as _fail
 from ...rig.datafile import read_text
@@ -105,7 +105,7 @@ _FORMATS = {"t": "%.3f", "acc": "%.4f", "gyr": "%.5f", "mag": "%.3f", "uv": "%.3
 
 def default_lab_dir() -> Path:
     """``data/lab`` of this project."""
-    return Path(__file__).resolve().parents[2] / "data" / "lab"
+    return PROJECT_ROOT / "data" / "lab"
 
 
 def _json_text(data: dict) -> str:

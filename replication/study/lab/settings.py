@@ -188,7 +188,7 @@ class LabSettings:
     lever_arm_m: float = 0.08
     mount_error_deg: float = 3.0
 
-    def without(self, *sources: str) -> "LabSettings":
+    def without(self, *sources: str) -> LabSettings:
         """These settings with the named error sources (keys of :data:`SOURCES` or :data:`PARTS`) switched off."""
         known = {**SOURCES, **PARTS}
         unknown = [s for s in sources if s not in known]
@@ -213,6 +213,6 @@ class LabSettings:
         """
         return not np.any(self.acc_noise_density_ug) and not self.mag_noise_ut
 
-    def exact(self) -> "LabSettings":
+    def exact(self) -> LabSettings:
         """Every error source switched off (the chain must then recover ``R0``)."""
         return self.without(*SOURCES)

@@ -9,11 +9,11 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .. import paper
-from ..simulation import SimulatedProblems, simulate
 from ...core.so3 import angle_between_deg, frobenius_error, orthonormality_residual
 from ...core.solvers import ReplicationWarning, chordal_optimal, sqp
 from ...core.stats import mean_se, paired_ratio_ci, share_range
+from .. import paper
+from ..simulation import SimulatedProblems, simulate
 from .table import DIVERGED, FEASIBLE_TOL, convergence_summary, diverting_runs, iterate_errors, table1
 
 __all__ = ["compact", "FAIL", "paper_two_step_means", "two_step_means", "sensitivity_grid", "fresh_mismatch",

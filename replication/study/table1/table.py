@@ -11,11 +11,11 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from .. import paper
-from ..simulation import SimulatedProblems
 from ...core.so3 import frobenius_error
 from ...core.solvers import SQP_VARIANTS, ReplicationWarning, sqp, two_step
 from ...core.stats import z_score
+from .. import paper
+from ..simulation import SimulatedProblems
 
 __all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED", "converged_at",
            "first_below", "convergence_summary", "ONE_PERCENT", "NEGLIGIBLE", "RISE_TOL",

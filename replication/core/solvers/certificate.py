@@ -1,0 +1,275 @@
+"""The global minimiser of the paper's cost (8) over SO(3) and its certificate of global optimality: the maths.
+
+The registry (:mod:`._registry`) checks every solver's answer against this certificate, and the registered
+solver :func:`replication.core.solvers.chordal_optimal` (:mod:`.optimal`) is its public door; this module imports
+neither, so the arrows run one way. The relaxed start (:func:`relaxed_rotation`, Andreff's solution) lives here
+for the same reason.
+
+The paper's eq. (8) is ``f(R) = sum_j ||A_j R - R B_j||_F^2``. On SO(3) it equals
+``2 J (3 - g(R))`` with ``g(R) = vec(R)^T M vec(R)`` and ``M = (K + K^T)/2``, ``K``
+the 9x9 operator of :func:`replication.core.handeye.kronecker_operator`. Neither the
+two-step iteration (top singular vector of ``K``, projected) nor the relaxed
+solution of :func:`replication.core.solvers.classic.andreff` (top eigenvector of
+``M``, projected) minimises ``f`` on SO(3) once there is noise. This module
+does: Riemannian Newton on SO(3) from the relaxed solution, with a
+first- and second-order optimality certificate.
+
+Derivation (``R(w) = R exp([w]x)``, ``P = R^T unvec(M vec(R))``):
+
+* gradient of ``g``: ``2 vee(P - P^T)``, ``vee`` the inverse of ``[.]x``;
+* Hessian of ``g``: ``2 D^T M D + 2 (sym(P) - tr(P) I)`` with
+  ``D = [vec(R [e_1]x), vec(R [e_2]x), vec(R [e_3]x)]``;
+* ``f``'s gradient and Hessian are ``-2J`` times these.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..checks import check_init
+from ..handeye import unvec, vec
+from ..motions import MotionObservability, Motions
+from ..so3 import exp_map, nearest_rotation_up_to_sign, skew
+from ._sdp import relaxation, upper_bound
+from ._warnings import CertificateWarning
+
+__all__ = ["ChordalResult", "chordal_newton", "global_certificate", "relaxed_rotation", "GAP_TOL"]
+
+#: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8) of
+#: the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
+GAP_TOL = 1e-8
+
+_GENERATORS = skew(np.eye(3))  # [e_k]x, k = 1, 2, 3
+
+
+@dataclass(frozen=True)
+class ChordalResult:
+    """Output of :func:`chordal_optimal`.
+
+    Attributes
+    ----------
+    R : ndarray, shape (..., 3, 3)
+        The minimiser of eq. (8) on SO(3) (``camera_from_sensor``).
+    cost : ndarray, shape (...)
+        Eq. (8) at ``R``.
+    gradient_norm : ndarray, shape (...)
+        Norm of the Riemannian gradient of eq. (8) at ``R`` divided by ``J``.
+    hessian_min_eigenvalue : ndarray, shape (...)
+        Smallest eigenvalue of the Riemannian Hessian of eq. (8) at ``R``, divided by ``J``.
+    iterations : ndarray of int, shape (...)
+        Newton iterations used (from the relaxed start; the fallback's polish not counted).
+    local_minimum : ndarray of bool, shape (...)
+        ``gradient_norm <= 2 gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol``
+        (first- and second-order sufficient conditions for a strict local minimum).
+    lower_bound : ndarray, shape (...)
+        A certified lower bound on the minimum of eq. (8) over SO(3) (NaN where no
+        certificate was computed).
+    duality_gap : ndarray, shape (...)
+        ``cost - lower_bound`` (>= 0 up to rounding).
+    global_optimum : ndarray of bool, shape (...)
+        ``local_minimum`` and ``duality_gap <= GAP_TOL * J``: ``R`` is a strict local minimiser whose cost
+        is certified to be within ``GAP_TOL * J`` of the global minimum of eq. (8). Where another minimum
+        has a cost within that tolerance (motions that nearly admit a second solution; an
+        :class:`~replication.core.solvers.ObservabilityWarning` says so), eq. (8) cannot tell the two apart.
+    certificate : ndarray of str, shape (...)
+        How: ``"lagrangian"`` (the fast O(3) dual at the Newton solution), ``"sdp"`` (the
+        semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
+    observability : MotionObservability or None
+    """
+
+    R: np.ndarray
+    cost: np.ndarray
+    gradient_norm: np.ndarray
+    hessian_min_eigenvalue: np.ndarray
+    iterations: np.ndarray
+    local_minimum: np.ndarray
+    lower_bound: np.ndarray
+    duality_gap: np.ndarray
+    global_optimum: np.ndarray
+    certificate: np.ndarray
+    observability: MotionObservability | None = None
+
+    @property
+    def sdp_used(self) -> np.ndarray:
+        """Problems the fast certificate could not settle (the relaxation was solved)."""
+        return self.certificate != "lagrangian"
+
+
+def _vee_asym(P):
+    """``vee(P - P^T)``: the vector ``w`` with ``<P, [w]x> = w . vee(P - P^T)``."""
+    return np.stack([P[..., 2, 1] - P[..., 1, 2], P[..., 0, 2] - P[..., 2, 0], P[..., 1, 0] - P[..., 0, 1]], -1)
+
+
+def _derivatives(M, R):
+    """``g(R)``, its Riemannian gradient (..., 3) and Hessian (..., 3, 3); see the module notes."""
+    x = vec(R)
+    y = np.einsum("...ab,...b->...a", M, x)
+    g = np.einsum("...a,...a->...", x, y)
+    P = np.swapaxes(R, -1, -2) @ unvec(y)
+    grad = 2.0 * _vee_asym(P)
+    D = vec(R[..., None, :, :] @ _GENERATORS)  # (..., 3, 9): row k = vec(R [e_k]x)
+    Ps = 0.5 * (P + np.swapaxes(P, -1, -2))
+    tr = np.trace(P, axis1=-2, axis2=-1)[..., None, None]
+    hess = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
+    return g, grad, hess
+
+
+def chordal_newton(K, init, *, max_iterations: int = 30, gradient_tol: float = 1e-10):
+    """Riemannian Newton for ``min_R 2J(3 - vec(R)^T sym(K) vec(R))`` on SO(3), batched.
+
+    Parameters
+    ----------
+    K : ndarray, shape (..., 9, 9)
+        A (possibly weighted) mean of ``B_j kron A_j``.
+    init : ndarray, shape (..., 3, 3)
+        Start rotations; batch dimensions broadcast against ``K``'s.
+    max_iterations : int
+    gradient_tol : float
+        Stop when the gradient of ``g`` (the cost divided by ``-2J``) is below this.
+
+    Returns
+    -------
+    (R, g, grad, hess, iterations)
+        Final rotations and ``g``'s value, gradient and Hessian there.
+    """
+    init = np.asarray(init, dtype=float)
+    batch = np.broadcast_shapes(K.shape[:-2], init.shape[:-2])
+    M = np.broadcast_to(0.5 * (K + np.swapaxes(K, -1, -2)), batch + (9, 9))
+    R = np.array(np.broadcast_to(init, batch + (3, 3)))
+    iterations = np.zeros(batch, dtype=int)
+    g, grad, hess = _derivatives(M, R)
+    for _ in range(max_iterations):
+        active = np.linalg.norm(grad, axis=-1) > gradient_tol
+        if not active.any():
+            break
+        # Newton step for the minimisation of -g: (-H) w = grad, with -H made positive definite
+        Hn = -hess
+        lam = np.linalg.eigvalsh(Hn)[..., 0]
+        shift = np.where(lam < 1e-3, 1e-3 - lam, 0.0)[..., None, None] * np.eye(3)
+        w = np.linalg.solve(Hn + shift, grad[..., None])[..., 0]
+        step = np.ones(w.shape[:-1])
+        for _ in range(30):  # backtracking: accept a step only if g does not decrease
+            R_new = R @ exp_map(w * step[..., None])
+            g_new, grad_new, hess_new = _derivatives(M, R_new)
+            ok = g_new >= g - 1e-15 * np.abs(g)
+            if ok.all():
+                break
+            step = np.where(ok, step, 0.5 * step)
+        take = active & ok
+        R = np.where(take[..., None, None], R_new, R)
+        g = np.where(take, g_new, g)
+        grad = np.where(take[..., None], grad_new, grad)
+        hess = np.where(take[..., None, None], hess_new, hess)
+        iterations += take
+        if not take.any():
+            break
+    return R, g, grad, hess, iterations
+
+
+def _lagrangian_upper_bound(M, R):
+    """Upper bound on ``max g`` over O(3) from the multiplier ``Lambda = sym(R^T unvec(M vec R))``."""
+    P = np.swapaxes(R, -1, -2) @ unvec(np.einsum("...ab,...b->...a", M, vec(R)))
+    Lam = 0.5 * (P + np.swapaxes(P, -1, -2))
+    # vec(R Lambda) = (Lambda kron I) vec(R) for symmetric Lambda (column-major vec)
+    S = np.einsum("...ab,ij->...aibj", Lam, np.eye(3)).reshape(Lam.shape[:-2] + (9, 9)) - M
+    # every rotation: g = x^T (Lambda kron I) x - x^T S x <= tr(Lambda) - 3 lambda_min(S)
+    return np.trace(Lam, axis1=-2, axis2=-1) - 3.0 * np.linalg.eigvalsh(S)[..., 0]
+
+
+def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
+                  hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
+    """:func:`chordal_optimal` on validated motions."""
+    K, J = m.K, m.J
+    M = 0.5 * (K + np.swapaxes(K, -1, -2))
+    start = relaxed_rotation(K) if init is None else check_init(init, m.batch_shape)
+    R, g, grad, hess, its = chordal_newton(K, start, max_iterations=max_iterations, gradient_tol=gradient_tol)
+    grad_norm = np.linalg.norm(grad, axis=-1)
+    hmin = np.linalg.eigvalsh(-hess)[..., 0]
+    local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
+    upper = np.full(R.shape[:-2], np.nan)
+    how = np.full(R.shape[:-2], "none", dtype=object)
+    if certify:
+        upper = np.asarray(_lagrangian_upper_bound(M, R), dtype=float)  # step 1 (fast path)
+        ok = 2.0 * J * (upper - g) <= GAP_TOL * J
+        how[ok] = "lagrangian"
+        R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
+        # the fallback may have replaced R: judge stationarity at the final answer
+        _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
+        grad_norm = np.linalg.norm(grad, axis=-1)
+        hmin = np.linalg.eigvalsh(-hess)[..., 0]
+        local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
+    gap = np.clip(2.0 * J * (upper - g), 0.0, None)
+    cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
+    res = ChordalResult(
+        R=R, cost=cost, gradient_norm=2.0 * grad_norm, hessian_min_eigenvalue=2.0 * hmin, iterations=its,
+        local_minimum=local, lower_bound=cost - gap if certify else upper, duality_gap=gap if certify else upper,
+        global_optimum=(gap <= GAP_TOL * J) & local & certify, certificate=how.astype(str),
+        observability=m.observability,
+    )
+    if certify and not res.global_optimum.all():
+        bad = ~res.global_optimum
+        loose = bad & ~local
+        causes = []
+        if np.any(loose):
+            causes.append(f"{int(loose.sum())} are not at a stationary point (Newton stopped after "
+                          f"{max_iterations} iterations; gradient up to {float(np.max(2.0 * grad_norm[loose])):.3g} J)")
+        if np.any(bad & local):
+            causes.append(f"for {int((bad & local).sum())} the semidefinite relaxation was not tight (duality gap up "
+                          f"to {float(np.max(gap[bad & local])):.3g} > {GAP_TOL:g} J): a local minimum that may not "
+                          f"be global")
+        warnings.warn(
+            f"chordal_optimal could not certify the global minimum of eq. (8) for {int(bad.sum())} of "
+            f"{bad.size} problems: " + "; ".join(causes),
+            CertificateWarning, stacklevel=3,
+        )
+    return res
+
+
+def _sdp_fallback(K, M, J, R, g, upper, how, todo):
+    """Step 2 of the certificate for the problems in ``todo``: relaxation, polish, keep the better minimum."""
+    if not todo.any():
+        return R, g, upper, how
+    R, g, upper, how = (np.array(a) for a in (np.broadcast_to(R, todo.shape + (3, 3)), g, upper, how))
+    idx = [tuple(i) for i in np.argwhere(todo)]
+    solved = [relaxation(M[i]) for i in idx]
+    K_todo = np.stack([K[i] for i in idx])
+    R_sdp, g_sdp = chordal_newton(K_todo, np.stack([r[1] for r in solved]))[:2]  # polish the relaxed answer
+    for n, i in enumerate(idx):
+        if g_sdp[n] > g[i]:
+            R[i], g[i] = R_sdp[n], g_sdp[n]
+        bound = upper_bound(M[i], R[i], solved[n][0])
+        if np.isfinite(bound) and bound < upper[i]:
+            upper[i] = bound
+        if 2.0 * J * (upper[i] - g[i]) <= GAP_TOL * J:
+            how[i] = "sdp"
+    return R, g, upper, how
+
+
+def global_certificate(motions: Motions) -> ChordalResult:
+    """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`.
+
+    Raises ``ValueError`` for degenerate motion (see :meth:`replication.core.motions.Motions.require`).
+    """
+    motions.require()
+    return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
+
+
+def relaxed_rotation(K) -> np.ndarray:
+    """The relaxed minimiser of eq. (8), projected onto SO(3), from ``K`` (see :func:`andreff`).
+
+    Parameters
+    ----------
+    K : ndarray, shape (..., 9, 9)
+        A (possibly weighted) mean of ``B_j kron A_j``
+        (:func:`replication.core.handeye.kronecker_operator`).
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+    """
+    M = 0.5 * (K + np.swapaxes(K, -1, -2))
+    _, vecs = np.linalg.eigh(M)
+    # eigenvector of the largest eigenvalue of sym(K); it has no sign, so take the one with det > 0
+    return nearest_rotation_up_to_sign(unvec(vecs[..., :, -1]))
