@@ -39,7 +39,7 @@ from .paper import data_dir
 from .paper import load_claim_table as load_claims  # the ledger's claims: a public name here
 
 __all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "load_claims", "check_record", "record",
-           "collect", "to_markdown", "update_readme"]
+           "check_evidence", "collect", "to_markdown", "update_readme"]
 
 #: The verdict that needs a condition.
 HOLDS_ONLY_IF = "holds only if"
@@ -143,6 +143,17 @@ def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting
         display({"text/plain": text, CLAIM_MIME: asdict(rec)}, raw=True)
     else:
         print(text)
+
+
+def check_evidence(holds, claim: str, condition: str) -> None:
+    """Nothing if ``holds``; else ``ValueError`` naming the claim and the ``condition`` its verdict rests on.
+
+    The sanity checks of the functions that build a notebook's records (e.g.
+    :func:`replication.study.table1.two_step_claims`): the measured numbers must bear the verdict, or no
+    record is made. ``condition`` says what should hold, with the measured values.
+    """
+    if not holds:
+        raise ValueError(f"claim {claim!r}: the evidence does not bear the verdict: expected {condition}")
 
 
 def _read_notebook(path: Path) -> dict:
