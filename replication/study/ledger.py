@@ -37,7 +37,7 @@ from .._io import PROJECT_ROOT, write_atomic
 from ..rig.datafile import DataFileError, fail, read_text
 from .paper import data_dir, load_claim_table
 
-__all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record",
+__all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record", "check_evidence",
            "collect", "to_markdown", "update_readme"]
 
 #: The verdict that needs a condition.
@@ -141,6 +141,17 @@ def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting
         display({"text/plain": text, CLAIM_MIME: asdict(rec)}, raw=True)
     else:
         print(text)
+
+
+def check_evidence(holds, claim: str, condition: str) -> None:
+    """Nothing if ``holds``; else ``ValueError`` naming the claim and the ``condition`` its verdict rests on.
+
+    The sanity checks of the functions that build a notebook's records (e.g.
+    :func:`replication.study.table1.two_step_claims`): the measured numbers must bear the verdict, or no
+    record is made. ``condition`` says what should hold, with the measured values.
+    """
+    if not holds:
+        raise ValueError(f"claim {claim!r}: the evidence does not bear the verdict: expected {condition}")
 
 
 def _read_notebook(path: Path) -> dict:

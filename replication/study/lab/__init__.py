@@ -13,7 +13,9 @@ recording     :class:`LabRecording`, its columns and units; :func:`write_lab` /
               :func:`load_lab` (the files of ``data/lab/``, validated on load)
 chain         the processing chain: PnP, ``ecompass`` / Madgwick, motions (eqs. (3)-(4)),
               one solve per data set, the dynamic trial (:func:`run_lab`)
-study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`seed_study`
+study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`seed_study`,
+              :func:`seed_spread`
+claims        :func:`lab_claims`: the notebook's ledger records on the lab experiment
 ============  ==========================================================================
 
 Table II's statistics and its comparison with the paper live beside Table I's in
@@ -43,7 +45,8 @@ _LAZY = {
     "simulate_lab": "simulate",
     "camera_orientations": "chain", "static_sensor_orientations": "chain", "dynamic_sensor_orientations": "chain",
     "static_motions": "chain", "LabResult": "chain", "run_lab": "chain",
-    "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study",
+    "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study", "seed_spread": "study",
+    "lab_claims": "claims",
 }
 
 __all__ = [

@@ -19,7 +19,7 @@ from .chain import LabResult, run_lab, static_motions
 from .settings import SOURCES, TABLE2_SOLVERS, LabSettings
 from .simulate import simulate_lab
 
-__all__ = ["summarize", "ablation", "sensitivity", "seed_study"]
+__all__ = ["summarize", "ablation", "sensitivity", "seed_study", "seed_spread"]
 
 
 def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
@@ -158,3 +158,13 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
             row["true_single_ours_right"] = float(np.mean(angle_between_deg(np.stack(single), result.truth)))
         rows.append(row)
     return pd.DataFrame(rows).set_index("seed")
+
+
+def seed_spread(values: pd.Series, digits: int = 2) -> str:
+    """``"<mean> (SD <sd>; <min>-<max>)"``: a quantity over the seeds (a column of :func:`seed_study`).
+
+    Notebook 05, "The lab over 20 seeds" (its seed table) and its claims (:func:`replication.study.lab.lab_claims`);
+    ``digits`` decimals, the SD with ``ddof=1``.
+    """
+    return (f"{values.mean():.{digits}f} (SD {values.std(ddof=1):.{digits}f}; "
+            f"{values.min():.{digits}f}-{values.max():.{digits}f})")
