@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from replication.rig.datafile import DataFileError, DataFileNotFound
 from replication._io import PROJECT_ROOT
+from replication.rig.datafile import DataFileError, DataFileNotFound
 from replication.study import ledger, paper
 
 CLAIMS = paper.load_claim_table()
