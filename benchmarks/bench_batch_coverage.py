@@ -58,8 +58,8 @@ def stations(runs, N, noise_deg, seed):
         err = float(so3.angle_between_deg(r.R, R0))
         station_hits.append(err <= r.bootstrap_ci95_deg)
         motions = prepare_motions(*pose_pairs(C, S))
-        R_boot = bootstrap_replicates(motions, "chordal_optimal", {}, block_indices(np.random.default_rng(k), motions.J, 1, 100),
-                             progress=False)
+        R_boot = bootstrap_replicates(motions, "chordal_optimal", {},
+                                      block_indices(np.random.default_rng(k), motions.J, 1, 100), progress=False)
         pair_hits.append(err <= float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95)))
     return station_hits, pair_hits
 

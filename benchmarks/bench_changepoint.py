@@ -52,7 +52,8 @@ def wilson(k: int, n: int) -> str:
 
 
 def bridge_check(n_bridges: int = 50_000, n_steps: int = 1000, seed: int = 0, share: float = 0.15):
-    """Quantiles of sup |B|^2 / (lam (1 - lam)) over [share, 1 - share] from simulated bridges, beside the approximation."""
+    """Quantiles of sup |B|^2 / (lam (1 - lam)) over [share, 1 - share] from simulated bridges, beside the
+    approximation."""
     rng = np.random.default_rng(seed)
     lam = np.arange(1, n_steps + 1) / n_steps
     sel = (lam >= share) & (lam <= 1 - share)
@@ -124,10 +125,11 @@ def false_alarms(seeds, workers: int, label: str):
             k = int(out[:, 0].sum())
             total += k
             n_all += len(out)
-            print(f"   {config[0]:4.0f} s, camera {config[1]:.2f} deg, gyro {config[2]:.3f} rad/s, bias {config[3]:.3f}: "
-                  f"flagged {wilson(k, len(out))}; p < 0.05 in {np.mean(out[:, 5] < 0.05):.3f}, p < 0.1 in "
-                  f"{np.mean(out[:, 5] < 0.1):.3f}; threshold {out[0, 2]:.1f}, inflation median {np.median(out[:, 3]):.2f}, "
-                  f"angle median {np.median(out[:, 4]):.3f} max {out[:, 4].max():.3f} deg")
+            print(f"   {config[0]:4.0f} s, camera {config[1]:.2f} deg, gyro {config[2]:.3f} rad/s, "
+                  f"bias {config[3]:.3f}: flagged {wilson(k, len(out))}; p < 0.05 in {np.mean(out[:, 5] < 0.05):.3f}, "
+                  f"p < 0.1 in {np.mean(out[:, 5] < 0.1):.3f}; threshold {out[0, 2]:.1f}, "
+                  f"inflation median {np.median(out[:, 3]):.2f}, angle median {np.median(out[:, 4]):.3f} "
+                  f"max {out[:, 4].max():.3f} deg")
     print(f"   all: flagged {wilson(total, n_all)}")
 
 
@@ -144,8 +146,8 @@ def drift(seeds, workers: int):
         for seconds, d in ((135, 0.1), (135, 0.3)):
             out = np.array(list(ex.map(_drift_run, [(s, seconds, d) for s in seeds])), dtype=float)
             print(f"   {seconds} s, drift {d} deg per 10 s: flagged {wilson(int(out[:, 0].sum()), len(out))}; angle "
-                  f"median {np.median(out[:, 1]):.3f}, max {out[:, 1].max():.3f} deg, flagged with angle >= {WARNING_DEG} "
-                  f"deg: {int(np.sum(out[:, 0].astype(bool) & (out[:, 1] >= WARNING_DEG)))}")
+                  f"median {np.median(out[:, 1]):.3f}, max {out[:, 1].max():.3f} deg, flagged with angle >= "
+                  f"{WARNING_DEG} deg: {int(np.sum(out[:, 0].astype(bool) & (out[:, 1] >= WARNING_DEG)))}")
 
 
 def _power_run(args):
@@ -167,10 +169,10 @@ def power(seeds, workers: int, sizes=(0.5, 1.0, 2.0)):
                 det = out[:, 0].astype(bool)
                 err = np.abs(out[det, 1]) if det.any() else np.array([np.nan])
                 side = np.maximum(out[:, 2], out[:, 3])
-                print(f"   {config[0]:4.0f} s, camera {config[1]:.2f} deg, gyro {config[2]:.3f}, {size:g} deg: detected "
-                      f"{int(det.sum())}/{len(out)}; |split error| median {np.nanmedian(err):.2f} max {np.nanmax(err):.2f} s; "
-                      f"worse side to its mounting median {np.median(side):.3f} max {side.max():.3f} deg; angle between "
-                      f"sides {out[:, 4].min():.2f}-{out[:, 4].max():.2f} deg")
+                print(f"   {config[0]:4.0f} s, camera {config[1]:.2f} deg, gyro {config[2]:.3f}, {size:g} deg: "
+                      f"detected {int(det.sum())}/{len(out)}; |split error| median {np.nanmedian(err):.2f} "
+                      f"max {np.nanmax(err):.2f} s; worse side to its mounting median {np.median(side):.3f} "
+                      f"max {side.max():.3f} deg; angle between sides {out[:, 4].min():.2f}-{out[:, 4].max():.2f} deg")
 
 
 def real_recordings():
@@ -246,9 +248,9 @@ def remount_study(recordings, sizes=(0.5, 1.0, 2.0, 5.0), when=(1 / 3, 1 / 2, 2 
             err = np.array([abs(r[1]) for r in sig]) if sig else np.array([np.nan])
             side = np.array([max(r[2], r[3]) for r in rows])
             verdicts = {v: sum(r[5] == v for r in rows) for v in ("fail", "warning", "ok (significant)", "ok")}
-            print(f"   {name}, {size:g} deg: detected {len(sig)}/{len(rows)}; |split error| median {np.nanmedian(err):.2f} "
-                  f"max {np.nanmax(err):.2f} s (detected); worse side's angle to its mounting median "
-                  f"{np.median(side):.3f} max {side.max():.3f} deg; angle between sides "
+            print(f"   {name}, {size:g} deg: detected {len(sig)}/{len(rows)}; |split error| median "
+                  f"{np.nanmedian(err):.2f} max {np.nanmax(err):.2f} s (detected); worse side's angle to its mounting "
+                  f"median {np.median(side):.3f} max {side.max():.3f} deg; angle between sides "
                   f"{min(r[4] for r in rows):.2f}-{max(r[4] for r in rows):.2f} deg; statistic "
                   f"{min(r[6] for r in rows):.0f}-{max(r[6] for r in rows):.0f}; verdicts "
                   + ", ".join(f"{v} {n}" for v, n in verdicts.items() if n))

@@ -11,11 +11,13 @@ import subprocess
 import sys
 
 REPEATS = 7
-MODULES = ["replication.core.so3", "replication", "replication.core.handeye", "replication.core.motions", "replication.rig.streams",
-           "replication.rig.datafile", "replication.study.paper", "replication.rig.realdata", "replication.study.lab.recording",
-           "replication.core.solvers", "replication.rig.calibration", "replication.study.lab"]
+MODULES = ["replication.core.so3", "replication", "replication.core.handeye", "replication.core.motions",
+           "replication.rig.streams", "replication.rig.datafile", "replication.study.paper", "replication.rig.realdata",
+           "replication.study.lab.recording", "replication.core.solvers", "replication.rig.calibration",
+           "replication.study.lab"]
 PROBE = ("import time, sys; t = time.perf_counter(); import {m}; dt = time.perf_counter() - t; "
-         "print(dt, 'scipy.optimize' in sys.modules, 'replication.core.solvers' in sys.modules, 'scipy' in sys.modules)")
+         "print(dt, 'scipy.optimize' in sys.modules, 'replication.core.solvers' in sys.modules, "
+         "'scipy' in sys.modules)")
 
 
 def measure(module):

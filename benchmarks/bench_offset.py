@@ -81,7 +81,8 @@ def noisy_rig(offset, camera_noise_deg, gyro_noise, rng, seconds=30.0):
         return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
 
     t_cam, t_imu = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
-    camera = world_from_camera(t_cam) @ so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg), size=(len(t_cam), 3)))
+    camera = world_from_camera(t_cam) @ so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg),
+                                                               size=(len(t_cam), 3)))
     Q = world_from_camera(t_imu) @ R0
     omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(scale=gyro_noise,
                                                                                     size=(len(t_imu) - 1, 3))
@@ -108,9 +109,9 @@ def coverage(runs, camera_noise_deg, gyro_noise, *, seconds=30.0, block_s=1.0, s
         errors.append(found.offset_s - truth)
     lo, hi = wilson(hits, runs)
     print(f"   camera {camera_noise_deg} deg, gyro {gyro_noise} rad/s, {seconds:.0f} s, blocks {block_s} s: "
-          f"{hits}/{runs} = {hits / runs:.3f} (Wilson 95 % {lo:.3f}-{hi:.3f}); width median {1e3 * np.median(widths):.2f} "
-          f"ms; error sd {1e3 * np.std(errors):.2f} ms (3.92 sd = {3.92e3 * np.std(errors):.2f} ms), "
-          f"mean {1e3 * np.mean(errors):+.2f} ms")
+          f"{hits}/{runs} = {hits / runs:.3f} (Wilson 95 % {lo:.3f}-{hi:.3f}); width median "
+          f"{1e3 * np.median(widths):.2f} ms; error sd {1e3 * np.std(errors):.2f} ms "
+          f"(3.92 sd = {3.92e3 * np.std(errors):.2f} ms), mean {1e3 * np.mean(errors):+.2f} ms")
 
 
 def periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0):

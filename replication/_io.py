@@ -14,8 +14,8 @@ import secrets
 import stat
 from pathlib import Path
 
-__all__ = ["PROJECT_ROOT", "write_atomic", "png_bytes", "figure_bytes", "figure_format", "FIGURE_FORMATS", "os_reason", "same_file",
-           "check_clashes", "check_not_standard_stream", "check_input", "prepare_output", "prepare_folder"]
+__all__ = ["PROJECT_ROOT", "write_atomic", "png_bytes", "figure_bytes", "figure_format", "FIGURE_FORMATS", "os_reason",
+           "same_file", "check_clashes", "check_not_standard_stream", "check_input", "prepare_output", "prepare_folder"]
 
 #: The project folder (the one holding ``replication/``, ``data/`` and ``notebooks/``): every default path starts here.
 PROJECT_ROOT = Path(__file__).resolve().parent.parent

@@ -21,15 +21,17 @@ ROOT = Path(__file__).resolve().parent.parent
 #: The mutants scripts/mutation runs: every function of the judging modules; in _registry.py and checks.py only the
 #: answer checks and the atol / rotation checks.
 TARGETS = [
-    "replication.rig.quality.*", "replication.rig.diagnose.*", "replication.rig.online.*", "replication.rig.online_events.*",
-    "replication.rig.live.*", "replication.study.ledger.*", "replication.rig.association.*", "replication.rig.report.*",
-    "replication.rig.changepoint.*",
-    "replication.core.solvers._registry.x_check_answer__mutmut_*", "replication.core.solvers._registry.x__checked_answer__mutmut_*",
+    "replication.rig.quality.*", "replication.rig.diagnose.*", "replication.rig.online.*",
+    "replication.rig.online_events.*", "replication.rig.live.*", "replication.study.ledger.*",
+    "replication.rig.association.*", "replication.rig.report.*", "replication.rig.changepoint.*",
+    "replication.core.solvers._registry.x_check_answer__mutmut_*",
+    "replication.core.solvers._registry.x__checked_answer__mutmut_*",
     "replication.core.solvers._registry.x__screen_gross__mutmut_*",
     "replication.core.solvers._registry.x__warn_not_rotations__mutmut_*",
     "replication.core.solvers._registry.x_check_local_answer__mutmut_*",
     "replication.core.checks.x_check_atol__mutmut_*", "replication.core.checks.x_check_number__mutmut_*",
-    "replication.core.checks.x_check_rotation_matrices__mutmut_*", "replication.core.checks.x_check_rotation_flat__mutmut_*",
+    "replication.core.checks.x_check_rotation_matrices__mutmut_*",
+    "replication.core.checks.x_check_rotation_flat__mutmut_*",
 ]
 
 STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", None: "not checked",
@@ -138,7 +140,7 @@ def main() -> int:
 
     print(f"\nsurvivors ({sum(1 for s in survivors if s[4] == 'survived')} surviving, "
           f"{sum(1 for s in survivors if s[4] == 'equivalent')} declared equivalent in docs/mutation_survivors.md):")
-    for module, key, path, source, status in sorted(survivors, key=lambda s: (s[0], s[1])):
+    for _module, key, path, source, status in sorted(survivors, key=lambda s: (s[0], s[1])):
         try:
             line, old, new = describe(key, path, source)
         except Exception as exc:  # a report line, never a crash of the report

@@ -1,5 +1,5 @@
-"""The clock offset of :mod:`replication.rig.association`: refined below the search grid, with a block-bootstrap interval,
-the margin of its correlation peak over the next one, and its sign in words.
+"""The clock offset of :mod:`replication.rig.association`: refined below the search grid, with a block-bootstrap
+interval, the margin of its correlation peak over the next one, and its sign in words.
 
 The synthetic rig is the one of ``tests/test_calibrate_trust.py`` (a 20 Hz camera and, rigidly attached, a 200 Hz
 gyro; smooth three-axis motion), here with the gyro's clock shifted and optional noise on both streams. The truth

@@ -182,7 +182,7 @@ def test_judge_tolerates_missing_residuals():
     assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
 
 
-# ------------------------------------------------------------------------------------------- a change inside a recording
+# ----------------------------------------------------------------------------------------- a change inside a recording
 
 def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
     from replication.rig.changepoint import remounted

@@ -170,7 +170,8 @@ def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
     reasons = _reasons(r)
     assert math.isnan(r.bootstrap_ci95_deg) and r.to_dict()["bootstrap_ci95_deg"] is None
     assert reasons["blocks"].level == "fail" and reasons["blocks"].measured < 3  # measured 1.55
-    assert reasons["overlap_intervals"].level == "warning" and reasons["overlap_intervals"].measured == pytest.approx(2.5)
+    assert (reasons["overlap_intervals"].level == "warning"
+            and reasons["overlap_intervals"].measured == pytest.approx(2.5))
 
 
 def test_nearly_single_axis_motion_warns_with_its_spread():
@@ -428,7 +429,8 @@ def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig)
 
     camera, _, _ = rig
     t, R = camera.t, camera.R
-    with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's {len(t) - 1} samples are camera"):
+    with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's "
+                                         rf"{len(t) - 1} samples are camera"):
         calibrate(camera, OrientationStream(t[1:], R[1:], "copy"))
     turn = exp_map(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
     with pytest.raises(ValueError, match="the sensor stream is the camera stream itself, or a copy of it"):

@@ -37,7 +37,8 @@ BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
 
 def _rig(seed, seconds=60.0, cam_deg=0.05, gyro_rad_s=0.005, remount=None):
-    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise; ``remount = (t, R)`` re-mounts the gyro."""
+    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise; ``remount = (t, R)`` re-mounts the
+    gyro."""
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
 
@@ -156,7 +157,8 @@ def pairs():
     ({"block": 0}, "block must be >= 1"), ({"block": 2.5}, "block must be a finite integer"),
     ({"block": True}, "block must be a finite integer"), ({"min_share": 0.0}, "min_share must be > 0"),
     ({"min_share": 0.5}, "min_share must be < 0.5"), ({"min_share": float("nan")}, "min_share must be a finite"),
-    ({"level": 0.0}, "level must be > 0"), ({"level": 0.5}, "level must be < 0.5"), ({"level": "0.01"}, "level must be a finite"),
+    ({"level": 0.0}, "level must be > 0"), ({"level": 0.5}, "level must be < 0.5"),
+    ({"level": "0.01"}, "level must be a finite"),
 ])
 def test_bad_parameters_are_named(pairs, kwargs, message):
     A, B, t = pairs
@@ -203,7 +205,8 @@ def _recording(name):
     root = data_root()
     tv, eu = root / "tumvi_room1_orbslam3mono", root / "euroc_mh01_orbslam3"
     if name.startswith("tumvi"):
-        sensor = load_euroc_imu(tv / "imu0_data.csv") if name == "tumvi_gyro" else load_euroc_mocap(tv / "mocap0_data.csv")
+        sensor = (load_euroc_imu(tv / "imu0_data.csv") if name == "tumvi_gyro"
+                  else load_euroc_mocap(tv / "mocap0_data.csv"))
         return load_tum_trajectory(tv / "orbslam3_mono_cam0_traj.txt"), sensor
     run = name[-1]
     return (load_tum_trajectory(eu / f"orbslam3_mono_cam0_traj_run{run}.txt", drop_repeated=True),

@@ -31,8 +31,8 @@ def test_exact_lab_recovers_r0_and_the_camera_attitude():
 
 
 def test_pnp_recovers_camera_from_wand_exactly():
-    rig = {"camera_matrix": [[450.0, 0, 320], [0, 450.0, 240], [0, 0, 1]], "dist_coeffs": [-0.25, 0.08, 0.001, -0.001, 0],
-           "wand_points": lab.WAND_POINTS}
+    rig = {"camera_matrix": [[450.0, 0, 320], [0, 450.0, 240], [0, 0, 1]],
+           "dist_coeffs": [-0.25, 0.08, 0.001, -0.001, 0], "wand_points": lab.WAND_POINTS}
     C = _look_at(np.array([[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]), np.zeros((2, 3)), np.array([30.0, -20.0]))
     uv = []
     for Cp, p in zip(C, [[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]):
@@ -61,7 +61,8 @@ def test_ecompass_gives_body_from_world_and_madgwick_a_world_from_body_stream():
     est = lab.dynamic_sensor_orientations(imu, 100.0)
     assert np.array_equal(est.t, t)
     truth = relative_rotations(Q, reference=0, convention="world_from_body")
-    err = so3.angle_between_deg(relative_rotations(est.world_from_body, reference=0, convention="world_from_body"), truth)
+    err = so3.angle_between_deg(relative_rotations(est.world_from_body, reference=0, convention="world_from_body"),
+                                truth)
     assert err.max() < 0.5
     # read in the other convention, the motions would be off by up to 2 x 80 deg
     assert so3.angle_between_deg(relative_rotations(est.world_from_body, reference=0), truth).max() > 90
@@ -104,10 +105,12 @@ def test_committed_recordings_are_the_generator_output():
 
 def test_write_then_load_round_trip(lab_recording):
     rec = lab.load_lab(lab_recording)
-    assert sorted(rec.static_imu["set"].unique()) == [0, 1] and rec.static_imu.groupby("set")["pose"].nunique().min() == 4
+    assert (sorted(rec.static_imu["set"].unique()) == [0, 1]
+            and rec.static_imu.groupby("set")["pose"].nunique().min() == 4)
     assert not list(lab_recording.glob("*.tmp"))
     res = lab.run_lab(rec)
-    assert set(res.table2.index.get_level_values("method")) == {"optimization", "ours_right", "ours_left", "sensor_frame"}
+    assert set(res.table2.index.get_level_values("method")) == {"optimization", "ours_right", "ours_left",
+                                                                "sensor_frame"}
 
 
 def _edit_csv(path, fn):
@@ -150,18 +153,29 @@ def _edit_rig(key, value):
 CSV_CASES = {
     "missing column": ("static_imu.csv", lambda ls: ls.__setitem__(0, ls[0].replace("mag_z", "mag_w")),
                        r"static_imu.csv, line 1: missing column\(s\) \['mag_z'\]"),
-    "not a number": ("static_markers.csv", _set_cell(5, "u3", "abc"), r"static_markers.csv, line 5, column 'u3': not a number: 'abc'"),
-    "NaN": ("dynamic_imu.csv", _set_cell(7, "gyr_y", "nan"), r"dynamic_imu.csv, line 7, column 'gyr_y': NaN, empty or inf"),
-    "empty cell": ("static_imu.csv", _set_cell(9, "acc_z", ""), r"static_imu.csv, line 9, column 'acc_z': NaN, empty or inf"),
-    "time goes back": ("dynamic_markers.csv", _set_cell(4, "t", "0.0"), r"dynamic_markers.csv, line 4, column 't': timestamp 0 is not after the previous line's 0.04"),
-    "pose out of order": ("static_imu.csv", _set_cell(3, "pose", "7"), r"static_imu.csv, line 4, column 'pose': pose 0 follows pose 7"),
-    "fractional set": ("static_markers.csv", _set_cell(2, "set", "0.5"), r"static_markers.csv, line 2, column 'set': must be a non-negative integer"),
-    "accelerometer in g": ("static_imu.csv", _scale_columns(lab.ACC_COLUMNS, 1 / lab.GRAVITY), r"static_imu.csv, column 'acc_x': median accelerometer norm 1.0\d*; expected about 9.80665 m/s\^2 \(data in g\?\)"),
+    "not a number": ("static_markers.csv", _set_cell(5, "u3", "abc"),
+                     r"static_markers.csv, line 5, column 'u3': not a number: 'abc'"),
+    "NaN": ("dynamic_imu.csv", _set_cell(7, "gyr_y", "nan"),
+            r"dynamic_imu.csv, line 7, column 'gyr_y': NaN, empty or inf"),
+    "empty cell": ("static_imu.csv", _set_cell(9, "acc_z", ""),
+                   r"static_imu.csv, line 9, column 'acc_z': NaN, empty or inf"),
+    "time goes back": ("dynamic_markers.csv", _set_cell(4, "t", "0.0"),
+                       r"dynamic_markers.csv, line 4, column 't': timestamp 0 is not after the previous line's 0.04"),
+    "pose out of order": ("static_imu.csv", _set_cell(3, "pose", "7"),
+                          r"static_imu.csv, line 4, column 'pose': pose 0 follows pose 7"),
+    "fractional set": ("static_markers.csv", _set_cell(2, "set", "0.5"),
+                       r"static_markers.csv, line 2, column 'set': must be a non-negative integer"),
+    "accelerometer in g": ("static_imu.csv", _scale_columns(lab.ACC_COLUMNS, 1 / lab.GRAVITY),
+                           r"static_imu.csv, column 'acc_x': median accelerometer norm 1.0\d*; "
+                           r"expected about 9.80665 m/s\^2 \(data in g\?\)"),
     "gyro in deg/s": ("dynamic_imu.csv", _scale_columns(lab.GYR_COLUMNS, 57.29578),
                       r"dynamic_imu.csv, column 'gyr_x': integrating the gyroscope .* \(data in deg/s\?\)"),
-    "gyro beyond range": ("dynamic_imu.csv", _set_cell(3, "gyr_z", "40.0"), r"dynamic_imu.csv, line 3, column 'gyr_z': 40 is outside the sensor's range .* not deg/s"),
-    "magnetometer in gauss": ("static_imu.csv", _scale_columns(lab.MAG_COLUMNS, 0.01), r"static_imu.csv, column 'mag_x': median magnetometer norm .*gauss"),
-    "pixel outside image": ("static_markers.csv", _set_cell(6, "v8", "481.5"), r"static_markers.csv, line 6, column 'v8': pixel 481.5 is outside the image \(0..480\)"),
+    "gyro beyond range": ("dynamic_imu.csv", _set_cell(3, "gyr_z", "40.0"),
+                          r"dynamic_imu.csv, line 3, column 'gyr_z': 40 is outside the sensor's range .* not deg/s"),
+    "magnetometer in gauss": ("static_imu.csv", _scale_columns(lab.MAG_COLUMNS, 0.01),
+                              r"static_imu.csv, column 'mag_x': median magnetometer norm .*gauss"),
+    "pixel outside image": ("static_markers.csv", _set_cell(6, "v8", "481.5"),
+                            r"static_markers.csv, line 6, column 'v8': pixel 481.5 is outside the image \(0..480\)"),
 }
 
 
@@ -175,7 +189,8 @@ def test_loader_rejects_malformed_csv(lab_dir, case):
 
 RIG_CASES = {
     "missing key": (_edit_rig("wand_points", None), r"rig.json: missing key\(s\) \['wand_points'\]"),
-    "camera matrix shape": (_edit_rig("camera_matrix", [[450, 0, 320], [0, 450, 240]]), r"'camera_matrix' must have shape \(3, 3\)"),
+    "camera matrix shape": (_edit_rig("camera_matrix", [[450, 0, 320], [0, 450, 240]]),
+                            r"'camera_matrix' must have shape \(3, 3\)"),
     "coplanar wand": (_edit_rig("wand_points", [[x, y, 0.0] for x in (-1, 0, 1) for y in (-1, 0, 1)]), r"coplanar"),
     "wand in mm": (_edit_rig("wand_points", (lab.WAND_POINTS * 1000).tolist()), r"expected metres, not mm"),
     "units": (_edit_rig("units", {**lab.UNITS, "gyr": "deg/s"}), r"key 'units' must be"),
@@ -197,7 +212,8 @@ def test_loader_rejects_protocol_violations(lab_dir):
         lab.load_lab(lab_dir, min_static_seconds=6.0)
     with pytest.raises(ValueError, match=r"set 0 has 4 static orientations, fewer than min_poses = 5"):
         lab.load_lab(lab_dir, min_poses=5)
-    _edit_csv(lab_dir / "static_markers.csv", lambda ls: ls.__setitem__(slice(None), [l for l in ls if not l.startswith("1,3,")]))
+    _edit_csv(lab_dir / "static_markers.csv",
+              lambda ls: ls.__setitem__(slice(None), [l for l in ls if not l.startswith("1,3,")]))
     with pytest.raises(ValueError, match=r"\(set, pose\) \(1, 3\) appears only in static_imu.csv"):
         lab.load_lab(lab_dir)
 

@@ -104,7 +104,8 @@ def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
     assert t5[0] == 0.0 and t5[-1] == pytest.approx(0.85 - 0.25 + 1e-12, abs=1e-9)
     with pytest.raises(ValueError, match=r"^interval must be positive, got 0$"):
         motion_pairs(cam, sen, 0)
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s \(streams overlap 1\.95 s\)$"):
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s "
+                                         r"\(streams overlap 1\.95 s\)$"):
         motion_pairs(cam, sen, 1.95)
     assert len(motion_pairs(cam, sen, 1.9)[2]) == 2
 
@@ -112,7 +113,8 @@ def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
 def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_to():
     rng = np.random.default_rng(0)
     t = np.arange(0.0, 30.0, 0.005)
-    omega = np.stack([np.sin(1.1 * t), np.cos(0.7 * t), 0.6 * np.sin(2.3 * t + 0.5)], axis=1) + 0.01 * rng.standard_normal((len(t), 3))
+    omega = (np.stack([np.sin(1.1 * t), np.cos(0.7 * t), 0.6 * np.sin(2.3 * t + 0.5)], axis=1)
+             + 0.01 * rng.standard_normal((len(t), 3)))
     gyro = GyroStream(t, omega, "g")
     Q = integrate_gyro(gyro)
     d = 0.03
@@ -266,7 +268,8 @@ def _dyadic_streams(tc, w=(0.4, 0.9, -0.3), sensor_t=None):
     w = np.asarray(w)
     ts = np.asarray(tc if sensor_t is None else sensor_t, float)
     tc = np.asarray(tc, float)
-    return OrientationStream(tc, so3.exp_map(tc[:, None] * w), "cam"), OrientationStream(ts, so3.exp_map(ts[:, None] * w))
+    return (OrientationStream(tc, so3.exp_map(tc[:, None] * w), "cam"),
+            OrientationStream(ts, so3.exp_map(ts[:, None] * w)))
 
 
 def test_camera_samples_at_the_sensor_s_first_and_last_stamps_are_inside():
@@ -286,7 +289,8 @@ def test_pairs_at_one_and_a_half_steps_take_the_later_sample_within_the_inclusiv
 
 def test_an_interval_nearer_the_sample_itself_pairs_nothing():
     cam, sen = _dyadic_streams(np.arange(20) * 0.0625)
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.01 s \(streams overlap 1\.19 s\)$"):
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.01 s "
+                                         r"\(streams overlap 1\.19 s\)$"):
         motion_pairs(cam, sen, 0.01)
 
 
@@ -301,10 +305,12 @@ def test_the_first_sample_pairs_only_with_its_nearest_neighbour_at_the_interval(
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no sample inside: NumPy's median of no steps warns first
 def test_too_few_pairs_says_the_overlap_of_the_streams():
     cam, sen = _dyadic_streams(1.0 + np.arange(40) * 0.05, sensor_t=np.arange(0.0, 4.0, 0.01))
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s \(streams overlap 1\.95 s\)$"):
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s "
+                                         r"\(streams overlap 1\.95 s\)$"):
         motion_pairs(cam, sen, 1.95)
     elsewhere = OrientationStream(np.arange(10.0, 11.0, 0.01), so3.exp_map(np.zeros((100, 3))))
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.25 s \(streams overlap 0\.00 s\)$"):
+    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.25 s "
+                                         r"\(streams overlap 0\.00 s\)$"):
         motion_pairs(cam, elsewhere, 0.25)
 
 

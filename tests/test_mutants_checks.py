@@ -59,8 +59,8 @@ def test_orthonormality_at_exactly_atol_passes_and_beyond_fails():
     ok = np.stack([np.eye(3), _stretched(atol * (1 - 1e-6))])
     assert check_rotation_matrices(ok, atol=atol) is not None
     bad = np.stack([np.eye(3), np.eye(3), _stretched(atol * 1.01), _stretched(atol * 2)])
-    with pytest.raises(ValueError, match=r"^Q is not a rotation matrix at index \(2,\): \|\|R\^T R - I\|\|_F = 0\.000101 "
-                                         r"> 0\.0001 \(2 bad of 4\)$"):
+    with pytest.raises(ValueError, match=r"^Q is not a rotation matrix at index \(2,\): "
+                                         r"\|\|R\^T R - I\|\|_F = 0\.000101 > 0\.0001 \(2 bad of 4\)$"):
         check_rotation_matrices(bad, "Q", atol=atol)
     # the default tolerance
     check_rotation_matrices(_stretched(ROTATION_ATOL * 0.99))
@@ -97,7 +97,7 @@ def test_flat_rotation_check_at_its_tolerance():
     check_rotation_flat("R", _flat(np.eye(3)))
     eps = 1e-6
     # largest entry of R^T R - I: the (0, 0) entry (1 + e)^2 - 1
-    for k, col in ((0, 0), (4, 1), (8, 2)):
+    for _k, col in ((0, 0), (4, 1), (8, 2)):
         M = np.eye(3)
         M[col, col] = math.sqrt(1.0 + eps)
         check_rotation_flat("R", _flat(M), atol=eps * (1 + 1e-9))

@@ -57,7 +57,8 @@ def test_record_prints_the_readable_line_outside_a_notebook(capsys):
     ledger.record("theorem1", "holds", evidence="e 1", uncertainty="exact", setting="sim")
     assert capsys.readouterr().out == "[theorem1] holds\n  evidence: e 1\n  uncertainty: exact\n  setting: sim\n"
     ledger.record("theorem1", "holds only if", evidence="e 2", uncertainty="u", setting="s", condition="J >= 3")
-    assert capsys.readouterr().out == "[theorem1] holds only if J >= 3\n  evidence: e 2\n  uncertainty: u\n  setting: s\n"
+    assert capsys.readouterr().out == ("[theorem1] holds only if J >= 3\n  evidence: e 2\n  uncertainty: u\n"
+                                       "  setting: s\n")
 
 
 def test_record_displays_the_claim_payload_in_a_notebook(monkeypatch):
@@ -99,7 +100,8 @@ def test_record_names_the_empty_field(field):
 
 
 def test_record_messages_name_the_known_claims_and_verdicts():
-    with pytest.raises(ValueError, match=r"unknown claim 'nope' \(not an id of .*claims\.csv\); no known id is close; known: eq7_relative, theorem1, "):
+    with pytest.raises(ValueError, match=r"unknown claim 'nope' \(not an id of .*claims\.csv\); no known id is close; "
+                                         r"known: eq7_relative, theorem1, "):
         ledger.record("nope", "holds", evidence="e", uncertainty="u", setting="s")
     with pytest.raises(ValueError, match=r"verdict must be one of \('holds', 'fails', .*got 'maybe'"):
         ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s")
@@ -144,7 +146,8 @@ def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path
                       "|---|---|---|---|---|---|"]
     assert md[2] == ("| `zeta` | the last id alphabetically comes first (Sec. 1) | holds | two lines | u | "
                      "s; notebook 01_a, cell 3 |")
-    assert md[3] == "| `alpha` | a \\| pipe in the statement (Eq. (2)) | holds | from a, cell 1 | u | s; notebook 01_a, cell 1 |"
+    assert md[3] == ("| `alpha` | a \\| pipe in the statement (Eq. (2)) | holds | from a, cell 1 | u | "
+                     "s; notebook 01_a, cell 1 |")
     assert md[4] == "| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | s; notebook 02_b, cell 1 |"
     assert len(md) == 5 and ledger.to_markdown(got).endswith(" |\n")
 

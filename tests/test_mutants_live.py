@@ -27,7 +27,7 @@ def _feed(rig, t_end, offset=0.0, sensor_skip=()):
     events = [(k * DT_CAM, 1, k) for k in range(int(round(t_end / DT_CAM)) + 1)]
     events += [(k * DT_SEN + offset, 0, k) for k in range(-128, int(round((t_end + 1) / DT_SEN)) + 1)
                if k not in sensor_skip]
-    for t, kind, k in sorted(events):
+    for t, kind, _k in sorted(events):
         if kind:
             rig.add_camera(t, _C(t))
         else:
@@ -306,7 +306,8 @@ def test_summary_times_default_to_the_clock_itself():
         t = k * DT_CAM
         for j in range(4):
             ts = t + j * DT_SEN
-            rig.add_orientation(ts - 1.0 if k == 0 and j == 0 else ts, _motion(ts - 1.0 if k == 0 and j == 0 else ts) @ R0)
+            rig.add_orientation(ts - 1.0 if k == 0 and j == 0 else ts,
+                                _motion(ts - 1.0 if k == 0 and j == 0 else ts) @ R0)
         rig.add_camera(t, _motion(t))
     assert rig.ready_at is not None
     s = rig.summary()
@@ -434,7 +435,7 @@ def test_a_sensor_slower_than_the_pairs_is_slerped_not_refused():
     rig, pairs = _rig(interval=0.25)
     _feed_orientations(rig, [k / 8 for k in range(17)], [k / 2 for k in range(-1, 6)])  # 2 Hz: 0 or 1 inside a span
     assert rig.pairs_dropped == 0 and len(pairs) == 5
-    for t, A, B in pairs:
+    for _t, A, B in pairs:
         assert np.allclose(B, R0.T @ A @ R0, atol=1e-12)
 
 

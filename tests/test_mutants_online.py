@@ -170,7 +170,8 @@ def test_not_ready_sentences():
     A1, B1 = _pairs(12, rng, 0.3, axes=[(0.0, 0.0, 1.0)])
     single.update_many(A1, B1)
     why = single.status()["not_ready"]
-    assert any(w.startswith("the motion does not determine R0: RMS rotation about axes perpendicular to [") for w in why)
+    assert any(w.startswith("the motion does not determine R0: RMS rotation about axes perpendicular to [")
+               for w in why)
 
 
 def test_pairs_are_refused_unless_two_rotations():
@@ -183,7 +184,8 @@ def test_pairs_are_refused_unless_two_rotations():
         c.update(2 * R0, R0)
     with pytest.raises(ValueError, match=r"^B \(sensor motion\) is a reflection"):
         c.update(R0, -R0)
-    with pytest.raises(ValueError, match=r"^need two \(J, 3, 3\) arrays of the same J, got \(2, 3, 3\) and \(3, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"^need two \(J, 3, 3\) arrays of the same J, "
+                                         r"got \(2, 3, 3\) and \(3, 3, 3\)$"):
         c.update_many(np.stack([R0] * 2), np.stack([R0] * 3))
     assert c.n_total == 0
 

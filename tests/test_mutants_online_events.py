@@ -22,6 +22,7 @@ from replication.rig.online_events import (
     pair_d2,
     residual_angle_deg,
 )
+from replication.rig.online_events import chi2_quantile as _chi2
 
 
 def _flat(R):
@@ -386,7 +387,6 @@ def test_decide_outliers_drops_the_held_pairs_and_carries_on():
 
 
 from replication.rig.online_events import TRIM_FACTOR, _excitation_deg, solve_window  # noqa: E402
-from replication.rig.online_events import chi2_quantile as _chi2
 
 
 def test_excitation_of_a_window():

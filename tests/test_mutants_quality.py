@@ -203,7 +203,8 @@ def test_a_change_counts_only_when_significant_and_beyond_the_bounds():
     assert r.level == "warning"
     assert r.message.startswith(f"angle between R0 before and after 12.3 s {warn + EPS:.3g} deg > {warn:g} deg: "
                                 f"the 40 pairs before and the 60 after agree on different R0")
-    assert "R0 before (1.0000, 0.0000, 0.0000, 0.0000), after (1.0000, 0.0000, 0.0000, 0.0000) (w, x, y, z)" in r.message
+    assert ("R0 before (1.0000, 0.0000, 0.0000, 0.0000), after (1.0000, 0.0000, 0.0000, 0.0000) (w, x, y, z)"
+            in r.message)
     assert _reasons(dataclasses.replace(GOOD, change=_change(fail)))["remount_deg"].level == "warning"
     assert _reasons(dataclasses.replace(GOOD, change=_change(fail + EPS)))["remount_deg"].level == "fail"
 
@@ -227,8 +228,8 @@ def test_outlying_poses_beyond_three_times_the_median():
         "pose_outliers"].message.split(" > ")[0]
     six = [2.0] * 20 + [7.0, 8.0, 9.0, 10.0, 11.0, 12.0]  # the stations' median 2 deg: the bound 6 deg
     r = _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=tuple(six)))["pose_outliers"]
-    assert "25 (12 deg), 24 (11 deg), 23 (10 deg), 22 (9 deg), 21 (8 deg) and 1 more > 3 x the stations' median 2 deg " \
-           "= 6 deg: a bad measurement" in r.message
+    assert "25 (12 deg), 24 (11 deg), 23 (10 deg), 22 (9 deg), 21 (8 deg) and 1 more > 3 x the stations' median " \
+           "2 deg = 6 deg: a bad measurement" in r.message
     two = [2.0] * 20 + [7.0, 8.0]
     assert _reasons(dataclasses.replace(GOOD, pose_residual_medians_deg=tuple(two)))["pose_outliers"].message\
         .startswith("outlying poses (0-based index, median residual of its pairs): 21 (8 deg), 20 (7 deg) > 3 x")
@@ -248,7 +249,8 @@ def test_verdict_of_lines_and_dicts():
     w = Reason("a", "warning", 1.0, 2.0, "m1")
     f = Reason("b", "fail", None, None, "m2")
     assert Verdict.of([]).level == "ok" and LEVELS == ("ok", "warning", "fail")
-    assert Verdict.of([w]).level == "warning" and Verdict.of([f, w]).level == "fail" and Verdict.of([w, f]).level == "fail"
+    assert (Verdict.of([w]).level == "warning" and Verdict.of([f, w]).level == "fail"
+            and Verdict.of([w, f]).level == "fail")
     v = Verdict.of(iter([w, f]))
     assert v.reasons == (w, f)
     assert v.lines() == ["verdict: FAIL", "  warning: m1", "  fail: m2"]

@@ -73,7 +73,8 @@ def test_local_answer_boundaries_of_gap_and_angles(crafted):
     assert local.startswith(f"fake did not reach the global minimum of eq. (8) in 2 of 6 problems: its cost exceeds "
                             f"the certified minimum f* by up to {tol * 1.001:.3g} (tolerance 0.001 f* + 1e-06 J) and "
                             f"its answer is {wrong * 1.0001:.3g}-{2 * wrong:.3g} deg from the certified minimiser; ")
-    assert local.endswith(". A local method from a start far from R0 does this; use chordal_optimal, or a start near R0")
+    assert local.endswith(". A local method from a start far from R0 does this; use chordal_optimal, "
+                          "or a start near R0")
     assert conv == ("fake stopped short of the minimum of eq. (8) in 3 of 6 problems: up to 2 deg from the certified "
                     "minimiser (tolerance 0.0001 deg); tighten its tolerance or use chordal_optimal")
 
@@ -148,7 +149,8 @@ def _geodesic(R_from, R_to, t):
 
 
 def _gross_case():
-    """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* + LOCAL_ATOL J`` and cost (8)."""
+    """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* + LOCAL_ATOL J`` and cost
+    (8)."""
     m = _motions(noise_deg=3.0)
     cert = certificate.global_certificate(m)
     far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
@@ -222,7 +224,8 @@ def test_a_singular_answer_is_flagged_and_said_not_an_error():
 
 @pytest.fixture
 def core(monkeypatch):
-    """``make(answer, local=False) -> name``: a solver whose core returns ``answer(motions)``, registered for the test."""
+    """``make(answer, local=False) -> name``: a solver whose core returns ``answer(motions)``, registered for the
+    test."""
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
     count = []
 

@@ -77,7 +77,8 @@ def test_radius_matches_the_gaussian_quantile():
     cov = np.diag([1.0, 1.0, 1.0]) * np.radians(0.1) ** 2
     # |w| / 0.1 deg is chi with 3 degrees of freedom: its 95 % quantile is 2.7955
     assert radius_deg(cov) == pytest.approx(0.1 * 2.7955, rel=0.01)
-    assert radius_deg(np.diag([1.0, 0.0, 0.0]) * np.radians(0.1) ** 2) == pytest.approx(0.1 * 1.96, rel=0.02)  # nu = 1: the worst case
+    # nu = 1: the worst case
+    assert radius_deg(np.diag([1.0, 0.0, 0.0]) * np.radians(0.1) ** 2) == pytest.approx(0.1 * 1.96, rel=0.02)
 
 
 @pytest.mark.parametrize("step_deg, max_delay", [(2.0, 22), (5.0, 16)])

@@ -103,7 +103,8 @@ def test_noise_free_data_get_the_noise_floor_not_zero(rng, R0):
     assert radii[1] == pytest.approx(2 * radii[0], rel=1e-9)
 
 
-@pytest.mark.parametrize("excitation, determined", [(0.98 * MIN_EXCITATION_DEG, False), (1.02 * MIN_EXCITATION_DEG, True)])
+@pytest.mark.parametrize("excitation, determined", [(0.98 * MIN_EXCITATION_DEG, False),
+                                                    (1.02 * MIN_EXCITATION_DEG, True)])
 def test_determined_at_the_excitation_threshold(excitation, determined):
     """Motions about z (20-40 deg) and about x by small angles phi_k: about z, lambda_min(G) = sum_k 4 sin^2(phi_k /
     2), so the excitation is sqrt of that over the n pairs."""

@@ -364,7 +364,7 @@ def _bad_inputs(A, B):
 @pytest.mark.parametrize("name", list(EXPORTED))
 def test_every_exported_solver_refuses_bad_input(name, problem):
     _, A, B = problem
-    for case, (a, b, message) in _bad_inputs(A, B).items():
+    for _case, (a, b, message) in _bad_inputs(A, B).items():
         with pytest.raises(ValueError, match=message):
             EXPORTED[name](a, b)
     # and degenerate motion, except the paper-literal fixed-point diagnostic which documents it

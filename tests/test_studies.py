@@ -75,7 +75,8 @@ def _hand_built_result():
         "from_mean_deg": [0.1, 0.2, 0.3, 0.0, 0.0, 0.0],
         "warnings": ["", "", "LocalMinimumWarning", "", "", ""],
     })
-    index = pd.MultiIndex.from_product([["roll", "pitch", "yaw"], ["a", "b", "sensor_frame"]], names=["angle", "method"])
+    index = pd.MultiIndex.from_product([["roll", "pitch", "yaw"], ["a", "b", "sensor_frame"]],
+                                       names=["angle", "method"])
     table2 = pd.DataFrame({"rms_deg": [1.0, 2.0, 9.0, 3.0, 2.0, 9.0, 2.0, 2.0, 9.0]}, index=index)
     return lab.LabResult(estimates={"a": None, "b": None}, r0={}, per_set=per_set, traces=pd.DataFrame(),
                          table2=table2, truth=np.eye(3))
@@ -95,7 +96,8 @@ def test_ablation_runs_every_case_and_switches_sources_off():
     assert list(out.index) == ["all sources", "without pixel noise", "without magnetometer errors",
                                "only pixel noise", "only magnetometer errors", "no sources"]
     # with two sources, "only one" is "without the other": the same draws, the same numbers
-    pd.testing.assert_series_equal(out.loc["only pixel noise"], out.loc["without magnetometer errors"], check_names=False)
+    pd.testing.assert_series_equal(out.loc["only pixel noise"], out.loc["without magnetometer errors"],
+                                   check_names=False)
     pd.testing.assert_series_equal(out.loc["only magnetometer errors"], out.loc["without pixel noise"],
                                    check_names=False)
     assert out.loc["no sources", "true_ours_right"] != out.loc["all sources", "true_ours_right"]

@@ -65,7 +65,8 @@ def _ours_equal_to_paper(se: float):
     cols = {}
     for m in ("ours_right", "ours_left", "optimization (analytic)"):
         means = ref.xs("optimization" if m.startswith("opt") else m, level="method")["mean"].to_numpy()
-        cols[(m, "mean")], cols[(m, "std")], cols[(m, "se")] = means.copy(), np.zeros_like(means), np.full_like(means, se)
+        cols[(m, "mean")], cols[(m, "std")], cols[(m, "se")] = (means.copy(), np.zeros_like(means),
+                                                                np.full_like(means, se))
     return pd.DataFrame(cols, index=pd.Index(paper.TABLE1_ITERATIONS, name="iteration"))
 
 
@@ -121,7 +122,8 @@ def test_rounding_level_rises_are_not_counted():
                             costs={"w": np.tile(cost, (5, 1))})
     assert s.loc["w", "error_rises"] == 0 and s.loc["w", "cost_rises"] == 0 and s.loc["w", "diverts"] == 0
     err[3] = 0.01 + 10 * RISE_TOL
-    assert convergence_summary({"w": np.tile(err, (5, 1))}, np.random.default_rng(0), n_boot=5).loc["w", "error_rises"] == 1
+    assert convergence_summary({"w": np.tile(err, (5, 1))}, np.random.default_rng(0),
+                               n_boot=5).loc["w", "error_rises"] == 1
 
 
 def test_diverting_runs_with_an_absolute_bar_and_feasibility():

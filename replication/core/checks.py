@@ -1,4 +1,5 @@
-"""Validators of rotation-matrix input (``check_*``), shared by every public door; re-exported by :mod:`replication.core.so3`.
+"""Validators of rotation-matrix input (``check_*``), shared by every public door; re-exported by
+:mod:`replication.core.so3`.
 
 Each raises ``ValueError`` naming the argument, the first offending batch index and the measured
 violation. Conventions: ``docs/conventions.md``.
@@ -154,7 +155,8 @@ def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
 def check_number(name: str, value, *, minimum=None, integer: bool = False, strict: bool = True):
     """``value``, or ``ValueError`` naming ``name`` unless it is a finite number (an integer if asked) above
     ``minimum`` (``>=`` if not ``strict``). Booleans are refused."""
-    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.integer, np.floating))
+    ok_type = (isinstance(value, (int, np.integer)) if integer
+               else isinstance(value, (int, float, np.integer, np.floating)))
     if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
         raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {value!r}")
     if minimum is not None and (value <= minimum if strict else value < minimum):

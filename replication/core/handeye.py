@@ -98,7 +98,8 @@ def relative_rotations(orientations, *, reference: int | None = None, pairs=None
         What ``orientations`` hold. ``"world_from_body"`` (e.g. a SLAM or mocap
         trajectory's quaternions, ``Q_t = C_t^T``) gives ``Delta R = Q_k^T Q_t``.
     atol : float
-        Tolerance of the rotation test of ``orientations`` (see :func:`~replication.core.checks.check_rotation_matrices`).
+        Tolerance of the rotation test of ``orientations`` (see
+        :func:`~replication.core.checks.check_rotation_matrices`).
 
     Returns
     -------
@@ -121,7 +122,8 @@ def relative_rotations(orientations, *, reference: int | None = None, pairs=None
         n = C.shape[-3]
         for name, index in (("t_index", t_index), ("k_index", k_index)):
             if index.ndim != 1 or not np.issubdtype(index.dtype, np.integer) and index.size:
-                raise ValueError(f"pairs: {name} must be a 1-D array of integers, got {index.dtype} of shape {index.shape}")
+                raise ValueError(f"pairs: {name} must be a 1-D array of integers, got {index.dtype} "
+                                 f"of shape {index.shape}")
             if index.size and (index.min() < 0 or index.max() >= n):
                 raise ValueError(f"pairs: {name} out of range for N = {n} orientations "
                                  f"(min {index.min()}, max {index.max()})")

@@ -349,7 +349,8 @@ def quaternion_to_matrix(q) -> np.ndarray:
 
 
 def yaw_pitch_roll_deg(R) -> np.ndarray:
-    """Yaw, pitch, roll (degrees, in that order) with ``R = Rz(yaw) Ry(pitch) Rx(roll)``, batched: (..., 3, 3) -> (..., 3).
+    """Yaw, pitch, roll (degrees, in that order) with ``R = Rz(yaw) Ry(pitch) Rx(roll)``, batched:
+    (..., 3, 3) -> (..., 3).
 
     The intrinsic z-y'-x'' (Tait-Bryan) angles of the aerospace convention; pitch in
     ``[-90, 90]``, yaw and roll in ``(-180, 180]``. Roll-first order is ``[..., ::-1]``.
@@ -360,13 +361,16 @@ def yaw_pitch_roll_deg(R) -> np.ndarray:
 
 
 def from_euler(seq: str, angles, *, degrees: bool = False) -> np.ndarray:
-    """Rotation matrices from Euler angles in SciPy's ``seq`` (upper case: intrinsic), batched: (..., len(seq)) -> (..., 3, 3)."""
+    """Rotation matrices from Euler angles in SciPy's ``seq`` (upper case: intrinsic), batched:
+    (..., len(seq)) -> (..., 3, 3)."""
     angles = np.asarray(angles, dtype=float)
-    return _batched(lambda a: _scipy_rotation().from_euler(seq, a, degrees=degrees).as_matrix(), angles, (len(seq),), (3, 3))
+    return _batched(lambda a: _scipy_rotation().from_euler(seq, a, degrees=degrees).as_matrix(), angles,
+                    (len(seq),), (3, 3))
 
 
 def slerp_interpolator(t, R):
-    """A function ``times -> rotations`` (..., 3, 3) interpolating ``R`` (sampled at increasing ``t``) along the geodesic.
+    """A function ``times -> rotations`` (..., 3, 3) interpolating ``R`` (sampled at increasing ``t``) along the
+    geodesic.
 
     SciPy's ``Slerp``, built once: call the result as often as needed.
     """

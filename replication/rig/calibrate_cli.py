@@ -95,8 +95,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
     cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
     cal.add_argument("--out", help="write the JSON report here (folders are created)")
-    cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension (folders are "
-                                    "created)")
+    cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension "
+                                    "(folders are created)")
     cal.add_argument("--accept", action="store_true", help="exit 0 even when the verdict is fail")
     cal.add_argument("--online", action="store_true",
                      help="also replay the streams through the online estimator (replication.rig.online), as if live")

@@ -171,9 +171,10 @@ def _time_unit_reason(camera, sensor):
            if not lo <= span <= hi or abs(start) > 1e10]
     culprit = f"the {odd[0]} file's" if len(odd) == 1 else "one of the two files'"
     return Reason("time_unit", "fail", float(ratio), factor,
-                  f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about {factor:.0e}: "
-                  f"{culprit} time stamps are likely in another unit than they were read in (TUM trajectories: "
-                  f"--camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by format)")
+                  f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about "
+                  f"{factor:.0e}: {culprit} time stamps are likely in another unit than they were read in (TUM "
+                  f"trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by "
+                  f"format)")
 
 
 #: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of one recording
@@ -249,14 +250,16 @@ def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) ->
 
 
 def _speeds(camera, sensor, offset, lo, hi):
-    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by ``offset``, in the overlap."""
+    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by ``offset``, in the
+    overlap."""
     t = camera.t[(camera.t >= lo) & (camera.t <= hi)]
     if len(t) < 2:
         return None
     cam = camera.at(t)
     sen = sensor.at(t + offset)
     dt = np.diff(t)
-    speed = [rotation_angle_deg(relative_rotations(Q, convention="world_from_body", atol=1e-5)) / dt for Q in (cam, sen)]
+    speed = [rotation_angle_deg(relative_rotations(Q, convention="world_from_body", atol=1e-5)) / dt
+             for Q in (cam, sen)]
     return 0.5 * (t[1:] + t[:-1]), speed[0], speed[1]
 
 
@@ -383,7 +386,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
     change, change_fit = _change_test(A, B, t_start, block, float(camera.t[0]))
-    evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset, offset_correlation=corr, offset_peak_margin=clock.peak_margin,
+    evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset,
+                    offset_correlation=corr, offset_peak_margin=clock.peak_margin,
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),

@@ -9,8 +9,8 @@ pairs after it agree on ``R0``. Notation and frames: ``docs/conventions.md``.
 (:func:`replication.core.handeye.kronecker_operator`). Prefix sums of ``B_j kron A_j`` (9x9) and of ``B_j`` (3x3) give
 both sides' ``K`` and ``G = sum_j (2I - B_j - B_j^T)`` for every split in O(1), so the whole scan is O(J): each
 side's minimiser of (8) is the top eigenvector of ``sym(K)``, projected, refined by batched Newton steps on SO(3)
-(:func:`replication.core.solvers.certificate.chordal_newton`), and its cost comes from ``K``. Pairs overlap (every camera
-time starts a pair ``interval`` seconds long, ``block`` pairs per interval): the ``block`` pairs that span the
+(:func:`replication.core.solvers.certificate.chordal_newton`), and its cost comes from ``K``. Pairs overlap (every
+camera time starts a pair ``interval`` seconds long, ``block`` pairs per interval): the ``block`` pairs that span the
 split belong to neither side, so the two sides share no pose.
 
 **The statistic.** Near a side's minimiser ``R``, ``R exp([w]x)`` moves pair ``j``'s residual rotation vector by
@@ -44,11 +44,11 @@ carries its sampling error (``phi_hat / phi`` as ``chi^2_nu / nu`` with ``nu = n
 on simulated rigs its spread is that of ``nu`` = 1.2-2.6 ``n_eff``, so this errs on the safe side) and the share of
 the noise the selected split absorbs (``phi_hat`` is smaller by about ``(1 + V / 3) / n_eff`` where ``V`` is the
 statistic against the true ``phi``; measured: 15 % at ``n_eff`` = 29). Without these two terms the 1 % test flagged
-5 % of 300 simulated 60 s recordings with gyro noise alone (measured while building it). With them the threshold at ``level = 0.01`` is 30.5 for 60 s of pairs at 20 Hz
-(``n_eff`` = 28), 22.9 for 135 s and 18.4 in the limit, and the share of simulated recordings without a change
-that it flags is 0.12 % [0.03, 0.45] % (Wilson 95 %; 1 600 recordings, 60 and 135 s, camera noise 0-0.3 deg,
-gyro noise 0.002-0.02 rad/s, some with a bias), 0.19 % [0.06, 0.55] % on 1 600 fresh ones; at most 2 of 200
-(1 %) for any one setting.
+5 % of 300 simulated 60 s recordings with gyro noise alone (measured while building it). With them the threshold at
+``level = 0.01`` is 30.5 for 60 s of pairs at 20 Hz (``n_eff`` = 28), 22.9 for 135 s and 18.4 in the limit, and the
+share of simulated recordings without a change that it flags is 0.12 % [0.03, 0.45] % (Wilson 95 %; 1 600 recordings, 60
+and 135 s, camera noise 0-0.3 deg, gyro noise 0.002-0.02 rad/s, some with a bias), 0.19 % [0.06, 0.55] % on 1 600 fresh
+ones; at most 2 of 200 (1 %) for any one setting.
 
 **What it cannot see.** Errors that drift slowly (a SLAM trajectory's frame wandering over tens of seconds) look
 like a change: they are correlated beyond ``block`` pairs, so ``phi`` does not hold them. A simulated camera frame
@@ -106,8 +106,8 @@ class ChangeTest:
         The false-alarm probability the threshold was set for.
     split_index : int
         The least-squares split (module notes; ``statistic`` is the maximum over every split, not necessarily
-        this one's): index of the first pair of the ``after`` side (pairs ``split_index - block .. split_index - 1`` span the
-        split and belong to neither side).
+        this one's): index of the first pair of the ``after`` side (pairs ``split_index - block .. split_index - 1``
+        span the split and belong to neither side).
     split_time : float
         Its start time ``t[split_index]`` (s): the estimated time of the change.
     R_before, R_after : ndarray (3, 3)
@@ -237,9 +237,11 @@ def _false_alarm(c, n_eff: float, lam1: float, lam2: float):
     """False-alarm probability of ``max_k W_k > c`` (module notes): the tail at the threshold the test puts on the
     statistic against the true inflation, averaged over the sampling error of the measured one."""
     nu = n_eff
-    x = np.clip(1.0 - 2.0 / (9.0 * nu) + _Z * math.sqrt(2.0 / (9.0 * nu)), 0.0, None) ** 3  # chi2_nu / nu (Wilson-Hilferty)
+    # chi2_nu / nu (Wilson-Hilferty)
+    x = np.clip(1.0 - 2.0 / (9.0 * nu) + _Z * math.sqrt(2.0 / (9.0 * nu)), 0.0, None) ** 3
     cx = np.asarray(c, dtype=float)[..., None] * x
-    v = cx * (1.0 - 1.0 / n_eff) / (1.0 + cx / (_DOF * n_eff))  # V where W / phi_hat = c x: phi_hat = phi (1 - (1 + V/3)/n_eff) x
+    # V where W / phi_hat = c x: phi_hat = phi (1 - (1 + V/3)/n_eff) x
+    v = cx * (1.0 - 1.0 / n_eff) / (1.0 + cx / (_DOF * n_eff))
     return _tail(v, lam1, lam2).mean(axis=-1)
 
 
@@ -299,7 +301,8 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
     A, B, t = _check(A, B, t, block, min_share, level)
     J, m = len(A), int(block)
     ks = _sides(J, m, min_share)
-    # prefix sums over the pairs; layout of replication.core.handeye.kronecker_operator: [(a, c), (b, d)] = B[a, b] A[c, d]
+    # prefix sums over the pairs; layout of replication.core.handeye.kronecker_operator:
+    # [(a, c), (b, d)] = B[a, b] A[c, d]
     kron = np.einsum("jab,jcd->jacbd", B, A).reshape(J, 9, 9)
     PK = np.concatenate([np.zeros((1, 9, 9)), np.cumsum(kron, axis=0)])
     PB = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(B, axis=0)])

@@ -1,5 +1,6 @@
-"""The common end of :func:`replication.rig.calibration.calibrate` (streams) and :func:`replication.rig.poses.calibrate_poses`
-(static pose sets): solve the pairs, their residuals, a bootstrap radius, the verdict.
+"""The common end of :func:`replication.rig.calibration.calibrate` (streams) and
+:func:`replication.rig.poses.calibrate_poses` (static pose sets): solve the pairs, their residuals, a bootstrap radius,
+the verdict.
 
 The bootstrap resamples what is independent in the data:
 
@@ -30,7 +31,8 @@ from ..core.solvers import ReplicationWarning, solve, solver_info
 from .quality import Evidence, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
 
-__all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices", "station_indices", "per_station_median"]
+__all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices",
+           "station_indices", "per_station_median"]
 
 
 def check_common(method, n_bootstrap, seed, reference):
@@ -43,7 +45,8 @@ def check_common(method, n_bootstrap, seed, reference):
         return None
     ref = np.asarray(reference, dtype=float)
     if ref.shape == (4, 4):
-        raise ValueError("reference is a 4x4 transform; pass its rotation block (the upper-left 3x3 camera_from_sensor)")
+        raise ValueError("reference is a 4x4 transform; pass its rotation block "
+                         "(the upper-left 3x3 camera_from_sensor)")
     if ref.shape != (3, 3):
         raise ValueError(f"reference must be a 3x3 rotation (camera_from_sensor), got shape {ref.shape}")
     return check_rotation_matrices(ref, "reference", atol=1e-5)

@@ -15,7 +15,8 @@ _VERDICT_COLOUR = {"ok": "tab:green", "warning": "tab:orange", "fail": "tab:red"
 
 
 def calibration_figure(result):
-    """The diagnostic figure of a calibration (:meth:`replication.rig.report.CalibrationResult.plot`), like Kalibr's report.
+    """The diagnostic figure of a calibration (:meth:`replication.rig.report.CalibrationResult.plot`), like Kalibr's
+    report.
 
     Streams: (a) angular speed of both streams after the clock alignment; (b) the clock-offset cross-correlation
     with the chosen peak and the search bounds. Static pose sets: (a) each station's median pair residual against

@@ -143,7 +143,8 @@ class LiveRig:
             t = float(t)
             wx, wy, wz = (float(v) for v in np.asarray(omega, dtype=float).reshape(3))
         except (TypeError, ValueError):
-            raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t!r}, omega={omega!r}") from None
+            raise ValueError(f"a gyro sample is a finite time and 3 finite rates, "
+                             f"got t={t!r}, omega={omega!r}") from None
         if not math.isfinite(t + wx + wy + wz):
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t!r}, omega={omega!r}")
         self._sensor_kind("gyro")

@@ -5,8 +5,8 @@ The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (
 new pair costs O(1): :class:`OnlineCalibrator` keeps the running sums of ``B_j kron A_j`` and of ``2I - B_j - B_j^T``
 (optionally with exponential forgetting), takes warm-started two-step steps (eqs. (14)-(17)) until the motion
 determines ``R0``, and publishes the minimiser of eq. (8) (Newton from the two-step iterate or the last minimiser,
-:func:`replication.core.solvers.certificate.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs or every
-tenth of the pairs so far, whichever is more: fed the same pairs, it equals the batch ``chordal_optimal``.
+:func:`replication.core.solvers.certificate.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs
+or every tenth of the pairs so far, whichever is more: fed the same pairs, it equals the batch ``chordal_optimal``.
 
 **When the motion determines R0.** Near the minimiser, perturbing ``R`` to ``R exp([w]x)`` changes pair ``j``'s
 residual rotation vector by about ``(I - B_j^T) w``, so the information about ``w`` is ``G = sum_j w_j (2I - B_j -
@@ -218,7 +218,8 @@ class OnlineCalibrator:
         m = len(A)
         w = self.forgetting ** np.arange(m - 1, -1, -1.0)
         decay = self.forgetting ** m
-        # sum_i w_i B_i kron A_i, laid out as replication.core.handeye.kronecker_operator: [(a, c), (b, d)] = B[a, b] A[c, d]
+        # sum_i w_i B_i kron A_i, laid out as replication.core.handeye.kronecker_operator:
+        # [(a, c), (b, d)] = B[a, b] A[c, d]
         S = np.einsum("i,iab,icd->acbd", w, B, A).reshape(9, 9)
         self._S = decay * self._S + S
         self._SB = decay * self._SB + np.einsum("i,iab->ab", w, B)

@@ -10,8 +10,9 @@ confirmation window and :func:`classify` names the event:
   that agree with it) differs from the current one by more than the :data:`CONFIRM_LEVEL` quantile of their
   combined error (the two estimates' covariances added; the window's noise taken as at least the estimate's own),
   those pairs do not fit the current estimate at its noise level (``3 sum d^2 / (2 s^2)`` above the
-  :data:`FIT_LEVEL` quantile of ``chi^2_{3n}``, ``s^2`` the estimate's mean square residual angle), and the window fits its own estimate at no more than ``cap`` times the old level
-  (median ``d^2 / m``): the pairs after the alarm agree on a new ``R0``;
+  :data:`FIT_LEVEL` quantile of ``chi^2_{3n}``, ``s^2`` the estimate's mean square residual angle), and the window fits
+  its own estimate at no more than ``cap`` times the old level (median ``d^2 / m``): the pairs after the alarm agree on
+  a new ``R0``;
 * ``outliers``: no new ``R0``, and the window's pairs either fit the current estimate at the old level or are gross
   outliers (``d^2 / m > cap``), or most of them fit it (median ``d^2 / m`` at most :data:`NOISE_Z`): the alarm
   came from a few pairs (a burst, or scattered outliers), which stay out of the estimate;

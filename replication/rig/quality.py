@@ -194,7 +194,8 @@ def _above(check, value, name, unit, why):
         return None
     for level, bound in (("fail", fail), ("warning", warn)):
         if bound is not None and value > bound:
-            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} > {bound:g}{unit}: {why}")
+            return Reason(check, level, float(value), float(bound),
+                          f"{name} {value:.3g}{unit} > {bound:g}{unit}: {why}")
     return None
 
 
@@ -204,7 +205,8 @@ def _below(check, value, name, unit, why):
         return None
     for level, bound in (("fail", fail), ("warning", warn)):
         if bound is not None and value < bound:
-            return Reason(check, level, float(value), float(bound), f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
+            return Reason(check, level, float(value), float(bound),
+                          f"{name} {value:.3g}{unit} < {bound:g}{unit}: {why}")
     return None
 
 
@@ -229,9 +231,9 @@ def _outlying_poses(medians):
     named = ", ".join(f"{int(k)} ({medians[k]:.3g} deg)" for k in bad[:5]) + (f" and {len(bad) - 5} more"
                                                                                 if len(bad) > 5 else "")
     return Reason("pose_outliers", "warning", float(ratio[bad[0]]), factor,
-                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): {named} > "
-                  f"{factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: a bad measurement "
-                  f"at that station (a target detection, a robot pose); its pairs pull R0")
+                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): "
+                  f"{named} > {factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: "
+                  f"a bad measurement at that station (a target detection, a robot pose); its pairs pull R0")
 
 
 def judge(e: Evidence, extra=()) -> Verdict:
@@ -244,7 +246,8 @@ def judge(e: Evidence, extra=()) -> Verdict:
     if e.reference_error_deg is not None:
         reasons.append(_above("reference_error_deg", e.reference_error_deg, "angle to the given reference", " deg",
                               "the data agree with another R0 than the reference: gyro axes permuted or sign-flipped "
-                              "(a fixed rotation the data alone cannot show), or a reference for another rig or camera"))
+                              "(a fixed rotation the data alone cannot show), or a reference for another rig or "
+                              "camera"))
     if e.offset_s is not None and not e.offset_applied:
         reasons.append(_above("offset_left_ms", abs(1e3 * e.offset_s), "clock offset measured but not removed", " ms",
                               "the pairs were formed with the clocks as recorded (keep-clock)"))

@@ -189,7 +189,8 @@ class CalibrationResult:
             lo, hi = (1e3 * v for v in self.time_offset_ci95_s)
             ci = f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms, " if math.isfinite(lo) or math.isfinite(hi) else ""
             lines.append(f"time offset: {offset_in_words(self.time_offset_s, decimals=2)} ({ci}correlation "
-                         f"{self.time_offset_correlation:.4f}, {'applied' if self.time_offset_applied else 'not applied'})")
+                         f"{self.time_offset_correlation:.4f}, "
+                         f"{'applied' if self.time_offset_applied else 'not applied'})")
         lines += [
             f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
             f"bootstrap 95% radius: {boot} (resampling {self.bootstrap_resamples}); it covers {self.bootstrap_covers}",

@@ -141,7 +141,8 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
             raise ValueError("ratio_to must be one of the methods compared, and rng must be given")
         for name, err in errors.items():
             both = np.isfinite(err) & np.isfinite(errors[ratio_to])
-            table.loc[name, ["ratio", "ratio_low", "ratio_high"]] = paired_ratio_ci(err[both], errors[ratio_to][both], rng)
+            table.loc[name, ["ratio", "ratio_low", "ratio_high"]] = paired_ratio_ci(
+                err[both], errors[ratio_to][both], rng)
     return table
 
 

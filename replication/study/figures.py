@@ -4,8 +4,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure",
-           "live_figure"]
+__all__ = ["METHOD_STYLE", "convergence_figure", "SWEEP_LABELS", "sweep_figure", "FIG7_STYLE", "fig6_figure",
+           "fig7_figure", "live_figure"]
 
 #: One colour/line style per method, reused in every figure.
 METHOD_STYLE = {
@@ -46,7 +46,8 @@ SWEEP_LABELS = {
 
 
 def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error to $R_0$ (deg)"):
-    """One panel per sweep parameter, one line per solver; ``sweeps`` is :func:`replication.study.baselines.sweep` output."""
+    """One panel per sweep parameter, one line per solver; ``sweeps`` is :func:`replication.study.baselines.sweep`
+    output."""
     params = list(dict.fromkeys(sweeps["parameter"]))
     ncols = 2
     nrows = -(-len(params) // ncols)
@@ -92,7 +93,8 @@ def fig6_figure(per_set, *, reference: str = "the true $R_0$"):
     for ax, axis in zip(axes, "xyz"):
         for method, part in per_set.groupby("method", sort=False):
             style = {"color": FIG7_STYLE[method]["color"], "ls": FIG7_STYLE[method].get("ls", "-")}
-            ax.plot(part["set"] + 1, part[f"dev_{axis}_deg"], marker="o", ms=4, label=METHOD_STYLE[method]["label"], **style)
+            ax.plot(part["set"] + 1, part[f"dev_{axis}_deg"], marker="o", ms=4, label=METHOD_STYLE[method]["label"],
+                    **style)
         ax.axhline(0.0, color="grey", ls="--", lw=1)
         ax.set_xlabel("data set")
         ax.set_title(f"about camera {axis}")
@@ -128,7 +130,8 @@ def fig7_figure(traces):
 
 def live_figure(runs: dict, targets=(0.5, 0.2)):
     """Notebook 08: the online estimate's error to the reference and its stated radius over time, per recording,
-    with the moment VINS-Mono's rule declares success (``runs``: :func:`replication.study.live_study.live_run` results)."""
+    with the moment VINS-Mono's rule declares success (``runs``: :func:`replication.study.live_study.live_run`
+    results)."""
     fig, axes = plt.subplots(1, len(runs), figsize=(6.5 * len(runs), 4.2), squeeze=False)
     for ax, (name, (track, vins)) in zip(axes[0], runs.items()):
         ok = track["n_pairs"] >= 10

@@ -23,8 +23,8 @@ from ..rig.calibration import calibrate
 from ..rig.poses import calibrate_poses, pose_pairs
 from .baselines import compare
 
-__all__ = ["station_bootstrap", "recording_warnings", "calibration_table", "solver_tables", "protocol_table", "sensitivity_table",
-           "calibrations", "usual_mistakes", "verdict_table"]
+__all__ = ["station_bootstrap", "recording_warnings", "calibration_table", "solver_tables", "protocol_table",
+           "sensitivity_table", "calibrations", "usual_mistakes", "verdict_table"]
 
 
 def recording_warnings(fn, *args, **kwargs):
@@ -110,7 +110,8 @@ def protocol_table(streams: dict, references: dict, intervals) -> pd.DataFrame:
     pandas.DataFrame
         Index ``(data, interval (s))``; columns ``sigma2/sigma1 of K`` (rounded to 5 digits), the error of
         ``R^l`` after 50 iterations and at the default's answer (deg), the default's iterations (or
-        ``"closed form"``) and whether the 50-iteration run warned (:class:`~replication.core.solvers.ConvergenceWarning`).
+        ``"closed form"``) and whether the 50-iteration run warned
+        (:class:`~replication.core.solvers.ConvergenceWarning`).
     """
     rows = {}
     for name, (cam, sensor, ref) in streams.items():

@@ -213,7 +213,8 @@ MATCHED_START_AXIS = (0.0, 0.6, 0.8)
 
 
 def matched_start() -> np.ndarray:
-    """The matched setting's start: the paper's ``R0`` turned by 150 deg about a fixed axis (see :data:`MATCHED_MOTIONS_DEG`)."""
+    """The matched setting's start: the paper's ``R0`` turned by 150 deg about a fixed axis (see
+    :data:`MATCHED_MOTIONS_DEG`)."""
     return r0_camera_from_sensor() @ exp_map(np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS))
 
 

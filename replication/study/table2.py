@@ -1,4 +1,5 @@
-"""Table II: its statistics, what they measure, and the comparison with the paper's (beside Table I's :mod:`replication.study.table1`).
+"""Table II: its statistics, what they measure, and the comparison with the paper's (beside Table I's
+:mod:`replication.study.table1`).
 
 Table II compares the camera's relative attitude ``Delta R_c = C_k C_ref^T`` with the sensor's, projected into
 the camera frame with an estimate of ``R0``: ``R0 Delta R_i R0^T``, ``Delta R_i = I_k I_ref^T``. Its numbers

@@ -37,8 +37,9 @@ LOCAL_ATOL = 1e-6
 #: minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's objective tolerance).
 LOCAL_ANGLE_TOL_DEG = 1e-4
 #: An answer above the certified minimum and farther than this from the minimiser did not reach the global
-#: minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before converging); closer, it stopped short (:class:`ConvergenceWarning`). The minima of eq. (8)
-#: seen here lie 100 deg and more apart (notebook 06); SLSQP's short stops are hundredths of a degree.
+#: minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before converging); closer, it stopped
+#: short (:class:`ConvergenceWarning`). The minima of eq. (8) seen here lie 100 deg and more apart (notebook 06);
+#: SLSQP's short stops are hundredths of a degree.
 WRONG_POINT_DEG = 1.0
 #: ``|grad f| / J`` above which an answer is not a stationary point of eq. (8) (the warning then says the solver
 #: stopped before converging rather than on another stationary point).
@@ -270,8 +271,8 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
         parts = []
         if np.any(off & moving):
             parts.append(f"{int(np.sum(off & moving))} where eq. (8) still has a gradient (up to "
-                         f"{float(np.max((2.0 * np.linalg.norm(grad, axis=-1))[off & moving])):.3g} J): the solver stopped "
-                         f"before converging (e.g. its iteration limit)")
+                         f"{float(np.max((2.0 * np.linalg.norm(grad, axis=-1))[off & moving])):.3g} J): "
+                         f"the solver stopped before converging (e.g. its iteration limit)")
         if np.any(off & ~moving):
             parts.append(f"{int(np.sum(off & ~moving))} at another stationary point of (8)")
         warnings.warn(

@@ -114,9 +114,9 @@ def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_fai
     informative motions", seen with J = 3 and with small motions) and returns its initial
     value, the identity; an exact identity is treated as a failure unless it is the
     certified minimum of eq. (8) (within the tolerance of
-    :func:`replication.core.solvers._registry.check_local_answer`). ``CALIB_HAND_EYE_PARK`` computes ``(M^T M)^{-1/2} M^T`` without a
-    determinant check and returns a *reflection* (det -1) when few noisy motions
-    make ``det M < 0`` (seen with J = 3 at the paper's noise level).
+    :func:`replication.core.solvers._registry.check_local_answer`). ``CALIB_HAND_EYE_PARK`` computes
+    ``(M^T M)^{-1/2} M^T`` without a determinant check and returns a *reflection* (det -1) when few noisy
+    motions make ``det M < 0`` (seen with J = 3 at the paper's noise level).
 
     Parameters
     ----------

@@ -1,4 +1,5 @@
-"""The registered solver ``chordal_optimal``: the global minimiser of the paper's cost (8) over SO(3), with a certificate of global optimality.
+"""The registered solver ``chordal_optimal``: the global minimiser of the paper's cost (8) over SO(3), with a
+certificate of global optimality.
 
 The paper's eq. (8) is ``f(R) = sum_j ||A_j R - R B_j||_F^2``. On SO(3) it equals
 ``2 J (3 - g(R))`` with ``g(R) = vec(R)^T M vec(R)`` and ``M = (K + K^T)/2``, ``K``
