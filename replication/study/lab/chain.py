@@ -260,7 +260,8 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
         traces[name] = yaw_pitch_roll_deg(R @ dI @ R.T)[..., ::-1]     # the paper's R0 Delta R_i R0^T (roll first)
     tables = {name: attitude_statistics(tr, traces["camera"]) for name, tr in traces.items() if name != "camera"}
     order = list(solvers) + ["sensor_frame"]
-    table2 = pd.concat(tables, names=["method"]).swaplevel().reindex(pd.MultiIndex.from_product([["roll", "pitch", "yaw"], order], names=["angle", "method"]))
+    rows = pd.MultiIndex.from_product([["roll", "pitch", "yaw"], order], names=["angle", "method"])
+    table2 = pd.concat(tables, names=["method"]).swaplevel().reindex(rows)
     frame = {"t": t_cam[1:]}
     for name, tr in traces.items():
         for i, a in enumerate(("roll", "pitch", "yaw")):

@@ -277,7 +277,8 @@ def _check_gyro_units(path, df, window_s=2.0, limit_deg=20.0):
     start, end = edges[:-1], edges[1:]
     if not len(start):
         return
-    predicted = np.einsum("wji,wj->wi", np.swapaxes(Q[start], -1, -2) @ Q[end], acc[start])  # (Q_s^T Q_e)^T a_s: a_s seen from body_end
+    # (Q_s^T Q_e)^T a_s: a_s seen from body_end
+    predicted = np.einsum("wji,wj->wi", np.swapaxes(Q[start], -1, -2) @ Q[end], acc[start])
     err = np.degrees(np.arccos(np.clip(np.sum(predicted * acc[end], axis=-1), -1, 1)))
     if np.median(err) > limit_deg:
         _fail(path, f"integrating the gyroscope over {window_s:g} s windows misses the accelerometer's tilt "

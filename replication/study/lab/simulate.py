@@ -63,7 +63,8 @@ def _project(settings, C, position, rng, n_frames):
         pts, _ = cv2.projectPoints(WAND_POINTS, rvec, -Cp @ pos, K, dist)
         clean[p] = pts[:, 0, :]
     margin = 10.0
-    inside = (clean[..., 0] > margin) & (clean[..., 0] < w - margin) & (clean[..., 1] > margin) & (clean[..., 1] < h - margin)
+    inside = ((clean[..., 0] > margin) & (clean[..., 0] < w - margin)
+              & (clean[..., 1] > margin) & (clean[..., 1] < h - margin))
     noise = rng.normal(0.0, 1.0, (len(C), n_frames) + clean.shape[1:]) * settings.pixel_noise_px
     return clean[:, None] + noise, inside.all(axis=-1)
 

@@ -122,7 +122,7 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
         result = run_lab(recording)
         row = {"seed": int(seed)}
         summary = summarize(result, failure_deg=failure_deg)
-        for name, R in result.estimates.items():
+        for name in result.estimates:
             row[f"shared_bias_{name}"] = float(angle_between_deg(result.r0[name], result.truth))
             row[f"true_{name}"] = summary[f"true_{name}"]
             row[f"spread_{name}"] = summary[f"spread_{name}"]

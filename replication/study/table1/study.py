@@ -48,7 +48,8 @@ def compact(cmp: pd.DataFrame, reference: pd.DataFrame | None = None) -> pd.Data
     table = shown.unstack("method")
     table.insert(0, "paper ours_right", cmp.xs("ours_right", level="method")["paper"])
     table.insert(1, "paper optimization", cmp.xs("ours_right", level="method").index.map(
-        lambda n: f"{reference.loc[(n, 'optimization'), 'mean']:.3f} ± {reference.loc[(n, 'optimization'), 'std']:.3f}"))
+        lambda n: f"{reference.loc[(n, 'optimization'), 'mean']:.3f} ± "
+                  f"{reference.loc[(n, 'optimization'), 'std']:.3f}"))
     return table
 
 
@@ -305,7 +306,8 @@ def share_text(row, key: str) -> str:
 
 
 def shown_cost_scales(scales: pd.DataFrame, reference: pd.DataFrame | None = None) -> pd.DataFrame:
-    """:func:`cost_scale_study`'s table as text, with the paper's SQP means as a last row ``("paper's Table I", "?")``."""
+    """:func:`cost_scale_study`'s table as text, with the paper's SQP means as a last row
+    ``("paper's Table I", "?")``."""
     reference = paper.load_table1() if reference is None else reference
     shown = pd.DataFrame({
         "failed": [share_range(p) if 0 < p < 1 else f"{p:.0%}" for p in scales["failed"]],

@@ -212,8 +212,9 @@ def convergence_summary(errors: dict, rng: np.random.Generator, *, n_boot: int =
     its interval. A column in ``caps`` (``{column: iterations}``, a solver stopped on a budget and padded)
     that "settles" only at its cap has not settled (``None``). With ``costs`` (``{column: (n, iterations)}``),
     also ``error_rises`` and ``cost_rises`` (share of runs whose error, or cost (8), increases at some
-    iteration, by more than :data:`RISE_TOL`, or :data:`COST_RISE_RTOL` relative), ``diverts`` (share of runs with an iteration at which the error rises
-    while the cost falls) and ``diverts_above_floor`` (the same while the error is above twice its final value).
+    iteration, by more than :data:`RISE_TOL`, or :data:`COST_RISE_RTOL` relative), ``diverts`` (share of runs with
+    an iteration at which the error rises while the cost falls) and ``diverts_above_floor`` (the same while the
+    error is above twice its final value).
     """
     caps = dict(caps or {})
     rows = {}
