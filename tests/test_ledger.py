@@ -24,7 +24,7 @@ def collected():
 def test_every_claim_has_a_verdict_evidence_and_uncertainty(collected):
     assert set(collected["claim"]) == set(CLAIMS.index)
     assert collected["verdict"].isin(ledger.VERDICTS).all()
-    for col in ("evidence", "uncertainty", "setting"):
+    for col in ("evidence", "uncertainty", "setting", "section"):
         assert (collected[col].str.strip().str.len() > 10).all(), col
     only_if = collected["verdict"] == "holds only if"
     assert (collected.loc[only_if, "condition"].str.len() > 10).all()
@@ -53,7 +53,7 @@ def test_a_missing_claim_is_refused(tmp_path, collected):
 ])
 def test_record_refuses_malformed_verdicts(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        ledger.record(**{"evidence": "e 1", "uncertainty": "u", "setting": "s", **kwargs})
+        ledger.record(**{"evidence": "e 1", "uncertainty": "u", "setting": "s", "section": "S", **kwargs})
 
 
 def test_malformed_claims_file_names_line_and_column(tmp_path):
@@ -119,7 +119,7 @@ def test_a_missing_claims_file_is_named(tmp_path):
 
 # ---- ledger.record in the notebook: the rules ------------------------------------------------------------------
 
-GOOD = dict(claim="theorem1", verdict="holds", evidence="e 1", uncertainty="u", setting="s", condition="")
+GOOD = dict(claim="theorem1", verdict="holds", evidence="e 1", uncertainty="u", setting="s", section="S", condition="")
 
 
 @pytest.mark.parametrize("changes, message", [
@@ -132,6 +132,7 @@ GOOD = dict(claim="theorem1", verdict="holds", evidence="e 1", uncertainty="u", 
     (dict(evidence=" \n\t "), r"claim 'theorem1': evidence is blank"),
     (dict(uncertainty="  "), r"claim 'theorem1': uncertainty is blank"),
     (dict(setting="\n"), r"claim 'theorem1': setting is blank"),
+    (dict(section=" "), r"claim 'theorem1': section is blank"),
     (dict(evidence=0.5), r"claim 'theorem1': evidence must be text, got float"),
     (dict(verdict="holds only if"), r"a condition goes with, and only with, 'holds only if'"),
     (dict(verdict="holds only if", condition="   "), r"a condition goes with, and only with"),
@@ -146,7 +147,7 @@ def test_record_refuses_each_broken_rule(changes, message):
 @pytest.mark.parametrize("verdict, condition", [(v, "the data are noise-free" if v == ledger.HOLDS_ONLY_IF else "")
                                                 for v in ledger.VERDICTS])
 def test_record_accepts_every_verdict_of_the_vocabulary(capsys, verdict, condition):
-    ledger.record("theorem1", verdict, evidence="e 1", uncertainty="u", setting="s", condition=condition)
+    ledger.record("theorem1", verdict, evidence="e 1", uncertainty="u", setting="s", section="S", condition=condition)
     assert capsys.readouterr().out.startswith(f"[theorem1] {verdict}")
 
 
@@ -193,7 +194,7 @@ def _notebook(path, *records):
     """A minimal notebook at ``path`` with one cell per stored record (a dict, or any JSON value)."""
     cells = [{"cell_type": "code", "source": "", "metadata": {}, "execution_count": 1,
               "outputs": [{"output_type": "display_data", "metadata": {}, "data": {ledger.CLAIM_MIME: rec}}]}
-             for rec in records]
+             for rec in records] + [{"cell_type": "markdown", "source": ["## S"], "metadata": {}}]
     path.write_text(json.dumps({"cells": cells, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}),
                     encoding="utf-8")
     return path

@@ -15,14 +15,15 @@ CLAIMS_CSV = ("claim,statement,where,paper_value,unit\n"
               "mid,a third claim,Table 1,,\n")
 
 
-def _record(claim, verdict="holds", condition="", evidence="e 1.0", uncertainty="u", setting="s"):
-    return asdict(ledger.ClaimRecord(claim, verdict, evidence, uncertainty, setting, condition))
+def _record(claim, verdict="holds", condition="", evidence="e 1.0", uncertainty="u", setting="s", section="S"):
+    return asdict(ledger.ClaimRecord(claim, verdict, evidence, uncertainty, setting, section, condition))
 
 
 def _notebook(path, cells):
     """A notebook whose cells carry these outputs (a list of output lists; None: a cell without outputs)."""
     nb = {"cells": [{"cell_type": "code", "source": ""} if outs is None else
-                    {"cell_type": "code", "source": "", "outputs": outs} for outs in cells]}
+                    {"cell_type": "code", "source": "", "outputs": outs} for outs in cells]
+          + [{"cell_type": "markdown", "source": "## S"}]}  # the section every _record names
     path.write_text(json.dumps(nb), encoding="utf-8")
     return path
 
@@ -54,11 +55,13 @@ def two_notebooks(tmp_path):
 
 
 def test_record_prints_the_readable_line_outside_a_notebook(capsys):
-    ledger.record("theorem1", "holds", evidence="e 1", uncertainty="exact", setting="sim")
-    assert capsys.readouterr().out == "[theorem1] holds\n  evidence: e 1\n  uncertainty: exact\n  setting: sim\n"
-    ledger.record("theorem1", "holds only if", evidence="e 2", uncertainty="u", setting="s", condition="J >= 3")
+    ledger.record("theorem1", "holds", evidence="e 1", uncertainty="exact", setting="sim", section="S")
+    assert capsys.readouterr().out == ("[theorem1] holds\n  evidence: e 1\n  uncertainty: exact\n  setting: sim\n"
+                                       "  measured in: S\n")
+    ledger.record("theorem1", "holds only if", evidence="e 2", uncertainty="u", setting="s", section="S",
+                  condition="J >= 3")
     assert capsys.readouterr().out == ("[theorem1] holds only if J >= 3\n  evidence: e 2\n  uncertainty: u\n"
-                                       "  setting: s\n")
+                                       "  setting: s\n  measured in: S\n")
 
 
 def test_record_displays_the_claim_payload_in_a_notebook(monkeypatch):
@@ -68,12 +71,12 @@ def test_record_displays_the_claim_payload_in_a_notebook(monkeypatch):
     shown = []
     monkeypatch.setattr(IPython, "get_ipython", lambda: object())
     monkeypatch.setattr(IPython.display, "display", lambda obj, **kw: shown.append((obj, kw)))
-    ledger.record("theorem1", "fails", evidence="e 3", uncertainty="u", setting="s")
+    ledger.record("theorem1", "fails", evidence="e 3", uncertainty="u", setting="s", section="S")
     (obj, kw), = shown
     assert kw == {"raw": True}
-    assert obj == {"text/plain": "[theorem1] fails\n  evidence: e 3\n  uncertainty: u\n  setting: s",
+    assert obj == {"text/plain": "[theorem1] fails\n  evidence: e 3\n  uncertainty: u\n  setting: s\n  measured in: S",
                    ledger.CLAIM_MIME: {"claim": "theorem1", "verdict": "fails", "evidence": "e 3", "uncertainty": "u",
-                                       "setting": "s", "condition": ""}}
+                                       "setting": "s", "section": "S", "condition": ""}}
 
 
 def test_record_displays_the_condition_and_prints_without_ipython(monkeypatch, capsys):
@@ -83,18 +86,20 @@ def test_record_displays_the_condition_and_prints_without_ipython(monkeypatch, c
     shown = []
     monkeypatch.setattr(IPython, "get_ipython", lambda: object())
     monkeypatch.setattr(IPython.display, "display", lambda obj, **kw: shown.append(obj))
-    ledger.record("theorem1", "holds only if", evidence="e", uncertainty="u", setting="s", condition="J >= 3")
+    ledger.record("theorem1", "holds only if", evidence="e", uncertainty="u", setting="s", section="S",
+                  condition="J >= 3")
     assert shown[0][ledger.CLAIM_MIME]["condition"] == "J >= 3"
     assert shown[0]["text/plain"].startswith("[theorem1] holds only if J >= 3\n")
     monkeypatch.setitem(sys.modules, "IPython", None)  # IPython not installed: the record is printed
-    ledger.record("theorem1", "fails", evidence="e", uncertainty="u", setting="s")
-    assert capsys.readouterr().out == "[theorem1] fails\n  evidence: e\n  uncertainty: u\n  setting: s\n"
+    ledger.record("theorem1", "fails", evidence="e", uncertainty="u", setting="s", section="S")
+    assert capsys.readouterr().out == ("[theorem1] fails\n  evidence: e\n  uncertainty: u\n  setting: s\n"
+                                       "  measured in: S\n")
     assert len(shown) == 1
 
 
-@pytest.mark.parametrize("field", ["evidence", "uncertainty", "setting"])
+@pytest.mark.parametrize("field", ["evidence", "uncertainty", "setting", "section"])
 def test_record_names_the_empty_field(field):
-    kwargs = {"evidence": "e", "uncertainty": "u", "setting": "s", field: "  "}
+    kwargs = {"evidence": "e", "uncertainty": "u", "setting": "s", "section": "S", field: "  "}
     with pytest.raises(ValueError, match=rf"^claim 'theorem1': {field} is blank \(empty or white space only\)$"):
         ledger.record("theorem1", "holds", **kwargs)
 
@@ -102,15 +107,15 @@ def test_record_names_the_empty_field(field):
 def test_record_messages_name_the_known_claims_and_verdicts():
     with pytest.raises(ValueError, match=r"unknown claim 'nope' \(not an id of .*claims\.csv\); no known id is close; "
                                          r"known: eq7_relative, theorem1, "):
-        ledger.record("nope", "holds", evidence="e", uncertainty="u", setting="s")
+        ledger.record("nope", "holds", evidence="e", uncertainty="u", setting="s", section="S")
     with pytest.raises(ValueError, match=r"verdict must be one of \('holds', 'fails', .*got 'maybe'"):
-        ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s")
+        ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s", section="S")
 
 
 def test_collect_reads_every_record_with_its_notebook_and_cell_in_the_claims_order(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
-    assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "notebook",
-                                 "cell", "statement", "where", "paper_value"]
+    assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "section",
+                                 "notebook", "cell", "anchor", "statement", "where", "paper_value"]
     assert list(got.index) == [0, 1, 2]
     # claims in the claims file's order (zeta, alpha, mid: not alphabetical), not in the notebooks' order
     assert list(got["claim"]) == ["zeta", "alpha", "mid"]
@@ -145,10 +150,11 @@ def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path
     assert md[:2] == ["| claim | the paper | verdict | evidence | uncertainty | where measured |",
                       "|---|---|---|---|---|---|"]
     assert md[2] == ("| `zeta` | the last id alphabetically comes first (Sec. 1) | holds | two lines | u | "
-                     "s; notebook 01_a, cell 3 |")
+                     "s; [notebook 01, § S](notebooks/01_a.ipynb#s) |")
     assert md[3] == ("| `alpha` | a \\| pipe in the statement (Eq. (2)) | holds | from a, cell 1 | u | "
-                     "s; notebook 01_a, cell 1 |")
-    assert md[4] == "| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | s; notebook 02_b, cell 1 |"
+                     "s; [notebook 01, § S](notebooks/01_a.ipynb#s) |")
+    assert md[4] == ("| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | "
+                     "s; [notebook 02, § S](notebooks/02_b.ipynb#s) |")
     assert len(md) == 5 and ledger.to_markdown(got).endswith(" |\n")
 
 
@@ -168,3 +174,33 @@ def test_update_readme_writes_between_the_markers_and_checks(tmp_path, two_noteb
         readme.write_text(text)
         with pytest.raises(ValueError, match="no claims marker"):
             ledger.update_readme(got, readme)
+
+
+
+
+def test_a_section_that_is_no_heading_of_the_notebook_is_refused_naming_the_close_ones(tmp_path, claims_path):
+    nb = _notebook(tmp_path / "01_a.ipynb", [[_out(_record("alpha", section="T"))]])
+    with pytest.raises(ValueError, match=r"01_a\.ipynb: cell 0: claim 'alpha': the section 'T' is not a heading of "
+                                         r"this notebook; its headings: \['S'\]"):
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+    near = _notebook(tmp_path / "02_b.ipynb", [[_out(_record("alpha", section="S."))]])
+    with pytest.raises(ValueError, match=r"the section 'S\.' is not a heading of this notebook; close headings: "
+                                         r"\['S'\]"):
+        ledger.collect([near], claims_path=claims_path, complete=False)
+
+
+@pytest.mark.parametrize("heading, anchor", [
+    ("1. Our defaults", "1-our-defaults"),
+    ("Fig. 6 — `R0` across the 10 data sets", "fig-6--r0-across-the-10-data-sets"),
+    ("Which of the paper's conclusions hold here?", "which-of-the-papers-conclusions-hold-here"),
+    ("snake_case and-hyphen ", "snake_case-and-hyphen"),
+])
+def test_heading_anchor_is_githubs(heading, anchor):
+    assert ledger.heading_anchor(heading) == anchor
+
+
+def test_notebook_headings_reads_every_level_from_markdown_cells_only():
+    nb = {"cells": [{"cell_type": "markdown", "source": ["# One\n", "text # not a heading\n", "###### Six ##\n"]},
+                    {"cell_type": "code", "source": "# a comment"},
+                    {"cell_type": "markdown", "source": "####### seven is not a heading\n## Two"}]}
+    assert ledger.notebook_headings(nb) == ["One", "Six", "Two"]

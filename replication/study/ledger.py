@@ -4,7 +4,8 @@
 if it gives one). A notebook that checks a claim calls :func:`record` in the cell that computes the evidence;
 the record is displayed (a readable line) and stored in the executed notebook as a
 ``application/vnd.replication.claim+json`` output. :func:`collect` reads the records back from the notebooks
-(no re-execution), adds the notebook and cell each came from, checks every record's form again (a stored output
+(no re-execution), adds the notebook and cell each came from and the anchor of the section it names, checks every
+record's form again (a stored output
 edited into nonsense is refused), and refuses a ledger in which any claim lacks a verdict, evidence or
 uncertainty, or has more than one record. It does not show that a stored record is what its cell computes: a
 record edited by hand into another well-formed verdict reads back as that verdict. That is checked by strict nbval
@@ -17,11 +18,12 @@ Verdicts (:data:`VERDICTS`): ``holds``, ``fails``, ``holds only if`` (the condit
 ``undecidable from the text`` (the paper does not give what the verdict depends on).
 
 The rules, checked by :func:`record` in the notebook and again by :func:`collect` (:func:`check_record`): the
-claim is an id of ``data/paper/claims.csv``; the verdict is one of :data:`VERDICTS`; evidence, uncertainty and
-setting are non-blank text; a condition goes with, and only with, ``holds only if``; and (:func:`collect`) one
-record per claim across all notebooks: a second record of a claim is refused even when it repeats the first
-word for word, because the README table gives one row, one source cell, per claim, and two copies of the
-evidence would drift apart the first time one cell changes.
+claim is an id of ``data/paper/claims.csv``; the verdict is one of :data:`VERDICTS`; evidence, uncertainty,
+setting and section are non-blank text, and (:func:`collect`) the section is a heading of the record's notebook,
+where the evidence is measured (the README links to its anchor, :func:`heading_anchor`); a condition goes with,
+and only with, ``holds only if``; and (:func:`collect`) one record per claim across all notebooks: a second record
+of a claim is refused even when it repeats the first word for word, because the README table gives one row, one
+source cell, per claim, and two copies of the evidence would drift apart the first time one cell changes.
 """
 from __future__ import annotations
 
@@ -38,7 +40,7 @@ from ..rig.datafile import DataFileError, fail, read_text
 from .paper import data_dir, load_claim_table
 
 __all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record", "check_evidence",
-           "collect", "to_markdown", "update_readme"]
+           "heading_anchor", "notebook_headings", "collect", "to_markdown", "update_readme"]
 
 #: The verdict that needs a condition.
 HOLDS_ONLY_IF = "holds only if"
@@ -61,10 +63,14 @@ class ClaimRecord:
     evidence : str
         What was computed, with the number(s) the verdict rests on (asserted in the same cell).
     uncertainty : str
-        Its uncertainty: a confidence interval or standard error, a count out of a total, or
-        ``exact (deterministic)`` for a computation without sampling.
+        Its uncertainty: a confidence interval or standard error (a count out of a total with its interval), a
+        bound (from the paper's rounding, say so: a bound is not an interval), or ``exact (deterministic)`` for a
+        computation without sampling.
     setting : str
-        Where it was measured (simulation settings, solver variant, data set).
+        The setting it was measured in (simulation settings, solver variant, data set; for a count over seeds, the
+        seeds it was found on and the fresh seeds it was confirmed on).
+    section : str
+        The heading (its text, without the ``#``) of the notebook section where the evidence is measured.
     condition : str
         For ``holds only if``: the condition.
     """
@@ -74,6 +80,7 @@ class ClaimRecord:
     evidence: str
     uncertainty: str
     setting: str
+    section: str
     condition: str = ""
 
 
@@ -92,7 +99,7 @@ def _unknown_claim(claim, known, claims_path) -> str:
     return f"unknown claim {claim!r} (not an id of {_claims_file(claims_path)}); {hint}"
 
 
-def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *, claims=None,
+def check_record(claim, verdict, evidence, uncertainty, setting, section, condition="", *, claims=None,
                  claims_path=None) -> ClaimRecord:
     """The record if it keeps the rules of the module notes, else ``ValueError`` naming the claim and the problem.
 
@@ -100,7 +107,7 @@ def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *
     ``data/paper/claims.csv``) when not given.
     """
     values = dict(claim=claim, verdict=verdict, evidence=evidence, uncertainty=uncertainty, setting=setting,
-                  condition=condition)
+                  section=section, condition=condition)
     for name, value in values.items():
         if not isinstance(value, str):
             raise ValueError(f"claim {claim!r}: {name} must be text, got {type(value).__name__} {value!r}")
@@ -109,7 +116,7 @@ def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *
         raise ValueError(_unknown_claim(claim, claims.index, claims_path))
     if verdict not in VERDICTS:
         raise ValueError(f"claim {claim!r}: verdict must be one of {VERDICTS}, got {verdict!r}")
-    for name in ("evidence", "uncertainty", "setting"):
+    for name in ("evidence", "uncertainty", "setting", "section"):
         if not values[name].strip():
             raise ValueError(f"claim {claim!r}: {name} is blank (empty or white space only)")
     if (verdict == HOLDS_ONLY_IF) != bool(condition.strip()):
@@ -118,20 +125,22 @@ def check_record(claim, verdict, evidence, uncertainty, setting, condition="", *
     return ClaimRecord(**values)
 
 
-def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting: str, condition: str = "") -> None:
+def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting: str, section: str,
+           condition: str = "") -> None:
     """Record a verdict in the executed notebook (see the module notes); it is displayed, nothing is returned.
 
     Raises
     ------
     ValueError
         A record that breaks a rule of :func:`check_record`: an unknown claim id (the close known ids
-        named), a verdict not in :data:`VERDICTS`, a field that is not text, blank evidence, uncertainty or
-        setting, ``holds only if`` without a condition or a condition with another verdict.
+        named), a verdict not in :data:`VERDICTS`, a field that is not text, blank evidence, uncertainty,
+        setting or section, ``holds only if`` without a condition or a condition with another verdict.
         (A second record of the same claim is found by :func:`collect`.)
     """
-    rec = check_record(claim, verdict, evidence, uncertainty, setting, condition)
+    rec = check_record(claim, verdict, evidence, uncertainty, setting, section, condition)
     verdict_text = f"{HOLDS_ONLY_IF} {condition}" if verdict == HOLDS_ONLY_IF else verdict
-    text = f"[{claim}] {verdict_text}\n  evidence: {evidence}\n  uncertainty: {uncertainty}\n  setting: {setting}"
+    text = (f"[{claim}] {verdict_text}\n  evidence: {evidence}\n  uncertainty: {uncertainty}\n  setting: {setting}"
+            f"\n  measured in: {section}")
     try:
         from IPython import get_ipython
         from IPython.display import display
@@ -152,6 +161,29 @@ def check_evidence(holds, claim: str, condition: str) -> None:
     """
     if not holds:
         raise ValueError(f"claim {claim!r}: the evidence does not bear the verdict: expected {condition}")
+
+
+def heading_anchor(heading: str) -> str:
+    """The anchor of a Markdown heading, as GitHub and MyST make it: lower case, every character that is not a
+    letter, digit, ``_``, ``-`` or space dropped, spaces as ``-``.
+
+    >>> heading_anchor("Fig. 6 — `R0` across the 10 data sets")
+    'fig-6--r0-across-the-10-data-sets'
+    """
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def notebook_headings(nb: dict) -> list[str]:
+    """The text of every Markdown heading of a notebook (``#`` to ``######``, the marks stripped), in order."""
+    found = []
+    for cell in nb["cells"]:
+        if isinstance(cell, dict) and cell.get("cell_type") == "markdown":
+            source = cell.get("source", "")
+            for line in ("".join(source) if isinstance(source, list) else str(source)).splitlines():
+                m = re.match(r"^#{1,6}\s+(.*?)\s*#*\s*$", line)
+                if m:
+                    found.append(m.group(1))
+    return found
 
 
 def _read_notebook(path: Path) -> dict:
@@ -208,6 +240,7 @@ def collect(notebooks=None, *, claims_path=None, complete: bool = True) -> pd.Da
     rows, first = [], {}
     for path in map(Path, paths):
         nb = _read_notebook(path)
+        headings = notebook_headings(nb)
         for index, stored in _stored_records(path, nb):
             if not isinstance(stored, dict) or set(stored) != set(RECORD_FIELDS):
                 got = sorted(stored) if isinstance(stored, dict) else type(stored).__name__
@@ -222,10 +255,14 @@ def collect(notebooks=None, *, claims_path=None, complete: bool = True) -> pd.Da
                 how = "repeats" if other == rec else "contradicts" if other.verdict != rec.verdict else "differs from"
                 fail(path, f"cell {index}: a second record of claim {rec.claim!r} ({rec.verdict!r}) {how} the one in "
                      f"{other_path.name}, cell {other_index} ({other.verdict!r}): one record per claim")
+            if rec.section not in headings:
+                close = difflib.get_close_matches(rec.section, headings, n=3, cutoff=0.5)
+                fail(path, f"cell {index}: claim {rec.claim!r}: the section {rec.section!r} is not a heading of this "
+                     f"notebook" + (f"; close headings: {close}" if close else f"; its headings: {headings}"))
             first[rec.claim] = (path, index, rec)
-            rows.append({**asdict(rec), "notebook": path.stem, "cell": index})
+            rows.append({**asdict(rec), "notebook": path.stem, "cell": index, "anchor": heading_anchor(rec.section)})
     ledger = pd.DataFrame(rows, columns=["claim", "verdict", "condition", "evidence", "uncertainty", "setting",
-                                         "notebook", "cell"])
+                                         "section", "notebook", "cell", "anchor"])
     if complete:
         missing = [c for c in claims.index if c not in set(ledger["claim"])]
         if missing:
@@ -241,11 +278,14 @@ def _verdict_text(row) -> str:
 
 
 def to_markdown(ledger: pd.DataFrame) -> str:
-    """A compact Markdown table: claim, where, verdict, evidence, uncertainty, source (notebook, cell)."""
+    """A compact Markdown table: claim, where, verdict, evidence, uncertainty, where measured (the setting and a
+    link to the notebook section)."""
     lines = ["| claim | the paper | verdict | evidence | uncertainty | where measured |", "|---|---|---|---|---|---|"]
     for row in ledger.itertuples(index=False):
         cells = [f"`{row.claim}`", f"{row.statement} ({row.where})", _verdict_text(row), row.evidence,
-                 row.uncertainty, f"{row.setting}; notebook {row.notebook}, cell {row.cell}"]
+                 row.uncertainty,
+                 f"{row.setting}; [notebook {row.notebook[:2]}, § {row.section}](notebooks/{row.notebook}.ipynb"
+                 f"#{row.anchor})"]
         lines.append("| " + " | ".join(c.replace("|", "\\|").replace("\n", " ") for c in cells) + " |")
     return "\n".join(lines) + "\n"
 

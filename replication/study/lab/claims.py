@@ -13,7 +13,17 @@ import pandas as pd
 from ..ledger import check_evidence
 from .study import seed_spread
 
-__all__ = ["lab_claims"]
+__all__ = ["SECTIONS", "lab_claims"]
+
+_FIG6, _SEEDS = "Fig. 6 — `R0` across the 10 data sets", "The lab over 20 seeds"
+_CONCLUSIONS = "Which of the paper's conclusions hold here?"
+#: The notebook section (its heading) where each record's evidence is measured.
+SECTIONS = {
+    "lab_protocol": "The recordings", "lab_averaging": _SEEDS, "fig6_consistency": _FIG6, "fig6_accuracy": _FIG6,
+    "table2_reduction": _CONCLUSIONS, "table2_correlation": _CONCLUSIONS, "table2_methods_agree": _SEEDS,
+    "table2_measures_calibration": "What Table II measures", "table2_rms": "Sensitivity to the magnetometer noise",
+    "fig7_projection": "Fig. 7 — the dynamic trial",
+}
 
 #: The setting of every record of the lab.
 _LAB_SETTING = "simulated lab (LabSettings defaults: datasheet noise, residual calibration errors as documented)"
@@ -180,4 +190,4 @@ def lab_claims(study: pd.DataFrame, *, poses: pd.Series, held: pd.Series, summar
                  f"the sensor-frame traces do not (Table II sensor-frame correlations {sensor_frame.min():.2f} to "
                  f"{sensor_frame.max():.2f}, committed draw)",
         uncertainty="mean, SD and range over 20 seeds", setting=_SEEDS_SETTING)]
-    return records
+    return [{**r, "section": SECTIONS[r["claim"]]} for r in records]

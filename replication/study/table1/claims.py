@@ -19,7 +19,20 @@ from ..ledger import check_evidence
 from .study import interval_text, per_setting_text, scales_text, sqp_per_setting_text
 from .table import table1
 
-__all__ = ["SECTION5_SETTINGS", "two_step_claims", "sqp_and_table_claims"]
+__all__ = ["SECTION5_SETTINGS", "SECTIONS", "two_step_claims", "sqp_and_table_claims"]
+
+_S2, _S3 = "2. Sensitivity to the unstated settings", "3. The matched setting, on fresh seeds, every SQP variant"
+_S5 = "5. The paper's claims about Table I and Fig. 3–4, checked (ledger)"
+#: The notebook section (its heading) where each record's evidence is measured.
+SECTIONS = {
+    "two_step_10_iterations": _S5, "cost_to_zero": _S5, "faster_than_sqp": _S5, "smoother_monotone": _S5,
+    "sqp_diverts": _S5, "converge_15_vs_30": _S5, "sqp_30_iterations": "SQP and the scale of its objective",
+    "table1_final": _S2, "table1_early": _S2, "table1_sqp": _S3,
+}
+
+
+def _with_sections(records: list[dict]) -> list[dict]:
+    return [{**r, "section": SECTIONS[r["claim"]]} for r in records]
 
 #: The three settings of section 5 (labels of ``settings``, ``conv`` and ``cost_ratio``), in the notebook's order,
 #: each with its short label in the evidence texts.
@@ -152,7 +165,7 @@ def two_step_claims(settings: dict, conv: pd.DataFrame, cost_ratio: dict, min_co
                  f"(SQP, analytic: {defaults.loc['optimization (analytic)', 'rises_above_floor']:.0%} at our defaults)",
         uncertainty=f"shares of {n_runs} runs ({n_slow} for the finite-difference SQP variants), SE at most 2.9 points",
         setting=setting))
-    return records
+    return _with_sections(records)
 
 
 def _faster_than_sqp(three, scales, scale_names, sqp_names, caps, setting) -> dict:
@@ -294,7 +307,7 @@ def sqp_and_table_claims(conv: pd.DataFrame, div: pd.DataFrame, fails: pd.DataFr
                  + scales_text(scales, "matched (fresh seeds)", scale_names)
                  + ": from 5 iterations to never, depending on its unstated start and cost scale",
         uncertainty=_BOOT + "; cost scales: 300 runs each", setting=setting))
-    return records
+    return _with_sections(records)
 
 
 def _sqp_diverts(conv, div, bar, sqp_names, reference, setting) -> dict:
