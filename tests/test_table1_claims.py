@@ -217,6 +217,7 @@ def _closer_at(position, value):
 
 
 _FLOOR = ("0-90 deg", "R0 turned 150 deg", "a", ORDERS[0])
+_FRESH = [("0-90 deg", "R0 turned 150 deg", order) for order in ORDERS]  # the rows of the fresh settings
 _SQP_C = "optimization (analytic)"
 _DIV = "diverts, error > 0.05"
 # (claim, change of the passing inputs just inside the check, the same just outside)
@@ -268,8 +269,14 @@ NEW_BOUNDARIES = {
         "table1_early", _second_at("sens", _FLOOR, "early cells agreeing", 5),
         _second_at("sens", _FLOOR, "early cells agreeing", 6)),
     "no fresh setting has all early cells agreeing": (
-        "table1_early", _second_at("fresh", 1, "early cells agreeing", 5),
-        _second_at("fresh", 1, "early cells agreeing", 6)),
+        "table1_early", _second_at("fresh", _FRESH[1], "early cells agreeing", 5),
+        _second_at("fresh", _FRESH[1], "early cells agreeing", 6)),
+    "fresh: our R^l the closer in every early cell in the printed order": (
+        "table1_early", _second_at("fresh", _FRESH[0], "R^l closer", 9),
+        _second_at("fresh", _FRESH[0], "R^l closer", 8)),
+    "fresh: our R^l the farther in every early cell in the other order": (
+        "table1_early", _second_at("fresh", _FRESH[1], "R^l closer", 0),
+        _second_at("fresh", _FRESH[1], "R^l closer", 1)),
     "our R^l the closer in every early cell in the printed order": (
         "table1_early", _closer_at(6, True), _closer_at(6, False)),
     "our R^l the farther in every early cell in the other order": (
