@@ -73,13 +73,15 @@ def _ours_equal_to_paper(se: float):
 def test_versus_paper_compares_in_standard_errors():
     ours = _ours_equal_to_paper(1e-4)
     assert (versus_paper(ours)["verdict"] == "agrees").all()
-    # at the noise floor the paper's SE is 0.004 / sqrt(1000) = 1.3e-4: 0.001 off is about 6 SE, a difference
-    ours.loc[50, ("ours_left", "mean")] += 0.001
+    # at the noise floor the paper's SE is 0.0055 / sqrt(1000) = 1.7e-4 (its std at the top of its rounding): 0.002
+    # off is 0.0015 beyond the rounding, about 7.5 SE, a difference
+    ours.loc[50, ("ours_left", "mean")] += 0.002
     # the old relative tolerance max(0.005, 0.25 x paper) would have accepted it
-    ours.loc[20, ("ours_right", "mean")] += 0.0002  # about 1.2 SE: agrees
+    ours.loc[20, ("ours_right", "mean")] += 0.0004  # inside the paper's rounding: z 0, agrees
     cmp = versus_paper(ours)
     assert cmp.loc[(50, "ours_left"), "verdict"] == "differs" and cmp.loc[(50, "ours_left"), "z"] > 5
-    assert cmp.loc[(20, "ours_right"), "verdict"] == "agrees"
+    assert cmp.loc[(20, "ours_right"), "verdict"] == "agrees" and cmp.loc[(20, "ours_right"), "z"] == 0
+    assert cmp.loc[(20, "ours_right"), "z as printed"] > 2 and cmp.loc[(50, "ours_left"), "z as printed"] > 10
     assert cmp.loc[(2, "optimization (analytic)"), "paper"] == "3.488 ± 0.250"  # compared with "Optimization"
     ours.loc[5, ("optimization (analytic)", "mean")] = 1e5  # an infeasible SQP iterate has no digits
     assert versus_paper(ours).loc[(5, "optimization (analytic)"), "verdict"] == "infeasible"
@@ -153,11 +155,12 @@ def test_two_step_means_mismatch_is_the_mean_absolute_log_ratio():
     pm = paper_two_step_means()
     assert pm.shape == (7, 2) and pm.loc[2, "ours_right"] == 2.339 and pm.loc[10, "ours_left"] == 0.062
     sim = simulate(3, 3)
-    means, _ = two_step_means(sim, None, pm)
-    # a "paper" e times ours on one side and equal on the other: |log| is 1 on half of the cells
+    means, _, agreeing = two_step_means(sim, None, pm)
+    assert agreeing == 0  # Haar motions from the identity: no early cell near Table I's
+    # a "paper" e times ours on one side and equal on the other: |log| is 1 on half of the cells (no rounding)
     fake = means[["ours_right", "ours_left"]].copy()
     fake["ours_right"] *= np.e
-    assert two_step_means(sim, None, fake)[1] == pytest.approx(0.5)
+    assert two_step_means(sim, None, fake, half_unit=0.0)[1] == pytest.approx(0.5)
 
 
 #: Crafted means of the fake two-step runs, per (motion range, start, noise distribution): R^r and R^l at
@@ -174,7 +177,7 @@ _FLOOR = ([0.1] * 5, [0.1] * 5, 0.5)
 @pytest.fixture
 def fake_runs(monkeypatch):
     """simulate and two_step_means replaced by fakes that record their calls and return :data:`_CELLS`."""
-    import replication.study.table1.study as study
+    import replication.study.table1.grid as study
 
     calls = {"simulate": [], "means": []}
 
@@ -182,10 +185,10 @@ def fake_runs(monkeypatch):
         calls["simulate"].append((seed, n_runs, motion_angle_range_deg, noise_distribution))
         return SimpleNamespace(key=(motion_angle_range_deg, noise_distribution), draw=len(calls["simulate"]))
 
-    def fake_means(problems, start, paper_means):
-        calls["means"].append((problems.draw, start))
+    def fake_means(problems, start, paper_means, *, reversed_halves=False):
+        calls["means"].append((problems.draw, start) + ((True,) if reversed_halves else ()))
         right, left, mismatch = _CELLS.get((problems.key[0], start, problems.key[1]), _FLOOR)
-        return pd.DataFrame({"ours_right": right, "ours_left": left}, index=_ITERS), mismatch
+        return pd.DataFrame({"ours_right": right, "ours_left": left}, index=_ITERS), mismatch, int(10 * mismatch)
 
     monkeypatch.setattr(study, "simulate", fake_simulate)
     monkeypatch.setattr(study, "two_step_means", fake_means)
@@ -201,21 +204,28 @@ def test_sensitivity_grid_order_values_and_left_closer(fake_runs):
                                      (7, 3, None, "sphere"), (7, 3, (0.0, 90.0), "sphere")]
     assert fake_runs["means"] == [(1, None), (1, "far"), (2, None), (2, "far"), (3, None), (3, "far"),
                                   (4, None), (4, "far")]
-    assert list(sens.index) == [(m, s, n) for n in noise for m in motions for s in starts]
-    assert list(sens.columns) == ["R^r @2", "R^r @5", "R^r @10", "R^r @20", "R^r @50", "mismatch"]
-    assert sens.loc[("Haar", "identity", "ball")].tolist() == [0.5, 0.3, 0.2, 0.1, 0.1, 0.25]
-    assert sens.loc[("0-90", "far", "sphere"), "mismatch"] == 0.75 and sens.loc[("Haar", "far", "ball"),
-                                                                                  "mismatch"] == 0.5
+    order = "(14) then (15)"  # the default: the printed order only
+    assert list(sens.index) == [(m, s, n, order) for n in noise for m in motions for s in starts]
+    assert sens.index.names == ["motions", "start", "noise", "half-steps"]
+    assert list(sens.columns) == ["R^r @2", "R^r @5", "R^r @10", "R^r @20", "R^r @50", "mismatch",
+                                  "early cells agreeing"]
+    assert sens.loc[("Haar", "identity", "ball", order)].tolist() == [0.5, 0.3, 0.2, 0.1, 0.1, 0.25, 2]
+    assert sens.loc[("0-90", "far", "sphere", order), "mismatch"] == 0.75 and sens.loc[("Haar", "far", "ball", order),
+                                                                                         "mismatch"] == 0.5
     # counted: (Haar, identity, ball) @2 (R^l equal: not closer) and @5 (closer); (0-90, far, sphere) @2 only
-    assert left_closer == [False, True, True]
+    assert left_closer.tolist() == [False, True, True]
+    assert list(left_closer.index) == [("Haar", "identity", "ball", order, 2), ("Haar", "identity", "ball", order, 5),
+                                       ("0-90", "far", "sphere", order, 2)]
 
 
 def test_fresh_mismatch_averages_over_noise_distributions(fake_runs):
     noise = {"ball": "uniform", "sphere": "sphere"}
-    fresh = fresh_mismatch([("Haar", "identity"), ("0-90", "far")], 9, 3, {"Haar": None, "0-90": (0.0, 90.0)},
-                           {"identity": None, "far": "far"}, noise, paper_two_step_means())
-    assert fresh == {("Haar", "identity"): pytest.approx((0.25 + 0.5) / 2),
-                     ("0-90", "far"): pytest.approx((0.5 + 0.75) / 2)}
+    fresh = fresh_mismatch([("Haar", "identity", "(14) then (15)"), ("0-90", "far", "(14) then (15)")], 9, 3,
+                           {"Haar": None, "0-90": (0.0, 90.0)}, {"identity": None, "far": "far"}, noise,
+                           paper_two_step_means())
+    assert fresh["mismatch"].tolist() == [pytest.approx((0.25 + 0.5) / 2), pytest.approx((0.5 + 0.75) / 2)]
+    assert fresh["early cells agreeing"].tolist() == [5, 7]  # the most over the noise distributions
+    assert fresh["R^l closer"].tolist() == [1, 1] and fresh["early cells"].tolist() == [2, 1]
     assert [c[:2] for c in fake_runs["simulate"]] == [(9, 3)] * 4
     assert [c[2:] for c in fake_runs["simulate"]] == [(None, "uniform"), (None, "sphere"), ((0.0, 90.0), "uniform"),
                                                       ((0.0, 90.0), "sphere")]
@@ -228,9 +238,10 @@ def test_failure_table_and_its_display():
     assert fails.loc["a", "optimization (x)"] == 0.5 and fails.loc["a", "ours_right"] == 0.25
     assert fails.loc["b", "optimization (x)"] == 0.0 and np.isnan(fails.loc["b", "ours_right"])
     shown = failure_display(fails, lambda row, col: 100)
-    assert shown.loc["a", "optimization (x)"] == share_range(0.5)              # SQP strictly inside (0, 1): a bracket
-    assert shown.loc["a", "ours_right"] == "25.0% ± 4.3%"                       # sqrt(0.25 * 0.75 / 100) = 0.0433
-    assert shown.loc["b", "optimization (x)"] == "0.0% ± 0.0%" and shown.loc["b", "ours_right"] == ""
+    # SQP strictly inside (0, 1): a bracket, with a Wilson interval covering it (50 and 54 of 100)
+    assert shown.loc["a", "optimization (x)"] == share_range(0.5) + " [40, 63]"
+    assert shown.loc["a", "ours_right"] == "25.0% [17.5, 34.3]"                # Wilson, 25 of 100
+    assert shown.loc["b", "optimization (x)"] == "0.0% [0.0, 3.7]" and shown.loc["b", "ours_right"] == ""
 
 
 def test_sqp_failures_and_other_minimum():

@@ -1,6 +1,6 @@
-"""The studies of ``notebooks/03_table1_monte_carlo.ipynb``, section by section: the sensitivity grid over the
-unstated settings, SQP's failures, the scale of eq. (8), convergence per setting, the cost against its minimum,
-and the texts of the notebook's verdicts.
+"""The studies of ``notebooks/03_table1_monte_carlo.ipynb``, section by section (the grid over the unstated
+settings of its section 2 is :mod:`.grid`): SQP's failures, the scale of eq. (8), convergence per setting, the counts
+of runs again on fresh seeds, the cost against its minimum, and the texts of the notebook's verdicts.
 """
 from __future__ import annotations
 
@@ -11,16 +11,15 @@ import pandas as pd
 
 from ...core.so3 import angle_between_deg, frobenius_error, orthonormality_residual
 from ...core.solvers import ReplicationWarning, chordal_optimal, sqp
-from ...core.stats import mean_se, paired_ratio_ci, share_range
+from ...core.stats import mean_se, paired_ratio_ci, share_range, wilson_interval
 from .. import paper
-from ..simulation import SimulatedProblems, simulate
-from .table import DIVERGED, FEASIBLE_TOL, convergence_summary, diverting_runs, iterate_errors, table1
+from ..simulation import simulate
+from .table import DIVERGED, FEASIBLE_TOL, convergence_summary, diverting_runs, iterate_errors
 
-__all__ = ["compact", "FAIL", "paper_two_step_means", "two_step_means", "sensitivity_grid", "fresh_mismatch",
-           "failure_table", "failure_display", "sqp_failures", "at_other_minimum", "cost_scale_study",
-           "interval_text", "share_text", "shown_cost_scales", "convergence_by_setting",
-           "shown_convergence", "cost_against_minimum", "diverting_table", "per_setting_text",
-           "sqp_per_setting_text", "scales_text"]
+__all__ = ["compact", "FAIL", "share_ci", "bracket_ci", "failure_table", "failure_display", "sqp_failures",
+           "at_other_minimum", "cost_scale_study", "fresh_seed_counts", "interval_text", "share_text",
+           "shown_cost_scales", "convergence_by_setting", "shown_convergence", "cost_against_minimum",
+           "diverting_table", "per_setting_text", "sqp_per_setting_text", "scales_text"]
 
 #: A run "fails" when its final error ``||R_hat - R0||_F`` exceeds this (notebook 03, section 4).
 FAIL = 0.05
@@ -53,102 +52,26 @@ def compact(cmp: pd.DataFrame, reference: pd.DataFrame | None = None) -> pd.Data
     return table
 
 
-def paper_two_step_means(reference: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The paper's mean two-step errors: index iteration, columns ``ours_right``, ``ours_left``."""
-    reference = paper.load_table1() if reference is None else reference
-    return reference["mean"].unstack()[["ours_right", "ours_left"]]
+def share_ci(p, n: int, digits: int = 0) -> str:
+    """``"<p>% [<low>, <high>]"``: a share of ``n`` runs with its 95 % Wilson interval, in percent."""
+    low, high = wilson_interval(int(round(float(p) * n)), n)
+    return f"{100 * p:.{digits}f}% [{100 * low:.{digits}f}, {100 * high:.{digits}f}]"
 
 
-def two_step_means(problems: SimulatedProblems, start, paper_means: pd.DataFrame):
-    """Mean errors of ``R^r`` and ``R^l`` at the paper's iterations, and their mismatch with Table I.
-
-    Parameters
-    ----------
-    problems : SimulatedProblems
-    start : None or array_like, shape (3, 3) or (n_runs, 3, 3)
-        Start of the two-step method (``None``: identity).
-    paper_means : DataFrame
-        :func:`paper_two_step_means`.
-
-    Returns
-    -------
-    (means, mismatch)
-        ``means``: the ``"mean"`` part of :func:`table1` (index iteration, one column per side).
-        ``mismatch = mean over iterations n and sides s of |log(ours[n, s] / paper[n, s])|`` (0: equal means;
-        ``log 2 = 0.69``: a factor 2 on average).
-    """
-    means = table1(iterate_errors(problems, init=start, with_sqp=False)).xs("mean", axis=1, level=1)
-    return means, float(np.mean(np.abs(np.log(means[["ours_right", "ours_left"]] / paper_means))))
-
-
-def sensitivity_grid(seed: int, n_runs: int, motions: dict, starts: dict, noise: dict, paper_means: pd.DataFrame,
-                     *, shown=(2, 5, 10, 20, 50), early=(2, 5, 10)):
-    """The two-step method over every (noise distribution, motions, start) setting, against Table I.
-
-    Each (noise, motions) pair draws ``simulate(seed, n_runs, motion_angle_range_deg=..., noise_distribution=...)``
-    (the same seed everywhere: the settings share their random draws); every start is run on those problems.
-
-    Parameters
-    ----------
-    seed, n_runs : int
-    motions : dict
-        label -> ``motion_angle_range_deg`` (``None``: Haar).
-    starts : dict
-        label -> start (``None``, a rotation, or one rotation per run).
-    noise : dict
-        label -> ``noise_distribution``.
-    paper_means : DataFrame
-        :func:`paper_two_step_means`.
-    shown : sequence of int
-        Iterations whose mean ``R^r`` error is reported (columns ``"R^r @<n>"``).
-    early : sequence of int
-        Iterations checked for the order of ``R^l`` and ``R^r``.
-
-    Returns
-    -------
-    (sens, left_closer)
-        ``sens``: index ``(motions, start, noise)`` in loop order (noise outermost, start innermost); columns the
-        ``R^r`` means and ``mismatch`` (:func:`two_step_means`). ``left_closer``: one bool per early cell whose
-        ``R^r`` mean is still above twice its value at iteration 50: whether ``R^l``'s mean is below ``R^r``'s.
-    """
-    rows, left_closer = {}, []
-    for n_name, dist in noise.items():
-        for m_name, m_range in motions.items():
-            sim_s = simulate(seed, n_runs, motion_angle_range_deg=m_range, noise_distribution=dist)
-            for s_name, start in starts.items():
-                means, mismatch = two_step_means(sim_s, start, paper_means)
-                rows[(m_name, s_name, n_name)] = {**{f"R^r @{n}": means.loc[n, "ours_right"] for n in shown},
-                                                  "mismatch": mismatch}
-                above = [n for n in early if means.loc[n, "ours_right"] > 2 * means.loc[50, "ours_right"]]
-                left_closer += [means.loc[n, "ours_left"] < means.loc[n, "ours_right"] for n in above]
-    sens = pd.DataFrame(rows).T
-    sens.index.names = ["motions", "start", "noise"]
-    return sens, left_closer
-
-
-def fresh_mismatch(settings, seed: int, n_runs: int, motions: dict, starts: dict, noise: dict,
-                   paper_means: pd.DataFrame) -> dict:
-    """Mismatch (:func:`two_step_means`) of (motions, start) settings on new problems, averaged over ``noise``.
-
-    Parameters
-    ----------
-    settings : iterable of (motions label, start label)
-    seed, n_runs : int
-        The new problems: ``simulate(seed, n_runs, ...)`` per noise distribution.
-    motions, starts, noise, paper_means
-        As in :func:`sensitivity_grid`.
-
-    Returns
-    -------
-    dict
-        setting -> ``mean over the noise distributions of the mismatch``.
-    """
-    fresh = {}
-    for setting in settings:
-        fresh[setting] = np.mean([two_step_means(simulate(seed, n_runs, motion_angle_range_deg=motions[setting[0]],
-                                                          noise_distribution=dist), starts[setting[1]], paper_means)[1]
-                                  for dist in noise.values()])
-    return fresh
+def bracket_ci(p, n: int, step: float = 0.05) -> str:
+    """A share of ``n`` runs that moves with the machine's rounding: its ``step``-wide bracket
+    (:func:`~replication.core.stats.share_range`, a bound on this machine's share) and, in brackets, a 95 % Wilson
+    interval covering every count in that bracket (the lower end of the smallest, the upper of the largest).
+    ``none`` and ``all`` do not move: ``"none of <n> [0, <high>]"``, ``"all of <n> [<low>, 100]"``."""
+    p = float(p)
+    if p in (0.0, 1.0):
+        low, high = wilson_interval(int(round(p * n)), n)
+        return f"{share_range(p)} of {n} " + (f"[0, {100 * high:.1f}]" if p == 0 else f"[{100 * low:.1f}, 100]")
+    k = int(np.floor(p / step + 1e-9))
+    k_min = int(np.ceil(k * step * n - 1e-9))
+    k_max = min(int(np.ceil(min((k + 1) * step, 1.0) * n - 1e-9)) - 1, n - 1)
+    low, high = wilson_interval(k_min, n)[0], wilson_interval(k_max, n)[1]
+    return f"{share_range(p, step)} [{100 * low:.0f}, {100 * high:.0f}]"
 
 
 def failure_table(rows: dict, *, fail: float = FAIL) -> pd.DataFrame:
@@ -174,11 +97,12 @@ def failure_table(rows: dict, *, fail: float = FAIL) -> pd.DataFrame:
 
 
 def failure_display(fails: pd.DataFrame, runs) -> pd.DataFrame:
-    """:func:`failure_table` as text: SQP's shares strictly between 0 and 1 as brackets, the others with their SE.
+    """:func:`failure_table` as text: each share with its 95 % Wilson interval; SQP's strictly between 0 and 1 as
+    brackets.
 
     Far-start SQP failures depend on where runs stop at their iteration limit (the machine's rounding), so an SQP
-    share ``0 < p < 1`` is shown as :func:`replication.core.stats.share_range`; every other share as
-    ``"p ± sqrt(p (1 - p) / n)"`` in percent, ``n = runs(row, column)``.
+    share ``0 < p < 1`` is shown as :func:`bracket_ci` (a bound on this machine's share, with an interval covering
+    the bracket); every other share as :func:`share_ci` with one decimal, ``n = runs(row, column)``.
 
     Parameters
     ----------
@@ -187,9 +111,9 @@ def failure_display(fails: pd.DataFrame, runs) -> pd.DataFrame:
     runs : callable
         ``runs(row_label, column) -> n`` runs behind that share.
     """
-    return fails.apply(lambda col: [("" if pd.isna(p) else share_range(p) if col.name.startswith("optimization")
-                                     and 0 < p < 1 else f"{p:.1%} ± {np.sqrt(p * (1 - p) / runs(r, col.name)):.1%}")
-                                    for r, p in zip(fails.index, col)])
+    return fails.apply(lambda col: [("" if pd.isna(p) else bracket_ci(p, runs(r, col.name))
+                                     if col.name.startswith("optimization") and 0 < p < 1
+                                     else share_ci(p, runs(r, col.name), 1)) for r, p in zip(fails.index, col)])
 
 
 def sqp_failures(A, B, R0, *, init=None, max_iterations: int = 50, fail: float = FAIL):
@@ -270,6 +194,54 @@ def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, 
     table = pd.DataFrame(rows).T
     table.index.names = ["setting", "eq. (8) times"]
     return table, runs
+
+
+def fresh_seed_counts(seed: int, n_runs: int, n_sqp: int, scales: dict, rng: np.random.Generator, *,
+                      motions_deg, far_start, near_scales=("as printed", "/ 2J"), far_scales=("as printed", "/ 100J"),
+                      bar: float = FAIL, fail: float = FAIL) -> dict:
+    """Section 5's counts of runs again, on new problems (root seed ``seed``): the confirmation of its shares.
+
+    Two identity-start settings, our defaults (``"defaults"``) and motion angles ``motions_deg``
+    (``"0-90 deg, identity start"``): the two-step method on ``n_runs`` runs, SQP (analytic gradients) on eq. (8)
+    times each of ``near_scales`` on the first ``n_sqp``; and the matched setting (``"matched"``: the same
+    motions from ``far_start``), SQP at each of ``far_scales`` on ``n_sqp`` runs.
+
+    Parameters
+    ----------
+    seed, n_runs, n_sqp : int
+    scales : dict
+        name -> factor (the notebook's ``SCALES``); ``near_scales`` and ``far_scales`` name some of them.
+    rng : numpy.random.Generator
+        Bootstrap intervals (:func:`cost_scale_study`, :func:`convergence_summary`).
+    motions_deg : (float, float)
+    far_start : array_like, shape (3, 3)
+    near_scales, far_scales : sequence of str
+    bar : float
+        The error bar of :func:`diverting_table`.
+    fail : float
+        Failure threshold of :func:`cost_scale_study`.
+
+    Returns
+    -------
+    dict
+        ``seed``, ``n_runs``, ``n_sqp``; ``conv``: :func:`convergence_summary` per identity-start setting (index
+        ``(setting, method)``, methods ``"ours_right"`` and ``"optimization (analytic)"``: SQP on eq. (8) as
+        printed, ``near_scales[0]``); ``div``: :func:`diverting_table` of those settings; ``scales``:
+        :func:`cost_scale_study` of all three settings (index ``(setting, "eq. (8) times")``).
+    """
+    sims = {"defaults": simulate(seed, n_runs),
+            "0-90 deg, identity start": simulate(seed, n_runs, motion_angle_range_deg=motions_deg)}
+    settings = {label: (s, *iterate_errors(s, with_sqp=False, return_costs=True)) for label, s in sims.items()}
+    near, runs = cost_scale_study({label: (s, None) for label, s in sims.items()},
+                                  {k: scales[k] for k in near_scales}, rng, n_runs=n_sqp, fail=fail)
+    far, _ = cost_scale_study({"matched": (sims["0-90 deg, identity start"], far_start)},
+                              {k: scales[k] for k in far_scales}, rng, n_runs=n_sqp, fail=fail)
+    conv = pd.concat({label: convergence_summary(
+        {"ours_right": e["ours_right"], "optimization (analytic)": runs[(label, near_scales[0])][1]}, rng,
+        costs={"ours_right": c["ours_right"], "optimization (analytic)": runs[(label, near_scales[0])][0].cost})
+        for label, (_, e, c) in settings.items()}, names=["setting", "method"])
+    div = diverting_table(runs, settings, list(settings), scale_names=near_scales, bar=bar, n_runs=n_sqp)
+    return dict(seed=seed, n_runs=n_runs, n_sqp=n_sqp, conv=conv, div=div, scales=pd.concat([near, far]))
 
 
 def interval_text(row, key: str, caps: dict | None = None, *, iterations: int = 50) -> str:

@@ -2,7 +2,9 @@
 
 SQP appears once per named variant (:data:`replication.core.solvers.SQP_VARIANTS`), as columns
 ``"optimization (analytic)"`` etc.; each is compared with the paper's single "Optimization" column.
-Cells are compared in standard errors: ours ``mean ± std/sqrt(n)``, the paper's ``mean ± std/sqrt(1000)``.
+Cells are compared in standard errors: ours ``mean ± std/sqrt(n)``, the paper's ``mean ± std/sqrt(1000)``, the
+paper's values taken as what its three printed decimals allow (:func:`printed_z`): a printed 0.009 is anything in
+``[0.0085, 0.0095)``.
 """
 from __future__ import annotations
 
@@ -17,7 +19,8 @@ from ...core.stats import z_score
 from .. import paper
 from ..simulation import SimulatedProblems
 
-__all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED", "converged_at",
+__all__ = ["iterate_errors", "table1", "versus_paper", "paper_method", "Z_AGREE", "DIVERGED", "PRINTED_HALF_UNIT",
+           "printed_z", "EARLY", "converged_at",
            "first_below", "convergence_summary", "ONE_PERCENT", "NEGLIGIBLE", "RISE_TOL",
            "COST_RISE_RTOL", "FEASIBLE_TOL", "diverting_runs"]
 
@@ -26,6 +29,10 @@ ONE_PERCENT = 0.01 * np.sqrt(3.0)
 
 #: Two means "agree" when they differ by at most this many standard errors of their difference.
 Z_AGREE = 3.0
+#: The paper prints Table I to 3 decimals: a printed value ``v`` stands for anything in ``[v - h, v + h)``.
+PRINTED_HALF_UNIT = 0.0005
+#: Table I's early iterations (the two-step method still far from its floor).
+EARLY = (2, 5, 10)
 #: A mean error above this is reported as "infeasible": between rotations ``||R - R0||_F <= 2 sqrt 2``, so
 #: only infeasible SQP iterates exceed it, and their values (10^5 and more) depend on rounding.
 DIVERGED = 10.0
@@ -37,7 +44,8 @@ def paper_method(column: str) -> str:
 
 
 def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=None,
-                   sqp_variants=("analytic",), with_sqp: bool = True, sqp_runs=None, return_costs: bool = False):
+                   sqp_variants=("analytic",), with_sqp: bool = True, sqp_runs=None, return_costs: bool = False,
+                   reversed_halves: bool = False):
     """``||R_hat_n - R0||_F`` at every iteration ``n`` of each method, as in Table I.
 
     Parameters
@@ -60,6 +68,13 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
 
     return_costs : bool
         Also return the cost (8) at every iterate (raw iterates for SQP), in the same layout.
+    reversed_halves : bool
+        Run the two half-steps of each two-step iteration in the other order: eq. (15) first (``R^l_n`` from
+        ``R^r_{n-1}``, the start standing for ``R^r_0``), then eq. (14) (``R^r_n`` from ``R^l_n``). That is
+        :func:`~replication.core.solvers.two_step` on the transposed motions, whose eq. (14) is our eq. (15) (its
+        operator is the adjoint) and whose ``R0`` and cost (8) are ours, with ``right`` and ``left`` swapped.
+        The paper prints the order (14) then (15); its Table I has ``R^l`` the farther from ``R0``, as in our runs
+        only the other order gives (notebook 03, section 2).
 
     Returns
     -------
@@ -69,7 +84,13 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
     R0 = problems.R0[:, None]
     with warnings.catch_warnings():  # the paper's protocol stops at `iterations` on purpose
         warnings.simplefilter("ignore", ReplicationWarning)
-        ours = two_step(problems.A, problems.B, iterations=iterations, init=init)
+        if reversed_halves:
+            flip = two_step(np.swapaxes(problems.A, -1, -2), np.swapaxes(problems.B, -1, -2), iterations=iterations,
+                            init=init)
+            two = dict(right=flip.left, left=flip.right, cost_right=flip.cost_left, cost_left=flip.cost_right)
+        else:
+            ours = two_step(problems.A, problems.B, iterations=iterations, init=init)
+            two = dict(right=ours.right, left=ours.left, cost_right=ours.cost_right, cost_left=ours.cost_left)
     errors, costs = {}, {}
     pad = lambda v, cap: v if cap >= iterations else np.concatenate([v, np.repeat(v[:, -1:], iterations - cap, axis=1)],
                                                                    axis=1)
@@ -83,9 +104,9 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
             res = sqp(problems.A[:k], problems.B[:k], max_iterations=cap, init=start, **options)
         errors[f"optimization ({name})"] = pad(frobenius_error(res.iterates, R0[:k]), cap)
         costs[f"optimization ({name})"] = pad(res.cost, cap)
-    errors["ours_right"] = frobenius_error(ours.right, R0)
-    errors["ours_left"] = frobenius_error(ours.left, R0)
-    costs["ours_right"], costs["ours_left"] = ours.cost_right, ours.cost_left
+    errors["ours_right"] = frobenius_error(two["right"], R0)
+    errors["ours_left"] = frobenius_error(two["left"], R0)
+    costs["ours_right"], costs["ours_left"] = two["cost_right"], two["cost_left"]
     return (errors, costs) if return_costs else errors
 
 
@@ -103,11 +124,39 @@ def table1(errors: dict, iterations=paper.TABLE1_ITERATIONS) -> pd.DataFrame:
     return pd.DataFrame(cols, index=pd.Index(list(iterations), name="iteration"))
 
 
-def versus_paper(ours: pd.DataFrame, *, n_paper: int = 1000) -> pd.DataFrame:
-    """Our Table I beside the paper's, cell by cell, compared in standard errors.
+def printed_z(ours_mean, ours_se, printed_mean, printed_std, *, n_paper: int = 1000,
+              half_unit: float = PRINTED_HALF_UNIT):
+    """A mean of ours against a printed (rounded) mean ± std of ``n_paper`` runs, in standard errors, three ways.
 
-    ``z = (ours - paper) / sqrt(se_ours^2 + se_paper^2)`` with ``se_paper = std_paper / sqrt(n_paper)``;
-    a cell "agrees" when ``|z| <= Z_AGREE``. ``ratio`` (ours / paper) gives the order of magnitude.
+    The printed digits say only that the paper's mean lies in ``[m - h, m + h)`` and its std in ``[s - h, s + h)``
+    (``h = half_unit``).
+
+    Returns
+    -------
+    (bound, uniform, as_printed) : floats
+        ``bound``: ``z`` against the value the rounding allows that is nearest to ours, with the paper's std at the
+        top of its rounding interval: ``sign(d) max(|d| - h, 0) / sqrt(se^2 + ((s + h) / sqrt(n_paper))^2)``,
+        ``d = ours - m``; the smallest ``|z|`` consistent with the printed digits (a bound: ``|z|`` is at least
+        this). ``uniform``: the rounding error taken as uniform on ``[-h, h]``, its variance ``h^2 / 3`` added
+        to the denominator. ``as_printed``: the printed digits taken as exact (``h = 0``).
+    """
+    d = float(ours_mean) - float(printed_mean)
+    se_paper = float(printed_std) / np.sqrt(n_paper)
+    bound = np.sign(d) * max(abs(d) - half_unit, 0.0) / np.hypot(ours_se, (float(printed_std) + half_unit)
+                                                                / np.sqrt(n_paper))
+    uniform = d / np.sqrt(ours_se ** 2 + se_paper ** 2 + half_unit ** 2 / 3.0)
+    return float(bound), float(uniform), float(z_score(ours_mean, ours_se, printed_mean, se_paper))
+
+
+def versus_paper(ours: pd.DataFrame, *, n_paper: int = 1000, half_unit: float = PRINTED_HALF_UNIT) -> pd.DataFrame:
+    """Our Table I beside the paper's, cell by cell, compared in standard errors (:func:`printed_z`).
+
+    ``z`` is the rounding-aware bound of :func:`printed_z`: the difference, in standard errors of the
+    difference (ours ``se``, the paper's ``std / sqrt(n_paper)`` with its std at the top of its rounding
+    interval), from the nearest value the paper's printed digits allow; a cell "agrees" when
+    ``|z| <= Z_AGREE``, so it "differs" only if it differs from every value the printed digits allow.
+    ``z uniform`` (the rounding's uniform variance added) and ``z as printed`` (the printed digits taken as
+    exact) are given beside it. ``ratio`` (ours / paper) gives the order of magnitude.
     A mean above :data:`DIVERGED` is printed as "infeasible" with no ``z``: such values come from SQP
     iterates far off SO(3) (early iterations, diverging runs) and change with the machine's rounding.
     ``ours`` is the output of :func:`table1` with the paper's iterations.
@@ -121,14 +170,15 @@ def versus_paper(ours: pd.DataFrame, *, n_paper: int = 1000) -> pd.DataFrame:
             o_mean, o_std = ours.loc[n, (method, "mean")], ours.loc[n, (method, "std")]
             o_se = ours.loc[n, (method, "se")] if (method, "se") in ours.columns else 0.0
             diverged = not o_mean <= DIVERGED
-            z = np.nan if diverged else float(z_score(o_mean, o_se, p_mean, p_std / np.sqrt(n_paper)))
+            z = (np.nan,) * 3 if diverged else printed_z(o_mean, o_se, p_mean, p_std, n_paper=n_paper,
+                                                          half_unit=half_unit)
             rows.append({
                 "iteration": n, "method": method,
                 "ours": f"infeasible (mean > {DIVERGED:g})" if diverged else f"{o_mean:.3f} ± {o_std:.3f}",
                 "paper": f"{p_mean:.3f} ± {p_std:.3f}",
                 "ratio": np.nan if diverged else round(float(o_mean / p_mean), 2),
-                "z": np.nan if diverged else round(z, 1),
-                "verdict": "infeasible" if diverged else ("agrees" if abs(z) <= Z_AGREE else "differs"),
+                "z": round(z[0], 1), "z uniform": round(z[1], 1), "z as printed": round(z[2], 1),
+                "verdict": "infeasible" if diverged else ("agrees" if abs(z[0]) <= Z_AGREE else "differs"),
             })
     return pd.DataFrame(rows).set_index(["iteration", "method"])
 
