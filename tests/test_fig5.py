@@ -1,3 +1,5 @@
+import re
+
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
@@ -5,14 +7,21 @@ import pytest
 
 from replication.core.stats import share_range
 from replication.study.fig5 import (
+    RECORD_SECTION,
+    confirmation_table,
     fig5_figure,
+    match_to_table1,
+    matching_display,
     noise_sweep,
+    problem_sets,
     ratio_range,
     resilience,
+    resilience_record,
     sqp_configs_for,
     summary_table,
     sweep_grid,
     two_step_growth,
+    variants_of,
 )
 
 
@@ -97,3 +106,267 @@ def test_fig5_figure_draws_two_step_with_error_bars_and_every_sqp_variant():
                                                                      "SQP (capped), all runs", "ours, $R^r$"]
     assert fig._suptitle.get_text() == "Fig. 5 (replicated)"
     plt.close(fig)
+
+
+# ---- resilience over all runs, and the changes of the mean errors ------------------------------------------------
+
+def _sweep(at_minimum=True):
+    rng = np.random.default_rng(3)
+    out = {}
+    for lv, scale in ((1.0, 0.01), (10.0, 0.1)):
+        out[lv] = {"two_step": scale * (1.5 + rng.random(40)), "sqp": scale * (1.0 + rng.random(40)),
+                   "sqp_at_minimum": np.full(40, at_minimum)}
+    return out
+
+
+def test_resilience_all_runs_gives_ratios_where_sqp_stopped_short():
+    sw = _sweep(at_minimum=False)
+    per_level, growth = resilience(sw, np.random.default_rng(0), n_boot=200)
+    assert per_level["ratio"].isna().all() and np.isnan(growth["ratio"])
+    per_level, growth = resilience(sw, np.random.default_rng(0), n_boot=200, all_runs=True)
+    assert per_level["sqp_failed"].tolist() == [40, 40] and per_level["ratio"].notna().all()
+    d_ours = sw[10.0]["two_step"].mean() - sw[1.0]["two_step"].mean()
+    d_sqp = sw[10.0]["sqp"].mean() - sw[1.0]["sqp"].mean()
+    assert growth["ratio"] == pytest.approx(d_ours / d_sqp) and growth["low"] < growth["ratio"] < growth["high"]
+    assert growth["sqp_change"] == pytest.approx(d_sqp) and growth["two_step_change"] == pytest.approx(d_ours)
+    assert growth["sqp_change_low"] < d_sqp < growth["sqp_change_high"]
+    assert growth["two_step_change_low"] < d_ours < growth["two_step_change_high"]
+
+
+def test_resilience_gives_the_changes_where_sqp_failed_without_a_growth_ratio():
+    per_level, growth = resilience(_sweep(at_minimum=False), np.random.default_rng(0), n_boot=200)
+    assert np.isnan(growth["ratio"]) and np.isfinite(growth["sqp_change_low"])
+    assert growth["sqp_all_highest"] - growth["sqp_all_lowest"] == pytest.approx(growth["sqp_change"])
+
+
+def test_resilience_where_sqp_converged_is_unchanged_by_all_runs():
+    sw = _sweep(at_minimum=True)
+    a = resilience(sw, np.random.default_rng(5), n_boot=100)
+    b = resilience(sw, np.random.default_rng(5), n_boot=100, all_runs=True)
+    pd.testing.assert_frame_equal(a[0], b[0])
+    assert a[1] == b[1]
+
+
+# ---- matching stop-short SQPs to Table I ------------------------------------------------------------------------
+
+FAMILIES = {"early": {"start": "identity", "knob": "max_iterations", "grid": range(1, 13), "text": "{:g} it"},
+            "tol": {"start": "identity", "knob": "ftol", "grid": [1e-3, 1e-1], "text": "ftol {:g}"}}
+
+
+def _match(target, **kw):
+    return match_to_table1(7, 6, target, motions={"Haar": None}, starts={"identity": None},
+                           noise={"ball": "uniform"}, families=FAMILIES, **kw)
+
+
+def test_match_to_table1_picks_the_grid_value_closest_to_the_target():
+    matching, configs, keys = _match(0.05)
+    early = matching.loc[("early", "Haar", "ball")]
+    k = int(early["value"])
+    assert 1 < k < 12 and early["knob"] == "max_iterations" and early["label"] == f"early: {k} it"
+    for neighbour in (early["mean below"], early["mean above"]):           # no neighbour is closer on a log scale
+        assert abs(np.log(neighbour / 0.05)) >= abs(np.log(early["SQP mean"] / 0.05))
+    assert early["matched"] == (np.exp(abs(np.log(early["SQP mean"] / 0.05))) <= 1.25)
+    # the configuration runs SQP stopped after k iterations: the same errors as the matching read from the history
+    from replication.core.so3 import frobenius_error
+    from replication.core.solvers import sqp
+    from replication.study.simulation import simulate
+    sim = simulate(7, 6)
+    if early["matched"]:
+        assert configs[early["label"]] == ("analytic", {"max_iterations": k})
+        assert ("Haar", "identity", "ball", early["label"]) in keys
+    with pytest.warns(Warning):
+        res = sqp(sim.A, sim.B, max_iterations=k)
+    assert frobenius_error(res.R, sim.R0).mean() == pytest.approx(early["SQP mean"], rel=1e-9)
+    tol = matching.loc[("tol", "Haar", "ball")]
+    assert tol["knob"] == "ftol" and tol["value"] in (1e-3, 1e-1) and np.isnan(tol["mean below"] if
+                                                                              tol["value"] == 1e-3 else
+                                                                              tol["mean above"])
+
+
+def test_match_to_table1_matches_within_the_factor_and_not_past_it():
+    matching, _, _ = _match(0.05)
+    mean = matching.loc[("early", "Haar", "ball"), "SQP mean"]
+    factor = np.exp(abs(np.log(mean / 0.05)))
+    m_in, configs_in, keys_in = _match(0.05, max_mismatch=factor * 1.001)
+    m_out, configs_out, keys_out = _match(0.05, max_mismatch=factor * 0.999)
+    assert m_in.loc[("early", "Haar", "ball"), "matched"] and not m_out.loc[("early", "Haar", "ball"), "matched"]
+    label = m_in.loc[("early", "Haar", "ball"), "label"]
+    assert label in configs_in and label not in configs_out
+    assert len(keys_in) == len(keys_out) + 1
+
+
+def test_matching_display_texts():
+    idx = pd.MultiIndex.from_tuples([("early", "Haar", "ball"), ("far", "Haar", "ball")],
+                                    names=["family", "motions", "noise"])
+    matching = pd.DataFrame({"knob": ["max_iterations"] * 2, "value": [7, 1], "SQP mean": [0.01346, 2.7339],
+                             "SQP SE": [0.0023, 0.0001], "SQP SD": [0.0282, 0.001], "mean below": [0.048, np.nan],
+                             "mean above": [0.0058, 2.74], "two-step mean": [0.00654, 0.00654],
+                             "matched": [True, False], "label": ["early: 7 iterations", "far: 1 iterations"]},
+                            index=idx)
+    out = matching_display(matching, 0.015)
+    assert out.columns.name == "Table I: 0.015"
+    assert out.loc[("early", "Haar", "ball")].tolist() == ["7 iterations", "0.0135 ± 0.0023", "0.028",
+                                                           "0.0480 / 0.0058", "0.0065"]
+    assert out.loc[("far", "Haar", "ball")].tolist() == ["no match (best: 1 iterations)", "2.73", "-", "-", "0.0065"]
+
+
+# ---- problem sets, fresh seeds ----------------------------------------------------------------------------------
+
+def test_problem_sets_groups_rows_on_the_same_problems_and_measures_their_differences():
+    base = _sweep()
+    shifted = {lv: {**d, "sqp": d["sqp"] + 2e-4} for lv, d in base.items()}
+    sweeps = {("Haar", "identity", "ball", "a"): base, ("Haar", "identity", "ball", "b"): shifted,
+              ("Haar", "far", "ball", "a"): base, ("Haar", "identity", "sphere", "a"): base,
+              ("0-90", "identity", "ball", "a"): base}
+    growth = pd.DataFrame({"ratio": [1.4, 1.41, 1.456, 1.3, 1.1], "low": [1.2] * 5, "high": [1.6] * 5},
+                          index=pd.MultiIndex.from_tuples(list(sweeps)))
+    sets = problem_sets(sweeps, growth)
+    assert list(sets.index) == [("Haar", "ball"), ("Haar", "sphere"), ("0-90", "ball")]
+    haar = sets.loc[("Haar", "ball")]
+    assert haar["rows"] == 3 and haar["first"] == ("Haar", "identity", "ball", "a")
+    assert haar["SQP difference"] == pytest.approx(2e-4) and haar["two-step difference"] == 0
+    assert haar["growth ratio"] == "1.40 [1.20, 1.60]" and haar["growth ratios of the rows"] == "1.40-1.46"
+    assert sets.loc[("Haar", "sphere"), "growth ratios of the rows"] == "1.30"
+
+
+def test_variants_of_runs_exactly_the_given_rows():
+    pick = variants_of([("Haar", "identity", "ball", "a"), ("Haar", "identity", "ball", "c"),
+                        ("Haar", "far", "ball", "b")])
+    assert pick("Haar", "identity", "ball") == ["a", "c"] and pick("Haar", "far", "ball") == ["b"]
+    assert pick("0-90", "identity", "ball") == []
+
+
+def test_confirmation_table_texts_two_decimals_where_sqp_failed():
+    cols = ["ratio", "low", "high", "sqp_change", "sqp_change_low", "sqp_change_high", "two_step_change",
+            "two_step_change_low", "two_step_change_high"]
+    idx = pd.MultiIndex.from_tuples([("H", "i", "b", "a"), ("H", "f", "b", "a")])
+    found = pd.DataFrame([[1.43, 1.31, 1.57, 0.024, 0.022, 0.026, 0.035, 0.032, 0.038],
+                          [np.nan] * 3 + [-0.0012, -0.0179, 0.0151, 0.0346, 0.0319, 0.0374]], index=idx, columns=cols)
+    fresh = found.iloc[::-1] * 1.0
+    out = confirmation_table(found, fresh)
+    assert list(out.index) == list(fresh.index)
+    assert out.loc[("H", "i", "b", "a")].tolist() == ["1.43 [1.31, 1.57]"] * 2 + ["0.024 [0.022, 0.026]"] * 2 + [
+        "0.035 [0.032, 0.038]"]
+    assert out.loc[("H", "f", "b", "a")].tolist() == ["-", "-", "-0.00 [-0.02, 0.02]", "-0.00 [-0.02, 0.02]",
+                                                      "0.035 [0.032, 0.037]"]
+
+
+def test_fig5_figure_leaves_out_variants_that_did_not_run_in_a_panel():
+    per_level, _ = _synthetic()
+    runs = {lv: {"sqp": np.array([lv, 3 * lv])} for lv in (1.0, 10.0)}
+    sweeps = {("Haar", "identity", "ball", "analytic"): runs, ("0-90 deg", "identity", "ball", "stopped"): runs}
+    fig = fig5_figure(per_level, sweeps, [1.0, 10.0], [("a", ("Haar", "identity", "ball")),
+                                                       ("b", ("0-90 deg", "identity", "ball")),
+                                                       ("c", ("Haar", "identity", "ball"))],
+                      variants=(("analytic", "-"), ("stopped", ":")), title="t")
+    a, b, c = fig.axes
+    assert [t.get_text() for t in a.get_legend().get_texts()] == ["SQP (analytic), all runs", "ours, $R^r$"]
+    assert [t.get_text() for t in b.get_legend().get_texts()] == ["SQP (stopped), all runs", "ours, $R^r$"]
+    assert fig._suptitle.get_text() == "t" and fig.get_size_inches()[0] == pytest.approx(13.5)
+    plt.close(fig)
+
+
+# ---- the ledger record ------------------------------------------------------------------------------------------
+
+LEVEL_NAMES = ["motions", "start", "noise", "SQP variant", "sensor noise (deg)"]
+CONV = [("Haar", "identity", "ball", "analytic"), ("Haar", "identity", "ball", "capped"),
+        ("0-90 deg", "identity", "ball", "analytic")]
+FAIL = [("0-90 deg", "150 deg from R0", "ball", "analytic"), ("Haar", "150 deg from R0", "ball", "analytic")]
+STOP = [("Haar", "identity", "ball", "early: 7 iterations"), ("0-90 deg", "identity", "ball", "tol: ftol 0.013")]
+GROWTH_COLS = ["sqp_failed_share", "ratio", "low", "high", "sqp_change", "sqp_change_low", "sqp_change_high",
+               "two_step_change", "two_step_change_low", "two_step_change_high"]
+
+
+def _record_inputs():
+    rows = {k: [0.0, 1.4, 1.3, 1.5, 0.024, 0.022, 0.026, 0.035, 0.032, 0.038] for k in CONV}
+    rows[FAIL[0]] = [0.85, np.nan, np.nan, np.nan, 0.026, -0.14, 0.19, 0.054, 0.050, 0.059]
+    rows[FAIL[1]] = [1.0, np.nan, np.nan, np.nan, -0.001, -0.018, 0.015, 0.035, 0.032, 0.037]
+    stop = {k: [1.0, 1.9, 1.5, 2.5, 0.018, 0.014, 0.022, 0.035, 0.032, 0.038] for k in STOP}
+    found = pd.DataFrame.from_dict({**rows, **stop}, orient="index", columns=GROWTH_COLS)
+    found.index = pd.MultiIndex.from_tuples(found.index, names=LEVEL_NAMES[:-1])
+    fresh = found.loc[[CONV[0], CONV[2], FAIL[0]] + STOP].copy()
+    grid = pd.DataFrame([{"ratio": 1.4, "ratio_low": 1.2} if k in CONV else {"ratio": np.nan, "ratio_low": np.nan}
+                         for k in list(rows) for _ in (1.0, 10.0)],
+                        index=pd.MultiIndex.from_tuples([k + (lv,) for k in rows for lv in (1.0, 10.0)],
+                                                        names=LEVEL_NAMES))
+    stop_levels = pd.DataFrame({"ratio": [0.5, 1.1, 0.6, 1.05], "ratio_high": [0.7, 1.2, 1.01, 1.2]},
+                               index=pd.MultiIndex.from_tuples([k + (lv,) for k in STOP for lv in (1.0, 10.0)],
+                                                               names=LEVEL_NAMES))
+    sets = pd.DataFrame({"rows": [2, 1], "first": [CONV[0], CONV[2]]},
+                        index=pd.MultiIndex.from_tuples([("Haar", "ball"), ("0-90 deg", "ball")]))
+    midx = pd.MultiIndex.from_tuples([("early", "Haar", "ball"), ("tol", "0-90 deg", "ball"),
+                                      ("far", "Haar", "ball")], names=["family", "motions", "noise"])
+    matching = pd.DataFrame({"knob": ["max_iterations", "ftol", "max_iterations"], "value": [7, 0.0133, 1],
+                             "SQP mean": [0.0135, 0.0156, 2.73], "SQP SD": [0.028, 0.007, 0.001],
+                             "matched": [True, True, False]}, index=midx)
+    return dict(grid_levels=grid.sort_index(), stop_levels=stop_levels.sort_index(), sets=sets,
+                found=found.sort_index(), fresh=fresh.sort_index(), matching=matching)
+
+
+def _record(**changes):
+    inputs = {**_record_inputs(), **changes}
+    return resilience_record(inputs["grid_levels"], inputs["stop_levels"], inputs["sets"], inputs["found"],
+                             inputs["fresh"], inputs["matching"], 0.015, 0.003, n_runs=150,
+                             seeds={"found": "root seeds 5000-5002", "fresh": "root seeds 6000-6001",
+                                    "tuning": "root seed 7000"})
+
+
+def test_resilience_record_is_a_valid_record_with_the_measured_numbers():
+    from replication.study import ledger
+
+    rec = _record()
+    assert rec["claim"] == "fig5_resilience" and rec["verdict"] == "fails" and rec["section"] == RECORD_SECTION
+    ledger.check_record(**rec)
+    ev = rec["evidence"]
+    assert "3 rows but 2 distinct problem sets" in ev
+    assert "grows 1.40 times as fast" in ev and "lower 95 % bounds 1.30" in ev
+    assert "ours 0.0135-0.0156, SD 0.007-0.028 against Table I's 0.003" in ev
+    assert "early after 7 iterations; tol: ftol 0.013; no match for far with Haar motions" in ev
+    assert "ratio 0.50-0.60; upper 95 % bound below 1 in 1 of 2), as in Table I" in ev
+    assert "at 10 deg the ratio is 1.05-1.10" in ev
+    assert "on fresh seeds 1.90, lower bounds 1.50, all above 1" in ev
+    assert "85-90 % to all of runs (2 settings)" in ev and "by -0.00 to 0.03" in ev
+    assert "95 % intervals from -0.14 to 0.19" in ev and "in 1 of the 2 (found seeds) it is resolved below" in ev
+    assert "Wilson 95 % half-width at most 3 points" in rec["uncertainty"]
+    assert "found on root seeds 5000-5002; confirmed on fresh root seeds 6000-6001" in rec["setting"]
+    assert "2 far-start settings" not in rec["setting"] and "1 far-start settings" in rec["setting"]
+
+
+def test_resilience_record_names_stop_short_sqps_not_resolved_on_fresh_seeds():
+    inp = _record_inputs()
+    inp["fresh"].loc[STOP[0], "low"] = 0.999
+    assert "above 1 in 1 of 2, the others include 1" in _record(fresh=inp["fresh"])["evidence"]
+
+
+@pytest.mark.parametrize("table, key, column, ok, bad, message", [
+    ("found", CONV[0], "low", 1.001, 0.999, "lower 95 % bound above 1 where SQP reaches the minimum"),
+    ("fresh", CONV[2], "low", 1.001, 1.0, "lower 95 % bound above 1 where SQP reaches the minimum"),
+    ("grid_levels", CONV[1] + (10.0,), "ratio_low", 1.001, 0.999, "above 1 at every level"),
+    ("found", STOP[1], "high", 1.0, 0.999, "no SQP that stops short"),
+    ("fresh", STOP[0], "high", 1.0, 0.999, "no SQP that stops short"),
+    ("found", FAIL[1], "sqp_change_low", 0.037, 0.0371, "SQP's change nowhere resolved above"),
+    ("fresh", FAIL[0], "sqp_change_low", 0.059, 0.0591, "SQP's change nowhere resolved above"),
+])
+def test_resilience_record_checks_each_number_just_past_its_threshold(table, key, column, ok, bad, message):
+    for value, raises in ((ok, False), (bad, True)):
+        inp = _record_inputs()
+        inp[table].loc[key, column] = value
+        if raises:
+            with pytest.raises(ValueError, match=r"claim 'fig5_resilience': .*" + re.escape(message)):
+                _record(**{table: inp[table]})
+        else:
+            assert _record(**{table: inp[table]})["verdict"] == "fails"
+
+
+def test_resilience_record_refuses_failures_from_another_start():
+    inp = _record_inputs()
+    found = inp["found"].rename(index={"150 deg from R0": "elsewhere"}, level="start")
+    with pytest.raises(ValueError, match="only from the far start"):
+        _record(found=found)
+
+
+def test_span_text():
+    from replication.study.fig5 import span_text
+
+    assert span_text([1.104, 1.47]) == "1.10-1.47" and span_text([1.104, 1.1049]) == "1.10"
+    assert span_text([-0.139, 0.0985]) == "-0.14 to 0.10" and span_text([7, 7], 0) == "7"

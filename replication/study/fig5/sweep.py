@@ -1,4 +1,4 @@
-"""Fig. 5: error against sensor noise, the two-step method against SQP (support of ``notebooks/04_noise_sweep.ipynb``).
+"""The noise sweep of Fig. 5: both methods' errors per sensor-noise level, over a grid of settings.
 
 The paper (Sec. III-A): with the noise on ``Delta R_i`` rising from 1 to 10 deg (1 deg on ``Delta R_c``), the
 two-step error grows "much slower than that of the traditional optimization method": it is "more resilient to
@@ -13,10 +13,13 @@ with uncertainties:
   the global minimum in every run of the level;
 * the growth ratio ``(two-step error at the top level - at the bottom) / (the same for SQP)``, with a bootstrap
   interval (problems resampled per level, the two methods paired on the same problems): below 1 means the
-  two-step error grows more slowly, as the paper claims.
+  two-step error grows more slowly, as the paper claims; and each method's change of its mean error, with its
+  interval (where SQP fails, its change over all runs: whether it grows at all).
 
 :func:`sweep_grid` runs the notebook's grid of settings (motions x start x noise distribution x SQP
-configuration), :func:`summary_table` and :func:`fig5_figure` show it.
+configuration), :func:`summary_table` and :func:`fig5_figure` show it. :func:`problem_sets` groups its rows by
+the problems they ran on (rows on one problem set where SQP ends at the same minimiser repeat one measurement);
+:func:`variants_of` and :func:`confirmation_table` run rows again on fresh seeds and compare.
 """
 from __future__ import annotations
 
@@ -25,13 +28,15 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..core.so3 import angle_between_deg, frobenius_error
-from ..core.solvers import SQP_VARIANTS, ReplicationWarning, chordal_optimal, sqp, two_step
-from ..core.stats import mean_se
-from .simulation import noise_bound_for_angle_deg, simulate
+from ...core.so3 import angle_between_deg, frobenius_error
+from ...core.solvers import SQP_VARIANTS, ReplicationWarning, chordal_optimal, sqp, two_step
+from ...core.stats import mean_se
+from ..simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
-           "fig5_figure", "two_step_growth", "ratio_range"]
+           "fig5_figure", "two_step_growth", "ratio_range", "problem_sets", "variants_of", "confirmation_table",
+           "span_text"]
+
 
 #: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having reached it.
 AT_MINIMUM_DEG = 0.01
@@ -72,19 +77,35 @@ def noise_sweep(levels, n_runs: int, seed: int, *, motions=None, init=None, nois
     return out
 
 
-def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000) -> tuple[pd.DataFrame, dict]:
+def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000,
+               all_runs: bool = False) -> tuple[pd.DataFrame, dict]:
     """Per-level statistics and the growth ratio of one :func:`noise_sweep` (see the module notes).
+
+    Parameters
+    ----------
+    sweep : dict
+        :func:`noise_sweep` output.
+    rng : numpy.random.Generator
+        Bootstrap draws: per level (where a ratio is given), then the resampled problems of the lowest and the
+        highest level.
+    n_boot : int
+    all_runs : bool
+        ``False`` (default): ratios only where SQP reached the global minimum in every run (its failures stop
+        at points that depend on rounding). ``True``: over all runs, for SQPs meant to stop short of the minimum
+        (:func:`match_to_table1`), whose errors are smooth functions of the data.
 
     Returns
     -------
     (per_level, growth)
         ``per_level``: index level; columns ``two_step``, ``two_step_se``, ``sqp_failed`` (runs not at the
-        global minimum), ``sqp`` and ``sqp_se`` (NaN where any run failed: their digits depend on rounding),
-        ``ratio``, ``ratio_low``, ``ratio_high`` (two-step / SQP, paired bootstrap 95 %; NaN where SQP failed).
+        global minimum), ``sqp`` and ``sqp_se`` (NaN where any run failed, unless ``all_runs``),
+        ``ratio``, ``ratio_low``, ``ratio_high`` (two-step / SQP, paired bootstrap 95 %; NaN likewise).
         ``growth``: ``{"ratio", "low", "high"}`` between the lowest and the highest level (NaN if SQP failed in
-        either), ``{"sqp_failed_share"}`` over all levels, and ``sqp_all_lowest`` / ``sqp_all_highest``: SQP's mean
-        error over *all* runs at the lowest and highest level (for bounds only: with failed runs its digits
-        depend on rounding).
+        either, unless ``all_runs``), ``{"sqp_failed_share"}`` over all levels, ``sqp_all_lowest`` /
+        ``sqp_all_highest``: SQP's mean error over *all* runs at the lowest and highest level, and the changes of
+        the mean errors from the lowest to the highest level with their 95 % bootstrap intervals (the same
+        resampled problems as the growth ratio): ``two_step_change`` (``_low``, ``_high``) and ``sqp_change``
+        (``_low``, ``_high``; over all runs, including failed ones).
     """
     levels = sorted(sweep)
     rows = {}
@@ -93,7 +114,7 @@ def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000) -> 
         ours_m, ours_se = mean_se(d["two_step"])
         failed = int((~d["sqp_at_minimum"]).sum())
         row = {"two_step": ours_m, "two_step_se": ours_se, "sqp_failed": failed, "runs": len(d["sqp"])}
-        if failed == 0:
+        if failed == 0 or all_runs:
             m, se = mean_se(d["sqp"])
             n = len(d["sqp"])
             idx = rng.integers(0, n, size=(int(n_boot), n))
@@ -108,12 +129,16 @@ def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000) -> 
     lo, hi = sweep[levels[0]], sweep[levels[-1]]
     growth = {"sqp_failed_share": float(per_level["sqp_failed"].sum() / per_level["runs"].sum()),
               "sqp_all_lowest": float(lo["sqp"].mean()), "sqp_all_highest": float(hi["sqp"].mean())}
-    if per_level.loc[[levels[0], levels[-1]], "sqp_failed"].sum() == 0:
-        i_lo = rng.integers(0, len(lo["sqp"]), size=(int(n_boot), len(lo["sqp"])))
-        i_hi = rng.integers(0, len(hi["sqp"]), size=(int(n_boot), len(hi["sqp"])))
-        g_ours = hi["two_step"][i_hi].mean(axis=1) - lo["two_step"][i_lo].mean(axis=1)
-        g_sqp = hi["sqp"][i_hi].mean(axis=1) - lo["sqp"][i_lo].mean(axis=1)
-        ratio = (hi["two_step"].mean() - lo["two_step"].mean()) / (hi["sqp"].mean() - lo["sqp"].mean())
+    i_lo = rng.integers(0, len(lo["sqp"]), size=(int(n_boot), len(lo["sqp"])))
+    i_hi = rng.integers(0, len(hi["sqp"]), size=(int(n_boot), len(hi["sqp"])))
+    g_ours = hi["two_step"][i_hi].mean(axis=1) - lo["two_step"][i_lo].mean(axis=1)
+    g_sqp = hi["sqp"][i_hi].mean(axis=1) - lo["sqp"][i_lo].mean(axis=1)
+    for name, method, boot in (("two_step_change", "two_step", g_ours), ("sqp_change", "sqp", g_sqp)):
+        growth.update({name: float(hi[method].mean() - lo[method].mean()),
+                       f"{name}_low": float(np.percentile(boot, 2.5)),
+                       f"{name}_high": float(np.percentile(boot, 97.5))})
+    if all_runs or per_level.loc[[levels[0], levels[-1]], "sqp_failed"].sum() == 0:
+        ratio = growth["two_step_change"] / growth["sqp_change"]
         growth.update(ratio=ratio, low=np.percentile(g_ours / g_sqp, 2.5), high=np.percentile(g_ours / g_sqp, 97.5))
     else:
         growth.update(ratio=np.nan, low=np.nan, high=np.nan)
@@ -146,7 +171,8 @@ def sqp_configs_for(motions: str, start: str, noise: str, *, full_noise: str = "
 
 
 def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, motions: dict, starts: dict,
-               noise: dict, configs: dict, variants_for=sqp_configs_for, n_boot: int = 2000):
+               noise: dict, configs: dict, variants_for=sqp_configs_for, n_boot: int = 2000,
+               all_runs: bool = False):
     """:func:`noise_sweep` and :func:`resilience` over a grid of settings.
 
     Loops over ``motions``, then ``starts``, then ``noise``, then ``variants_for(motions label, start label,
@@ -167,6 +193,8 @@ def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, moti
     variants_for : callable
         ``(motions label, start label, noise label) -> list of configuration labels``.
     n_boot : int
+    all_runs : bool
+        Passed to :func:`resilience` (``True`` for SQPs meant to stop short of the minimum).
 
     Returns
     -------
@@ -184,12 +212,87 @@ def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, moti
                     base, options = configs[variant]
                     sweeps[key] = noise_sweep(levels, n_runs, seed, motions=m_range, init=start,
                                               noise_distribution=dist, sqp_variant=base, sqp_options=options)
-                    results[key] = resilience(sweeps[key], rng, n_boot=n_boot)
+                    results[key] = resilience(sweeps[key], rng, n_boot=n_boot, all_runs=all_runs)
     names = ["motions", "start", "noise", "SQP variant"]
     per_level = pd.concat({k: v[0] for k, v in results.items()}, names=names + ["sensor noise (deg)"]).sort_index()
     growth = pd.DataFrame({k: v[1] for k, v in results.items()}).T
     growth.index.names = names
     return sweeps, per_level, growth.sort_index()
+
+
+def problem_sets(sweeps: dict, growth: pd.DataFrame) -> pd.DataFrame:
+    """The rows of a grid grouped by the problems they ran on.
+
+    :func:`sweep_grid` gives every setting the same seeds, so rows with the same motions and noise distribution
+    ran on the same problems: one problem set, however many SQP configurations and starts ran on it. Where they
+    all end at the same point, the rows repeat one measurement.
+
+    Parameters
+    ----------
+    sweeps : dict
+        :func:`sweep_grid`'s ``sweeps``.
+    growth : DataFrame
+        Its ``growth`` table, the rows to group.
+
+    Returns
+    -------
+    DataFrame
+        Index ``(motions, noise)``, in order of first appearance; columns ``rows`` (how many), ``first`` (the
+        first row's key), ``SQP difference`` and ``two-step difference`` (the largest difference, run by run at
+        any level, between the errors of any row and the first row's), ``growth ratio`` (the first row's,
+        ``"v [low, high]"``) and ``growth ratios of the rows`` (smallest and largest, ``"a-b"``, or one number
+        where they agree to 2 decimals).
+    """
+    groups: dict = {}
+    for key in growth.index:
+        groups.setdefault((key[0], key[2]), []).append(key)
+    out = {}
+    for pset, keys in groups.items():
+        first = keys[0]
+
+        def diff(method, first=first, keys=keys):
+            return max(float(np.abs(sweeps[k][lv][method] - sweeps[first][lv][method]).max())
+                       for k in keys for lv in sweeps[first])
+
+        g = growth.loc[keys, "ratio"]
+        r = growth.loc[first]
+        out[pset] = {"rows": len(keys), "first": first, "SQP difference": diff("sqp"),
+                     "two-step difference": diff("two_step"),
+                     "growth ratio": _interval(r["ratio"], r["low"], r["high"]),
+                     "growth ratios of the rows": span_text(g)}
+    table = pd.DataFrame(out).T
+    table.index.names = ["motions", "noise"]
+    return table
+
+
+def variants_of(keys):
+    """``variants_for`` of :func:`sweep_grid` that runs exactly the rows ``keys`` (``(motions, start, noise,
+    SQP variant)``), e.g. to run them again on fresh seeds."""
+    keys = list(keys)
+    return lambda m, s, n: [k[3] for k in keys if k[:3] == (m, s, n)]
+
+
+def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame:
+    """The growth ratio and the changes of the mean errors (lowest to highest level), found against fresh seeds.
+
+    ``found`` and ``fresh``: ``growth`` tables of :func:`sweep_grid`; one row per row of ``fresh``. Texts
+    ``"v [low, high]"`` (95 % bootstrap); ``"-"`` where no growth ratio is given, and there SQP's change with two
+    decimals only (its failed runs stop at points that depend on rounding).
+    """
+    def ratio(g):
+        return g.apply(lambda r: _interval(r["ratio"], r["low"], r["high"]), axis=1)
+
+    def change(g, name):
+        def text(r):
+            d = 3 if name == "two_step_change" or pd.notna(r["ratio"]) else 2
+            return f"{r[name]:.{d}f} [{r[name + '_low']:.{d}f}, {r[name + '_high']:.{d}f}]"
+        return g.apply(text, axis=1)
+
+    found = found.loc[fresh.index]
+    return pd.DataFrame({"growth ratio (found)": ratio(found), "growth ratio (fresh)": ratio(fresh),
+                         "SQP change (found)": change(found, "sqp_change"),
+                         "SQP change (fresh)": change(fresh, "sqp_change"),
+                         "two-step change (fresh)": change(fresh, "two_step_change")})
 
 
 def _interval(v, lo, hi) -> str:
@@ -209,7 +312,7 @@ def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float =
     low, high : float
         The levels whose ratios are shown.
     """
-    from ..core.stats import share_range
+    from ...core.stats import share_range
 
     def ratio_at(level):
         return per_level.xs(level, level=-1).apply(lambda r: _interval(r["ratio"], r["ratio_low"], r["ratio_high"]),
@@ -225,20 +328,23 @@ def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float =
 
 
 def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
-                variants=(("analytic", "-"), ("finite-difference", "--"), ("capped", ":"))):
+                variants=(("analytic", "-"), ("finite-difference", "--"), ("capped", ":")), *,
+                title: str = "Fig. 5 (replicated)"):
     """Fig. 5 replicated: final error against sensor noise, one panel per setting.
 
     Each panel: the two-step mean error (``R^r``) with ``± 1.96 SE`` error bars (from the ``"analytic"`` row of
     ``per_level``), and each SQP variant's mean error over *all* runs (including runs that did not reach the
-    minimum), log scale.
+    minimum), log scale; a variant that did not run in a panel's setting is left out of that panel, and each panel
+    has its own legend.
 
     Parameters
     ----------
     per_level, sweeps
-        :func:`sweep_grid` output.
+        :func:`sweep_grid` output (of several grids: concatenated / merged).
     levels : sequence of float
     panels : sequence of (title, (motions, start, noise))
     variants : sequence of (SQP variant, line style)
+    title : str
 
     Returns
     -------
@@ -246,21 +352,23 @@ def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(12, 4.2), sharey=True)
+    fig, axes = plt.subplots(1, len(panels), figsize=(max(12.0, 4.5 * len(panels)), 5.4), sharey=True)
     for ax, (label, key) in zip(axes, panels):
         base = per_level.loc[key + ("analytic",)]
         ax.errorbar(levels, base["two_step"], yerr=1.96 * base["two_step_se"], marker="o", capsize=3,
                     color="tab:cyan", label="ours, $R^r$")
         for variant, style in variants:
+            if key + (variant,) not in sweeps:
+                continue
             sw = sweeps[key + (variant,)]
             ax.plot(levels, [sw[lv]["sqp"].mean() for lv in levels], ls=style, marker=".",
                     label=f"SQP ({variant}), all runs")
         ax.set_xlabel(r"noise on $\Delta R_i$ (deg); noise on $\Delta R_c$ = 1 deg")
         ax.set_title(label, fontsize=9)
         ax.set_yscale("log")
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     axes[0].set_ylabel(r"final $\|\hat R_0 - R_0\|_F$ (mean; ours $\pm$ 1.96 SE)")
-    axes[0].legend(fontsize=8)
-    fig.suptitle("Fig. 5 (replicated)")
+    fig.suptitle(title)
     fig.tight_layout()
     return fig
 
@@ -275,3 +383,10 @@ def ratio_range(per_level: pd.DataFrame, motions: str, start: str = "identity") 
     (motions, start) setting."""
     ratio = per_level.xs(motions, level="motions").xs(start, level="start")["ratio"]
     return ratio.min(), ratio.max()
+
+
+def span_text(values, digits: int = 2) -> str:
+    """Smallest and largest of ``values`` as ``"a-b"`` (``"a to b"`` where one is negative), or ``"a"`` if they
+    agree at ``digits`` decimals."""
+    lo, hi = f"{min(values):.{digits}f}", f"{max(values):.{digits}f}"
+    return lo if lo == hi else f"{lo} to {hi}" if lo.startswith("-") or hi.startswith("-") else f"{lo}-{hi}"
