@@ -13,8 +13,11 @@ recording     :class:`LabRecording`, its columns and units; :func:`write_lab` /
               :func:`load_lab` (the files of ``data/lab/``, validated on load)
 chain         the processing chain: PnP, ``ecompass`` / Madgwick, motions (eqs. (3)-(4)),
               one solve per data set, the dynamic trial (:func:`run_lab`)
+fastchain     the seed studies' faster equivalents of chain steps: :func:`refine_camera_orientations`
+              (PnP on many frames at once), :func:`ecompass_attitudes`, :func:`madgwick_marg`
 study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`seed_study`,
-              :func:`seed_spread`
+              :func:`seed_spread`, :func:`seed_findings` (counts with Wilson intervals, means
+              with standard errors), :func:`count_text`, :func:`sqp_shares`, :func:`seed_range`
 claims        :func:`lab_claims`: the notebook's ledger records on the lab experiment
 ============  ==========================================================================
 
@@ -44,8 +47,10 @@ from .settings import GRAVITY, NOMINAL_CAMERA_FROM_SENSOR, PARTS, SOURCES, TABLE
 _LAZY = {
     "simulate_lab": "simulate",
     "camera_orientations": "chain", "static_sensor_orientations": "chain", "dynamic_sensor_orientations": "chain",
-    "static_motions": "chain", "LabResult": "chain", "run_lab": "chain",
+    "static_motions": "chain", "LabResult": "chain", "run_lab": "chain", "camera_poses": "chain",
+    "refine_camera_orientations": "fastchain", "ecompass_attitudes": "fastchain", "madgwick_marg": "fastchain",
     "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study", "seed_spread": "study",
+    "seed_findings": "study", "count_text": "study", "sqp_shares": "study", "seed_range": "study",
     "lab_claims": "claims",
 }
 

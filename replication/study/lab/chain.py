@@ -4,6 +4,7 @@
   ``C_t = camera_from_wand`` (the role of the paper's ref. [38]);
 * sensor, static: accelerometer + magnetometer through ``ahrs.common.orientation.ecompass``;
   dynamic: the Madgwick MARG filter (``ahrs.filters.Madgwick``), ``world_from_sensor``;
+* the seed studies' faster equivalents of these steps are in :mod:`replication.study.lab.fastchain`;
 * motions ``Delta R_c = C_k C_t^T``, ``Delta R_i = I_k I_t^T`` (eqs. (3)-(4),
   :func:`replication.core.handeye.relative_rotations`), one solve per data set, and the dynamic trial
   projected as ``R0 Delta R_i R0^T`` (Table II, :mod:`replication.study.table2`).
@@ -26,14 +27,15 @@ from ...core.so3 import angle_between_deg, log_map, nearest_rotation, quaternion
 from ...core.solvers import ReplicationWarning, solve
 from ...rig.streams import OrientationStream
 from ..table2 import attitude_statistics
+from .fastchain import _gauss_newton_pnp, ecompass_attitudes, madgwick_marg, refine_camera_orientations
 from .recording import ACC_COLUMNS, GYR_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, LabRecording, marker_pixels
 from .settings import TABLE2_SOLVERS
 
-__all__ = ["camera_orientations", "static_sensor_orientations", "dynamic_sensor_orientations", "static_motions",
-           "LabResult", "run_lab"]
+__all__ = ["camera_orientations", "camera_poses", "static_sensor_orientations", "dynamic_sensor_orientations",
+           "static_motions", "LabResult", "run_lab"]
 
 
-def camera_orientations(uv, rig) -> np.ndarray:
+def camera_orientations(uv, rig, *, refine: str = "opencv") -> np.ndarray:
     """Camera attitudes ``C = camera_from_wand`` from marker pixels by PnP (the paper's ref. [38]).
 
     Parameters
@@ -42,6 +44,10 @@ def camera_orientations(uv, rig) -> np.ndarray:
         Pixels of the N wand markers in M images (distorted, as detected).
     rig : dict
         ``camera_matrix``, ``dist_coeffs``, ``wand_points`` (see :class:`LabRecording`).
+    refine : {"opencv", "batched"}
+        How the SQPnP solution is refined to the least reprojection error: ``cv2.solvePnPRefineLM`` image by
+        image, or Gauss-Newton on all images at once (:mod:`replication.study.lab.fastchain`: the same minimum to
+        about 1e-6 deg, ``tests/test_lab_claims.py``; faster on many images).
 
     Returns
     -------
@@ -54,22 +60,32 @@ def camera_orientations(uv, rig) -> np.ndarray:
         If PnP fails or leaves a reprojection error above 5 px (wrong intrinsics,
         marker order or units).
     """
+    return camera_poses(uv, rig, refine=refine)[0]
+
+
+def camera_poses(uv, rig, *, refine: str = "opencv"):
+    """:func:`camera_orientations` with the translations: ``(C, t)``, shapes (M, 3, 3) and (M, 3), ``x = C X + t``."""
+    if refine not in ("opencv", "batched"):
+        raise ValueError(f"refine must be 'opencv' or 'batched', got {refine!r}")
     K = np.asarray(rig["camera_matrix"], dtype=float)
     dist = np.asarray(rig["dist_coeffs"], dtype=float)
     X = np.asarray(rig["wand_points"], dtype=float)
     uv = np.ascontiguousarray(uv, dtype=float)
-    out = np.empty((len(uv), 3, 3))
+    out, trans = np.empty((len(uv), 3, 3)), np.empty((len(uv), 3))
     for m, x in enumerate(uv):
         ok, rvec, tvec = cv2.solvePnP(X, x, K, dist, flags=cv2.SOLVEPNP_SQPNP)
-        if ok:
+        if ok and refine == "opencv":
             rvec, tvec = cv2.solvePnPRefineLM(X, x, K, dist, rvec, tvec)
             proj, _ = cv2.projectPoints(X, rvec, tvec, K, dist)
             rms = float(np.sqrt(np.mean(np.sum((proj[:, 0] - x) ** 2, axis=-1))))
-        if not ok or rms > 5.0:
+        if not ok or (refine == "opencv" and rms > 5.0):
             raise ValueError(f"image {m}: PnP failed (reprojection RMS {rms if ok else float('nan'):.3g} px); "
                              "check the intrinsics, the marker order and that pixels are in px")
         out[m] = cv2.Rodrigues(rvec)[0]
-    return out
+        trans[m] = tvec[:, 0]
+    if refine == "batched":
+        out, trans = _gauss_newton_pnp(uv, X, K, dist, out, trans, iterations=4)
+    return out, trans
 
 
 def static_sensor_orientations(acc, mag) -> np.ndarray:
@@ -96,7 +112,7 @@ def static_sensor_orientations(acc, mag) -> np.ndarray:
     return np.swapaxes(Q, -1, -2)
 
 
-def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float) -> OrientationStream:
+def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float, *, madgwick: str = "ahrs") -> OrientationStream:
     """The moving node's orientation from a Madgwick MARG filter, as a ``world_from_body`` stream.
 
     ``ahrs.filters.Madgwick`` (S. Madgwick, "An efficient orientation filter for
@@ -105,15 +121,29 @@ def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float) -> Orientatio
     sensor vectors into its world: they are the stream's ``world_from_body`` as they come
     (``I_t`` of eq. (1) is their transpose).
 
+    Parameters
+    ----------
+    imu : DataFrame
+        ``t`` and the IMU columns.
+    rate_hz : float
+    madgwick : {"ahrs", "transcribed"}
+        ``ahrs``' filter, or :func:`~replication.study.lab.fastchain.madgwick_marg` (the same filter, faster: the
+        seed studies).
+
     Returns
     -------
     OrientationStream
         At the IMU times ``imu["t"]``.
     """
-    from ahrs.filters import Madgwick
+    gyr, acc, mag = (imu[c].to_numpy() for c in (GYR_COLUMNS, ACC_COLUMNS, MAG_COLUMNS))
+    if madgwick == "ahrs":
+        from ahrs.filters import Madgwick
 
-    q = Madgwick(gyr=imu[GYR_COLUMNS].to_numpy(), acc=imu[ACC_COLUMNS].to_numpy(), mag=imu[MAG_COLUMNS].to_numpy(),
-                 frequency=rate_hz).Q
+        q = Madgwick(gyr=gyr, acc=acc, mag=mag, frequency=rate_hz).Q
+    elif madgwick == "transcribed":
+        q = madgwick_marg(gyr, acc, mag, rate_hz)
+    else:
+        raise ValueError(f"madgwick must be 'ahrs' or 'transcribed', got {madgwick!r}")
     return OrientationStream(imu["t"].to_numpy(), quaternion_to_matrix(q), "Madgwick")
 
 
@@ -132,19 +162,27 @@ def static_motions(recording: LabRecording, *, sample: str = "mean") -> dict:
     Parameters
     ----------
     recording : LabRecording
-    sample : {"mean", "single"}
-        ``"mean"``: the paper's protocol; ``"single"``: the first sample of each orientation instead (the
-        intervention that measures what the averaging buys).
+    sample : {"mean", "single", "all"}
+        ``"mean"``: the paper's protocol; ``"single"``: the first sample of each orientation instead; ``"all"``:
+        every measurement, the alternative the paper names ("instead of using all the measurements"): each IMU
+        sample gives its own ``I`` (:func:`~replication.study.lab.fastchain.ecompass_attitudes`) and is paired with
+        the camera frame at or before its time (its own ``C``,
+        :func:`~replication.study.lab.fastchain.refine_camera_orientations` from the PnP pose of the mean pixels); the
+        ``j``-th pair of an orientation and the ``j``-th of the next give one motion, so each pair of consecutive
+        orientations gives as many motions as it has samples (the fewer of the two), weighted alike.
 
     Returns
     -------
     dict
-        set id -> ``(A, B)``, each of shape (poses - 1, 3, 3).
+        set id -> ``(A, B)``, each of shape (motions, 3, 3): ``poses - 1`` motions, or with ``"all"`` the sum over
+        consecutive orientations of their samples.
     """
-    if sample not in ("mean", "single"):
-        raise ValueError(f"sample must be 'mean' or 'single', got {sample!r}")
-    reduce = (lambda g: g.mean()) if sample == "mean" else (lambda g: g.first())
+    if sample not in ("mean", "single", "all"):
+        raise ValueError(f"sample must be 'mean', 'single' or 'all', got {sample!r}")
     n = len(recording.rig["wand_points"])
+    if sample == "all":
+        return _all_sample_motions(recording, n)
+    reduce = (lambda g: g.mean()) if sample == "mean" else (lambda g: g.first())
     C = camera_orientations(marker_pixels(reduce(recording.static_markers.groupby(["set", "pose"])), n), recording.rig)
     im = reduce(recording.static_imu.groupby(["set", "pose"])[IMU_COLUMNS])
     I = static_sensor_orientations(im[ACC_COLUMNS].to_numpy(), im[MAG_COLUMNS].to_numpy())
@@ -153,6 +191,36 @@ def static_motions(recording: LabRecording, *, sample: str = "mean") -> dict:
     for k in np.unique(sets):
         sel = sets == k
         out[int(k)] = (relative_rotations(C[sel]), relative_rotations(I[sel]))
+    return out
+
+
+def _all_sample_motions(recording: LabRecording, n_markers: int) -> dict:
+    """``static_motions(recording, sample="all")``."""
+    markers, imu = recording.static_markers, recording.static_imu
+    mean_uv = marker_pixels(markers.groupby(["set", "pose"]).mean(), n_markers)
+    C0, t0 = camera_poses(mean_uv, recording.rig)
+    pose_keys = markers.groupby(["set", "pose"]).ngroup().to_numpy()    # same order as the groupby's mean
+    C = refine_camera_orientations(marker_pixels(markers, n_markers), recording.rig, C0[pose_keys], t0[pose_keys])
+    I = ecompass_attitudes(imu[ACC_COLUMNS].to_numpy(), imu[MAG_COLUMNS].to_numpy())
+    cam_key = markers[["set", "pose"]].to_numpy()
+    imu_key = imu[["set", "pose"]].to_numpy()
+    cam_t, imu_t = markers["t"].to_numpy(), imu["t"].to_numpy()
+    out = {}
+    for k in np.unique(imu_key[:, 0]):
+        frames, samples = [], []
+        for p in np.unique(imu_key[imu_key[:, 0] == k, 1]):
+            ci = np.flatnonzero((cam_key[:, 0] == k) & (cam_key[:, 1] == p))
+            ii = np.flatnonzero((imu_key[:, 0] == k) & (imu_key[:, 1] == p))
+            at = np.searchsorted(cam_t[ci], imu_t[ii], side="right") - 1  # the frame at or before each sample
+            keep = at >= 0
+            frames.append(C[ci[at[keep]]])
+            samples.append(I[ii[keep]])
+        A, B = [], []
+        for p in range(len(frames) - 1):
+            j = min(len(frames[p]), len(frames[p + 1]))
+            A.append(frames[p + 1][:j] @ np.swapaxes(frames[p][:j], -1, -2))
+            B.append(samples[p + 1][:j] @ np.swapaxes(samples[p][:j], -1, -2))
+        out[int(k)] = (np.concatenate(A), np.concatenate(B))
     return out
 
 
@@ -193,7 +261,8 @@ class LabResult:
     dynamic: dict = field(default_factory=dict)
 
 
-def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResult:
+def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS, *, fast: bool = False,
+            dynamic_camera=None) -> LabResult:
     """The experiment of Sec. III-B from recordings: calibrate per data set, then the dynamic trial.
 
     Parameters
@@ -203,6 +272,15 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
     solvers : dict
         Column name -> (registered solver, options); default Table II's three methods
         (:data:`TABLE2_SOLVERS`).
+    fast : bool
+        The dynamic trial through the faster equivalents of the seed studies: the camera by
+        ``camera_orientations(..., refine="batched")``, the sensor by ``dynamic_sensor_orientations(...,
+        madgwick="transcribed")`` (each equal to the default to about 1e-6 deg and to rounding,
+        ``tests/test_lab_claims.py``).
+    dynamic_camera : array_like (M, 3, 3), optional
+        The dynamic trial's camera attitudes (``LabResult.dynamic["camera_from_world"]``) of a run on a recording
+        with the same marker pixels (e.g. the same seed with IMU errors switched off), reused instead of
+        PnP on every frame again.
 
     Returns
     -------
@@ -246,8 +324,15 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS) -> LabResul
 
     # dynamic trial
     dm = recording.dynamic_markers
-    C = camera_orientations(marker_pixels(dm, len(recording.rig["wand_points"])), recording.rig)
-    sensor = dynamic_sensor_orientations(recording.dynamic_imu, recording.rig["imu_rate_hz"])
+    if dynamic_camera is None:
+        C = camera_orientations(marker_pixels(dm, len(recording.rig["wand_points"])), recording.rig,
+                                refine="batched" if fast else "opencv")
+    else:
+        C = np.asarray(dynamic_camera, dtype=float)
+        if C.shape != (len(dm), 3, 3):
+            raise ValueError(f"dynamic_camera must have shape ({len(dm)}, 3, 3) (one per camera frame), got {C.shape}")
+    sensor = dynamic_sensor_orientations(recording.dynamic_imu, recording.rig["imu_rate_hz"],
+                                         madgwick="transcribed" if fast else "ahrs")
     t_cam, t_imu = dm["t"].to_numpy(), sensor.t
     if t_cam[0] < t_imu[0] or t_cam[-1] > t_imu[-1]:
         raise ValueError(f"dynamic trial: camera times {t_cam[0]:.3f}..{t_cam[-1]:.3f} s are not inside "

@@ -14,12 +14,14 @@ import pandas as pd
 
 from ...core.so3 import angle_between_deg, exp_map
 from ...core.solvers import ReplicationWarning, solve, sqp
+from ...core.stats import mean_se, wilson_interval
 from ..table2 import projection_statistics
 from .chain import LabResult, run_lab, static_motions
 from .settings import SOURCES, TABLE2_SOLVERS, LabSettings
 from .simulate import simulate_lab
 
-__all__ = ["summarize", "ablation", "sensitivity", "seed_study", "seed_spread"]
+__all__ = ["summarize", "ablation", "sensitivity", "seed_study", "seed_spread", "seed_findings", "count_text",
+           "sqp_shares", "seed_range"]
 
 
 def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
@@ -45,12 +47,14 @@ def summarize(result: LabResult, *, failure_deg: float = 10.0) -> dict:
     return row
 
 
-def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict = TABLE2_SOLVERS) -> pd.DataFrame:
+def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict = TABLE2_SOLVERS, *,
+             fast: bool = False) -> pd.DataFrame:
     """Rerun the whole simulated experiment with error sources switched off.
 
     Cases: ``all sources``; ``without <source>`` (one switched off at a time);
     ``only <source>`` (all others off); ``no sources``. Every other random draw stays
-    the same (see :func:`simulate_lab`).
+    the same (see :func:`simulate_lab`). ``fast``: :func:`run_lab`'s faster equivalents for the dynamic trial (the
+    same numbers to about 1e-6 deg; where the filter's chatter sets them, see below, to rounding either way).
 
     Returns
     -------
@@ -65,12 +69,13 @@ def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict 
     cases += [(f"only {s}", settings.without(*[o for o in sources if o != s])) for s in sources]
     cases.append(("no sources", settings.without(*sources)))
     rows = [{"case": label, "noise_free_dynamic_attitude": st.noise_free_dynamic_attitude,
-             **summarize(run_lab(simulate_lab(st), solvers))} for label, st in cases]
+             **summarize(run_lab(simulate_lab(st), solvers, fast=fast))} for label, st in cases]
     return pd.DataFrame(rows).set_index("case")
 
 
-def sensitivity(name: str, values, settings: LabSettings = LabSettings(), solvers: dict = TABLE2_SOLVERS):
-    """Rerun the experiment for each value of one :class:`LabSettings` field.
+def sensitivity(name: str, values, settings: LabSettings = LabSettings(), solvers: dict = TABLE2_SOLVERS, *,
+                fast: bool = False):
+    """Rerun the experiment for each value of one :class:`LabSettings` field (``fast``: as in :func:`ablation`).
 
     Returns
     -------
@@ -79,13 +84,14 @@ def sensitivity(name: str, values, settings: LabSettings = LabSettings(), solver
     """
     if name not in {f.name for f in dataclasses.fields(LabSettings)}:
         raise ValueError(f"{name!r} is not a LabSettings field")
-    rows = [{name: v, **summarize(run_lab(simulate_lab(dataclasses.replace(settings, **{name: v})), solvers))}
-            for v in values]
+    rows = [{name: v, **summarize(run_lab(simulate_lab(dataclasses.replace(settings, **{name: v})), solvers,
+                                          fast=fast))} for v in values]
     return pd.DataFrame(rows).set_index(name)
 
 
 def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: float = 10.0, sqp_runs=None,
-               turned_deg=(), single_sample: bool = False) -> pd.DataFrame:
+               turned_deg=(), single_sample: bool = False, all_samples: bool = False, without=(),
+               fast: bool = True) -> pd.DataFrame:
     """The simulated experiment once per seed: one row of numbers per seed.
 
     Columns: per method (``ours_right``, ``ours_left``, ``optimization``) ``shared_bias_<m>`` (angle of the
@@ -115,11 +121,26 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
     single_sample : bool
         Also calibrate with the first sample of each static orientation instead of the mean
         (:func:`replication.study.lab.static_motions`): ``true_single_ours_right``.
+    all_samples : bool
+        Also calibrate with every sample of each static orientation (``static_motions(..., sample="all")``, the
+        alternative the paper names): ``true_all_ours_right``.
+    without : iterable of str
+        Error sources or parts (:data:`SOURCES`, :data:`PARTS`) to switch off one at a time, on the same seed (every
+        other draw unchanged): the two-step (``R^r``) calibration and the dynamic trial rerun, with the camera's
+        dynamic attitudes reused (the marker pixels are checked to be the same). Columns
+        ``<column>_without_<source>`` (spaces as ``_``) for ``shared_bias_ours_right``, ``true_ours_right``,
+        ``rms_ours_right``, ``pitch_bias_true_R0`` and ``rms_true_R0``.
+    fast : bool
+        :func:`replication.study.lab.run_lab`'s faster equivalents for the dynamic trial (its ``fast``): the same
+        numbers to about 1e-6 deg, in half the time.
     """
+    without = list(without)
+    right = {"ours_right": TABLE2_SOLVERS["ours_right"]}
     rows = []
     for seed in seeds:
-        recording = simulate_lab(dataclasses.replace(settings, seed=int(seed)))
-        result = run_lab(recording)
+        seeded = dataclasses.replace(settings, seed=int(seed))
+        recording = simulate_lab(seeded)
+        result = run_lab(recording, fast=fast)
         row = {"seed": int(seed)}
         summary = summarize(result, failure_deg=failure_deg)
         for name in result.estimates:
@@ -151,11 +172,24 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
             off = [angle_between_deg(r.R, result.truth) > failure_deg for r in runs]
             row[f"failed_sqp_{name}"] = int(sum(off))
             row[f"limit_sqp_{name}"] = int(sum(o and int(r.n_iterations) >= cap for o, r in zip(off, runs)))
-        if single_sample:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", ReplicationWarning)
-                single = [solve("two_step_right", A, B) for A, B in static_motions(recording, sample="single").values()]
-            row["true_single_ours_right"] = float(np.mean(angle_between_deg(np.stack(single), result.truth)))
+        for sample, wanted in (("single", single_sample), ("all", all_samples)):
+            if wanted:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", ReplicationWarning)
+                    est = [solve("two_step_right", A, B) for A, B in static_motions(recording, sample=sample).values()]
+                row[f"true_{sample}_ours_right"] = float(np.mean(angle_between_deg(np.stack(est), result.truth)))
+        for source in without:
+            off_recording = simulate_lab(seeded.without(source))
+            if not off_recording.dynamic_markers.equals(recording.dynamic_markers):
+                raise ValueError(f"switching {source!r} off changed the marker pixels: the camera cannot be reused")
+            off = run_lab(off_recording, right, fast=fast, dynamic_camera=result.dynamic["camera_from_world"])
+            off_true = projection_statistics(off, off.truth)
+            tag = "_without_" + source.replace(" ", "_")
+            row["shared_bias_ours_right" + tag] = float(angle_between_deg(off.r0["ours_right"], off.truth))
+            row["true_ours_right" + tag] = float(off.per_set["true_error_deg"].mean())
+            row["rms_ours_right" + tag] = float(off.table2.xs("ours_right", level="method")["rms_deg"].mean())
+            row["pitch_bias_true_R0" + tag] = float(off_true.loc["pitch", "mean_deg"])
+            row["rms_true_R0" + tag] = float(off_true["rms_deg"].mean())
         rows.append(row)
     return pd.DataFrame(rows).set_index("seed")
 
@@ -168,3 +202,118 @@ def seed_spread(values: pd.Series, digits: int = 2) -> str:
     """
     return (f"{values.mean():.{digits}f} (SD {values.std(ddof=1):.{digits}f}; "
             f"{values.min():.{digits}f}-{values.max():.{digits}f})")
+
+
+def seed_range(study: pd.DataFrame) -> str:
+    """``"seeds 1-20"``: the seeds of a :func:`seed_study` frame (its index), which must be consecutive."""
+    seeds = list(study.index)
+    if not seeds or seeds != list(range(seeds[0], seeds[0] + len(seeds))):
+        raise ValueError(f"the seeds must be consecutive integers, got {seeds}")
+    return f"seeds {seeds[0]}-{seeds[-1]}"
+
+
+def count_text(k, n) -> str:
+    """``"15 of 20 (53-89 %)"``: a count of seeds with its Wilson 95 % interval
+    (:func:`replication.core.stats.wilson_interval`)."""
+    low, high = wilson_interval(k, n)
+    return f"{int(k)} of {int(n)} ({100 * low:.0f}-{100 * high:.0f} %)"
+
+
+def _parts(study):
+    tag = "shared_bias_ours_right_without_"
+    return [c[len(tag):] for c in study.columns if c.startswith(tag)]
+
+
+def seed_findings(study: pd.DataFrame) -> pd.DataFrame:
+    """The seed study's findings on one set of seeds: counts of seeds with their Wilson 95 % interval, paired
+    differences and means with their standard errors.
+
+    Notebook 05, "The lab over fresh seeds": each finding on the seeds it was found on beside the fresh ones
+    (:func:`replication.study.lab.lab_claims` builds the records from them). Which findings there are follows
+    the columns of ``study`` (:func:`seed_study`): the turned ``R0`` (``rms_turned_<a>``), the parts switched off
+    (``..._without_<part>``), the single and all-sample calibrations.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``finding`` (an id); columns ``what`` (its text), ``kind`` (``"count"``: ``value`` seeds of ``n``,
+        ``low``-``high`` its Wilson interval; ``"mean"``: ``value`` ± ``se`` over the ``n`` seeds; ``"median"``),
+        and ``text`` (``"k of n (low-high %)"``, ``"mean ± se"`` or the median), deg where a quantity has a unit.
+    """
+    n = len(study)
+    rows = {}
+
+    def count(key, what, mask):
+        k = int(np.asarray(mask, dtype=bool).sum())
+        low, high = wilson_interval(k, n)
+        rows[key] = dict(what=what, kind="count", value=float(k), n=n, low=low, high=high, se=np.nan,
+                         text=count_text(k, n))
+
+    def mean(key, what, values, digits=3):
+        m, se = mean_se(np.asarray(values, dtype=float))
+        rows[key] = dict(what=what, kind="mean", value=float(m), n=n, low=np.nan, high=np.nan, se=float(se),
+                         text=f"{m:.{digits}f} ± {se:.{digits}f}")
+
+    rms_true = study["rms_true_R0"]
+    count("estimate_beats_truth", "seeds where the two-step estimate gives a smaller Table II RMS than the true R0",
+          study["rms_ours_right"] < rms_true)
+    count("reversed_loses", "seeds where the estimate's error reversed gives a larger RMS than the true R0",
+          study["rms_reversed_ours_right"] > rms_true)
+    turned = [c[len("rms_turned_"):] for c in study.columns if c.startswith("rms_turned_")]
+    for a in turned:
+        count(f"turned_{a}_loses", f"seeds where R0 turned by {a} deg gives a larger RMS than the true R0",
+              study[f"rms_turned_{a}"] > rms_true)
+    mean("rms_true", "Table II RMS with the true R0 (deg)", rms_true)
+    mean("rms_estimate_minus_truth", "RMS with the estimate minus with the true R0 (deg)",
+         study["rms_ours_right"] - rms_true)
+    mean("rms_reversed_minus_truth", "RMS with the reversed error minus with the true R0 (deg)",
+         study["rms_reversed_ours_right"] - rms_true)
+    for a in turned:
+        mean(f"rms_turned_{a}_minus_truth", f"RMS with R0 turned by {a} deg minus with the true R0 (deg)",
+             study[f"rms_turned_{a}"] - rms_true)
+    mean("shared_bias", "error of the mean of the 10 estimates (deg)", study["shared_bias_ours_right"], 2)
+    ratio = study["shared_bias_ours_right"] / (study["spread_ours_right"] / np.sqrt(10))
+    count("shared_exceeds_independent", "seeds where that error exceeds the spread / sqrt(10) independent per-set "
+          "errors would leave", ratio > 1)
+    rows["shared_ratio_median"] = dict(what="that error / (spread / sqrt(10)), median over the seeds", kind="median",
+                                       value=float(ratio.median()), n=n, low=np.nan, high=np.nan, se=np.nan,
+                                       text=f"{ratio.median():.1f}")
+    pitch = study["pitch_bias_true_R0"].abs()
+    mean("abs_pitch_bias", "|pitch bias| with the true R0 (deg)", pitch, 2)
+    for part in _parts(study):
+        name = part.replace("_", " ")
+        tag = "_without_" + part
+        shared_off = study["shared_bias_ours_right" + tag]
+        pitch_off = study["pitch_bias_true_R0" + tag].abs()
+        mean("shared_bias" + tag, f"error of the mean of the 10 estimates without {name} (deg)", shared_off, 2)
+        mean("shared_bias_change" + tag, f"its change with {name} switched off (deg)",
+             shared_off - study["shared_bias_ours_right"], 3)
+        mean("abs_pitch_bias" + tag, f"|pitch bias| with the true R0 without {name} (deg)", pitch_off, 2)
+        mean("abs_pitch_bias_change" + tag, f"its change with {name} switched off (deg)", pitch_off - pitch, 3)
+        count("estimate_beats_truth" + tag, f"seeds where the estimate gives a smaller RMS than the true R0, without "
+              f"{name}", study["rms_ours_right" + tag] < study["rms_true_R0" + tag])
+    mean("true_mean", "two-step error to the true R0, the mean of each orientation (deg)", study["true_ours_right"], 2)
+    for sample, what in (("all", "every sample"), ("single", "the first sample")):
+        if f"true_{sample}_ours_right" in study:
+            mean(f"{sample}_minus_mean", f"its change with {what} of each orientation instead (deg)",
+                 study[f"true_{sample}_ours_right"] - study["true_ours_right"], 4 if sample == "all" else 2)
+    for angle in ("roll", "pitch", "yaw"):
+        count(f"corr_{angle}_at_paper", f"seeds where the {angle} correlation after calibration is at least 0.999",
+              study[f"corr_{angle}_ours_right"] >= 0.999)
+    count("calibration_reduces", "seeds where the calibrated RMS is below the sensor frame's",
+          study["rms_ours_right"] < study["rms_sensor_frame"])
+    out = pd.DataFrame.from_dict(rows, orient="index")
+    out.index.name = "finding"
+    return out
+
+
+def sqp_shares(study: pd.DataFrame, runs) -> dict:
+    """SQP's failures over a :func:`seed_study` frame run with ``sqp_runs`` named ``runs``: ``"failed, <name>"``
+    (share of the data sets more than 10 deg off), ``"at limit"`` (share of the 100-iteration failures stopped by
+    the iteration limit; the run named ``"100 iterations"``) and ``"seeds"`` (share of seeds with a failed set)."""
+    n_sets = 10 * len(study)
+    out = {f"failed, {name}": study[f"failed_sqp_{name}"].sum() / n_sets for name in runs}
+    failed = study["failed_sqp_100 iterations"]
+    out["at limit"] = study["limit_sqp_100 iterations"].sum() / max(int(failed.sum()), 1)
+    out["seeds"] = float((failed > 0).mean())
+    return out
