@@ -35,7 +35,7 @@ from ..simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
            "fig5_figure", "two_step_growth", "ratio_range", "problem_sets", "variants_of", "confirmation_table",
-           "span_text"]
+           "span_text", "rounding_bound"]
 
 
 #: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having reached it.
@@ -276,16 +276,17 @@ def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame
     """The growth ratio and the changes of the mean errors (lowest to highest level), found against fresh seeds.
 
     ``found`` and ``fresh``: ``growth`` tables of :func:`sweep_grid`; one row per row of ``fresh``. Texts
-    ``"v [low, high]"`` (95 % bootstrap); ``"-"`` where no growth ratio is given, and there SQP's change with two
-    decimals only (its failed runs stop at points that depend on rounding).
+    ``"v [low, high]"`` (95 % bootstrap); ``"-"`` where no growth ratio is given, and there SQP's change as a bound
+    (:func:`rounding_bound`: its failed runs stop at points that depend on the machine's rounding).
     """
     def ratio(g):
         return g.apply(lambda r: _interval(r["ratio"], r["low"], r["high"]), axis=1)
 
     def change(g, name):
         def text(r):
-            d = 3 if name == "two_step_change" or pd.notna(r["ratio"]) else 2
-            return f"{r[name]:.{d}f} [{r[name + '_low']:.{d}f}, {r[name + '_high']:.{d}f}]"
+            if name != "two_step_change" and pd.isna(r["ratio"]):
+                return rounding_bound(r[name + "_low"], r[name + "_high"])
+            return f"{r[name]:.3f} [{r[name + '_low']:.3f}, {r[name + '_high']:.3f}]"
         return g.apply(text, axis=1)
 
     found = found.loc[fresh.index]
@@ -293,6 +294,24 @@ def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame
                          "SQP change (found)": change(found, "sqp_change"),
                          "SQP change (fresh)": change(fresh, "sqp_change"),
                          "two-step change (fresh)": change(fresh, "two_step_change")})
+
+
+#: Margin (deg) by which :func:`rounding_bound` widens an interval of a failing SQP before rounding it outwards to
+#: 0.1 deg: where its runs stop depends on the machine's rounding, which moved such intervals by 0.01 under other
+#: BLAS kernels.
+ROUNDING_MARGIN_DEG = 0.03
+
+
+def rounding_bound(low: float, high: float) -> str:
+    """``"within [a, b]"``: ``low`` and ``high`` widened by :data:`ROUNDING_MARGIN_DEG` and rounded outwards to
+    0.1, a bound that holds on machines that round differently (not an interval).
+
+    >>> rounding_bound(-0.13, 0.20)
+    'within [-0.2, 0.3]'
+    """
+    a = np.floor((low - ROUNDING_MARGIN_DEG) * 10) / 10
+    b = np.ceil((high + ROUNDING_MARGIN_DEG) * 10) / 10
+    return f"within [{a + 0.0:.1f}, {b + 0.0:.1f}]"
 
 
 def _interval(v, lo, hi) -> str:
