@@ -2,6 +2,7 @@
 
 ``python -m replication reproduce`` re-executes every notebook and writes ``results/``.
 ``python -m replication calibrate --camera FILE --sensor FILE`` calibrates a real rig.
+``python -m replication export REPORT.json --to kalibr|openvins|basalt|orbslam3|ros2`` writes it into a tool's file.
 ``python -m replication fetch-data DEST`` downloads and verifies the real recordings notebook 07 reads.
 """
 from __future__ import annotations
@@ -155,6 +156,9 @@ def main(argv: list[str] | None = None) -> int:
     from .rig.calibrate_cli import add_parser as add_calibrate_parser
 
     add_calibrate_parser(sub)
+    from .rig.export import add_parser as add_export_parser
+
+    add_export_parser(sub)
     gen = sub.add_parser("generate-lab", help="write the simulated lab recordings (default: data/lab)")
     gen.add_argument("--out", help="output folder (default: data/lab of this project)")
     gen.add_argument("--seed", type=int, help="LabSettings.seed (default: that of the committed data)")

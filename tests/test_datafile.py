@@ -199,7 +199,7 @@ def test_other_realdata_loaders_raise_it_too(tmp_path):
     yaml_file = tmp_path / "c.yaml"
     yaml_file.write_text("cam0:\n  T_cam_imu: [[1, 0,\n  - 2\n")
     with pytest.raises(DataFileError, match="not valid YAML") as info:
-        rd.load_kalibr_camchain(yaml_file)
+        rd.load_reference(yaml_file)
     assert info.value.path == yaml_file and info.value.line is not None and "not valid YAML" in info.value.message
     with pytest.raises(DataFileNotFound, match="none.yaml: no such file"):
         rd.load_orbslam3_stereo(tmp_path / "none.yaml")

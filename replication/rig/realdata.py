@@ -39,8 +39,6 @@ __all__ = [
     "load_tum_trajectory",
     "load_euroc_imu",
     "load_euroc_mocap",
-    "load_kalibr_camchain",
-    "load_euroc_sensor_yaml",
     "load_tabb_poses",
     "load_tabb_camera_poses",
     "load_tabb_solution",
@@ -142,21 +140,6 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0) -> GyroStream:
     return GyroStream(data[:, 0] * 1e-9, w, str(path))
 
 
-def _yaml(path):
-    import io
-
-    import yaml
-
-    stream = io.StringIO(read_text(path))
-    stream.name = str(path)  # YAML's messages name the file
-    try:
-        return yaml.safe_load(stream)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        fail(path, f"not valid YAML: {err}", line=None if mark is None else mark.line + 1,
-             column=None if mark is None else mark.column + 1)
-
-
 def _rotation(path, M, what, atol):
     """``check_rotation_matrices`` whose error is a :class:`~replication.rig.datafile.DataFileError` for ``path``."""
     try:
@@ -173,35 +156,6 @@ def _rotation_block(path, matrix, what):
     if M.shape != (4, 4):
         fail(path, f"{what} must be a 4x4 matrix, got shape {M.shape}")
     return _rotation(path, M[:3, :3], f"rotation part of {what}", atol=1e-5)
-
-
-def load_kalibr_camchain(path, camera: str = "cam0") -> np.ndarray:
-    """``camera_from_sensor`` from a Kalibr camchain YAML: the rotation of ``<camera>.T_cam_imu``.
-
-    Kalibr's ``T_cam_imu`` maps IMU-frame points into the camera frame, so its rotation is
-    ``R_cam<-imu`` = the paper's ``R0`` directly.
-    """
-    doc = _yaml(path)
-    try:
-        T = doc[camera]["T_cam_imu"]
-    except (KeyError, TypeError):
-        fail(path, f"no {camera}.T_cam_imu entry")
-    return _rotation_block(path, T, f"{camera}.T_cam_imu")
-
-
-def load_euroc_sensor_yaml(path) -> np.ndarray:
-    """``camera_from_sensor`` from an EuRoC ``cam0/sensor.yaml``: the transpose of ``T_BS``'s rotation.
-
-    ``T_BS`` maps sensor (camera) points into the body (= IMU) frame: ``R_BS = R_imu<-cam``,
-    so ``R0 = R_cam<-imu = R_BS^T``.
-    """
-    doc = _yaml(path)
-    try:
-        T = doc["T_BS"]
-        M = np.asarray(T["data"], dtype=float).reshape(int(T["rows"]), int(T["cols"]))
-    except (KeyError, TypeError, ValueError):
-        fail(path, "no valid T_BS (rows, cols, data) entry")
-    return _rotation_block(path, M, "T_BS").T
 
 
 def _tabb_count(path, tokens):
@@ -291,17 +245,19 @@ def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", dro
 
 
 def load_reference(path, camera: str = "cam0") -> np.ndarray:
-    """A reference ``camera_from_sensor`` from a Kalibr camchain, an EuRoC ``sensor.yaml`` or Tabb's solution.
+    """A reference ``camera_from_sensor`` from a calibration file, its kind recognised from the content.
 
-    The kind is recognised from the content: ``<camera>.T_cam_imu`` (Kalibr), ``T_BS`` (EuRoC),
-    a ``Z`` matrix (Tabb's ``transformations.txt``).
+    Kalibr camchains (``<camera>.T_cam_imu``), OpenVINS ``%YAML:1.0`` imu-camera chains (``T_imu_cam`` or
+    ``T_cam_imu``), ORB-SLAM3 visual-inertial settings (``IMU.T_b_c1``), Basalt's calibration JSON
+    (``value0.T_imu_cam``), EuRoC camera ``sensor.yaml`` files (``T_BS``): see
+    :mod:`replication.rig.vioformats`; anything else is read as Tabb's ``transformations.txt`` (a ``Z`` matrix).
     """
+    from .vioformats import looks_like_vio_file, read_vio_file
+
     path = Path(path)
-    if path.suffix.lower() in (".yaml", ".yml"):
-        doc = _yaml(path)
-        if isinstance(doc, dict) and "T_BS" in doc:
-            return load_euroc_sensor_yaml(path)
-        return load_kalibr_camchain(path, camera)
+    text = read_text(path, "a reference calibration")
+    if looks_like_vio_file(path, text):
+        return read_vio_file(path, text).camera_from_sensor(camera)
     return load_tabb_solution(path)
 
 

@@ -1,0 +1,328 @@
+"""Camera-IMU calibration files of the VIO ecosystem: read ``R0`` and the clock offset, change them in a copy.
+
+Each format stores the camera-IMU rotation in its own direction and the clock offset under its own name and sign;
+the conventions below, and the source line each comes from, are in ``docs/conventions.md`` ("Other tools' files").
+``R0 = camera_from_sensor`` (``v_cam = R0 v_imu``) and ``d`` is this package's clock offset (the IMU sample stamped
+``t + d`` matches the camera sample stamped ``t``: ``t_imu = t_cam + d``).
+
+========  =================================================  ==========================  ==========================
+format    file and entry                                     rotation stored             clock offset field
+========  =================================================  ==========================  ==========================
+kalibr    camchain(-imucam) YAML, ``<cam>.T_cam_imu``        ``R0``                      ``timeshift_cam_imu`` = d
+openvins  ``kalibr_imucam_chain.yaml`` (``%YAML:1.0``)       ``T_imu_cam``: ``R0ᵀ``;     ``timeshift_cam_imu`` = d
+                                                             ``T_cam_imu``: ``R0``
+basalt    calibration JSON, ``value0.T_imu_cam[i]``          ``R0ᵀ`` (quaternion xyzw)   ``cam_time_offset_ns`` = d
+orbslam3  settings YAML (``%YAML:1.0``), ``IMU.T_b_c1``      ``R0ᵀ`` (body = IMU)        none
+euroc     ``sensor.yaml`` ``T_BS`` (read only)               ``R0ᵀ``                     none
+========  =================================================  ==========================  ==========================
+
+A file is edited in its text: the nine numbers of the rotation (and the offset's one) are replaced where they stand,
+so comments, the ``%YAML:1.0`` header, the translation, the intrinsics and every other field stay byte for byte. The
+spans come from PyYAML's node marks (JSON is parsed as YAML for them, and by :mod:`json` for the values).
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..core.checks import check_rotation_matrices
+from .datafile import fail, read_text
+
+__all__ = ["FORMATS", "VioFile", "read_vio_file", "looks_like_vio_file", "format_number"]
+
+#: The formats :func:`read_vio_file` recognises, and whether a rotation can be written into them.
+FORMATS = {"kalibr": True, "openvins": True, "basalt": True, "orbslam3": True, "euroc": False}
+_OPENCV_HEADER = re.compile(r"%YAML[: ]1\.0")
+_MATRIX_TAG = "tag:yaml.org,2002:opencv-matrix"
+
+
+def format_number(x: float) -> str:
+    """``x`` to 17 significant digits (round-trips exactly), always with a dot: YAML 1.1 reads ``1e-05`` as text."""
+    if not math.isfinite(x):
+        raise ValueError(f"cannot write a non-finite number ({x}) into a calibration file")
+    text = repr(float(x))
+    if "e" in text and "." not in text:
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}.0e{exponent}"
+    return text
+
+
+def _loader():
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        """Safe YAML plus OpenCV's ``!!opencv-matrix`` (a mapping rows, cols, dt, data)."""
+
+    def matrix(loader, node):
+        m = loader.construct_mapping(node, deep=True)
+        return np.asarray(m["data"], dtype=float).reshape(int(m["rows"]), int(m["cols"]))
+
+    Loader.add_constructor(_MATRIX_TAG, matrix)
+    return Loader
+
+
+def _yaml_text(path, text):
+    """The text PyYAML can read: OpenCV's ``%YAML:1.0`` header turned into a comment of the same length."""
+    if _OPENCV_HEADER.match(text):
+        return "#" + text[1:]
+    return text
+
+
+@dataclass
+class _Span:
+    """A scalar's place in the text."""
+
+    start: int
+    end: int
+
+
+def _compose(path, text):
+    import yaml
+
+    try:
+        return yaml.compose(text, Loader=_loader())
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        fail(path, f"not valid YAML/JSON: {getattr(err, 'problem', err)}",
+             line=None if mark is None else mark.line + 1, column=None if mark is None else mark.column + 1)
+
+
+def _child(node, key):
+    """The value node under ``key`` of a mapping node, or None."""
+    import yaml
+
+    if not isinstance(node, yaml.MappingNode):
+        return None
+    for k, v in node.value:
+        if isinstance(k, yaml.ScalarNode) and k.value == key:
+            return v
+    return None
+
+
+def _span(node) -> _Span:
+    return _Span(node.start_mark.index, node.end_mark.index)
+
+
+class VioFile:
+    """One calibration file, its format recognised from its content.
+
+    Use :func:`read_vio_file`. ``camera_from_sensor(camera)`` and ``time_offset_s(camera)`` read it;
+    ``with_values(camera, R0, d)`` returns the text of a copy with only those values changed.
+    """
+
+    def __init__(self, path, text: str):
+        self.path = Path(path) if not isinstance(path, Path) else path
+        self.text = text
+        self.opencv = bool(_OPENCV_HEADER.match(text))
+        self.json = text.lstrip().startswith("{")
+        yaml_text = _yaml_text(path, text)
+        self._root = _compose(path, yaml_text)
+        if self.json:
+            try:
+                self.doc = json.loads(text)
+            except json.JSONDecodeError as err:
+                fail(path, f"not valid JSON: {err.msg}", line=err.lineno, column=err.colno)
+        else:
+            import yaml
+
+            try:
+                self.doc = yaml.load(yaml_text, Loader=_loader())  # noqa: S506 (a SafeLoader subclass)
+            except (yaml.YAMLError, KeyError, TypeError, ValueError) as err:
+                fail(path, f"not a readable calibration file: {err}")
+        self.format = self._recognise()
+
+    # -- recognising -------------------------------------------------------------------------------------------
+    def _recognise(self) -> str:
+        doc = self.doc
+        if not isinstance(doc, dict):
+            fail(self.path, "not a calibration file: its top level is not a mapping")
+        if self.json:
+            if isinstance(doc.get("value0"), dict) and "T_imu_cam" in doc["value0"]:
+                return "basalt"
+            fail(self.path, "a JSON file without value0.T_imu_cam: not a Basalt calibration")
+        if "IMU.T_b_c1" in doc:
+            return "orbslam3"
+        if "T_BS" in doc:
+            if doc.get("sensor_type", "camera") != "camera":
+                fail(self.path, f"an EuRoC sensor.yaml of a {doc['sensor_type']!r}, not of a camera: its T_BS is not a "
+                                "camera-IMU extrinsic")
+            return "euroc"
+        cams = [k for k, v in doc.items() if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
+        if cams:
+            return "openvins" if self.opencv else "kalibr"
+        if any(str(k).startswith(("Camera.", "Camera1.", "ORBextractor.")) for k in doc):
+            fail(self.path, "ORB-SLAM3 settings without IMU.T_b_c1: a vision-only configuration (ORB-SLAM3's "
+                            "Monocular-Inertial / Stereo-Inertial settings carry the camera-IMU extrinsic)")
+        fail(self.path, "no camera-IMU extrinsic found: expected <camera>.T_cam_imu or T_imu_cam (Kalibr, OpenVINS), "
+                        "IMU.T_b_c1 (ORB-SLAM3), T_BS (EuRoC) or value0.T_imu_cam (Basalt JSON)")
+
+    def cameras(self) -> list[str]:
+        """The camera names this file holds (``cam0``, ``cam1``, ...)."""
+        if self.format in ("kalibr", "openvins"):
+            return [k for k, v in self.doc.items() if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
+        if self.format == "basalt":
+            return [f"cam{i}" for i in range(len(self.doc["value0"]["T_imu_cam"]))]
+        return ["cam0"]
+
+    def _check_camera(self, camera):
+        if camera not in self.cameras():
+            only = {"orbslam3": " (ORB-SLAM3's IMU.T_b_c1 is camera 1: use cam0)", "euroc": ""}.get(self.format, "")
+            fail(self.path, f"no camera {camera!r} in this {self.format} file; it has "
+                            f"{', '.join(self.cameras())}{only}")
+
+    # -- the rotation --------------------------------------------------------------------------------------------
+    def _matrix_nodes(self, camera):
+        """``(key, transposed, nine scalar nodes in row-major order)`` of the camera's extrinsic."""
+        import yaml
+
+        self._check_camera(camera)
+        if self.format == "basalt":
+            raise AssertionError("Basalt stores a quaternion")
+        if self.format in ("kalibr", "openvins"):
+            cam = _child(self._root, camera)
+            key = "T_cam_imu" if _child(cam, "T_cam_imu") is not None else "T_imu_cam"
+            node = _child(cam, key)
+            transposed = key == "T_imu_cam"
+        else:
+            key = "IMU.T_b_c1" if self.format == "orbslam3" else "T_BS"
+            node, transposed = _child(self._root, key), True
+        if isinstance(node, yaml.MappingNode):  # !!opencv-matrix or EuRoC's rows / cols / data
+            data, cols = _child(node, "data"), _child(node, "cols")
+            scalars = data.value if isinstance(data, yaml.SequenceNode) else []
+            ncols = int(cols.value) if isinstance(cols, yaml.ScalarNode) else 0
+            nine = [scalars[r * ncols + c] for r in range(3) for c in range(3)] if len(scalars) >= 12 and ncols >= 3 \
+                else []
+        elif isinstance(node, yaml.SequenceNode) and len(node.value) >= 3 and all(
+                isinstance(row, yaml.SequenceNode) and len(row.value) >= 3 for row in node.value[:3]):
+            nine = [node.value[r].value[c] for r in range(3) for c in range(3)]
+        else:
+            nine = []
+        if len(nine) != 9 or not all(isinstance(s, yaml.ScalarNode) for s in nine):
+            fail(self.path, f"{camera if self.format in ('kalibr', 'openvins') else ''}.{key}".lstrip(".")
+                 + " is not a 4x4 matrix (a list of rows, or rows / cols / data)")
+        return key, transposed, nine
+
+    def _quaternion_nodes(self, camera):
+        index = int(camera[3:])
+        entry = self._root_value0("T_imu_cam").value[index]
+        nodes = [_child(entry, k) for k in ("qx", "qy", "qz", "qw")]
+        if any(n is None for n in nodes):
+            fail(self.path, f"value0.T_imu_cam[{index}] has no qx, qy, qz, qw")
+        return nodes
+
+    def _root_value0(self, key):
+        node = _child(_child(self._root, "value0"), key)
+        if node is None:
+            fail(self.path, f"no value0.{key}")
+        return node
+
+    def camera_from_sensor(self, camera: str = "cam0") -> np.ndarray:
+        """``R0`` (``camera_from_sensor``) as this file states it for ``camera``, checked to be a rotation."""
+        self._check_camera(camera)
+        if self.format == "basalt":
+            from scipy.spatial.transform import Rotation
+
+            q = np.array([float(n.value) for n in self._quaternion_nodes(camera)])
+            if not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1) > 1e-6:
+                fail(self.path, f"value0.T_imu_cam[{camera[3:]}] quaternion has norm {np.linalg.norm(q):.9g}, not 1")
+            return Rotation.from_quat(q).as_matrix().T  # T_imu_cam's rotation is imu_from_camera
+        key, transposed, nine = self._matrix_nodes(camera)
+        try:
+            M = np.array([float(n.value) for n in nine]).reshape(3, 3)
+        except ValueError:
+            fail(self.path, f"{key} has an entry that is not a number")
+        try:
+            M = check_rotation_matrices(M, f"rotation part of {key}", atol=1e-5)
+        except ValueError as err:
+            fail(self.path, str(err))
+        return M.T if transposed else M
+
+    # -- the clock offset -----------------------------------------------------------------------------------------
+    def _offset_node(self, camera):
+        self._check_camera(camera)
+        if self.format in ("kalibr", "openvins"):
+            return _child(_child(self._root, self._offset_camera(camera)), "timeshift_cam_imu"), 1.0
+        if self.format == "basalt":
+            return _child(_child(self._root, "value0"), "cam_time_offset_ns"), 1e-9
+        return None, None
+
+    def _offset_camera(self, camera):
+        """The camera whose entry holds the offset: OpenVINS reads one, cam0's, for every camera."""
+        return "cam0" if self.format == "openvins" and "cam0" in self.cameras() else camera
+
+    def time_offset_s(self, camera: str = "cam0") -> float | None:
+        """``d`` (``t_imu = t_cam + d``, seconds) as this file states it; None if the file has no such field."""
+        node, scale = self._offset_node(camera)
+        if node is None:
+            return None
+        try:
+            return float(node.value) * scale
+        except ValueError:
+            fail(self.path, f"the time offset {node.value!r} is not a number", line=node.start_mark.line + 1)
+
+    # -- writing ---------------------------------------------------------------------------------------------------
+    def with_values(self, camera: str, R0, time_offset_s: float | None) -> tuple[str, list[str]]:
+        """The text of a copy with ``camera``'s rotation set to ``R0`` and, if given and the format has a field for
+        it, the clock offset set to ``time_offset_s``; and the names of the fields changed (or added)."""
+        if not FORMATS[self.format]:
+            fail(self.path, f"{self.format} files are read as references only, not written")
+        R0 = check_rotation_matrices(np.asarray(R0, dtype=float), "R0")
+        edits, changed = [], []
+        if self.format == "basalt":
+            from scipy.spatial.transform import Rotation
+
+            nodes = self._quaternion_nodes(camera)
+            old = np.array([float(n.value) for n in nodes])
+            q = Rotation.from_matrix(R0.T).as_quat()
+            q = -q if np.dot(q, old) < 0 else q  # the hemisphere of the file's own quaternion
+            edits += [(_span(n), format_number(v)) for n, v in zip(nodes, q)]
+            changed.append(f"value0.T_imu_cam[{camera[3:]}].qx..qw")
+        else:
+            key, transposed, nine = self._matrix_nodes(camera)
+            M = R0.T if transposed else R0
+            edits += [(_span(n), format_number(v)) for n, v in zip(nine, M.ravel())]
+            changed.append(f"{camera}.{key} rotation" if self.format in ("kalibr", "openvins") else f"{key} rotation")
+        if time_offset_s is not None and self.format != "orbslam3":
+            node, scale = self._offset_node(camera)
+            ns = int(round(time_offset_s * 1e9))  # to the nanosecond, Basalt's unit: finer is noise
+            value = str(ns) if self.format == "basalt" else format_number(ns * 1e-9)
+            if node is not None:
+                edits.append((_span(node), value))
+            elif self.format == "basalt":
+                fail(self.path, "no value0.cam_time_offset_ns to set")
+            else:
+                edits.append(self._insertion(self._offset_camera(camera), f"timeshift_cam_imu: {value}"))
+            changed.append(f"{self._offset_camera(camera)}.timeshift_cam_imu" if self.format != "basalt"
+                           else "value0.cam_time_offset_ns")
+        text = self.text
+        for span, value in sorted(edits, key=lambda e: e[0].start, reverse=True):
+            text = text[:span.start] + value + text[span.end:]
+        return text, changed
+
+    def _insertion(self, camera, line):
+        """An edit that adds ``line`` as the camera mapping's first key, at its indentation (block style only)."""
+        cam = _child(self._root, camera)
+        if cam.flow_style:
+            fail(self.path, f"{camera} is written in flow style: add timeshift_cam_imu by hand")
+        first = cam.value[0][0].start_mark
+        start = first.index - first.column
+        return _Span(start, start), " " * first.column + line + "\n"
+
+
+def looks_like_vio_file(path, text: str) -> bool:
+    """Whether ``text`` (the content of ``path``) is to be read as YAML or JSON: a ``.yaml``, ``.yml`` or ``.json``
+    name, an OpenCV ``%YAML`` header, or a JSON object."""
+    stripped = text.lstrip()
+    return Path(path).suffix.lower() in (".yaml", ".yml", ".json") or stripped.startswith(("%YAML", "{"))
+
+
+def read_vio_file(path, text: str | None = None) -> VioFile:
+    """Read a calibration file of any format in :data:`FORMATS` (recognised by content, not by name).
+
+    ``text``: the file's content when already read (a pipe can be read once)."""
+    return VioFile(path, read_text(path, "a calibration file") if text is None else text)

@@ -1,0 +1,415 @@
+"""Export into the ecosystem's files (:mod:`replication.rig.export`, :mod:`replication.rig.vioformats`) and those
+files as references.
+
+Round trips against the real files of both rigs (Kalibr camchain, OpenVINS ``%YAML:1.0`` chains, Basalt's JSON,
+ORB-SLAM3 settings); only the rotation and the offset change, every other value and comment stays; ``cv2.FileStorage``
+still reads the OpenCV-style files; the offset's sign: a gyro clock shifted by a known amount gives that amount in
+each file, under each tool's own name and unit.
+"""
+import difflib
+import json
+import math
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+from replication.core import so3
+from replication.rig.calibration import calibrate
+from replication.rig.datafile import DataFileError
+from replication.rig.export import ExportWarning, TranslationNotEstimatedWarning, export_calibration, read_report
+from replication.rig.realdata import data_root, load_reference, real_data_available
+from replication.rig.streams import GyroStream, OrientationStream
+from replication.rig.vioformats import format_number, read_vio_file
+
+needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
+R_TRUE = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+FILE_FORMATS = ("kalibr", "openvins", "basalt", "orbslam3")
+
+
+def _world_from_camera(t):
+    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
+
+
+def _rig(offset, seconds=30.0):
+    """A 20 Hz camera and a rigid 200 Hz gyro (raw rates) whose clock reads ``offset`` s ahead of the camera's."""
+    t_cam = np.arange(0.0, seconds, 0.05)
+    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = _world_from_camera(t_imu) @ R_TRUE
+    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    return (OrientationStream(t_cam, _world_from_camera(t_cam), "camera"),
+            GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
+
+
+def _report(R=R_TRUE, d=0.0123456789, level="ok", kind="GyroStream"):
+    return {"R0_camera_from_sensor": np.asarray(R).tolist(), "time_offset_s": d,
+            "verdict": {"level": level, "reasons": [] if level == "ok" else [{"level": level, "message": "m"}]},
+            "inputs": {"sensor": {"kind": kind, "source": "imu.csv"}}}
+
+
+def _export(report, to, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TranslationNotEstimatedWarning)
+        return export_calibration(report, to, **kw)
+
+
+def _written(tmp_path, export, name):
+    path = tmp_path / name
+    export.write(path)
+    return path
+
+
+# ------------------------------------------------------------------------------------------------ numbers and files
+
+def test_numbers_round_trip_and_always_carry_a_dot():
+    for x in (1e-05, -0.1, 0.9995250378696743, 123456789.0, 5e-324):
+        text = format_number(x)
+        assert "." in text and float(text) == x
+    assert format_number(1e-05) == "1.0e-05"
+    import yaml
+
+    assert isinstance(yaml.safe_load(format_number(1e-05)), float)  # YAML 1.1 reads a bare 1e-05 as text
+    for bad in (math.nan, math.inf):
+        with pytest.raises(ValueError, match="non-finite"):
+            format_number(bad)
+
+
+@pytest.mark.parametrize("to", FILE_FORMATS)
+def test_a_minimal_file_holds_the_rotation_and_offset_and_says_what_it_lacks(tmp_path, to):
+    with pytest.warns(TranslationNotEstimatedWarning, match="translation NOT estimated"):
+        export = export_calibration(_report(), to)
+    path = _written(tmp_path, export, f"min.{'json' if to == 'basalt' else 'yaml'}")
+    file = read_vio_file(path)
+    assert file.format == to
+    assert np.abs(file.camera_from_sensor("cam0") - R_TRUE).max() < 1e-12
+    if to == "orbslam3":
+        assert file.time_offset_s() is None and any("no camera-IMU time offset" in n for n in export.notes)
+    else:
+        assert file.time_offset_s() == pytest.approx(0.012345679, abs=1e-15)  # to the nanosecond
+    if to != "basalt":
+        assert "translation NOT estimated" in path.read_text()
+    assert np.allclose(np.asarray(load_reference(path)), R_TRUE, atol=1e-12)
+
+
+@pytest.mark.parametrize("to", ("openvins", "orbslam3"))
+def test_opencv_style_files_keep_their_header_and_cv2_reads_them(tmp_path, to):
+    import cv2
+
+    path = _written(tmp_path, _export(_report(), to), "min.yaml")
+    assert path.read_text().startswith("%YAML:1.0\n")
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    try:
+        assert fs.isOpened()
+        if to == "orbslam3":
+            T = fs.getNode("IMU.T_b_c1").mat()  # dt: f, ORB-SLAM3's float matrix
+            assert np.abs(T[:3, :3] - R_TRUE.T).max() < 1e-7
+        else:
+            cam = fs.getNode("cam0")
+            rows = [[cam.getNode("T_imu_cam").at(r).at(c).real() for c in range(4)] for r in range(4)]
+            assert np.abs(np.array(rows)[:3, :3] - R_TRUE.T).max() < 1e-15
+            assert cam.getNode("timeshift_cam_imu").real() == pytest.approx(0.012345679)
+    finally:
+        fs.release()
+
+
+KALIBR_BASE = """# my rig, calibrated 2026-11-30
+cam0:
+  T_cam_imu:  # keep this comment
+  - [1.0, 0.0, 0.0, 0.1]
+  - [0.0, 1.0, 0.0, -0.2]
+  - [0.0, 0.0, 1.0, 0.3]
+  - [0.0, 0.0, 0.0, 1.0]
+  intrinsics: [190.9, 190.9, 254.9, 256.8]
+  timeshift_cam_imu: -0.5
+cam1:
+  T_cam_imu:
+  - [1.0, 0.0, 0.0, 0.7]
+  - [0.0, 1.0, 0.0, 0.0]
+  - [0.0, 0.0, 1.0, 0.0]
+  - [0.0, 0.0, 0.0, 1.0]
+"""
+
+
+def test_a_kalibr_base_changes_in_three_rotation_rows_and_the_offset_only(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    base.write_text(KALIBR_BASE)
+    export = export_calibration(_report(), "kalibr", base=base)
+    changed = [(a, b) for a, b in zip(KALIBR_BASE.splitlines(), export.text.splitlines()) if a != b]
+    assert len(export.text.splitlines()) == len(KALIBR_BASE.splitlines()) and len(changed) == 4
+    assert export.changed == ("cam0.T_cam_imu rotation", "cam0.timeshift_cam_imu")
+    out = read_vio_file(_written(tmp_path, export, "new.yaml"))
+    assert np.abs(out.camera_from_sensor("cam0") - R_TRUE).max() < 1e-12
+    assert out.doc["cam0"]["T_cam_imu"][0][3] == 0.1 and out.doc["cam0"]["T_cam_imu"][2][3] == 0.3  # translation
+    assert out.doc["cam1"] == read_vio_file(base).doc["cam1"] and "# keep this comment" in export.text
+    assert out.time_offset_s("cam0") == pytest.approx(0.012345679, abs=1e-15)
+    # cam1 has no offset field: it is added at the camera's indentation, the rest untouched
+    export1 = export_calibration(_report(), "kalibr", base=base, camera="cam1")
+    out1 = read_vio_file(_written(tmp_path, export1, "new1.yaml"))
+    assert out1.time_offset_s("cam1") == pytest.approx(0.012345679) and out1.time_offset_s("cam0") == -0.5
+    assert np.abs(out1.camera_from_sensor("cam0") - np.eye(3)).max() == 0
+
+
+def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    base.write_text(KALIBR_BASE)
+    export = export_calibration(_report(d=None), "kalibr", base=base)
+    assert read_vio_file(_written(tmp_path, export, "n.yaml")).time_offset_s() == -0.5
+    assert export.changed == ("cam0.T_cam_imu rotation",) and any("left as it was" in n for n in export.notes)
+
+
+def test_ros2_is_a_static_transform_publisher_command_of_the_cameras_pose_in_the_imu_frame():
+    from scipy.spatial.transform import Rotation
+
+    with pytest.warns(TranslationNotEstimatedWarning):
+        export = export_calibration(_report(), "ros2", parent_frame="imu0", child_frame="cam0_optical")
+    command = export.text.splitlines()[-1].split()
+    assert command[:4] == ["ros2", "run", "tf2_ros", "static_transform_publisher"]
+    value = {command[i][2:]: command[i + 1] for i in range(4, len(command), 2)}
+    assert (value["frame-id"], value["child-frame-id"]) == ("imu0", "cam0_optical")
+    assert [float(value[k]) for k in ("x", "y", "z")] == [0.0, 0.0, 0.0]
+    q = [float(value[k]) for k in ("qx", "qy", "qz", "qw")]
+    assert np.abs(Rotation.from_quat(q).as_matrix() - R_TRUE.T).max() < 1e-12  # p_imu = R p_cam
+    assert any("t_imu = t_cam + d" in n for n in export.notes)
+    with pytest.raises(ValueError, match="no base file"):
+        export_calibration(_report(), "ros2", base="x.yaml")
+
+
+def test_basalt_keeps_the_files_quaternion_hemisphere(tmp_path):
+    base = tmp_path / "calib.json"
+    pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": -1.0}
+    base.write_text(json.dumps({"value0": {"T_imu_cam": [pose, pose], "cam_time_offset_ns": 7}}, indent=4))
+    R = so3.exp_map(np.radians([0.0, 0.0, 1.0]))
+    out = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1").text)
+    assert out["value0"]["T_imu_cam"][1]["qw"] < 0 and out["value0"]["T_imu_cam"][0] == pose
+    assert out["value0"]["cam_time_offset_ns"] == -2500000
+    assert (out["value0"]["T_imu_cam"][1]["px"], out["value0"]["T_imu_cam"][1]["pz"]) == (0.1, 0.3)
+
+
+# ----------------------------------------------------------------------------------------------------- refusals
+
+def test_a_failed_verdict_is_refused_unless_forced_and_a_warning_is_carried_over():
+    with pytest.raises(ValueError, match="verdict is fail .*m.*force"):
+        _export(_report(level="fail"), "kalibr")
+    with pytest.warns(ExportWarning, match="verdict is fail"):
+        _export(_report(level="fail"), "kalibr", force=True)
+    with pytest.warns(ExportWarning, match="verdict is warning: warning: m"):
+        _export(_report(level="warning"), "kalibr")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        _export(_report(level="ok"), "kalibr")
+
+
+def test_an_offset_measured_against_an_orientation_stream_is_flagged():
+    with pytest.warns(ExportWarning, match="not the IMU's gyro"):
+        _export(_report(kind="OrientationStream"), "basalt")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        _export(_report(kind="GyroStream"), "basalt")
+        _export(_report(kind="OrientationStream", d=None), "basalt")  # no offset exported, nothing to flag
+        _export(_report(kind="OrientationStream"), "orbslam3")  # ORB-SLAM3 takes no offset
+
+
+@pytest.mark.parametrize("report, message", [
+    ({"x": 1}, "not a calibration report"),
+    ({**_report(), "R0_camera_from_sensor": (2 * np.eye(3)).tolist()}, "R0_camera_from_sensor"),
+    ({**_report(), "time_offset_s": "0.1"}, "time_offset_s must be a number or null"),
+    ({**_report(), "verdict": {"level": "great"}}, "verdict.level"),
+])
+def test_a_report_that_is_not_one_is_refused(report, message):
+    with pytest.raises(ValueError, match=message):
+        read_report(report)
+
+
+def test_a_bad_report_file_is_named_with_line_and_column(tmp_path):
+    path = tmp_path / "r.json"
+    path.write_text('{\n  "R0_camera_from_sensor": [1,\n}')
+    with pytest.raises(DataFileError, match=r"r.json, line 3, column 1: not valid JSON") as info:
+        read_report(path)
+    assert (info.value.line, info.value.column) == (3, 1)
+
+
+def test_a_base_of_another_tool_or_without_the_camera_is_refused(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    base.write_text(KALIBR_BASE)
+    with pytest.raises(DataFileError, match="is a kalibr file, not basalt"):
+        export_calibration(_report(), "basalt", base=base)
+    with pytest.raises(DataFileError, match="no camera 'cam2' in this kalibr file; it has cam0, cam1"):
+        export_calibration(_report(), "kalibr", base=base, camera="cam2")
+    with pytest.raises(ValueError, match="minimal Basalt file holds cam0 only"):
+        _export(_report(), "basalt", camera="cam1")
+    with pytest.raises(ValueError, match="to must be one of"):
+        export_calibration(_report(), "vins")
+
+
+@pytest.mark.parametrize("text, message", [
+    ("sensor_type: imu\nT_BS:\n  rows: 4\n  cols: 4\n  data: [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]\n",
+     "sensor.yaml of a 'imu', not of a camera"),
+    ("%YAML:1.0\nCamera1.fx: 458.6\nORBextractor.nFeatures: 1000\n", "ORB-SLAM3 settings without IMU.T_b_c1"),
+    ("cam0:\n  intrinsics: [1, 2, 3, 4]\n", "no camera-IMU extrinsic found"),
+    ("cam0:\n  T_cam_imu: [[1, 0], [0, 1]]\n", r"cam0.T_cam_imu is not a 4x4 matrix"),
+    ("cam0:\n  T_cam_imu:\n  - [2, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 0, 0, 1]\n", "rotation"),
+    ('{"value0": {"intrinsics": []}}', "not a Basalt calibration"),
+    ('{"value0": {"T_imu_cam": [{"qx": 0, "qy": 0, "qz": 0, "qw": 2}]}}', "norm 2, not 1"),
+    ("cam0:\n  T_cam_imu: [[1, 0,\n", "not valid YAML/JSON"),
+])
+def test_reference_files_that_are_not_camera_imu_extrinsics_are_refused(tmp_path, text, message):
+    path = tmp_path / ("f.json" if text.startswith("{") else "f.yaml")
+    path.write_text(text)
+    with pytest.raises(DataFileError, match=message):
+        load_reference(path)
+
+
+# --------------------------------------------------------------------------------------------------------- sign
+
+@pytest.mark.parametrize("shift_ms", (2.29, -12.62))
+def test_a_known_gyro_clock_shift_comes_out_in_each_tools_field_and_sign(tmp_path, shift_ms):
+    """The gyro's clock reads ``shift`` ahead (its sample stamped t + shift is the camera's at t): Kalibr's and
+    OpenVINS' ``timeshift_cam_imu`` (t_imu = t_cam + shift) and Basalt's ``cam_time_offset_ns`` (camera time plus
+    it is IMU time) are +shift; the ROS 2 note and ORB-SLAM3's (no field) state it with its sign."""
+    result = calibrate(*_rig(1e-3 * shift_ms), n_bootstrap=0)
+    assert result.verdict.level == "ok"
+    for to in ("kalibr", "openvins", "basalt"):
+        file = read_vio_file(_written(tmp_path, _export(result, to), f"{to}.{'json' if to == 'basalt' else 'yaml'}"))
+        assert abs(1e3 * file.time_offset_s() - shift_ms) < 0.01, (to, file.time_offset_s())
+        assert so3.angle_between_deg(file.camera_from_sensor(), R_TRUE) < 1e-4
+    orb = _export(result, "orbslam3")
+    assert f"add d = {1e-3 * shift_ms:.5f}"[:-1] in orb.notes[0], orb.notes
+    assert f"d = {1e-3 * shift_ms:.5f}"[:-1] in _export(result, "ros2").notes[0]
+
+
+# ------------------------------------------------------------------------------------------------------------ CLI
+
+def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
+    report, base, out = tmp_path / "report.json", tmp_path / "camchain.yaml", tmp_path / "new.yaml"
+    report.write_text(json.dumps(_report(level="warning")))
+    base.write_text(KALIBR_BASE)
+    cmd = [sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base", str(base)]
+    done = subprocess.run(cmd + ["--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "kalibr: changed cam0.T_cam_imu rotation, cam0.timeshift_cam_imu" in done.stderr
+    assert "warning: ExportWarning: the report's verdict is warning" in done.stderr and base.read_text() == KALIBR_BASE
+    assert np.abs(read_vio_file(out).camera_from_sensor() - R_TRUE).max() < 1e-12
+    refused = subprocess.run(cmd + ["--out", str(base)], capture_output=True, text=True)
+    assert refused.returncode == 2 and "--out is the --base input file" in refused.stderr
+    report.write_text(json.dumps(_report(level="fail")))
+    failed = subprocess.run(cmd, capture_output=True, text=True)
+    assert failed.returncode == 2 and "verdict is fail" in failed.stderr and failed.stdout == ""
+    forced = subprocess.run(cmd + ["--force"], capture_output=True, text=True)
+    assert forced.returncode == 0 and forced.stdout.startswith("# my rig")  # no --out: standard output
+
+
+# ------------------------------------------------------------------------------------------------ real files
+
+def _orbslam3_inertial(folder, tmp_path):
+    """ORB-SLAM3's real monocular settings with the visual-inertial block its Monocular-Inertial settings carry
+    (``IMU.T_b_c1`` as an ``!!opencv-matrix`` of ``dt: f``), holding the rig's published extrinsic."""
+    name = {"euroc_mh01_orbslam3": "orbslam3_Monocular_EuRoC.yaml",
+            "tumvi_room1_orbslam3mono": "orbslam3_Monocular_TUM-VI.yaml"}[folder]
+    T = np.eye(4)
+    T[:3, :3] = load_reference(data_root() / folder / _REFERENCES[folder][0]).T
+    T[:3, 3] = [-0.0216, -0.0647, 0.0098]
+    data = ",\n         ".join(", ".join(format_number(v) for v in row) for row in T)
+    path = tmp_path / f"inertial_{name}"
+    path.write_text((data_root() / folder / name).read_text() + "\n# Transformation from camera to body-frame (imu)\n"
+                    f"IMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f\n   data: [{data}]\n\n"
+                    "IMU.NoiseGyro: 1.7e-4\nIMU.Frequency: 200.0\n")
+    return path
+
+
+#: Each rig's published calibrations, as files: the dataset's own (Kalibr), and Basalt's.
+_REFERENCES = {"euroc_mh01_orbslam3": ("euroc_cam0_sensor.yaml", "openvins_euroc_kalibr_imucam_chain.yaml",
+                                       "basalt_euroc_eucm_calib.json", "basalt_euroc_ds_calib.json"),
+               "tumvi_room1_orbslam3mono": ("camchain.yaml", "openvins_tum_vi_kalibr_imucam_chain.yaml",
+                                            "basalt_tumvi_512_eucm_calib.json", "basalt_tumvi_512_ds_calib.json")}
+
+
+def _values(file):
+    """Every value of a file as ``{dotted path: value}``."""
+    out = {}
+
+    def walk(prefix, v):
+        if isinstance(v, dict):
+            for k, w in v.items():
+                walk(f"{prefix}.{k}", w)
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            for i, w in enumerate(np.asarray(v, dtype=object).tolist() if isinstance(v, np.ndarray) else v):
+                walk(f"{prefix}[{i}]", w)
+        else:
+            out[prefix] = v
+    walk("", file.doc)
+    return out
+
+
+@needs_real
+@pytest.mark.parametrize("folder", sorted(_REFERENCES))
+@pytest.mark.parametrize("camera", ("cam0", "cam1"))
+def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_path, folder, camera):
+    import cv2
+
+    d = data_root() / folder
+    bases = [d / name for name in _REFERENCES[folder][1:]]
+    if folder == "tumvi_room1_orbslam3mono":
+        bases.append(d / "camchain.yaml")
+    if camera == "cam0":
+        bases.append(_orbslam3_inertial(folder, tmp_path))
+    R = so3.exp_map(np.radians([0.3, -0.2, 0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
+    for base in bases:
+        before = read_vio_file(base)
+        export = export_calibration(_report(R=R, d=-0.0123456789), before.format, base=base, camera=camera)
+        after = read_vio_file(_written(tmp_path, export, "out" + base.suffix))
+        assert after.format == before.format and after.cameras() == before.cameras()
+        assert np.abs(after.camera_from_sensor(camera) - R).max() < 1e-12, base.name
+        if before.format != "orbslam3":
+            assert after.time_offset_s(camera) == pytest.approx(-0.012345679, abs=1e-15)
+        old, new = _values(before), _values(after)
+        moved = {k for k in old if old[k] != new.get(k)}
+        assert old.keys() <= new.keys() and len(new) - len(old) == (0 if before.time_offset_s(camera) is not None
+                                                                      or before.format == "orbslam3" else 1)
+        assert 1 <= len(moved) <= 10 and all(("T_" in k or "q" in k or "offset" in k) for k in moved), moved
+        if before.format == "basalt":
+            assert all(k.startswith(f".value0.T_imu_cam[{camera[3:]}].q") or k.endswith("cam_time_offset_ns")
+                       for k in moved)
+        added = [ln for ln in difflib.ndiff(before.text.splitlines(), export.text.splitlines()) if ln.startswith("+ ")]
+        assert 1 <= len(added) <= 5, (base.name, added)  # three rotation rows (four quaternion lines), the offset
+        if before.opencv:
+            assert export.text.startswith("%YAML:1.0")
+            fs = cv2.FileStorage(str(tmp_path / ("out" + base.suffix)), cv2.FILE_STORAGE_READ)
+            assert fs.isOpened()
+            fs.release()
+
+
+@needs_real
+def test_the_two_published_references_of_each_rig_disagree_by_the_reference_floor():
+    """Kalibr's (the dataset's) and Basalt's calibrations of cam0: 0.343 deg apart on EuRoC (both of Basalt's camera
+    models), 0.034 deg on TUM-VI; OpenVINS' files repeat the dataset's (0 deg)."""
+    floors = {"euroc_mh01_orbslam3": 0.343, "tumvi_room1_orbslam3mono": 0.034}
+    for folder, names in _REFERENCES.items():
+        R = [load_reference(data_root() / folder / n) for n in names]
+        assert so3.angle_between_deg(R[0], R[1]) < 1e-6
+        for other in R[2:]:
+            assert abs(so3.angle_between_deg(R[0], other) - floors[folder]) < 0.0015, folder
+
+
+def test_openvins_takes_one_offset_cam0s_and_orbslam3_needs_its_file_version(tmp_path):
+    base = tmp_path / "chain.yaml"
+    base.write_text("%YAML:1.0\n" + KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"))
+    export = export_calibration(_report(), "openvins", base=base, camera="cam1")
+    assert export.changed == ("cam1.T_imu_cam rotation", "cam0.timeshift_cam_imu")
+    assert any("one time offset, cam0's" in n for n in export.notes)
+    out = read_vio_file(_written(tmp_path, export, "o.yaml"))
+    assert out.doc["cam0"]["timeshift_cam_imu"] == pytest.approx(0.012345679) and "timeshift_cam_imu" not in out.doc[
+        "cam1"]
+    assert np.abs(out.camera_from_sensor("cam1") - R_TRUE).max() < 1e-12
+    matrix = "IMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f\n   data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, " \
+             "0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n"
+    orb = tmp_path / "orb.yaml"
+    orb.write_text('%YAML:1.0\nFile.version: "1.0"\n' + matrix)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        export_calibration(_report(), "orbslam3", base=orb)
+    assert read_vio_file(_written(tmp_path, _export(_report(), "orbslam3"), "m.yaml")).doc["File.version"] == "1.0"
+    orb.write_text('%YAML:1.0\nFile.version: "0.9"\n' + matrix)
+    with pytest.warns(ExportWarning, match='no File.version: "1.0"'):
+        export_calibration(_report(), "orbslam3", base=orb)
