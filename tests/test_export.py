@@ -413,3 +413,25 @@ def test_openvins_takes_one_offset_cam0s_and_orbslam3_needs_its_file_version(tmp
     orb.write_text('%YAML:1.0\nFile.version: "0.9"\n' + matrix)
     with pytest.warns(ExportWarning, match='no File.version: "1.0"'):
         export_calibration(_report(), "orbslam3", base=orb)
+
+
+def test_the_floor_table_reads_within_beyond_and_one_reference():
+    from types import SimpleNamespace
+
+    from replication.study.real_study import reference_floor_table
+
+    ref_a, ref_b = np.eye(3), so3.exp_map(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
+
+    def at(deg):  # an estimate turned about x, off both references' z-axis disagreement
+        return SimpleNamespace(R=so3.exp_map(np.radians([deg, 0.0, 0.15])))
+
+    results = {("inside", "m"): at(0.25), ("outside", "m"): at(0.27), ("robot", "m"): at(0.0)}
+    table = reference_floor_table(results, {"inside": "rig", "outside": "rig", "robot": "arm"},
+                                  {"rig": {"a": ref_a, "b": ref_b}, "arm": {"a": ref_a}})
+    assert table.loc[("inside", "m"), "references apart (deg)"] == pytest.approx(0.3)
+    assert table.loc[("inside", "m"), "to a (deg)"] == pytest.approx(math.hypot(0.25, 0.15), rel=1e-4)
+    assert table.loc[("inside", "m"), "reading"] == "within the floor"  # 0.2915 deg from each, below 0.3
+    assert table.loc[("outside", "m"), "reading"] == "beyond the floor"  # 0.3089 deg from each, above 0.3
+    assert table.loc[("robot", "m"), "reading"] == "one reference"
+    assert math.isnan(table.loc[("robot", "m"), "to b (deg)"]) and math.isnan(table.loc[("robot", "m"),
+                                                                                         "references apart (deg)"])

@@ -24,7 +24,7 @@ from ..rig.poses import calibrate_poses, pose_pairs
 from .baselines import compare
 
 __all__ = ["station_bootstrap", "recording_warnings", "calibration_table", "solver_tables", "protocol_table",
-           "sensitivity_table", "calibrations", "usual_mistakes", "verdict_table"]
+           "sensitivity_table", "calibrations", "usual_mistakes", "verdict_table", "reference_floor_table"]
 
 
 def recording_warnings(fn, *args, **kwargs):
@@ -231,3 +231,41 @@ def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
                                 block_indices(np.random.default_rng(seed), motions.J, 1, n_bootstrap))
     return {"stations": int(len(C)), "pairs": int(motions.J), "radius by stations (deg)": r.bootstrap_ci95_deg,
             "radius by pairs one by one (deg)": float(np.percentile(angle_between_deg(boot, r.R), 95))}
+
+
+def reference_floor_table(results: dict, rig_of: dict, references: dict) -> pd.DataFrame:
+    """Every estimate against every published calibration of its rig, and the references' own disagreement.
+
+    Parameters
+    ----------
+    results : dict
+        ``{(data, method): CalibrationResult}`` (:func:`calibrations`).
+    rig_of : dict
+        ``{data: rig}``: the rig each data set was recorded on.
+    references : dict
+        ``{rig: {reference name: camera_from_sensor}}``: the published calibrations of each rig.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``(data, method)``; one column ``to <reference> (deg)`` per reference name (NaN where the rig has no
+        such reference), ``references apart (deg)`` (the largest angle between two references of the rig: the
+        *reference floor*; NaN with one reference) and ``reading``: ``within the floor`` when the estimate is no
+        farther from any reference than they are from each other (it agrees with each as far as they agree; that
+        says nothing on which is nearer the truth), ``beyond the floor`` when it is farther from one of them than
+        they are from each other, ``one reference`` when there is no floor to compare with.
+    """
+    names = list(dict.fromkeys(n for refs in references.values() for n in refs))
+    rows = []
+    for (data, method), r in results.items():
+        refs = references[rig_of[data]]
+        angles = {n: float(rotation_angle_deg(r.R.T @ R)) for n, R in refs.items()}
+        apart = [float(rotation_angle_deg(a.T @ b)) for i, a in enumerate(refs.values())
+                 for b in list(refs.values())[i + 1:]]
+        floor = max(apart) if apart else np.nan
+        reading = ("one reference" if not apart else
+                   "within the floor" if max(angles.values()) <= floor else "beyond the floor")
+        rows.append({"data": data, "method": method,
+                     **{f"to {n} (deg)": angles.get(n, np.nan) for n in names},
+                     "references apart (deg)": floor, "reading": reading})
+    return pd.DataFrame(rows).set_index(["data", "method"])
