@@ -92,8 +92,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--sensor-time-unit", choices=units, default=None, help="time unit of the sensor file only")
     cal.add_argument("--drop-repeated", action="store_true",
                      help="skip lines of a TUM trajectory that repeat the previous line verbatim")
-    cal.add_argument("--reference", help="a reference R0 to compare with (Kalibr / EuRoC / Tabb file)")
-    cal.add_argument("--reference-camera", default="cam0", help="camera entry of a Kalibr camchain")
+    cal.add_argument("--reference", help="a reference R0 to compare with: a Kalibr camchain, an OpenVINS or ORB-SLAM3 "
+                     "%%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's transformations.txt "
+                     "(recognised by content)")
+    cal.add_argument("--reference-camera", default="cam0", help="camera entry of the reference file (cam0, cam1, ...; Basalt: its index)")
     cal.add_argument("--out", help="write the JSON report here (folders are created)")
     cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension "
                                     "(folders are created)")
