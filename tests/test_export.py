@@ -435,3 +435,26 @@ def test_the_floor_table_reads_within_beyond_and_one_reference():
     assert table.loc[("robot", "m"), "reading"] == "one reference"
     assert math.isnan(table.loc[("robot", "m"), "to b (deg)"]) and math.isnan(table.loc[("robot", "m"),
                                                                                          "references apart (deg)"])
+
+
+def test_crlf_and_a_byte_order_mark_are_given_back_as_found(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    base.write_bytes(b"\xef\xbb\xbf" + KALIBR_BASE.replace("\n", "\r\n").encode())
+    export = export_calibration(_report(), "kalibr", base=base)
+    out = _written(tmp_path, export, "new.yaml").read_bytes()
+    assert out.startswith(b"\xef\xbb\xbf") and out.count(b"\r\n") == out.count(b"\n") == KALIBR_BASE.count("\n") + 0
+    assert np.abs(read_vio_file(tmp_path / "new.yaml").camera_from_sensor() - R_TRUE).max() < 1e-12
+    base.write_bytes(KALIBR_BASE.encode())  # LF stays LF, no mark added
+    plain = _written(tmp_path, export_calibration(_report(), "kalibr", base=base), "lf.yaml").read_bytes()
+    assert b"\r" not in plain and not plain.startswith(b"\xef\xbb\xbf")
+
+
+def test_an_entry_shared_through_a_yaml_alias_is_not_edited(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    rows = "\n".join(f"  - [{', '.join('1.0' if c == r else '0.0' for c in range(4))}]" for r in range(4))
+    base.write_text(f"cam0:\n  T_cam_imu: &same\n{rows}\ncam1:\n  T_cam_imu: *same\n")
+    with pytest.raises(DataFileError, match="shared with another entry through a YAML anchor"):
+        export_calibration(_report(), "kalibr", base=base, camera="cam1")
+    base.write_text(f"cam0:\n  T_cam_imu: &same\n{rows}\ncam1:\n  T_cam_imu:\n{rows}\n")  # written out: edited
+    assert np.abs(read_vio_file(_written(tmp_path, export_calibration(_report(), "kalibr", base=base, camera="cam1"),
+                                         "o.yaml")).camera_from_sensor("cam1") - R_TRUE).max() < 1e-12

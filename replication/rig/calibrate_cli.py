@@ -95,7 +95,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--reference", help="a reference R0 to compare with: a Kalibr camchain, an OpenVINS or ORB-SLAM3 "
                      "%%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's transformations.txt "
                      "(recognised by content)")
-    cal.add_argument("--reference-camera", default="cam0", help="camera entry of the reference file (cam0, cam1, ...; Basalt: its index)")
+    cal.add_argument("--reference-camera", default="cam0",
+                     help="camera entry of the reference file (cam0, cam1, ...; Basalt: its index)")
     cal.add_argument("--out", help="write the JSON report here (folders are created)")
     cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension "
                                     "(folders are created)")

@@ -19,8 +19,8 @@ from typing import NoReturn
 
 import numpy as np
 
-__all__ = ["DataFileError", "DataFileNotFound", "fail", "read_text", "read_lines", "read_table", "is_number",
-           "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
+__all__ = ["DataFileError", "DataFileNotFound", "fail", "read_text", "read_text_layout", "read_lines", "read_table",
+           "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
 
 #: Accepted deviation of a stored quaternion's norm from 1.
 QUATERNION_NORM_TOL = 1e-3
@@ -133,6 +133,13 @@ def read_text(path, what: str | None = None) -> str:
         The file cannot be read, or is not UTF-8 text (binary, UTF-16, ...): the message gives
         the byte offset, ``line`` the line, of the first offending byte.
     """
+    return read_text_layout(path, what)[0]
+
+
+def read_text_layout(path, what: str | None = None) -> tuple[str, str, bool]:
+    """:func:`read_text`, and how the file wrote its lines: ``(text, newline, bom)``, ``newline`` being
+    ``"\\r\\n"`` when every line ends so (else ``"\\n"``) and ``bom`` whether it starts with a UTF-8 byte-order
+    mark; for a writer that gives a file back as it found it."""
     path = Path(path)
     if path.is_dir():
         raise DataFileNotFound(path, "is a directory, not a file")
@@ -142,6 +149,11 @@ def read_text(path, what: str | None = None) -> str:
         raise DataFileNotFound(path, "no such file" + (f" ({what})" if what else "")) from None
     except OSError as err:
         raise DataFileError(path, f"cannot be read ({err.strerror or err})") from err
+    newline = "\r\n" if b"\r\n" in data and data.count(b"\n") == data.count(b"\r\n") else "\n"
+    return _decoded(path, data), newline, data.startswith(codecs.BOM_UTF8)
+
+
+def _decoded(path, data: bytes) -> str:
     bom = len(codecs.BOM_UTF8) if data.startswith(codecs.BOM_UTF8) else 0
     try:
         text = data[bom:].decode("utf-8")

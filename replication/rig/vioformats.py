@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.checks import check_rotation_matrices
-from .datafile import fail, read_text
+from .datafile import fail, read_text_layout
 
 __all__ = ["FORMATS", "VioFile", "read_vio_file", "looks_like_vio_file", "format_number"]
 
@@ -115,9 +115,9 @@ class VioFile:
     ``with_values(camera, R0, d)`` returns the text of a copy with only those values changed.
     """
 
-    def __init__(self, path, text: str):
+    def __init__(self, path, text: str, newline: str = "\n", bom: bool = False):
         self.path = Path(path) if not isinstance(path, Path) else path
-        self.text = text
+        self.text, self.newline, self.bom = text, newline, bom
         self.opencv = bool(_OPENCV_HEADER.match(text))
         self.json = text.lstrip().startswith("{")
         yaml_text = _yaml_text(path, text)
@@ -135,6 +135,7 @@ class VioFile:
             except (yaml.YAMLError, KeyError, TypeError, ValueError) as err:
                 fail(path, f"not a readable calibration file: {err}")
         self.format = self._recognise()
+        self._shared = _shared_nodes(self._root)
 
     # -- recognising -------------------------------------------------------------------------------------------
     def _recognise(self) -> str:
@@ -202,6 +203,8 @@ class VioFile:
             nine = [node.value[r].value[c] for r in range(3) for c in range(3)]
         else:
             nine = []
+        self._not_shared([node, *getattr(node, "value", [])] if isinstance(node, yaml.SequenceNode) else [node],
+                         nine, key)
         if len(nine) != 9 or not all(isinstance(s, yaml.ScalarNode) for s in nine):
             fail(self.path, f"{camera if self.format in ('kalibr', 'openvins') else ''}.{key}".lstrip(".")
                  + " is not a 4x4 matrix (a list of rows, or rows / cols / data)")
@@ -213,7 +216,15 @@ class VioFile:
         nodes = [_child(entry, k) for k in ("qx", "qy", "qz", "qw")]
         if any(n is None for n in nodes):
             fail(self.path, f"value0.T_imu_cam[{index}] has no qx, qy, qz, qw")
+        self._not_shared([entry], nodes, f"value0.T_imu_cam[{index}]")
         return nodes
+
+    def _not_shared(self, containers, scalars, what):
+        """Refuse to edit an entry that a YAML alias (``*name``) also stands for elsewhere: one edit would change
+        both."""
+        if any(id(n) in self._shared for n in [*containers, *scalars] if n is not None):
+            fail(self.path, f"{what} is shared with another entry through a YAML anchor and alias (&, *): changing it "
+                            "would change both; write it out in full")
 
     def _root_value0(self, key):
         node = _child(_child(self._root, "value0"), key)
@@ -302,7 +313,9 @@ class VioFile:
         text = self.text
         for span, value in sorted(edits, key=lambda e: e[0].start, reverse=True):
             text = text[:span.start] + value + text[span.end:]
-        return text, changed
+        if self.newline != "\n":
+            text = text.replace("\n", self.newline)
+        return ("\ufeff" if self.bom else "") + text, changed
 
     def _insertion(self, camera, line):
         """An edit that adds ``line`` as the camera mapping's first key, at its indentation (block style only)."""
@@ -312,6 +325,22 @@ class VioFile:
         first = cam.value[0][0].start_mark
         start = first.index - first.column
         return _Span(start, start), " " * first.column + line + "\n"
+
+
+def _shared_nodes(root) -> set:
+    """``id`` of every node reached more than once (through an alias) from ``root``."""
+    seen, shared, stack = set(), set(), [root]
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
+            shared.add(id(node))
+            continue
+        seen.add(id(node))
+        value = getattr(node, "value", None)
+        if isinstance(value, list):
+            for item in value:
+                stack.extend(item if isinstance(item, tuple) else (item,))
+    return shared
 
 
 def looks_like_vio_file(path, text: str) -> bool:
@@ -325,4 +354,6 @@ def read_vio_file(path, text: str | None = None) -> VioFile:
     """Read a calibration file of any format in :data:`FORMATS` (recognised by content, not by name).
 
     ``text``: the file's content when already read (a pipe can be read once)."""
-    return VioFile(path, read_text(path, "a calibration file") if text is None else text)
+    if text is not None:
+        return VioFile(path, text)
+    return VioFile(path, *read_text_layout(path, "a calibration file"))
