@@ -208,18 +208,26 @@ def test_an_offset_measured_against_an_orientation_stream_is_flagged():
         warnings.simplefilter("error", ExportWarning)
         _export(_report(kind="GyroStream"), "basalt")
         _export(_report(kind="OrientationStream", d=None), "basalt")  # no offset exported, nothing to flag
-        _export(_report(kind="OrientationStream"), "orbslam3")  # ORB-SLAM3 takes no offset
+    with pytest.warns(ExportWarning, match="not the IMU's gyro"):  # its note still says to apply the offset
+        _export(_report(kind="OrientationStream"), "orbslam3")
 
 
 @pytest.mark.parametrize("report, message", [
     ({"x": 1}, "not a calibration report"),
     ({**_report(), "R0_camera_from_sensor": (2 * np.eye(3)).tolist()}, "R0_camera_from_sensor"),
-    ({**_report(), "time_offset_s": "0.1"}, "time_offset_s must be a number or null"),
-    ({**_report(), "verdict": {"level": "great"}}, "verdict.level"),
+    ({**_report(), "time_offset_s": "0.1"}, "time_offset_s must be a number of seconds or null"),
+    ({**_report(), "verdict": {"level": "great"}}, "verdict must be an object whose level is ok, warning or fail"),
+    ({**_report(d=0.2 + 1e-9), "parameters": {"max_offset_s": 0.2}}, r"beyond the offsets calibrate searched \(\+-0.2"),
+    ({**_report(d=1.0 + 1e-9)}, r"beyond the offsets calibrate searched \(\+-1.0 s\): milliseconds"),
 ])
 def test_a_report_that_is_not_one_is_refused(report, message):
     with pytest.raises(ValueError, match=message):
         read_report(report)
+
+
+def test_an_offset_at_the_search_bound_is_accepted():
+    read_report({**_report(d=-0.2), "parameters": {"max_offset_s": 0.2}})
+    read_report(_report(d=1.0))
 
 
 def test_a_bad_report_file_is_named_with_line_and_column(tmp_path):
@@ -245,13 +253,14 @@ def test_a_base_of_another_tool_or_without_the_camera_is_refused(tmp_path):
 
 @pytest.mark.parametrize("text, message", [
     ("sensor_type: imu\nT_BS:\n  rows: 4\n  cols: 4\n  data: [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]\n",
-     "sensor.yaml of a 'imu', not of a camera"),
+     "sensor.yaml of sensor_type 'imu', not 'camera'"),
+    ("T_BS:\n  rows: 4\n  cols: 4\n  data: [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]\n", "sensor_type None, not 'camera'"),
     ("%YAML:1.0\nCamera1.fx: 458.6\nORBextractor.nFeatures: 1000\n", "ORB-SLAM3 settings without IMU.T_b_c1"),
     ("cam0:\n  intrinsics: [1, 2, 3, 4]\n", "no camera-IMU extrinsic found"),
     ("cam0:\n  T_cam_imu: [[1, 0], [0, 1]]\n", r"cam0.T_cam_imu is not a 4x4 matrix"),
     ("cam0:\n  T_cam_imu:\n  - [2, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n  - [0, 0, 0, 1]\n", "rotation"),
     ('{"value0": {"intrinsics": []}}', "not a Basalt calibration"),
-    ('{"value0": {"T_imu_cam": [{"qx": 0, "qy": 0, "qz": 0, "qw": 2}]}}', "norm 2, not 1"),
+    ('{"value0": {"T_imu_cam": [{"qx": 0, "qy": 0, "qz": 0, "qw": 1.0011}]}}', "norm 1.0011, not within 0.001 of 1"),
     ("cam0:\n  T_cam_imu: [[1, 0,\n", "not valid YAML/JSON"),
 ])
 def test_reference_files_that_are_not_camera_imu_extrinsics_are_refused(tmp_path, text, message):
@@ -458,3 +467,42 @@ def test_an_entry_shared_through_a_yaml_alias_is_not_edited(tmp_path):
     base.write_text(f"cam0:\n  T_cam_imu: &same\n{rows}\ncam1:\n  T_cam_imu:\n{rows}\n")  # written out: edited
     assert np.abs(read_vio_file(_written(tmp_path, export_calibration(_report(), "kalibr", base=base, camera="cam1"),
                                          "o.yaml")).camera_from_sensor("cam1") - R_TRUE).max() < 1e-12
+
+
+@pytest.mark.parametrize("rows, cols, ok", [(4, 4, True), (3, 4, False), (4, 3, False), (4, 5, False), (5, 4, False)])
+def test_only_a_4x4_matrix_is_read_or_written(tmp_path, rows, cols, ok):
+    listed = "".join(f"  - [{', '.join('1.0' if r == c else '0.0' for c in range(cols))}]\n" for r in range(rows))
+    data = ", ".join("1.0" if r == c else "0.0" for r in range(rows) for c in range(cols))
+    for name, text in (("k.yaml", f"cam0:\n  T_cam_imu:\n{listed}"),
+                       ("o.yaml", f"%YAML:1.0\nFile.version: \"1.0\"\nIMU.T_b_c1: !!opencv-matrix\n   rows: {rows}\n"
+                                  f"   cols: {cols}\n   dt: f\n   data: [{data}]\n")):
+        path = tmp_path / name
+        path.write_text(text)
+        if ok:
+            assert np.abs(load_reference(path) - np.eye(3)).max() == 0
+        else:
+            with pytest.raises(DataFileError, match="is not a 4x4 matrix"):
+                load_reference(path)
+
+
+def test_a_t_imu_cam_file_is_openvins_and_without_its_header_it_is_flagged(tmp_path):
+    base = tmp_path / "chain.yaml"
+    base.write_text(KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"))
+    with pytest.raises(DataFileError, match="is a openvins file, not kalibr"):
+        export_calibration(_report(), "kalibr", base=base)
+    with pytest.warns(ExportWarning, match="no %YAML:1.0 header: OpenVINS reads its files with cv::FileStorage"):
+        export_calibration(_report(), "openvins", base=base)
+    base.write_text("%YAML:1.0\n" + KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        export_calibration(_report(), "openvins", base=base)
+
+
+def test_names_from_the_report_and_the_command_line_cannot_add_lines_or_shell_words():
+    report = _report()
+    report["inputs"]["sensor"]["source"] = "imu.csv\ncam0:\n  T_cam_imu: []"
+    text = _export(report, "kalibr").text
+    assert [ln for ln in text.splitlines() if ln.startswith("cam0")] == ["cam0:"]
+    assert "imu.csv cam0: T_cam_imu: []" in text
+    command = _export(report, "ros2", parent_frame="imu; rm -rf ~", child_frame="cam 0").text.splitlines()
+    assert len(command) == 2 and command[1].endswith("--frame-id 'imu; rm -rf ~' --child-frame-id 'cam 0'")

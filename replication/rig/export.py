@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import shlex
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -84,11 +85,23 @@ def read_report(report) -> dict:
     except (TypeError, ValueError) as err:
         raise ValueError(f"{where}{err}") from None
     d = report.get("time_offset_s")
-    if d is not None and not (isinstance(d, (int, float)) and math.isfinite(d)):
-        raise ValueError(f"{where}time_offset_s must be a number or null, got {d!r}")
-    level = (report.get("verdict") or {}).get("level")
+    if d is not None and (isinstance(d, bool) or not isinstance(d, (int, float)) or not math.isfinite(d)):
+        raise ValueError(f"{where}time_offset_s must be a number of seconds or null, got {d!r}")
+    parameters = report.get("parameters") if isinstance(report.get("parameters"), dict) else {}
+    bound = parameters.get("max_offset_s", 1.0)
+    if d is not None and isinstance(bound, (int, float)) and abs(d) > bound:
+        raise ValueError(f"{where}time_offset_s = {d!r} s is beyond the offsets calibrate searched (+-{bound} s): "
+                         "milliseconds written as seconds?")
+    verdict = report.get("verdict")
+    level = verdict.get("level") if isinstance(verdict, dict) else None
     if level not in ("ok", "warning", "fail"):
-        raise ValueError(f"{where}verdict.level must be ok, warning or fail, got {level!r}")
+        raise ValueError(f"{where}verdict must be an object whose level is ok, warning or fail, got {verdict!r}")
+    reasons = verdict.get("reasons", [])
+    if not isinstance(reasons, list) or not all(isinstance(r, dict) for r in reasons):
+        raise ValueError(f"{where}verdict.reasons must be a list of objects (level, message), got {reasons!r}")
+    for key in ("inputs", "parameters"):
+        if key in report and report[key] is not None and not isinstance(report[key], dict):
+            raise ValueError(f"{where}{key} must be an object, got {report[key]!r}")
     return report
 
 
@@ -98,8 +111,10 @@ def _reasons(report) -> str:
 
 
 def _source(report) -> str:
+    """The sensor stream, on one line (a file name may hold anything: it is written into files and commands)."""
     sensor = (report.get("inputs") or {}).get("sensor") or {}
-    return f"{sensor.get('kind', 'a sensor stream')} {sensor.get('source', '')}".strip()
+    sensor = sensor if isinstance(sensor, dict) else {}
+    return " ".join(f"{sensor.get('kind', 'a sensor stream')} {sensor.get('source', '')}".split())
 
 
 # The minimal files: an identity rotation, zero translation and offset, into which the values are then written by
@@ -135,7 +150,7 @@ def _ros2(R0, report, parent_frame, child_frame) -> str:
     args = " ".join(f"--{k} {format_number(v)}" for k, v in zip(("qx", "qy", "qz", "qw"), q))
     return (f"# replication {__version__}: camera pose in the IMU frame (R0 transposed), from {_source(report)}; "
             f"{_NOT_ESTIMATED}\nros2 run tf2_ros static_transform_publisher --x 0.0 --y 0.0 --z 0.0 {args} "
-            f"--frame-id {parent_frame} --child-frame-id {child_frame}\n")
+            f"--frame-id {shlex.quote(parent_frame)} --child-frame-id {shlex.quote(child_frame)}\n")
 
 
 def export_calibration(report, to: str, *, base=None, camera: str = "cam0", parent_frame: str = "imu_link",
@@ -180,6 +195,10 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
         warnings.warn(f"the report's verdict is {level}: {_reasons(report)}", ExportWarning, stacklevel=2)
     d = report.get("time_offset_s")
     notes = []
+    kind = (((report.get("inputs") or {}).get("sensor") or {}) or {}).get("kind")
+    if d is not None and kind not in (None, "GyroStream"):
+        warnings.warn(f"the clock offset was measured against {_source(report)}, not the IMU's gyro: it is the "
+                      "IMU's only if that stream is stamped by the IMU's clock", ExportWarning, stacklevel=2)
     if to == "ros2":
         if base is not None:
             raise ValueError("ros2 prints a command: there is no base file to edit")
@@ -197,11 +216,6 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
         if file.format != to:
             fail(file.path, f"is a {file.format} file, not {to}: give a {to} file as --base or --to {file.format}")
         notes.append(f"kept from {file.path}: everything but the fields changed")
-    if d is not None and to != "orbslam3":
-        kind = ((report.get("inputs") or {}).get("sensor") or {}).get("kind")
-        if kind not in (None, "GyroStream"):
-            warnings.warn(f"the clock offset was measured against {_source(report)}, not the IMU's gyro: it is the "
-                          "IMU's only if that stream is stamped by the IMU's clock", ExportWarning, stacklevel=2)
     if d is None:
         notes.append("no clock offset was estimated (static poses): the file's offset is left as it was")
     elif to == "orbslam3":
@@ -213,9 +227,8 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
     elif to == "openvins" and camera != "cam0":
         notes.append(f"OpenVINS reads one time offset, cam0's, for every camera: the offset measured with {camera} "
                      "was written there")
-    if to == "orbslam3" and base is not None and str(file.doc.get("File.version")) != "1.0":
-        warnings.warn(f"{file.path} has no File.version: \"1.0\": ORB-SLAM3 then reads its legacy keys (Tbc), not "
-                      "IMU.T_b_c1", ExportWarning, stacklevel=2)
+    if file.unread:
+        warnings.warn(f"{file.path}: {file.unread}", ExportWarning, stacklevel=2)
     text, changed = file.with_values(camera, R0, d)
     return Export(text, to, camera, tuple(changed), tuple(notes))
 

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.checks import check_rotation_matrices
-from .datafile import fail, read_text_layout
+from .datafile import QUATERNION_NORM_TOL, fail, read_text_layout
 
 __all__ = ["FORMATS", "VioFile", "read_vio_file", "looks_like_vio_file", "format_number"]
 
@@ -81,11 +81,13 @@ class _Span:
     end: int
 
 
-def _compose(path, text):
+def _compose(path, text, json_text: bool = False):
+    """PyYAML's node tree, for the spans. JSON is YAML but for tabs as white space: they become spaces (a JSON
+    string holds none unescaped, so every index stays where it was)."""
     import yaml
 
     try:
-        return yaml.compose(text, Loader=_loader())
+        return yaml.compose(text.replace("\t", " ") if json_text else text, Loader=_loader())
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         fail(path, f"not valid YAML/JSON: {getattr(err, 'problem', err)}",
@@ -121,7 +123,8 @@ class VioFile:
         self.opencv = bool(_OPENCV_HEADER.match(text))
         self.json = text.lstrip().startswith("{")
         yaml_text = _yaml_text(path, text)
-        self._root = _compose(path, yaml_text)
+        self._root = _compose(path, yaml_text, self.json)
+        self._shared = _checked_tree(self.path, self._root)
         if self.json:
             try:
                 self.doc = json.loads(text)
@@ -134,8 +137,9 @@ class VioFile:
                 self.doc = yaml.load(yaml_text, Loader=_loader())  # noqa: S506 (a SafeLoader subclass)
             except (yaml.YAMLError, KeyError, TypeError, ValueError) as err:
                 fail(path, f"not a readable calibration file: {err}")
+        self.unread = None  # why the tool would not read the entry this file is edited in, if it would not
+        self.unwritable = None  # why a rotation cannot be written into it, if it cannot
         self.format = self._recognise()
-        self._shared = _shared_nodes(self._root)
 
     # -- recognising -------------------------------------------------------------------------------------------
     def _recognise(self) -> str:
@@ -146,33 +150,56 @@ class VioFile:
             if isinstance(doc.get("value0"), dict) and "T_imu_cam" in doc["value0"]:
                 return "basalt"
             fail(self.path, "a JSON file without value0.T_imu_cam: not a Basalt calibration")
-        if "IMU.T_b_c1" in doc:
+        if "IMU.T_b_c1" in doc or "Tbc" in doc:
+            self._orbslam3_key = self._orbslam3_entry()
             return "orbslam3"
         if "T_BS" in doc:
-            if doc.get("sensor_type", "camera") != "camera":
-                fail(self.path, f"an EuRoC sensor.yaml of a {doc['sensor_type']!r}, not of a camera: its T_BS is not a "
-                                "camera-IMU extrinsic")
+            if doc.get("sensor_type") != "camera":
+                fail(self.path, f"an EuRoC sensor.yaml of sensor_type {doc.get('sensor_type')!r}, not 'camera': its "
+                                "T_BS is not a camera-IMU extrinsic")
             return "euroc"
-        cams = [k for k, v in doc.items() if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
-        if cams:
-            return "openvins" if self.opencv else "kalibr"
+        cams = [str(k) for k, v in doc.items() if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
+        if cams:  # Kalibr writes T_cam_imu only, and no %YAML header
+            if self.opencv or any("T_imu_cam" in doc[k] for k in doc if str(k) in cams):
+                if not self.opencv:
+                    self.unread = ("no %YAML:1.0 header: OpenVINS reads its files with cv::FileStorage, which "
+                                   "needs it")
+                return "openvins"
+            return "kalibr"
         if any(str(k).startswith(("Camera.", "Camera1.", "ORBextractor.")) for k in doc):
             fail(self.path, "ORB-SLAM3 settings without IMU.T_b_c1: a vision-only configuration (ORB-SLAM3's "
                             "Monocular-Inertial / Stereo-Inertial settings carry the camera-IMU extrinsic)")
         fail(self.path, "no camera-IMU extrinsic found: expected <camera>.T_cam_imu or T_imu_cam (Kalibr, OpenVINS), "
                         "IMU.T_b_c1 (ORB-SLAM3), T_BS (EuRoC) or value0.T_imu_cam (Basalt JSON)")
 
+    def _orbslam3_entry(self) -> str:
+        """The key ORB-SLAM3 reads the extrinsic from: ``IMU.T_b_c1`` with ``File.version: "1.0"`` (a string), else
+        its legacy ``Tbc`` (``System.cc``)."""
+        version = _child(self._root, "File.version")
+        versioned = version is not None and version.value == "1.0" and version.style in ('"', "'")
+        if versioned:
+            if "IMU.T_b_c1" not in self.doc:
+                fail(self.path, 'File.version "1.0" without IMU.T_b_c1: ORB-SLAM3 reads the extrinsic from '
+                                "IMU.T_b_c1 in these files, not from the legacy Tbc")
+            return "IMU.T_b_c1"
+        if "Tbc" in self.doc:
+            return "Tbc"
+        self.unread = ('no File.version: "1.0" (a quoted string): ORB-SLAM3 then reads the legacy keys (Tbc), not '
+                       "IMU.T_b_c1")
+        return "IMU.T_b_c1"
+
     def cameras(self) -> list[str]:
         """The camera names this file holds (``cam0``, ``cam1``, ...)."""
         if self.format in ("kalibr", "openvins"):
-            return [k for k, v in self.doc.items() if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
+            return [str(k) for k, v in self.doc.items()
+                    if isinstance(v, dict) and ("T_cam_imu" in v or "T_imu_cam" in v)]
         if self.format == "basalt":
             return [f"cam{i}" for i in range(len(self.doc["value0"]["T_imu_cam"]))]
         return ["cam0"]
 
     def _check_camera(self, camera):
         if camera not in self.cameras():
-            only = {"orbslam3": " (ORB-SLAM3's IMU.T_b_c1 is camera 1: use cam0)", "euroc": ""}.get(self.format, "")
+            only = {"orbslam3": " (ORB-SLAM3's extrinsic is camera 1's: use cam0)"}.get(self.format, "")
             fail(self.path, f"no camera {camera!r} in this {self.format} file; it has "
                             f"{', '.join(self.cameras())}{only}")
 
@@ -186,31 +213,34 @@ class VioFile:
             raise AssertionError("Basalt stores a quaternion")
         if self.format in ("kalibr", "openvins"):
             cam = _child(self._root, camera)
-            key = "T_cam_imu" if _child(cam, "T_cam_imu") is not None else "T_imu_cam"
-            node = _child(cam, key)
-            transposed = key == "T_imu_cam"
+            if _child(cam, "<<") is not None:
+                fail(self.path, f"{camera} uses a YAML merge key (<<): write its entries out in full")
+            # OpenVINS reads T_imu_cam and falls back to T_cam_imu; Kalibr reads T_cam_imu
+            keys = ("T_imu_cam", "T_cam_imu") if self.format == "openvins" else ("T_cam_imu",)
+            key = next(k for k in keys if _child(cam, k) is not None)
+            node, transposed, name = _child(cam, key), key == "T_imu_cam", f"{camera}.{key}"
         else:
-            key = "IMU.T_b_c1" if self.format == "orbslam3" else "T_BS"
-            node, transposed = _child(self._root, key), True
+            key = self._orbslam3_key if self.format == "orbslam3" else "T_BS"
+            node, transposed, name = _child(self._root, key), True, key
+        nine, rows = [], []
         if isinstance(node, yaml.MappingNode):  # !!opencv-matrix or EuRoC's rows / cols / data
-            data, cols = _child(node, "data"), _child(node, "cols")
+            data, shape = _child(node, "data"), [_child(node, k) for k in ("rows", "cols")]
             scalars = data.value if isinstance(data, yaml.SequenceNode) else []
-            ncols = int(cols.value) if isinstance(cols, yaml.ScalarNode) else 0
-            nine = [scalars[r * ncols + c] for r in range(3) for c in range(3)] if len(scalars) >= 12 and ncols >= 3 \
-                else []
-        elif isinstance(node, yaml.SequenceNode) and len(node.value) >= 3 and all(
-                isinstance(row, yaml.SequenceNode) and len(row.value) >= 3 for row in node.value[:3]):
-            nine = [node.value[r].value[c] for r in range(3) for c in range(3)]
-        else:
-            nine = []
-        self._not_shared([node, *getattr(node, "value", [])] if isinstance(node, yaml.SequenceNode) else [node],
-                         nine, key)
-        if len(nine) != 9 or not all(isinstance(s, yaml.ScalarNode) for s in nine):
-            fail(self.path, f"{camera if self.format in ('kalibr', 'openvins') else ''}.{key}".lstrip(".")
-                 + " is not a 4x4 matrix (a list of rows, or rows / cols / data)")
+            if [getattr(n, "value", None) for n in shape] == ["4", "4"] and len(scalars) == 16:
+                nine, rows = [scalars[r * 4 + c] for r in range(3) for c in range(3)], [data]
+            kind = _child(node, "dt")
+            if kind is not None and kind.value not in ("f", "d"):
+                self.unwritable = f"{name} has dt: {kind.value} (not f or d): a rotation cannot be written into it"
+        elif isinstance(node, yaml.SequenceNode) and len(node.value) == 4 and all(
+                isinstance(row, yaml.SequenceNode) and len(row.value) == 4 for row in node.value):
+            nine, rows = [node.value[r].value[c] for r in range(3) for c in range(3)], node.value
+        if len(nine) != 9 or not all(isinstance(x, yaml.ScalarNode) for x in nine):
+            fail(self.path, f"{name} is not a 4x4 matrix (4 lists of 4 numbers, or rows: 4, cols: 4 and 16 data)")
+        self._not_shared([node, *rows], nine, name)
         return key, transposed, nine
 
     def _quaternion_nodes(self, camera):
+        self._check_camera(camera)
         index = int(camera[3:])
         entry = self._root_value0("T_imu_cam").value[index]
         nodes = [_child(entry, k) for k in ("qx", "qy", "qz", "qw")]
@@ -238,10 +268,14 @@ class VioFile:
         if self.format == "basalt":
             from scipy.spatial.transform import Rotation
 
-            q = np.array([float(n.value) for n in self._quaternion_nodes(camera)])
-            if not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1) > 1e-6:
-                fail(self.path, f"value0.T_imu_cam[{camera[3:]}] quaternion has norm {np.linalg.norm(q):.9g}, not 1")
-            return Rotation.from_quat(q).as_matrix().T  # T_imu_cam's rotation is imu_from_camera
+            try:
+                q = np.array([float(n.value) for n in self._quaternion_nodes(camera)])
+            except ValueError:
+                fail(self.path, f"value0.T_imu_cam[{camera[3:]}] has a quaternion entry that is not a number")
+            if not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1) > QUATERNION_NORM_TOL:
+                fail(self.path, f"value0.T_imu_cam[{camera[3:]}] quaternion has norm {np.linalg.norm(q):.9g}, not "
+                                f"within {QUATERNION_NORM_TOL:g} of 1")
+            return Rotation.from_quat(q / np.linalg.norm(q)).as_matrix().T  # T_imu_cam's rotation: imu_from_camera
         key, transposed, nine = self._matrix_nodes(camera)
         try:
             M = np.array([float(n.value) for n in nine]).reshape(3, 3)
@@ -282,6 +316,7 @@ class VioFile:
         it, the clock offset set to ``time_offset_s``; and the names of the fields changed (or added)."""
         if not FORMATS[self.format]:
             fail(self.path, f"{self.format} files are read as references only, not written")
+        self._check_camera(camera)
         R0 = check_rotation_matrices(np.asarray(R0, dtype=float), "R0")
         edits, changed = [], []
         if self.format == "basalt":
@@ -295,6 +330,8 @@ class VioFile:
             changed.append(f"value0.T_imu_cam[{camera[3:]}].qx..qw")
         else:
             key, transposed, nine = self._matrix_nodes(camera)
+            if self.unwritable:
+                fail(self.path, self.unwritable)
             M = R0.T if transposed else R0
             edits += [(_span(n), format_number(v)) for n, v in zip(nine, M.ravel())]
             changed.append(f"{camera}.{key} rotation" if self.format in ("kalibr", "openvins") else f"{key} rotation")
@@ -303,6 +340,7 @@ class VioFile:
             ns = int(round(time_offset_s * 1e9))  # to the nanosecond, Basalt's unit: finer is noise
             value = str(ns) if self.format == "basalt" else format_number(ns * 1e-9)
             if node is not None:
+                self._not_shared([], [node], "the time offset")
                 edits.append((_span(node), value))
             elif self.format == "basalt":
                 fail(self.path, "no value0.cam_time_offset_ns to set")
@@ -327,8 +365,11 @@ class VioFile:
         return _Span(start, start), " " * first.column + line + "\n"
 
 
-def _shared_nodes(root) -> set:
-    """``id`` of every node reached more than once (through an alias) from ``root``."""
+def _checked_tree(path, root) -> set:
+    """``id`` of every node reached more than once (through an alias) from ``root``; a mapping with a key twice is
+    refused, naming its line (readers differ on which one counts: PyYAML and Kalibr take the last)."""
+    import yaml
+
     seen, shared, stack = set(), set(), [root]
     while stack:
         node = stack.pop()
@@ -336,6 +377,15 @@ def _shared_nodes(root) -> set:
             shared.add(id(node))
             continue
         seen.add(id(node))
+        if isinstance(node, yaml.MappingNode):
+            keys = {}
+            for k, _ in node.value:
+                if isinstance(k, yaml.ScalarNode) and k.value != "<<":
+                    if k.value in keys:
+                        line = k.start_mark.line + 1
+                        fail(path, f"the key {k.value!r} appears twice in one mapping (lines {keys[k.value]} and "
+                                   f"{line}): readers disagree on which counts", line=line)
+                    keys[k.value] = k.start_mark.line + 1
         value = getattr(node, "value", None)
         if isinstance(value, list):
             for item in value:
@@ -347,7 +397,10 @@ def looks_like_vio_file(path, text: str) -> bool:
     """Whether ``text`` (the content of ``path``) is to be read as YAML or JSON: a ``.yaml``, ``.yml`` or ``.json``
     name, an OpenCV ``%YAML`` header, or a JSON object."""
     stripped = text.lstrip()
-    return Path(path).suffix.lower() in (".yaml", ".yml", ".json") or stripped.startswith(("%YAML", "{"))
+    if Path(path).suffix.lower() in (".yaml", ".yml", ".json") or stripped.startswith(("%YAML", "{")):
+        return True
+    first = next((ln for ln in text.split("\n") if ln.strip() and not ln.lstrip().startswith("#")), "")
+    return bool(re.match(r"""\s*[\w."'-]+\s*:(\s|$)""", first))  # a YAML key; Tabb's file starts "X"
 
 
 def read_vio_file(path, text: str | None = None) -> VioFile:
