@@ -353,7 +353,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
         if args.online and args.poses:
             raise ValueError("--online needs streams, not static pose sets (--poses)")
         if args.online:
-            require("pandas", "calibrate --online (its track is a table)")
+            require("pandas", "calibrate --online")
         kinds = _check_paths(args)
         out = prepare_output(args.out, "--out") if args.out is not None else None
         plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
