@@ -4,6 +4,7 @@ The checksum logic is checked against the shared copies (``$REPLICATION_REAL_DAT
 ``../shared/data/real``) used as a mirror; the download path is checked with a stubbed downloader.
 """
 import json
+import pickle
 import re
 import shutil
 import socket
@@ -219,4 +220,6 @@ def test_no_network_keeps_the_files_already_verified_and_counts_the_rest(tmp_pat
     with pytest.raises(fetch.NoNetwork, match=r"could not be reached \(no route\); 1 file not fetched") as info:
         fetch.fetch(tmp_path, entries=[good, bad], log=lambda _: None)
     assert isinstance(info.value, ConnectionError) and info.value.url == bad.url and info.value.pending == 1
+    again = pickle.loads(pickle.dumps(info.value))
+    assert type(again) is fetch.NoNetwork and str(again) == str(info.value)
     assert (tmp_path / "f" / "a.txt").read_bytes() == b"abc"
