@@ -24,8 +24,8 @@ class MissingExtra(ImportError):
 def missing_message(module: str, purpose: str) -> str:
     """The sentence for an optional ``module`` that is not installed, needed for ``purpose``.
 
-    >>> missing_message("pandas", "calibrate --online")[:75]
-"calibrate --online needs pandas, which is not installed: pip install 'repli"
+    >>> print(missing_message("pandas", "calibrate --online")[:89])
+    calibrate --online needs pandas, which is not installed: pip install 'replication[study]'
     """
     extra = OPTIONAL.get(module.split(".")[0], "study")
     return (f"{purpose} needs {module}, which is not installed: pip install 'replication[{extra}]' "
