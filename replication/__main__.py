@@ -11,9 +11,11 @@ import argparse
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from ._io import PROJECT_ROOT, write_atomic
+from ._version import __version__
 
 KERNELSPEC = {"name": "python3", "display_name": "Python 3 (ipykernel)", "language": "python"}
 
@@ -145,8 +147,40 @@ def generate_lab_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def _one_line_warnings():
+    """A ``warnings.showwarning`` for the command line: each warning once (by class and text), on one line of standard
+    error as ``warning: <Class>: <message>``, without the file, line and source line Python prints by default."""
+    seen = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = " ".join(str(message).split())
+        if (category, text) not in seen:
+            seen.add((category, text))
+            print(f"warning: {category.__name__}: {text}", file=file or sys.stderr)
+    return show
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run a parsed command with the command line's warnings (:func:`_one_line_warnings`, restored after); an optional
+    package that is missing ends it with exit 2 and the extra to install (:mod:`replication._extras`)."""
+    from ._extras import OPTIONAL, MissingExtra, missing_message
+
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warnings()
+        try:
+            return args.func(args)
+        except ImportError as err:
+            if not isinstance(err, MissingExtra) and (err.name or "").split(".")[0] not in OPTIONAL:
+                raise
+            command = f"python -m replication {args.command}"
+            text = err if isinstance(err, MissingExtra) else missing_message(err.name, command)
+            print(f"error: {text}", file=sys.stderr)
+            return 2
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m replication", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"replication {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     rep = sub.add_parser("reproduce", help="re-execute every notebook in order and write results/")
     rep.add_argument("--notebooks", default=str(PROJECT_ROOT / "notebooks"), help="folder of NN_*.ipynb")
@@ -177,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     fet.add_argument("--only", nargs="*", help="only these folders of the manifest (e.g. tabb_rwhe_ds1)")
     fet.set_defaults(func=fetch_command)
     args = parser.parse_args(argv)
-    return args.func(args)
+    return _run(args)
 
 
 def _main_closing_pipes():

@@ -8,7 +8,15 @@ import pytest
 
 from conftest import SMALL_LAB
 from replication.rig import realdata as rd
-from replication.rig.datafile import DataFileError, DataFileNotFound, fail, read_lines, read_text
+from replication.rig.datafile import (
+    ColumnCountError,
+    DataFileError,
+    DataFileNotFound,
+    fail,
+    read_lines,
+    read_table,
+    read_text,
+)
 from replication.study import lab, paper
 
 TUM_LINES = [
@@ -33,6 +41,18 @@ def test_error_prints_file_line_and_column_and_stays_a_value_error(tmp_path):
     assert str(DataFileError("a.csv", "bad")) == "a.csv: bad"
     again = pickle.loads(pickle.dumps(err))
     assert type(again) is DataFileError and str(again) == str(err) and again.column_name == "qw"
+
+
+def test_a_wrong_column_count_carries_both_numbers(tmp_path):
+    path = tmp_path / "imu.csv"
+    path.write_text("# t,w,w,w,a,a,a\n1,0,0,0,0,0,0\n2,0,0,0,0,0,0\n")
+    with pytest.raises(ColumnCountError, match=r"imu.csv, line 2: expected 8 columns \(a b\), got 7") as info:
+        read_table(path, "abcdefgh", delimiter=",", what="a b")
+    err = info.value
+    assert isinstance(err, DataFileError) and (err.expected, err.found, err.line) == (8, 7, 2)
+    again = pickle.loads(pickle.dumps(err))
+    assert type(again) is ColumnCountError and str(again) == str(err) and (again.expected, again.found) == (8, 7)
+    assert read_table(path, "abcdefg", delimiter=",")[0].shape == (2, 7)  # one column fewer: read
 
 
 def test_not_found_is_also_a_file_not_found_error(tmp_path):

@@ -4,10 +4,14 @@ The checksum logic is checked against the shared copies (``$REPLICATION_REAL_DAT
 ``../shared/data/real``) used as a mirror; the download path is checked with a stubbed downloader.
 """
 import json
+import pickle
 import re
 import shutil
+import socket
 import subprocess
 import sys
+import urllib.error
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -158,3 +162,64 @@ def test_stereo_settings_errors_name_the_entry(tmp_path):
         rd.load_orbslam3_stereo(path)
     with pytest.raises(FileNotFoundError, match="no such file"):
         rd.load_orbslam3_stereo(tmp_path / "none.yaml")
+
+
+def _unreachable(error):
+    """A stand-in for ``urllib.request.urlopen`` that raises ``error`` and counts its calls."""
+    calls = []
+
+    def urlopen(url, timeout=None):
+        calls.append(url)
+        raise error
+
+    return urlopen, calls
+
+
+@pytest.mark.parametrize("error, reason", [
+    (urllib.error.URLError(socket.gaierror(-3, "Temporary failure in name resolution")),
+     "Temporary failure in name resolution"),
+    (urllib.error.URLError(ConnectionRefusedError(111, "Connection refused")), "Connection refused"),
+    (TimeoutError("timed out"), "timed out"),
+])
+def test_without_a_network_fetch_data_says_so_once(tmp_path, monkeypatch, capsys, error, reason):
+    from replication.__main__ import main
+
+    urlopen, calls = _unreachable(error)
+    monkeypatch.setattr(urllib.request, "urlopen", urlopen)
+    entries = fetch.load_manifest()
+    assert main(["fetch-data", str(tmp_path / "dest")]) == 1
+    out, err = capsys.readouterr()
+    assert calls == [entries[0].url]  # stopped at the first server not reached
+    assert "FAILED" not in out and err.count("error:") == 1 and len(err.strip().splitlines()) == 1
+    assert err.startswith(f"error: no network: {entries[0].url} could not be reached ({reason}); "
+                          f"{len(entries)} files not fetched.")
+    assert "--mirror FOLDER" in err and "data/real_data_manifest.csv" in err
+
+
+def test_a_server_that_answers_with_an_error_fails_that_file_only(tmp_path, monkeypatch, capsys):
+    """The other side of the line: an HTTP error is the file's problem, said per file with its URL; the fetch goes
+    on."""
+    from replication.__main__ import main
+
+    urlopen, calls = _unreachable(urllib.error.HTTPError("u", 404, "Not Found", {}, None))
+    monkeypatch.setattr(urllib.request, "urlopen", urlopen)
+    entries = fetch.load_manifest()
+    assert main(["fetch-data", str(tmp_path / "dest")]) == 1
+    out, err = capsys.readouterr()
+    assert len(calls) == len(entries) and "no network" not in err
+    assert f"FAILED   {entries[0].relpath}: {entries[0].url}: HTTP error 404 (Not Found)" in out
+
+
+def test_no_network_keeps_the_files_already_verified_and_counts_the_rest(tmp_path, monkeypatch):
+    good, bad = (fetch.ManifestEntry("f", name, 3, fetch.sha256_of(b"abc"), "o/r", "0" * 40, name, "MIT", "x")
+                 for name in ("a.txt", "b.txt"))
+    (tmp_path / "f").mkdir()
+    (tmp_path / "f" / "a.txt").write_bytes(b"abc")
+    urlopen, _ = _unreachable(urllib.error.URLError("no route"))
+    monkeypatch.setattr(urllib.request, "urlopen", urlopen)
+    with pytest.raises(fetch.NoNetwork, match=r"could not be reached \(no route\); 1 file not fetched") as info:
+        fetch.fetch(tmp_path, entries=[good, bad], log=lambda _: None)
+    assert isinstance(info.value, ConnectionError) and info.value.url == bad.url and info.value.pending == 1
+    again = pickle.loads(pickle.dumps(info.value))
+    assert type(again) is fetch.NoNetwork and str(again) == str(info.value)
+    assert (tmp_path / "f" / "a.txt").read_bytes() == b"abc"

@@ -25,9 +25,11 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 #: The packages (only they have submodules a name could shadow), the top one included.
 PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
                                     if m.ispkg)
-#: Rank of each room: a module imports only from its own room or a lower one. The two leaves of the hall (the atomic
-#: writer and the version) import nothing of the package and serve every room; the rest of the hall is on top.
-ROOMS = {"_io": 0, "_version": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4, "__main__": 4, "testing": 4}
+#: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
+#: writer, the version and the optional packages) import nothing of the package and serve every room; the rest of the
+#: hall is on top.
+ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4, "__main__": 4,
+         "testing": 4}
 MAX_TOP_LEVEL_MODULES = 8
 MAX_CELL_LINES = 60
 

@@ -7,7 +7,10 @@ readable), the outputs (folders created, a directory or an unwritable place refu
 extension). A pipe is read once, at the start, and the report records it as such with the SHA-256 of what was read;
 a regular input is hashed at the start too. The report, track and figure are written atomically. Exit codes: 0
 (verdict ``ok`` or ``warning``), 2 (bad input, or a file-system error: the path and the reason named, nothing
-computed or nothing written), :data:`replication.rig.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``).
+computed or nothing written; ``--online`` without pandas: the extra to install named),
+:data:`replication.rig.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``). A CSV with the other kind's
+number of columns (an IMU file read as orientations, or the reverse) is said to look like that kind, naming
+``--sensor-kind``. ``--help`` lists every option's default and the registered solvers.
 """
 from __future__ import annotations
 
@@ -21,10 +24,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+from .._extras import MissingExtra, require
 from .._io import check_clashes, check_input, figure_format, os_reason, prepare_output, same_file, write_atomic
 from .quality import EXIT_FAIL
 
-__all__ = ["CALIBRATE_HELP", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
+__all__ = ["CALIBRATE_HELP", "CALIBRATE_EXAMPLES", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
 
 #: Exit code for bad input (argparse's own, too).
 EXIT_BAD_INPUT = 2
@@ -41,15 +45,61 @@ Formats (recognised by --sensor-kind and the file name):
   gyro sensor (--sensor-kind gyro):
     *.csv  EuRoC / TUM-VI imu0/data.csv, "t[ns], wx, wy, wz [rad/s], ax, ay, az [m/s^2]"
   static pose sets (--poses): Tabb & Ahmad Yousef's cali.txt (camera) and robot_cali.txt (robot hand)
-  reference (optional):
-    Kalibr camchain YAML (<cam>.T_cam_imu), EuRoC sensor.yaml (T_BS, cam -> body), Tabb transformations.txt (Z)
+  reference (optional; recognised by content, --reference-camera picks the camera):
+    Kalibr camchain YAML (<cam>.T_cam_imu), OpenVINS %YAML:1.0 chain (<cam>.T_imu_cam), ORB-SLAM3 settings
+    (IMU.T_b_c1), Basalt calib JSON (value0.T_imu_cam), EuRoC sensor.yaml (T_BS), Tabb transformations.txt (Z)
+Export the report into your own Kalibr / OpenVINS / Basalt / ORB-SLAM3 file or a ROS 2 command:
+  python -m replication export report.json --to kalibr --base camchain.yaml --out camchain-new.yaml
 The clock offset is estimated by cross-correlating angular speeds and removed unless --keep-clock; the report
 states its sign: the sensor sample stamped t + offset matches the camera sample stamped t.
 Outputs: --out, --plot (.png, .pdf or .svg, by its extension) and --track may not be an input file or one another
 (after resolving links); an input may be a pipe (read once: --camera <(...)). Refused before any work, exit 2.
 Exit codes: 0 ok or warning, 2 bad input or a file-system error (the path and the reason named), 3 verdict fail
 (0 with --accept).
+
+Solvers (--method, replication.core.solvers.available()):
+{solvers}
 """
+
+#: The epilog of ``calibrate --help``.
+CALIBRATE_EXAMPLES = """Examples:
+  # an ORB-SLAM3 camera trajectory and a raw EuRoC / TUM-VI gyro, report and figure
+  python -m replication calibrate --camera f_cam.txt --sensor imu0/data.csv --sensor-kind gyro \\
+      --out report.json --plot report.png
+  # two orientation streams (mocap), a reference R0 from a Kalibr camchain
+  python -m replication calibrate --camera mocap_cam.csv --sensor mocap_imu.csv --reference camchain.yaml
+  # Tabb's static pose sets
+  python -m replication calibrate --poses --camera cali.txt --sensor robot_cali.txt --reference transformations.txt
+"""
+
+#: The solver ``calibrate`` uses unless ``--method`` names another.
+DEFAULT_METHOD = "chordal_optimal"
+
+
+class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """``calibrate --help``: the description and epilog as written, the registered solvers listed in place of
+    ``{solvers}`` (looked up when the help is shown, so other commands do not import the solvers), and each option's
+    default after its help (an option whose default is None says in its help what happens without it; a flag is
+    off by default)."""
+
+    def _fill_text(self, text, width, indent):
+        if "{solvers}" in text:
+            import textwrap
+
+            from ..core.solvers import available
+
+            names = [f"{n} (default)" if n == DEFAULT_METHOD else n for n in available()]
+            text = text.replace("{solvers}", textwrap.fill(", ".join(names), width, initial_indent="  ",
+                                                           subsequent_indent="  "))
+        return super()._fill_text(text, width, indent)
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if not action.option_strings or action.default in (None, argparse.SUPPRESS) or "default" in text:
+            return text
+        if action.default is False and action.nargs == 0:
+            return f"{text} (default: off)"
+        return f"{text} (default: %(default)s)"
 
 
 def _number(kind, *, minimum=None, strict=True):
@@ -68,13 +118,14 @@ def _number(kind, *, minimum=None, strict=True):
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer",
-                         description=CALIBRATE_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer", description=CALIBRATE_HELP,
+                         epilog=CALIBRATE_EXAMPLES, formatter_class=_HelpFormatter)
     cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera), or camera poses (--poses)")
     cal.add_argument("--sensor", required=True, help="sensor trajectory, raw gyro samples, or robot poses (--poses)")
-    cal.add_argument("--sensor-kind", choices=["orientation", "gyro"], default="orientation")
+    cal.add_argument("--sensor-kind", choices=["orientation", "gyro"], default="orientation",
+                     help="what --sensor holds: orientations (a trajectory, mocap) or raw gyro samples (imu0/data.csv)")
     cal.add_argument("--poses", action="store_true", help="both files are static pose sets (Tabb format)")
-    cal.add_argument("--method", default="chordal_optimal", help="a solver from replication.core.solvers.available()")
+    cal.add_argument("--method", default=DEFAULT_METHOD, help="the solver (the list above)")
     cal.add_argument("--interval", type=_number(float, minimum=0), default=1.0,
                      help="seconds between the two poses of a pair")
     cal.add_argument("--stride", type=_number(int, minimum=1, strict=False), default=1,
@@ -87,23 +138,27 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
     units = ["auto", "s", "ms", "us", "ns"]
     cal.add_argument("--time-unit", choices=units, default=None,
-                     help="time unit of both files when they are TUM trajectories (auto: ns above 1e12, else s)")
-    cal.add_argument("--camera-time-unit", choices=units, default=None, help="time unit of the camera file only")
-    cal.add_argument("--sensor-time-unit", choices=units, default=None, help="time unit of the sensor file only")
+                     help="time unit of both files when they are TUM trajectories (default: auto: ns above 1e12, "
+                          "else s; EuRoC / TUM-VI CSVs are ns)")
+    cal.add_argument("--camera-time-unit", choices=units, default=None,
+                     help="time unit of the camera file only (default: that of --time-unit)")
+    cal.add_argument("--sensor-time-unit", choices=units, default=None,
+                     help="time unit of the sensor file only (default: that of --time-unit)")
     cal.add_argument("--drop-repeated", action="store_true",
                      help="skip lines of a TUM trajectory that repeat the previous line verbatim")
     cal.add_argument("--reference", help="a reference R0 to compare with: a Kalibr camchain, an OpenVINS or ORB-SLAM3 "
                      "%%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's transformations.txt "
-                     "(recognised by content)")
+                     "(recognised by content; default: none)")
     cal.add_argument("--reference-camera", default="cam0",
                      help="camera entry of the reference file (cam0, cam1, ...; Basalt: its index)")
-    cal.add_argument("--out", help="write the JSON report here (folders are created)")
+    cal.add_argument("--out", help="write the JSON report here (folders are created; default: no report)")
     cal.add_argument("--plot", help="write the diagnostic figure here: .png, .pdf or .svg by its extension "
-                                    "(folders are created)")
+                                    "(folders are created; default: no figure)")
     cal.add_argument("--accept", action="store_true", help="exit 0 even when the verdict is fail")
     cal.add_argument("--online", action="store_true",
                      help="also replay the streams through the online estimator (replication.rig.online), as if live")
-    cal.add_argument("--track", help="with --online: write its estimate, 95 %% radius, ready and alarms per pair (CSV)")
+    cal.add_argument("--track", help="with --online: write its estimate, 95 %% radius, ready and alarms per pair (CSV; "
+                          "default: not written)")
     cal.add_argument("--target", type=_number(float, minimum=0), default=0.5,
                      help="with --online: ready once the 95 %% radius is below this (deg)")
     cal.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -184,11 +239,35 @@ def _load(args, paths):
 
     if args.poses:
         return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
-    camera = realdata.load_stream(paths["--camera"], "orientation", time_unit=_unit(args, "camera"),
-                                  drop_repeated=args.drop_repeated)
-    sensor = realdata.load_stream(paths["--sensor"], args.sensor_kind, time_unit=_unit(args, "sensor"),
-                                  drop_repeated=args.drop_repeated)
+    camera = _stream(paths["--camera"], "--camera", "orientation", time_unit=_unit(args, "camera"),
+                     drop_repeated=args.drop_repeated)
+    sensor = _stream(paths["--sensor"], "--sensor", args.sensor_kind, time_unit=_unit(args, "sensor"),
+                     drop_repeated=args.drop_repeated)
     return camera, sensor
+
+
+def _stream(path, option: str, kind: str, **options):
+    """:func:`~replication.rig.realdata.load_stream`; a CSV whose lines have the other kind's number of columns (7: an
+    IMU stream read as orientations; 8: orientations read as a gyro) is said to look like that kind, naming the
+    option to give."""
+    from .datafile import ColumnCountError
+    from .realdata import EUROC_IMU_COLUMNS, EUROC_POSE_COLUMNS, load_stream
+
+    try:
+        return load_stream(path, kind, **options)
+    except ColumnCountError as err:
+        csv = Path(path).suffix.lower() == ".csv"
+        if kind == "orientation" and csv and err.found == len(EUROC_IMU_COLUMNS):
+            looks = "a gyro / IMU stream (t, wx, wy, wz, ax, ay, az: EuRoC / TUM-VI imu0/data.csv)"
+            hint = ("give --sensor-kind gyro" if option == "--sensor" else
+                    "--camera takes the camera's orientations; a gyro goes to --sensor with --sensor-kind gyro")
+        elif kind == "gyro" and err.found == len(EUROC_POSE_COLUMNS):
+            looks = "an orientation stream (t, px, py, pz, qw, qx, qy, qz: EuRoC / TUM-VI mocap or ground truth)"
+            hint = "leave out --sensor-kind gyro (orientation, the default, reads it)"
+        else:
+            raise
+        raise ColumnCountError(err.path, f"{err.message}: the file looks like {looks}; {hint}", err.line,
+                               expected=err.expected, found=err.found) from None
 
 
 def _unit(args, side: str) -> str:
@@ -282,6 +361,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
             raise ValueError("--track needs --online")
         if args.online and args.poses:
             raise ValueError("--online needs streams, not static pose sets (--poses)")
+        if args.online:
+            require("pandas", "calibrate --online")
         kinds = _check_paths(args)
         out = prepare_output(args.out, "--out") if args.out is not None else None
         plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
@@ -296,7 +377,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
                                max_offset=args.max_offset, correct_offset=not args.keep_clock, **common)
     except OverlapError as err:
         return _error(err.named("--max-offset"))
-    except (ValueError, OSError) as err:
+    except (ValueError, OSError, MissingExtra) as err:
         return _error(err)
     print(result.summary())
     if args.online:

@@ -19,8 +19,8 @@ from typing import NoReturn
 
 import numpy as np
 
-__all__ = ["DataFileError", "DataFileNotFound", "fail", "read_text", "read_text_layout", "read_lines", "read_table",
-           "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
+__all__ = ["DataFileError", "DataFileNotFound", "ColumnCountError", "fail", "read_text", "read_text_layout",
+           "read_lines", "read_table", "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
 
 #: Accepted deviation of a stored quaternion's norm from 1.
 QUATERNION_NORM_TOL = 1e-3
@@ -89,6 +89,29 @@ class DataFileNotFound(DataFileError, FileNotFoundError):
         super().__init__(path, message, line, column, column_name)
         self.errno = errno.ENOENT
         self.filename = str(self.path)
+
+
+class ColumnCountError(DataFileError):
+    """A data line with another number of columns than the format's: a :class:`DataFileError` that also carries the
+    numbers, so that a caller can say what the file looks like instead (``calibrate``: an IMU stream given as an
+    orientation stream, and the reverse).
+
+    Attributes
+    ----------
+    expected : int
+        The format's number of columns.
+    found : int
+        The line's.
+    """
+
+    def __init__(self, path, message: str, line: int | None = None, column=None, column_name=None,
+                 expected: int = 0, found: int = 0):
+        super().__init__(path, message, line, column, column_name)
+        self.expected, self.found = int(expected), int(found)
+
+    def __reduce__(self):
+        return type(self), (self.path, self.message, self.line, self.column, self.column_name, self.expected,
+                            self.found)
 
 
 def fail(path, message: str, line: int | None = None, column: int | str | None = None,
@@ -185,6 +208,8 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     ``None`` splits on white space; ``header``: skip the first data line (a header of names); ``drop_repeated``:
     skip a line identical in every value to the previous data line; ``increasing_first``: the first column
     (a time stamp) must increase strictly.
+    A line with another number of columns raises :class:`ColumnCountError`, any other problem
+    :class:`DataFileError`.
 
     Returns
     -------
@@ -204,7 +229,8 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
             continue
         parts = text.split(delimiter) if delimiter else text.split()
         if len(parts) != n_columns:
-            fail(path, f"expected {n_columns} columns ({what}), got {len(parts)}", line=lineno)
+            raise ColumnCountError(path, f"expected {n_columns} columns ({what}), got {len(parts)}", lineno,
+                                   expected=n_columns, found=len(parts))
         try:
             values = [float(p) for p in parts]
         except ValueError:

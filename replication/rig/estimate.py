@@ -19,6 +19,7 @@ it. Conventions: ``docs/conventions.md``.
 from __future__ import annotations
 
 import math
+import sys
 import warnings
 
 import numpy as np
@@ -94,6 +95,16 @@ def per_station_median(res, stations) -> np.ndarray:
                      for s in range(N)])
 
 
+def _progress(items, **options):
+    """``items`` behind a tqdm progress bar on standard error; without tqdm (an optional package: the extra
+    ``study``) ``items`` as they are, the bar being all that is lost."""
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return items
+    return tqdm(items, file=sys.stderr, **options)
+
+
 def bootstrap_replicates(motions, method, options, index_sets, *, progress=False):
     """The solver's core on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list of index
     arrays of any lengths); validated pairs, so no re-validation; the replicates' own warnings would repeat the
@@ -106,17 +117,13 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
             chunks = np.array_split(np.arange(len(index_sets)), min(len(index_sets), 10)) if progress else [
                 np.arange(len(index_sets))]
             if progress:
-                from tqdm import tqdm
-
-                chunks = tqdm(chunks, desc=f"bootstrap ({method})", unit="chunk", file=__import__("sys").stderr)
+                chunks = _progress(chunks, desc=f"bootstrap ({method})", unit="chunk")
             for chunk in chunks:
                 out.append(core(motions.subset(index_sets[chunk]), **options))
             return np.concatenate(out)
         sets = index_sets
         if progress:
-            from tqdm import tqdm
-
-            sets = tqdm(sets, desc=f"station bootstrap ({method})", unit="replicate", file=__import__("sys").stderr)
+            sets = _progress(sets, desc=f"station bootstrap ({method})", unit="replicate")
         for idx in sets:
             out.append(core(motions.subset(idx), **options))
     return np.stack(out)

@@ -26,7 +26,7 @@ from pathlib import Path
 from .._io import PROJECT_ROOT, os_reason, prepare_folder, same_file, write_atomic
 from .datafile import fail, read_text
 
-__all__ = ["MANIFEST", "ManifestEntry", "load_manifest", "verify", "fetch", "sha256_of"]
+__all__ = ["MANIFEST", "ManifestEntry", "NoNetwork", "load_manifest", "verify", "fetch", "sha256_of"]
 
 #: The manifest shipped with the project.
 MANIFEST = PROJECT_ROOT / "data" / "real_data_manifest.csv"
@@ -125,11 +125,49 @@ def verify(root, entries=None) -> dict:
     return {str(e.relpath): _status(root / e.relpath, e) for e in entries}
 
 
+class NoNetwork(ConnectionError):
+    """A download could not reach its server (no network, a host name that does not resolve, a refused or reset
+    connection, a timeout): :func:`fetch` stops there, as every other download would fail alike.
+
+    Attributes
+    ----------
+    url : str
+        The first URL that could not be reached.
+    reason : str
+        Why (the operating system's or urllib's words).
+    pending : int or None
+        How many files of the manifest were left unfetched (None: not counted yet).
+    """
+
+    def __init__(self, url: str, reason, pending: int | None = None):
+        self.url, self.reason, self.pending = url, str(reason), pending
+        left = "" if pending is None else f"; {pending} file{'s' if pending != 1 else ''} not fetched"
+        super().__init__(
+            f"no network: {url} could not be reached ({self.reason}){left}. Connect and run again (files already "
+            f"verified are kept), or copy the files from a local copy laid out like DEST with --mirror FOLDER; "
+            f"{MANIFEST.relative_to(PROJECT_ROOT).as_posix()} lists each file's repository, commit, path, size and "
+            "SHA-256")
+
+    def __reduce__(self):
+        return type(self), (self.url, self.reason, self.pending)
+
+
 def _download(url: str, timeout: float) -> bytes:
+    """The bytes at ``url``; a server that answers with an error raises ``OSError`` naming the URL and the HTTP
+    status, a server not reached :class:`NoNetwork`."""
+    import urllib.error
     import urllib.request
 
-    with urllib.request.urlopen(url, timeout=timeout) as response:  # noqa: S310 (https URLs from the manifest)
-        return response.read()
+    try:
+        with urllib.request.urlopen(url, timeout=timeout) as response:  # noqa: S310 (https URLs from the manifest)
+            return response.read()
+    except urllib.error.HTTPError as err:  # the server answered: a problem of this file only
+        raise OSError(f"{url}: HTTP error {err.code} ({err.reason})") from None
+    except urllib.error.URLError as err:
+        reason = err.reason
+        raise NoNetwork(url, os_reason(reason) if isinstance(reason, OSError) else reason) from None
+    except (TimeoutError, ConnectionError) as err:
+        raise NoNetwork(url, os_reason(err) or type(err).__name__) from None
 
 
 def _obtain(entry: ManifestEntry, mirror, timeout: float) -> bytes:
@@ -169,7 +207,9 @@ def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) 
     Before any download, ``dest`` and its folders are created and checked: a file in the way, a folder that
     cannot be created or written, or ``dest`` being the mirror raises ``ValueError`` (``NotADirectoryError`` for
     an existing file) naming the path and the reason; a write that fails later (a full disk) too, the files
-    fetched before it kept.
+    fetched before it kept. A server that cannot be reached (no network) stops the fetch with :class:`NoNetwork`
+    (a ``ConnectionError``) naming the URL, the reason and how many files are left; the files fetched before it
+    are kept.
     """
     dest = Path(dest)
     if dest.exists() and not dest.is_dir():
@@ -186,7 +226,10 @@ def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) 
             continue
         try:
             data = _obtain(e, mirror, timeout)
-        except (OSError, ValueError) as err:  # URLError is an OSError
+        except NoNetwork as err:  # every other download would fail alike: stop, said once
+            pending = sum(_status(dest / x.relpath, x) != "ok" for x in entries)
+            raise NoNetwork(err.url, err.reason, pending) from None
+        except (OSError, ValueError) as err:  # an HTTP error is an OSError
             log(f"FAILED   {e.relpath}: {err}")
             continue
         digest = sha256_of(data)
@@ -205,7 +248,8 @@ def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) 
 
 
 def fetch_command(args) -> int:
-    """``python -m replication fetch-data``: exit 0 if every file is present and verified, else 1."""
+    """``python -m replication fetch-data``: exit 0 if every file is present and verified, else 1 (no network
+    included), 2 for bad arguments or an unwritable DEST."""
     try:
         entries = load_manifest()
         if args.only:
@@ -221,6 +265,9 @@ def fetch_command(args) -> int:
     except ValueError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    except NoNetwork as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 1
     except OSError as err:  # FileNotFoundError, NotADirectoryError, PermissionError, ...
         where = f"{err.filename}: " if err.filename and str(err.filename) not in str(err.strerror or "") else ""
         print(f"error: {where}{os_reason(err) if where else err}", file=sys.stderr)
@@ -239,6 +286,8 @@ Download the real recordings that notebook 07 and the real-data tests read, from
 (GitHub repositories at pinned commits; see data/real_data_manifest.csv for each file's repository, commit,
 path, size, SHA-256, licence and citation), verify every checksum, and write them to DEST. Then run with
 REPLICATION_REAL_DATA=DEST. Files already in DEST with the right checksum are kept.
-Exit status: 0 all files verified, 1 some missing or not matching, 2 bad arguments or manifest, or DEST cannot
-be created or written (a file in the way, no permission, a full disk: the path and the reason named).
+Without a network the fetch stops at the first server it cannot reach, with one message naming that URL and the
+reason; --mirror FOLDER takes the files from a local copy instead.
+Exit status: 0 all files verified, 1 some missing or not matching, or no network, 2 bad arguments or manifest, or
+DEST cannot be created or written (a file in the way, no permission, a full disk: the path and the reason named).
 """

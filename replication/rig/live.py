@@ -12,6 +12,7 @@ from collections import deque
 
 import numpy as np
 
+from .._extras import require
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 from .online import OnlineCalibrator
@@ -407,8 +408,7 @@ def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.
     ``pairs_dropped``, ``alarms``, ``events`` and ``summary`` (:meth:`LiveRig.summary`, times since the camera's
     first sample).
     """
-    import pandas as pd
-
+    pd = require("pandas", "replay (its table of pairs; calibrate --online)")
     rig = LiveRig(calibrator, interval=interval, offset=offset, max_offset=max_offset, correct_offset=correct_offset,
                   stride=stride, offset_window=offset_window, on_pair=on_pair, diagnose=diagnose)
     events = sorted([(t, 1, k) for k, t in enumerate(camera.t)] + [(t, 0, k) for k, t in enumerate(sensor.t)])

@@ -1,0 +1,138 @@
+"""A calibrate-only install: the core dependencies leave out the notebook stack, and ``calibrate`` and ``--version``
+run without it.
+
+A fresh virtual environment per test run would take minutes; instead the core list is read from pyproject.toml, and
+the command line runs in a subprocess whose imports of the optional packages fail as if they were not installed (a
+meta-path finder placed first). environment.md records the check in a real fresh venv.
+"""
+import re
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomllib
+
+from replication._extras import OPTIONAL, MissingExtra, require
+from replication.core import so3
+
+ROOT = Path(__file__).resolve().parent.parent
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+#: The notebook stack and the studies' packages: none of them in the core install.
+NOTEBOOK_STACK = ["nbclient", "nbformat", "ipykernel", "jupyter", "pandas", "tqdm", "tabulate", "ahrs"]
+#: What calibrate, the rig API and the solvers import.
+CORE = ["numpy", "scipy", "matplotlib", "opencv-python-headless", "pyyaml", "clarabel"]
+
+
+def _names(requirements):
+    return [re.match(r"[A-Za-z0-9_.\-]+", r).group(0).lower() for r in requirements]
+
+
+def _blocked_run(args, blocked=NOTEBOOK_STACK, cwd=None):
+    """``python -m replication *args`` in a subprocess where importing any of ``blocked`` (or a submodule) raises
+    ``ModuleNotFoundError``, as if not installed."""
+    code = textwrap.dedent(f"""
+        import runpy, sys
+        BLOCKED = {sorted(blocked)!r}
+
+        class Blocker:
+            def find_spec(self, name, path=None, target=None):
+                if name.split(".")[0] in BLOCKED:
+                    raise ModuleNotFoundError(f"No module named {{name!r}} (blocked by the test)", name=name)
+                return None
+
+        sys.meta_path.insert(0, Blocker())
+        sys.argv = ["python -m replication", *{[str(a) for a in args]!r}]
+        runpy.run_module("replication", run_name="__main__", alter_sys=True)
+    """)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=cwd)
+
+
+def test_the_core_dependencies_leave_out_the_notebook_stack():
+    core = _names(PYPROJECT["dependencies"])
+    assert sorted(core) == sorted(CORE)
+    assert not set(core) & set(NOTEBOOK_STACK)
+    extras = PYPROJECT["optional-dependencies"]
+
+    def installed_by(extra):  # the extra's packages, those of the extras it names ("replication[study]") included
+        names = set(_names(extras[extra]))
+        for inner in re.findall(r"^replication\[(\w+)\]$", "\n".join(extras[extra]), re.M):
+            names |= installed_by(inner)
+        return names - {"replication"}
+
+    for module, extra in OPTIONAL.items():  # the extra a missing module's message names installs it
+        assert module in installed_by(extra), (module, extra)
+    assert set(OPTIONAL) == set(NOTEBOOK_STACK)
+    assert "replication[study]" in PYPROJECT["optional-dependencies"]["notebooks"]
+    setup = (ROOT / "scripts" / "setup.sh").read_text()
+    assert re.search(r'-e "\$ROOT\[study,test,notebooks\]"', setup)  # README's two commands install everything
+
+
+@pytest.fixture(scope="module")
+def rig(tmp_path_factory):
+    """30 s of a camera (TUM, 20 Hz) and a rigidly attached gyro (EuRoC imu0 CSV, 200 Hz)."""
+    d = tmp_path_factory.mktemp("light")
+    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+
+    def world_from_camera(t):
+        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
+
+    t = np.arange(0.0, 30.0, 0.05)
+    q = so3.as_quaternion(world_from_camera(t))
+    np.savetxt(d / "cam.txt", np.column_stack([t + 1e3, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
+    t_imu = np.arange(-1.0, 31.0, 0.005)
+    Q = world_from_camera(t_imu) @ R0
+    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    t_mid = 0.5 * (t_imu[1:] + t_imu[:-1]) + 1e3
+    np.savetxt(d / "imu.csv", np.column_stack([np.round(t_mid * 1e9), omega, np.tile([0, 0, 9.81], (len(t_mid), 1))]),
+               fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,wx,wy,wz,ax,ay,az")
+    return d, R0
+
+
+def test_the_blocker_blocks():
+    """The control: with the blocker, importing pandas fails; without it, it works (else the next test proves
+    nothing)."""
+    out = _blocked_run(["--version"], blocked=["replication"])
+    assert out.returncode != 0 and "blocked by the test" in out.stderr
+    assert _blocked_run(["--version"], blocked=[]).returncode == 0
+
+
+def test_calibrate_and_version_run_without_the_notebook_stack(rig, tmp_path):
+    d, R0 = rig
+    out = _blocked_run(["--version"])
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == f"replication {__import__('replication').__version__}"
+    report, figure = tmp_path / "r.json", tmp_path / "r.png"
+    out = _blocked_run(["calibrate", "--camera", d / "cam.txt", "--sensor", d / "imu.csv", "--sensor-kind", "gyro",
+                        "--bootstrap", "20", "--out", report, "--plot", figure], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "verdict: OK" in out.stdout and out.stderr == ""
+    estimate = np.array(__import__("json").loads(report.read_text())["R0_camera_from_sensor"])
+    assert so3.angle_between_deg(estimate, R0) < 1e-3  # noise-free: measured 8e-6 deg (the gyro's integration)
+    assert figure.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("args, needs", [
+    (["calibrate", "--online"], "calibrate --online needs pandas"),
+    (["reproduce", "--only", "nothing"], "python -m replication reproduce needs"),
+])
+def test_a_command_that_needs_the_extra_says_which_to_install(rig, tmp_path, args, needs):
+    d, _ = rig
+    if args[0] == "calibrate":
+        args = [*args, "--camera", d / "cam.txt", "--sensor", d / "imu.csv", "--sensor-kind", "gyro", "--bootstrap", 0]
+    else:
+        args = [*args, "--results", tmp_path / "results"]
+    out = _blocked_run(args)
+    assert out.returncode == 2, out.stderr
+    assert needs in out.stderr and "pip install 'replication[study]'" in out.stderr
+    assert "Traceback" not in out.stderr and "verdict" not in out.stdout  # refused before any work
+
+
+def test_require_names_the_extra():
+    assert require("math", "x").pi > 3
+    with pytest.raises(MissingExtra, match=r"the replay needs no_such_module_x, which is not installed: pip install "
+                                           r"'replication\[study\]'") as info:
+        require("no_such_module_x", "the replay")
+    assert isinstance(info.value, ImportError) and info.value.name == "no_such_module_x"
