@@ -267,7 +267,8 @@ def add_parser(sub):
 
 
 def export_command(args) -> int:
-    """Exit 0 (written), 2 (refused: the reason on standard error)."""
+    """Exit 0 (written), 2 (refused: the reason on standard error); warnings reach the terminal through the command
+    line's one-line formatter (``replication.__main__``)."""
     import sys
 
     from .._io import check_clashes, check_input, os_reason, prepare_output, same_file
@@ -279,16 +280,11 @@ def export_command(args) -> int:
             raise ValueError(f"--base is the REPORT pipe ({args.base}): a pipe can be read once")
         check_clashes({"--out": args.out}, inputs)
         out = prepare_output(args.out, "--out") if args.out is not None else None
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            result = export_calibration(args.report, args.to, base=args.base, camera=args.camera,
-                                        parent_frame=args.parent_frame, child_frame=args.child_frame,
-                                        force=args.force)
+        result = export_calibration(args.report, args.to, base=args.base, camera=args.camera,
+                                    parent_frame=args.parent_frame, child_frame=args.child_frame, force=args.force)
     except ValueError as err:  # DataFileError is a ValueError
         print(f"error: {err}", file=sys.stderr)
         return 2
-    for w in caught:
-        print(f"warning: {w.category.__name__}: {w.message}", file=sys.stderr)
     if out is None:
         sys.stdout.write(result.text)
     else:
