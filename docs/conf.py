@@ -31,6 +31,11 @@ napoleon_numpy_docstring = True
 html_theme = "sphinx_book_theme"
 html_title = "Cameras and IMU alignment calibration: a replication"
 html_theme_options = {"show_toc_level": 2, "use_download_button": False, "use_fullscreen_button": False}
-html_static_path = []
+# the theme logs a console error for a reader with no stored mode unless it has a default one
+html_context = {"default_mode": "light"}
+html_static_path = ["_static"]
+html_css_files = ["book.css"]
+html_favicon = "_static/favicon.svg"  # else the browser's request for /favicon.ico is a 404 in its console
+html_copy_source = False
 html_last_updated_fmt = None
 html_show_sourcelink = False

@@ -3,7 +3,8 @@ and the calibration report's schema, all Markdown (MyST) written from the record
 copied by hand.
 
 The book's source is assembled in ``docs/_build/source`` by :func:`stage`: the pages of ``docs/`` (a line
-``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py`` and the executed
+``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py``, ``docs/_static/`` (text
+files) and the executed
 notebooks under ``notebooks/`` (rendered from their stored outputs, never re-executed). Links to a notebook section
 use the anchor of its heading (:func:`~replication.study.ledger.heading_anchor`, as MyST makes it); Sphinx resolves
 each one or the build fails.
@@ -47,7 +48,7 @@ def front_page_claims(ledger: pd.DataFrame) -> str:
              "| the paper claims | verdict | the evidence, in one line | measured in |", "|---|---|---|---|"]
     for row in ledger.itertuples(index=False):
         lines.append(f"| [{_md(row.statement)}](ledger.md#{row.claim}) | **{row.verdict}** | "
-                     f"{_md(first_clause(row.evidence))} | {_where(row)} |")
+                     f"{_md(first_clause(row.evidence, max_words=22))} | {_where(row)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -186,12 +187,16 @@ def stage(source=None, *, root=None, ledger=None) -> Path:
     for page in sorted((root / "docs").glob("*.md")):
         wanted.add(page.name)
         _write_if_changed(source / page.name, fill_markers(page.read_text(encoding="utf-8"), blocks, page))
+    (source / "_static").mkdir(exist_ok=True)
+    for static in sorted((root / "docs" / "_static").glob("*")):
+        wanted.add(f"_static/{static.name}")
+        _write_if_changed(source / "_static" / static.name, static.read_text(encoding="utf-8"))
     for notebook in sorted((root / "notebooks").glob("[0-9][0-9]_*.ipynb")):
         wanted.add(f"notebooks/{notebook.name}")
         target = source / "notebooks" / notebook.name
         if not target.exists() or target.read_bytes() != notebook.read_bytes():
             shutil.copy2(notebook, target)
-    for stale in [*source.glob("*.md"), *(source / "notebooks").glob("*.ipynb")]:
+    for stale in [*source.glob("*.md"), *(source / "notebooks").glob("*.ipynb"), *(source / "_static").glob("*")]:
         if stale.relative_to(source).as_posix() not in wanted:
             stale.unlink()
     return source

@@ -50,6 +50,8 @@ HOLDS_ONLY_IF = "holds only if"
 VERDICTS = ("holds", "fails", HOLDS_ONLY_IF, "undecidable from the text")
 CLAIM_MIME = "application/vnd.replication.claim+json"
 README_START, README_END = "<!-- claims:start -->", "<!-- claims:end -->"
+#: Optional inline markers of README's first screen, between which :func:`update_readme` writes the counts.
+COUNTS = re.compile(r"<!-- counts:start -->.*?<!-- counts:end -->")
 
 
 @dataclass(frozen=True)
@@ -373,8 +375,9 @@ def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
 
 
 def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
-    """Write the compact ledger (:func:`to_summary`) between the README's claims markers; ``check``: only say
-    whether it is current.
+    """Write the compact ledger (:func:`to_summary`) between the README's claims markers, and the counts
+    (:func:`counts_in_words`) between each pair of inline counts markers (:data:`COUNTS`) on one line; ``check``:
+    only say whether it is current.
 
     Raises
     ------
@@ -388,6 +391,8 @@ def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> 
     text = read_text(readme, "the README with the claims table")
     head, tail = _readme_parts(readme, text)
     new = f"{head}{README_START}\n{to_summary(ledger)}{README_END}{tail}"
+    counts = f"<!-- counts:start -->{counts_in_words(ledger)}<!-- counts:end -->"
+    new = COUNTS.sub(lambda _: counts, new)
     if check:
         return new == text
     if new != text:
