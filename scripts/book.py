@@ -11,10 +11,11 @@ BUILD = ROOT / "docs" / "_build"
 def main(argv=None) -> int:
     from sphinx.cmd.build import build_main
 
+    from replication import _PUBLIC
     from replication.study.book import stage
 
     try:
-        source = stage(BUILD / "source", root=ROOT)
+        source = stage(BUILD / "source", public=_PUBLIC, root=ROOT)
     except (ValueError, OSError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

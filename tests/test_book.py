@@ -141,7 +141,9 @@ def test_a_marker_naming_no_block_is_refused_with_its_line(tmp_path):
 
 
 def test_stage_fills_every_page_and_copies_the_notebooks(tmp_path, collected):
-    source = book.stage(tmp_path / "src", ledger=collected)
+    from replication import _PUBLIC
+
+    source = book.stage(tmp_path / "src", public=_PUBLIC, ledger=collected)
     pages = {p.name for p in (PROJECT_ROOT / "docs").glob("*.md")}
     assert {p.name for p in source.glob("*.md")} == pages
     assert {p.name for p in (source / "notebooks").glob("*.ipynb")} == {p.name for p in NOTEBOOKS}
@@ -150,7 +152,7 @@ def test_stage_fills_every_page_and_copies_the_notebooks(tmp_path, collected):
     assert ledger.counts_in_words(collected) in (source / "index.md").read_text(encoding="utf-8")
     before = (source / "index.md").stat().st_mtime_ns
     (source / "stale.md").write_text("x")
-    book.stage(tmp_path / "src", ledger=collected)
+    book.stage(tmp_path / "src", public=_PUBLIC, ledger=collected)
     assert (source / "index.md").stat().st_mtime_ns == before and not (source / "stale.md").exists()
 
 

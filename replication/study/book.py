@@ -165,8 +165,12 @@ def _write_if_changed(path: Path, text: str) -> None:
         write_atomic(path, text)
 
 
-def stage(source=None, *, root=None, ledger=None) -> Path:
+def stage(source=None, *, public: dict, root=None, ledger=None) -> Path:
     """Assemble the book's source in ``source`` (default ``docs/_build/source``) and return it.
+
+    ``public``: the package's public names (``replication._PUBLIC``, passed in: the study room does not import the
+    package face) for :func:`api_chapter`; ``ledger``: default :func:`~replication.study.ledger.collect` of
+    ``root``'s notebooks.
 
     Files are written only when they change, so that Sphinx rebuilds only what changed. Pages of ``docs/`` whose
     marker names no block, a report schema field without a description and a ledger that
@@ -174,13 +178,11 @@ def stage(source=None, *, root=None, ledger=None) -> Path:
     """
     root = Path(root) if root else PROJECT_ROOT
     source = Path(source) if source else root / "docs" / "_build" / "source"
-    from .. import _PUBLIC
-
     ledger = collect(sorted((root / "notebooks").glob("[0-9][0-9]_*.ipynb")),
                      claims_path=root / "data" / "paper" / "claims.csv") if ledger is None else ledger
     schema = json.loads((root / "docs" / "calibration_report.schema.json").read_text(encoding="utf-8"))
     blocks = {"claims": front_page_claims(ledger), "ledger": ledger_chapter(ledger),
-              "schema": schema_chapter(schema), "api": api_chapter(_PUBLIC)}
+              "schema": schema_chapter(schema), "api": api_chapter(public)}
     (source / "notebooks").mkdir(parents=True, exist_ok=True)
     wanted = {"conf.py"}
     _write_if_changed(source / "conf.py", (root / "docs" / "conf.py").read_text(encoding="utf-8"))
