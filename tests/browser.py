@@ -25,8 +25,6 @@ import urllib.request
 from html.parser import HTMLParser
 from pathlib import Path
 
-import websocket
-
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-extensions",
          "--remote-debugging-port=0", "--window-size=1280,900"]
@@ -80,6 +78,8 @@ class Chromium:
         self._next_id, self._events, self._pages = 0, [], {}
 
     def __enter__(self):
+        import websocket  # websocket-client (the docs extra); imported here so that collecting this file needs nothing
+
         self._profile = tempfile.mkdtemp(prefix="replication-chromium-")
         self._process = subprocess.Popen([self.executable, *FLAGS, f"--user-data-dir={self._profile}", "about:blank"],
                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -3,11 +3,10 @@ and the calibration report's schema, all Markdown (MyST) written from the record
 copied by hand.
 
 The book's source is assembled in ``docs/_build/source`` by :func:`stage`: the pages of ``docs/`` (a line
-``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py``, ``docs/_static/`` (text
-files) and the executed
-notebooks under ``notebooks/`` (rendered from their stored outputs, never re-executed). Links to a notebook section
-use the anchor of its heading (:func:`~replication.study.ledger.heading_anchor`, as MyST makes it); Sphinx resolves
-each one or the build fails.
+``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py``, ``docs/_static/``
+and the executed notebooks under ``notebooks/`` (rendered from their stored outputs, never re-executed). Links to a
+notebook section use the anchor of its heading (:func:`~replication.study.ledger.heading_anchor`, as MyST makes
+it); Sphinx resolves each one or the build fails.
 """
 from __future__ import annotations
 
@@ -15,7 +14,6 @@ import importlib
 import inspect
 import json
 import re
-import shutil
 from pathlib import Path
 
 import pandas as pd
@@ -160,9 +158,10 @@ def fill_markers(text: str, blocks: dict, path) -> str:
     return MARKER.sub(lambda m: blocks[m.group(1)].rstrip("\n"), text)
 
 
-def _write_if_changed(path: Path, text: str) -> None:
-    if not path.exists() or path.read_text(encoding="utf-8") != text:
-        write_atomic(path, text)
+def _write_if_changed(path: Path, data: bytes | str) -> None:
+    data = data.encode("utf-8") if isinstance(data, str) else data
+    if not path.exists() or path.read_bytes() != data:
+        write_atomic(path, data)
 
 
 def stage(source=None, *, public: dict, root=None, ledger=None) -> Path:
@@ -192,12 +191,10 @@ def stage(source=None, *, public: dict, root=None, ledger=None) -> Path:
     (source / "_static").mkdir(exist_ok=True)
     for static in sorted((root / "docs" / "_static").glob("*")):
         wanted.add(f"_static/{static.name}")
-        _write_if_changed(source / "_static" / static.name, static.read_text(encoding="utf-8"))
+        _write_if_changed(source / "_static" / static.name, static.read_bytes())
     for notebook in sorted((root / "notebooks").glob("[0-9][0-9]_*.ipynb")):
         wanted.add(f"notebooks/{notebook.name}")
-        target = source / "notebooks" / notebook.name
-        if not target.exists() or target.read_bytes() != notebook.read_bytes():
-            shutil.copy2(notebook, target)
+        _write_if_changed(source / "notebooks" / notebook.name, notebook.read_bytes())
     for stale in [*source.glob("*.md"), *(source / "notebooks").glob("*.ipynb"), *(source / "_static").glob("*")]:
         if stale.relative_to(source).as_posix() not in wanted:
             stale.unlink()
