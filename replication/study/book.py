@@ -76,7 +76,7 @@ def _type(node: dict) -> str:
         return "one of " + ", ".join(json.dumps(v) for v in node["enum"])
     if "const" in node:
         return f"always {json.dumps(node['const'])}"
-    if "oneOf" in node:
+    if "oneOf" in node and "type" not in node:
         return " or ".join(_type(n) for n in node["oneOf"])
     kind = node.get("type", "any")
     if kind == "array" and "items" in node:
