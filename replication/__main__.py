@@ -112,7 +112,7 @@ def reproduce(args: argparse.Namespace) -> int:
 def claims_command(args: argparse.Namespace) -> int:
     """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
     file or README refused: the message on stderr)."""
-    from .study.ledger import collect, to_markdown, update_readme
+    from .study.ledger import collect, to_markdown, to_summary, update_readme
 
     try:
         ledger = collect()
@@ -127,6 +127,9 @@ def claims_command(args: argparse.Namespace) -> int:
         if args.readme:
             update_readme(ledger)
             print("README's claims table updated")
+            return 0
+        if args.summary:
+            print(to_summary(ledger), end="")
             return 0
     except (ValueError, OSError) as err:  # DataFileError is a ValueError; DataFileNotFound both
         print(f"error: {err}", file=sys.stderr)
@@ -200,6 +203,8 @@ def main(argv: list[str] | None = None) -> int:
     cla = sub.add_parser("claims", help="the claims ledger from the executed notebooks (data/paper/claims.csv)")
     cla.add_argument("--readme", action="store_true", help="write it into README.md between the claims markers")
     cla.add_argument("--check", action="store_true", help="exit 1 if README.md's table is out of date")
+    cla.add_argument("--summary", action="store_true",
+                     help="print the compact table (the counts, then claim | the paper says | verdict | measured in)")
     cla.set_defaults(func=claims_command)
     from .rig.fetch import FETCH_HELP, fetch_command
 

@@ -11,8 +11,9 @@ uncertainty, or has more than one record. It does not show that a stored record 
 record edited by hand into another well-formed verdict reads back as that verdict. That is checked by strict nbval
 (``bash scripts/test`` re-executes every notebook and compares each stored output, claim records included, with
 the new one), and ``claims --check`` says so. ``python -m replication reproduce`` writes it to
-``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it and updates the
-README's findings table from it.
+``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it, ``claims --summary``
+prints the compact table (:func:`to_summary`) that ``claims --readme`` writes into README; the book
+(``bash scripts/docs``) gives the full ledger from the same records.
 
 Verdicts (:data:`VERDICTS`): ``holds``, ``fails``, ``holds only if`` (the condition says what must hold) and
 ``undecidable from the text`` (the paper does not give what the verdict depends on).
@@ -40,7 +41,8 @@ from ..rig.datafile import DataFileError, fail, read_text
 from .paper import data_dir, load_claim_table
 
 __all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record", "check_evidence",
-           "heading_anchor", "notebook_headings", "collect", "to_markdown", "update_readme"]
+           "heading_anchor", "notebook_headings", "collect", "to_markdown", "verdict_counts", "counts_in_words",
+           "first_clause", "to_summary", "update_readme"]
 
 #: The verdict that needs a condition.
 HOLDS_ONLY_IF = "holds only if"
@@ -48,6 +50,8 @@ HOLDS_ONLY_IF = "holds only if"
 VERDICTS = ("holds", "fails", HOLDS_ONLY_IF, "undecidable from the text")
 CLAIM_MIME = "application/vnd.replication.claim+json"
 README_START, README_END = "<!-- claims:start -->", "<!-- claims:end -->"
+#: Optional inline markers of README's first screen, between which :func:`update_readme` writes the counts.
+COUNTS = re.compile(r"<!-- counts:start -->.*?<!-- counts:end -->")
 
 
 @dataclass(frozen=True)
@@ -290,6 +294,64 @@ def to_markdown(ledger: pd.DataFrame) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: How the counts name each verdict (a number of claims before it).
+_PLURAL = {"holds": "hold", HOLDS_ONLY_IF: "hold only if", "fails": "fail",
+           "undecidable from the text": "undecidable from the text"}
+
+
+def verdict_counts(ledger: pd.DataFrame) -> dict:
+    """The number of claims per verdict, every verdict of :data:`VERDICTS` in its order (zeros included)."""
+    found = ledger.drop_duplicates("claim")["verdict"].value_counts()
+    return {v: int(found.get(v, 0)) for v in VERDICTS}
+
+
+def counts_in_words(ledger: pd.DataFrame) -> str:
+    """One line: the number of claims and how many have each verdict, e.g. ``28 claims: 4 hold, 7 hold only if,
+    6 fail, 11 undecidable from the text``."""
+    counts = verdict_counts(ledger)
+    return f"{sum(counts.values())} claims: " + ", ".join(f"{counts[v]} {_PLURAL[v]}" for v in _PLURAL)
+
+
+def first_clause(text: str, max_words: int = 30) -> str:
+    """The text up to its first ``"; "`` (or ``". "`` before a capital: not ``eq. (8)``) outside brackets, at most
+    ``max_words`` words; ``…`` marks a cut.
+
+    >>> first_clause("error < 1e-12 (3a; 3b) by eq. (8); start 170 deg off: the reflection")
+    'error < 1e-12 (3a; 3b) by eq. (8) …'
+    >>> first_clause("it holds. The rest")
+    'it holds …'
+    >>> first_clause("one two three", max_words=2)
+    'one two …'
+    """
+    depth, end = 0, len(text)
+    for k, char in enumerate(text):
+        depth += char in "([{"
+        depth -= char in ")]}" and depth > 0
+        if depth == 0 and (text.startswith("; ", k) or text.startswith(". ", k) and text[k + 2:k + 3].isupper()):
+            end = k
+            break
+    words = text[:end].split()
+    cut = end < len(text.rstrip(" .;")) or len(words) > max_words
+    return " ".join(words[:max_words]) + (" …" if cut else "")
+
+
+def _cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def to_summary(ledger: pd.DataFrame) -> str:
+    """The compact ledger (README, ``claims --summary``): the counts (:func:`counts_in_words`), then one row per
+    claim: its id, what the paper says, the verdict (the condition is in the full ledger) and a link to the
+    notebook section where it is measured."""
+    lines = [f"**{counts_in_words(ledger)}.**", "", "| claim | the paper says | verdict | measured in |",
+             "|---|---|---|---|"]
+    for row in ledger.itertuples(index=False):
+        link = f"[{row.notebook[:2]}, § {row.section}](notebooks/{row.notebook}.ipynb#{row.anchor})"
+        lines.append("| " + " | ".join(_cell(c) for c in (f"`{row.claim}`", row.statement, row.verdict, link))
+                     + " |")
+    return "\n".join(lines) + "\n"
+
+
 def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
     """The README's text before its start marker and from its end marker on; ``DataFileError`` naming the file,
     and the marker, if a marker is missing or repeated or the end comes before the start."""
@@ -313,7 +375,9 @@ def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
 
 
 def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
-    """Write the ledger table between the README's claims markers; ``check``: only say whether it is current.
+    """Write the compact ledger (:func:`to_summary`) between the README's claims markers, and the counts
+    (:func:`counts_in_words`) between each pair of inline counts markers (:data:`COUNTS`) on one line; ``check``:
+    only say whether it is current.
 
     Raises
     ------
@@ -326,7 +390,9 @@ def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> 
     readme = Path(readme) if readme else PROJECT_ROOT / "README.md"
     text = read_text(readme, "the README with the claims table")
     head, tail = _readme_parts(readme, text)
-    new = f"{head}{README_START}\n{to_markdown(ledger)}{README_END}{tail}"
+    new = f"{head}{README_START}\n{to_summary(ledger)}{README_END}{tail}"
+    counts = f"<!-- counts:start -->{counts_in_words(ledger)}<!-- counts:end -->"
+    new = COUNTS.sub(lambda _: counts, new)
     if check:
         return new == text
     if new != text:
