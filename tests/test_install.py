@@ -67,7 +67,7 @@ def test_the_core_dependencies_leave_out_the_notebook_stack():
     assert set(OPTIONAL) == set(NOTEBOOK_STACK)
     assert "replication[study]" in PYPROJECT["optional-dependencies"]["notebooks"]
     setup = (ROOT / "scripts" / "setup.sh").read_text()
-    assert re.search(r'-e "\$ROOT\[study,test,notebooks\]"', setup)  # README's two commands install everything
+    assert re.search(r'-e "\$ROOT\[study,test,notebooks(,docs)?\]"', setup)  # README's two commands install everything
 
 
 @pytest.fixture(scope="module")
