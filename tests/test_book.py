@@ -68,7 +68,7 @@ def test_readme_holds_the_compact_table_and_is_short():
     first_screen = "\n".join(lines[:40])
     assert ledger.counts_in_words(ledger.collect()) in first_screen
     assert "bash scripts/reproduce" in first_screen and "bash scripts/test" in first_screen
-    assert "bash scripts/docs" in text and "python -m replication export REPORT.json --to" in text
+    assert "bash scripts/docs" in text and "python -m replication export report.json --to kalibr --base" in text
 
 
 @pytest.mark.parametrize("words, cut", [(5, False), (4, True)])
