@@ -117,22 +117,26 @@ SWEEP_TITLES = {
 }
 
 
+_LEGEND_IN = 0.8  # inches below the sweep panels for their shared legend
+
+
 def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error to $R_0$ (deg)"):
     """One panel per sweep parameter, one line per solver in its :func:`method_style`; ``sweeps`` is
     :func:`replication.study.baselines.sweep` output.
 
     With ``metric="mean_deg"`` each point has its 95 % interval of the mean, ``± 1.96 sd_deg / sqrt(n_solved)``
-    (cut at the axis where it reaches 0, log scale); each panel's title says how many problems each point averages
-    (``n_solved``: fewer where a solver returned no rotation).
+    (log scale: one that reaches 0 runs off the bottom of the axis); each panel's title says how many problems each
+    point averages (``n_solved``: fewer where a solver returned no rotation).
     """
     params = list(dict.fromkeys(sweeps["parameter"]))
     ncols = 2
     nrows = -(-len(params) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(11, 3.6 * nrows + 1.2), squeeze=False)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(11, 3.6 * nrows + _LEGEND_IN), squeeze=False)
     methods = list(dict.fromkeys(sweeps["method"]))
     bars = metric == "mean_deg"
     for k, (ax, param) in enumerate(zip(axes.flat, params)):
         part = sweeps[sweeps["parameter"] == param]
+        shown = []  # the means and the interval ends that do not reach 0: they set the axis
         for method in methods:
             line = part[part["method"] == method]
             y = line[metric].to_numpy(float)
@@ -141,19 +145,26 @@ def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error 
                 half = 1.96 * line["sd_deg"].to_numpy(float) / np.sqrt(line["n_solved"].to_numpy(float))
                 ax.errorbar(line["value"], y, yerr=[np.minimum(half, 0.999 * y), half], capsize=2, elinewidth=0.8,
                             **style)
+                shown += [y + half, (y - half)[half < y]]
             else:
                 ax.plot(line["value"], y, **style)
+            shown.append(y)
         n = part["n_solved"]
         each = f"N = {n.max()}" if n.min() == n.max() else f"N = {n.min()}-{n.max()}"
         ax.set_title(f"({chr(97 + k)}) {SWEEP_TITLES.get(param, param)}: {each} problems per point", fontsize=10)
         ax.set_xlabel(SWEEP_LABELS.get(param, param))
-        ax.set_ylabel(ylabel + ("\n(bars: 95 % interval of the mean)" if bars else ""), fontsize=9)
+        ax.set_ylabel(ylabel + ("\n(bars: 95 % interval of the mean;\nrunning off the bottom: reaches 0)" if bars
+                                else ""), fontsize=9)
         ax.set_yscale("log")
+        shown = np.concatenate(shown)
+        shown = shown[np.isfinite(shown) & (shown > 0)]
+        if len(shown):
+            ax.set_ylim(shown.min() / 1.5, shown.max() * 1.5)
     for ax in list(axes.flat)[len(params):]:
         fig.delaxes(ax)
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8)
-    fig.tight_layout(rect=(0, 1.2 / (3.6 * nrows + 1.2), 1, 1))
+    fig.tight_layout(rect=(0, _LEGEND_IN / (3.6 * nrows + _LEGEND_IN), 1, 1))
     return fig
 
 
