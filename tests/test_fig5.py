@@ -95,13 +95,16 @@ def test_fig5_figure_draws_two_step_with_error_bars_and_every_sqp_variant():
                                                        ("right", ("Haar", "identity", "ball"))],
                       variants=(("analytic", "-"), ("capped", ":")))
     left, right = fig.axes
-    assert left.get_title() == "left" and right.get_title() == "right" and left.get_yscale() == "log"
+    assert left.get_title() == "left\nN = 2 runs per point" and right.get_title().startswith("right\n")
+    assert left.get_yscale() == "log"
     bars = left.containers[0]                                                   # ours: mean with +- 1.96 SE bars
     assert bars.lines[0].get_ydata().tolist() == [0.01, 0.1]
     segments = bars.lines[2][0].get_segments()
     assert segments[0][:, 1] == pytest.approx([0.01 - 1.96e-3, 0.01 + 1.96e-3])
     sqp_a, sqp_c = [line for line in left.lines if line.get_label().startswith("SQP")]
     assert sqp_a.get_ydata() == pytest.approx([2.0, 20.0]) and sqp_c.get_linestyle() == ":"
+    assert sqp_a.get_color() == sqp_c.get_color() == "b" and bars.lines[0].get_color() == "c"  # fixed colours
+    assert sqp_a.get_marker() != sqp_c.get_marker()
     assert [t.get_text() for t in left.get_legend().get_texts()] == ["SQP (analytic), all runs",
                                                                      "SQP (capped), all runs", "ours, $R^r$"]
     assert fig._suptitle.get_text() == "Fig. 5 (replicated)"
@@ -263,6 +266,30 @@ def test_fig5_figure_leaves_out_variants_that_did_not_run_in_a_panel():
     assert [t.get_text() for t in a.get_legend().get_texts()] == ["SQP (analytic), all runs", "ours, $R^r$"]
     assert [t.get_text() for t in b.get_legend().get_texts()] == ["SQP (stopped), all runs", "ours, $R^r$"]
     assert fig._suptitle.get_text() == "t" and fig.get_size_inches()[0] == pytest.approx(13.5)
+    plt.close(fig)
+
+
+def test_fig5_figure_shows_table1_beside_ours_and_says_why_only_there():
+    per_level, _ = _synthetic()
+    runs = {lv: {"sqp": np.array([lv, 3 * lv, lv])} for lv in (1.0, 10.0)}
+    sweeps = {("Haar", "identity", "ball", "analytic"): runs}
+    paper = pd.DataFrame({"mean": [0.009, 0.015, 0.5], "std": [0.004, 0.003, 0.1]},
+                         index=pd.MultiIndex.from_tuples([(50, "ours_right"), (50, "optimization"), (2, "ours_right")]))
+    fig = fig5_figure(per_level, sweeps, [1.0, 10.0], [("a", ("Haar", "identity", "ball"))], paper=paper)
+    (ax,) = fig.axes
+    assert ax.get_title() == "a\nN = 3 runs per point"
+    stars = [c for c in ax.containers if c.get_label().startswith("the paper")]
+    assert [c.get_label() for c in stars] == ["the paper, $R^r$: Table I, iteration 50 (mean ± SD)",
+                                              "the paper, SQP: Table I, iteration 50 (mean ± SD)"]
+    (x, y), = stars[0].lines[0].get_xydata()
+    assert (x, y) == pytest.approx((0.88, 0.009)) and stars[0].lines[0].get_color() == "c"
+    assert stars[1].lines[0].get_xydata()[0] == pytest.approx((1.12, 0.015)) and stars[1].lines[0].get_color() == "b"
+    assert stars[1].lines[2][0].get_segments()[0][:, 1] == pytest.approx([0.012, 0.018])  # mean +- SD
+    assert any("its Fig. 5 curves are not in the paper's text" in t.get_text() for t in fig.texts)
+    plt.close(fig)
+    fig = fig5_figure(per_level, sweeps, [1.0, 10.0], [("a", ("Haar", "identity", "ball"))])
+    assert not any("Stars" in t.get_text() for t in fig.texts)
+    assert not [c for c in fig.axes[0].containers if c.get_label().startswith("the paper")]
     plt.close(fig)
 
 

@@ -161,7 +161,7 @@ def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_pa
 
     fig = Figure(figsize=(2, 1))
     fig.add_subplot().plot([0, 1], [0, 1])
-    monkeypatch.setattr(figures, "calibration_figure", lambda res: fig)
+    monkeypatch.setattr(figures, "calibration_figure", lambda res, **_: fig)
     monkeypatch.chdir(tmp_path)
     assert _result().plot() is fig and list(tmp_path.iterdir()) == []
     assert _result().plot(tmp_path / "f.png") is fig

@@ -400,7 +400,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
         print(f"report written to {out}")
     if plot is not None:
         try:
-            result.plot(plot)  # the format its extension names, written atomically
+            result.plot(plot, name=f"{Path(args.camera).stem} + {Path(args.sensor).stem}",  # the recording
+                        reference_name=Path(args.reference).name if args.reference else None)
         except OSError as err:
             return _error(f"--plot {plot}: cannot write ({os_reason(err)}); nothing was written there")
         print(f"figure written to {plot}")

@@ -206,15 +206,16 @@ class CalibrationResult:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
         return "\n".join(lines)
 
-    def plot(self, path=None):
-        """The diagnostic figure (:func:`replication.rig.figure.calibration_figure`); saved to ``path`` if given, in the
+    def plot(self, path=None, *, name: str | None = None, reference_name: str | None = None):
+        """The diagnostic figure (:func:`replication.rig.figure.calibration_figure`; ``name``: the recording, in its
+        title; ``reference_name``: where the reference came from); saved to ``path`` if given, in the
         format its extension names (``.png``, ``.pdf``, ``.svg``; another extension is refused with a
         ``ValueError`` before the figure is drawn), written atomically."""
         from .._io import figure_bytes, figure_format, write_atomic
         from .figure import calibration_figure
 
         fmt = figure_format(path) if path is not None else None
-        fig = calibration_figure(self)
+        fig = calibration_figure(self, name=name, reference_name=reference_name)
         if path is not None:
             write_atomic(path, figure_bytes(fig, fmt, dpi=110))
         return fig

@@ -94,7 +94,8 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
     Returns
     -------
     pandas.DataFrame
-        Index ``method``; columns ``mean_deg``, ``median_deg``, ``p95_deg``,
+        Index ``method``; columns ``mean_deg``, ``sd_deg`` (its standard deviation over the problems; NaN for one),
+        ``n_solved`` (the problems these statistics are over), ``median_deg``, ``p95_deg``,
         ``max_deg`` (angle to ``R0``), ``mean_cost`` (eq. (8)), ``failures``
         (problems where OpenCV returned no rotation; they are left out of the
         error statistics), ``warnings`` (the classes of the warnings the call issued, e.g.
@@ -125,6 +126,8 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
         rows.append({
             "method": name,
             "mean_deg": err.mean(),
+            "sd_deg": err.std(ddof=1) if len(err) > 1 else np.nan,
+            "n_solved": len(err),
             "median_deg": np.median(err),
             "p95_deg": np.percentile(err, 95),
             "max_deg": err.max(),

@@ -35,7 +35,7 @@ from ..simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
            "fig5_figure", "two_step_growth", "ratio_range", "problem_sets", "variants_of", "confirmation_table",
-           "span_text", "rounding_bound"]
+           "span_text", "rounding_bound", "PAPER_ITERATION", "PAPER_LEVEL_DEG"]
 
 
 #: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having reached it.
@@ -346,15 +346,24 @@ def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float =
     })
 
 
+#: The paper's points shown in Fig. 5: Table I at its last iteration, whose setting (1 deg noise on both sides) is
+#: Fig. 5's lowest level. Fig. 5's own curves are not in the paper's text (its figure is an image we do not have).
+PAPER_ITERATION = 50
+PAPER_LEVEL_DEG = 1.0
+
+
 def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
                 variants=(("analytic", "-"), ("finite-difference", "--"), ("capped", ":")), *,
-                title: str = "Fig. 5 (replicated)"):
+                title: str = "Fig. 5 (replicated)", paper: pd.DataFrame | None = None):
     """Fig. 5 replicated: final error against sensor noise, one panel per setting.
 
     Each panel: the two-step mean error (``R^r``) with ``± 1.96 SE`` error bars (from the ``"analytic"`` row of
     ``per_level``), and each SQP variant's mean error over *all* runs (including runs that did not reach the
-    minimum), log scale; a variant that did not run in a panel's setting is left out of that panel, and each panel
-    has its own legend.
+    minimum), log scale, in the colours of :func:`replication.study.figures.method_style` (SQP's blue for every
+    variant, each with its line style and marker); a variant that did not run in a panel's setting is left out of
+    that panel, and each panel has its own legend and says how many runs each point averages. With ``paper``, the
+    paper's numbers beside ours, never used: Table I's mean ± SD at iteration :data:`PAPER_ITERATION` for ``R^r``
+    and SQP, at :data:`PAPER_LEVEL_DEG` (Table I's noise), as stars.
 
     Parameters
     ----------
@@ -364,6 +373,8 @@ def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
     panels : sequence of (title, (motions, start, noise))
     variants : sequence of (SQP variant, line style)
     title : str
+    paper : DataFrame, optional
+        :func:`replication.study.paper.load_table1`.
 
     Returns
     -------
@@ -371,24 +382,40 @@ def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
     """
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(panels), figsize=(max(12.0, 4.5 * len(panels)), 5.4), sharey=True)
-    for ax, (label, key) in zip(axes, panels):
+    from ..figures import method_style, sqp_config_style
+
+    ours = method_style("ours_right")
+    fig, axes = plt.subplots(1, len(panels), figsize=(max(12.0, 4.5 * len(panels)), 5.4), sharey=True, squeeze=False)
+    for ax, (label, key) in zip(axes[0], panels):
         base = per_level.loc[key + ("analytic",)]
         ax.errorbar(levels, base["two_step"], yerr=1.96 * base["two_step_se"], marker="o", capsize=3,
-                    color="tab:cyan", label="ours, $R^r$")
+                    color=ours["color"], label=ours["label"])
+        runs = set()
         for variant, style in variants:
             if key + (variant,) not in sweeps:
                 continue
             sw = sweeps[key + (variant,)]
-            ax.plot(levels, [sw[lv]["sqp"].mean() for lv in levels], ls=style, marker=".",
+            runs |= {len(sw[lv]["sqp"]) for lv in levels}
+            ax.plot(levels, [sw[lv]["sqp"].mean() for lv in levels], **{**sqp_config_style(variant), "ls": style},
                     label=f"SQP ({variant}), all runs")
+        if paper is not None:
+            for method, text, dx in (("ours_right", "$R^r$", -0.12), ("optimization", "SQP", 0.12)):
+                row = paper.loc[(PAPER_ITERATION, method)]
+                ax.errorbar([PAPER_LEVEL_DEG + dx], [row["mean"]], yerr=[row["std"]], marker="*", ms=11, capsize=3,
+                            ls="none", color=method_style(method)["color"], mec="k", mew=0.6,
+                            label=f"the paper, {text}: Table I, iteration {PAPER_ITERATION} (mean ± SD)")
+        n = f"N = {min(runs)}" + (f"-{max(runs)}" if len(runs) > 1 else "") if runs else ""
+        ax.set_title(f"{label}\n{n} runs per point" if n else label, fontsize=9)
         ax.set_xlabel(r"noise on $\Delta R_i$ (deg); noise on $\Delta R_c$ = 1 deg")
-        ax.set_title(label, fontsize=9)
         ax.set_yscale("log")
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
-    axes[0].set_ylabel(r"final $\|\hat R_0 - R_0\|_F$ (mean; ours $\pm$ 1.96 SE)")
+    axes[0, 0].set_ylabel(r"final $\|\hat R_0 - R_0\|_F$ (mean; ours $\pm$ 1.96 SE)")
     fig.suptitle(title)
-    fig.tight_layout()
+    if paper is not None:
+        fig.text(0.5, 0.005, "Stars: the paper's only numbers in Fig. 5's setting (Table I, 1 deg noise on both sides, "
+                 "1000 runs), drawn either side of 1 deg; its Fig. 5 curves are not in the paper's text, so they "
+                 "are not shown.", ha="center", fontsize=8)
+    fig.tight_layout(rect=(0, 0.03 if paper is not None else 0, 1, 1))
     return fig
 
 
