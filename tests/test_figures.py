@@ -160,6 +160,7 @@ def test_calibration_figure_names_the_recording_and_states_r0_the_radius_and_the
     assert f"95 % bootstrap radius {r.bootstrap_ci95_deg:.3g} deg (resampling pairs in moving blocks" in text
     assert "covers the pairs' own noise only" in " ".join(text.split())
     assert "reference (camchain.yaml): quaternion (w, x, y, z) = (" + q in text  # the reference is R0 itself
+    assert "sensor clock offset d (ms; d > 0: the sensor clock reads ahead)" in text  # the offset's sign
     assert f"angle between R0 and it: {r.reference_error_deg:.3f} deg" in " ".join(text.split())
     titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
     assert [t[:3] for t in titles] == ["(a)", "(b)", "(c)", "(d)", "(e)", "(f)"]

@@ -139,7 +139,7 @@ def _offset_panel(ax, k, result):
     if bound:
         for x in (-bound, bound):
             ax.axvline(1e3 * x, color="tab:red", ls=":", lw=0.8, label="search bound" if x < 0 else None)
-    ax.set_xlabel("sensor clock offset (ms)")
+    ax.set_xlabel("sensor clock offset d (ms; d > 0: the sensor clock reads ahead)")
     ax.set_ylabel("correlation of angular speeds")
     ax.legend(fontsize=7)
     ax.set_title(f"({k}) clock offset")

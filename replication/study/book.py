@@ -40,13 +40,16 @@ def _where(row) -> str:
 
 def front_page_claims(ledger: pd.DataFrame) -> str:
     """The counts, then one row per claim: what the paper claims (linked to its full record in the ledger chapter),
-    the verdict, the evidence's first clause (:func:`~replication.study.ledger.first_clause`) and the notebook
-    section where it is measured."""
+    the verdict, in one line the condition's first clause (``holds only if``) or the evidence's
+    (:func:`~replication.study.ledger.first_clause`), and the notebook section where it is measured."""
     lines = [f"**{counts_in_words(ledger)}.**", "",
-             "| the paper claims | verdict | the evidence, in one line | measured in |", "|---|---|---|---|"]
+             "| the paper claims | verdict | in one line: the condition, or the evidence | measured in |",
+             "|---|---|---|---|"]
     for row in ledger.itertuples(index=False):
-        lines.append(f"| [{_md(row.statement)}](ledger.md#{row.claim}) | **{row.verdict}** | "
-                     f"{_md(first_clause(row.evidence, max_words=22))} | {_where(row)} |")
+        line = (f"only if {first_clause(row.condition, max_words=22)}" if row.verdict == HOLDS_ONLY_IF
+                else first_clause(row.evidence, max_words=22))
+        lines.append(f"| [{_md(row.statement)}](ledger.md#{row.claim}) | **{row.verdict}** | {_md(line)} | "
+                     f"{_where(row)} |")
     return "\n".join(lines) + "\n"
 
 

@@ -425,9 +425,10 @@ def convex_problem_record(convexity: pd.DataFrame, random_starts: pd.DataFrame, 
     out_rows = out[out["Newton alone on a non-global minimum"] > 0]
     scale, changed, perturbed = sensitivity
     evidence = (
-        f"The cost (8) is a convex quadratic in vec(R): its 9x9 Hessian 2 sum_j L_j^T L_j is positive semi-definite "
-        f"in all {int(convexity['problems'].sum())} problems ({hessian}). What is not convex is the constraint set "
-        f"SO(3), eqs. (9)-(10), and with it the problem: Newton on SO(3) from a random start ends on a non-global "
+        f"the constraint set SO(3), eqs. (9)-(10), is not convex, and with it the problem; the cost (8) alone is a "
+        f"convex quadratic in vec(R) (its 9x9 Hessian 2 sum_j L_j^T L_j is positive semi-definite in all "
+        f"{int(convexity['problems'].sum())} problems: {hessian}). Newton on SO(3) from a random start ends on a "
+        f"non-global "
         f"local minimum in {single} and in {ms.loc['found', 'share']} of {int(ms['runs'].iloc[0])} runs with "
         f"{n_starts} starts on each of {int(ms['problems'].iloc[0])} problems (fresh: {ms.loc['fresh', 'share']}), "
         f"where every problem has at least one (found by at least 2 of its {n_starts} starts). Every one is a strict "
