@@ -14,6 +14,7 @@ import numpy as np
 
 from .checks import _first_index
 from .handeye import check_motion_pairs, kronecker_operator
+from .kernels import eigvalsh3
 from .so3 import log_map
 
 __all__ = ["MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions"]
@@ -89,7 +90,7 @@ def _axis_spread_deg(R: np.ndarray):
     """
     w = log_map(R)
     gram = np.swapaxes(w, -1, -2) @ w  # (..., 3, 3): s_k^2 are its eigenvalues
-    ev = np.clip(np.linalg.eigvalsh(gram), 0.0, None)
+    ev = np.clip(eigvalsh3(gram), 0.0, None)
     J = R.shape[-3]
     return np.degrees(np.sqrt(ev[..., 1] / J)), np.degrees(np.sqrt(ev.sum(axis=-1) / J))
 

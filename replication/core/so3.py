@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .checks import check_matrices, det3
+from .checks import check_matrices
+from .kernels import polar_factor
 
 __all__ = [
     "skew",
@@ -79,12 +80,8 @@ def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
     numpy.ndarray, shape (..., 3, 3)
     """
     M = check_matrices(M, "M")
-    U, _, At = np.linalg.svd(M)  # eq. (16): M = U Sigma A^T
-    if enforce_det:
-        d = np.where(det3(U @ At) < 0, -1.0, 1.0)
-        U = U.copy()
-        U[..., :, 2] *= d[..., None]
-    return U @ At  # eq. (17)
+    # eqs. (16)-(17) as U A^T of the SVD M = U Sigma A^T, batched by replication.core.kernels (no SVD per matrix)
+    return polar_factor(M, "rotation" if enforce_det else "orthogonal")
 
 
 def nearest_rotation_up_to_sign(M) -> np.ndarray:
@@ -99,16 +96,7 @@ def nearest_rotation_up_to_sign(M) -> np.ndarray:
     ``M`` (``det M = 0``) is projected as ``nearest_rotation(M)``.
     """
     M = check_matrices(M, "M")
-    U, s, At = np.linalg.svd(M)  # eq. (16)
-    P = U @ At  # eq. (17)
-    d = np.where(det3(P) < 0, -1.0, 1.0)
-    singular = s[..., 2] == 0
-    if singular.any():  # sign(det M) = +1: flip the weakest direction instead (as nearest_rotation)
-        U = U.copy()
-        U[..., :, 2] *= np.where(singular, d, 1.0)[..., None]
-        P = U @ At
-        d = np.where(singular, 1.0, d)
-    return P * d[..., None, None]
+    return polar_factor(M, "up_to_sign")  # eqs. (16)-(17), batched (replication.core.kernels)
 
 
 def noise_rotations(v) -> np.ndarray:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernels import solve3
 from ..so3 import (
     as_quaternion,
     exp_map,
@@ -193,7 +194,7 @@ def tsai_lenz(motions):
     d = Pb - Pa
     StS = np.einsum("...jki,...jkl->...il", S, S)
     Std = np.einsum("...jki,...jk->...i", S, d)
-    p = np.linalg.solve(StS, Std[..., None])[..., 0]  # least squares over the J pairs
+    p = solve3(StS, Std)  # least squares over the J pairs
     norm = np.linalg.norm(p, axis=-1, keepdims=True)
     # eqs. (13)-(14): P_X = 2 p' / sqrt(1 + |p'|^2), i.e. theta_X = 2 atan|p'| about p'/|p'|
     with np.errstate(invalid="ignore", divide="ignore"):
