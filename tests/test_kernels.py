@@ -14,6 +14,7 @@ from replication.core.kernels import (
     MIN_BATCH,
     POLAR_SAFE,
     SOLVE3_SAFE,
+    bottom_eigenvector4,
     eigvalsh3,
     lapack_reference,
     polar_factor,
@@ -315,3 +316,55 @@ def test_check_rotation_matrices_messages_unchanged(bad, message, rng):
         R[3, 0, 0] = bad
     with pytest.raises(ValueError, match=message):
         check_rotation_matrices(R, "R")
+
+
+def _psd4(kind, rng, shape):
+    n = shape if shape else ()
+    Q = np.linalg.qr(rng.normal(size=n + (4, 4)))[0]
+    ev = {"handeye_noise_free": [0.0, 3.0, 7.0, 12.0], "handeye_noisy": [2e-3, 3.0, 7.0, 12.0],
+          "random": None, "repeated_bottom": [1.0, 1.0, 5.0, 9.0], "slow_power_steps": [4.0, 6.0, 7.0, 12.0],
+          "zero": [0.0, 0.0, 0.0, 0.0]}[kind]
+    if ev is None:
+        G = rng.normal(size=n + (4, 4))
+        return G @ np.swapaxes(G, -1, -2)
+    return Q @ (np.asarray(ev)[:, None] * np.swapaxes(Q, -1, -2))
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("kind", ["handeye_noise_free", "handeye_noisy", "random", "repeated_bottom",
+                                  "slow_power_steps", "zero"])
+def test_bottom_eigenvector4_matches_lapack_up_to_sign(kind, shape, rng):
+    S = _psd4(kind, rng, shape)
+    got = bottom_eigenvector4(S, method="kernel")
+    want = np.linalg.eigh(S)[1][..., :, 0]
+    assert got.shape == S.shape[:-1]
+    diff = np.minimum(np.max(np.abs(got - want), axis=-1), np.max(np.abs(got + want), axis=-1))
+    assert np.max(diff) <= 1e-12
+
+
+def test_horaud_dornaika_unchanged_by_the_kernel(rng):
+    from replication.core.solvers import solve
+
+    R0 = random_rotations(rng, ())
+    A = random_rotations(rng, (MIN_BATCH, 20))
+    B = np.swapaxes(R0, -1, -2) @ A @ R0
+    B = B @ random_rotations(rng, (MIN_BATCH, 20), angle_range_deg=(0.0, 0.5))
+    with lapack_reference():
+        before = solve("horaud_dornaika", A, B)
+    after = solve("horaud_dornaika", A, B)
+    assert np.max(np.abs(after - before)) <= 1e-12
+
+
+@pytest.mark.parametrize("factor, to_lapack", [(1.01, False), (0.99, True)])
+def test_bottom_eigenvector4_falls_back_above_the_angle_bound_only(factor, to_lapack, rng, monkeypatch):
+    S = _psd4("slow_power_steps", rng, (MIN_BATCH,))
+    e = np.ascontiguousarray(S.reshape(-1, 16).T)
+    e /= np.sqrt(np.einsum("kn,kn->n", e, e))
+    bound = kernels._bottom_eigenvector4_block(e)[1]
+    assert np.all(bound > 1e-6)  # three power steps at lambda_1 / lambda_2 = 2/3 are far from converged
+    monkeypatch.setattr(kernels, "EIG4_SAFE", factor * float(np.max(bound)))
+    seen = []
+    original = np.linalg.eigh
+    monkeypatch.setattr(np.linalg, "eigh", lambda A: seen.append(len(A)) or original(A))
+    bottom_eigenvector4(S)
+    assert (sum(seen) >= 1) is to_lapack  # at 0.99 x the largest bound that matrix goes to LAPACK; at 1.01 x none

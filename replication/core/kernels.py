@@ -10,6 +10,9 @@ entries of a batch of 3x3 matrices as one contiguous array and do the arithmetic
 * :func:`eigvalsh3`: eigenvalues of symmetric 3x3 matrices in closed form (the trigonometric solution of the
   characteristic cubic, O. K. Smith, Comm. ACM 4(4), 1961);
 * :func:`solve3`: 3x3 linear systems by the cofactors (Cramer's rule);
+* :func:`bottom_eigenvector4`: the eigenvector of the smallest eigenvalue of a symmetric positive semidefinite 4x4
+  matrix (Horaud & Dornaika's quaternion), by power steps with the adjugate, checked by its residual against the
+  gap to the other three eigenvalues;
 * :func:`rotation_violation`: the rotation test of :func:`~replication.core.checks.check_rotation_matrices` in one
   fused pass (orthonormality, determinant, finiteness).
 
@@ -27,8 +30,8 @@ import contextlib
 
 import numpy as np
 
-__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "MIN_BATCH", "polar_factor", "eigvalsh3", "solve3",
-           "rotation_violation", "lapack_reference"]
+__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "MIN_BATCH", "polar_factor", "eigvalsh3",
+           "solve3", "bottom_eigenvector4", "rotation_violation", "lapack_reference"]
 
 #: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which :func:`polar_factor` hands a
 #: matrix to LAPACK: the polar factor's condition number is ``sigma_max / (sigma_2 + sigma_3)``, so at the bound the
@@ -40,6 +43,9 @@ POLAR_SAFE = 1e-3
 EIG3_SAFE = 1e-4
 #: ``|det A| / ||A||_F^3`` below which :func:`solve3` hands a system to LAPACK (condition number above about 1e3).
 SOLVE3_SAFE = 1e-3
+#: Bound on ``sin`` of the angle between :func:`bottom_eigenvector4`'s answer and the eigenvector (its residual over
+#: the gap to the other eigenvalues) above which the matrix goes to LAPACK: about a gap below 0.4 % of ``||S||``.
+EIG4_SAFE = 1e-13
 #: Batches of fewer matrices go to LAPACK whole (measured crossover of the fixed Python cost, about 16-32).
 MIN_BATCH = 32
 #: Newton iterations of :func:`polar_factor` at most; converged entries stop changing, the rest go to LAPACK.
@@ -260,6 +266,95 @@ def solve3(A, b, *, method: str = "auto") -> np.ndarray:
     if rest.size:
         sol[rest] = np.linalg.solve(A.reshape(-1, 3, 3)[rest], rhs[:, rest].T[..., None])[..., 0]
     return sol.reshape(batch + (3,))
+
+
+def _adjugate4(e):
+    """Adjugates of 4x4 matrices from their row-major entries ``e`` (16, n), as (16, n): by the 2x2 minors of the top
+    and the bottom row pairs (Laplace expansion)."""
+    m00, m01, m02, m03, m10, m11, m12, m13, m20, m21, m22, m23, m30, m31, m32, m33 = e
+    s0, s1, s2 = m00 * m11 - m10 * m01, m00 * m12 - m10 * m02, m00 * m13 - m10 * m03
+    s3, s4, s5 = m01 * m12 - m11 * m02, m01 * m13 - m11 * m03, m02 * m13 - m12 * m03
+    c5, c4, c3 = m22 * m33 - m32 * m23, m21 * m33 - m31 * m23, m21 * m32 - m31 * m22
+    c2, c1, c0 = m20 * m33 - m30 * m23, m20 * m32 - m30 * m22, m20 * m31 - m30 * m21
+    return np.stack([
+        m11 * c5 - m12 * c4 + m13 * c3, m02 * c4 - m01 * c5 - m03 * c3,
+        m31 * s5 - m32 * s4 + m33 * s3, m22 * s4 - m21 * s5 - m23 * s3,
+        m12 * c2 - m10 * c5 - m13 * c1, m00 * c5 - m02 * c2 + m03 * c1,
+        m32 * s2 - m30 * s5 - m33 * s1, m20 * s5 - m22 * s2 + m23 * s1,
+        m10 * c4 - m11 * c2 + m13 * c0, m01 * c2 - m00 * c4 - m03 * c0,
+        m30 * s4 - m31 * s2 + m33 * s0, m21 * s2 - m20 * s4 - m23 * s0,
+        m11 * c1 - m10 * c3 - m12 * c0, m00 * c3 - m01 * c1 + m02 * c0,
+        m31 * s1 - m30 * s3 - m32 * s0, m20 * s3 - m21 * s1 + m22 * s0])
+
+
+def _matvec4(e, x):
+    """``M x`` for matrices with row-major entries ``e`` (16, n) and vectors ``x`` (4, n)."""
+    return np.stack([e[4 * i] * x[0] + e[4 * i + 1] * x[1] + e[4 * i + 2] * x[2] + e[4 * i + 3] * x[3]
+                     for i in range(4)])
+
+
+def _bottom_eigenvector4_block(e):
+    """:func:`bottom_eigenvector4` on row-major entries ``e`` (16, n) of ``S / ||S||_F``: ``x`` (4, n) and the bound
+    ``||r|| / (mu - rho)`` on ``sin`` of its angle to the eigenvector (inf where ``mu <= rho``)."""
+    adj = _adjugate4(e)
+    k = np.argmax(adj[[0, 5, 10, 15]], axis=0)  # the largest diagonal entry's column
+    x = adj.reshape(4, 4, -1)[:, k, np.arange(e.shape[1])]
+    for _ in range(3):
+        x = _matvec4(adj, x / np.sqrt(np.einsum("in,in->n", x, x)))
+    x /= np.sqrt(np.einsum("in,in->n", x, x))
+    Sx = _matvec4(e, x)
+    rho = np.einsum("in,in->n", x, Sx)
+    r = Sx - rho * x
+    residual = np.sqrt(np.einsum("in,in->n", r, r))
+    w, a, b, c = x  # the last three columns of the quaternion matrix L(x): a basis of the complement of x
+    basis = np.stack([np.stack([-a, -b, -c]), np.stack([w, -c, b]), np.stack([c, w, -a]), np.stack([-b, a, w])])
+    SB = np.stack([_matvec4(e, basis[:, col]) for col in range(3)], axis=1)  # (4, 3, n): S times each column
+    compressed = np.einsum("ikn,iln->nkl", basis, SB)  # B^T S B, (n, 3, 3)
+    mu = eigvalsh3(compressed)[..., 0]
+    gap = mu - rho
+    return x, np.where(gap > 0, residual / np.where(gap > 0, gap, 1.0), np.inf)
+
+
+def bottom_eigenvector4(S, *, method: str = "auto") -> np.ndarray:
+    """Unit eigenvectors of the smallest eigenvalue of symmetric positive semidefinite 4x4 matrices, batched:
+    (..., 4, 4) -> (..., 4), as ``numpy.linalg.eigh(S)[1][..., :, 0]`` up to sign.
+
+    ``adj(S) = sum_i (prod_{j != i} lambda_j) v_i v_i^T`` is dominated by ``v_1`` when ``lambda_1`` is the
+    smallest: start from its largest column, three power steps with ``adj(S)``, then a check: with the Rayleigh
+    quotient ``rho``, the residual ``r = S x - rho x`` and ``mu`` the smallest eigenvalue of ``S`` on the complement
+    of ``x`` (the other three eigenvalues, to second order in ``r``), ``||r|| / (mu - rho)`` bounds ``sin`` of the
+    angle to the eigenvector. Where it exceeds :data:`EIG4_SAFE` (or ``mu <= rho``: ``x`` is not the bottom
+    eigenvector; or ``lambda_1 / lambda_2`` is too large for three steps) the matrix goes to LAPACK.
+
+    Parameters
+    ----------
+    S : ndarray, shape (..., 4, 4)
+        Symmetric positive semidefinite matrices (only such; a matrix with a negative eigenvalue may go to LAPACK).
+    method : {"auto", "kernel", "lapack"}
+        As in :func:`polar_factor`.
+    """
+    S = np.asarray(S, dtype=float)
+    n = S.size // 16
+    if not _use_kernel(n, method):
+        return np.linalg.eigh(S)[1][..., :, 0]
+    flat = S.reshape(-1, 4, 4)
+    e = np.ascontiguousarray(flat.reshape(-1, 16).T)
+    scale = np.sqrt(np.einsum("kn,kn->n", e, e))
+    empty = ~(scale > 0)  # a zero matrix: every vector is an eigenvector; LAPACK's answer, not the kernel's
+    e[:, empty], scale[empty] = np.eye(4).reshape(16, 1), 1.0
+    e /= scale
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.empty((4, e.shape[1]))
+        bound = np.empty(e.shape[1])
+        for start in range(0, e.shape[1], _CHUNK):
+            block = slice(start, start + _CHUNK)
+            out[:, block], bound[block] = _bottom_eigenvector4_block(e[:, block])
+        safe = (bound <= EIG4_SAFE) & ~empty
+    out = out.T
+    rest = np.flatnonzero(~safe)
+    if rest.size:
+        out[rest] = np.linalg.eigh(flat[rest])[1][..., :, 0]
+    return out.reshape(S.shape[:-1])
 
 
 def rotation_violation(R) -> np.ndarray:

@@ -95,6 +95,11 @@ def _axis_spread_deg(R: np.ndarray):
     return np.degrees(np.sqrt(ev[..., 1] / J)), np.degrees(np.sqrt(ev.sum(axis=-1) / J))
 
 
+def _largest_singular_value(M: np.ndarray) -> np.ndarray:
+    """``sigma_max`` of 3x3 matrices, ``sqrt(lambda_max(M^T M))`` (the spectral norm, without an SVD per matrix)."""
+    return np.sqrt(np.clip(eigvalsh3(np.swapaxes(M, -1, -2) @ M)[..., -1], 0.0, None))
+
+
 #: Below this, the gap between the two largest eigenvalues of ``sym(K)`` and the data's inconsistency both
 #: vanish to rounding: a second rotation solves eq. (7) exactly (see :meth:`Motions.require`).
 NONUNIQUE_TOL = 1e-10
@@ -206,10 +211,8 @@ class Motions:
             sv = self.svd[1]
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
-            rate = np.maximum(
-                np.linalg.norm(self.A.mean(axis=-3), ord=2, axis=(-2, -1)),
-                np.linalg.norm(self.B.mean(axis=-3), ord=2, axis=(-2, -1)),
-            ) ** 2
+            rate = np.maximum(_largest_singular_value(self.A.mean(axis=-3)),
+                              _largest_singular_value(self.B.mean(axis=-3))) ** 2
             ev = self.sym_eigvals
             return MotionObservability(sv, ratio, rate, *self.axis_spread_deg, self.rms_motion_deg,
                                        ev[..., 0] - ev[..., 1], 1.0 - ev[..., 0])

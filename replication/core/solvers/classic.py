@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import solve3
+from ..kernels import bottom_eigenvector4, solve3
 from ..so3 import (
     as_quaternion,
     exp_map,
@@ -116,8 +116,7 @@ def horaud_dornaika(motions):
          - _multiplication_matrix(as_quaternion(motions.B), "right"))
     # eqs. (33)-(39): a_j * x - x * b_j = C_j x
     S = np.einsum("...jki,...jkl->...il", C, C)  # eq. (40): sum_j C_j^T C_j
-    _, vecs = np.linalg.eigh(S)
-    x = vecs[..., :, 0]  # eq. (41): eigenvector of the smallest eigenvalue
+    x = bottom_eigenvector4(S)  # eq. (41): eigenvector of the smallest eigenvalue
     return quaternion_to_matrix(x)
 
 
