@@ -28,6 +28,7 @@ __all__ = [
     "log_map",
     "exp_map",
     "as_quaternion",
+    "quaternion_from_rotation_vector",
     "quaternion_to_matrix",
     "yaw_pitch_roll_deg",
     "from_euler",
@@ -323,7 +324,13 @@ def as_quaternion(R) -> np.ndarray:
     ``q = (cos(theta/2), sin(theta/2) n)``, from :func:`log_map` (elementwise). ``w >= 0``
     because ``theta <= 180`` deg; the sign is ambiguous only at ``theta = 180`` deg.
     """
-    w = log_map(R)
+    return quaternion_from_rotation_vector(log_map(R))
+
+
+def quaternion_from_rotation_vector(w) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)``, scalar first, from rotation vectors ``|w| <= pi`` (radians), batched:
+    (..., 3) -> (..., 4); ``as_quaternion(R) = quaternion_from_rotation_vector(log_map(R))``."""
+    w = np.asarray(w, dtype=float)
     theta = np.sqrt(np.einsum("...i,...i->...", w, w))
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(theta > 1e-6, np.sin(0.5 * theta) / theta, 0.5 - theta * theta / 48.0)  # sin(t/2)/t
