@@ -12,6 +12,7 @@ from replication.core.checks import check_rotation_matrices
 from replication.core.kernels import (
     EIG3_SAFE,
     MIN_BATCH,
+    MIN_BATCH_LARGE,
     POLAR_SAFE,
     SOLVE3_SAFE,
     bottom_eigenvector4,
@@ -146,6 +147,18 @@ def test_small_batches_go_to_lapack_whole(n, to_lapack, rng, monkeypatch):
     assert (seen == [n]) is to_lapack
 
 
+@pytest.mark.parametrize("n, to_lapack", [(MIN_BATCH_LARGE - 1, True), (MIN_BATCH_LARGE, False)])
+def test_small_batches_of_systems_and_4x4_matrices_go_to_lapack_whole(n, to_lapack, rng, monkeypatch):
+    seen = []
+    solve, eigh = np.linalg.solve, np.linalg.eigh
+    monkeypatch.setattr(np.linalg, "solve", lambda A, b: seen.append(("solve", len(A))) or solve(A, b))
+    monkeypatch.setattr(np.linalg, "eigh", lambda A: seen.append(("eigh", len(A))) or eigh(A))
+    solve3(np.broadcast_to(2.0 * np.eye(3), (n, 3, 3)), np.ones((n, 3)))
+    bottom_eigenvector4(np.broadcast_to(np.diag([0.0, 1.0, 2.0, 3.0]), (n, 4, 4)))
+    assert (seen == [("solve", n), ("eigh", n)]) is to_lapack
+    assert seen == [] or to_lapack
+
+
 def test_lapack_reference_switches_every_kernel_and_is_restored(rng):
     M = rng.normal(size=(100, 3, 3))
     S = M + np.swapaxes(M, -1, -2)
@@ -256,8 +269,8 @@ def test_solve3_falls_back_for_ill_conditioned_systems_only(factor, to_lapack, r
     for _ in range(200):
         t = 0.5 * (lo + hi)
         lo, hi = (t, hi) if t / (2.0 + t * t) ** 1.5 < factor * SOLVE3_SAFE else (lo, t)
-    A = np.concatenate([np.broadcast_to(4.0 * np.eye(3), (MIN_BATCH, 3, 3)), np.diag([1.0, 1.0, hi])[None]])
-    b = rng.normal(size=(MIN_BATCH + 1, 3))
+    A = np.concatenate([np.broadcast_to(4.0 * np.eye(3), (MIN_BATCH_LARGE, 3, 3)), np.diag([1.0, 1.0, hi])[None]])
+    b = rng.normal(size=(MIN_BATCH_LARGE + 1, 3))
     seen = []
     original = np.linalg.solve
     monkeypatch.setattr(np.linalg, "solve", lambda A, b: seen.append(len(A)) or original(A, b))
@@ -270,7 +283,7 @@ def test_solve3_singular_system_raises_as_lapack():
     A = np.broadcast_to(np.eye(3), (MIN_BATCH, 3, 3)).copy()
     A[5] = 0.0
     with pytest.raises(np.linalg.LinAlgError):
-        solve3(A, np.ones((MIN_BATCH, 3)))
+        solve3(A, np.ones((MIN_BATCH, 3)), method="kernel")
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -346,18 +359,19 @@ def test_horaud_dornaika_unchanged_by_the_kernel(rng):
     from replication.core.solvers import solve
 
     R0 = random_rotations(rng, ())
-    A = random_rotations(rng, (MIN_BATCH, 20))
+    A = random_rotations(rng, (MIN_BATCH_LARGE, 20))
     B = np.swapaxes(R0, -1, -2) @ A @ R0
-    B = B @ random_rotations(rng, (MIN_BATCH, 20), angle_range_deg=(0.0, 0.5))
+    B = B @ random_rotations(rng, (MIN_BATCH_LARGE, 20), angle_range_deg=(0.0, 0.5))
     with lapack_reference():
         before = solve("horaud_dornaika", A, B)
     after = solve("horaud_dornaika", A, B)
     assert np.max(np.abs(after - before)) <= 1e-12
+    assert not np.array_equal(after, before)  # the kernel answered
 
 
 @pytest.mark.parametrize("factor, to_lapack", [(1.01, False), (0.99, True)])
 def test_bottom_eigenvector4_falls_back_above_the_angle_bound_only(factor, to_lapack, rng, monkeypatch):
-    S = _psd4("slow_power_steps", rng, (MIN_BATCH,))
+    S = _psd4("slow_power_steps", rng, (MIN_BATCH_LARGE,))
     e = np.ascontiguousarray(S.reshape(-1, 16).T)
     e /= np.sqrt(np.einsum("kn,kn->n", e, e))
     bound = kernels._bottom_eigenvector4_block(e)[1]

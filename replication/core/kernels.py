@@ -21,7 +21,8 @@ near-rotation, rank-deficient, repeated-singular-value and reflection inputs). W
 a matrix far from full rank (``2 |det M| / ||M||_F^3`` below :data:`POLAR_SAFE`), a reflection asked to become the
 nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly conditioned system -- those entries
 alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` go to LAPACK as a whole
-(its per-call cost is then below the kernels' fixed Python cost). :func:`lapack_reference` switches every kernel to
+(:data:`MIN_BATCH_LARGE` for :func:`solve3` and :func:`bottom_eigenvector4`: its per-call cost is then below the
+kernels' fixed Python cost). :func:`lapack_reference` switches every kernel to
 the LAPACK path (the "before" of ``benchmarks/bench_kernels.py``).
 """
 from __future__ import annotations
@@ -30,7 +31,8 @@ import contextlib
 
 import numpy as np
 
-__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "MIN_BATCH", "polar_factor", "eigvalsh3",
+__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "MIN_BATCH", "MIN_BATCH_LARGE", "polar_factor",
+           "eigvalsh3",
            "solve3", "bottom_eigenvector4", "rotation_violation", "lapack_reference"]
 
 #: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which :func:`polar_factor` hands a
@@ -46,8 +48,12 @@ SOLVE3_SAFE = 1e-3
 #: Bound on ``sin`` of the angle between :func:`bottom_eigenvector4`'s answer and the eigenvector (its residual over
 #: the gap to the other eigenvalues) above which the matrix goes to LAPACK: about a gap below 0.4 % of ``||S||``.
 EIG4_SAFE = 1e-13
-#: Batches of fewer matrices go to LAPACK whole (measured crossover of the fixed Python cost, about 16-32).
-MIN_BATCH = 32
+#: Batches of fewer matrices go to LAPACK whole in :func:`polar_factor` and :func:`eigvalsh3`: below it the kernels'
+#: fixed Python cost exceeds LAPACK's per-matrix cost (crossover measured at 32-64 matrices on the loaded 2-core EPYC).
+MIN_BATCH = 64
+#: The same for :func:`solve3` and :func:`bottom_eigenvector4`, whose LAPACK calls cost less per matrix (crossover
+#: measured at 256-512 systems for ``solve``; 4x4 ``eigh`` wins at every size unless ``lambda_1 << lambda_2``).
+MIN_BATCH_LARGE = 256
 #: Newton iterations of :func:`polar_factor` at most; converged entries stop changing, the rest go to LAPACK.
 _POLAR_MAX_ITERATIONS = 16
 #: A Newton step below this (Frobenius) ends the iteration: the next one would change the factor by about its square.
@@ -70,11 +76,11 @@ def lapack_reference():
         _FORCE_LAPACK[0] = previous
 
 
-def _use_kernel(n: int, method: str) -> bool:
+def _use_kernel(n: int, method: str, minimum: int = MIN_BATCH) -> bool:
     if method not in ("auto", "kernel", "lapack"):
         raise ValueError(f"method must be 'auto', 'kernel' or 'lapack', got {method!r}")
     if method == "auto":
-        return not _FORCE_LAPACK[0] and n >= MIN_BATCH
+        return not _FORCE_LAPACK[0] and n >= minimum
     return method == "kernel"
 
 
@@ -250,7 +256,7 @@ def solve3(A, b, *, method: str = "auto") -> np.ndarray:
     A = np.broadcast_to(A, batch + (3, 3))
     b = np.broadcast_to(b, batch + (3,))
     n = A.size // 9
-    if not _use_kernel(n, method):
+    if not _use_kernel(n, method, MIN_BATCH_LARGE):
         return np.linalg.solve(A, b[..., None])[..., 0]
     x = _entries(A)
     rhs = np.ascontiguousarray(b.reshape(-1, 3).T)
@@ -335,7 +341,7 @@ def bottom_eigenvector4(S, *, method: str = "auto") -> np.ndarray:
     """
     S = np.asarray(S, dtype=float)
     n = S.size // 16
-    if not _use_kernel(n, method):
+    if not _use_kernel(n, method, MIN_BATCH_LARGE):
         return np.linalg.eigh(S)[1][..., :, 0]
     flat = S.reshape(-1, 4, 4)
     e = np.ascontiguousarray(flat.reshape(-1, 16).T)
