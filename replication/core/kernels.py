@@ -20,10 +20,11 @@ Each kernel agrees with the LAPACK path to 1e-12 where it is used (``tests/test_
 near-rotation, rank-deficient, repeated-singular-value and reflection inputs). Where a closed form is not safe --
 a matrix far from full rank (``2 |det M| / ||M||_F^3`` below :data:`POLAR_SAFE`), a reflection asked to become the
 nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly conditioned system -- those entries
-alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` go to LAPACK as a whole
-(:data:`MIN_BATCH_LARGE` for :func:`solve3` and :func:`bottom_eigenvector4`: its per-call cost is then below the
-kernels' fixed Python cost). :func:`lapack_reference` switches every kernel to
-the LAPACK path (the "before" of ``benchmarks/bench_kernels.py``).
+alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` (:data:`MIN_BATCH_LARGE`
+for :func:`solve3` and :func:`bottom_eigenvector4`) go to LAPACK as a whole: its per-call cost is then below the
+kernels' fixed Python cost. :func:`lapack_reference` switches every kernel to the LAPACK path (the "before" of
+``benchmarks/bench_kernels.py``). The 9x9 decompositions of ``K`` (its SVD, the eigenvalues of ``sym(K)``) stay with
+LAPACK (environment.md, issue 26, says why).
 """
 from __future__ import annotations
 
@@ -32,8 +33,7 @@ import contextlib
 import numpy as np
 
 __all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "MIN_BATCH", "MIN_BATCH_LARGE", "polar_factor",
-           "eigvalsh3",
-           "solve3", "bottom_eigenvector4", "rotation_violation", "lapack_reference"]
+           "eigvalsh3", "solve3", "bottom_eigenvector4", "rotation_violation", "lapack_reference"]
 
 #: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which :func:`polar_factor` hands a
 #: matrix to LAPACK: the polar factor's condition number is ``sigma_max / (sigma_2 + sigma_3)``, so at the bound the

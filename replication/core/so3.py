@@ -60,7 +60,7 @@ def skew(v) -> np.ndarray:
 
 
 def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
-    """Project 3x3 matrices onto the rotation group by SVD (eqs. (16)-(17)).
+    """Project 3x3 matrices onto the rotation group (eqs. (16)-(17)).
 
     With ``M = U Sigma A^T`` (eq. (16)) the paper takes ``U A^T`` (eq. (17)), the
     nearest *orthogonal* matrix in Frobenius norm. ``U A^T`` has ``det = -1``
@@ -79,6 +79,9 @@ def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (..., 3, 3)
+        Computed batched by :func:`replication.core.kernels.polar_factor` (Newton's iteration for the polar
+        factor; the SVD for nearly singular matrices, reflections with ``enforce_det`` and small batches): the SVD
+        path's answer to about 1e-13.
     """
     M = check_matrices(M, "M")
     # eqs. (16)-(17) as U A^T of the SVD M = U Sigma A^T, batched by replication.core.kernels (no SVD per matrix)
@@ -93,8 +96,9 @@ def nearest_rotation_up_to_sign(M) -> np.ndarray:
     itself with the det fix would flip only its weakest direction instead.
 
     With ``M = U Sigma A^T`` and ``det M != 0``, ``sign(det M) = det(U A^T)`` and the
-    result is ``det(U A^T) U A^T``: one SVD, no determinant of ``M`` itself. A singular
-    ``M`` (``det M = 0``) is projected as ``nearest_rotation(M)``.
+    result is ``det(U A^T) U A^T``, the orthogonal polar factor times ``sign(det M)``
+    (:func:`replication.core.kernels.polar_factor`). A singular ``M`` (``det M = 0``) is
+    projected as ``nearest_rotation(M)``.
     """
     M = check_matrices(M, "M")
     return polar_factor(M, "up_to_sign")  # eqs. (16)-(17), batched (replication.core.kernels)
