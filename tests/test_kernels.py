@@ -382,3 +382,13 @@ def test_bottom_eigenvector4_falls_back_above_the_angle_bound_only(factor, to_la
     monkeypatch.setattr(np.linalg, "eigh", lambda A: seen.append(len(A)) or original(A))
     bottom_eigenvector4(S)
     assert (sum(seen) >= 1) is to_lapack  # at 0.99 x the largest bound that matrix goes to LAPACK; at 1.01 x none
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+def test_quaternion_from_rotation_vector_is_as_quaternion_without_the_log_map(shape, rng):
+    from replication.core.so3 import as_quaternion, log_map, quaternion_from_rotation_vector
+
+    R = random_rotations(rng, shape)
+    assert np.array_equal(quaternion_from_rotation_vector(log_map(R)), as_quaternion(R))
+    q = quaternion_from_rotation_vector(np.array([0.0, 0.0, np.pi / 2]))
+    assert np.allclose(q, [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)], atol=1e-15)
