@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+from .kernels import rotation_violation
+
 __all__ = ["ROTATION_ATOL", "MAX_ROTATION_ATOL", "det3", "check_matrices", "check_rotation_matrices", "check_init",
            "check_range", "check_rotation_flat",
            "check_atol", "check_number"]
@@ -101,6 +103,15 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
         not orthonormal, or a reflection (det = -1).
     """
     check_atol(atol)
+    if not np.iscomplexobj(R):
+        try:
+            fast = np.asarray(R, dtype=float)
+        except (TypeError, ValueError):
+            fast = None
+        # one fused pass (orthonormality, det, finiteness: NaN fails it); the detailed checks below only on failure
+        if fast is not None and fast.ndim >= 2 and fast.shape[-2:] == (3, 3) and np.all(
+                rotation_violation(fast) <= atol):
+            return fast
     R = check_matrices(R, name)
     E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
     ortho = np.sqrt(np.einsum("...ab,...ab->...", E, E))  # ||R^T R - I||_F

@@ -14,6 +14,7 @@ import numpy as np
 
 from .checks import _first_index
 from .handeye import check_motion_pairs, kronecker_operator
+from .kernels import eigvalsh3
 from .so3 import log_map
 
 __all__ = ["MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions"]
@@ -82,16 +83,20 @@ class MotionObservability:
             return np.where(rate < 1.0, np.log(reduction) / np.log(rate), np.inf)
 
 
-def _axis_spread_deg(R: np.ndarray):
-    """``(s_2, sqrt(s_1^2 + s_2^2 + s_3^2)) / sqrt(J)`` of the (..., J, 3) rotation vectors, degrees.
+def _axis_spread_deg(w: np.ndarray):
+    """``(s_2, sqrt(s_1^2 + s_2^2 + s_3^2)) / sqrt(J)`` of the (..., J, 3) rotation vectors ``w``, degrees.
 
     The first is the axis spread of :class:`MotionObservability`, the second the RMS motion angle.
     """
-    w = log_map(R)
     gram = np.swapaxes(w, -1, -2) @ w  # (..., 3, 3): s_k^2 are its eigenvalues
-    ev = np.clip(np.linalg.eigvalsh(gram), 0.0, None)
-    J = R.shape[-3]
+    ev = np.clip(eigvalsh3(gram), 0.0, None)
+    J = w.shape[-2]
     return np.degrees(np.sqrt(ev[..., 1] / J)), np.degrees(np.sqrt(ev.sum(axis=-1) / J))
+
+
+def _largest_singular_value(M: np.ndarray) -> np.ndarray:
+    """``sigma_max`` of 3x3 matrices, ``sqrt(lambda_max(M^T M))`` (the spectral norm, without an SVD per matrix)."""
+    return np.sqrt(np.clip(eigvalsh3(np.swapaxes(M, -1, -2) @ M)[..., -1], 0.0, None))
 
 
 #: Below this, the gap between the two largest eigenvalues of ``sym(K)`` and the data's inconsistency both
@@ -181,14 +186,23 @@ class Motions:
         return self._cached("svd", lambda: np.linalg.svd(self.K))
 
     @property
+    def rotation_vectors(self):
+        """``(log A, log B)``: the rotation vectors of the camera and sensor motions (radians), (..., J, 3) each."""
+        return self._cached("rotation_vectors", lambda: (log_map(self.A), log_map(self.B)))
+
+    def _spreads(self):
+        return self._cached("spreads", lambda: tuple(_axis_spread_deg(w) for w in self.rotation_vectors))
+
+    @property
     def axis_spread_deg(self):
         """``(camera, sensor)`` axis spreads in degrees (see :class:`MotionObservability`)."""
-        return self._cached("spread", lambda: (_axis_spread_deg(self.A)[0], _axis_spread_deg(self.B)[0]))
+        camera, sensor = self._spreads()
+        return camera[0], sensor[0]
 
     @property
     def rms_motion_deg(self):
         """RMS rotation angle of the camera motions, degrees."""
-        return self._cached("rms_motion", lambda: _axis_spread_deg(self.A)[1])
+        return self._spreads()[0][1]
 
     @property
     def sym_eigvals(self) -> np.ndarray:
@@ -205,10 +219,8 @@ class Motions:
             sv = self.svd[1]
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
-            rate = np.maximum(
-                np.linalg.norm(self.A.mean(axis=-3), ord=2, axis=(-2, -1)),
-                np.linalg.norm(self.B.mean(axis=-3), ord=2, axis=(-2, -1)),
-            ) ** 2
+            rate = np.maximum(_largest_singular_value(self.A.mean(axis=-3)),
+                              _largest_singular_value(self.B.mean(axis=-3))) ** 2
             ev = self.sym_eigvals
             return MotionObservability(sv, ratio, rate, *self.axis_spread_deg, self.rms_motion_deg,
                                        ev[..., 0] - ev[..., 1], 1.0 - ev[..., 0])

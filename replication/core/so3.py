@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .checks import check_matrices, det3
+from .checks import check_matrices
+from .kernels import polar_factor
 
 __all__ = [
     "skew",
@@ -27,6 +28,7 @@ __all__ = [
     "log_map",
     "exp_map",
     "as_quaternion",
+    "quaternion_from_rotation_vector",
     "quaternion_to_matrix",
     "yaw_pitch_roll_deg",
     "from_euler",
@@ -58,7 +60,7 @@ def skew(v) -> np.ndarray:
 
 
 def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
-    """Project 3x3 matrices onto the rotation group by SVD (eqs. (16)-(17)).
+    """Project 3x3 matrices onto the rotation group (eqs. (16)-(17)).
 
     With ``M = U Sigma A^T`` (eq. (16)) the paper takes ``U A^T`` (eq. (17)), the
     nearest *orthogonal* matrix in Frobenius norm. ``U A^T`` has ``det = -1``
@@ -77,14 +79,13 @@ def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (..., 3, 3)
+        Computed batched by :func:`replication.core.kernels.polar_factor` (Newton's iteration for the polar
+        factor; the SVD for nearly singular matrices, reflections with ``enforce_det`` and small batches): the SVD
+        path's answer to about 1e-13.
     """
     M = check_matrices(M, "M")
-    U, _, At = np.linalg.svd(M)  # eq. (16): M = U Sigma A^T
-    if enforce_det:
-        d = np.where(det3(U @ At) < 0, -1.0, 1.0)
-        U = U.copy()
-        U[..., :, 2] *= d[..., None]
-    return U @ At  # eq. (17)
+    # eqs. (16)-(17) as U A^T of the SVD M = U Sigma A^T, batched by replication.core.kernels (no SVD per matrix)
+    return polar_factor(M, "rotation" if enforce_det else "orthogonal")
 
 
 def nearest_rotation_up_to_sign(M) -> np.ndarray:
@@ -95,20 +96,12 @@ def nearest_rotation_up_to_sign(M) -> np.ndarray:
     itself with the det fix would flip only its weakest direction instead.
 
     With ``M = U Sigma A^T`` and ``det M != 0``, ``sign(det M) = det(U A^T)`` and the
-    result is ``det(U A^T) U A^T``: one SVD, no determinant of ``M`` itself. A singular
-    ``M`` (``det M = 0``) is projected as ``nearest_rotation(M)``.
+    result is ``det(U A^T) U A^T``, the orthogonal polar factor times ``sign(det M)``
+    (:func:`replication.core.kernels.polar_factor`). A singular ``M`` (``det M = 0``) is
+    projected as ``nearest_rotation(M)``.
     """
     M = check_matrices(M, "M")
-    U, s, At = np.linalg.svd(M)  # eq. (16)
-    P = U @ At  # eq. (17)
-    d = np.where(det3(P) < 0, -1.0, 1.0)
-    singular = s[..., 2] == 0
-    if singular.any():  # sign(det M) = +1: flip the weakest direction instead (as nearest_rotation)
-        U = U.copy()
-        U[..., :, 2] *= np.where(singular, d, 1.0)[..., None]
-        P = U @ At
-        d = np.where(singular, 1.0, d)
-    return P * d[..., None, None]
+    return polar_factor(M, "up_to_sign")  # eqs. (16)-(17), batched (replication.core.kernels)
 
 
 def noise_rotations(v) -> np.ndarray:
@@ -335,7 +328,13 @@ def as_quaternion(R) -> np.ndarray:
     ``q = (cos(theta/2), sin(theta/2) n)``, from :func:`log_map` (elementwise). ``w >= 0``
     because ``theta <= 180`` deg; the sign is ambiguous only at ``theta = 180`` deg.
     """
-    w = log_map(R)
+    return quaternion_from_rotation_vector(log_map(R))
+
+
+def quaternion_from_rotation_vector(w) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)``, scalar first, from rotation vectors ``|w| <= pi`` (radians), batched:
+    (..., 3) -> (..., 4); ``as_quaternion(R) = quaternion_from_rotation_vector(log_map(R))``."""
+    w = np.asarray(w, dtype=float)
     theta = np.sqrt(np.einsum("...i,...i->...", w, w))
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(theta > 1e-6, np.sin(0.5 * theta) / theta, 0.5 - theta * theta / 48.0)  # sin(t/2)/t

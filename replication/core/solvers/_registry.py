@@ -202,12 +202,16 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
     below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
     outlier pairs, or near-symmetric motions).
     """
-    obs = motions.observability
-    spread = np.minimum(obs.camera_axis_spread_deg, obs.sensor_axis_spread_deg)
+    # the cached pieces of motions.observability these tests need, without the SVD of K it also holds
+    camera_spread, sensor_spread = motions.axis_spread_deg
+    rms_motion = motions.rms_motion_deg
+    ev = motions.sym_eigvals
+    symmetric_gap, inconsistency = ev[..., 0] - ev[..., 1], 1.0 - ev[..., 0]
+    spread = np.minimum(camera_spread, sensor_spread)
     weak = spread < warn_axis_spread_deg
     if np.any(weak):
-        small = weak & (obs.camera_rms_motion_deg < warn_axis_spread_deg)
-        what = (f"small motions (RMS rotation down to {float(np.min(obs.camera_rms_motion_deg[weak])):.3g} deg)"
+        small = weak & (rms_motion < warn_axis_spread_deg)
+        what = (f"small motions (RMS rotation down to {float(np.min(rms_motion[weak])):.3g} deg)"
                 if np.all(small[weak]) else "nearly single-axis motion")
         warnings.warn(
             f"{int(np.sum(weak))} of {weak.size} problems have {what}: axis spread down to "
@@ -216,15 +220,15 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
             ObservabilityWarning,
             stacklevel=stacklevel,
         )
-    flat = obs.symmetric_gap < WEAK_GAP_FACTOR * np.maximum(obs.inconsistency, 0.0)
+    flat = symmetric_gap < WEAK_GAP_FACTOR * np.maximum(inconsistency, 0.0)
     flat &= ~weak  # already reported
     if np.any(flat):
-        i = np.unravel_index(int(np.argmin(np.where(flat, obs.symmetric_gap / np.maximum(obs.inconsistency, 1e-300),
+        i = np.unravel_index(int(np.argmin(np.where(flat, symmetric_gap / np.maximum(inconsistency, 1e-300),
                                                     np.inf))), flat.shape) if flat.ndim else ()
         warnings.warn(
             f"{int(np.sum(flat))} of {flat.size} problems determine R0 poorly: another rotation fits eq. (8) almost "
-            f"as well (gap between the two largest eigenvalues of sym(K) {float(obs.symmetric_gap[i]):.3g} < "
-            f"{WEAK_GAP_FACTOR:g} x the data's inconsistency 1 - lambda_1 = {float(obs.inconsistency[i]):.3g}): "
+            f"as well (gap between the two largest eigenvalues of sym(K) {float(symmetric_gap[i]):.3g} < "
+            f"{WEAK_GAP_FACTOR:g} x the data's inconsistency 1 - lambda_1 = {float(inconsistency[i]):.3g}): "
             f"motions small for the noise, outlier pairs (use robust), or motions that nearly admit a second "
             f"solution",
             ObservabilityWarning,

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..checks import check_init
 from ..handeye import unvec, vec
+from ..kernels import eigvalsh3, solve3
 from ..motions import MotionObservability, Motions
 from ..so3 import exp_map, nearest_rotation_up_to_sign, skew
 from ._sdp import relaxation, upper_bound
@@ -146,9 +147,9 @@ def chordal_newton(K, init, *, max_iterations: int = 30, gradient_tol: float = 1
             break
         # Newton step for the minimisation of -g: (-H) w = grad, with -H made positive definite
         Hn = -hess
-        lam = np.linalg.eigvalsh(Hn)[..., 0]
+        lam = eigvalsh3(Hn)[..., 0]
         shift = np.where(lam < 1e-3, 1e-3 - lam, 0.0)[..., None, None] * np.eye(3)
-        w = np.linalg.solve(Hn + shift, grad[..., None])[..., 0]
+        w = solve3(Hn + shift, grad)
         step = np.ones(w.shape[:-1])
         for _ in range(30):  # backtracking: accept a step only if g does not decrease
             R_new = R @ exp_map(w * step[..., None])
@@ -186,7 +187,7 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
     start = relaxed_rotation(K) if init is None else check_init(init, m.batch_shape)
     R, g, grad, hess, its = chordal_newton(K, start, max_iterations=max_iterations, gradient_tol=gradient_tol)
     grad_norm = np.linalg.norm(grad, axis=-1)
-    hmin = np.linalg.eigvalsh(-hess)[..., 0]
+    hmin = eigvalsh3(-hess)[..., 0]
     local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     upper = np.full(R.shape[:-2], np.nan)
     how = np.full(R.shape[:-2], "none", dtype=object)
@@ -198,7 +199,7 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
         # the fallback may have replaced R: judge stationarity at the final answer
         _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
         grad_norm = np.linalg.norm(grad, axis=-1)
-        hmin = np.linalg.eigvalsh(-hess)[..., 0]
+        hmin = eigvalsh3(-hess)[..., 0]
         local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     gap = np.clip(2.0 * J * (upper - g), 0.0, None)
     cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)

@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kernels import bottom_eigenvector4, solve3
 from ..so3 import (
-    as_quaternion,
     exp_map,
-    log_map,
     nearest_rotation,
+    quaternion_from_rotation_vector,
     quaternion_to_matrix,
     skew,
 )
@@ -60,8 +60,8 @@ def park_martin(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    alpha = log_map(motions.A)  # Park & Martin eq. (10): alpha_j = log A_j
-    beta = log_map(motions.B)  # beta_j = log B_j; then alpha_j = X beta_j
+    alpha, beta = motions.rotation_vectors  # Park & Martin eq. (10): alpha_j = log A_j, beta_j = log B_j
+    # then alpha_j = X beta_j
     M = np.einsum("...ja,...jb->...ab", alpha, beta)  # sum_j alpha_j beta_j^T = M^T of eq. (13)
     return nearest_rotation(M)  # eq. (15): X = (M^T M)^{-1/2} M^T, as the SO(3) Procrustes solution
 
@@ -111,12 +111,11 @@ def horaud_dornaika(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    C = (_multiplication_matrix(as_quaternion(motions.A), "left")
-         - _multiplication_matrix(as_quaternion(motions.B), "right"))
+    a, b = (quaternion_from_rotation_vector(w) for w in motions.rotation_vectors)  # as_quaternion(A), (B)
+    C = _multiplication_matrix(a, "left") - _multiplication_matrix(b, "right")
     # eqs. (33)-(39): a_j * x - x * b_j = C_j x
     S = np.einsum("...jki,...jkl->...il", C, C)  # eq. (40): sum_j C_j^T C_j
-    _, vecs = np.linalg.eigh(S)
-    x = vecs[..., :, 0]  # eq. (41): eigenvector of the smallest eigenvalue
+    x = bottom_eigenvector4(S)  # eq. (41): eigenvector of the smallest eigenvalue
     return quaternion_to_matrix(x)
 
 
@@ -187,13 +186,13 @@ def tsai_lenz(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    Pa = 2.0 * as_quaternion(motions.A)[..., 1:]  # Tsai eq. (12): P = 2 sin(theta/2) n
-    Pb = 2.0 * as_quaternion(motions.B)[..., 1:]
+    # Tsai eq. (12): P = 2 sin(theta/2) n, the vector part of as_quaternion(A) (and B) times 2
+    Pa, Pb = (2.0 * quaternion_from_rotation_vector(w)[..., 1:] for w in motions.rotation_vectors)
     S = skew(Pa + Pb)  # eq. (12): skew(P_a + P_b) p' = P_b - P_a
     d = Pb - Pa
     StS = np.einsum("...jki,...jkl->...il", S, S)
     Std = np.einsum("...jki,...jk->...i", S, d)
-    p = np.linalg.solve(StS, Std[..., None])[..., 0]  # least squares over the J pairs
+    p = solve3(StS, Std)  # least squares over the J pairs
     norm = np.linalg.norm(p, axis=-1, keepdims=True)
     # eqs. (13)-(14): P_X = 2 p' / sqrt(1 + |p'|^2), i.e. theta_X = 2 atan|p'| about p'/|p'|
     with np.errstate(invalid="ignore", divide="ignore"):
