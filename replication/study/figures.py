@@ -13,6 +13,17 @@ import numpy as np
 __all__ = ["METHOD_STYLE", "SQP_CONFIG_STYLE", "method_style", "sqp_config_style", "convergence_figure",
            "SWEEP_LABELS", "SWEEP_TITLES", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure", "live_figure"]
 
+#: SQP's configurations in notebooks 02 and 04 (:func:`replication.study.fig5.sqp_configs_for`; a stop-short label
+#: ``"family: value"`` by its family): SQP's blue, one line style and marker each.
+SQP_CONFIG_STYLE = {
+    "analytic": {"ls": "-", "marker": "."},
+    "finite-difference": {"ls": "--", "marker": "^"},
+    "capped": {"ls": ":", "marker": "v"},
+    "cost / 100J": {"ls": "-.", "marker": "s"},
+    "stopped early": {"ls": ":", "marker": "D"},
+    "loose tolerance": {"ls": ":", "marker": "x"},
+    "eq. (8) / 100J, stopped early": {"ls": ":", "marker": "P"},
+}
 _PAPER = {"ls": "-", "lw": 2.0}
 _BASELINE = {"ls": "--", "lw": 1.2}
 #: One colour per method, reused in every figure, keyed by the registered solver names
@@ -24,44 +35,34 @@ METHOD_STYLE = {
     "two_step_right": {"color": "c", **_PAPER, "label": "two_step_right (ours, $R^r$)"},
     "two_step_left": {"color": "m", **_PAPER, "label": "two_step_left (ours, $R^l$)"},
     "sqp": {"color": "b", **_BASELINE, "label": "sqp (SLSQP)"},
-    "chordal_optimal": {"color": "tab:green", **_BASELINE, "label": "chordal_optimal"},
-    "andreff": {"color": "tab:gray", **_BASELINE, "label": "andreff"},
-    "robust": {"color": "tab:olive", **_BASELINE, "label": "robust"},
-    "park_martin": {"color": "tab:orange", **_BASELINE, "label": "park_martin"},
-    "opencv_park": {"color": "#ffbb78", **_BASELINE, "label": "opencv_park"},
-    "tsai_lenz": {"color": "tab:brown", **_BASELINE, "label": "tsai_lenz"},
-    "opencv_tsai": {"color": "#c49c94", **_BASELINE, "label": "opencv_tsai"},
-    "horaud_dornaika": {"color": "tab:purple", **_BASELINE, "label": "horaud_dornaika"},
-    "opencv_horaud": {"color": "#c5b0d5", **_BASELINE, "label": "opencv_horaud"},
+    "chordal_optimal": {"color": "tab:green", **_BASELINE},
+    "andreff": {"color": "tab:gray", **_BASELINE},
+    "robust": {"color": "tab:olive", **_BASELINE},
+    "park_martin": {"color": "tab:orange", **_BASELINE},
+    "opencv_park": {"color": "#ffbb78", **_BASELINE},
+    "tsai_lenz": {"color": "tab:brown", **_BASELINE},
+    "opencv_tsai": {"color": "#c49c94", **_BASELINE},
+    "horaud_dornaika": {"color": "tab:purple", **_BASELINE},
+    "opencv_horaud": {"color": "#c5b0d5", **_BASELINE},
     "ours_right": {"color": "c", "label": "ours, $R^r$"},
     "ours_left": {"color": "m", "label": "ours, $R^l$"},
     "optimization": {"color": "b", "label": "SQP (SLSQP)"},
     "optimization_projected": {"color": "b", "ls": "--", "label": "SQP, iterate projected"},
-    "optimization (analytic)": {"color": "b", "label": "SQP, analytic gradients"},
-    "optimization (finite-difference)": {"color": "b", "ls": "--", "marker": "^", "label": "SQP, finite differences"},
-    "optimization (capped)": {"color": "b", "ls": ":", "marker": "v", "label": "SQP, capped (30 it., ftol 1e-6)"},
-    "optimization (per-pair cost)": {"color": "b", "ls": "-.", "marker": "s", "label": "SQP, cost (8) / 2J"},
+    "optimization (analytic)": {"color": "b", **SQP_CONFIG_STYLE["analytic"], "label": "SQP, analytic gradients"},
+    "optimization (finite-difference)": {"color": "b", **SQP_CONFIG_STYLE["finite-difference"],
+                                         "label": "SQP, finite differences"},
+    "optimization (capped)": {"color": "b", **SQP_CONFIG_STYLE["capped"], "label": "SQP, capped (30 it., ftol 1e-6)"},
+    "optimization (per-pair cost)": {"color": "b", **SQP_CONFIG_STYLE["cost / 100J"], "label": "SQP, cost (8) / 2J"},
 }
 
-#: SQP's configurations in notebook 04 (:func:`replication.study.fig5.sqp_configs_for`; a stop-short label
-#: ``"family: value"`` by its family): SQP's blue, one line style and marker each.
-SQP_CONFIG_STYLE = {
-    "analytic": {"ls": "-", "marker": "."},
-    "finite-difference": {"ls": "--", "marker": "^"},
-    "capped": {"ls": ":", "marker": "v"},
-    "cost / 100J": {"ls": "-.", "marker": "s"},
-    "stopped early": {"ls": ":", "marker": "D"},
-    "loose tolerance": {"ls": ":", "marker": "x"},
-    "eq. (8) / 100J, stopped early": {"ls": ":", "marker": "P"},
-}
 #: Colours left for methods :data:`METHOD_STYLE` does not know: none of them is a known method's.
 _SPARE = ("gold", "crimson", "teal", "sienna", "darkkhaki", "hotpink", "darkslategray", "lime")
 _SPARE_MARKERS = ("x", "+", "1", "2", "3", "4")
 
 
 def method_style(name: str) -> dict:
-    """Line style of method ``name`` (``color``, ``label``, maybe ``ls``, ``lw``, ``marker``), the same in every
-    figure.
+    """Line style of method ``name`` (``color``, ``label``: the name unless :data:`METHOD_STYLE` gives one, maybe
+    ``ls``, ``lw``, ``marker``), the same in every figure.
 
     A name :data:`METHOD_STYLE` does not know (a solver registered by a user) gets a colour and marker chosen from
     its name alone (CRC-32), among colours no known method uses, so it never changes another method's colour; two
@@ -72,7 +73,7 @@ def method_style(name: str) -> dict:
     ('c', 'c')
     """
     if name in METHOD_STYLE:
-        return dict(METHOD_STYLE[name])
+        return {"label": name, **METHOD_STYLE[name]}
     h = zlib.crc32(name.encode())
     return {"color": _SPARE[h % len(_SPARE)], "marker": _SPARE_MARKERS[h // len(_SPARE) % len(_SPARE_MARKERS)],
             "ls": "-.", "lw": 1.2, "label": name}
