@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_claims_records import DEF, FAR, IDENT, ORDERS, _table1_inputs
+from test_claims_records import DEF, FAR, IDENT, ORDERS, _table1_inputs, check_just_inside_and_past
 
 from replication.core.handeye import handeye_cost, operator_T, operator_T_adjoint
 from replication.core.so3 import frobenius_error, nearest_rotation
@@ -293,15 +293,7 @@ NEW_BOUNDARIES = {
 
 @pytest.mark.parametrize("name", NEW_BOUNDARIES)
 def test_each_new_check_raises_just_past_its_threshold(name):
-    claim, inside, outside = NEW_BOUNDARIES[name]
-    first, second = _table1_inputs()
-    inside(first, second)
-    assert len(two_step_claims(**first)) == 4 and len(sqp_and_table_claims(**second)) == 6
-    first, second = _table1_inputs()
-    outside(first, second)
-    with pytest.raises(ValueError, match=f"^claim '{claim}': the evidence does not bear the verdict: expected "):
-        two_step_claims(**first)
-        sqp_and_table_claims(**second)
+    check_just_inside_and_past(NEW_BOUNDARIES, name)
 
 
 def test_the_early_iterations_are_undecidable_and_say_what_they_depend_on():
