@@ -28,8 +28,8 @@ PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replic
 #: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
 #: writer, the version and the optional packages) import nothing of the package and serve every room; the rest of the
 #: hall is on top.
-ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4, "__main__": 4,
-         "testing": 4}
+ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4,
+         "__main__": 4, "testing": 4}
 MAX_TOP_LEVEL_MODULES = 8
 MAX_CELL_LINES = 60
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._jitter import jitter
 from .checks import check_matrices
 from .kernels import polar_factor
 
@@ -192,7 +193,7 @@ def random_rotations(
     n = int(np.prod(shape))
     if angle_range_deg is None:
         mats = _scipy_rotation().random(n, rng=rng).as_matrix() if n else np.empty((0, 3, 3))
-        return mats.reshape(shape + (3, 3))
+        return jitter(mats.reshape(shape + (3, 3)))
     lo, hi = (float(a) for a in angle_range_deg)
     if not (0.0 <= lo <= hi <= 180.0):
         raise ValueError(f"angle_range_deg must satisfy 0 <= lo <= hi <= 180, got {angle_range_deg}")
@@ -200,7 +201,7 @@ def random_rotations(
     axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
     angle = np.radians(rng.uniform(lo, hi, size=n))
     mats = _scipy_rotation().from_rotvec(axis * angle[:, None]).as_matrix() if n else np.empty((0, 3, 3))
-    return mats.reshape(shape + (3, 3))
+    return jitter(mats.reshape(shape + (3, 3)))
 
 
 def frobenius_error(R_est, R_true) -> np.ndarray:

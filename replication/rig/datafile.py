@@ -19,6 +19,8 @@ from typing import NoReturn
 
 import numpy as np
 
+from .._jitter import jitter
+
 __all__ = ["DataFileError", "DataFileNotFound", "ColumnCountError", "fail", "read_text", "read_text_layout",
            "read_lines", "read_table", "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
 
@@ -245,7 +247,7 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
         lines.append(lineno)
     if len(rows) < 2:
         fail(path, f"fewer than 2 data lines ({what})")
-    data = np.array(rows)
+    data = jitter(np.array(rows))
     step = np.diff(data[:, 0])
     if increasing_first and np.any(step <= 0):
         k = int(np.flatnonzero(step <= 0)[0])

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .._io import PROJECT_ROOT
+from .._jitter import jitter
 from ..core.checks import check_rotation_matrices
 from ..core.so3 import nearest_rotation
 from .datafile import fail, is_number, read_lines, read_table, read_text, unit_quaternion_rotations
@@ -181,7 +182,7 @@ def load_tabb_poses(path) -> np.ndarray:
     except ValueError:
         bad = next(v for v in values if not is_number(v))
         fail(path, f"a pose entry is not a number: {bad!r}")
-    return nearest_rotation(_rotation(path, T[:, :3, :3], "hand_from_base rotations", atol=1e-4))
+    return jitter(nearest_rotation(_rotation(path, T[:, :3, :3], "hand_from_base rotations", atol=1e-4)))
 
 
 def load_tabb_camera_poses(path) -> np.ndarray:
@@ -209,7 +210,7 @@ def load_tabb_camera_poses(path) -> np.ndarray:
         fail(path, f"header says {n} poses, found {len(mats)}")
     R = np.array(mats)
     _rotation(path, R, "camera_from_target rotations", atol=1e-4)
-    return nearest_rotation(R)
+    return jitter(nearest_rotation(R))
 
 
 def load_tabb_solution(path) -> np.ndarray:
@@ -257,8 +258,8 @@ def load_reference(path, camera: str = "cam0") -> np.ndarray:
     path = Path(path)
     text = read_text(path, "a reference calibration")
     if looks_like_vio_file(path, text):
-        return read_vio_file(path, text).camera_from_sensor(camera)
-    return load_tabb_solution(path)
+        return jitter(read_vio_file(path, text).camera_from_sensor(camera))
+    return jitter(load_tabb_solution(path))
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .._jitter import jitter
 from ..core.so3 import exp_map, log_map, noise_rotations, random_rotations, sample_ball
 from .paper import r0_camera_from_sensor
 
@@ -131,7 +132,7 @@ def simulate(seed: int, n_runs: int, settings: SimulationSettings | None = None,
     B0 = R0_t @ A0 @ R0[:, None]  # Delta R_i = R0^T Delta R_c R0
     A = noise_rotations(np.stack(v_c)) @ A0  # Delta R_c <- delta R_c Delta R_c
     B = noise_rotations(np.stack(v_i)) @ B0  # Delta R_i <- delta R_i Delta R_i
-    return SimulatedProblems(A=A, B=B, R0=R0, settings=settings, seed=int(seed))
+    return SimulatedProblems(A=jitter(A), B=jitter(B), R0=R0, settings=settings, seed=int(seed))
 
 
 @dataclass(frozen=True)
@@ -195,7 +196,7 @@ def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool 
             g = exp_map(log_map(g) + rng.normal(0.0, 0.001, 3))
         Rg.append(g)
         Rc.append(c)
-    Rg, Rc = np.array(Rg), np.array(Rc)
+    Rg, Rc = jitter(np.array(Rg)), jitter(np.array(Rc))
     i, j = np.triu_indices(int(n_poses), k=1)
     k = np.arange(int(n_poses) - 1)
     pair = lambda a, b: (np.swapaxes(Rg[b], -1, -2) @ Rg[a], Rc[b] @ np.swapaxes(Rc[a], -1, -2))
@@ -260,5 +261,6 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
     omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005  # body rates over each step, at its midpoint
     if gyro_noise_deg_s:
         omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
+    C, omega, Q = jitter(C), jitter(omega), jitter(Q)
     return (R0, OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro"),
             OrientationStream(t_imu[::2], Q[::2], "sensor"))

@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ..._io import PROJECT_ROOT, write_atomic
+from ..._jitter import jitter, jitter_setting
 from ...core.checks import check_rotation_matrices
 from ...rig.datafile import fail as _fail
 from ...rig.datafile import read_text
@@ -63,6 +64,16 @@ class LabRecording:
     dynamic_imu: pd.DataFrame
     dynamic_markers: pd.DataFrame
     truth: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if jitter_setting() is None:
+            return
+        for name in ("static_imu", "static_markers", "dynamic_imu", "dynamic_markers"):
+            df = getattr(self, name).copy()
+            for col in df.columns:
+                if pd.api.types.is_float_dtype(df[col]):
+                    df[col] = jitter(df[col].to_numpy())
+            setattr(self, name, df)
 
 
 ACC_COLUMNS, GYR_COLUMNS, MAG_COLUMNS = (["acc_x", "acc_y", "acc_z"], ["gyr_x", "gyr_y", "gyr_z"],
