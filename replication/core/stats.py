@@ -10,8 +10,10 @@ import statistics
 
 import numpy as np
 
-__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket", "wilson_interval",
-           "poisson_upper", "radius_deg"]
+from .._jitter import guard_failed, margin_scale
+
+__all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket", "declared_bound",
+           "ROUNDING_RUNS", "wilson_interval", "poisson_upper", "radius_deg"]
 
 
 def mean_se(x, axis=0):
@@ -65,24 +67,85 @@ def format_ci(low, high, digits: int = 2) -> str:
     return f"[{low:.{digits}f}, {high:.{digits}f}]"
 
 
-def bracket(value, width: float) -> str:
+def _guard(value, low, high, margin, what, text):
+    """Raise unless ``value`` lies ``margin`` (times :func:`replication._jitter.margin_scale`) inside
+    ``[low, high]``."""
+    margin = float(margin) * margin_scale()
+    ok = low + margin - 1e-12 <= value <= high - margin + 1e-12  # a count exactly at the margin passes
+    if margin and not ok and guard_failed({"what": what, "value": value, "bound": text, "margin": margin,
+                                           "distance": min(value - low, high - value)}):
+        raise ValueError(f"{what} {value:.4g} is within {margin:g} of an edge of its bracket {text}: another machine's "
+                         "rounding can move it across; show it with another step or a declared bound")
+
+
+def bracket(value, width: float, *, margin: float = 0.0, what: str = "the value") -> str:
     """The ``width``-wide bracket that holds ``value`` (``bracket(13.86, 1) == "13-14"``).
 
     For means whose last digits depend on rounding (counts of a solver that stops at an iteration limit from a
-    far start): a machine with other rounding moves the printed text only if the value crosses an edge.
+    far start): a machine with other rounding moves the printed text only if the value crosses an edge, so the value
+    is checked to lie ``margin`` (its measured spread between machines) inside the bracket; ``ValueError`` otherwise.
     """
     value, width = float(value), float(width)
     if not (np.isfinite(value) and width > 0):
         raise ValueError(f"need a finite value and a positive width, got {value}, {width}")
     k = np.floor(value / width + 1e-9)
-    return f"{k * width:g}-{(k + 1) * width:g}"
+    text = f"{k * width:g}-{(k + 1) * width:g}"
+    _guard(value, k * width, (k + 1) * width, margin, what, text)
+    return text
 
 
-def share_range(p, step: float = 0.05) -> str:
+#: Runs by which a machine's rounding moves a count of runs whose outcome is chaotic (which far-start SLSQP runs fail,
+#: which basin a Newton start falls into): one or two runs between the machines tried (scripts/spread.py; the
+#: portability issue's machines). The guard of a share of such runs (:func:`share_range`'s ``margin``) is this many
+#: runs.
+ROUNDING_RUNS = 2
+
+
+def declared_bound(value, low=None, high=None, *, margin, what: str = "the value", fmt: str = "g") -> str:
+    """A bound declared in advance for a quantity that rounding moves, as text, once ``value`` is checked to lie at
+    least ``margin`` inside it.
+
+    The text is made from the constants ``low`` and ``high`` only (``"600-700"``, ``"at most 0.4"``, ``"at least
+    13"``), never from ``value``: a machine whose rounding moves ``value`` by less than ``margin`` prints the same
+    text. ``margin`` is the measured machine-to-machine spread of ``value`` with room to spare (``scripts/spread.py``
+    measures it; ``docs/reproducing.md``, "What strict nbval compares"). For a quantity that is a chaotic function of
+    its inputs (runs stopped by an iteration limit, which runs end on which local minimum) this is the stable
+    statement about it; a bracket chosen from the value (:func:`bracket`) flips where the value sits near an edge.
+
+    >>> declared_bound(13.6, 10, margin=1), declared_bound(0.27, high=0.4, margin=0.05)
+    ('at least 10', 'at most 0.4')
+    >>> declared_bound(620, 550, 700, margin=20)
+    '550-700'
+    >>> declared_bound(0.37, high=0.4, margin=0.05, what="the bound")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: the bound 0.37 is not at least 0.05 inside its declared bound (at most 0.4): ...
+    """
+    value, margin = float(value), float(margin) * margin_scale()
+    if low is None and high is None:
+        raise ValueError("declare low, high or both")
+    if not (np.isfinite(value) and margin >= 0):
+        raise ValueError(f"need a finite value and a margin >= 0, got {value}, {margin}")
+    if low is not None and high is not None:
+        text = f"{low:{fmt}}-{high:{fmt}}" if low >= 0 else f"{low:{fmt}} to {high:{fmt}}"
+    else:
+        text = f"at least {low:{fmt}}" if high is None else f"at most {high:{fmt}}"
+    inside = (low is None or value >= low + margin) and (high is None or value <= high - margin)
+    distance = min(np.inf if low is None else value - low, np.inf if high is None else high - value)
+    if not inside and guard_failed({"what": what, "value": value, "bound": text, "margin": margin,
+                                    "distance": distance}):
+        raise ValueError(f"{what} {value:.4g} is not at least {margin:g} inside its declared bound ({text}): measure "
+                         "its spread and declare a wider one")
+    return text
+
+
+def share_range(p, step: float = 0.05, *, margin: float = 0.0, what: str = "the share") -> str:
     """A share of runs as the ``step``-wide bracket that holds it (``"80-85 %"``), or ``"none"`` / ``"all"``.
 
     For counts of runs whose outcome depends on rounding (a solver stopped at an iteration limit): one run more
-    or less on another machine then moves the printed text only if it crosses a bracket's edge.
+    or less on another machine then moves the printed text only if it crosses a bracket's edge; ``margin`` (a share:
+    the runs a machine's rounding moves, divided by the runs) is the room the share must keep from both edges
+    (``ValueError`` otherwise).
     """
     p = float(p)
     if not 0.0 <= p <= 1.0:
@@ -93,7 +156,9 @@ def share_range(p, step: float = 0.05) -> str:
         return "all"
     k = int(np.floor(p / step + 1e-9))
     low, high = k * step, min((k + 1) * step, 1.0)
-    return f"{100 * low:.0f}-{100 * high:.0f} %"
+    text = f"{100 * low:.0f}-{100 * high:.0f} %"
+    _guard(p, low, high, margin, what, text)  # 0 and 1 are edges too: "none" and "all"
+    return text
 
 
 def wilson_interval(k, n, level: float = 0.95):
