@@ -399,14 +399,21 @@ def test_span_text():
     assert span_text([-0.139, 0.0985]) == "-0.14 to 0.10" and span_text([7, 7], 0) == "7"
 
 
-@pytest.mark.parametrize("low, high, text", [
-    (-0.3086, 0.2698, "within [-0.4, 0.4]"),  # the interval seen on one machine ...
-    (-0.3076, 0.2879, "within [-0.4, 0.4]"),  # ... and under other BLAS kernels: one bound for both
-    (-0.049, 0.049, "within [-0.1, 0.1]"),  # just inside the margin's reach of the next tenth
-    (-0.051, 0.051, "within [-0.2, 0.2]"),  # just beyond it
-    (0.0, 0.0, "within [-0.1, 0.1]"),
+@pytest.mark.parametrize("low, high", [
+    (-0.3086, 0.2698),  # the interval seen on one machine ...
+    (-0.3076, 0.2879),  # ... and under other BLAS kernels: one bound for both
+    (-0.4999, 0.4999),  # just inside the margin
+    (0.0, 0.0),
 ])
-def test_rounding_bound_widens_by_the_margin_and_rounds_outwards(low, high, text):
+def test_rounding_bound_is_the_declared_bound_whatever_the_ends(low, high):
     from replication.study.fig5 import rounding_bound
 
-    assert rounding_bound(low, high) == text
+    assert rounding_bound(low, high) == "within [-0.6, 0.6]"
+
+
+@pytest.mark.parametrize("low, high, end", [(-0.5001, 0.0, "lower end"), (0.0, 0.5001, "upper end")])
+def test_an_end_within_the_margin_of_the_declared_bound_is_refused(low, high, end):
+    from replication.study.fig5 import rounding_bound
+
+    with pytest.raises(ValueError, match=f"failing SQP's change, {end}.*declare a wider one"):
+        rounding_bound(low, high)

@@ -30,7 +30,7 @@ import pandas as pd
 
 from ...core.so3 import angle_between_deg, frobenius_error
 from ...core.solvers import SQP_VARIANTS, ReplicationWarning, chordal_optimal, sqp, two_step
-from ...core.stats import mean_se
+from ...core.stats import declared_bound, mean_se
 from ..simulation import noise_bound_for_angle_deg, simulate
 
 __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sweep_grid", "summary_table",
@@ -296,23 +296,27 @@ def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame
                          "two-step change (fresh)": change(fresh, "two_step_change")})
 
 
-#: Margin (deg) by which :func:`rounding_bound` widens an interval of a failing SQP before rounding it outwards to
-#: 0.1 deg: where its runs stop depends on the machine's rounding, which moved such interval ends by up to 0.018 deg
-#: under other BLAS kernels (OpenBLAS's Sandybridge kernels, one thread: 0.2698 -> 0.2879; 0.03 was not enough for an
-#: end that close to a tenth); 0.05 is more than twice the largest move seen.
-ROUNDING_MARGIN_DEG = 0.05
+#: The declared bound (deg) on the change of a failing SQP's mean error, and the margin its interval ends must keep
+#: inside it. Where a failing SQP's runs stop depends on the machine's rounding: such interval ends moved by up to
+#: 0.04 deg between machines (OpenBLAS's Sandybridge kernels: 0.2698 -> 0.2879; numpy's AVX2 paths: an end of about
+#: 0.26 below 0.25), so an end rounded outwards to 0.1 deg flipped; a bound declared in advance does not, and 0.1 is
+#: more than twice the largest move seen (the ends here: -0.31 and 0.27, twice the margin inside +-0.6).
+FAILING_CHANGE_BOUND_DEG = 0.6
+FAILING_CHANGE_MARGIN_DEG = 0.1
 
 
 def rounding_bound(low: float, high: float) -> str:
-    """``"within [a, b]"``: ``low`` and ``high`` widened by :data:`ROUNDING_MARGIN_DEG` and rounded outwards to
-    0.1, a bound that holds on machines that round differently (not an interval).
+    """``"within [-0.6, 0.6]"``: the declared :data:`FAILING_CHANGE_BOUND_DEG`, once ``low`` and ``high`` are checked
+    to lie :data:`FAILING_CHANGE_MARGIN_DEG` inside it (:func:`replication.core.stats.declared_bound`); a bound that
+    holds on machines that round differently, not an interval.
 
     >>> rounding_bound(-0.13, 0.20)
-    'within [-0.2, 0.3]'
+    'within [-0.6, 0.6]'
     """
-    a = np.floor((low - ROUNDING_MARGIN_DEG) * 10) / 10
-    b = np.ceil((high + ROUNDING_MARGIN_DEG) * 10) / 10
-    return f"within [{a + 0.0:.1f}, {b + 0.0:.1f}]"
+    b = FAILING_CHANGE_BOUND_DEG
+    declared_bound(low, -b, margin=FAILING_CHANGE_MARGIN_DEG, what="a failing SQP's change, lower end (deg)")
+    declared_bound(high, high=b, margin=FAILING_CHANGE_MARGIN_DEG, what="a failing SQP's change, upper end (deg)")
+    return f"within [{-b:.1f}, {b:.1f}]"
 
 
 def _interval(v, lo, hi) -> str:
