@@ -237,11 +237,21 @@ def test_failure_table_and_its_display():
                            "b": {"optimization (x)": np.zeros(3)}}, fail=0.05)
     assert fails.loc["a", "optimization (x)"] == 0.5 and fails.loc["a", "ours_right"] == 0.25
     assert fails.loc["b", "optimization (x)"] == 0.0 and np.isnan(fails.loc["b", "ours_right"])
-    shown = failure_display(fails, lambda row, col: 100)
+    shown = failure_display(fails.assign(**{"optimization (x)": [0.52, 0.0]}), lambda row, col: 100)
     # SQP strictly inside (0, 1): a bracket, with a Wilson interval covering it (50 and 54 of 100)
-    assert shown.loc["a", "optimization (x)"] == share_range(0.5) + " [40, 63]"
+    assert shown.loc["a", "optimization (x)"] == share_range(0.52) + " [40, 63]"
     assert shown.loc["a", "ours_right"] == "25.0% [17.5, 34.3]"                # Wilson, 25 of 100
     assert shown.loc["b", "optimization (x)"] == "0.0% [0.0, 3.7]" and shown.loc["b", "ours_right"] == ""
+
+
+@pytest.mark.parametrize("share, ok", [(0.52, True), (0.53, True), (0.51, False), (0.54, False)])
+def test_a_far_start_sqp_share_keeps_two_runs_from_its_brackets_edges(share, ok):
+    fails = pd.DataFrame({"optimization (x)": [share]}, index=["a"])
+    if ok:
+        assert failure_display(fails, lambda row, col: 100).loc["a", "optimization (x)"].startswith("50-55 %")
+    else:
+        with pytest.raises(ValueError, match="of an edge of its bracket 50-55 %"):
+            failure_display(fails, lambda row, col: 100)
 
 
 def test_sqp_failures_and_other_minimum():

@@ -241,14 +241,15 @@ NEW_BOUNDARIES = {
         "sqp_diverts", _confirm_at("div", (IDENT, "SQP, eq. (8) as printed"), _DIV, 0.001),
         _confirm_at("div", (IDENT, "SQP, eq. (8) as printed"), _DIV, 0.0)),
     "far-start SQP as printed fails in over half of the runs": (
-        "sqp_30_iterations", _second_at("fails", "matched setting (fresh seeds)", _SQP_C, 0.5001),
+        # just inside: 0.51, as the share is printed in a 10-point bracket that must keep 2 runs from 50 %
+        "sqp_30_iterations", _second_at("fails", "matched setting (fresh seeds)", _SQP_C, 0.51),
         _second_at("fails", "matched setting (fresh seeds)", _SQP_C, 0.5)),
     "far-start SQP / 100J fails in no run": (
         "sqp_30_iterations", _far_scaled_at("failed", 0.0), _far_scaled_at("failed", 0.001)),
     "far-start SQP / 100J under 1 % only after iteration 30": (
         "sqp_30_iterations", _far_scaled_at("below_1pct_low", 30.01), _far_scaled_at("below_1pct_low", 30)),
     "fresh: far-start SQP as printed fails in over half": (
-        "sqp_30_iterations", _confirm_at("scales", ("matched", "as printed"), "failed", 0.5001),
+        "sqp_30_iterations", _confirm_at("scales", ("matched", "as printed"), "failed", 0.51),
         _confirm_at("scales", ("matched", "as printed"), "failed", 0.5)),
     "fresh: far-start SQP / 100J fails in no run": (
         "sqp_30_iterations", _confirm_at("scales", ("matched", "/ 100J"), "failed", 0.0),

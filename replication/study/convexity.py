@@ -24,7 +24,7 @@ from ..core.handeye import handeye_cost, kronecker_operator, vec
 from ..core.so3 import angle_between_deg, exp_map, skew
 from ..core.solvers import WEAK_GAP_FACTOR, ReplicationWarning, chordal_optimal, two_step
 from ..core.solvers.certificate import chordal_newton
-from ..core.stats import share_range, wilson_interval
+from ..core.stats import ROUNDING_RUNS, share_range, wilson_interval
 from .baselines import corrupt_pairs
 from .ledger import check_evidence
 from .simulation import simulate
@@ -76,7 +76,7 @@ def bracket_interval(k, n, step: float = 0.05, level: float = 0.95):
     upper end at the bracket's upper count, so a count that moves inside its bracket moves neither.
     """
     k, n = int(k), int(n)
-    text = share_range(k / n, step)
+    text = share_range(k / n, step, margin=ROUNDING_RUNS / n, what="a share of starts")
     if k in (0, n):
         low, high = wilson_interval(k, n, level)
         return text, low, high
@@ -446,7 +446,8 @@ def convex_problem_record(convexity: pd.DataFrame, random_starts: pd.DataFrame, 
     uncertainty = (
         "Hessian eigenvalues, strictness, angles and costs: exact (deterministic) for each problem and minimum found; "
         "shares of runs: 10 % (one start) and 5 % (several) brackets, bounds, because turning every start by "
-        f"{scale:g} rad changes the outcome of {share_range(changed / perturbed, 0.02)} of {perturbed} starts "
+        f"{scale:g} rad changes the outcome of "
+        f"{share_range(changed / perturbed, 0.02, margin=ROUNDING_RUNS / perturbed)} of {perturbed} starts "
         "(a bound; basins interleave finely, and a machine's rounding does the same), with 95 % Wilson intervals "
         "over each bracket's ends: one start "
         + ", ".join(f"[{100 * r['share low']:.0f}, {100 * r['share high']:.0f}] %" for _, r in rs.iterrows())

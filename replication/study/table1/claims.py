@@ -368,16 +368,17 @@ def _sqp_30_iterations(three, fails, far_scaled, sqp_names, caps, confirm, n_run
                  f"variant is under 1 % within {int(max(from_identity))} iterations "
                  "(" + sqp_per_setting_text(three[:2], sqp_names, "below_1pct", caps)
                  + "). From the far start with eq. (8) as printed SQP does not converge: "
-                 f"{bracket_ci(far_fail, n_runs)} of {n_runs} runs end more than 0.05 from R0, at the iteration limit "
-                 f"(fresh root seed {confirm['seed']}: {bracket_ci(c_printed['failed'], c_n)} of {c_n}). Only from "
+                 f"{bracket_ci(far_fail, n_runs, 0.1)} of {n_runs} runs end more than 0.05 from R0, at the iteration "
+                 f"limit (fresh root seed {confirm['seed']}: {bracket_ci(c_printed['failed'], c_n, 0.1)} of {c_n}). "
+                 "Only from "
                  "the far start with the objective scaled down by 100J does it both converge (failed: "
                  f"{bracket_ci(far_scaled['failed'], n_grid)}; fresh: {bracket_ci(c_scaled['failed'], c_n)}) and need "
                  f"more than 30 iterations (under 1 % from iteration {interval_text(far_scaled, 'below_1pct')}; "
                  f"fresh: {interval_text(c_scaled, 'below_1pct')})",
         uncertainty=_BOOT + " for iterations; 95 % Wilson intervals for shares of runs (in brackets); the far-start "
-                    "failure share of eq. (8) as printed is given as its 5-point bracket, a bound on this machine's "
-                    "share (which runs stop at the iteration limit moves with the machine's rounding), its interval "
-                    "covering the whole bracket", setting=setting)
+                    "failure share of eq. (8) as printed is given as its 10-point bracket, a bound on this machine's "
+                    "share checked to keep 2 runs from the bracket's edges (which runs stop at the iteration limit "
+                    "moves with the machine's rounding), its interval covering the whole bracket", setting=setting)
 
 
 def _sqp_diverts(conv, div, bar, reference, confirm, n_runs, n_grid, setting) -> dict:

@@ -11,7 +11,7 @@ import pandas as pd
 
 from ...core.so3 import angle_between_deg, frobenius_error, orthonormality_residual
 from ...core.solvers import ReplicationWarning, chordal_optimal, sqp
-from ...core.stats import mean_se, paired_ratio_ci, share_range, wilson_interval
+from ...core.stats import ROUNDING_RUNS, mean_se, paired_ratio_ci, share_range, wilson_interval
 from .. import paper
 from ..simulation import simulate
 from .table import DIVERGED, FEASIBLE_TOL, convergence_summary, diverting_runs, iterate_errors
@@ -58,20 +58,22 @@ def share_ci(p, n: int, digits: int = 0) -> str:
     return f"{100 * p:.{digits}f}% [{100 * low:.{digits}f}, {100 * high:.{digits}f}]"
 
 
-def bracket_ci(p, n: int, step: float = 0.05) -> str:
+def bracket_ci(p, n: int, step: float = 0.05, *, margin_runs: int = ROUNDING_RUNS) -> str:
     """A share of ``n`` runs that moves with the machine's rounding: its ``step``-wide bracket
     (:func:`~replication.core.stats.share_range`, a bound on this machine's share) and, in brackets, a 95 % Wilson
     interval covering every count in that bracket (the lower end of the smallest, the upper of the largest).
-    ``none`` and ``all`` do not move: ``"none of <n> [0, <high>]"``, ``"all of <n> [<low>, 100]"``."""
+    ``none`` and ``all``: ``"none of <n> [0, <high>]"``, ``"all of <n> [<low>, 100]"``. The share must keep
+    ``margin_runs`` runs from the bracket's edges (``ValueError`` otherwise: :func:`share_range`'s guard)."""
     p = float(p)
     if p in (0.0, 1.0):
         low, high = wilson_interval(int(round(p * n)), n)
-        return f"{share_range(p)} of {n} " + (f"[0, {100 * high:.1f}]" if p == 0 else f"[{100 * low:.1f}, 100]")
+        return (f"{share_range(p, margin=margin_runs / n)} of {n} "
+                + (f"[0, {100 * high:.1f}]" if p == 0 else f"[{100 * low:.1f}, 100]"))
     k = int(np.floor(p / step + 1e-9))
     k_min = int(np.ceil(k * step * n - 1e-9))
     k_max = min(int(np.ceil(min((k + 1) * step, 1.0) * n - 1e-9)) - 1, n - 1)
     low, high = wilson_interval(k_min, n)[0], wilson_interval(k_max, n)[1]
-    return f"{share_range(p, step)} [{100 * low:.0f}, {100 * high:.0f}]"
+    return f"{share_range(p, step, margin=margin_runs / n, what='a share of runs')} [{100 * low:.0f}, {100 * high:.0f}]"
 
 
 def failure_table(rows: dict, *, fail: float = FAIL) -> pd.DataFrame:
