@@ -7,8 +7,10 @@ array passed through it is multiplied elementwise by ``1 + SCALE * u``, ``u`` un
 jittered run is a stable function of its seed whatever the order of the calls. The entry points that call it: the
 simulations (``study.simulation``: ``simulate``, ``opencv_protocol``, ``rig_streams``; ``core.so3.random_rotations``),
 the simulated lab (its loader and its in-memory recordings) and the real-data loaders (``rig.datafile.read_table``,
-the references). A stored output that changes under it is a digit that another processor's rounding can flip
-(``docs/reproducing.md``, "What strict nbval compares").
+the references). Time stamps are left as they are: they are a recorder's exact ticks, which every machine parses to
+the same double and differences alike (a relative jitter of an epoch in ns would move them by microseconds). A stored
+output that changes under it is a digit that another processor's rounding can flip (``docs/reproducing.md``, "What
+strict nbval compares").
 """
 import json
 import os

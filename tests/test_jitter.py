@@ -104,3 +104,12 @@ def test_a_guard_that_does_not_hold_is_logged_not_raised_when_a_log_is_named(mon
     monkeypatch.delenv("REPLICATION_GUARD_LOG")
     with pytest.raises(ValueError, match="inside its declared bound"):
         declared_bound(10.05, 10, margin=0.1)
+
+
+def test_time_stamps_are_not_jittered_their_values_are(monkeypatch, tmp_path):
+    path = tmp_path / "t.txt"
+    path.write_text("1520530308188189400 0.5 0.25\n1520530308193345800 0.75 0.125\n")
+    monkeypatch.setenv(ENV, "1:1e-9")
+    data, _ = read_table(path, ("t", "a", "b"))
+    assert data[0, 0] == 1520530308188189400.0 and data[1, 0] == 1520530308193345800.0
+    assert data[0, 1] != 0.5 and abs(data[0, 1] - 0.5) < 1e-9

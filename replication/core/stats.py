@@ -130,7 +130,8 @@ def declared_bound(value, low=None, high=None, *, margin, what: str = "the value
         text = f"{low:{fmt}}-{high:{fmt}}" if low >= 0 else f"{low:{fmt}} to {high:{fmt}}"
     else:
         text = f"at least {low:{fmt}}" if high is None else f"at most {high:{fmt}}"
-    inside = (low is None or value >= low + margin) and (high is None or value <= high - margin)
+    tol = 1e-12 * max(1.0, abs(value))  # a value exactly at the margin passes
+    inside = (low is None or value >= low + margin - tol) and (high is None or value <= high - margin + tol)
     distance = min(np.inf if low is None else value - low, np.inf if high is None else high - value)
     if not inside and guard_failed({"what": what, "value": value, "bound": text, "margin": margin,
                                     "distance": distance}):

@@ -71,7 +71,7 @@ class LabRecording:
         for name in ("static_imu", "static_markers", "dynamic_imu", "dynamic_markers"):
             df = getattr(self, name).copy()
             for col in df.columns:
-                if pd.api.types.is_float_dtype(df[col]):
+                if pd.api.types.is_float_dtype(df[col]) and col != "t":  # time stamps are exact ticks
                     df[col] = jitter(df[col].to_numpy())
             setattr(self, name, df)
 
