@@ -38,6 +38,17 @@ def test_single_axis_noise_free_motion_is_never_ready_and_the_axis_is_named(rng,
     assert oc.radius > 1e3  # the noise floor over an unexcited axis: no radius of 0
 
 
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_the_named_axis_has_one_sign_whatever_the_motions_direction(rng, R0, sign):
+    # eigh's eigenvector sign is arbitrary (it flipped between numpy's AVX-512 and AVX2 paths in notebook 08): the
+    # axis is named with its largest component positive
+    axis = sign * np.array([0.3, 0.4, 0.5]) / np.linalg.norm([0.3, 0.4, 0.5])
+    A, B = pair_stream(rng, 200, R0, noise_deg=0.0, axis=axis)
+    oc, _ = _feed(A, B)
+    named = np.array(oc.status()["least_excited_axis_sensor"])
+    assert named[np.argmax(abs(named))] > 0 and abs(named @ (R0.T @ axis)) > 0.999
+
+
 def test_one_pair_repeated_is_one_pair(rng, R0):
     A, B = pair_stream(rng, 1, R0)
     oc, states = _feed(np.repeat(A, 200, 0), np.repeat(B, 200, 0))

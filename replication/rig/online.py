@@ -387,7 +387,7 @@ class OnlineCalibrator:
         G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
         lam, V = np.linalg.eigh(G)
         self._excitation = math.degrees(math.sqrt(max(float(lam[0]), 0.0) / self._w))
-        self._weak_axis = V[:, 0]
+        self._weak_axis = V[:, 0] * math.copysign(1.0, V[int(np.argmax(abs(V[:, 0]))), 0])  # eigh's sign is arbitrary
         if not lam[0] > 1e-12 * max(float(lam[-1]), 1e-300) or n_eff < self.min_pairs:
             self._radius, self._cov = math.inf, None
             return cost
