@@ -1,11 +1,15 @@
-"""Stored notebook outputs hold on another machine: strict nbval under other BLAS kernels, one thread, Agg.
+"""Stored notebook outputs hold on another machine: strict nbval with jittered inputs, numpy's AVX2 paths, other BLAS
+kernels, one thread and Agg.
 
-Re-executes every notebook (one test per notebook, so that a failure names it) in a subprocess with OpenBLAS forced
-to another CPU's kernels (``OPENBLAS_CORETYPE=Sandybridge``: no FMA, other summation order), one thread, and
-``MPLBACKEND=Agg`` (a common CI setting), and compares every stored output as the normal nbval run does. A stored
-digit that depends on last-bit rounding (a diverging or chaotic computation printed as digits) fails here.
-The notebooks are split between this file and ``test_portability_part2.py`` so that two xdist workers (``--dist
-loadfile``) share the re-runs (about 6 min each on 2 cores). Deselect with ``-m "not portability"``.
+Re-executes every notebook (one test per notebook, so that a failure names it) in a subprocess under the variant
+``avx2`` of :data:`replication._jitter.VARIANTS`: every generated and loaded input moved at its last bits
+(``REPLICATION_JITTER``), numpy's SIMD dispatch limited to AVX2 (``NPY_DISABLE_CPU_FEATURES``: an AVX-512 machine
+computes as one without it; on a machine without AVX-512 it changes nothing), OpenBLAS forced to its Haswell kernels
+with one thread, and ``MPLBACKEND=Agg``; every stored output is compared as the normal nbval run does. A stored digit
+that rounding can flip fails here. The longer matrix (the SSE4.2 baseline, Nehalem and SkylakeX kernels, a
+1e-11 jitter with doubled guards) is ``scripts/spread.py``, run before committing notebook outputs. The notebooks
+are split between this file and ``test_portability_part2.py`` so that two xdist workers (``--dist loadfile``) share
+the re-runs. Deselect with ``-m "not portability"``.
 """
 import os
 import subprocess
@@ -14,9 +18,10 @@ from pathlib import Path
 
 import pytest
 
+from replication._jitter import VARIANTS
+
 ROOT = Path(__file__).resolve().parent.parent
-OTHER_MACHINE = {"OPENBLAS_CORETYPE": "Sandybridge", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-                 "MKL_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
+OTHER_MACHINE = {**VARIANTS["avx2"], "MPLBACKEND": "Agg"}
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 #: The notebooks this file re-runs (about half the time: 08, 05, 06, 01 took 160, 128, 61, 10 s); the rest are
 #: test_portability_part2.py's.
@@ -46,5 +51,5 @@ def test_every_numbered_notebook_is_rerun_once():
 
 @pytest.mark.portability
 @pytest.mark.parametrize("notebook", notebooks(True), ids=lambda p: p.stem)
-def test_the_notebook_passes_strict_nbval_on_other_blas_kernels_one_thread_and_agg(notebook, tmp_path):
+def test_the_notebook_passes_strict_nbval_on_another_machine(notebook, tmp_path):
     check_on_another_machine(notebook, tmp_path)

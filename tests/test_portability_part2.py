@@ -6,5 +6,5 @@ from test_portability import check_on_another_machine, notebooks
 
 @pytest.mark.portability
 @pytest.mark.parametrize("notebook", notebooks(False), ids=lambda p: p.stem)
-def test_the_notebook_passes_strict_nbval_on_other_blas_kernels_one_thread_and_agg(notebook, tmp_path):
+def test_the_notebook_passes_strict_nbval_on_another_machine(notebook, tmp_path):
     check_on_another_machine(notebook, tmp_path)
