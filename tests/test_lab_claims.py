@@ -17,6 +17,8 @@ from replication.study.lab import chain, count_text, fastchain, lab_claims, seed
 from replication.study.lab.recording import marker_pixels
 
 SQP_RUNS = ["100 iterations", "1000 iterations", "cost (8) / 2J"]
+#: Notebook 05's declared bounds of SQP's failure shares.
+BOUNDS = {"failed": 0.1, "at limit": 0.75, "seeds": 0.5, "failed, 1000": 0.15, "failed, per pair": 0.05}
 NOISE, CAL = "_without_magnetometer_noise", "_without_magnetometer_calibration_errors"
 
 
@@ -208,8 +210,7 @@ def lab_claims_inputs():
         ablation_table=pd.DataFrame({"spread_ours_right": [0.456]}, index=["without magnetic field deflection"]),
         sensitivity_table=pd.DataFrame({"rms_ours_right": [0.81, 1.5, 2.71]}), table2=table2,
         checks={"ours and SQP agree (largest RMS difference between methods, deg)": 0.012}, pitch_true=-4.09,
-        frames=frames, bounds={"failed": 0.1, "at limit": 0.9, "seeds": 0.5, "failed, 1000": 0.1,
-                               "failed, per pair": 0.02}, sqp_runs=SQP_RUNS)
+        frames=frames, bounds=BOUNDS, sqp_runs=SQP_RUNS)
 
 
 def test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_errors():
@@ -222,7 +223,7 @@ def test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_erro
     row = f.loc["all_minus_mean"]
     assert row["kind"] == "mean" and row["value"] == pytest.approx(diff.mean())
     assert row["se"] == pytest.approx(diff.std(ddof=1) / np.sqrt(20))
-    assert row["text"] == f"{diff.mean():.4f} ± {diff.std(ddof=1) / np.sqrt(20):.4f}"
+    assert row["text"] == "-0.005 to 0"  # a bound declared in advance: the change moves between machines
     change = study["pitch_bias_true_R0" + NOISE].abs() - study["pitch_bias_true_R0"].abs()
     assert f.loc["abs_pitch_bias_change" + NOISE, "value"] == pytest.approx(change.mean())
     assert f.loc["shared_ratio_median", "value"] == pytest.approx(
@@ -234,8 +235,10 @@ def test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_erro
 
 def test_sqp_shares():
     shares = sqp_shares(lab_study(range(1, 21)), SQP_RUNS)
+    counts = shares.pop("counts")
     assert shares == pytest.approx({"failed, 100 iterations": 36 / 200, "failed, 1000 iterations": 8 / 200,
                                     "failed, cost (8) / 2J": 0.0, "at limit": 1.0, "seeds": 0.9})
+    assert counts == {"data sets": 200, "failed": 36, "seeds": 20}
 
 
 def test_lab_claims_name_both_seed_sets_and_the_fresh_section():
@@ -245,8 +248,8 @@ def test_lab_claims_name_both_seed_sets_and_the_fresh_section():
         assert records[claim]["section"] == "The lab over fresh seeds"
         assert "found on seeds 1-20, confirmed on fresh seeds 21-40" in records[claim]["setting"]
     assert records["lab_averaging"]["verdict"] == "fails"
-    assert "-0.0020 ± 0.0002 deg on the first and -0.0020 ± 0.0002 deg on the fresh seeds" \
-        in records["lab_averaging"]["evidence"]
+    assert "between -0.005 and 0 deg on the first and between -0.005 and 0 deg on the fresh seeds (at most 0.5 % " \
+        "and at most 0.5 % of the error" in records["lab_averaging"]["evidence"]
     assert "every sample the more accurate" in records["lab_averaging"]["evidence"]
     measures = records["table2_measures_calibration"]["evidence"]
     assert "above the truth's in 20 of 20 (84-100 %) on the first and 20 of 20 (84-100 %) on the fresh seeds" \
@@ -284,7 +287,6 @@ def _critical(inputs, which, key, *, scale_key=None, factor=0.0, sign=1.0, absol
 
 # (claim, column shifted, finding, critical-shift options, a larger shift breaks the check?)
 MEAN_CHECKS = [
-    ("lab_averaging", "true_all_ours_right", "all_minus_mean", dict(scale_key="true_mean", factor=0.01), True),
     ("lab_averaging", "true_single_ours_right", "single_minus_mean", dict(sign=-1.0), False),
     ("fig6_accuracy", "shared_bias_ours_right" + CAL, "shared_bias_change" + CAL, {}, True),
     ("fig6_accuracy", "shared_bias_ours_right" + NOISE, "shared_bias_change" + NOISE,
@@ -371,21 +373,23 @@ def _per_seed(*counts):
     return np.array(list(counts) + [0] * (20 - len(counts)), dtype=float)
 
 
-# SQP's failure counts (columns of the 20 seeds) just inside and just outside one bound, the others kept
+# SQP's failure counts (columns of the 20 seeds) just inside and just outside one bound's margin of 2 data sets
+# (seeds, failed sets), the others kept
 SQP_CASES = {
-    "more than 10 % of the 200 data sets fail with 100 iterations: 21 of 200, not 20": (
-        {"failed_sqp_100 iterations": _per_seed(2, *[1] * 19), "limit_sqp_100 iterations": _per_seed(2, *[1] * 19)},
-        {"failed_sqp_100 iterations": _per_seed(*[1] * 20), "limit_sqp_100 iterations": _per_seed(*[1] * 20)}),
-    "more than 90 % of those at the limit: 33 of 36, not 32": (
-        {"limit_sqp_100 iterations": _per_seed(*[2] * 15, 1, 1, 1)},
-        {"limit_sqp_100 iterations": _per_seed(*[2] * 14, 1, 1, 1, 1)}),
-    "in more than half the seeds: 11 seeds, not 10": (
-        {"failed_sqp_100 iterations": _per_seed(*[2] * 11), "limit_sqp_100 iterations": _per_seed(*[2] * 11)},
-        {"failed_sqp_100 iterations": _per_seed(*[3] * 10), "limit_sqp_100 iterations": _per_seed(*[3] * 10)}),
-    "1000 iterations: under half the 100-iteration share (and 10 %): 17 of 200, not 18": (
-        {"failed_sqp_1000 iterations": _per_seed(*[1] * 17)}, {"failed_sqp_1000 iterations": _per_seed(*[1] * 18)}),
-    "the objective / 2J: fewer than 2 %: 3 of 200, not 4": (
-        {"failed_sqp_cost (8) / 2J": _per_seed(1, 1, 1)}, {"failed_sqp_cost (8) / 2J": _per_seed(2, 1, 1)}),
+    "more than 10 % of the 200 data sets fail with 100 iterations, by 2: 22 of 200, not 21": (
+        {"failed_sqp_100 iterations": _per_seed(2, 2, *[1] * 18),
+         "limit_sqp_100 iterations": _per_seed(2, 2, *[1] * 18)},
+        {"failed_sqp_100 iterations": _per_seed(2, *[1] * 19), "limit_sqp_100 iterations": _per_seed(2, *[1] * 19)}),
+    "more than 75 % of those at the limit, by 2 of 36: 29 of 36, not 28": (
+        {"limit_sqp_100 iterations": _per_seed(*[2] * 11, *[1] * 7)},
+        {"limit_sqp_100 iterations": _per_seed(*[2] * 10, *[1] * 8)}),
+    "in more than half the seeds, by 2: 12 seeds, not 11": (
+        {"failed_sqp_100 iterations": _per_seed(*[2] * 12), "limit_sqp_100 iterations": _per_seed(*[2] * 12)},
+        {"failed_sqp_100 iterations": _per_seed(*[2] * 11), "limit_sqp_100 iterations": _per_seed(*[2] * 11)}),
+    "1000 iterations: fewer than 15 %, by 2: 28 of 200, not 29": (
+        {"failed_sqp_1000 iterations": _per_seed(*[2] * 14)}, {"failed_sqp_1000 iterations": _per_seed(*[2] * 14, 1)}),
+    "the objective / 2J: fewer than 5 %, by 2: 8 of 200, not 9": (
+        {"failed_sqp_cost (8) / 2J": _per_seed(*[1] * 8)}, {"failed_sqp_cost (8) / 2J": _per_seed(*[1] * 9)}),
 }
 
 
@@ -397,7 +401,18 @@ def test_each_sqp_bound_raises_just_past_it(which, case):
         for column, counts in columns.items():
             inputs[which][column] = counts
         if raises:
-            with pytest.raises(ValueError, match="^claim 'table2_methods_agree': .*within the asserted bounds"):
+            with pytest.raises(ValueError, match="^table2_methods_agree, .*inside its declared bound"):
                 lab_claims(**inputs)
         else:
             assert len(lab_claims(**inputs)) == 10
+
+
+@pytest.mark.parametrize("mean_change, ok", [(-0.0008, True), (-0.0042, True), (-0.0007, False), (-0.0043, False)])
+def test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin(mean_change, ok):
+    study = lab_study(range(1, 21))
+    study["true_all_ours_right"] = study["true_ours_right"] + mean_change
+    if ok:
+        assert seed_findings(study).loc["all_minus_mean", "text"] == "-0.005 to 0"
+    else:
+        with pytest.raises(ValueError, match="every sample of each orientation.*inside its declared bound"):
+            seed_findings(study)

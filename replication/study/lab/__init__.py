@@ -50,7 +50,8 @@ _LAZY = {
     "static_motions": "chain", "LabResult": "chain", "run_lab": "chain", "camera_poses": "chain",
     "refine_camera_orientations": "fastchain", "ecompass_attitudes": "fastchain", "madgwick_marg": "fastchain",
     "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study", "seed_spread": "study",
-    "seed_findings": "study", "count_text": "study", "sqp_shares": "study", "seed_range": "study",
+    "seed_findings": "study", "count_text": "study", "sqp_shares": "study", "check_sqp_shares": "study",
+    "seed_range": "study",
     "lab_claims": "claims",
 }
 

@@ -11,8 +11,17 @@ from __future__ import annotations
 
 import pandas as pd
 
+from ...core.stats import declared_bound
 from ..ledger import check_evidence
-from .study import seed_findings, seed_range, seed_spread, sqp_shares
+from .study import (
+    ALL_MINUS_MEAN_BOUND,
+    ALL_MINUS_MEAN_TEXT,
+    check_sqp_shares,
+    seed_findings,
+    seed_range,
+    seed_spread,
+    sqp_shares,
+)
 
 __all__ = ["SECTIONS", "lab_claims"]
 
@@ -102,16 +111,23 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
     def deg(key):
         return _both(f1, f2, key, " deg")
 
-    def share(f):  # the change with every sample, as a share of the error
-        return f"{100 * abs(f.loc['all_minus_mean', 'value']) / f.loc['true_mean', 'value']:.2f} %"
+    def changes(f):  # the declared bound of seed_findings, "-0.005 to 0", in words
+        lo, hi = ALL_MINUS_MEAN_BOUND
+        return (f"between {lo:g} and {hi:g}" if f.loc["all_minus_mean", "text"] == ALL_MINUS_MEAN_TEXT
+                else f.loc["all_minus_mean", "text"])
+
+    def share(f):  # the change with every sample, as a share of the error: a declared bound (see seed_findings)
+        return declared_bound(100 * abs(f.loc['all_minus_mean', 'value']) / f.loc['true_mean', 'value'], high=0.5,
+                              margin=0.05, what="lab_averaging: the change with every sample (% of the error)") + " %"
 
     # a count "replicates" if its Wilson interval lies on the same side of one half on both sets of seeds
     sides = {int(f.loc["estimate_beats_truth", "low"] > 0.5) - int(f.loc["estimate_beats_truth", "high"] < 0.5)
              for f in (f1, f2)}
     preference = "is the same on both sets of seeds" if sides in ({1}, {-1}) else "does not replicate"
-    signs = {bool(f.loc["all_minus_mean", "value"] < 0) for f in (f1, f2)}
-    favours = ("every sample the more accurate" if signs == {True} else "the mean the more accurate"
-               if signs == {False} else "no consistent sign")
+    # the sign is read from the declared bounds of seed_findings ("-0.005 to 0": checked to keep a margin from 0 that
+    # exceeds the change's spread between machines), not from the value
+    signs = {f.loc["all_minus_mean", "text"] for f in (f1, f2)}
+    favours = ("every sample the more accurate" if signs == {ALL_MINUS_MEAN_TEXT} else "no consistent sign")
 
     def spread(frame, col, digits=2):
         return seed_spread(frame[col], digits)
@@ -163,11 +179,7 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
                        f"magnetometer's calibration errors on {label} "
                        f"({f.loc['abs_pitch_bias_change' + _CAL, 'text']} deg)")
         shares = sqp_shares(frame, sqp_runs)
-        check_evidence(shares["failed, 100 iterations"] > bounds["failed"] and shares["at limit"] > bounds["at limit"]
-                       and shares["seeds"] > bounds["seeds"] and shares["failed, 1000 iterations"]
-                       < min(bounds["failed, 1000"], shares["failed, 100 iterations"] / 2)
-                       and shares["failed, cost (8) / 2J"] < bounds["failed, per pair"], "table2_methods_agree",
-                       f"SQP's failure shares within the asserted bounds {bounds} on {label} (measured {shares})")
+        check_sqp_shares(shares, bounds, label)
 
     n = len(study)
     records = [dict(
@@ -181,11 +193,14 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
                  "frame at or before it; the j-th samples of consecutive orientations as one motion), the mean of "
                  "each orientation gains nothing: the two-step estimates' mean error to the true R0 is "
                  f"{f1.loc['true_mean', 'value']:.2f} and {f2.loc['true_mean', 'value']:.2f} deg with the means, and "
-                 f"with every sample it changes by {deg('all_minus_mean')} ({share(f1)} and {share(f2)} of the "
-                 f"error; {favours}). The noise the mean does reduce is that of one sample: with the first sample "
+                 f"with every sample it changes by {changes(f1)} deg on the first and {changes(f2)} deg on the fresh "
+                 f"seeds ({share(f1)} and {share(f2)} of the error; {favours}; bounds declared in advance, as the "
+                 "change moves by up to 0.0005 deg between machines, as much as its standard error). The noise the "
+                 "mean does reduce is that of one sample: with the first sample "
                  f"of each orientation instead, the error grows by {deg('single_minus_mean')}, a comparison the "
                  "paper does not make",
-        uncertainty=f"mean ± SE of the paired differences over {n} seeds per set",
+        uncertainty=f"mean ± SE of the paired differences over {n} seeds per set; the change with every sample as a "
+                    "declared bound checked with a margin of 0.0008 deg",
         setting=both_setting), dict(
         claim="fig6_consistency", verdict="undecidable from the text",
         evidence="'very small' is not quantified, and the spread depends on error sizes the paper does not give: in "
