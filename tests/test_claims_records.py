@@ -394,9 +394,9 @@ def test_lab_claims_ids_verdicts_and_numbers():
     corr = rec["table2_correlation"]["evidence"]
     assert f"roll {seed_spread(study['corr_roll_ours_right'], 4)}; pitch" in corr
     assert "reached for roll in 0 of 20 (0-16 %) on the first and 0 of 20 (0-16 %) on the fresh seeds" in corr
-    assert ("stops short (> 10 deg off) on more than 10% of the 200 data sets (more than 90% of them at the iteration "
-            "limit), in more than 50% of the 20 seeds; with 1000 iterations on fewer than 10%, with its objective "
-            "divided by 2J on fewer than 2%") in rec["table2_methods_agree"]["condition"]
+    assert ("stops short (> 10 deg off) on more than 10% of the 200 data sets (more than 75% of them at the iteration "
+            "limit), in more than 50% of the 20 seeds; with 1000 iterations on fewer than 15%, with its objective "
+            "divided by 2J on fewer than 5%") in rec["table2_methods_agree"]["condition"]
     assert "differ by at most 0.012 deg" in rec["table2_methods_agree"]["evidence"]
     measures = rec["table2_measures_calibration"]["evidence"]
     assert "(its chordal mean, 2.05 and 2.05 deg off the true R0 on average)" in measures
