@@ -3,7 +3,7 @@
 Every numbered notebook (or those named) is executed once per *variant* of the machine: its inputs jittered at the
 last bits (``REPLICATION_JITTER``, ``replication/_jitter.py``), numpy's SIMD dispatch limited
 (``NPY_DISABLE_CPU_FEATURES``: AVX2 or the SSE4.2 baseline on an AVX-512 machine), OpenBLAS forced to another CPU's
-kernels (``OPENBLAS_CORETYPE``) with one thread, and a *margin* variant whose jitter is 1e-11 (10^4 times the
+kernels (``OPENBLAS_CORETYPE``) with one thread, and a *margin* variant whose jitter is 1e-13 (100 times the
 last-bit one). Every output strict nbval compares (text, HTML, streams, the ledger's records; not images, not cells
 marked ``NBVAL_IGNORE_OUTPUT``) is split into its numbers and the text between them, and compared with the stored
 one, number by number.
@@ -11,7 +11,7 @@ one, number by number.
 For each stored number the report gives its *spread*: the values it takes over the last-bit variants (a stored
 number must not move: spread 0 at its printed precision), and its *margin*: a printed number does not carry its
 unrounded value, so its distance to the nearest rounding edge is measured as the relative input jitter it withstands
-(unchanged under the 1e-11 variant: at least 10^4 times what a processor's rounding does to the inputs). A number
+(unchanged under the 1e-13 variant: a hundred times what a processor's rounding does to the inputs). A number
 that moves in any variant is *fragile*; the exit status is 1 if any is.
 
 Usage::
@@ -158,8 +158,8 @@ def compare(stored: dict, runs: dict) -> list[dict]:
             rows.append({"cell": key[0], "output": key[1], "index": i, "stored": value, "values": values,
                          "fragile": bool(moved),
                          "spread": sorted({value, *(values[v] for v in values if v in LAST_BIT)}),
-                         "margin": "below 1e-11" if "margin" in moved else
-                                   (">= 1e-11" if "margin" in values else "not measured"),
+                         "margin": "below 1e-13" if "margin" in moved else
+                                   (">= 1e-13" if "margin" in values else "not measured"),
                          "what": ("moves in " + ", ".join(moved)) if moved else "stable"})
     return rows
 

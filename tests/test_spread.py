@@ -70,8 +70,8 @@ def test_the_margin_variant_measures_the_distance_to_the_edge():
     stored = {(1, "1:text/plain"): "0.27 and 3"}
     runs = {"jitter": {(1, "1:text/plain"): "0.27 and 3"}, "margin": {(1, "1:text/plain"): "0.28 and 3"}}
     rows = {r["stored"]: r for r in spread.compare(stored, runs)}
-    assert rows["0.27"]["margin"] == "below 1e-11" and rows["0.27"]["fragile"]
-    assert rows["3"]["margin"] == ">= 1e-11" and not rows["3"]["fragile"]
+    assert rows["0.27"]["margin"] == "below 1e-13" and rows["0.27"]["fragile"]
+    assert rows["3"]["margin"] == ">= 1e-13" and not rows["3"]["fragile"]
 
 
 def test_guards_that_fail_at_twice_their_margin_are_fragile_with_their_distance(monkeypatch, tmp_path):
