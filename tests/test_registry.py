@@ -193,3 +193,32 @@ def test_motions_accept_an_atol_in_range(problem, atol):
     assert Motions(A, B, atol=atol).J == 20
     with pytest.raises(ValueError, match="not a rotation matrix"):
         Motions(2 * A, B, atol=atol)
+
+
+# ------------------------------------------------------------------ the same checks for every re-solve (issue 33, 1)
+
+@pytest.mark.parametrize("answer, match", [
+    (lambda X: 2 * X, r"returned a matrix that is not a rotation on replicates at batch index \(0,\): .*det R = 8"),
+    (lambda X: _edited(X, (1, 0, 2), np.nan),
+     r"returned a matrix that is not a rotation on replicates at batch index \(1,\): NaN or inf"),
+    (lambda X: X[0], r"returned an array of shape \(3, 3\) on replicates; expected"),
+])
+def test_checked_core_refuses_what_solve_refuses_naming_the_solver(bad_core, two_noisy, answer, match):
+    A, B, X = two_noisy
+    name = bad_core(lambda motions: answer(X))
+    with pytest.raises(_registry.SolverAnswerError, match=rf"solver '{name}' {match}"):
+        _registry.checked_core(name, Motions(A, B), where=" on replicates")
+    with pytest.raises(ValueError, match=rf"solver '{name}'"):  # solve() says the same, as a ValueError
+        solve(name, A, B)
+
+
+def test_checked_core_returns_the_masks_of_non_rotations(bad_core, two_noisy):
+    A, B, X = two_noisy
+    for edit, which in ((lambda X: _edited(X, 1, -X[1]), 2), (lambda X: _edited(X, 0, np.nan), 1)):
+        name = bad_core(lambda motions, e=edit: e(X))
+        R, failed, reflection = _registry.checked_core(name, Motions(A, B))
+        assert (failed.tolist(), reflection.tolist()) == (([True, False], [False, False]) if which == 1 else
+                                                          ([False, False], [False, True]))
+    name = bad_core(lambda motions: X)
+    R, failed, reflection = _registry.checked_core(name, Motions(A, B))
+    assert np.array_equal(R, X) and not failed.any() and not reflection.any()

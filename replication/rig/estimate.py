@@ -28,8 +28,8 @@ from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import pair_residual_deg
 from ..core.motions import prepare_motions
 from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map, rotation_angle_deg, yaw_pitch_roll_deg
-from ..core.solvers import ReplicationWarning, solve, solver_info
-from .quality import Evidence, Verdict, judge
+from ..core.solvers import ReplicationWarning, SolverAnswerError, checked_core, solve, solver_info
+from .quality import Evidence, Reason, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
 
 __all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices",
@@ -105,11 +105,16 @@ def _progress(items, **options):
     return tqdm(items, file=sys.stderr, **options)
 
 
-def bootstrap_replicates(motions, method, options, index_sets, *, progress=False):
-    """The solver's core on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list of index
-    arrays of any lengths); validated pairs, so no re-validation; the replicates' own warnings would repeat the
-    main solve's and are not issued."""
-    core = solver_info(method).core
+def bootstrap_replicates(motions, method, options, index_sets, *, progress=False, masks=False):
+    """The solver on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list of index arrays of
+    any lengths), through the registry's one door for re-solves
+    (:func:`replication.core.solvers.checked_core`): validated pairs, so no re-validation; the replicates' own
+    warnings would repeat the main solve's and are not issued; every answer is checked as :func:`solve` checks it.
+
+    Returns the replicates' answers ``R_boot``; with ``masks`` ``(R_boot, failed, reflection)``, with the masks of
+    the solver's declared failures (NaN blocks) and reflections, which are no rotations and never enter a radius
+    (without ``masks`` any of them raises). Raises :class:`~replication.core.solvers.SolverAnswerError` (a
+    ``ValueError`` naming the solver) where an answer is neither a rotation nor a NaN block (e.g. ``2 R``)."""
     out = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ReplicationWarning)
@@ -119,14 +124,37 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
             if progress:
                 chunks = _progress(chunks, desc=f"bootstrap ({method})", unit="chunk")
             for chunk in chunks:
-                out.append(core(motions.subset(index_sets[chunk]), **options))
-            return np.concatenate(out)
-        sets = index_sets
-        if progress:
-            sets = _progress(sets, desc=f"station bootstrap ({method})", unit="replicate")
-        for idx in sets:
-            out.append(core(motions.subset(idx), **options))
-    return np.stack(out)
+                out.append(checked_core(method, motions.subset(index_sets[chunk]),
+                                        where=f" on bootstrap replicates {chunk[0]}..{chunk[-1]}", **options))
+        else:
+            sets = index_sets
+            if progress:
+                sets = _progress(sets, desc=f"station bootstrap ({method})", unit="replicate")
+            for k, idx in enumerate(sets):
+                R, failed, reflection = checked_core(method, motions.subset(idx), where=f" on bootstrap replicate {k}",
+                                                     **options)
+                out.append((R[None], failed[None], reflection[None]))
+    R_boot, failed, reflection = (np.concatenate(part) for part in zip(*out))
+    if masks:
+        return R_boot, failed, reflection
+    bad = _bad_replicates(method, failed, reflection)
+    if bad is not None:
+        raise SolverAnswerError(bad.message)
+    return R_boot
+
+
+def _bad_replicates(method, failed, reflection):
+    """A ``fail`` reason naming the solver where some bootstrap replicates are no rotations (no radius then), or
+    None."""
+    if not (failed.any() or reflection.any()):
+        return None
+    parts = [f"declared a failure (NaN) on {int(failed.sum())}" if failed.any() else "",
+             f"returned a reflection (det -1) on {int(reflection.sum())}" if reflection.any() else ""]
+    bad = int((failed | reflection).sum())
+    return Reason("bootstrap_answers", "fail", float(bad), 0.0,
+                  f"solver {method!r} " + " and ".join(p for p in parts if p) + f" of {failed.size} bootstrap "
+                  f"replicates: its answer is not a rotation on resamples of these pairs, so no radius is given and "
+                  f"its answer here is not to be trusted; use chordal_optimal")
 
 
 def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
@@ -145,6 +173,10 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     for w in caught:  # still said to the caller, as solve() says it
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     R = sol.R
+    if not np.isfinite(R).all() or not np.linalg.det(R) > 0:  # solve() warned; a calibration needs a rotation
+        what = "declared a failure (returned NaN)" if not np.isfinite(R).all() else "returned a reflection (det -1)"
+        raise SolverAnswerError(f"solver {method!r} {what} on these {len(A)} pairs: no rotation to calibrate with "
+                                f"(its warning: {ours[-1].message if ours else 'none'}); use chordal_optimal")
     res = pair_residual_deg(R, A, B)
     J = len(A)
     rng = np.random.default_rng(seed)
@@ -157,15 +189,20 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         resamples = f"pairs in moving blocks of {int(min(J, block))}"
         index_sets = (lambda: block_indices(rng, J, block, n_bootstrap))
     ci, boot = float("nan"), np.empty((0, 3))
-    boot_failed = None
+    boot_failed, bad_replicates = None, None
     if n_bootstrap and units >= 3:
         try:
-            R_boot = bootstrap_replicates(motions, method, options, index_sets(), progress=progress)
+            R_boot, failed, reflection = bootstrap_replicates(motions, method, options, index_sets(),
+                                                              progress=progress, masks=True)
+        except SolverAnswerError:  # the solver broke its contract: the registry's error, naming it
+            raise
         except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
             boot_failed = str(err).split(":")[0]
         else:
-            ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
-            boot = np.degrees(log_map(R_boot @ R.T))
+            bad_replicates = _bad_replicates(method, failed, reflection)
+            if bad_replicates is None:  # never a radius from non-rotations
+                ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
+                boot = np.degrees(log_map(R_boot @ R.T))
     motion = float(np.median(rotation_angle_deg(A)))
     station_medians = None if stations is None else per_station_median(res, stations)
     verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
@@ -175,7 +212,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
                              reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
-                             **evidence))
+                             **evidence), extra=[bad_replicates] if bad_replicates is not None else ())
     offset, corr, applied = time_offset
     diagnostics = {"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
                    "motion_median_deg": motion}
