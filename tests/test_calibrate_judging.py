@@ -311,3 +311,25 @@ def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_
     # the last split leaves 5 % of the pairs and 5 blocks (of 1 s) after it: later than 0.15's 51 s
     assert 60.0 * (1 - 0.15) < r.change_test["splits_to_s"] <= 60.0 * (1 - CHANGE_MIN_SHARE)
     assert "a change outside cannot be told" in r.summary()
+
+
+# ---------------------------------------------------------------------- no clock, no offset (issue 33, point 6)
+
+def test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed(rng):
+    R0, C, S = _stations(rng, N=12)
+    r = calibrate_poses(C, S, n_bootstrap=20)
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["time_offset_s"] is None and report["time_offset_correlation"] is None
+    assert report["time_offset_applied"] is False and "time offset" not in r.summary()
+    assert "null for static poses" in SCHEMA["properties"]["time_offset_s"]["description"]
+    # the schema still refuses what is neither a number nor null
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**report, "time_offset_s": "0.0"}, SCHEMA)
+
+
+def test_a_stream_report_keeps_its_measured_clock_offset(rng):
+    _, camera, gyro, _ = rig_streams(30.0, rng=rng, camera_noise_deg=0.05)
+    report = calibrate(camera, gyro, n_bootstrap=0).to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert isinstance(report["time_offset_s"], float)

@@ -63,7 +63,8 @@ class CalibrationResult:
     n_pairs : int
     time_offset_s, time_offset_correlation : float
         Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the angular speeds
-        there (NaN for static pose sets).
+        there; both NaN (``null`` in the report) for static pose sets, which have no clock: no offset was measured,
+        so an export leaves a file's own offset as it was.
     time_offset_applied : bool
     time_offset_ci95_s : (float, float)
         95 % block-bootstrap interval of the offset (:func:`replication.rig.association.offset_analysis`; NaN without a
