@@ -61,7 +61,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
                          f"lower it or give poses that differ more")
     result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=reference, time_offset=(float("nan"), float("nan"), False), options=options,
+                          seed=seed, reference=reference, time_offset=(np.nan, np.nan, False), options=options,
                           evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
                          stations=(i, j, len(C)))
     if diagnose:
