@@ -333,3 +333,56 @@ def test_a_stream_report_keeps_its_measured_clock_offset(rng):
     report = calibrate(camera, gyro, n_bootstrap=0).to_dict()
     jsonschema.validate(report, SCHEMA)
     assert isinstance(report["time_offset_s"], float)
+
+
+# -------------------------------------------------------------------- stations counted once (issue 33, point 2)
+
+def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
+    """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the same radius (it
+    was 0.68 -> 0.44 deg, ok, nothing said)."""
+    R0, C, S = _stations(rng, N=10)
+    once = calibrate_poses(C, S, n_bootstrap=100, seed=3)
+    twice = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), n_bootstrap=100, seed=3)
+    assert twice.bootstrap_ci95_deg == pytest.approx(once.bootstrap_ci95_deg, rel=1e-9)
+    assert so3.angle_between_deg(twice.R, once.R) < 1e-9
+    assert once.station_repeats is None and "repeated_stations" not in _reasons(once)
+    assert once.bootstrap_resamples == "stations"
+    assert twice.station_repeats == {"stations": 20, "distinct": 10, "groups": [[k, k + 10] for k in range(10)]}
+    assert twice.bootstrap_resamples == "distinct stations (repeats as one)"
+    reason = _reasons(twice)["repeated_stations"]
+    assert reason.level == "warning" and reason.measured == 10
+    assert reason.message.startswith("10 of the 20 stations repeat others (0-based, the same pose on both sides")
+    assert "0 = 10; 1 = 11; 2 = 12; 3 = 13; 4 = 14; and 5 more groups" in reason.message
+    assert "counted once in the bootstrap (10 distinct stations)" in reason.message
+    report = twice.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["station_repeats"]["distinct"] == 10 and once.to_dict()["station_repeats"] is None
+
+
+def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
+    R0, C, S = _stations(rng, N=8, station_noise_deg=0.3)
+    sd = np.radians(0.3) / np.sqrt(3)
+    C3 = np.concatenate([C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C])
+    S3 = np.concatenate([S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S])
+    r = calibrate_poses(C3, S3, n_bootstrap=50)
+    assert r.station_repeats["distinct"] == 8 and r.station_repeats["groups"][0] == [0, 8, 16]
+    consecutive = calibrate_poses(C3, S3, n_bootstrap=50, pairs="consecutive")  # repeats drawn as one there too
+    assert consecutive.bootstrap_resamples == "distinct stations (repeats as one)"
+
+
+@pytest.mark.parametrize("apart_deg, same", [(1.99, True), (2.01, False)])
+def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg, same):
+    """The boundary is min_motion_deg (2 deg by default): closer on both sides, a pair of them is noise, not motion,
+    and they are one station; a station apart on one side only is no repeat (a bad measurement, not the same pose)."""
+    from replication.rig.poses import repeated_stations
+
+    R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
+    turn = so3.exp_map(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
+    C2, S2 = np.concatenate([C, (R0 @ turn @ R0.T @ C[2])[None]]), np.concatenate([S, (turn @ S[2])[None]])
+    labels = repeated_stations(C2, S2, 2.0)
+    assert bool(labels[6] == 2) is same and list(labels[:6]) == list(range(6))
+    one_side = np.concatenate([C, C[2][None]]), np.concatenate([S, (turn @ S[2])[None]])
+    if not same:
+        assert repeated_stations(*one_side, 2.0)[6] == 6
+    r = calibrate_poses(C2, S2, n_bootstrap=20)
+    assert (r.station_repeats is not None) is same

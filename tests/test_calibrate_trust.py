@@ -624,3 +624,19 @@ def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solve
         est.bootstrap_replicates(motions, name, {}, [s for s in sets])
     R, failed, reflection = est.bootstrap_replicates(motions, name, {}, [s for s in sets], masks=True)
     assert not reflection.any() and not failed.any()  # calls 4-7: the bad one (call 2) was in the first run
+
+
+@pytest.mark.parametrize("factor, unit", [(1e9, "nanoseconds"), (1e6, "microseconds"), (1e3, "milliseconds")])
+def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(rig, factor, unit):
+    camera, gyro, _ = rig
+    t0 = 1000.0  # absolute stamps, as a recording has: the camera's in another unit
+    late = OrientationStream((camera.t + t0) * factor, camera.R, "c")
+    gyro = GyroStream(gyro.t + t0, gyro.omega, "g")
+    about = re.escape(f"{factor:.0e}")
+    with pytest.raises(ValueError, match=rf"a factor of about {about}: the camera file's time stamps are likely in "
+                                         rf"another unit than they were read in \({unit} read as seconds\)"):
+        calibrate(late, gyro, n_bootstrap=0)
+    early = OrientationStream(camera.t + t0, camera.R, "c")  # and the other way round: the gyro's in seconds / unit
+    slow = GyroStream((gyro.t + t0) / factor, gyro.omega * factor, "g")
+    with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* \(seconds read as {unit}\)"):
+        calibrate(early, slow, n_bootstrap=0)

@@ -79,18 +79,42 @@ def block_indices(rng, J: int, block: int, n_bootstrap: int) -> np.ndarray:
 def station_indices(rng, stations, n_bootstrap: int) -> list:
     """Station bootstrap (see the module notes): for each replicate, the pair indices, pair ``k`` of stations
     ``(i_k, j_k)`` repeated ``m_i m_j`` times (``m`` the stations' multiplicities in a draw of ``N`` with
-    replacement). ``stations = (i, j, N)``."""
-    i, j, N = stations
+    replacement). ``stations = (i, j, N)``, or ``(i, j, N, labels)``: stations that share a label (repeats of one
+    station) are drawn together, as one, ``D`` distinct stations drawn ``D`` times."""
+    i, j, N = stations[:3]
+    labels = stations[3] if len(stations) > 3 else np.arange(N)
+    distinct, group = np.unique(labels, return_inverse=True)
     out = []
     for _ in range(n_bootstrap):
-        m = np.bincount(rng.integers(0, N, N), minlength=N)
+        m = np.bincount(rng.integers(0, len(distinct), len(distinct)), minlength=len(distinct))[group]
         out.append(np.repeat(np.arange(len(i)), m[i] * m[j]))
     return out
 
 
+def _repeats(stations):
+    """The report's ``station_repeats`` (stations given, distinct, the groups of repeats), or None without repeats."""
+    if stations is None or len(stations) < 4 or len(np.unique(stations[3])) == stations[2]:
+        return None
+    labels = np.asarray(stations[3])
+    groups = [np.flatnonzero(labels == g).tolist() for g in np.unique(labels)]
+    return {"stations": int(stations[2]), "distinct": len(groups), "groups": [g for g in groups if len(g) > 1]}
+
+
+def _repeats_reason(repeats):
+    if repeats is None:
+        return None
+    named = "; ".join(" = ".join(str(k) for k in g) for g in repeats["groups"][:5]) + (
+        f"; and {len(repeats['groups']) - 5} more groups" if len(repeats["groups"]) > 5 else "")
+    extra = repeats["stations"] - repeats["distinct"]
+    return Reason("repeated_stations", "warning", float(extra), 0.0,
+                  f"{extra} of the {repeats['stations']} stations repeat others (0-based, the same pose on both "
+                  f"sides within the motion a pair needs): {named}; each group is counted once in the bootstrap "
+                  f"({repeats['distinct']} distinct stations), since repeats do not add independent poses")
+
+
 def per_station_median(res, stations) -> np.ndarray:
     """Median residual (deg) of the pairs that use each station (NaN for a station in no pair)."""
-    i, j, N = stations
+    i, j, N = stations[:3]
     return np.array([np.median(res[(i == s) | (j == s)]) if np.any((i == s) | (j == s)) else np.nan
                      for s in range(N)])
 
@@ -180,8 +204,10 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     res = pair_residual_deg(R, A, B)
     J = len(A)
     rng = np.random.default_rng(seed)
-    if stations is not None and parameters.get("pairs", "all") == "all":
-        units, resamples = float(stations[2]), "stations"
+    repeats = _repeats(stations)
+    if stations is not None and (parameters.get("pairs", "all") == "all" or repeats is not None):
+        distinct = len(np.unique(stations[3])) if len(stations) > 3 else stations[2]
+        units, resamples = float(distinct), "stations" if repeats is None else "distinct stations (repeats as one)"
         index_sets = (lambda: station_indices(rng, stations, n_bootstrap))
     else:
         block = 2 if stations is not None else block
@@ -212,7 +238,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
                              reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
-                             **evidence), extra=[bad_replicates] if bad_replicates is not None else ())
+                             **evidence), extra=[r for r in (bad_replicates, _repeats_reason(repeats)) if r is not None])
     offset, corr, applied = time_offset
     diagnostics = {"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
                    "motion_median_deg": motion}
@@ -245,6 +271,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         bootstrap_resamples=resamples if n_bootstrap else "none",
         bootstrap_covers=RADIUS_COVERS,
         pose_residual_median_deg=None if station_medians is None else station_medians.tolist(),
+        station_repeats=repeats,
         diagnostics=diagnostics,
     )
 

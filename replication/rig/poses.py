@@ -17,7 +17,12 @@ from ..core.so3 import rotation_angle_deg
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .report import CalibrationResult
 
-__all__ = ["calibrate_poses", "pose_pairs"]
+__all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "SAME_STATION_FLOOR_DEG"]
+
+#: Two stations are the same (a repeat) when neither side turns more than ``min_motion_deg`` between them (a pair
+#: of them carries noise, not motion, and is dropped), and at least when neither turns more than this (deg): the
+#: same pose given twice, to rounding, with ``min_motion_deg = 0``.
+SAME_STATION_FLOOR_DEG = 1e-6
 
 
 def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
@@ -53,6 +58,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     if C.shape != S.shape or C.ndim != 3:
         raise ValueError(f"need two (N, 3, 3) arrays of the same N, got {C.shape} and {S.shape}")
     A, B, i, j = pose_pairs(C, S, pairs=pairs, min_motion_deg=min_motion_deg, stations=True)
+    labels = repeated_stations(C, S, max(min_motion_deg, SAME_STATION_FLOOR_DEG))
     parameters = {"method": method, "pairs": pairs, "min_motion_deg": min_motion_deg, "n_bootstrap": n_bootstrap,
                   "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
     inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
@@ -63,7 +69,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(np.nan, np.nan, False), options=options,
                           evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
-                         stations=(i, j, len(C)))
+                         stations=(i, j, len(C), labels))
     if diagnose:
         from .diagnose import pose_direction
 
@@ -72,6 +78,20 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         if found:
             result = with_reasons(result, found)
     return result
+
+
+def repeated_stations(C, S, within_deg: float) -> np.ndarray:
+    """Station labels: stations whose camera and sensor attitudes both lie within ``within_deg`` of each other (a
+    station given twice, identical or re-measured within the noise) share a label (connected groups, labelled by
+    their first station); ``labels[k] == k`` for every station that repeats none before it."""
+    i, j = np.triu_indices(len(C), k=1)
+    same = ((rotation_angle_deg(C[j] @ np.swapaxes(C[i], -1, -2)) <= within_deg)
+            & (rotation_angle_deg(S[j] @ np.swapaxes(S[i], -1, -2)) <= within_deg))
+    labels = np.arange(len(C))
+    for a, b in zip(i[same], j[same]):  # union of the groups, each labelled by its smallest station
+        la, lb = labels[a], labels[b]
+        labels[labels == max(la, lb)] = min(la, lb)
+    return labels
 
 
 def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0, stations: bool = False):

@@ -303,8 +303,10 @@ def judge(e: Evidence, extra=()) -> Verdict:
             if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
                 continue  # the axis spread above says it, with its number
             reasons.append(Reason("observability", "warning", None, None,
-                                  "the solver issued ObservabilityWarning: another rotation fits eq. (8) almost as "
-                                  "well (motions small for the noise, outlier pairs, or nearly a second solution)"))
+                                  "the solver issued ObservabilityWarning (its words in the warnings): one pair "
+                                  "alone carries the rotation about the dominant axis, or another rotation fits eq. "
+                                  "(8) almost as well (motions small for the noise, outlier pairs, or nearly a second "
+                                  "solution)"))
             continue
         reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))

@@ -85,6 +85,10 @@ class CalibrationResult:
         What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
     pose_residual_median_deg : list of float or None
         Static pose sets: each station's median pair residual (0-based station order).
+    station_repeats : dict or None
+        Static pose sets with stations that repeat others (:func:`replication.rig.poses.repeated_stations`):
+        ``stations`` given, ``distinct``, and the ``groups`` of repeats (0-based); each group is one station in the
+        bootstrap. None otherwise.
     change_test : dict or None
         Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
         recording? times since the camera's first sample), or why it was not run; None for static pose sets.
@@ -123,6 +127,7 @@ class CalibrationResult:
     bootstrap_resamples: str = "none"
     bootstrap_covers: str = RADIUS_COVERS
     pose_residual_median_deg: list | None = None
+    station_repeats: dict | None = None
     change_test: dict | None = None
     online: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
@@ -162,6 +167,7 @@ class CalibrationResult:
             "bootstrap_resamples": self.bootstrap_resamples,
             "bootstrap_covers": self.bootstrap_covers,
             "pose_residual_median_deg": self.pose_residual_median_deg,
+            "station_repeats": self.station_repeats,
             "change_test": self.change_test,
             "online": self.online,
             "observability": {

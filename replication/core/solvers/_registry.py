@@ -196,8 +196,10 @@ def solver_info(method: str) -> SolverInfo:
 def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel: int = 3) -> None:
     """Issue an :class:`ObservabilityWarning` where the motions weakly determine ``R0``.
 
-    Two tests, each naming what it measured: nearly single-axis motion (axis spread below
-    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small), and a
+    Three tests, each naming what it measured: nearly single-axis motion (axis spread below
+    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small); motion about one
+    axis but for one pair (``J >= 3``: the spread without the pair that turns most about other axes below
+    ``warn_axis_spread_deg``, :attr:`replication.core.motions.Motions.leave_one_out_spread_deg`); and a
     second rotation fitting eq. (8) almost as well (gap between the two largest eigenvalues of ``sym(K)``
     below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
     outlier pairs, or near-symmetric motions).
@@ -220,8 +222,18 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
             ObservabilityWarning,
             stacklevel=stacklevel,
         )
+    loo, pair = motions.leave_one_out_spread_deg
+    single = ~weak & (loo < warn_axis_spread_deg)  # NaN (J < 3) never
+    if np.any(single):
+        i = _first_index(single)
+        warnings.warn(
+            f"{int(np.sum(single))} of {single.size} problems rest on one pair for the rotation about their dominant "
+            f"axis: without pair {int(pair[i])} (the largest turn about other axes) the axis spread falls from "
+            f"{float(spread[i]):.3g} deg to {float(loo[i]):.3g} deg < {warn_axis_spread_deg:g} deg, so that one "
+            f"pair's error decides R0 unseen; add larger motions about other axes",
+            ObservabilityWarning, stacklevel=stacklevel)
     flat = symmetric_gap < WEAK_GAP_FACTOR * np.maximum(inconsistency, 0.0)
-    flat &= ~weak  # already reported
+    flat &= ~weak & ~single  # already reported
     if np.any(flat):
         i = np.unravel_index(int(np.argmin(np.where(flat, symmetric_gap / np.maximum(inconsistency, 1e-300),
                                                     np.inf))), flat.shape) if flat.ndim else ()
@@ -248,13 +260,10 @@ def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
 
 
 def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
-    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8).
-
-    * :class:`LocalMinimumWarning`: cost (8) above the certified minimum ``f*`` by more than
-      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than ``WRONG_POINT_DEG`` from the minimiser (another
-      stationary point, or stopped far away; the gradient of (8) tells which);
-    * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
-      certified minimiser (it stopped short of the minimum).
+    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8): :class:`LocalMinimumWarning`
+    (cost (8) above the certified minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than
+    ``WRONG_POINT_DEG`` from the minimiser: another stationary point, or stopped far away, the gradient of (8) tells
+    which); else :class:`ConvergenceWarning` farther than ``LOCAL_ANGLE_TOL_DEG`` from it (stopped short).
 
     Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
     about itself, are skipped. Returns the boolean mask of problems flagged either way.
@@ -386,12 +395,9 @@ def checked_core(method: str, motions: Motions, *, where: str = "", **options):
 
 def _checked_answer(method: str, motions: Motions, R, where: str = ""):
     """A core's answer as a float array, with its masks ``(failed, reflection)``; :class:`SolverAnswerError` if it
-    breaks the contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem).
-
-    One vectorised pass over the batch: orthogonality ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against
-    :data:`ANSWER_ATOL` (a reflection passes both and is only warned about); any NaN or inf in a block that is not
-    all NaN fails them.
-    """
+    breaks the contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem). One pass:
+    ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against :data:`ANSWER_ATOL` (a reflection passes both and is only
+    warned about); any NaN or inf in a block that is not all NaN fails them."""
     expected = motions.batch_shape + (3, 3)
     if not isinstance(R, np.ndarray) or R.shape != expected:
         got = (f"an array of shape {R.shape}" if isinstance(R, np.ndarray) else
