@@ -238,7 +238,8 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
                              reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
-                             **evidence), extra=[r for r in (bad_replicates, _repeats_reason(repeats)) if r is not None])
+                             **evidence),
+                    extra=[r for r in (bad_replicates, _repeats_reason(repeats)) if r is not None])
     offset, corr, applied = time_offset
     diagnostics = {"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
                    "motion_median_deg": motion}
