@@ -183,11 +183,13 @@ def _bad_replicates(method, failed, reflection):
 
 def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
                 parameters, inputs, pair_times, progress, stations=None, extra_diagnostics=None,
-                time_offset_ci95_s=(math.nan, math.nan), time_offset_peak_margin=math.nan, change_test=None):
+                time_offset_ci95_s=(math.nan, math.nan), time_offset_peak_margin=math.nan, change_test=None,
+                station_residual=None):
     """Solve, residuals, bootstrap, verdict: a :class:`~replication.rig.report.CalibrationResult`.
 
     ``stations = (i, j, N)``: the pairs come from static stations (pair ``k`` between stations ``i_k`` and
-    ``j_k``): the bootstrap resamples stations, and each station's median residual is reported and judged.
+    ``j_k``): the bootstrap resamples stations, and each station's median residual is reported and judged (or, with
+    ``station_residual(R)``, each station's own residual at the estimate ``R``).
     """
     motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
     with warnings.catch_warnings(record=True) as caught:
@@ -230,7 +232,8 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                 ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
                 boot = np.degrees(log_map(R_boot @ R.T))
     motion = float(np.median(rotation_angle_deg(A)))
-    station_medians = None if stations is None else per_station_median(res, stations)
+    station_medians = None if stations is None else (per_station_median(res, stations) if station_residual is None
+                                                     else station_residual(R))
     verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
                              bootstrap_deg=ci if math.isfinite(ci) else None,
                              axis_spread_deg=float(sol.observability.camera_axis_spread_deg),
@@ -238,6 +241,8 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
                              reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
+                             pose_residual_kind=("its own residual" if station_residual else
+                                                 "median residual of its pairs"),
                              **evidence),
                     extra=[r for r in (bad_replicates, _repeats_reason(repeats)) if r is not None])
     offset, corr, applied = time_offset

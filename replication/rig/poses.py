@@ -17,7 +17,8 @@ from ..core.so3 import rotation_angle_deg
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .report import CalibrationResult
 
-__all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "SAME_STATION_FLOOR_DEG"]
+__all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
+           "SAME_STATION_FLOOR_DEG"]
 
 #: Two stations are the same (a repeat) when neither side turns more than ``min_motion_deg`` between them (a pair
 #: of them carries noise, not motion, and is dropped), and at least when neither turns more than this (deg): the
@@ -69,7 +70,8 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
                           seed=seed, reference=reference, time_offset=(np.nan, np.nan, False), options=options,
                           evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
-                         stations=(i, j, len(C), labels))
+                         stations=(i, j, len(C), labels),
+                         station_residual=(lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None)
     if diagnose:
         from .diagnose import pose_direction
 
@@ -78,6 +80,22 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         if found:
             result = with_reasons(result, found)
     return result
+
+
+def own_residuals_deg(C, S, R) -> np.ndarray:
+    """Each station's own residual (deg) at the estimate ``R``: the angle between its ``Y_k = S_k^T R^T C_k`` (the
+    target's frame in the robot base's, the same at every station when ``C_k = R0 S_k Y``) and a robust centre of
+    them (the chordal mean of the half nearest the station whose median angle to the others is least).
+
+    With consecutive pairs a bad station spoils both its pairs and each neighbour shares one of them, so the pairs'
+    residuals blame the neighbours too; a station's own residual blames it alone."""
+    Y = np.swapaxes(S, -1, -2) @ R.T @ C
+    angles = rotation_angle_deg(np.swapaxes(Y[:, None], -1, -2) @ Y[None, :])
+    medoid = int(np.argmin(np.median(angles, axis=1)))
+    near = angles[medoid] <= np.median(angles[medoid])
+    U, _, Vt = np.linalg.svd(Y[near].mean(axis=0))
+    centre = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+    return rotation_angle_deg(np.swapaxes(Y, -1, -2) @ centre)
 
 
 def repeated_stations(C, S, within_deg: float) -> np.ndarray:

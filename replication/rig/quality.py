@@ -184,6 +184,7 @@ class Evidence:
     change_sides_fit: float | None = None   # the larger median residual / median motion of its two sides
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
+    pose_residual_kind: str = "median residual of its pairs"  # or "its own residual" (consecutive pairs)
     mirror_fit_ratio: float | None = None   # the fit with the sensor's frame mirrored: its median residual / ours
     mirror_normal: tuple | None = None      # the sensor axis turned about least
 
@@ -216,7 +217,7 @@ def _quaternion(R) -> str:
     return "(" + ", ".join(f"{v:.4f}" for v in as_quaternion(R)) + ")"
 
 
-def _outlying_poses(medians):
+def _outlying_poses(medians, kind="median residual of its pairs"):
     """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
     factor = THRESHOLDS["pose_residual_ratio"][0]
     finite = np.isfinite(medians)
@@ -231,7 +232,7 @@ def _outlying_poses(medians):
     named = ", ".join(f"{int(k)} ({medians[k]:.3g} deg)" for k in bad[:5]) + (f" and {len(bad) - 5} more"
                                                                                 if len(bad) > 5 else "")
     return Reason("pose_outliers", "warning", float(ratio[bad[0]]), factor,
-                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): "
+                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, {kind}): "
                   f"{named} > {factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: "
                   f"a bad measurement at that station (a target detection, a robot pose); its pairs pull R0")
 
@@ -319,7 +320,7 @@ def judge(e: Evidence, extra=()) -> Verdict:
                               f"and little about its normal{normal}; rotate about that axis too, or check the "
                               f"sensor's axes"))
     if e.pose_residual_medians_deg is not None:
-        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
+        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float), e.pose_residual_kind))
     sides_fit = e.change_sides_fit is None or e.change_sides_fit <= THRESHOLDS["residual_to_motion"][1]
     if e.change is not None and e.change.significant and sides_fit:  # a re-mount leaves each side fitting its R0
         c = e.change
