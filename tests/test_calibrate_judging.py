@@ -351,7 +351,7 @@ def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
     assert twice.bootstrap_resamples == "distinct stations (repeats as one)"
     reason = _reasons(twice)["repeated_stations"]
     assert reason.level == "warning" and reason.measured == 10
-    assert reason.message.startswith("10 of the 20 stations repeat others (0-based, the same pose on both sides")
+    assert reason.message.startswith("10 of the 20 stations repeat others (0-based, the same attitude on both sides")
     assert "0 = 10; 1 = 11; 2 = 12; 3 = 13; 4 = 14; and 5 more groups" in reason.message
     assert "counted once in the bootstrap (10 distinct stations)" in reason.message
     report = twice.to_dict()

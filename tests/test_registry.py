@@ -278,3 +278,11 @@ def test_two_turns_or_two_pairs_are_not_one_pair(rng):
     assert Motions(A, B).leave_one_out_spread_deg[0] > 5.0
     _, A, B = _one_axis_plus_one_turn(rng, J=2, noise_deg=0.0)
     assert np.isnan(Motions(A, B).leave_one_out_spread_deg[0])  # J = 2 has no redundancy to speak of
+
+
+def test_opencvs_own_door_warns_too(rng):
+    from replication.core.solvers import ObservabilityWarning, calibrate_hand_eye
+
+    _, A, B = _one_axis_plus_one_turn(rng)
+    with pytest.warns(ObservabilityWarning, match="rest on one pair for the rotation about their dominant axis"):
+        calibrate_hand_eye(A, B, "CALIB_HAND_EYE_TSAI")

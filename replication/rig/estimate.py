@@ -107,7 +107,7 @@ def _repeats_reason(repeats):
         f"; and {len(repeats['groups']) - 5} more groups" if len(repeats["groups"]) > 5 else "")
     extra = repeats["stations"] - repeats["distinct"]
     return Reason("repeated_stations", "warning", float(extra), 0.0,
-                  f"{extra} of the {repeats['stations']} stations repeat others (0-based, the same pose on both "
+                  f"{extra} of the {repeats['stations']} stations repeat others (0-based, the same attitude on both "
                   f"sides within the motion a pair needs): {named}; each group is counted once in the bootstrap "
                   f"({repeats['distinct']} distinct stations), since repeats do not add independent poses")
 

@@ -42,7 +42,15 @@ excitation (online)         < 1 deg          --               the RMS rotation a
                                                               motion so far does not determine R0
 outlying station (pose      > 3 x the        --               a station whose pairs all fit badly holds a bad
 sets): median residual of   stations'                         measurement (a chessboard detection, a robot pose);
-its pairs                   median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x
+its pairs (consecutive       median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x;
+pairs: its own residual)                                      consecutive pairs share a station with each neighbour,
+                                                              so there the station's own S^T R^T C is judged
+repeated stations (pose     any              --               a station given twice (both sides within min_motion_deg
+sets)                                                         of another) adds no independent pose: each group is
+                                                              named and counted once in the station bootstrap
+bootstrap replicates that   --               any              a solver whose answer on a resample is a reflection or
+are no rotations                                              NaN: no radius is given from them (a matrix that is no
+                                                              rotation at all is refused naming the solver)
 median motion per pair      < 1 deg          < 0.5 deg        a rig at rest, or an interval too short, leaves pairs of
                                                               noise (real recordings: 1.75 deg on EuRoC at 0.25 s,
                                                               3.9-52 deg at 1 s, 12.7 deg between Tabb's stations)
