@@ -45,10 +45,10 @@ def main(first, last, N, r, mode, old=False):
         ok += res.verdict.level == "ok"
     n = last - first + 1
     lo, hi = wilson_interval(hits, n)
-    lo2, hi2 = wilson_interval(hits, n - none)
+    given = "no run has a radius" if none == n else "of those with a radius {} of {} = {:.3f} [{:.3f}, {:.3f}]".format(
+        hits, n - none, hits / (n - none), *wilson_interval(hits, n - none))
     print(f"N = {N} x {r} {mode}{' (old bootstrap)' if old else ''}, seeds {first}-{last}: covered {hits} of {n} = "
-          f"{hits / n:.3f} [{lo:.3f}, {hi:.3f}]; no radius in {none}; of those with a radius {hits} of {n - none} = "
-          f"{hits / (n - none):.3f} [{lo2:.3f}, {hi2:.3f}]; verdict ok in {ok}")
+          f"{hits / n:.3f} [{lo:.3f}, {hi:.3f}]; no radius in {none}; {given}; verdict ok in {ok}")
 
 
 if __name__ == "__main__":

@@ -436,3 +436,9 @@ def test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_i
 
     medians = per_station_median(pair_residual_deg(r.R, A, B), (i, j, len(C)))
     assert max(medians[6], medians[8]) > 3 * np.median(medians)  # the old rule blamed a neighbour
+
+
+def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
+    R0, C, S = _stations(rng, N=10)
+    r = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), min_motion_deg=0.0, n_bootstrap=20)
+    assert r.station_repeats["distinct"] == 10 and "repeated_stations" in _reasons(r)
