@@ -111,9 +111,16 @@ def reproduce(args: argparse.Namespace) -> int:
 
 def claims_command(args: argparse.Namespace) -> int:
     """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
-    file or README refused: the message on stderr)."""
+    file or README refused, or more than one of ``--check``, ``--readme``, ``--summary`` given: the message on
+    stderr)."""
     from .study.ledger import collect, to_markdown, to_summary, update_readme
 
+    given = [flag for flag in ("--check", "--readme", "--summary") if getattr(args, flag[2:])]
+    if len(given) > 1:  # each is one action: refused before any work rather than one of them silently ignored
+        print(f"error: {' and '.join(given)} cannot be used together: --check compares README's claims table with "
+              f"the records, --readme writes it, --summary prints the compact table; give one of them",
+              file=sys.stderr)
+        return 2
     try:
         ledger = collect()
         if args.check:

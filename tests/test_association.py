@@ -234,3 +234,15 @@ def test_euroc_off_grid_shifts_come_back_within_0_01_ms():
     for shift in 1e-3 * np.array([0.13, 1.71, 2.29]):
         found = estimate_time_offset(camera, OrientationStream(truth.t + shift, truth.R, "gt"))[0]
         assert abs(found - base - shift) <= 0.01e-3, (1e3 * shift, 1e3 * (found - base - shift))
+
+
+def test_the_offset_search_names_stamps_in_different_units():
+    """The message the online front end used to show ("overlap 1000000000000.000..1060.793 s") names the units."""
+    t = np.arange(1000.0, 1060.8, 0.05)
+    Q = so3.exp_map(np.stack([np.sin(t), np.cos(0.7 * t), 0.1 * t], axis=-1))
+    with pytest.raises(ValueError, match=r"overlap in fewer than 10 camera samples \(overlap .*\); the camera stream "
+                                         r"spans 6.075e\+10 s and the sensor stream 60.75 s, a factor of about 1e\+09: "
+                                         r"the camera file's .* \(nanoseconds read as seconds\)"):
+        estimate_time_offset(OrientationStream(t * 1e9, Q, "c"), OrientationStream(t, Q, "s"))
+    with pytest.raises(ValueError, match=r"fewer than 10 camera samples \(overlap [-0-9.]+\.\.[-0-9.]+ s\)$"):
+        estimate_time_offset(OrientationStream(t, Q, "c"), OrientationStream(t + 500.0, Q, "s"))  # no unit mistake

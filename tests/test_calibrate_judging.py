@@ -311,3 +311,134 @@ def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_
     # the last split leaves 5 % of the pairs and 5 blocks (of 1 s) after it: later than 0.15's 51 s
     assert 60.0 * (1 - 0.15) < r.change_test["splits_to_s"] <= 60.0 * (1 - CHANGE_MIN_SHARE)
     assert "a change outside cannot be told" in r.summary()
+
+
+# ---------------------------------------------------------------------- no clock, no offset (issue 33, point 6)
+
+def test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed(rng):
+    R0, C, S = _stations(rng, N=12)
+    r = calibrate_poses(C, S, n_bootstrap=20)
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["time_offset_s"] is None and report["time_offset_correlation"] is None
+    assert report["time_offset_applied"] is False and "time offset" not in r.summary()
+    assert "null for static poses" in SCHEMA["properties"]["time_offset_s"]["description"]
+    # the schema still refuses what is neither a number nor null
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**report, "time_offset_s": "0.0"}, SCHEMA)
+
+
+def test_a_stream_report_keeps_its_measured_clock_offset(rng):
+    _, camera, gyro, _ = rig_streams(30.0, rng=rng, camera_noise_deg=0.05)
+    report = calibrate(camera, gyro, n_bootstrap=0).to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert isinstance(report["time_offset_s"], float)
+
+
+# -------------------------------------------------------------------- stations counted once (issue 33, point 2)
+
+def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
+    """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the same radius (it
+    was 0.68 -> 0.44 deg, ok, nothing said)."""
+    R0, C, S = _stations(rng, N=10)
+    once = calibrate_poses(C, S, n_bootstrap=100, seed=3)
+    twice = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), n_bootstrap=100, seed=3)
+    assert twice.bootstrap_ci95_deg == pytest.approx(once.bootstrap_ci95_deg, rel=1e-9)
+    assert so3.angle_between_deg(twice.R, once.R) < 1e-9
+    assert once.station_repeats is None and "repeated_stations" not in _reasons(once)
+    assert once.bootstrap_resamples == "stations"
+    assert twice.station_repeats == {"stations": 20, "distinct": 10, "groups": [[k, k + 10] for k in range(10)]}
+    assert twice.bootstrap_resamples == "distinct stations (repeats as one)"
+    reason = _reasons(twice)["repeated_stations"]
+    assert reason.level == "warning" and reason.measured == 10
+    assert reason.message.startswith("10 of the 20 stations repeat others (0-based, the same attitude on both sides")
+    assert "0 = 10; 1 = 11; 2 = 12; 3 = 13; 4 = 14; and 5 more groups" in reason.message
+    assert "counted once in the bootstrap (10 distinct stations)" in reason.message
+    report = twice.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["station_repeats"]["distinct"] == 10 and once.to_dict()["station_repeats"] is None
+
+
+def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
+    R0, C, S = _stations(rng, N=8, station_noise_deg=0.3)
+    sd = np.radians(0.3) / np.sqrt(3)
+    C3 = np.concatenate([C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C])
+    S3 = np.concatenate([S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S])
+    r = calibrate_poses(C3, S3, n_bootstrap=50)
+    assert r.station_repeats["distinct"] == 8 and r.station_repeats["groups"][0] == [0, 8, 16]
+    consecutive = calibrate_poses(C3, S3, n_bootstrap=50, pairs="consecutive")  # repeats drawn as one there too
+    assert consecutive.bootstrap_resamples == "distinct stations (repeats as one)"
+
+
+@pytest.mark.parametrize("apart_deg, same", [(1.99, True), (2.01, False)])
+def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg, same):
+    """The boundary is min_motion_deg (2 deg by default): closer on both sides, a pair of them is noise, not motion,
+    and they are one station; a station apart on one side only is no repeat (a bad measurement, not the same pose)."""
+    from replication.rig.poses import repeated_stations
+
+    R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
+    turn = so3.exp_map(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
+    C2, S2 = np.concatenate([C, (R0 @ turn @ R0.T @ C[2])[None]]), np.concatenate([S, (turn @ S[2])[None]])
+    labels = repeated_stations(C2, S2, 2.0)
+    assert bool(labels[6] == 2) is same and list(labels[:6]) == list(range(6))
+    one_side = np.concatenate([C, C[2][None]]), np.concatenate([S, (turn @ S[2])[None]])
+    if not same:
+        assert repeated_stations(*one_side, 2.0)[6] == 6
+    r = calibrate_poses(C2, S2, n_bootstrap=20)
+    assert (r.station_repeats is not None) is same
+
+
+# ------------------------------------------------------------------ name the culprit (issue 33, point 5)
+
+def _bad_stations(bad, N=20, seed=5, bad_deg=3.0):
+    rng = np.random.default_rng(seed)
+    R0, C, S = _stations(rng, N=N)
+    for b in bad:
+        C[b] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
+    return C, S
+
+
+def _blamed(result):
+    reason = _reasons(result).get("pose_outliers")
+    if reason is None:
+        return set()
+    named = reason.message.split("):", 1)[1].split(">")[0]
+    return {int(part.split("(")[0]) for part in named.split(",")}
+
+
+@pytest.mark.parametrize("bad_deg", [3.0, 6.0])
+@pytest.mark.parametrize("bad", [[7], [7, 8], [7, 9], [3, 12]], ids=["one", "two-adjacent", "two-one-apart", "apart"])
+def test_with_consecutive_pairs_only_the_bad_stations_are_blamed(bad, bad_deg):
+    """Their neighbours share a bad pair each; their own residual does not. The pairs' median (the rule before) named
+    a neighbour in 7 of these 8 cases (and nothing for two adjacent stations 3 deg off)."""
+    C, S = _bad_stations(bad, bad_deg=bad_deg)
+    r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)
+    assert _blamed(r) == set(bad)
+    assert "(0-based index, its own residual)" in _reasons(r)["pose_outliers"].message
+
+
+def test_with_consecutive_pairs_a_clean_set_blames_no_station():
+    C, S = _bad_stations([])
+    assert _blamed(calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)) == set()
+
+
+def test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_its_neighbours():
+    from replication.rig.estimate import per_station_median
+    from replication.rig.poses import own_residuals_deg, pose_pairs
+
+    C, S = _bad_stations([7], bad_deg=6.0)
+    r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)
+    own = own_residuals_deg(C, S, r.R)
+    assert _blamed(r) == {7}
+    assert 3.0 < own[7] < 7.0 and np.max(np.delete(own, 7)) < 3 * np.median(own) < own[7]
+    A, B, i, j = pose_pairs(C, S, pairs="consecutive", stations=True)
+    from replication.core.handeye import pair_residual_deg
+
+    medians = per_station_median(pair_residual_deg(r.R, A, B), (i, j, len(C)))
+    assert max(medians[6], medians[8]) > 3 * np.median(medians)  # the old rule blamed a neighbour
+
+
+def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
+    R0, C, S = _stations(rng, N=10)
+    r = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), min_motion_deg=0.0, n_bootstrap=20)
+    assert r.station_repeats["distinct"] == 10 and "repeated_stations" in _reasons(r)

@@ -7,6 +7,7 @@ EuRoC, Tabb) check the command line end to end.
 """
 import json
 import math
+import re
 
 import jsonschema
 import numpy as np
@@ -522,3 +523,120 @@ def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsy
                 "gyro", "--method", "sqp", "--bootstrap", "0")
     assert code == EXIT_FAIL and "LocalMinimumWarning" in capsys.readouterr().out
 
+
+
+# ------------------------------------------------------------------- one door for every solver answer (issue 33, 1)
+
+@pytest.fixture
+def door_solver(monkeypatch):
+    """``make(answer) -> name``: registers a solver whose core returns ``answer(R, call)`` (``R`` the certified
+    minimiser, ``call`` 0 for the calibration's own solve, then 1, 2, ... for each later call: the replicates)."""
+    from replication.core.solvers import _registry, register, solver_info
+
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    core = solver_info("chordal_optimal").core
+
+    def make(answer):
+        calls = []
+
+        def bad(motions):
+            calls.append(1)
+            return answer(core(motions), len(calls) - 1)
+
+        name = f"door_test_{len(_registry._REGISTRY)}"
+        register(name, reference="test: a solver bad on some calls")(bad)
+        return name
+
+    return make
+
+
+def _poses(rig, step=60):
+    camera, _, sensor = rig
+    return np.swapaxes(camera.R[::step], -1, -2), np.swapaxes(sensor.at(camera.t[::step]), -1, -2)
+
+
+def _nan_like(R):
+    return np.full_like(R, np.nan)
+
+
+RAW_MESSAGES = ("Non-positive determinant", "R_est contains", "SVD did not converge")
+
+
+def test_a_solver_returning_2R_on_replicates_is_refused_naming_it_at_every_door(rig, door_solver):
+    C, S = _poses(rig)
+    camera, gyro, _ = rig
+    name = door_solver(lambda R, call: R if call == 0 else 2 * R)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a matrix that is not a rotation on bootstrap "
+                                         r"replicate 0 at batch index \(\): .*det R = 8"):
+        calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
+    name = door_solver(lambda R, call: R if call == 0 else 2 * R)  # streams: the replicates come batched
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a matrix that is not a rotation on bootstrap "
+                                         r"replicates 0\.\.29 at batch index \(0,\)"):
+        calibrate(camera, gyro, method=name, **_fast(diagnose=False))
+
+
+@pytest.mark.parametrize("what, answer, words", [
+    ("reflection", lambda R: -R, r"returned a reflection \(det -1\)"),
+    ("nan", _nan_like, r"declared a failure \(NaN\)"),
+])
+@pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
+def test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius(
+        rig, door_solver, what, answer, words, bad_calls, counted):
+    """No bad replicate: a radius and no such reason; one bad replicate of 20 (the boundary) already fails."""
+    C, S = _poses(rig)
+    name = door_solver(lambda R, call: answer(R) if call in bad_calls else R)
+    r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
+    reasons = _reasons(r)
+    if not counted:
+        assert "bootstrap_answers" not in reasons and math.isfinite(r.bootstrap_ci95_deg)
+        return
+    reason = reasons["bootstrap_answers"]
+    assert reason.level == "fail" and r.verdict.level == "fail" and reason.measured == counted
+    assert re.search(rf"solver '{name}' {words} on {counted} of 20 bootstrap replicates", reason.message)
+    assert not math.isfinite(r.bootstrap_ci95_deg) and r.diagnostics["bootstrap_rotvec_deg"].size == 0
+    assert r.to_dict()["bootstrap_ci95_deg"] is None
+
+
+@pytest.mark.parametrize("answer, words", [(lambda R: -R, r"returned a reflection \(det -1\)"),
+                                           (_nan_like, r"declared a failure \(returned NaN\)")])
+def test_a_solver_whose_own_answer_is_no_rotation_is_refused_naming_it(rig, door_solver, answer, words):
+    C, S = _poses(rig)
+    camera, gyro, _ = rig
+    for run in (lambda name: calibrate_poses(C, S, method=name, n_bootstrap=20),
+                lambda name: calibrate(camera, gyro, method=name, **_fast())):
+        name = door_solver(lambda R, call: answer(R))
+        with pytest.warns(Warning), pytest.raises(ValueError) as err:
+            run(name)
+        assert re.search(rf"solver '{name}' {words} on these \d+ pairs: no rotation", str(err.value))
+        assert not any(raw in str(err.value) for raw in RAW_MESSAGES)
+
+
+def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solver):
+    import replication.rig.estimate as est
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    motions = prepare_motions(*pose_pairs(C, S))
+    name = door_solver(lambda R, call: -R if call == 2 else R)
+    sets = est.block_indices(np.random.default_rng(0), motions.J, 1, 4)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a reflection \(det -1\) on 1 of 4 bootstrap"):
+        est.bootstrap_replicates(motions, name, {}, [s for s in sets])
+    R, failed, reflection = est.bootstrap_replicates(motions, name, {}, [s for s in sets], masks=True)
+    assert not reflection.any() and not failed.any()  # calls 4-7: the bad one (call 2) was in the first run
+
+
+@pytest.mark.parametrize("factor, unit", [(1e9, "nanoseconds"), (1e6, "microseconds"), (1e3, "milliseconds")])
+def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(rig, factor, unit):
+    camera, gyro, _ = rig
+    t0 = 1000.0  # absolute stamps, as a recording has: the camera's in another unit
+    late = OrientationStream((camera.t + t0) * factor, camera.R, "c")
+    gyro = GyroStream(gyro.t + t0, gyro.omega, "g")
+    about = re.escape(f"{factor:.0e}")
+    with pytest.raises(ValueError, match=rf"a factor of about {about}: the camera file's time stamps are likely in "
+                                         rf"another unit than they were read in \({unit} read as seconds\)"):
+        calibrate(late, gyro, n_bootstrap=0)
+    early = OrientationStream(camera.t + t0, camera.R, "c")  # and the other way round: the gyro's in seconds / unit
+    slow = GyroStream((gyro.t + t0) / factor, gyro.omega * factor, "g")
+    with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* \(seconds read as {unit}\)"):
+        calibrate(early, slow, n_bootstrap=0)

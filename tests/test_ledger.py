@@ -472,3 +472,24 @@ def test_a_reader_that_stops_early_ends_the_output_quietly():
     assert runs["bare"].returncode != 0 and "BrokenPipeError" in runs["bare"].stderr  # the pipe did break
     out = runs["wrapped"]
     assert out.stdout == "| claim |\n" and out.stderr == "" and out.returncode == 141
+
+
+@pytest.mark.parametrize("flags", [("--summary", "--readme"), ("--readme", "--summary"), ("--check", "--readme"),
+                                   ("--check", "--summary"), ("--check", "--readme", "--summary")])
+def test_conflicting_claims_flags_are_refused_naming_them_before_any_work(flags, capsys, monkeypatch):
+    from replication.study import ledger as ledger_module
+
+    monkeypatch.setattr(ledger_module, "collect", lambda *a, **k: pytest.fail("work done despite the conflict"))
+    assert _claims_cli(*flags) == 2
+    err = capsys.readouterr().err
+    ordered = [f for f in ("--check", "--readme", "--summary") if f in flags]
+    assert f"error: {' and '.join(ordered)} cannot be used together" in err and "give one of them" in err
+
+
+@pytest.mark.parametrize("flag", ["--summary", "--readme", "--check"])
+def test_each_claims_flag_alone_is_not_refused_as_a_conflict(flag, capsys, monkeypatch):
+    from replication.study import ledger as ledger_module
+
+    monkeypatch.setattr(ledger_module, "collect", lambda *a, **k: (_ for _ in ()).throw(ValueError("collected")))
+    assert _claims_cli(flag) == 2  # it reached the work (which this test makes fail), not the conflict check
+    assert "error: collected" in capsys.readouterr().err

@@ -42,6 +42,7 @@ def test_to_dict_holds_every_field():
     res = _result(verdict=Verdict.of([reason]), warnings=("W: x",), parameters={"p": 1}, inputs={"i": 2},
                   reference_error_deg=0.75, time_offset_ci95_s=(0.01, np.inf), time_offset_peak_margin=0.4,
                   bootstrap_resamples="pairs in moving blocks of 4", pose_residual_median_deg=[0.1, np.nan],
+                  station_repeats={"stations": 3, "distinct": 2, "groups": [[0, 2]]},
                   change_test={"run": False, "note": "n"}, online={"o": 1})
     d = res.to_dict()
     assert d == {
@@ -69,6 +70,7 @@ def test_to_dict_holds_every_field():
         "bootstrap_resamples": "pairs in moving blocks of 4",
         "bootstrap_covers": RADIUS_COVERS,
         "pose_residual_median_deg": [0.1, None],
+        "station_repeats": {"stations": 3, "distinct": 2, "groups": [[0, 2]]},
         "change_test": {"run": False, "note": "n"},
         "online": {"o": 1},
         "observability": {"spectral_ratio": 0.5, "camera_axis_spread_deg": 12.34, "sensor_axis_spread_deg": 11.0},

@@ -200,6 +200,29 @@ class Motions:
         return camera[0], sensor[0]
 
     @property
+    def leave_one_out_spread_deg(self):
+        """``(spread, pair)``: the smaller of the camera and sensor axis spreads (as :attr:`axis_spread_deg`, RMS over
+        the ``J - 1`` other pairs) once the pair that turns most about axes other than the dominant one is left
+        out, and that pair's index (per problem; that of the side with the smaller spread). Far below the full
+        spread, the rotation about the dominant axis rests on that one pair. NaN where ``J < 3``."""
+        def compute():
+            out = []
+            for w in self.rotation_vectors:
+                gram = np.swapaxes(w, -1, -2) @ w
+                n = np.linalg.eigh(gram)[1][..., :, -1]  # the dominant axis
+                along = np.einsum("...ja,...a->...j", w, n)
+                perp = np.sum(w * w, axis=-1) - along ** 2  # squared turn about axes other than n
+                k = np.argmax(perp, axis=-1)
+                wk = np.take_along_axis(w, k[..., None, None], axis=-2)[..., 0, :]
+                rest = gram - wk[..., :, None] * wk[..., None, :]
+                ev = np.clip(eigvalsh3(rest), 0.0, None)
+                spread = np.degrees(np.sqrt(ev[..., 1] / max(self.J - 1, 1)))
+                out.append((np.where(self.J >= 3, spread, np.nan), k))
+            (cam, k_cam), (sen, k_sen) = out
+            return np.fmin(cam, sen), np.where(sen < cam, k_sen, k_cam)
+        return self._cached("leave_one_out", compute)
+
+    @property
     def rms_motion_deg(self):
         """RMS rotation angle of the camera motions, degrees."""
         return self._spreads()[0][1]

@@ -21,7 +21,7 @@ import numpy as np
 from ..core.checks import check_number
 from ..core.handeye import relative_rotations
 from ..core.so3 import log_map
-from .streams import GyroStream, OrientationStream, integrate_gyro
+from .streams import GyroStream, OrientationStream, integrate_gyro, time_unit_mismatch
 
 __all__ = ["OffsetEstimate", "estimate_time_offset", "offset_analysis", "offset_in_words", "motion_pairs",
            "stream_pairs"]
@@ -100,7 +100,9 @@ def _overlap(camera, sensor, max_offset):
     keep = (camera.t >= lo) & (camera.t <= hi)
     t = camera.t[keep]
     if len(t) < 10:
-        raise ValueError(f"the streams overlap in fewer than 10 camera samples (overlap {lo:.3f}..{hi:.3f} s)")
+        unit = time_unit_mismatch(camera, sensor)  # a time-unit mistake is named, with the spans that show it
+        raise ValueError(f"the streams overlap in fewer than 10 camera samples (overlap {lo:.3f}..{hi:.3f} s)"
+                         + ("" if unit is None else "; " + unit[2]))
     return t, _speed(camera.R[keep], t)
 
 

@@ -41,7 +41,13 @@ from .association import (  # re-exported: public names here
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
-from .streams import GyroStream, OrientationStream, integrate_gyro  # integrate_gyro re-exported: a public name
+from .streams import (  # integrate_gyro re-exported: a public name
+    PLAUSIBLE_SPAN_S,
+    GyroStream,
+    OrientationStream,
+    integrate_gyro,
+    time_unit_mismatch,
+)
 
 __all__ = ["calibrate", "OverlapError"]
 
@@ -149,32 +155,16 @@ def _gap_free_window(camera, sensor, max_offset):
     return part if len(part.t) >= 10 else camera
 
 
-#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit mistake puts one
-#: stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach that in 2286).
-PLAUSIBLE_SPAN_S = (1.0, 1e4)
-
-
 def _time_unit_reason(camera, sensor):
-    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file's time stamps in
-    another unit than its loader read them in); it blames the stream whose span is implausible for a recording."""
+    """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9
+    (:func:`replication.rig.streams.time_unit_mismatch`, which names the units and the stream to blame)."""
     from .quality import Reason
 
-    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
-    if not (cs > 0 and ss > 0):
+    found = time_unit_mismatch(camera, sensor)
+    if found is None:
         return None
-    ratio = max(cs, ss) / min(cs, ss)
-    factor = next((f for f in (1e3, 1e6, 1e9) if 0.5 < ratio / f < 2.0), None)
-    if factor is None:
-        return None
-    lo, hi = PLAUSIBLE_SPAN_S
-    odd = [name for name, span, start in (("camera", cs, camera.t[0]), ("sensor", ss, sensor.t[0]))
-           if not lo <= span <= hi or abs(start) > 1e10]
-    culprit = f"the {odd[0]} file's" if len(odd) == 1 else "one of the two files'"
-    return Reason("time_unit", "fail", float(ratio), factor,
-                  f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about "
-                  f"{factor:.0e}: {culprit} time stamps are likely in another unit than they were read in (TUM "
-                  f"trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by "
-                  f"format)")
+    ratio, factor, text = found
+    return Reason("time_unit", "fail", ratio, factor, text)
 
 
 #: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of one recording

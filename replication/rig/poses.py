@@ -17,7 +17,13 @@ from ..core.so3 import rotation_angle_deg
 from .estimate import check_common, check_options, solve_pairs, with_reasons
 from .report import CalibrationResult
 
-__all__ = ["calibrate_poses", "pose_pairs"]
+__all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
+           "SAME_STATION_FLOOR_DEG"]
+
+#: Two stations are the same (a repeat) when neither side turns more than ``min_motion_deg`` between them (a pair
+#: of them carries noise, not motion, and is dropped), and at least when neither turns more than this (deg): the
+#: same pose given twice, to rounding, with ``min_motion_deg = 0``.
+SAME_STATION_FLOOR_DEG = 1e-6
 
 
 def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
@@ -53,6 +59,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     if C.shape != S.shape or C.ndim != 3:
         raise ValueError(f"need two (N, 3, 3) arrays of the same N, got {C.shape} and {S.shape}")
     A, B, i, j = pose_pairs(C, S, pairs=pairs, min_motion_deg=min_motion_deg, stations=True)
+    labels = repeated_stations(C, S, max(min_motion_deg, SAME_STATION_FLOOR_DEG))
     parameters = {"method": method, "pairs": pairs, "min_motion_deg": min_motion_deg, "n_bootstrap": n_bootstrap,
                   "seed": seed, "solver_options": {k: repr(v) for k, v in options.items()}}
     inputs = {"camera": {"kind": "static poses", "samples": int(len(C))},
@@ -61,9 +68,10 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
                          f"lower it or give poses that differ more")
     result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=reference, time_offset=(0.0, float("nan"), False), options=options,
+                          seed=seed, reference=reference, time_offset=(np.nan, np.nan, False), options=options,
                           evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
-                         stations=(i, j, len(C)))
+                         stations=(i, j, len(C), labels),
+                         station_residual=(lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None)
     if diagnose:
         from .diagnose import pose_direction
 
@@ -72,6 +80,36 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         if found:
             result = with_reasons(result, found)
     return result
+
+
+def own_residuals_deg(C, S, R) -> np.ndarray:
+    """Each station's own residual (deg) at the estimate ``R``: the angle between its ``Y_k = S_k^T R^T C_k`` (the
+    target's frame in the robot base's, the same at every station when ``C_k = R0 S_k Y``) and a robust centre of
+    them (the chordal mean of the half nearest the station whose median angle to the others is least).
+
+    With consecutive pairs a bad station spoils both its pairs and each neighbour shares one of them, so the pairs'
+    residuals blame the neighbours too; a station's own residual blames it alone."""
+    Y = np.swapaxes(S, -1, -2) @ R.T @ C
+    angles = rotation_angle_deg(np.swapaxes(Y[:, None], -1, -2) @ Y[None, :])
+    medoid = int(np.argmin(np.median(angles, axis=1)))
+    near = angles[medoid] <= np.median(angles[medoid])
+    U, _, Vt = np.linalg.svd(Y[near].mean(axis=0))
+    centre = U @ np.diag([1.0, 1.0, np.linalg.det(U @ Vt)]) @ Vt
+    return rotation_angle_deg(np.swapaxes(Y, -1, -2) @ centre)
+
+
+def repeated_stations(C, S, within_deg: float) -> np.ndarray:
+    """Station labels: stations whose camera and sensor attitudes both lie within ``within_deg`` of each other (a
+    station given twice, identical or re-measured within the noise) share a label (connected groups, labelled by
+    their first station); ``labels[k] == k`` for every station that repeats none before it."""
+    i, j = np.triu_indices(len(C), k=1)
+    same = ((rotation_angle_deg(C[j] @ np.swapaxes(C[i], -1, -2)) <= within_deg)
+            & (rotation_angle_deg(S[j] @ np.swapaxes(S[i], -1, -2)) <= within_deg))
+    labels = np.arange(len(C))
+    for a, b in zip(i[same], j[same]):  # union of the groups, each labelled by its smallest station
+        la, lb = labels[a], labels[b]
+        labels[labels == max(la, lb)] = min(la, lb)
+    return labels
 
 
 def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0, stations: bool = False):

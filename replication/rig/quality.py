@@ -42,7 +42,15 @@ excitation (online)         < 1 deg          --               the RMS rotation a
                                                               motion so far does not determine R0
 outlying station (pose      > 3 x the        --               a station whose pairs all fit badly holds a bad
 sets): median residual of   stations'                         measurement (a chessboard detection, a robot pose);
-its pairs                   median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x
+its pairs (consecutive       median                            Tabb DS1: station 76 at 4.9 x, the next at 2.1 x;
+pairs: its own residual)                                      consecutive pairs share a station with each neighbour,
+                                                              so there the station's own S^T R^T C is judged
+repeated stations (pose     any              --               a station given twice (both sides within min_motion_deg
+sets)                                                         of another) adds no independent pose: each group is
+                                                              named and counted once in the station bootstrap
+bootstrap replicates that   --               any              a solver whose answer on a resample is a reflection or
+are no rotations                                              NaN: no radius is given from them (a matrix that is no
+                                                              rotation at all is refused naming the solver)
 median motion per pair      < 1 deg          < 0.5 deg        a rig at rest, or an interval too short, leaves pairs of
                                                               noise (real recordings: 1.75 deg on EuRoC at 0.25 s,
                                                               3.9-52 deg at 1 s, 12.7 deg between Tabb's stations)
@@ -184,6 +192,7 @@ class Evidence:
     change_sides_fit: float | None = None   # the larger median residual / median motion of its two sides
     repeated_pairs: int = 0                 # online: pairs refused as repeats of earlier ones
     pose_residual_medians_deg: tuple | None = None  # static pose sets: each station's median pair residual
+    pose_residual_kind: str = "median residual of its pairs"  # or "its own residual" (consecutive pairs)
     mirror_fit_ratio: float | None = None   # the fit with the sensor's frame mirrored: its median residual / ours
     mirror_normal: tuple | None = None      # the sensor axis turned about least
 
@@ -216,7 +225,7 @@ def _quaternion(R) -> str:
     return "(" + ", ".join(f"{v:.4f}" for v in as_quaternion(R)) + ")"
 
 
-def _outlying_poses(medians):
+def _outlying_poses(medians, kind="median residual of its pairs"):
     """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
     factor = THRESHOLDS["pose_residual_ratio"][0]
     finite = np.isfinite(medians)
@@ -231,7 +240,7 @@ def _outlying_poses(medians):
     named = ", ".join(f"{int(k)} ({medians[k]:.3g} deg)" for k in bad[:5]) + (f" and {len(bad) - 5} more"
                                                                                 if len(bad) > 5 else "")
     return Reason("pose_outliers", "warning", float(ratio[bad[0]]), factor,
-                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, median residual of its pairs): "
+                  f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, {kind}): "
                   f"{named} > {factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: "
                   f"a bad measurement at that station (a target detection, a robot pose); its pairs pull R0")
 
@@ -303,8 +312,10 @@ def judge(e: Evidence, extra=()) -> Verdict:
             if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
                 continue  # the axis spread above says it, with its number
             reasons.append(Reason("observability", "warning", None, None,
-                                  "the solver issued ObservabilityWarning: another rotation fits eq. (8) almost as "
-                                  "well (motions small for the noise, outlier pairs, or nearly a second solution)"))
+                                  "the solver issued ObservabilityWarning (its words in the warnings): one pair "
+                                  "alone carries the rotation about the dominant axis, or another rotation fits eq. "
+                                  "(8) almost as well (motions small for the noise, outlier pairs, or nearly a second "
+                                  "solution)"))
             continue
         reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
                               + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
@@ -317,7 +328,7 @@ def judge(e: Evidence, extra=()) -> Verdict:
                               f"and little about its normal{normal}; rotate about that axis too, or check the "
                               f"sensor's axes"))
     if e.pose_residual_medians_deg is not None:
-        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float)))
+        reasons.append(_outlying_poses(np.asarray(e.pose_residual_medians_deg, dtype=float), e.pose_residual_kind))
     sides_fit = e.change_sides_fit is None or e.change_sides_fit <= THRESHOLDS["residual_to_motion"][1]
     if e.change is not None and e.change.significant and sides_fit:  # a re-mount leaves each side fitting its R0
         c = e.change

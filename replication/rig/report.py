@@ -63,7 +63,8 @@ class CalibrationResult:
     n_pairs : int
     time_offset_s, time_offset_correlation : float
         Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the angular speeds
-        there (NaN for static pose sets).
+        there; both NaN (``null`` in the report) for static pose sets, which have no clock: no offset was measured,
+        so an export leaves a file's own offset as it was.
     time_offset_applied : bool
     time_offset_ci95_s : (float, float)
         95 % block-bootstrap interval of the offset (:func:`replication.rig.association.offset_analysis`; NaN without a
@@ -84,6 +85,10 @@ class CalibrationResult:
         What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
     pose_residual_median_deg : list of float or None
         Static pose sets: each station's median pair residual (0-based station order).
+    station_repeats : dict or None
+        Static pose sets with stations that repeat others (:func:`replication.rig.poses.repeated_stations`):
+        ``stations`` given, ``distinct``, and the ``groups`` of repeats (0-based); each group is one station in the
+        bootstrap. None otherwise.
     change_test : dict or None
         Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
         recording? times since the camera's first sample), or why it was not run; None for static pose sets.
@@ -122,6 +127,7 @@ class CalibrationResult:
     bootstrap_resamples: str = "none"
     bootstrap_covers: str = RADIUS_COVERS
     pose_residual_median_deg: list | None = None
+    station_repeats: dict | None = None
     change_test: dict | None = None
     online: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
@@ -161,6 +167,7 @@ class CalibrationResult:
             "bootstrap_resamples": self.bootstrap_resamples,
             "bootstrap_covers": self.bootstrap_covers,
             "pose_residual_median_deg": self.pose_residual_median_deg,
+            "station_repeats": self.station_repeats,
             "change_test": self.change_test,
             "online": self.online,
             "observability": {

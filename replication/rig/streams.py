@@ -20,7 +20,7 @@ import numpy as np
 from ..core.checks import check_rotation_matrices
 from ..core.so3 import cumulative_product, exp_map, slerp_interpolator
 
-__all__ = ["OrientationStream", "GyroStream", "integrate_gyro"]
+__all__ = ["OrientationStream", "GyroStream", "integrate_gyro", "time_unit_mismatch", "PLAUSIBLE_SPAN_S"]
 
 
 @dataclass(frozen=True)
@@ -122,3 +122,37 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     steps = exp_map(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
     Q = np.concatenate([np.eye(3)[None], cumulative_product(steps)])
     return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")
+
+
+#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit mistake puts one
+#: stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach that in 2286).
+PLAUSIBLE_SPAN_S = (1.0, 1e4)
+_UNITS = {1e3: "milliseconds", 1e6: "microseconds", 1e9: "nanoseconds"}
+
+
+def time_unit_mismatch(camera, sensor):
+    """``(ratio, factor, sentence)`` when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file's time
+    stamps in another unit than its loader read them in), else None. The sentence names the units and blames the
+    stream whose span (or first stamp, beyond 1e10 s) is implausible for a recording (:data:`PLAUSIBLE_SPAN_S`)."""
+    cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
+    if not (cs > 0 and ss > 0):
+        return None
+    ratio = max(cs, ss) / min(cs, ss)
+    factor = next((f for f in (1e3, 1e6, 1e9) if 0.5 < ratio / f < 2.0), None)
+    if factor is None:
+        return None
+    lo, hi = PLAUSIBLE_SPAN_S
+    odd = [(name, span) for name, span, start in (("camera", cs, camera.t[0]), ("sensor", ss, sensor.t[0]))
+           if not lo <= span <= hi or abs(start) > 1e10]
+    if len(odd) == 1:
+        name, span = odd[0]
+        unit = _UNITS[factor]
+        how = f"{unit} read as seconds" if span == max(cs, ss) else f"seconds read as {unit}"
+        culprit = f"the {name} file's time stamps are likely in another unit than they were read in ({how})"
+    else:
+        culprit = (f"one of the two files' time stamps are likely in another unit than they were read in "
+                   f"({_UNITS[factor]} read as seconds, or seconds as {_UNITS[factor]})")
+    return float(ratio), factor, (
+        f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about {factor:.0e}: "
+        f"{culprit}; TUM trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns "
+        f"by format")

@@ -23,7 +23,7 @@ from .certificate import GAP_TOL, _derivatives, global_certificate
 
 __all__ = ["SolverInfo", "Solution", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
-           "ANSWER_ATOL", "check_answer", "warn_if_weak"]
+           "ANSWER_ATOL", "check_answer", "warn_if_weak", "SolverAnswerError", "checked_core"]
 
 #: A local solver's answer is flagged (:class:`LocalMinimumWarning`) when its cost (8) exceeds the
 #: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
@@ -196,8 +196,10 @@ def solver_info(method: str) -> SolverInfo:
 def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel: int = 3) -> None:
     """Issue an :class:`ObservabilityWarning` where the motions weakly determine ``R0``.
 
-    Two tests, each naming what it measured: nearly single-axis motion (axis spread below
-    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small), and a
+    Three tests, each naming what it measured: nearly single-axis motion (axis spread below
+    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small); motion about one
+    axis but for one pair (``J >= 3``: the spread without the pair that turns most about other axes below
+    ``warn_axis_spread_deg``, :attr:`replication.core.motions.Motions.leave_one_out_spread_deg`); and a
     second rotation fitting eq. (8) almost as well (gap between the two largest eigenvalues of ``sym(K)``
     below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
     outlier pairs, or near-symmetric motions).
@@ -220,8 +222,18 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
             ObservabilityWarning,
             stacklevel=stacklevel,
         )
+    loo, pair = motions.leave_one_out_spread_deg
+    single = ~weak & (loo < warn_axis_spread_deg)  # NaN (J < 3) never
+    if np.any(single):
+        i = _first_index(single)
+        warnings.warn(
+            f"{int(np.sum(single))} of {single.size} problems rest on one pair for the rotation about their dominant "
+            f"axis: without pair {int(pair[i])} (the largest turn about other axes) the axis spread falls from "
+            f"{float(spread[i]):.3g} deg to {float(loo[i]):.3g} deg < {warn_axis_spread_deg:g} deg, so that one "
+            f"pair's error decides R0 unseen; add larger motions about other axes",
+            ObservabilityWarning, stacklevel=stacklevel)
     flat = symmetric_gap < WEAK_GAP_FACTOR * np.maximum(inconsistency, 0.0)
-    flat &= ~weak  # already reported
+    flat &= ~weak & ~single  # already reported
     if np.any(flat):
         i = np.unravel_index(int(np.argmin(np.where(flat, symmetric_gap / np.maximum(inconsistency, 1e-300),
                                                     np.inf))), flat.shape) if flat.ndim else ()
@@ -248,13 +260,10 @@ def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
 
 
 def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
-    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8).
-
-    * :class:`LocalMinimumWarning`: cost (8) above the certified minimum ``f*`` by more than
-      ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than ``WRONG_POINT_DEG`` from the minimiser (another
-      stationary point, or stopped far away; the gradient of (8) tells which);
-    * :class:`ConvergenceWarning`: otherwise, farther than ``LOCAL_ANGLE_TOL_DEG`` from the
-      certified minimiser (it stopped short of the minimum).
+    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8): :class:`LocalMinimumWarning`
+    (cost (8) above the certified minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than
+    ``WRONG_POINT_DEG`` from the minimiser: another stationary point, or stopped far away, the gradient of (8) tells
+    which); else :class:`ConvergenceWarning` farther than ``LOCAL_ANGLE_TOL_DEG`` from it (stopped short).
 
     Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
     about itself, are skipped. Returns the boolean mask of problems flagged either way.
@@ -366,23 +375,38 @@ def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: s
     return flagged.reshape(batch)
 
 
-def _checked_answer(method: str, motions: Motions, R):
-    """A core's answer as a float array, with its masks ``(failed, reflection)``; ``ValueError`` if it breaks the
-    contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem).
+class SolverAnswerError(ValueError):
+    """A solver's core broke the contract of :class:`SolverInfo` (not one rotation, or one whole 3x3 block of NaN,
+    per problem); the message names the solver, where, the first offending index and the measured violation."""
 
-    One vectorised pass over the batch: orthogonality ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against
-    :data:`ANSWER_ATOL` (a reflection passes both and is only warned about); any NaN or inf in a block that is not
-    all NaN fails them.
+
+def checked_core(method: str, motions: Motions, *, where: str = "", **options):
+    """The core of ``method`` on validated ``motions``, its answer checked as :func:`solve` checks it: the one door
+    for every re-solve inside a calibration (bootstrap replicates, ...), which skip :func:`solve`'s validation and
+    its warnings but never its contract check.
+
+    Returns ``(R, failed, reflection)``: the answers and the masks of declared failures (whole NaN blocks) and of
+    reflections (det -1), which the caller must not use as rotations. Raises :class:`SolverAnswerError` (a
+    ``ValueError`` naming the solver and ``where``, e.g. ``"on bootstrap replicates"``) where the answer is not a
+    rotation or a NaN block.
     """
+    return _checked_answer(method, motions, solver_info(method).core(motions, **options), where=where)
+
+
+def _checked_answer(method: str, motions: Motions, R, where: str = ""):
+    """A core's answer as a float array, with its masks ``(failed, reflection)``; :class:`SolverAnswerError` if it
+    breaks the contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem). One pass:
+    ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against :data:`ANSWER_ATOL` (a reflection passes both and is only
+    warned about); any NaN or inf in a block that is not all NaN fails them."""
     expected = motions.batch_shape + (3, 3)
     if not isinstance(R, np.ndarray) or R.shape != expected:
         got = (f"an array of shape {R.shape}" if isinstance(R, np.ndarray) else
                "None" if R is None else f"a {type(R).__name__}")
-        raise ValueError(f"solver {method!r} returned {got}; expected a numpy array of shape {expected} (one 3x3 "
-                         f"rotation per problem of batch shape {motions.batch_shape})")
+        raise SolverAnswerError(f"solver {method!r} returned {got}{where}; expected a numpy array of shape "
+                                f"{expected} (one 3x3 rotation per problem of batch shape {motions.batch_shape})")
     if R.dtype.kind not in "fiu":
-        raise ValueError(f"solver {method!r} returned an array of dtype {R.dtype}; expected real numbers, shape "
-                         f"{expected}")
+        raise SolverAnswerError(f"solver {method!r} returned an array of dtype {R.dtype}{where}; expected real "
+                                f"numbers, shape {expected}")
     R = np.asarray(R, dtype=float)
     with np.errstate(invalid="ignore", over="ignore"):
         E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
@@ -396,7 +420,8 @@ def _checked_answer(method: str, motions: Motions, R):
         what = ("NaN or inf in part of the block (a declared failure is a whole block of NaN)"
                 if not np.isfinite(R[i]).all() else
                 f"||R^T R - I||_F = {ortho[i]:.3g}, det R = {det[i]:.6g}: | |det R| - 1 | = {abs(abs(det[i]) - 1):.3g}")
-        raise ValueError(f"solver {method!r} returned a matrix that is not a rotation at batch index {i}: {what} "
+        raise SolverAnswerError(f"solver {method!r} returned a matrix that is not a rotation{where} at batch index "
+                                f"{i}: {what} "
                          f"(tolerance ANSWER_ATOL = {ANSWER_ATOL:g}; {int(np.sum(bad))} bad of {bad.size})")
     return R, failed, ~failed & (det < 0)
 
