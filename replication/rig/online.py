@@ -32,10 +32,10 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.rig.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, and the residuals are plausible
-(:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and thresholds as the batch verdict,
-:mod:`replication.rig.quality`). :meth:`OnlineCalibrator.status` says which of these
-fails, with its number.
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs do not agree on a
+rotation the radius does not allow (:class:`replication.rig.online_guard.MisfitGuard`: within a few pairs of a
+re-mount, before the detector decides), and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not
+``fail``: the batch verdict's checks and thresholds). :meth:`OnlineCalibrator.status` says which fails, with its number.
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
 trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
@@ -279,7 +279,7 @@ class OnlineCalibrator:
     @property
     def ready(self) -> bool:
         return bool(self.determined and not self._detector.checking and self._radius < self.target_deg
-                    and self._detector.misfits < MISFITS_WITHDRAW_READY
+                    and self._detector.misfits < MISFITS_WITHDRAW_READY and self._detector.guard.misfit is None
                     and (self._verdict is None or self._verdict.level != "fail"))
 
     def unresolved_end(self):
@@ -491,6 +491,8 @@ class OnlineCalibrator:
         elif self._detector.misfits >= MISFITS_WITHDRAW_READY:
             why.append(f"{self._detector.misfits} recent pairs do not fit the estimate (d^2 above "
                        f"{self._detector.cap:g} x its level): a change or outliers, not decided yet")
+        if self._detector.guard.misfit is not None:
+            why.append(self._detector.guard.describe())
         if not self._radius < self.target_deg:
             why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
         if self._verdict is not None and self._verdict.level == "fail":

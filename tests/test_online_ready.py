@@ -1,0 +1,193 @@
+"""``ready`` means still right (issue 33, point 3): the online estimator withdraws ``ready`` as soon as the recent pairs
+agree on a rotation that its radius does not allow, before its change detector has decided anything; each rule of the
+guard (:mod:`replication.rig.online_guard`) at its boundary."""
+import math
+
+import numpy as np
+import pytest
+
+from replication.core import so3
+from replication.rig.online import OnlineCalibrator
+from replication.rig.online_events import chi2_quantile, pair_d2
+from replication.rig.online_guard import (
+    GUARD_EVERY,
+    GUARD_K,
+    GUARD_LEVEL,
+    GUARD_MIN_PAIRS,
+    GUARD_WINDOW,
+    MisfitGuard,
+    misfit_test,
+)
+from replication.study.live_study import pair_stream
+
+AXIS = np.array([0.6, 0.0, 0.8])
+
+
+def _remounted(seed, step_deg, noise_deg, before=200, after=100):
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    R1 = R0 @ so3.exp_map(np.radians(step_deg) * AXIS)
+    A1, B1 = pair_stream(rng, before, R0, noise_deg=noise_deg)
+    A2, B2 = pair_stream(rng, after, R1, noise_deg=noise_deg)
+    return R1, (A1, B1), (A2, B2)
+
+
+def _first_withdrawal(oc, A, B):
+    """Feed pairs one at a time; the index of the first not ready, with what held at that pair."""
+    for k, (a, b) in enumerate(zip(A, B)):
+        state = oc.update(a, b)
+        if not state.ready:
+            return k, state
+    return None, None
+
+
+def test_the_guard_constants():
+    assert (GUARD_LEVEL, GUARD_MIN_PAIRS, GUARD_K, GUARD_WINDOW, GUARD_EVERY) == (0.9999, 3, 1.5, 20, 20)
+    assert MisfitGuard(64).threshold == pytest.approx(chi2_quantile(0.9999, 3)) == pytest.approx(21.84, abs=0.01)
+
+
+def test_a_1_deg_remount_withdraws_ready_within_a_few_pairs_before_the_detector_decides():
+    """1 deg at 0.2 deg of noise: the CUSUM needs about 6 pairs to alarm and 10 more to confirm; ``ready`` goes at
+    the 2nd-5th pair, withdrawn by the guard; in most runs by the guard alone (no alarm, fewer than 2 gross misfits,
+    radius and verdict fine)."""
+    alone = 0
+    for seed in range(6):
+        R1, (A1, B1), (A2, B2) = _remounted([21, seed], 1.0, 0.2)
+        oc = OnlineCalibrator()
+        oc.update_many(A1, B1)
+        assert oc.ready and oc.error_deg(R1) > 0.9
+        k, state = _first_withdrawal(oc, A2, B2)
+        assert k is not None and k <= 5
+        said = [m for m in oc.status()["not_ready"] if "beyond what its radius allows" in m]
+        assert len(said) == (oc._detector.guard.misfit is not None)
+        alone += (bool(said) and "agree on a rotation" in said[0] and not oc.checking and oc._detector.misfits < 2
+                  and oc.radius < oc.target_deg and oc.determined and oc.current_verdict.level != "fail")
+    assert alone >= 3
+
+
+def test_a_shift_too_small_for_any_residual_is_seen_by_the_guard():
+    """1 deg at 0.5 deg of noise: no pair's residual stands out (no gross misfit), the CUSUM has not alarmed; the
+    guard withdraws ``ready`` within 30 pairs in each of 8 runs, by its run or by its window of the last 20 pairs
+    (seed [22, 2]: the window, at the 29th pair)."""
+    by = []
+    for seed in range(8):
+        R1, (A1, B1), (A2, B2) = _remounted([22, seed], 1.0, 0.5)
+        oc = OnlineCalibrator()
+        oc.update_many(A1, B1)
+        assert oc.ready
+        k, state = _first_withdrawal(oc, A2, B2)
+        guard = oc._detector.guard
+        assert k is not None and k < 30 and not oc.checking and oc._detector.misfits < 2 and oc.radius < 0.5
+        by.append("window" if guard.run_misfit is None else "run")
+        assert guard.misfit == (guard.run_misfit or guard.window_misfit) is not None
+    assert by.count("window") >= 1 and by.count("run") >= 5
+
+
+def test_clean_streams_keep_ready():
+    """No change: after the first ready, ready is withdrawn at fewer than 0.3 % of pairs (measured 20 of 19,810 at 0.5
+    deg of noise, 16 of 39,820 at 0.2 deg, seeds [7, 0..19])."""
+    lost = total = 0
+    for seed in range(3):
+        rng = np.random.default_rng([70, seed])
+        R0 = so3.random_rotations(rng, ())
+        states = OnlineCalibrator().update_many(*pair_stream(rng, 1500, R0, noise_deg=0.5))
+        first = next(i for i, s in enumerate(states) if s.ready)
+        lost += sum(not s.ready for s in states[first:])
+        total += len(states) - first
+    assert lost <= 0.003 * total
+
+
+def _guard_pairs(rng, n, offset_deg=1.0, noise_deg=0.2):
+    R = so3.random_rotations(rng, ())
+    A, B = pair_stream(rng, n, R @ so3.exp_map(np.radians(offset_deg) * AXIS), noise_deg=noise_deg)
+    return R, A, B
+
+
+def test_the_statistic_equals_the_gauss_newton_step_in_numpy(rng):
+    R, A, B = _guard_pairs(rng, 12)
+    cov, s2 = np.diag([1e-8, 2e-8, 3e-8]), math.radians(0.2) ** 2
+    E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
+    r = 0.5 * np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], -1)
+    H = sum(2 * np.eye(3) - b - b.T for b in B)
+    w = np.linalg.solve(H, sum(x - b.T @ x for x, b in zip(r, B)))
+    C = s2 / 3 * np.linalg.inv(H) + cov
+    stat, angle = misfit_test(R, cov, s2, A, B)
+    assert stat == pytest.approx(w @ np.linalg.solve(C, w), rel=1e-9)
+    assert angle == pytest.approx(np.degrees(np.linalg.norm(w)), rel=1e-9)
+    assert misfit_test(R, None, s2, A, B)[0] > stat  # the estimate's own uncertainty lowers the statistic
+
+
+def test_the_run_bound_never_understates_the_statistic(rng):
+    """The run is solved only when its sum of 1.5 d^2 / s^2 exceeds the threshold: that sum bounds the statistic."""
+    for _ in range(200):
+        n = int(rng.integers(3, 30))
+        R, A, B = _guard_pairs(rng, n, offset_deg=rng.uniform(0, 5), noise_deg=rng.uniform(0.05, 1.0))
+        s2 = math.radians(rng.uniform(0.05, 1.0)) ** 2
+        stat, _ = misfit_test(R, None, s2, A, B)
+        assert stat <= 1.5 * pair_d2(R, A, B).sum() / s2 * (1 + 1e-12)
+
+
+def _feed(guard, R, A, B, s2, cov=None):
+    for a, b in zip(A, B):
+        guard.add(a, b, float(pair_d2(R, a[None], b[None])[0]), R, cov, s2)
+
+
+@pytest.mark.parametrize("just, withdrawn", [(1 - 1e-9, True), (1 + 1e-9, False)])
+def test_the_run_is_withdrawn_just_past_the_threshold(rng, just, withdrawn):
+    R, A, B = _guard_pairs(rng, 6, offset_deg=3.0)
+    s2 = math.radians(0.2) ** 2
+    stats = [misfit_test(R, None, s2, A[:n], B[:n])[0] for n in range(GUARD_MIN_PAIRS, 7)]
+    guard = MisfitGuard(64)
+    guard.threshold = max(stats) * just
+    _feed(guard, R, A, B, s2)
+    assert len(guard.pairs) == 6 and (guard.misfit is not None) is withdrawn
+    if withdrawn:
+        n, angle, stat, threshold = guard.misfit
+        assert n == GUARD_MIN_PAIRS + int(np.argmax(stats)) and stat == pytest.approx(max(stats), rel=1e-9)
+
+
+@pytest.mark.parametrize("n, tested", [(GUARD_MIN_PAIRS - 1, False), (GUARD_MIN_PAIRS, True)])
+def test_the_run_is_tested_from_its_third_pair(rng, n, tested):
+    R, A, B = _guard_pairs(rng, n, offset_deg=20.0)
+    guard = MisfitGuard(64)
+    _feed(guard, R, A, B, math.radians(0.2) ** 2)
+    assert len(guard.pairs) == n and (guard.misfit is not None) is tested
+
+
+@pytest.mark.parametrize("z, opens", [(GUARD_K, False), (GUARD_K * (1 + 1e-9), True)])
+def test_the_run_opens_only_above_the_allowance(z, opens):
+    guard = MisfitGuard(64)
+    s2 = 1e-4
+    guard.add(np.eye(3), np.eye(3), 2.0 * z * s2, np.eye(3), None, s2)
+    assert (guard.sum > 0) is opens and len(guard.pairs) == int(opens)
+
+
+def test_the_run_and_its_withdrawal_end_when_its_sum_returns_to_zero(rng):
+    R, A, B = _guard_pairs(rng, 5, offset_deg=20.0)
+    guard = MisfitGuard(64)
+    s2 = math.radians(0.2) ** 2
+    _feed(guard, R, A, B, s2)
+    assert guard.run_misfit is not None
+    total = guard.sum
+    guard.add(np.eye(3), np.eye(3), 2.0 * s2 * (GUARD_K - total) + 1e-15, R, None, s2)  # sum just above 0
+    assert guard.run_misfit is not None and guard.sum > 0
+    guard.add(np.eye(3), np.eye(3), 2.0 * s2 * (GUARD_K - guard.sum), R, None, s2)  # sum exactly 0
+    assert guard.sum == 0.0 and guard.run_misfit is None and len(guard.pairs) == 0
+
+
+def test_the_window_is_tested_every_guard_every_pairs_on_the_last_guard_window(rng):
+    from collections import deque
+
+    R, A, B = _guard_pairs(rng, 2 * GUARD_WINDOW, offset_deg=2.0)
+    s2 = math.radians(0.2) ** 2
+    guard, recent = MisfitGuard(64), deque(maxlen=50)
+    for k, (a, b) in enumerate(zip(A, B), 1):
+        recent.append((a, b))
+        guard.add(a, b, 0.0, R, None, s2, recent)  # residuals of 0: no run; only the window sees the shift
+        due = k % GUARD_EVERY == 0 and k >= GUARD_WINDOW
+        assert (guard.window_misfit is not None) is (k >= GUARD_WINDOW and (due or guard.window_misfit is not None))
+        if due:
+            stat, angle = misfit_test(R, None, s2, A[k - GUARD_WINDOW:k], B[k - GUARD_WINDOW:k])
+            assert guard.window_misfit == (GUARD_WINDOW, pytest.approx(angle), pytest.approx(stat), guard.threshold)
+    guard.clear()
+    assert guard.misfit is None
