@@ -191,3 +191,73 @@ def test_the_window_is_tested_every_guard_every_pairs_on_the_last_guard_window(r
             assert guard.window_misfit == (GUARD_WINDOW, pytest.approx(angle), pytest.approx(stat), guard.threshold)
     guard.clear()
     assert guard.misfit is None
+
+
+# ------------------------------------------------------------------------------------------------ every rule of ready
+# ready = determined (excitation, distinct pairs) and the radius below the target and no change being confirmed and
+# fewer than 2 gross misfits and the guard's recent pairs fit and the verdict not fail. Each test below holds every
+# other condition and fails if its own is dropped; the radius (test_online_judging.py::test_ready_at_the_radius_target),
+# the gross misfits (::test_ready_is_withdrawn_at_the_second_gross_misfit_and_said) and the verdict
+# (::test_ready_needs_the_verdict_not_to_fail) are guarded there, the guard above.
+
+def _others_hold(oc, *, determined=True):
+    return (oc.radius < oc.target_deg and not oc.checking and oc._detector.misfits < 2
+            and oc._detector.guard.misfit is None and oc.current_verdict.level != "fail"
+            and oc.determined is determined)
+
+
+def _excited(excitation_deg, n_z=20, n_x=20):
+    """Noise-free motions about z (20-40 deg) and about x by small angles scaled to the given excitation (R0 = I)."""
+    u = np.linspace(0.5, 1.5, n_x)
+    target = math.radians(excitation_deg) ** 2 * (n_z + n_x)
+    lo, hi = 0.0, 1.0
+    for _ in range(100):
+        c = 0.5 * (lo + hi)
+        lo, hi = (c, hi) if np.sum(4 * np.sin(c * u / 2) ** 2) < target else (lo, c)
+    return np.concatenate([so3.exp_map(np.outer(np.radians(np.linspace(20, 40, n_z)), [0, 0, 1])),
+                           so3.exp_map(np.outer(c * u, [1, 0, 0]))])
+
+
+@pytest.mark.parametrize("excitation, ready", [(0.5, False), (0.75, False), (0.98, False), (1.02, True)])
+def test_ready_needs_the_motion_to_determine_r0_even_with_a_small_radius(excitation, ready):
+    """Noise-free motion with 0.5-0.98 deg of excitation has a finite radius (the noise floor over the weak axis,
+    0.1-0.2 deg) below the 0.5 deg target and a verdict that does not fail: only "the motion determines R0" keeps
+    ``ready`` false; just above the threshold it is ready."""
+    A = _excited(excitation)
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, A.copy())
+    oc.estimate()
+    assert oc.excitation_deg == pytest.approx(excitation, rel=1e-6)
+    assert 0.02 < oc.radius < 0.25 and _others_hold(oc, determined=ready)
+    assert oc.ready is ready and states[-1].ready is ready
+    assert any("does not determine R0" in m for m in oc.status()["not_ready"]) is (not ready)
+
+
+@pytest.mark.parametrize("distinct, ready", [(9, False), (10, True)])
+def test_ready_needs_min_pairs_distinct_pairs_however_often_repeated(rng, distinct, ready):
+    R0 = so3.random_rotations(rng, ())
+    A, B = pair_stream(rng, distinct, R0, noise_deg=0.02, motion_deg=(40.0, 60.0))
+    oc = OnlineCalibrator()
+    states = oc.update_many(np.tile(A, (20, 1, 1)), np.tile(B, (20, 1, 1)))
+    assert oc.n_pairs == distinct and oc.duplicates == 19 * distinct
+    assert states[-1].ready is ready and oc.determined is ready
+    if not ready:
+        assert oc.radius == math.inf and f"9.0 effective distinct pairs < 10 ({19 * distinct} repeated pairs refused)" \
+            in oc.status()["not_ready"][0]
+
+
+def test_ready_waits_while_a_change_is_being_confirmed(rng):
+    """An alarm being confirmed (here raised by hand on in-control pairs): not ready, every other condition holding;
+    ready again once the window is decided (outliers: nothing changed)."""
+    R0 = so3.random_rotations(rng, ())
+    A, B = pair_stream(rng, 300, R0)
+    oc = OnlineCalibrator()
+    oc.update_many(A[:200], B[:200])
+    assert oc.ready and _others_hold(oc)
+    oc._detector._alarm(oc.n_total - 1, "cusum")
+    states = oc.update_many(A[200:205], B[200:205])
+    assert oc.checking and not any(s.ready for s in states) and _others_hold(oc) is False
+    assert oc.radius < oc.target_deg and oc._detector.guard.misfit is None and oc._detector.misfits < 2
+    assert any("a change is being confirmed" in m for m in oc.status()["not_ready"])
+    oc.update_many(A[205:260], B[205:260])
+    assert not oc.checking and oc.ready and [e.kind for e in oc.events] != ["remount"]
