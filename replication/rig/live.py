@@ -109,6 +109,7 @@ class LiveRig:
         self.offset_given = offset is not None
         self.offset_correlation = None
         self.offset_note = None      # why no offset could be estimated, if so
+        self._causes = []            # reasons named on the streams (time units, an offset beyond the search)
         self._gyro = deque()         # (t, Q) of the integrated sensor, recent only
         self._last_gyro = None       # (t, omega, Q)
         self._gyro_dt = None
@@ -125,6 +126,7 @@ class LiveRig:
         self._times = {}             # pair index -> (pair end, formed), for the events
         self._diagnosis = None
         self._finished = False
+        self._no_offset = False      # the offset search found no overlap: no pairs
 
     # ------------------------------------------------------------------------------------------------ input
     def _sensor_kind(self, kind: str) -> None:
@@ -204,12 +206,12 @@ class LiveRig:
         if self._finished:
             return
         self._finished = True
-        if self.offset is None and self._camera and self._gyro:
-            try:
-                self._estimate_offset()
-            except ValueError as err:
+        if self.offset is None and self._camera and self._gyro and not self._no_offset:
+            self._estimate_offset()
+            if self._no_offset:
                 self.offset_note = (f"no clock offset: the streams ended after {self._now - self._camera[0][0]:.1f} s "
-                                    f"of camera data, before the {self.offset_window:g} s offset window ({err})")
+                                    f"of camera data, before the {self.offset_window:g} s offset window "
+                                    f"({self.offset_note.removeprefix('no clock offset: ')})")
         self._drain()
 
     # ------------------------------------------------------------------------------------------------ pairing
@@ -226,14 +228,35 @@ class LiveRig:
         return cam, sensor
 
     def _estimate_offset(self) -> None:
+        """The clock offset on the held samples; where the streams' sample intervals show time stamps in different
+        units, that is named (:func:`replication.rig.online_causes.time_unit_by_rate`); where the search finds no
+        overlap, no pair is formed and the verdict fails naming why (never a raised search error)."""
         from .association import estimate_time_offset
+        from .online_causes import time_unit_by_rate
+        from .quality import Reason
         from .streams import OrientationStream
 
+        t_cam = np.array([c[0] for c in self._camera])
+        unit = time_unit_by_rate(float(np.median(np.diff(t_cam))) if len(t_cam) > 1 else None, self._gyro_dt)
+        if unit is not None:
+            self._name(unit)
         cam = OrientationStream(np.array([c[0] for c in self._camera]), np.array([c[1] for c in self._camera]))
         sen = OrientationStream(np.array([g[0] for g in self._gyro]), np.array([g[1] for g in self._gyro]))
-        self.offset, self.offset_correlation = estimate_time_offset(cam, sen, max_offset=self.max_offset,
-                                                                    resolution=OFFSET_RESOLUTION)
+        try:
+            self.offset, self.offset_correlation = estimate_time_offset(cam, sen, max_offset=self.max_offset,
+                                                                        resolution=OFFSET_RESOLUTION)
+        except ValueError as err:
+            self._no_offset = True
+            self.offset_note = f"no clock offset: {err}" + (f"; {unit.message}" if unit is not None else "")
+            if unit is None:
+                self._name(Reason("overlap", "fail", None, None, self.offset_note))
+            return
         self.calibrator.set_context(**self._evidence())
+
+    def _name(self, reason) -> None:
+        """A cause named on the streams: judged with the estimator's evidence from now on."""
+        self._causes.append(reason)
+        self.calibrator.set_context(extra=tuple(self._causes) + tuple(self._diagnosis or ()))
 
     @property
     def used_offset(self) -> float | None:
@@ -257,11 +280,13 @@ class LiveRig:
 
     def _drain(self) -> None:
         if self.offset is None:
-            if self._finished or not self._camera or not self._gyro \
+            if self._no_offset or self._finished or not self._camera or not self._gyro \
                     or self._gyro[-1][0] - self._gyro[0][0] < self.offset_window \
                     or self._camera[-1][0] - self._camera[0][0] < self.offset_window:
                 return
             self._estimate_offset()
+            if self.offset is None:
+                return
         offset = self.used_offset
         while self._camera:
             t, C = self._camera[0]
@@ -342,8 +367,16 @@ class LiveRig:
         self._diagnosis = input_mistakes(camera, sensor, base_residual_deg=base.residual_deg["median"],
                                          motion_deg=base.diagnostics["motion_median_deg"], interval=self.interval,
                                          max_offset=self.max_offset, calibrate=calibrate)
+        if not self._diagnosis and not self.offset_given:  # a clock offset beyond the search, named if found wider
+            from .online_causes import offset_beyond_search
+            from .streams import integrate_gyro
+
+            wide = offset_beyond_search(camera, integrate_gyro(sensor) if self._kind == "gyro" else sensor,
+                                        max_offset=self.max_offset, window=self.offset_window,
+                                        found_correlation=self.offset_correlation, resolution=OFFSET_RESOLUTION)
+            self._diagnosis = [wide] if wide is not None else []
         if self._diagnosis:
-            self.calibrator.set_context(extra=tuple(self._diagnosis))
+            self.calibrator.set_context(extra=tuple(self._causes) + tuple(self._diagnosis))
 
     def verdict(self):
         """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence: clock offset, gaps,

@@ -60,14 +60,8 @@ from ..core.checks import check_number, check_range, check_rotation_flat, check_
 from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
-from .online_events import (
-    DUPLICATE_DEG,
-    ChangeDetector,
-    OnlineEvent,
-    OnlineState,
-    RepeatFilter,
-    residual_angle_deg,
-)
+from .online_causes import constant_speed
+from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
 
 __all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
@@ -453,19 +447,20 @@ class OnlineCalibrator:
 
         e = self.evidence()
         context = dict(self._context)
-        found = context.pop("extra", ())
+        found = tuple(context.pop("extra", ()))
+        steady = constant_speed(self._recent_motion, self._excitation, self.min_excitation_deg, self._weak_axis)
         return judge(Evidence(n_pairs=int(round(self._n_eff)), residual_median_deg=e["residual_median_deg"],
                               motion_median_deg=e["motion_median_deg"],
                               bootstrap_deg=self._radius if math.isfinite(self._radius) else None,
                               axis_spread_deg=None, excitation_deg=self._excitation, radius_kind="curvature",
-                              repeated_pairs=self.duplicates, **context), found)
+                              repeated_pairs=self.duplicates, **context), found + ((steady,) if steady else ()))
 
     def set_context(self, **evidence) -> None:
         """Evidence from a stream front end (:class:`replication.rig.live.LiveRig`: clock offset, gaps, gyro rate, as
         fields of :class:`replication.rig.quality.Evidence`; ``extra``: further reasons, e.g. a named input mistake),
         judged with the estimator's own from now on (``ready`` needs the verdict not to fail)."""
         self._context.update(evidence)
-        if self._refined:
+        if self._refined or evidence.get("extra"):  # a named cause counts before the first estimate too
             self._verdict = self.verdict()
 
     @property
