@@ -25,7 +25,7 @@ from ..core.stats import _normal_quantile
 
 _EYE = np.eye(3)
 
-__all__ = ["GUARD_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard", "misfit_test"]
+__all__ = ["GUARD_LEVEL", "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard", "misfit_test"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
 #: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
@@ -37,6 +37,10 @@ GUARD_MIN_PAIRS = 3
 GUARD_WINDOW = 20
 #: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
 GUARD_EVERY = 20
+#: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
+#: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
+#: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
+GUARD_CLEAR_LEVEL = 0.95
 #: Allowance of the guard's own sum ``max(0, S + z - k)``, ``z = d^2 / (2 s^2)`` (about ``chi^2_3 / 3``, mean 1, while
 #: the estimate holds): its window is the pairs since that sum last stood at 0. Lower than the detector's allowance (2)
 #: so that a change whose residuals are only 1.5-2 times the noise (1 deg at 0.5 deg of noise) keeps the window open.
@@ -120,11 +124,11 @@ class MisfitGuard:
     The change detector calls :meth:`add` for each pair it adds to the estimate (not the gross misfits it holds
     out) and :meth:`clear` when it decides or starts over. :attr:`misfit` is None while the pairs fit, else ``(pairs,
     angle_deg, statistic, threshold)`` of the test that withdrew ``ready``: the run's until its sum returns to 0, the
-    window's until the next window fits.
+    window's until a later window fits as usual (:data:`GUARD_CLEAR_LEVEL`).
     """
 
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
-        self.level, self.threshold = level, _chi2_3(level)
+        self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
         self.clear()
 
@@ -155,7 +159,10 @@ class MisfitGuard:
         self._since_window = 0
         window = np.array(list(recent)[-GUARD_WINDOW:])  # (n, 2, 3, 3): A and B
         stat, angle = misfit_test(R, cov, s2, window[:, 0], window[:, 1])
-        self.window_misfit = (GUARD_WINDOW, angle, stat, self.threshold) if stat > self.threshold else None
+        if stat > self.threshold:
+            self.window_misfit = (GUARD_WINDOW, angle, stat, self.threshold)
+        elif stat <= self.clear_threshold:  # withdrawn until a window fits at a usual level (hysteresis)
+            self.window_misfit = None
 
     def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
         """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
