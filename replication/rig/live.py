@@ -124,6 +124,7 @@ class LiveRig:
         self.events = []             # (time of the pair's end, time it was formed, OnlineState)
         self.ready_at = None         # (pair end, formed) of the first pair at which the calibrator was ready
         self._times = {}             # pair index -> (pair end, formed), for the events
+        self._event_times = {}       # pair index -> (pair end, formed), of every decision
         self._diagnosis = None
         self._finished = False
         self._no_offset = False      # the offset search found no overlap: no pairs
@@ -317,6 +318,8 @@ class LiveRig:
         index = cal.n_total  # the index this pair gets unless it is a repeat
         state = cal.update(A, B)
         self._times[index] = (t, self._now)
+        if state.event is not None:  # decisions' times kept for good (a drift's rate spans them)
+            self._event_times[index] = (t, self._now)
         if len(self._times) > 4 * cal.confirm_pairs + 256:
             for k in sorted(self._times)[:len(self._times) // 2]:
                 del self._times[k]
@@ -395,11 +398,14 @@ class LiveRig:
         estimated = bool(self.events) and cal.n_pairs >= cal.min_pairs
         events = []
         for ev in cal.events:
-            end, seen = self._times.get(ev.pair, (math.nan, math.nan))
+            end, seen = self._event_times.get(ev.pair, (math.nan, math.nan))
             alarm = self._times.get(ev.alarm_pair, (math.nan, math.nan))[1]
             events.append({"kind": ev.kind, "t_s": seen - t0, "pair_end_s": end - t0, "alarm_t_s": alarm - t0,
                            "angle_deg": ev.angle_deg, "threshold_deg": ev.threshold_deg,
-                           "pairs_dropped": ev.pairs_dropped, "message": ev.message})
+                           "pairs_dropped": ev.pairs_dropped, "message": ev.message, "rate_deg_s": None})
+            if ev.kind == "drift":  # deg/s over the pairs' time since the re-mount that began it
+                span = end - self._event_times.get(ev.onset_pair, (math.nan,))[0]
+                events[-1]["rate_deg_s"] = ev.angle_deg / span if span > 0 else None
         status = cal.status()
         return {
             "ready": bool(cal.ready) and undecided is None,

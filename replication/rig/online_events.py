@@ -45,8 +45,9 @@ __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
            "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
-#: Kinds of :class:`OnlineEvent`, in the order :func:`classify` tests them.
-EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information")
+#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, and ``drift`` (a
+#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`).
+EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
 #: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
@@ -156,13 +157,15 @@ class OnlineEvent:
     R_before: np.ndarray
     R_after: np.ndarray
     message: str
+    rate_deg_per_pair: float | None = None   # drift: how fast the frame moves (deg per pair)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "pair": self.pair, "alarm_pair": self.alarm_pair, "source": self.source,
                 "onset_pair": self.onset_pair, "window_pairs": self.window_pairs, "angle_deg": self.angle_deg,
                 "threshold_deg": self.threshold_deg, "median_z_before": self.median_z_before,
                 "median_z_after": self.median_z_after, "pairs_dropped": self.pairs_dropped,
-                "R_before": self.R_before.tolist(), "R_after": self.R_after.tolist(), "message": self.message}
+                "R_before": self.R_before.tolist(), "R_after": self.R_after.tolist(), "message": self.message,
+                "rate_deg_per_pair": self.rate_deg_per_pair}
 
 
 def pair_d2(R, A, B) -> np.ndarray:

@@ -1,6 +1,6 @@
 """What keeps the online estimator's ``ready`` right between its decisions: the recent pairs tested against the
 estimate and its radius (:func:`misfit_test`, :class:`MisfitGuard`), and a frame that drifts told from a re-mount
-(:func:`drift_rate`).
+(:func:`recognise_drift`).
 
 **Ready means still right.** The change detector (:mod:`replication.rig.online_events`) confirms a change only after
 its CUSUM passes its threshold and a confirmation window agrees: for a re-mount of 1 deg at 0.2 deg of noise that is
@@ -11,6 +11,14 @@ Gauss-Newton step from the estimate on those pairs alone gives their own rotatio
 ``chi^2_3`` while the estimate still holds, and ``ready`` is withdrawn above its :data:`GUARD_LEVEL` quantile. Cheap:
 the statistic is at most the window's ``sum 3 |r_j|^2 / s^2 <= sum 1.5 d_j^2 / s^2`` (``|r_j| = sin theta_j``, ``d_j^2
 = 4 (1 - cos theta_j)``), so the step is solved only when that running sum exceeds the threshold.
+
+**One event per cause.** A frame that drifts (a camera mount that creeps) looks to the change detector like a
+re-mount every few hundred pairs: each time the pairs after an alarm agree on a new rotation. The first is taken for
+a re-mount (the estimator starts over once); a second one soon after, small and in the same direction
+(:func:`recognise_drift`), is the same cause: the two become one ``drift`` event with its rate, the estimator does not
+start over again but follows (:func:`follow_forgetting`: exponential forgetting whose lag behind the drift is a
+quarter of the target), and its radius includes that lag (:func:`drift_lag_deg`), so ``ready`` says whether it can
+follow within the target; later steps of the same drift update the rate, in the same event.
 
 Notation: :mod:`replication.rig.online` (``d_j^2``, ``s^2``, ``G``) and ``docs/conventions.md``.
 """
@@ -25,7 +33,10 @@ from ..core.stats import _normal_quantile
 
 _EYE = np.eye(3)
 
-__all__ = ["GUARD_LEVEL", "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard", "misfit_test"]
+__all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_deg", "drift_step",
+           "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
+           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard",
+           "misfit_test"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
 #: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
@@ -197,3 +208,90 @@ class MisfitGuard:
         stat, angle = _statistic(self._g, self._H, s2, cov)
         if stat > self.threshold:
             self.run_misfit = (len(pairs), angle, stat, self.threshold)
+
+
+# ------------------------------------------------------------------------------------------------ drift
+#: A re-mount decided within this many pairs of the last restart, in the same direction (the cosine of the angle
+#: between the two steps at least :data:`DRIFT_COS`) and both steps below :data:`DRIFT_MAX_STEP_DEG`, is the frame
+#: drifting, not a second re-mount: one cause, one event (``drift``), no second restart.
+DRIFT_WITHIN_PAIRS = 2000
+DRIFT_COS = 0.7
+DRIFT_MAX_STEP_DEG = 3.0
+#: While following a drift, the estimate's memory (``2 / (1 - lambda)`` pairs under forgetting ``lambda``) is chosen so
+#: that its lag behind the drift, ``rate x lambda / (1 - lambda)``, is this share of the target; the lag is added to
+#: the radius (``ready`` then means the noise and the lag together stay below the target).
+DRIFT_LAG_SHARE = 0.25
+
+
+def drift_step(R_before, R_after) -> np.ndarray:
+    """The rotation vector ``w`` (rad, sensor frame) with ``R_after = R_before exp([w]x)``."""
+    from ..core.so3 import log_map
+
+    return log_map(np.swapaxes(R_before, -1, -2) @ R_after)
+
+
+def recognise_drift(last, event, following: float | None):
+    """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`) continues the last
+    change, ``last = (pair, R_latest, origin)``: the pair and estimate of the last re-mount or drift step, and the
+    re-mount that began it (an event). The step from ``R_latest`` to the event's own estimate must be small
+    (:data:`DRIFT_MAX_STEP_DEG`, or twice what the drift followed at rate ``following`` (deg per pair) moves in the
+    pairs between), within :data:`DRIFT_WITHIN_PAIRS`, and in the direction of the movement so far (from the origin's
+    estimate before it to ``R_latest``): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
+    whose small steps are noisy) at least 0. Returns None or ``(rate_deg_per_pair, angle_deg,
+    first_pair, axis)``: the angle between the origin's own estimate and the event's (where the frame was then and
+    is now), its rate over the pairs between them, and the movement's direction (a unit vector, sensor frame)."""
+    if last is None or not 0 < event.pair - last[0] <= DRIFT_WITHIN_PAIRS:
+        return None
+    origin = last[2]
+    so_far = drift_step(origin.R_before, last[1])
+    step = drift_step(last[1], event.R_after)
+    a, b = float(np.linalg.norm(so_far)), float(np.linalg.norm(step))
+    if a and b and float(np.linalg.norm(so_far + step)) == 0.0:
+        return None
+    bound = DRIFT_MAX_STEP_DEG if following is None else max(DRIFT_MAX_STEP_DEG, 2 * following * (event.pair - last[0]))
+    if not (a and b) or math.degrees(max(b, 0.0 if following is not None else a)) > bound:
+        return None
+    if float(so_far @ step) / (a * b) < (0.0 if following is not None else DRIFT_COS):
+        return None
+    moved = drift_step(origin.R_after, event.R_after)  # between the windows' own estimates: where the frame was
+    angle = math.degrees(float(np.linalg.norm(moved)))
+    return angle / (event.pair - origin.pair), angle, origin.pair, (so_far + step) / np.linalg.norm(so_far + step)
+
+
+def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
+    """Act on a drift recognised by :func:`recognise_drift` in the calibrator ``cal``
+    (:class:`replication.rig.online.OnlineCalibrator`): the drift event (the first re-mount's restart folded into it,
+    one event per cause), forgetting that follows it (:func:`follow_forgetting`), the older pairs' weight cut to the
+    new memory; no restart. Returns the event."""
+    import dataclasses
+
+    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start
+        cal.events = [e for e in cal.events if not (e.kind == "remount" and e.pair == first)]
+        cal.alarms = [a for a in cal.alarms if a != first]
+    cal._flush()
+    lam = follow_forgetting(rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1), cal.refine_every)
+    c = min(1.0, 1.0 / ((1.0 - lam) * cal._w)) if cal._w else 1.0
+    cal._S, cal._SB, cal._w, cal._SB2, cal._w2 = c * cal._S, c * cal._SB, c * cal._w, c * c * cal._SB2, c * c * cal._w2
+    cal._last_step, cal._drift_rate, cal.forgetting = (event.pair, event.R_after, cal._last_step[2]), rate, lam
+    cal._drift_axis = axis
+    lag = drift_lag_deg(rate, lam, cal.refine_every)
+    return dataclasses.replace(
+        event, kind="drift", onset_pair=first, angle_deg=angle, rate_deg_per_pair=rate,
+        message=f"the frame drifts: {angle:.3g} deg in {event.pair - first} pairs ({rate:.3g} deg per pair) since the "
+                f"re-mount decided at pair {first} (started over once, then followed): forgetting {lam:.4g}, lag "
+                f"{lag:.3g} deg added to the radius" + (
+                    "" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg"))
+
+
+def follow_forgetting(rate_deg_per_pair: float, target_deg: float, lowest: float, every: int) -> float:
+    """The forgetting factor that keeps the lag behind a drift (:func:`drift_lag_deg`, refined every ``every``
+    pairs) at :data:`DRIFT_LAG_SHARE` of the target (at least ``lowest``, the factor that still gives the estimator
+    its distinct pairs; below 1)."""
+    memory = DRIFT_LAG_SHARE * target_deg / max(rate_deg_per_pair, 1e-12) - every   # lambda / (1 - lambda)
+    return min(max(memory / (1.0 + memory), lowest), 1.0 - 1e-9) if memory > 0 else lowest
+
+
+def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> float:
+    """The lag (deg) behind a drift of an estimate with forgetting ``lambda`` refined every ``every`` pairs: ``rate x
+    (lambda / (1 - lambda) + every)`` (the weighted mean age of its pairs, and the pairs since its last refinement)."""
+    return rate_deg_per_pair * (forgetting / (1.0 - forgetting) + every)
