@@ -106,10 +106,17 @@ def test_gyro_stamps_in_another_unit_are_named_and_nothing_is_raised(rig, scale,
         assert len(rows) == 0 and "no clock offset" in summary["note"] and "in ns" in summary["note"]
 
 
-def test_camera_stamps_in_ms_are_named(rig):
+def test_camera_stamps_in_ms_are_named_from_the_spans(rig):
+    """Camera stamps in ms beside a 200 Hz gyro: the sample intervals' ratio (1e-4) is a plausible keyframe rate;
+    the streams' spans (60,000 s against 62 s) show it, as in the batch."""
     R0, camera, gyro, _ = rig
     rows, summary = _summary(OrientationStream(camera.t * 1e3, camera.world_from_body, "c"), gyro, R0)
-    assert "the camera time stamps are likely in ms" in _fails(summary)["time_unit"]["message"]
+    reason = _fails(summary)["time_unit"]
+    assert "a factor of about 1e+03" in reason["message"] and "the camera file's time stamps" in reason["message"]
+
+
+def test_a_keyframe_trajectory_beside_a_fast_gyro_is_not_a_unit_mistake():
+    assert time_unit_by_rate(2.0, 1 / 2000) is None  # 0.5 Hz keyframes, 2000 Hz gyro
 
 
 @pytest.mark.parametrize("ratio, named", [

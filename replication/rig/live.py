@@ -383,7 +383,18 @@ class LiveRig:
 
     def verdict(self):
         """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence: clock offset, gaps,
-        gyro rate, and a named input mistake if the diagnosis found one)."""
+        gyro rate, and a named input mistake if the diagnosis found one). Time stamps in different units are also
+        looked for in the spans of the streams so far, as the batch does."""
+        from types import SimpleNamespace
+
+        from .calibration import _time_unit_reason
+
+        if self._early_camera and self._early_sensor and not any(r.check == "time_unit" for r in self._causes):
+            span = lambda first, last: SimpleNamespace(t=np.array([first, last]))  # noqa: E731
+            unit = _time_unit_reason(span(self._early_camera[0][0], self._last_camera_t),
+                                     span(self._early_sensor[0][0], self._gyro[-1][0]))
+            if unit is not None:
+                self._name(unit)
         self.calibrator.set_context(**self._evidence())
         return self.calibrator.verdict()
 

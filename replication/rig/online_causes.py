@@ -8,10 +8,10 @@ offset beyond the search (:func:`offset_beyond_search`). Each returns a :class:`
   clock offset can be measured (the correlation of speeds is noise). Named when the motion does not determine ``R0``
   and the recent camera motions' angles agree within :data:`CONSTANT_SPEED_SPREAD` of their median (median absolute
   deviation), the median above :data:`CONSTANT_SPEED_MIN_DEG` (a rig at rest is named by its own check).
-* **Units.** A gyro samples at 50-2000 Hz and a camera at 1-100 Hz, so the ratio of their sample intervals lies in
-  :data:`PLAUSIBLE_INTERVAL_RATIO`; a ratio 1e3, 1e6 or 1e9 times outside it is one stream's stamps read in another
-  unit (ms, us or ns as s). This works while the streams arrive, before any overlap is known (the batch compares the
-  spans of the whole recordings).
+* **Units.** A gyro samples at 50-2000 Hz and a camera (or a keyframe trajectory) at 0.1-100 Hz, so the ratio of
+  their sample intervals lies in :data:`PLAUSIBLE_INTERVAL_RATIO`; a ratio 1e3, 1e6 or 1e9 times outside it is one
+  stream's stamps read in another unit (ms, us or ns as s). This works while the streams arrive, before any overlap
+  is known; :meth:`replication.rig.live.LiveRig.verdict` also compares the streams' spans, as the batch does.
 * **Offset beyond the search.** When the verdict fails, the clock offset is searched again on the first
   ``offset_window`` seconds over a range :data:`WIDE_SEARCH_SHARE` of that window; an offset beyond ``max_offset``
   whose correlation is at least :data:`WIDE_CORRELATION` and :data:`WIDE_GAIN` above the one found is named.
@@ -31,9 +31,10 @@ __all__ = ["constant_speed", "time_unit_by_rate", "offset_beyond_search", "CONST
 CONSTANT_SPEED_SPREAD = 0.05
 #: Median motion per pair (deg) above which constant speed is named (below, the rig is near rest: its own check).
 CONSTANT_SPEED_MIN_DEG = 1.0
-#: Plausible range of (sensor sample interval) / (camera sample interval): a 2000 Hz gyro beside a 1 Hz camera
-#: (1/2000) to an orientation sensor ten times slower than the camera (10).
-PLAUSIBLE_INTERVAL_RATIO = (1 / 2000, 10.0)
+#: Plausible range of (sensor sample interval) / (camera sample interval): a 2000 Hz gyro beside a 0.1 Hz camera (a
+#: SLAM keyframe trajectory; 1/20000) to an orientation sensor ten times slower than the camera (10). Camera stamps in
+#: ms beside a 200 Hz gyro (1e-4) lie inside: those the streams' spans show, at the end (as the batch's check).
+PLAUSIBLE_INTERVAL_RATIO = (1 / 20000, 10.0)
 #: The wider offset search spans this share of the offset window on each side (5 s of the default 20 s window: the
 #: search keeps half the window's camera samples).
 WIDE_SEARCH_SHARE = 0.25
