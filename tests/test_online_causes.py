@@ -39,15 +39,15 @@ def _fails(summary):
     return {r["check"]: r for r in summary["verdict"]["reasons"] if r["level"] == "fail"}
 
 
-def _spinning(seconds=60.0, deg_s=30.0, seed=5):
-    """A rig turning at a constant angular velocity about one axis (noisy camera and gyro)."""
+def _spinning(seconds=60.0, deg_s=30.0, seed=5, noise=0.05):
+    """A rig turning at a constant angular velocity about one axis (camera and gyro noise ``noise``, deg, deg/s)."""
     rng = np.random.default_rng(seed)
     R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
     axis = np.array([0.2, 0.5, 0.8]) / np.linalg.norm([0.2, 0.5, 0.8])
     t, ti = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
     C = so3.exp_map(np.outer(np.radians(deg_s) * t, axis)) @ so3.exp_map(
-        rng.normal(0.0, np.radians(0.05) / np.sqrt(3), (len(t), 3)))
-    omega = np.tile(R0.T @ axis * np.radians(deg_s), (len(ti), 1)) + rng.normal(0.0, np.radians(0.05), (len(ti), 3))
+        rng.normal(0.0, np.radians(noise) / np.sqrt(3), (len(t), 3)))
+    omega = np.tile(R0.T @ axis * np.radians(deg_s), (len(ti), 1)) + rng.normal(0.0, np.radians(noise), (len(ti), 3))
     return R0, OrientationStream(t, C, "camera"), GyroStream(ti, omega, "gyro")
 
 
@@ -60,6 +60,26 @@ def test_a_rig_turning_at_constant_speed_is_named_never_ready():
     reason = _fails(summary)["constant_speed"]
     assert "turns at a constant speed" in reason["message"] and "no clock offset can be measured" in reason["message"]
     assert reason["measured"] < 0.01 and any("constant speed" in m for m in summary["not_ready"])
+
+
+def test_a_noise_free_rig_at_constant_speed_is_named_from_the_camera_stream():
+    """Noise-free, every pair is the same pair (refused as repeats): the camera stream's own motions name the cause."""
+    R0, camera, gyro = _spinning(seconds=40.0, noise=0.0)
+    rows, summary = _summary(camera, gyro, R0)
+    assert not summary["ready"] and summary["repeated_pairs"] > 20
+    assert "turns at a constant speed" in _fails(summary)["constant_speed"]["message"]
+    assert sum("constant speed" in m for m in summary["not_ready"]) == 1  # named once, not by both
+
+
+def test_constant_speed_on_a_stream_needs_ten_intervals_of_steady_motion(rig):
+    from replication.rig.online_causes import constant_speed_stream
+
+    R0, camera, gyro = _spinning(seconds=40.0, noise=0.0)
+    assert constant_speed_stream(camera.t, camera.world_from_body, 1.0) is not None
+    short = camera.t < 9.9
+    assert constant_speed_stream(camera.t[short], camera.world_from_body[short], 1.0) is None
+    _, moving, _, _ = rig
+    assert constant_speed_stream(moving.t, moving.world_from_body, 1.0) is None  # a rig moving at varying speed
 
 
 @pytest.mark.parametrize("spread, named", [(0.99 * CONSTANT_SPEED_SPREAD, True), (1.01 * CONSTANT_SPEED_SPREAD, False)])

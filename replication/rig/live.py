@@ -233,7 +233,7 @@ class LiveRig:
         units, that is named (:func:`replication.rig.online_causes.time_unit_by_rate`); where the search finds no
         overlap, no pair is formed and the verdict fails naming why (never a raised search error)."""
         from .association import estimate_time_offset
-        from .online_causes import time_unit_by_rate
+        from .online_causes import constant_speed_stream, time_unit_by_rate
         from .quality import Reason
         from .streams import OrientationStream
 
@@ -241,6 +241,9 @@ class LiveRig:
         unit = time_unit_by_rate(float(np.median(np.diff(t_cam))) if len(t_cam) > 1 else None, self._gyro_dt)
         if unit is not None:
             self._name(unit)
+        steady = constant_speed_stream(t_cam, np.array([c[1] for c in self._camera]), self.interval)
+        if steady is not None:  # the camera turns at constant speed: no offset can be measured, nor R0 about its axis
+            self._name(steady)
         cam = OrientationStream(np.array([c[0] for c in self._camera]), np.array([c[1] for c in self._camera]))
         sen = OrientationStream(np.array([g[0] for g in self._gyro]), np.array([g[1] for g in self._gyro]))
         try:

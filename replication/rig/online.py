@@ -450,7 +450,8 @@ class OnlineCalibrator:
         e = self.evidence()
         context = dict(self._context)
         found = tuple(context.pop("extra", ()))
-        steady = constant_speed(self._recent_motion, self._excitation, self.min_excitation_deg, self._weak_axis)
+        steady = None if any(r.check == "constant_speed" for r in found) else constant_speed(
+            self._recent_motion, self._excitation, self.min_excitation_deg, self._weak_axis)
         return judge(Evidence(n_pairs=int(round(self._n_eff)), residual_median_deg=e["residual_median_deg"],
                               motion_median_deg=e["motion_median_deg"],
                               bootstrap_deg=self._radius if math.isfinite(self._radius) else None,

@@ -22,8 +22,9 @@ import math
 
 import numpy as np
 
-__all__ = ["constant_speed", "time_unit_by_rate", "offset_beyond_search", "CONSTANT_SPEED_SPREAD",
-           "CONSTANT_SPEED_MIN_DEG", "PLAUSIBLE_INTERVAL_RATIO", "WIDE_SEARCH_SHARE", "WIDE_CORRELATION", "WIDE_GAIN"]
+__all__ = ["constant_speed", "constant_speed_stream", "time_unit_by_rate", "offset_beyond_search",
+           "CONSTANT_SPEED_SPREAD", "CONSTANT_SPEED_MIN_DEG", "PLAUSIBLE_INTERVAL_RATIO", "WIDE_SEARCH_SHARE",
+           "WIDE_CORRELATION", "WIDE_GAIN"]
 
 #: Relative spread (median absolute deviation over the median) of the recent camera motion angles below which the
 #: rig turns at constant speed (noise of 0.05-0.5 deg on 10-60 deg motions: 0.1-3 %; a hand-held or robot motion:
@@ -64,6 +65,20 @@ def constant_speed(motions_deg, excitation_deg: float, min_excitation_deg: float
                   f"{100 * spread:.2g} % about one axis{axis}; R0 about that axis is not determined and no clock "
                   f"offset can be measured (the angular speed never varies); rotate about other axes, at varying "
                   f"speed")
+
+
+def constant_speed_stream(t, world_from_camera, interval: float):
+    """:func:`constant_speed` on a camera stream's own motions (samples ``t``, ``world_from_camera``): the angles
+    turned over successive ``interval`` spans. Named where every pair repeats (a noise-free camera turning at constant
+    speed gives the same pair again and again, refused as repeats, so the estimator's own motions stay few)."""
+    from ..core.so3 import angle_between_deg
+
+    t = np.asarray(t, dtype=float)
+    if len(t) < 2 or not t[-1] - t[0] >= 10 * interval:
+        return None
+    k = np.searchsorted(t, np.arange(t[0], t[-1], interval))
+    angles = angle_between_deg(world_from_camera[k[:-1]], world_from_camera[k[1:]])
+    return constant_speed(angles, 0.0, 1.0, None)
 
 
 def time_unit_by_rate(camera_dt: float | None, sensor_dt: float | None):
