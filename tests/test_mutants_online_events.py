@@ -141,7 +141,9 @@ def test_an_event_record_holds_every_field():
     assert ev.to_dict() == {"kind": "outliers", "pair": 12, "alarm_pair": 9, "source": "cusum", "onset_pair": 7,
                             "window_pairs": 10, "angle_deg": 0.5, "threshold_deg": 1.5, "median_z_before": 3.0,
                             "median_z_after": 0.8, "pairs_dropped": 2, "R_before": np.eye(3).tolist(),
-                            "R_after": (2 * np.eye(3)).tolist(), "message": "m"}
+                            "R_after": (2 * np.eye(3)).tolist(), "message": "m", "rate_deg_per_pair": None}
+    assert OnlineEvent("drift", 12, 9, "drift", 7, 10, 0.5, 1.5, 3.0, 0.8, 2, np.eye(3), np.eye(3), "m",
+                       0.01).to_dict()["rate_deg_per_pair"] == 0.01
 
 
 def _old_estimate(noise_deg, sd_deg):

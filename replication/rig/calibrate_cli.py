@@ -309,7 +309,8 @@ def _online(args, camera, sensor, reference, result):
         if line["level"] == "fail":
             print(f"  online fail: {line['message']}")
     print("  events: " + ("none" if not summary["events"] else ", ".join(
-        f"{ev['kind']} at {ev['t_s']:.1f} s" for ev in summary["events"])))
+        f"{ev['kind']} at {ev['t_s']:.1f} s" + (f" ({ev['rate_deg_s']:.2g} deg/s)" if ev.get("rate_deg_s") else "")
+        for ev in summary["events"])))
     print(f"  the online radius covers {summary['radius_covers']}")
     diagnostics = {**result.diagnostics, "online_track": rows}
     return dataclasses.replace(result, online=summary, diagnostics=diagnostics), rows

@@ -109,6 +109,7 @@ class LiveRig:
         self.offset_given = offset is not None
         self.offset_correlation = None
         self.offset_note = None      # why no offset could be estimated, if so
+        self._causes = []            # reasons named on the streams (time units, an offset beyond the search)
         self._gyro = deque()         # (t, Q) of the integrated sensor, recent only
         self._last_gyro = None       # (t, omega, Q)
         self._gyro_dt = None
@@ -123,8 +124,10 @@ class LiveRig:
         self.events = []             # (time of the pair's end, time it was formed, OnlineState)
         self.ready_at = None         # (pair end, formed) of the first pair at which the calibrator was ready
         self._times = {}             # pair index -> (pair end, formed), for the events
+        self._event_times = {}       # pair index -> (pair end, formed), of every decision
         self._diagnosis = None
         self._finished = False
+        self._no_offset = False      # the offset search found no overlap: no pairs
 
     # ------------------------------------------------------------------------------------------------ input
     def _sensor_kind(self, kind: str) -> None:
@@ -204,12 +207,12 @@ class LiveRig:
         if self._finished:
             return
         self._finished = True
-        if self.offset is None and self._camera and self._gyro:
-            try:
-                self._estimate_offset()
-            except ValueError as err:
+        if self.offset is None and self._camera and self._gyro and not self._no_offset:
+            self._estimate_offset()
+            if self._no_offset:
                 self.offset_note = (f"no clock offset: the streams ended after {self._now - self._camera[0][0]:.1f} s "
-                                    f"of camera data, before the {self.offset_window:g} s offset window ({err})")
+                                    f"of camera data, before the {self.offset_window:g} s offset window "
+                                    f"({self.offset_note.removeprefix('no clock offset: ')})")
         self._drain()
 
     # ------------------------------------------------------------------------------------------------ pairing
@@ -226,14 +229,38 @@ class LiveRig:
         return cam, sensor
 
     def _estimate_offset(self) -> None:
+        """The clock offset on the held samples; where the streams' sample intervals show time stamps in different
+        units, that is named (:func:`replication.rig.online_causes.time_unit_by_rate`); where the search finds no
+        overlap, no pair is formed and the verdict fails naming why (never a raised search error)."""
         from .association import estimate_time_offset
+        from .online_causes import constant_speed_stream, time_unit_by_rate
+        from .quality import Reason
         from .streams import OrientationStream
 
+        t_cam = np.array([c[0] for c in self._camera])
+        unit = time_unit_by_rate(float(np.median(np.diff(t_cam))) if len(t_cam) > 1 else None, self._gyro_dt)
+        if unit is not None:
+            self._name(unit)
+        steady = constant_speed_stream(t_cam, np.array([c[1] for c in self._camera]), self.interval)
+        if steady is not None:  # the camera turns at constant speed: no offset can be measured, nor R0 about its axis
+            self._name(steady)
         cam = OrientationStream(np.array([c[0] for c in self._camera]), np.array([c[1] for c in self._camera]))
         sen = OrientationStream(np.array([g[0] for g in self._gyro]), np.array([g[1] for g in self._gyro]))
-        self.offset, self.offset_correlation = estimate_time_offset(cam, sen, max_offset=self.max_offset,
-                                                                    resolution=OFFSET_RESOLUTION)
+        try:
+            self.offset, self.offset_correlation = estimate_time_offset(cam, sen, max_offset=self.max_offset,
+                                                                        resolution=OFFSET_RESOLUTION)
+        except ValueError as err:
+            self._no_offset = True
+            self.offset_note = f"no clock offset: {err}" + (f"; {unit.message}" if unit is not None else "")
+            if unit is None:
+                self._name(Reason("overlap", "fail", None, None, self.offset_note))
+            return
         self.calibrator.set_context(**self._evidence())
+
+    def _name(self, reason) -> None:
+        """A cause named on the streams: judged with the estimator's evidence from now on."""
+        self._causes.append(reason)
+        self.calibrator.set_context(extra=tuple(self._causes) + tuple(self._diagnosis or ()))
 
     @property
     def used_offset(self) -> float | None:
@@ -257,11 +284,13 @@ class LiveRig:
 
     def _drain(self) -> None:
         if self.offset is None:
-            if self._finished or not self._camera or not self._gyro \
+            if self._no_offset or self._finished or not self._camera or not self._gyro \
                     or self._gyro[-1][0] - self._gyro[0][0] < self.offset_window \
                     or self._camera[-1][0] - self._camera[0][0] < self.offset_window:
                 return
             self._estimate_offset()
+            if self.offset is None:
+                return
         offset = self.used_offset
         while self._camera:
             t, C = self._camera[0]
@@ -292,6 +321,8 @@ class LiveRig:
         index = cal.n_total  # the index this pair gets unless it is a repeat
         state = cal.update(A, B)
         self._times[index] = (t, self._now)
+        if state.event is not None:  # decisions' times kept for good (a drift's rate spans them)
+            self._event_times[index] = (t, self._now)
         if len(self._times) > 4 * cal.confirm_pairs + 256:
             for k in sorted(self._times)[:len(self._times) // 2]:
                 del self._times[k]
@@ -342,12 +373,31 @@ class LiveRig:
         self._diagnosis = input_mistakes(camera, sensor, base_residual_deg=base.residual_deg["median"],
                                          motion_deg=base.diagnostics["motion_median_deg"], interval=self.interval,
                                          max_offset=self.max_offset, calibrate=calibrate)
+        if not self._diagnosis and not self.offset_given:  # a clock offset beyond the search, named if found wider
+            from .online_causes import offset_beyond_search
+            from .streams import integrate_gyro
+
+            wide = offset_beyond_search(camera, integrate_gyro(sensor) if self._kind == "gyro" else sensor,
+                                        max_offset=self.max_offset, window=self.offset_window,
+                                        found_correlation=self.offset_correlation, resolution=OFFSET_RESOLUTION)
+            self._diagnosis = [wide] if wide is not None else []
         if self._diagnosis:
-            self.calibrator.set_context(extra=tuple(self._diagnosis))
+            self.calibrator.set_context(extra=tuple(self._causes) + tuple(self._diagnosis))
 
     def verdict(self):
         """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence: clock offset, gaps,
-        gyro rate, and a named input mistake if the diagnosis found one)."""
+        gyro rate, and a named input mistake if the diagnosis found one). Time stamps in different units are also
+        looked for in the spans of the streams so far, as the batch does."""
+        from types import SimpleNamespace
+
+        from .calibration import _time_unit_reason
+
+        if self._early_camera and self._early_sensor and not any(r.check == "time_unit" for r in self._causes):
+            span = lambda first, last: SimpleNamespace(t=np.array([first, last]))  # noqa: E731
+            unit = _time_unit_reason(span(self._early_camera[0][0], self._last_camera_t),
+                                     span(self._early_sensor[0][0], self._gyro[-1][0]))
+            if unit is not None:
+                self._name(unit)
         self.calibrator.set_context(**self._evidence())
         return self.calibrator.verdict()
 
@@ -362,11 +412,14 @@ class LiveRig:
         estimated = bool(self.events) and cal.n_pairs >= cal.min_pairs
         events = []
         for ev in cal.events:
-            end, seen = self._times.get(ev.pair, (math.nan, math.nan))
+            end, seen = self._event_times.get(ev.pair, (math.nan, math.nan))
             alarm = self._times.get(ev.alarm_pair, (math.nan, math.nan))[1]
             events.append({"kind": ev.kind, "t_s": seen - t0, "pair_end_s": end - t0, "alarm_t_s": alarm - t0,
                            "angle_deg": ev.angle_deg, "threshold_deg": ev.threshold_deg,
-                           "pairs_dropped": ev.pairs_dropped, "message": ev.message})
+                           "pairs_dropped": ev.pairs_dropped, "message": ev.message, "rate_deg_s": None})
+            if ev.kind == "drift":  # deg/s over the pairs' time since the re-mount that began it
+                span = end - self._event_times.get(ev.onset_pair, (math.nan,))[0]
+                events[-1]["rate_deg_s"] = ev.angle_deg / span if span > 0 else None
         status = cal.status()
         return {
             "ready": bool(cal.ready) and undecided is None,

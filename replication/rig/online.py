@@ -32,10 +32,10 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.rig.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, and the residuals are plausible
-(:meth:`OnlineCalibrator.verdict` is not ``fail``; the same checks and thresholds as the batch verdict,
-:mod:`replication.rig.quality`). :meth:`OnlineCalibrator.status` says which of these
-fails, with its number.
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs do not agree on a
+rotation the radius does not allow (:class:`replication.rig.online_guard.MisfitGuard`: within a few pairs of a
+re-mount, before the detector decides), and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not
+``fail``: the batch verdict's checks and thresholds). :meth:`OnlineCalibrator.status` says which fails, with its number.
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
 trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
@@ -60,14 +60,9 @@ from ..core.checks import check_number, check_range, check_rotation_flat, check_
 from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
-from .online_events import (
-    DUPLICATE_DEG,
-    ChangeDetector,
-    OnlineEvent,
-    OnlineState,
-    RepeatFilter,
-    residual_angle_deg,
-)
+from .online_causes import constant_speed
+from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
+from .online_guard import drift_lag_deg, follow_drift, recognise_drift
 
 __all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
@@ -158,7 +153,8 @@ class OnlineCalibrator:
             raise ValueError(f"max_confirm_pairs must be at least confirm_pairs = {confirm_pairs}, got "
                              f"{max_confirm_pairs}")
         lowest = (min_pairs - 1) / (min_pairs + 1)
-        self.forgetting = check_range("forgetting", forgetting, low=lowest, high=1.0, low_open=False)
+        self.forgetting = self._fgt = check_range("forgetting", forgetting, low=lowest, high=1.0, low_open=False)
+        self._last_step, self._drift_rate, self._drift_axis = None, None, None  # the last re-mount or drift step; drift
         self.target_deg = float(target_deg)
         self.step_every, self.refine_every, self.min_pairs = int(step_every), int(refine_every), int(min_pairs)
         self.confirm_pairs, self.max_confirm_pairs = int(confirm_pairs), int(max_confirm_pairs)
@@ -242,19 +238,11 @@ class OnlineCalibrator:
         self._flush()
         return self._S / self._w if self._w else np.zeros((9, 9))
 
-    @property
-    def R(self) -> np.ndarray:
-        return self._R
+    R = property(lambda self: self._R, doc="The published estimate (the last refinement's minimiser of eq. (8)).")
 
-    @property
-    def n_pairs(self) -> int:
-        """Pairs since the last (re)start, repeats excluded."""
-        return self._n
+    n_pairs = property(lambda self: self._n, doc="Pairs since the last (re)start, repeats excluded.")
 
-    @property
-    def radius(self) -> float:
-        """The current error radius (degrees) at :attr:`level`."""
-        return self._radius
+    radius = property(lambda self: self._radius, doc="The current error radius (degrees) at :attr:`level`.")
 
     @property
     def excitation_deg(self) -> float:
@@ -271,15 +259,12 @@ class OnlineCalibrator:
         """The motion so far determines ``R0``: excitation and effective distinct pairs (see the module notes)."""
         return bool(self._excitation >= self.min_excitation_deg and self._n_eff >= self.min_pairs - 1e-9)
 
-    @property
-    def checking(self) -> bool:
-        """A change-detector alarm is being confirmed."""
-        return self._detector.checking
+    checking = property(lambda self: self._detector.checking, doc="A change-detector alarm is being confirmed.")
 
     @property
     def ready(self) -> bool:
         return bool(self.determined and not self._detector.checking and self._radius < self.target_deg
-                    and self._detector.misfits < MISFITS_WITHDRAW_READY
+                    and self._detector.misfits < MISFITS_WITHDRAW_READY and self._detector.guard.misfit is None
                     and (self._verdict is None or self._verdict.level != "fail"))
 
     def unresolved_end(self):
@@ -341,10 +326,13 @@ class OnlineCalibrator:
             self._add(A, B)
         if self._n >= self._next_refine:
             self._refine()
-            self._next_refine = self._n + max(self.refine_every, self._n // 10)
+            self._next_refine = self._n + self._refine_gap()
         elif self._n % self.step_every == 0 and not detector.armed:
             self._step()  # once the motion determines R0, the last minimiser is the next refinement's start
         return self._state(None)
+
+    def _refine_gap(self) -> int:  # following a drift, every refine_every pairs (the lag counts them)
+        return self.refine_every if self._drift_rate is not None else max(self.refine_every, self._n // 10)
 
     # ------------------------------------------------------------------------------------------------ estimates
     def _step(self) -> None:
@@ -399,6 +387,10 @@ class OnlineCalibrator:
             cov = (s2 / 3.0) * Gi @ G2 @ Gi
         self._cov = cov
         self._radius = radius_deg(cov, self.level) if np.all(np.isfinite(cov)) else math.inf
+        if self._drift_rate is not None:  # following a drift: the estimate lags behind it, along the drift's axis
+            lag = drift_lag_deg(self._drift_rate, self.forgetting, self.refine_every)
+            self._radius += lag
+            self._cov = cov + math.radians(lag) ** 2 * np.outer(self._drift_axis, self._drift_axis)
         return cost
 
     def estimate(self) -> np.ndarray:
@@ -420,16 +412,20 @@ class OnlineCalibrator:
             return None
         event = decision["event"]
         self.pairs_dropped += event.pairs_dropped - decision["held_before"]
-        if decision["restart"]:
+        drift = recognise_drift(self._last_step, event, self._drift_rate) if decision["restart"] else None
+        if drift is not None:  # the same cause as the last re-mount: one drift event, followed, no restart
+            event = follow_drift(self, event, *drift)
+        elif decision["restart"]:  # a re-mount (or a jump while following a drift): start over, forget the drift
             self.alarms.append(event.pair)
+            self._last_step, self._drift_rate, self.forgetting = (event.pair, event.R_after, event), None, self._fgt
             self.restart(init=decision["R_new"])
             self._n = len(decision["kept"])
         for a, b in decision["kept"]:
             self._add(a, b)
         self._rearm = decision["rearm"]  # new information: the reference restarts at the refined estimate
         self._refine()
-        self._next_refine = self._n + max(self.refine_every, self._n // 10)
-        self.events.append(event)
+        self._next_refine = self._n + self._refine_gap()
+        self.events = [e for e in self.events if e.kind != "drift" or e.onset_pair != event.onset_pair] + [event]
         return event.kind
 
     # ------------------------------------------------------------------------------------------------ judging
@@ -453,19 +449,21 @@ class OnlineCalibrator:
 
         e = self.evidence()
         context = dict(self._context)
-        found = context.pop("extra", ())
+        found = tuple(context.pop("extra", ()))
+        steady = None if any(r.check == "constant_speed" for r in found) else constant_speed(
+            self._recent_motion, self._excitation, self.min_excitation_deg, self._weak_axis)
         return judge(Evidence(n_pairs=int(round(self._n_eff)), residual_median_deg=e["residual_median_deg"],
                               motion_median_deg=e["motion_median_deg"],
                               bootstrap_deg=self._radius if math.isfinite(self._radius) else None,
                               axis_spread_deg=None, excitation_deg=self._excitation, radius_kind="curvature",
-                              repeated_pairs=self.duplicates, **context), found)
+                              repeated_pairs=self.duplicates, **context), found + ((steady,) if steady else ()))
 
     def set_context(self, **evidence) -> None:
         """Evidence from a stream front end (:class:`replication.rig.live.LiveRig`: clock offset, gaps, gyro rate, as
         fields of :class:`replication.rig.quality.Evidence`; ``extra``: further reasons, e.g. a named input mistake),
         judged with the estimator's own from now on (``ready`` needs the verdict not to fail)."""
         self._context.update(evidence)
-        if self._refined:
+        if self._refined or evidence.get("extra"):  # a named cause counts before the first estimate too
             self._verdict = self.verdict()
 
     @property
@@ -491,6 +489,8 @@ class OnlineCalibrator:
         elif self._detector.misfits >= MISFITS_WITHDRAW_READY:
             why.append(f"{self._detector.misfits} recent pairs do not fit the estimate (d^2 above "
                        f"{self._detector.cap:g} x its level): a change or outliers, not decided yet")
+        if self._detector.guard.misfit is not None:
+            why.append(self._detector.guard.describe())
         if not self._radius < self.target_deg:
             why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
         if self._verdict is not None and self._verdict.level == "fail":

@@ -39,13 +39,15 @@ import numpy as np
 
 from ..core.so3 import angle_between_deg
 from ..core.stats import _normal_quantile, radius_deg
+from .online_guard import MisfitGuard
 
 __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY",
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
            "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
-#: Kinds of :class:`OnlineEvent`, in the order :func:`classify` tests them.
-EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information")
+#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, and ``drift`` (a
+#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`).
+EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
 #: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
@@ -155,13 +157,15 @@ class OnlineEvent:
     R_before: np.ndarray
     R_after: np.ndarray
     message: str
+    rate_deg_per_pair: float | None = None   # drift: how fast the frame moves (deg per pair)
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "pair": self.pair, "alarm_pair": self.alarm_pair, "source": self.source,
                 "onset_pair": self.onset_pair, "window_pairs": self.window_pairs, "angle_deg": self.angle_deg,
                 "threshold_deg": self.threshold_deg, "median_z_before": self.median_z_before,
                 "median_z_after": self.median_z_after, "pairs_dropped": self.pairs_dropped,
-                "R_before": self.R_before.tolist(), "R_after": self.R_after.tolist(), "message": self.message}
+                "R_before": self.R_before.tolist(), "R_after": self.R_after.tolist(), "message": self.message,
+                "rate_deg_per_pair": self.rate_deg_per_pair}
 
 
 def pair_d2(R, A, B) -> np.ndarray:
@@ -324,7 +328,7 @@ class OnlineState(NamedTuple):
     n_pairs: int          # pairs since the last (re)start, repeats excluded
     R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
     radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
-    ready: bool           # determined, radius below the target, no change being confirmed, verdict not fail
+    ready: bool           # determined, radius below the target, recent pairs fit, no change pending, verdict ok
     alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
     event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
     determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
@@ -362,6 +366,7 @@ class ChangeDetector:
         self.checking, self.window, self.target = False, [], self.confirm_pairs
         self.alarm_pair, self.source, self.onset = None, None, 0
         self.since_onset = deque(maxlen=SINCE_ONSET)   # (A, B, held out) since the sum last stood at 0
+        self.guard = MisfitGuard(SINCE_ONSET)           # those not held out, tested against the estimate
         self.recent = deque(maxlen=self.drift_pairs)    # the drift test's window: the last pairs added
         self.since_drift = 0
 
@@ -393,6 +398,7 @@ class ChangeDetector:
         """Start (or restart) at reference level ``level``; ``index`` is the next pair's."""
         self.armed, self.level, self.cusum = True, max(level, self.d2_floor), 0.0
         self.since_onset.clear()
+        self.guard.clear()
         self.onset = index
 
     def observe(self, A, B, d2: float, index: int, R, cov, s2) -> tuple[bool, bool]:
@@ -413,6 +419,8 @@ class ChangeDetector:
         if not held:
             self.recent.append((A, B))
             self.since_drift += 1
+        if not held and s2 is not None:  # the guard tests the pair against the estimate (s2: its noise)
+            self.guard.add(A, B, d2, R, cov, s2, self.recent)
         if self.cusum == 0.0:
             self.since_onset.clear()
             self.onset = index + 1
@@ -469,6 +477,7 @@ class ChangeDetector:
         else:
             self.checking, self.window, self.cusum, self.level = False, [], 0.0, level
             self.since_onset.clear()
+            self.guard.clear()
             self.onset, self.since_drift = index + 1, 0
         for pair in kept:
             self.recent.append(pair)

@@ -1,0 +1,297 @@
+"""What keeps the online estimator's ``ready`` right between its decisions: the recent pairs tested against the
+estimate and its radius (:func:`misfit_test`, :class:`MisfitGuard`), and a frame that drifts told from a re-mount
+(:func:`recognise_drift`).
+
+**Ready means still right.** The change detector (:mod:`replication.rig.online_events`) confirms a change only after
+its CUSUM passes its threshold and a confirmation window agrees: for a re-mount of 1 deg at 0.2 deg of noise that is
+10-20 pairs, during which the estimate is 1 deg off. :class:`MisfitGuard` withdraws ``ready`` as soon as the pairs since
+the CUSUM last stood at 0 (the suspected change) agree on a rotation that the estimate's radius does not allow: one
+Gauss-Newton step from the estimate on those pairs alone gives their own rotation ``w`` with covariance ``C_w = (s^2 /
+3) G_w^{-1}``; with the estimate's covariance ``C`` (the one behind its radius), ``w^T (C_w + C)^{-1} w`` is about
+``chi^2_3`` while the estimate still holds, and ``ready`` is withdrawn above its :data:`GUARD_LEVEL` quantile. Cheap:
+the statistic is at most the window's ``sum 3 |r_j|^2 / s^2 <= sum 1.5 d_j^2 / s^2`` (``|r_j| = sin theta_j``, ``d_j^2
+= 4 (1 - cos theta_j)``), so the step is solved only when that running sum exceeds the threshold.
+
+**One event per cause.** A frame that drifts (a camera mount that creeps) looks to the change detector like a
+re-mount every few hundred pairs: each time the pairs after an alarm agree on a new rotation. The first is taken for
+a re-mount (the estimator starts over once); a second one soon after, small and in the same direction
+(:func:`recognise_drift`), is the same cause: the two become one ``drift`` event with its rate, the estimator does not
+start over again but follows (:func:`follow_forgetting`: exponential forgetting whose lag behind the drift is a
+quarter of the target), and its radius includes that lag (:func:`drift_lag_deg`), so ``ready`` says whether it can
+follow within the target; later steps of the same drift update the rate, in the same event.
+
+Notation: :mod:`replication.rig.online` (``d_j^2``, ``s^2``, ``G``) and ``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from ..core.stats import _normal_quantile
+
+_EYE = np.eye(3)
+
+__all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_deg", "drift_step",
+           "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
+           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard",
+           "misfit_test"]
+
+#: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
+#: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
+GUARD_LEVEL = 0.9999
+#: Fewest pairs since the CUSUM last stood at 0 that are tested (3 unknowns; fewer pairs say little about a rotation).
+GUARD_MIN_PAIRS = 3
+#: The last this many pairs are tested together every :data:`GUARD_EVERY` pairs (a shift too small to show in any
+#: one pair's residual: 1 deg at 0.5 deg of noise needs about 8 pairs at :data:`GUARD_LEVEL`).
+GUARD_WINDOW = 20
+#: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
+GUARD_EVERY = 20
+#: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
+#: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
+#: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
+GUARD_CLEAR_LEVEL = 0.95
+#: Allowance of the guard's own sum ``max(0, S + z - k)``, ``z = d^2 / (2 s^2)`` (about ``chi^2_3 / 3``, mean 1, while
+#: the estimate holds): its window is the pairs since that sum last stood at 0. Lower than the detector's allowance (2)
+#: so that a change whose residuals are only 1.5-2 times the noise (1 deg at 0.5 deg of noise) keeps the window open.
+GUARD_K = 1.5
+
+
+def _chi2_3(level: float) -> float:
+    """The ``level`` quantile of ``chi^2_3`` (Wilson-Hilferty, as
+    :func:`replication.rig.online_events.chi2_quantile`)."""
+    return 3.0 * (1.0 - 2.0 / 27.0 + _normal_quantile(level) * math.sqrt(2.0 / 27.0)) ** 3
+
+
+def misfit_test(R, cov, s2, A, B) -> tuple[float, float]:
+    """The pairs ``(A, B)`` solved on their own by one Gauss-Newton step from ``R`` (as
+    :func:`replication.rig.online_events.drift_test`): ``(statistic, angle_deg)``, the statistic ``w^T (C_w +
+    cov)^{-1} w`` (``C_w = (s^2 / 3) G_w^{-1}``, ``s^2`` the estimate's mean square residual ``s2``, ``cov`` its
+    covariance or None), ``angle_deg = |w|`` in degrees; ``(0, nan)`` where the pairs do not determine a rotation
+    (``G_w`` singular)."""
+    E = np.swapaxes(R, -1, -2) @ A @ R @ np.swapaxes(B, -1, -2)
+    r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+    SB = B.sum(axis=0)
+    H = 2.0 * len(A) * _EYE - SB - SB.T
+    g = 0.5 * (r.sum(axis=0) - np.einsum("jba,jb->a", B, r))
+    return _statistic(g.tolist(), H.ravel().tolist(), s2, cov)
+
+
+def _inv3(m):
+    """Inverse of a 3x3 matrix given as 9 floats, row-major (plain Python: cheaper than numpy at this size); None if
+    singular."""
+    a, b, c, d, e, f, g, h, i = m
+    A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
+    det = a * A + b * B + c * C
+    if not det or not math.isfinite(det):
+        return None
+    k = 1.0 / det
+    return [A * k, (c * h - b * i) * k, (b * f - c * e) * k, B * k, (a * i - c * g) * k, (c * d - a * f) * k,
+            C * k, (b * g - a * h) * k, (a * e - b * d) * k]
+
+
+def _mul3(m, v):
+    return [m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+            m[6] * v[0] + m[7] * v[1] + m[8] * v[2]]
+
+
+def _share(R, A, B):
+    """A pair's share ``(g_j, H_j)`` of the Gauss-Newton step from ``R``: ``g_j = (I - B_j^T) r_j`` (``r_j`` its
+    residual rotation vector ``vee`` of the antisymmetric part of ``R^T A_j R B_j^T``) and ``H_j = 2I - B_j - B_j^T``,
+    as plain floats (3 and 9, row-major)."""
+    e = (R.T @ A @ R @ B.T).ravel().tolist()
+    r = (0.5 * (e[7] - e[5]), 0.5 * (e[2] - e[6]), 0.5 * (e[3] - e[1]))
+    b = B.ravel().tolist()
+    g = [r[0] - b[0] * r[0] - b[3] * r[1] - b[6] * r[2], r[1] - b[1] * r[0] - b[4] * r[1] - b[7] * r[2],
+         r[2] - b[2] * r[0] - b[5] * r[1] - b[8] * r[2]]
+    H = [2.0 - 2.0 * b[0], -b[1] - b[3], -b[2] - b[6], -b[1] - b[3], 2.0 - 2.0 * b[4], -b[5] - b[7],
+         -b[2] - b[6], -b[5] - b[7], 2.0 - 2.0 * b[8]]
+    return g, H
+
+
+def _statistic(g, H, s2, cov) -> tuple[float, float]:
+    """``(w^T (C_w + cov)^{-1} w, |w| in deg)`` for ``w = H^{-1} g`` and ``C_w = (s2 / 3) H^{-1}`` (9-float ``H``,
+    3-float ``g``, ``cov`` a 3x3 array or None); ``(0, nan)`` where ``H`` is singular."""
+    Hi = _inv3(H)
+    if Hi is None:
+        return 0.0, math.nan
+    w = _mul3(Hi, g)
+    c = [0.0] * 9 if cov is None else cov.ravel().tolist()
+    Ci = _inv3([s2 / 3.0 * x + y for x, y in zip(Hi, c)])
+    if Ci is None:
+        return 0.0, math.nan
+    stat = sum(a * b for a, b in zip(w, _mul3(Ci, w)))
+    if not math.isfinite(stat):
+        return 0.0, math.nan
+    return stat, math.degrees(math.sqrt(w[0] ** 2 + w[1] ** 2 + w[2] ** 2))
+
+
+class MisfitGuard:
+    """Tests the recent pairs against the estimate (see the module notes): the pairs since its own sum last stood at 0
+    after each pair (a run of residuals above the noise), and the last :data:`GUARD_WINDOW` pairs every
+    :data:`GUARD_EVERY` pairs (a shift too small for any one pair's residual to show, seen in its direction).
+
+    The change detector calls :meth:`add` for each pair it adds to the estimate (not the gross misfits it holds
+    out) and :meth:`clear` when it decides or starts over. :attr:`misfit` is None while the pairs fit, else ``(pairs,
+    angle_deg, statistic, threshold)`` of the test that withdrew ``ready``: the run's until its sum returns to 0, the
+    window's until a later window fits as usual (:data:`GUARD_CLEAR_LEVEL`).
+    """
+
+    def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
+        self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
+        self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
+        self.clear()
+
+    @property
+    def misfit(self):
+        return self.run_misfit or self.window_misfit
+
+    def describe(self) -> str:
+        """The sentence for ``not_ready`` while :attr:`misfit` is set."""
+        n, angle, stat, threshold = self.misfit
+        return (f"the last {n} pairs agree on a rotation {angle:.3g} deg from the estimate, beyond what its radius "
+                f"allows (statistic {stat:.3g} > {threshold:.3g}, the {100 * self.level:g} % region of both): a "
+                f"change, not decided yet")
+
+    def clear(self) -> None:
+        """Forget every pair (a decision, a start)."""
+        self._clear_run()
+        self.window_misfit, self._since_window = None, 0
+
+    def _clear_run(self) -> None:
+        self.pairs.clear()
+        self._g, self._H = [0.0] * 3, [0.0] * 9   # the run's sums of g_j = (I - B_j^T) r_j and H_j = 2I - B_j - B_j^T
+        self._chi2 = 0.0     # its sum of 1.5 d^2 / s^2 (a bound on its statistic)
+        self.sum = 0.0
+        self.run_misfit = None
+
+    def _scan(self, R, cov, s2, recent) -> None:
+        self._since_window = 0
+        window = np.array(list(recent)[-GUARD_WINDOW:])  # (n, 2, 3, 3): A and B
+        stat, angle = misfit_test(R, cov, s2, window[:, 0], window[:, 1])
+        if stat > self.threshold:
+            self.window_misfit = (GUARD_WINDOW, angle, stat, self.threshold)
+        elif stat <= self.clear_threshold:  # withdrawn until a window fits at a usual level (hysteresis)
+            self.window_misfit = None
+
+    def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
+        """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
+        mean square residual); ``recent``: the last pairs added, this one included (a sequence of ``(A, B)``)."""
+        z = 0.5 * d2 / s2
+        self._since_window += 1
+        if self._since_window >= GUARD_EVERY and len(recent) >= GUARD_WINDOW:
+            self._scan(R, cov, s2, recent)
+        total = self.sum + z - GUARD_K
+        if total <= 0.0:
+            if self.sum:
+                self._clear_run()
+            return
+        self.sum = total
+        pairs = self.pairs
+        if len(pairs) == pairs.maxlen:
+            _, _, bound0, part = pairs[0]
+            self._chi2 -= bound0
+            if part is not None:
+                self._g = [x - y for x, y in zip(self._g, part[0])]
+                self._H = [x - y for x, y in zip(self._H, part[1])]
+        bound = 3.0 * z
+        pairs.append([A, B, bound, None])
+        self._chi2 += bound
+        if self.run_misfit is not None or len(pairs) < GUARD_MIN_PAIRS or self._chi2 <= self.threshold:
+            return  # withdrawn until the sum returns to 0; or the run cannot pass the threshold
+        for pair in pairs:  # the pairs' shares of the Gauss-Newton step, computed once a test is due
+            if pair[3] is None:
+                pair[3] = g, H = _share(R, pair[0], pair[1])
+                self._g = [x + y for x, y in zip(self._g, g)]
+                self._H = [x + y for x, y in zip(self._H, H)]
+        stat, angle = _statistic(self._g, self._H, s2, cov)
+        if stat > self.threshold:
+            self.run_misfit = (len(pairs), angle, stat, self.threshold)
+
+
+# ------------------------------------------------------------------------------------------------ drift
+#: A re-mount decided within this many pairs of the last restart, in the same direction (the cosine of the angle
+#: between the two steps at least :data:`DRIFT_COS`) and both steps below :data:`DRIFT_MAX_STEP_DEG`, is the frame
+#: drifting, not a second re-mount: one cause, one event (``drift``), no second restart.
+DRIFT_WITHIN_PAIRS = 2000
+DRIFT_COS = 0.7
+DRIFT_MAX_STEP_DEG = 3.0
+#: While following a drift, the estimate's memory (``2 / (1 - lambda)`` pairs under forgetting ``lambda``) is chosen so
+#: that its lag behind the drift, ``rate x lambda / (1 - lambda)``, is this share of the target; the lag is added to
+#: the radius (``ready`` then means the noise and the lag together stay below the target).
+DRIFT_LAG_SHARE = 0.25
+
+
+def drift_step(R_before, R_after) -> np.ndarray:
+    """The rotation vector ``w`` (rad, sensor frame) with ``R_after = R_before exp([w]x)``."""
+    from ..core.so3 import log_map
+
+    return log_map(np.swapaxes(R_before, -1, -2) @ R_after)
+
+
+def recognise_drift(last, event, following: float | None):
+    """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`) continues the last
+    change, ``last = (pair, R_latest, origin)``: the pair and estimate of the last re-mount or drift step, and the
+    re-mount that began it (an event). The step from ``R_latest`` to the event's own estimate must be small
+    (:data:`DRIFT_MAX_STEP_DEG`, or twice what the drift followed at rate ``following`` (deg per pair) moves in the
+    pairs between), within :data:`DRIFT_WITHIN_PAIRS`, and in the direction of the movement so far (from the origin's
+    estimate before it to ``R_latest``): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
+    whose small steps are noisy) at least 0. Returns None or ``(rate_deg_per_pair, angle_deg,
+    first_pair, axis)``: the angle between the origin's own estimate and the event's (where the frame was then and
+    is now), its rate over the pairs between them, and the movement's direction (a unit vector, sensor frame)."""
+    if last is None or not 0 < event.pair - last[0] <= DRIFT_WITHIN_PAIRS:
+        return None
+    origin = last[2]
+    so_far = drift_step(origin.R_before, last[1])
+    step = drift_step(last[1], event.R_after)
+    a, b = float(np.linalg.norm(so_far)), float(np.linalg.norm(step))
+    if a and b and float(np.linalg.norm(so_far + step)) == 0.0:
+        return None
+    bound = DRIFT_MAX_STEP_DEG if following is None else max(DRIFT_MAX_STEP_DEG, 2 * following * (event.pair - last[0]))
+    if not (a and b) or math.degrees(max(b, 0.0 if following is not None else a)) > bound:
+        return None
+    if float(so_far @ step) / (a * b) < (0.0 if following is not None else DRIFT_COS):
+        return None
+    moved = drift_step(origin.R_after, event.R_after)  # between the windows' own estimates: where the frame was
+    angle = math.degrees(float(np.linalg.norm(moved)))
+    return angle / (event.pair - origin.pair), angle, origin.pair, (so_far + step) / np.linalg.norm(so_far + step)
+
+
+def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
+    """Act on a drift recognised by :func:`recognise_drift` in the calibrator ``cal``
+    (:class:`replication.rig.online.OnlineCalibrator`): the drift event (the first re-mount's restart folded into it,
+    one event per cause), forgetting that follows it (:func:`follow_forgetting`), the older pairs' weight cut to the
+    new memory; no restart. Returns the event."""
+    import dataclasses
+
+    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start
+        cal.events = [e for e in cal.events if not (e.kind == "remount" and e.pair == first)]
+        cal.alarms = [a for a in cal.alarms if a != first]
+    cal._flush()
+    lam = follow_forgetting(rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1), cal.refine_every)
+    c = min(1.0, 1.0 / ((1.0 - lam) * cal._w)) if cal._w else 1.0
+    cal._S, cal._SB, cal._w, cal._SB2, cal._w2 = c * cal._S, c * cal._SB, c * cal._w, c * c * cal._SB2, c * c * cal._w2
+    cal._last_step, cal._drift_rate, cal.forgetting = (event.pair, event.R_after, cal._last_step[2]), rate, lam
+    cal._drift_axis = axis
+    lag = drift_lag_deg(rate, lam, cal.refine_every)
+    return dataclasses.replace(
+        event, kind="drift", onset_pair=first, angle_deg=angle, rate_deg_per_pair=rate,
+        message=f"the frame drifts: {angle:.3g} deg in {event.pair - first} pairs ({rate:.3g} deg per pair) since the "
+                f"re-mount decided at pair {first} (started over once, then followed): forgetting {lam:.4g}, lag "
+                f"{lag:.3g} deg added to the radius" + (
+                    "" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg"))
+
+
+def follow_forgetting(rate_deg_per_pair: float, target_deg: float, lowest: float, every: int) -> float:
+    """The forgetting factor that keeps the lag behind a drift (:func:`drift_lag_deg`, refined every ``every``
+    pairs) at :data:`DRIFT_LAG_SHARE` of the target (at least ``lowest``, the factor that still gives the estimator
+    its distinct pairs; below 1)."""
+    memory = DRIFT_LAG_SHARE * target_deg / max(rate_deg_per_pair, 1e-12) - every   # lambda / (1 - lambda)
+    return min(max(memory / (1.0 + memory), lowest), 1.0 - 1e-9) if memory > 0 else lowest
+
+
+def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> float:
+    """The lag (deg) behind a drift of an estimate with forgetting ``lambda`` refined every ``every`` pairs: ``rate x
+    (lambda / (1 - lambda) + every)`` (the weighted mean age of its pairs, and the pairs since its last refinement)."""
+    return rate_deg_per_pair * (forgetting / (1.0 - forgetting) + every)
