@@ -293,8 +293,8 @@ the one calibrated (--camera), so every camera-camera transform is unchanged; --
 with a warning saying how far the stereo calibration moves. Each tool's loader needs intrinsics that a calibration
 of R0 does not give, so without --base a file is refused (naming what the base must hold); --to ros2 prints a
 static_transform_publisher command instead. Each tool's frame direction, field, unit and sign, with the line of its
-source: the module replication.rig.vioformats (python -m pydoc replication.rig.vioformats) and, in the project's
-repository, docs/conventions.md ("Other tools' files").
+source: docs/conventions.md, "Other tools' files" (in the project's clone, or shipped inside the installed package
+as replication/_shipped/docs/conventions.md); in short: python -m pydoc replication.rig.vioformats.
 
 examples:
   python -m replication export report.json --to kalibr --base camchain-imucam.yaml --out camchain-new.yaml
