@@ -202,6 +202,33 @@ def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
     assert read_vio_file(_written(tmp_path, export, "g.yaml")).time_offset_s() == 0.0
 
 
+@pytest.mark.parametrize("offset", ["null", "0.0"])
+def test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command(tmp_path, offset):
+    """Issue 33: the report of static poses (calibrate --poses) has no clock; before, its 0.0 overwrote the user's
+    timeshift_cam_imu of 0.0042. Null (the schema now) and 0.0 (older reports) both leave it, and the command says
+    so; a gyro report's number is written."""
+    R = np.asarray(R_TRUE).tolist()
+    report, base, out = tmp_path / "robot.json", tmp_path / "camchain-imucam.yaml", tmp_path / "new.yaml"
+    poses = '{"kind": "static poses", "samples": 12}'
+    report.write_text(f'{{"R0_camera_from_sensor": {json.dumps(R)}, "time_offset_s": {offset}, "verdict": {{"level": '
+                      f'"ok", "reasons": []}}, "inputs": {{"camera": {poses}, "sensor": {poses}}}}}')
+    base.write_text(KALIBR_BASE.replace("timeshift_cam_imu: -0.5", "timeshift_cam_imu: 0.0042"))
+    done = subprocess.run([sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base",
+                           str(base), "--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert read_vio_file(out).time_offset_s("cam0") == 0.0042 and "timeshift_cam_imu: 0.0042" in out.read_text()
+    assert "note: no clock offset was estimated (static poses): the file's offset is left as it was" in done.stderr
+    assert "timeshift" not in done.stderr.splitlines()[0]  # "kalibr: changed ..." names the rotations only
+    assert np.abs(read_vio_file(out).camera_from_sensor() - R_TRUE).max() < 1e-12
+    gyro = json.loads(report.read_text())
+    gyro["inputs"] = {"sensor": {"kind": "GyroStream", "source": "imu0.csv"}}
+    gyro["time_offset_s"] = 0.0
+    report.write_text(json.dumps(gyro))
+    done = subprocess.run([sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base",
+                           str(base)], capture_output=True, text=True)
+    assert done.returncode == 0 and "timeshift_cam_imu: 0.0\n" in done.stdout  # measured: written
+
+
 def test_ros2_is_a_static_transform_publisher_command_of_the_cameras_pose_in_the_imu_frame():
     from scipy.spatial.transform import Rotation
 
