@@ -173,6 +173,21 @@ def test_by_default_the_other_cameras_turn_with_the_one_calibrated(tmp_path):
     assert any(n.startswith("the rig kept whole: cam1") and "148.7 deg" in n for n in export.notes)
 
 
+def test_another_cameras_entry_that_cannot_turn_is_named_with_the_way_out(tmp_path):
+    """The rig's correction reaches every camera: one whose entry cannot be edited (a merge key, a matrix that is
+    not a rotation) stops the export naming that camera and --one-camera; with --one-camera it goes through."""
+    base = tmp_path / "camchain.yaml"
+    for cam1 in ("cam1:\n  <<: *b\n  T_cam_imu:\n", "cam1:\n  T_cam_imu:\n  - [2.0, 0.0, 0.0, 0.7]\n"):
+        text = KALIBR_BASE.split("cam1:\n  T_cam_imu:\n")
+        base.write_text("b: &b\n  intrinsics: [1, 2, 3, 4]\n" + text[0] + cam1 + text[1].split("\n", 1)[1])
+        with pytest.raises(DataFileError, match=r"cam1.*\(the rig's other cameras, cam1, turn with cam0; --one-camera "
+                                                r"edits cam0 only\)"):
+            export_calibration(_report(), "kalibr", base=base)
+        with pytest.warns(ExportWarning, match="one camera only"):
+            one = export_calibration(_report(), "kalibr", base=base, whole_rig=False)
+        assert np.abs(read_vio_file(_written(tmp_path, one, "o.yaml")).camera_from_sensor() - R_TRUE).max() < 1e-12
+
+
 def test_kalibrs_other_per_camera_offsets_move_by_the_same_amount(tmp_path):
     base = tmp_path / "camchain.yaml"
     base.write_text(KALIBR_BASE + "  timeshift_cam_imu: -0.25\n")  # cam1's, 0.25 s after cam0's -0.5

@@ -29,7 +29,7 @@ import numpy as np
 from .._version import __version__
 from ..core.checks import check_rotation_matrices
 from ..core.solvers import ReplicationWarning
-from .datafile import fail, read_text
+from .datafile import DataFileError, fail, read_text
 from .vioformats import VioFile, format_number, read_vio_file
 
 __all__ = ["TARGETS", "NEEDS_BASE", "Export", "ExportWarning", "TranslationNotEstimatedWarning", "export_calibration",
@@ -246,7 +246,15 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
                      "was written there")
     if file.unread:
         warnings.warn(f"{file.path.name}: {file.unread}", ExportWarning, stacklevel=2)
-    text, changed, added = file.with_values(camera, R0, d, whole_rig=whole_rig)
+    try:
+        text, changed, added = file.with_values(camera, R0, d, whole_rig=whole_rig)
+    except DataFileError as err:
+        if not whole_rig:
+            raise
+        file.with_values(camera, R0, d, whole_rig=False)  # the camera's own problem: raised as it is
+        others = [c for c in file.cameras() if c != camera]
+        raise DataFileError(err.path, f"{err.message} (the rig's other cameras, {', '.join(others)}, turn with "
+                                      f"{camera}; --one-camera edits {camera} only)", err.line, err.column) from None
     written = text[1:] if file.bom else text
     notes += _rig_notes(file, VioFile(file.path, written.replace(file.newline, "\n")), camera, whole_rig)
     return Export(text, to, camera, tuple(changed), tuple(notes), tuple(added))

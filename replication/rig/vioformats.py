@@ -285,7 +285,8 @@ class VioFile:
         except ValueError:
             fail(self.path, f"{key} has an entry that is not a number")
         try:
-            M = check_rotation_matrices(M, f"rotation part of {key}", atol=1e-5)
+            named = f"{camera}.{key}" if self.format in ("kalibr", "openvins") else key
+            M = check_rotation_matrices(M, f"rotation part of {named}", atol=1e-5)
         except ValueError as err:
             fail(self.path, str(err))
         return M.T if transposed else M
