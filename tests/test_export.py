@@ -247,8 +247,9 @@ def test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_comm
 def test_ros2_is_a_static_transform_publisher_command_of_the_cameras_pose_in_the_imu_frame():
     from scipy.spatial.transform import Rotation
 
-    with pytest.warns(TranslationNotEstimatedWarning):
+    with pytest.warns(TranslationNotEstimatedWarning, match="put your measured translation in --x --y --z") as said:
         export = export_calibration(_report(), "ros2", parent_frame="imu0", child_frame="cam0_optical")
+    assert not any("--base" in str(w.message) for w in said)  # which ros2 refuses
     command = export.text.splitlines()[-1].split()
     assert command[:4] == ["ros2", "run", "tf2_ros", "static_transform_publisher"]
     value = {command[i][2:]: command[i + 1] for i in range(4, len(command), 2)}
