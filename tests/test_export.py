@@ -197,6 +197,12 @@ def test_kalibrs_other_per_camera_offsets_move_by_the_same_amount(tmp_path):
     with pytest.warns(ExportWarning, match="one camera only"):
         one = export_calibration(_report(d=0.1), "kalibr", base=base, whole_rig=False)
     assert read_vio_file(_written(tmp_path, one, "o.yaml")).time_offset_s("cam1") == -0.25
+    base.write_text(KALIBR_BASE)  # cam1 has none: added there, cam0's -0.5 kept (no old value to move it by)
+    added = export_calibration(_report(d=0.1), "kalibr", base=base, camera="cam1")
+    out = read_vio_file(_written(tmp_path, added, "a.yaml"))
+    assert (out.time_offset_s("cam1"), out.time_offset_s("cam0")) == (pytest.approx(0.1, abs=1e-15), -0.5)
+    assert added.added == ("cam1.timeshift_cam_imu",) and any("cam0's offsets are left as they were" in n
+                                                               for n in added.notes)
 
 
 def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):

@@ -255,6 +255,10 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
         others = [c for c in file.cameras() if c != camera]
         raise DataFileError(err.path, f"{err.message} (the rig's other cameras, {', '.join(others)}, turn with "
                                       f"{camera}; --one-camera edits {camera} only)", err.line, err.column) from None
+    kept = [c for c in file.cameras() if c != camera and file.time_offset_s(c) is not None] if to == "kalibr" else []
+    if whole_rig and added and kept:
+        notes.append(f"{camera} had no timeshift_cam_imu (added): {', '.join(kept)}'s offsets are left as they were, "
+                     "having no old value of it to move them by")
     written = text[1:] if file.bom else text
     notes += _rig_notes(file, VioFile(file.path, written.replace(file.newline, "\n")), camera, whole_rig)
     return Export(text, to, camera, tuple(changed), tuple(notes), tuple(added))

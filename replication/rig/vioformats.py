@@ -415,8 +415,8 @@ class VioFile:
         else:
             edits, old = [self._insertion(where, f"timeshift_cam_imu: {value}")], 0.0
             added.append(name)
-        if self.format == "kalibr":  # one offset per camera: the others move with it
-            for cam in others:
+        if self.format == "kalibr" and node is not None:  # one offset per camera: the others move with it (by how
+            for cam in others:                                 # much is unknown where the camera had none: kept)
                 other, _ = self._offset_node(cam)
                 if other is not None:
                     self._not_shared([], [other], "the time offset")
