@@ -675,3 +675,15 @@ def test_no_folder_reaches_any_output(tmp_path, source):
     assert any("imu0.csv" in t for t in said) and any("base_kalibr.yaml" in t for t in said)
     for folder in ("/home/me", "Users", str(tmp_path)):
         assert not any(folder in t for t in said), folder
+
+
+def test_the_export_help_says_what_the_command_now_does():
+    import argparse
+
+    from replication.rig.export import add_parser
+
+    parser = argparse.ArgumentParser(prog="replication")
+    text = add_parser(parser.add_subparsers()).format_help()
+    assert "--one-camera" in text and "stays a rig" in " ".join(text.split())
+    assert "without --base a file is refused" in " ".join(text.split()) and "minimal" not in text
+    assert "replication/_shipped/docs/conventions.md" in " ".join(text.split())
