@@ -91,16 +91,84 @@ def test_front_page_links_every_claim_to_its_record_and_its_notebook_section(col
     rows = [line for line in page.splitlines() if line.startswith("| [")]
     assert len(rows) == collected["claim"].nunique()
     for line, rec in zip(rows, collected.itertuples()):
-        assert f"](ledger.md#{rec.claim})" in line and f"| **{rec.verdict}** |" in line
+        assert f"](ledger.md#{book.claim_anchor(rec.claim)})" in line
+        assert f"| {book.verdict_badge(rec.verdict)} |" in line
         assert f"](notebooks/{rec.notebook}.ipynb#{rec.anchor})" in line
+
+
+def _condition_cells(page):
+    """The third cell of each front-page row: the condition (holds only if) or the evidence."""
+    return {line.split("](ledger.md#")[1].split(")")[0]: line.split(" | ")[2]
+            for line in page.splitlines() if line.startswith("| [")}
+
+
+def test_front_page_gives_every_condition_in_full_and_cuts_nothing(collected):
+    """Issue 35: a "holds only if" row carries its whole condition (the cell wraps; no "…" or "..." cut), and an
+    evidence cell ends at its first clause with a link to the rest, never an ellipsis."""
+    cells = _condition_cells(book.front_page_claims(collected))
+    only_if = collected[collected["verdict"] == ledger.HOLDS_ONLY_IF]
+    assert len(only_if) >= 5  # theorem1, table2_methods_agree (380 characters), ...
+    for rec in collected.itertuples():
+        cell = cells[book.claim_anchor(rec.claim)]
+        assert "…" not in cell, (rec.claim, cell)
+        if rec.verdict == ledger.HOLDS_ONLY_IF:
+            assert cell == f"only if {book._md(rec.condition)}" and "..." not in cell, rec.claim
+    theorem1 = cells[book.claim_anchor("theorem1")]
+    assert theorem1.endswith("relative motions do not share an axis")  # was cut at "the motions are not …"
+
+
+def test_a_long_condition_is_kept_whole_and_a_long_evidence_links_to_the_rest(collected):
+    row = collected.iloc[[0]].copy()
+    row["verdict"], row["condition"] = ledger.HOLDS_ONLY_IF, "a; b. C " + "word " * 60
+    assert "word " * 59 in _condition_cells(book.front_page_claims(row))[book.claim_anchor(row.iloc[0]["claim"])]
+    row["verdict"], row["evidence"] = "holds", "first clause; second"
+    cell = _condition_cells(book.front_page_claims(row))[book.claim_anchor(row.iloc[0]["claim"])]
+    assert cell == f"first clause [(more)](ledger.md#{book.claim_anchor(row.iloc[0]['claim'])})"
+    row["evidence"] = "one clause only"
+    assert _condition_cells(book.front_page_claims(row))[book.claim_anchor(row.iloc[0]["claim"])] == "one clause only"
+
+
+def test_verdicts_carry_a_mark_and_a_class_each(collected):
+    assert set(book.VERDICT_MARKS) == set(ledger.VERDICTS)
+    marks = [m for m, _ in book.VERDICT_MARKS.values()]
+    classes = [c for _, c in book.VERDICT_MARKS.values()]
+    assert len(set(marks)) == len(set(classes)) == len(ledger.VERDICTS)
+    css = (PROJECT_ROOT / "docs" / "_static" / "book.css").read_text(encoding="utf-8")
+    for css_class in classes:
+        assert f".verdict-{css_class} {{" in css
+    assert book.verdict_badge("fails") == '<span class="verdict verdict-fails">✘ fails</span>'
+    with pytest.raises(ValueError, match="no mark for the verdict 'maybe'"):
+        book.verdict_badge("maybe")
+
+
+def test_every_claim_has_a_readable_title_and_a_heading_of_its_own(collected):
+    claims = [line.split(",")[0] for line in (PROJECT_ROOT / "data" / "paper" / "claims.csv").read_text(
+        encoding="utf-8").splitlines()[1:]]
+    assert set(claims) == set(book.TITLES)
+    anchors = [book.claim_anchor(c) for c in claims]
+    assert len(set(anchors)) == len(anchors) and all(len(book.TITLES[c]) <= 70 for c in claims)
+    assert not any(re.fullmatch(r"\w+", book.TITLES[c]) for c in claims)  # words, not an id
+    with pytest.raises(ValueError, match="the claim 'no_such' has no title"):
+        book.claim_anchor("no_such")
 
 
 def test_ledger_chapter_gives_every_record_in_full(collected):
     chapter = book.ledger_chapter(collected)
-    assert re.findall(r"^## (\S+)$", chapter, re.MULTILINE) == list(collected["claim"])
+    assert re.findall(r"^## (.+)$", chapter, re.MULTILINE) == [book.TITLES[c] for c in collected["claim"]]
     rec = collected.set_index("claim").loc["theorem1"]
-    assert f"**Verdict:** holds only if: {book._md(rec.condition)}" in chapter
+    assert "## Theorem 1: the two-step iteration converges to R0\n\n`theorem1`\n" in chapter
+    assert f"**Verdict:** {book.verdict_badge(ledger.HOLDS_ONLY_IF)}: {book._md(rec.condition)}" in chapter
     assert book._md(rec.evidence) in chapter and book._md(rec.uncertainty) in chapter
+
+
+def test_the_front_page_shows_readmes_headlines(collected):
+    readme = (PROJECT_ROOT / "README.md").read_text(encoding="utf-8")
+    block = book.readme_headlines(readme, collected)
+    assert block.count("\n* ") + block.startswith("* ") == 4  # README's four headlines
+    assert "**Theorem 1 holds only if**" in block and "**The resilience claim fails**" in block
+    assert f"[`theorem1`](ledger.md#{book.claim_anchor('theorem1')})" in block
+    with pytest.raises(ValueError, match="README.md has no list of headlines"):
+        book.readme_headlines("# x\n", collected)
 
 
 def test_markdown_escapes_what_would_change_the_text():
@@ -264,4 +332,33 @@ def test_the_book_reads_cleanly_in_a_real_browser(built, chromium):
 def test_the_front_page_shows_the_counts_of_the_records(built, collected):
     html = (built / "index.html").read_text(encoding="utf-8")
     assert ledger.counts_in_words(collected) in html
-    assert html.count('href="ledger.html#') == collected["claim"].nunique()
+    assert len(set(re.findall(r'href="ledger.html#([\w-]+)"', html))) == collected["claim"].nunique()
+
+
+def test_the_front_page_reads_in_five_minutes_in_a_real_browser(built, chromium, collected):
+    """Issue 35, in the rendered page: README's four headlines first; every "holds only if" row shows its whole
+    condition (no "…" or "..."), wrapped rather than cut (the cell's text fits its box); each verdict a mark and a
+    background of its own; the ledger's headings are titles, not ids."""
+    import browser
+
+    with browser.serve(built) as base, browser.Chromium(chromium) as page:
+        page.check_page(base + "index.html")
+        rows = page.evaluate("""Array.from(document.querySelectorAll('tr')).filter(r => r.querySelector('.verdict'))
+            .map(r => { const v = r.querySelector('.verdict'), c = r.cells[2];
+                        return {cls: v.className, text: v.innerText, bg: getComputedStyle(v).backgroundColor,
+                                cell: c.innerText, clipped: c.scrollWidth > c.clientWidth + 1}; })""")
+        headlines = page.evaluate("Array.from(document.querySelectorAll('#what-we-found li')).map(li => li.innerText)")
+        page.check_page(base + "ledger.html")
+        headings = page.evaluate("Array.from(document.querySelectorAll('article h2')).map(h => h.innerText)")
+    assert len(rows) == collected["claim"].nunique()
+    conditions = collected.set_index("claim")["condition"]
+    for row, rec in zip(rows, collected.itertuples()):
+        assert "…" not in row["cell"] and not row["clipped"], (rec.claim, row)
+        if rec.verdict == ledger.HOLDS_ONLY_IF:
+            plain = row["cell"].strip().translate(str.maketrans("‘’“”", "''\"\""))  # Sphinx's smart quotes undone
+            assert "..." not in plain and plain == f"only if {conditions[rec.claim]}", rec.claim
+        assert row["text"].startswith(book.VERDICT_MARKS[rec.verdict][0])
+    backgrounds = {r["cls"]: r["bg"] for r in rows}
+    assert len(set(backgrounds.values())) == len(backgrounds) == len(set(collected["verdict"]))
+    assert len(headlines) == 4 and headlines[0].startswith("Theorem 1 holds only if")
+    assert [h.strip("#\n ").replace("’", "'") for h in headings] == [book.TITLES[c] for c in collected["claim"]]

@@ -11,7 +11,9 @@ import json
 import math
 import subprocess
 import sys
+import tempfile
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -49,7 +51,13 @@ def _report(R=R_TRUE, d=0.0123456789, level="ok", kind="GyroStream"):
             "inputs": {"sensor": {"kind": kind, "source": "imu.csv"}}}
 
 
+_BASES = Path(tempfile.mkdtemp(prefix="export_bases_"))
+
+
 def _export(report, to, **kw):
+    """Export into ``_base``'s file of that tool unless a base is given."""
+    if to != "ros2":
+        kw.setdefault("base", _base(_BASES, to))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TranslationNotEstimatedWarning)
         return export_calibration(report, to, **kw)
@@ -76,42 +84,32 @@ def test_numbers_round_trip_and_always_carry_a_dot():
             format_number(bad)
 
 
-@pytest.mark.parametrize("to", FILE_FORMATS)
-def test_a_minimal_file_holds_the_rotation_and_offset_and_says_what_it_lacks(tmp_path, to):
-    with pytest.warns(TranslationNotEstimatedWarning, match="translation NOT estimated"):
-        export = export_calibration(_report(), to)
-    path = _written(tmp_path, export, f"min.{'json' if to == 'basalt' else 'yaml'}")
-    file = read_vio_file(path)
-    assert file.format == to
-    assert np.abs(file.camera_from_sensor("cam0") - R_TRUE).max() < 1e-12
-    if to == "orbslam3":
-        assert file.time_offset_s() is None and any("no camera-IMU time offset" in n for n in export.notes)
-    else:
-        assert file.time_offset_s() == pytest.approx(0.012345679, abs=1e-15)  # to the nanosecond
-    if to != "basalt":
-        assert "translation NOT estimated" in path.read_text()
-    assert np.allclose(np.asarray(load_reference(path)), R_TRUE, atol=1e-12)
+@pytest.mark.parametrize("to, needs", [
+    ("kalibr", "camera_model, intrinsics, distortion_model, distortion_coeffs, resolution and rostopic"),
+    ("openvins", "distortion_model, distortion_coeffs, intrinsics and resolution"),
+    ("basalt", "value0.intrinsics, resolution, calib_accel_bias, calib_gyro_bias, imu_update_rate, accel_noise_std, "
+               "gyro_noise_std, accel_bias_std, gyro_bias_std and vignette"),
+    ("orbslam3", "Camera.type, the camera's intrinsics"),
+])
+def test_without_a_base_a_file_is_refused_naming_what_the_tools_loader_needs(to, needs):
+    """No tool loads a file holding only the extrinsic (Basalt's loader: 10 required fields missing): refused, with
+    the fields a base must provide and the way out (--base, or ros2 for the rotation alone)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # refused before any warning
+        with pytest.raises(ValueError, match=f"--to {to} needs --base: .* loads no file without ") as info:
+            export_calibration(_report(level="warning"), to)
+    assert needs in str(info.value) and "--to ros2" in str(info.value)
 
 
-@pytest.mark.parametrize("to", ("openvins", "orbslam3"))
-def test_opencv_style_files_keep_their_header_and_cv2_reads_them(tmp_path, to):
-    import cv2
-
-    path = _written(tmp_path, _export(_report(), to), "min.yaml")
-    assert path.read_text().startswith("%YAML:1.0\n")
-    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    try:
-        assert fs.isOpened()
-        if to == "orbslam3":
-            T = fs.getNode("IMU.T_b_c1").mat()  # dt: f, ORB-SLAM3's float matrix
-            assert np.abs(T[:3, :3] - R_TRUE.T).max() < 1e-7
-        else:
-            cam = fs.getNode("cam0")
-            rows = [[cam.getNode("T_imu_cam").at(r).at(c).real() for c in range(4)] for r in range(4)]
-            assert np.abs(np.array(rows)[:3, :3] - R_TRUE.T).max() < 1e-15
-            assert cam.getNode("timeshift_cam_imu").real() == pytest.approx(0.012345679)
-    finally:
-        fs.release()
+def _base(tmp_path, to):
+    """A small base file of each tool, two cameras where the tool has several (identity rotations)."""
+    path = tmp_path / f"base_{to}.{'json' if to == 'basalt' else 'yaml'}"
+    pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}
+    path.write_text({"kalibr": KALIBR_BASE, "openvins": "%YAML:1.0\n" + KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"),
+                     "basalt": json.dumps({"value0": {"T_imu_cam": [pose, {**pose, "px": -0.1}],
+                                                      "cam_time_offset_ns": 0}}, indent=4),
+                     "orbslam3": '%YAML:1.0\nFile.version: "1.0"\n' + ORB_MATRIX}[to])
+    return path
 
 
 KALIBR_BASE = """# my rig, calibrated 2026-11-30
@@ -130,12 +128,16 @@ cam1:
   - [0.0, 0.0, 1.0, 0.0]
   - [0.0, 0.0, 0.0, 1.0]
 """
+ORB_MATRIX = ("IMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f\n   data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, "
+              "0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n")
 
 
 def test_a_kalibr_base_changes_in_three_rotation_rows_and_the_offset_only(tmp_path):
     base = tmp_path / "camchain.yaml"
     base.write_text(KALIBR_BASE)
-    export = export_calibration(_report(), "kalibr", base=base)
+    with pytest.warns(ExportWarning, match="one camera only: cam0 is changed and cam1 kept as written, so the "
+                                           "rotation between cam0 and each of them moves by 148.7 deg"):
+        export = export_calibration(_report(), "kalibr", base=base, whole_rig=False)
     changed = [(a, b) for a, b in zip(KALIBR_BASE.splitlines(), export.text.splitlines()) if a != b]
     assert len(export.text.splitlines()) == len(KALIBR_BASE.splitlines()) and len(changed) == 4
     assert export.changed == ("cam0.T_cam_imu rotation", "cam0.timeshift_cam_imu")
@@ -145,10 +147,62 @@ def test_a_kalibr_base_changes_in_three_rotation_rows_and_the_offset_only(tmp_pa
     assert out.doc["cam1"] == read_vio_file(base).doc["cam1"] and "# keep this comment" in export.text
     assert out.time_offset_s("cam0") == pytest.approx(0.012345679, abs=1e-15)
     # cam1 has no offset field: it is added at the camera's indentation, the rest untouched
-    export1 = export_calibration(_report(), "kalibr", base=base, camera="cam1")
+    with pytest.warns(ExportWarning, match="one camera only: cam1 is changed and cam0 kept"):
+        export1 = export_calibration(_report(), "kalibr", base=base, camera="cam1", whole_rig=False)
+    assert export1.added == ("cam1.timeshift_cam_imu",) and export1.changed == ("cam1.T_cam_imu rotation",)
     out1 = read_vio_file(_written(tmp_path, export1, "new1.yaml"))
     assert out1.time_offset_s("cam1") == pytest.approx(0.012345679) and out1.time_offset_s("cam0") == -0.5
     assert np.abs(out1.camera_from_sensor("cam0") - np.eye(3)).max() == 0
+
+
+def test_by_default_the_other_cameras_turn_with_the_one_calibrated(tmp_path):
+    """KALIBR_BASE's cameras are both the identity: cam0 set to R_TRUE turns cam1 to R_TRUE too; their T_cam_imu
+    translations (the IMU in each camera) stay, and so does every other line."""
+    base = tmp_path / "camchain.yaml"
+    base.write_text(KALIBR_BASE)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        export = export_calibration(_report(), "kalibr", base=base)
+    assert export.changed == ("cam0.T_cam_imu rotation", "cam1.T_cam_imu rotation", "cam0.timeshift_cam_imu")
+    out = read_vio_file(_written(tmp_path, export, "new.yaml"))
+    for cam in ("cam0", "cam1"):
+        assert np.abs(out.camera_from_sensor(cam) - R_TRUE).max() < 1e-12
+        assert [row[3] for row in out.doc[cam]["T_cam_imu"]] == [row[3] for row in read_vio_file(base).doc[cam][
+            "T_cam_imu"]]
+    assert "timeshift_cam_imu" not in out.doc["cam1"]  # none to move
+    assert any(n.startswith("the rig kept whole: cam1") and "148.7 deg" in n for n in export.notes)
+
+
+def test_another_cameras_entry_that_cannot_turn_is_named_with_the_way_out(tmp_path):
+    """The rig's correction reaches every camera: one whose entry cannot be edited (a merge key, a matrix that is
+    not a rotation) stops the export naming that camera and --one-camera; with --one-camera it goes through."""
+    base = tmp_path / "camchain.yaml"
+    for cam1 in ("cam1:\n  <<: *b\n  T_cam_imu:\n", "cam1:\n  T_cam_imu:\n  - [2.0, 0.0, 0.0, 0.7]\n"):
+        text = KALIBR_BASE.split("cam1:\n  T_cam_imu:\n")
+        base.write_text("b: &b\n  intrinsics: [1, 2, 3, 4]\n" + text[0] + cam1 + text[1].split("\n", 1)[1])
+        with pytest.raises(DataFileError, match=r"cam1.*\(the rig's other cameras, cam1, turn with cam0; --one-camera "
+                                                r"edits cam0 only\)"):
+            export_calibration(_report(), "kalibr", base=base)
+        with pytest.warns(ExportWarning, match="one camera only"):
+            one = export_calibration(_report(), "kalibr", base=base, whole_rig=False)
+        assert np.abs(read_vio_file(_written(tmp_path, one, "o.yaml")).camera_from_sensor() - R_TRUE).max() < 1e-12
+
+
+def test_kalibrs_other_per_camera_offsets_move_by_the_same_amount(tmp_path):
+    base = tmp_path / "camchain.yaml"
+    base.write_text(KALIBR_BASE + "  timeshift_cam_imu: -0.25\n")  # cam1's, 0.25 s after cam0's -0.5
+    out = read_vio_file(_written(tmp_path, export_calibration(_report(d=0.1), "kalibr", base=base), "n.yaml"))
+    assert out.time_offset_s("cam0") == pytest.approx(0.1, abs=1e-15)
+    assert out.time_offset_s("cam1") - out.time_offset_s("cam0") == pytest.approx(0.25, abs=1e-15)  # was 0.25 apart
+    with pytest.warns(ExportWarning, match="one camera only"):
+        one = export_calibration(_report(d=0.1), "kalibr", base=base, whole_rig=False)
+    assert read_vio_file(_written(tmp_path, one, "o.yaml")).time_offset_s("cam1") == -0.25
+    base.write_text(KALIBR_BASE)  # cam1 has none: added there, cam0's -0.5 kept (no old value to move it by)
+    added = export_calibration(_report(d=0.1), "kalibr", base=base, camera="cam1")
+    out = read_vio_file(_written(tmp_path, added, "a.yaml"))
+    assert (out.time_offset_s("cam1"), out.time_offset_s("cam0")) == (pytest.approx(0.1, abs=1e-15), -0.5)
+    assert added.added == ("cam1.timeshift_cam_imu",) and any("cam0's offsets are left as they were" in n
+                                                               for n in added.notes)
 
 
 def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
@@ -156,14 +210,52 @@ def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
     base.write_text(KALIBR_BASE)
     export = export_calibration(_report(d=None), "kalibr", base=base)
     assert read_vio_file(_written(tmp_path, export, "n.yaml")).time_offset_s() == -0.5
-    assert export.changed == ("cam0.T_cam_imu rotation",) and any("left as it was" in n for n in export.notes)
+    assert "cam0.timeshift_cam_imu" not in export.changed and any("left as it was" in n for n in export.notes)
+    # issue 33: a static-pose report written before time_offset_s became null carries 0.0: not a measurement either
+    for d in (0.0, 0.0042, None):
+        report = {**_report(d=d), "inputs": {"sensor": {"kind": "static poses", "samples": 10}}}
+        export = export_calibration(report, "kalibr", base=base)
+        assert read_vio_file(_written(tmp_path, export, "s.yaml")).time_offset_s() == -0.5, d
+        assert any("left as it was" in n for n in export.notes)
+        assert any("comes from static poses, which have no clock" in n for n in export.notes) == (d is not None)
+    # a gyro report's 0.0 is a measurement: written
+    export = export_calibration(_report(d=0.0), "kalibr", base=base)
+    assert read_vio_file(_written(tmp_path, export, "g.yaml")).time_offset_s() == 0.0
+
+
+@pytest.mark.parametrize("offset", ["null", "0.0"])
+def test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command(tmp_path, offset):
+    """Issue 33: the report of static poses (calibrate --poses) has no clock; before, its 0.0 overwrote the user's
+    timeshift_cam_imu of 0.0042. Null (the schema now) and 0.0 (older reports) both leave it, and the command says
+    so; a gyro report's number is written."""
+    R = np.asarray(R_TRUE).tolist()
+    report, base, out = tmp_path / "robot.json", tmp_path / "camchain-imucam.yaml", tmp_path / "new.yaml"
+    poses = '{"kind": "static poses", "samples": 12}'
+    report.write_text(f'{{"R0_camera_from_sensor": {json.dumps(R)}, "time_offset_s": {offset}, "verdict": {{"level": '
+                      f'"ok", "reasons": []}}, "inputs": {{"camera": {poses}, "sensor": {poses}}}}}')
+    base.write_text(KALIBR_BASE.replace("timeshift_cam_imu: -0.5", "timeshift_cam_imu: 0.0042"))
+    done = subprocess.run([sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base",
+                           str(base), "--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert read_vio_file(out).time_offset_s("cam0") == 0.0042 and "timeshift_cam_imu: 0.0042" in out.read_text()
+    assert "note: no clock offset was estimated (static poses): the file's offset is left as it was" in done.stderr
+    assert "timeshift" not in done.stderr.splitlines()[0]  # "kalibr: changed ..." names the rotations only
+    assert np.abs(read_vio_file(out).camera_from_sensor() - R_TRUE).max() < 1e-12
+    gyro = json.loads(report.read_text())
+    gyro["inputs"] = {"sensor": {"kind": "GyroStream", "source": "imu0.csv"}}
+    gyro["time_offset_s"] = 0.0
+    report.write_text(json.dumps(gyro))
+    done = subprocess.run([sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base",
+                           str(base)], capture_output=True, text=True)
+    assert done.returncode == 0 and "timeshift_cam_imu: 0.0\n" in done.stdout  # measured: written
 
 
 def test_ros2_is_a_static_transform_publisher_command_of_the_cameras_pose_in_the_imu_frame():
     from scipy.spatial.transform import Rotation
 
-    with pytest.warns(TranslationNotEstimatedWarning):
+    with pytest.warns(TranslationNotEstimatedWarning, match="put your measured translation in --x --y --z") as said:
         export = export_calibration(_report(), "ros2", parent_frame="imu0", child_frame="cam0_optical")
+    assert not any("--base" in str(w.message) for w in said)  # which ros2 refuses
     command = export.text.splitlines()[-1].split()
     assert command[:4] == ["ros2", "run", "tf2_ros", "static_transform_publisher"]
     value = {command[i][2:]: command[i + 1] for i in range(4, len(command), 2)}
@@ -181,8 +273,12 @@ def test_basalt_keeps_the_files_quaternion_hemisphere(tmp_path):
     pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": -1.0}
     base.write_text(json.dumps({"value0": {"T_imu_cam": [pose, pose], "cam_time_offset_ns": 7}}, indent=4))
     R = so3.exp_map(np.radians([0.0, 0.0, 1.0]))
-    out = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1").text)
+    with pytest.warns(ExportWarning, match="one camera only"):
+        out = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1",
+                                            whole_rig=False).text)
     assert out["value0"]["T_imu_cam"][1]["qw"] < 0 and out["value0"]["T_imu_cam"][0] == pose
+    rig = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1").text)
+    assert rig["value0"]["T_imu_cam"][0] == rig["value0"]["T_imu_cam"][1] == out["value0"]["T_imu_cam"][1]
     assert out["value0"]["cam_time_offset_ns"] == -2500000
     assert (out["value0"]["T_imu_cam"][1]["px"], out["value0"]["T_imu_cam"][1]["pz"]) == (0.1, 0.3)
 
@@ -241,12 +337,11 @@ def test_a_bad_report_file_is_named_with_line_and_column(tmp_path):
 def test_a_base_of_another_tool_or_without_the_camera_is_refused(tmp_path):
     base = tmp_path / "camchain.yaml"
     base.write_text(KALIBR_BASE)
-    with pytest.raises(DataFileError, match="is a kalibr file, not basalt"):
+    with pytest.raises(DataFileError, match="is a Kalibr file, not Basalt: give a Basalt file as --base, or --to "
+                                            "kalibr"):
         export_calibration(_report(), "basalt", base=base)
     with pytest.raises(DataFileError, match="no camera 'cam2' in this kalibr file; it has cam0, cam1"):
         export_calibration(_report(), "kalibr", base=base, camera="cam2")
-    with pytest.raises(ValueError, match="minimal Basalt file holds cam0 only"):
-        _export(_report(), "basalt", camera="cam1")
     with pytest.raises(ValueError, match="to must be one of"):
         export_calibration(_report(), "vins")
 
@@ -284,7 +379,7 @@ def test_a_known_gyro_clock_shift_comes_out_in_each_tools_field_and_sign(tmp_pat
         assert abs(1e3 * file.time_offset_s() - shift_ms) < 0.01, (to, file.time_offset_s())
         assert so3.angle_between_deg(file.camera_from_sensor(), R_TRUE) < 1e-4
     orb = _export(result, "orbslam3")
-    assert f"add d = {1e-3 * shift_ms:.5f}"[:-1] in orb.notes[0], orb.notes
+    assert any(f"add d = {1e-3 * shift_ms:.5f}"[:-1] in n for n in orb.notes), orb.notes
     assert f"d = {1e-3 * shift_ms:.5f}"[:-1] in _export(result, "ros2").notes[0]
 
 
@@ -297,7 +392,9 @@ def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
     cmd = [sys.executable, "-m", "replication", "export", str(report), "--to", "kalibr", "--base", str(base)]
     done = subprocess.run(cmd + ["--out", str(out)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert "kalibr: changed cam0.T_cam_imu rotation, cam0.timeshift_cam_imu" in done.stderr
+    assert "kalibr: changed cam0.T_cam_imu rotation, cam1.T_cam_imu rotation, cam0.timeshift_cam_imu in new.yaml" in \
+        done.stderr and str(tmp_path) not in done.stderr  # file names only
+    assert "note: kept from camchain.yaml" in done.stderr and "note: the rig kept whole: cam1" in done.stderr
     assert "warning: ExportWarning: the report's verdict is warning" in done.stderr and base.read_text() == KALIBR_BASE
     assert np.abs(read_vio_file(out).camera_from_sensor() - R_TRUE).max() < 1e-12
     refused = subprocess.run(cmd + ["--out", str(base)], capture_output=True, text=True)
@@ -307,6 +404,12 @@ def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
     assert failed.returncode == 2 and "verdict is fail" in failed.stderr and failed.stdout == ""
     forced = subprocess.run(cmd + ["--force"], capture_output=True, text=True)
     assert forced.returncode == 0 and forced.stdout.startswith("# my rig")  # no --out: standard output
+    # one camera only, into cam1 which has no offset: the key is said to be added, and the rig's move is warned
+    one = subprocess.run(cmd + ["--force", "--camera", "cam1", "--one-camera"], capture_output=True, text=True)
+    assert one.returncode == 0 and "kalibr: changed cam1.T_cam_imu rotation; added cam1.timeshift_cam_imu" in \
+        one.stderr and "ExportWarning: one camera only: cam1 is changed" in one.stderr
+    bare = subprocess.run(cmd[:-2] + ["--force"], capture_output=True, text=True)  # no --base
+    assert bare.returncode == 2 and "error: --to kalibr needs --base" in bare.stderr and bare.stdout == ""
 
 
 # ------------------------------------------------------------------------------------------------ real files
@@ -355,6 +458,7 @@ def _values(file):
 @pytest.mark.parametrize("folder", sorted(_REFERENCES))
 @pytest.mark.parametrize("camera", ("cam0", "cam1"))
 def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_path, folder, camera):
+    """With ``whole_rig=False``: the one camera's rotation and the offset, nothing else."""
     import cv2
 
     d = data_root() / folder
@@ -366,7 +470,10 @@ def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_pat
     R = so3.exp_map(np.radians([0.3, -0.2, 0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
     for base in bases:
         before = read_vio_file(base)
-        export = export_calibration(_report(R=R, d=-0.0123456789), before.format, base=base, camera=camera)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ExportWarning)  # one camera only: the rig moves, and says so
+            export = export_calibration(_report(R=R, d=-0.0123456789), before.format, base=base, camera=camera,
+                                        whole_rig=False)
         after = read_vio_file(_written(tmp_path, export, "out" + base.suffix))
         assert after.format == before.format and after.cameras() == before.cameras()
         assert np.abs(after.camera_from_sensor(camera) - R).max() < 1e-12, base.name
@@ -389,6 +496,49 @@ def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_pat
             fs.release()
 
 
+#: Both rigs' files with two cameras: Kalibr's camchain (with T_cn_cnm1), OpenVINS' chains (T_imu_cam on EuRoC,
+#: T_cam_imu on TUM-VI), Basalt's JSON (two camera models each).
+_RIG_FILES = [(f, n) for f, names in _REFERENCES.items() for n in names[1:]] + [("tumvi_room1_orbslam3mono",
+                                                                               "camchain.yaml")]
+
+
+def _camera_to_camera(file, i, j):
+    """Camera j's pose in camera i: ``(R_ij, t_ij)`` from each one's stored extrinsic."""
+    Ri, Rj = file.camera_from_sensor(i), file.camera_from_sensor(j)
+    return Ri @ Rj.T, Ri @ (file.camera_position(j) - file.camera_position(i))
+
+
+@needs_real
+@pytest.mark.parametrize("folder, name", _RIG_FILES)
+@pytest.mark.parametrize("camera", ("cam0", "cam1"))
+def test_a_two_camera_file_stays_a_rig(tmp_path, folder, name, camera):
+    """Issue 35: exporting cam0's (or cam1's) R0 into a stereo file leaves the cam0-cam1 rotation as it was to 1e-9
+    deg and its translation to 1e-12 m (Kalibr's T_cn_cnm1 unchanged byte for byte); the calibrated camera gets R0
+    exactly; one camera only moves the stereo rotation by the whole correction, and warns with that angle."""
+    base = data_root() / folder / name
+    before = read_vio_file(base)
+    R = so3.exp_map(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
+    correction = so3.angle_between_deg(R, before.camera_from_sensor(camera))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ExportWarning)
+        export = export_calibration(_report(R=R, d=-0.0042), before.format, base=base, camera=camera)
+    after = read_vio_file(_written(tmp_path, export, "rig" + base.suffix))
+    assert np.abs(after.camera_from_sensor(camera) - R).max() < 1e-12
+    (R_old, t_old), (R_new, t_new) = _camera_to_camera(before, "cam0", "cam1"), _camera_to_camera(after, "cam0", "cam1")
+    assert so3.angle_between_deg(R_old, R_new) < 1e-9 and np.abs(t_new - t_old).max() < 1e-12
+    assert so3.angle_between_deg(after.camera_from_sensor("cam1"), before.camera_from_sensor("cam1")) == \
+        pytest.approx(correction, abs=1e-9)  # the other camera turned by the correction too
+    if "T_cn_cnm1" in before.doc.get("cam1", {}):
+        assert after.doc["cam1"]["T_cn_cnm1"] == before.doc["cam1"]["T_cn_cnm1"]
+    other = "cam1" if camera == "cam0" else "cam0"
+    assert any(n.startswith(f"the rig kept whole: {other}") for n in export.notes), export.notes
+    with pytest.warns(ExportWarning, match=f"one camera only: {camera} is changed and {other} kept as written.* moves "
+                                           f"by {correction:.4g} deg"):
+        one = export_calibration(_report(R=R, d=-0.0042), before.format, base=base, camera=camera, whole_rig=False)
+    R_one, _ = _camera_to_camera(read_vio_file(_written(tmp_path, one, "one" + base.suffix)), "cam0", "cam1")
+    assert so3.angle_between_deg(R_one, R_old) == pytest.approx(correction, abs=1e-9)
+
+
 @needs_real
 def test_the_two_published_references_of_each_rig_disagree_by_the_reference_floor():
     """Kalibr's (the dataset's) and Basalt's calibrations of cam0: 0.343 deg apart on EuRoC (both of Basalt's camera
@@ -404,12 +554,16 @@ def test_the_two_published_references_of_each_rig_disagree_by_the_reference_floo
 def test_openvins_takes_one_offset_cam0s_and_orbslam3_needs_its_file_version(tmp_path):
     base = tmp_path / "chain.yaml"
     base.write_text("%YAML:1.0\n" + KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"))
-    export = export_calibration(_report(), "openvins", base=base, camera="cam1")
-    assert export.changed == ("cam1.T_imu_cam rotation", "cam0.timeshift_cam_imu")
+    with pytest.warns(ExportWarning, match="one camera only"):
+        export = export_calibration(_report(), "openvins", base=base, camera="cam1", whole_rig=False)
+    assert export.changed == ("cam1.T_imu_cam rotation", "cam0.timeshift_cam_imu") and export.added == ()
     assert any("one time offset, cam0's" in n for n in export.notes)
     out = read_vio_file(_written(tmp_path, export, "o.yaml"))
     assert out.doc["cam0"]["timeshift_cam_imu"] == pytest.approx(0.012345679) and "timeshift_cam_imu" not in out.doc[
         "cam1"]
+    rig = export_calibration(_report(), "openvins", base=base, camera="cam1")  # cam0 turns and moves with cam1
+    assert rig.changed == ("cam1.T_imu_cam rotation", "cam0.T_imu_cam rotation", "cam0.T_imu_cam translation",
+                           "cam0.timeshift_cam_imu")
     assert np.abs(out.camera_from_sensor("cam1") - R_TRUE).max() < 1e-12
     matrix = "IMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f\n   data: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, " \
              "0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n"
@@ -418,7 +572,6 @@ def test_openvins_takes_one_offset_cam0s_and_orbslam3_needs_its_file_version(tmp
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExportWarning)
         export_calibration(_report(), "orbslam3", base=orb)
-    assert read_vio_file(_written(tmp_path, _export(_report(), "orbslam3"), "m.yaml")).doc["File.version"] == "1.0"
     orb.write_text('%YAML:1.0\nFile.version: "0.9"\n' + matrix)
     with pytest.warns(ExportWarning, match='no File.version: "1.0"'):
         export_calibration(_report(), "orbslam3", base=orb)
@@ -488,7 +641,7 @@ def test_only_a_4x4_matrix_is_read_or_written(tmp_path, rows, cols, ok):
 def test_a_t_imu_cam_file_is_openvins_and_without_its_header_it_is_flagged(tmp_path):
     base = tmp_path / "chain.yaml"
     base.write_text(KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"))
-    with pytest.raises(DataFileError, match="is a openvins file, not kalibr"):
+    with pytest.raises(DataFileError, match="is an OpenVINS file, not Kalibr"):
         export_calibration(_report(), "kalibr", base=base)
     with pytest.warns(ExportWarning, match="no %YAML:1.0 header: OpenVINS reads its files with cv::FileStorage"):
         export_calibration(_report(), "openvins", base=base)
@@ -501,8 +654,36 @@ def test_a_t_imu_cam_file_is_openvins_and_without_its_header_it_is_flagged(tmp_p
 def test_names_from_the_report_and_the_command_line_cannot_add_lines_or_shell_words():
     report = _report()
     report["inputs"]["sensor"]["source"] = "imu.csv\ncam0:\n  T_cam_imu: []"
-    text = _export(report, "kalibr").text
-    assert [ln for ln in text.splitlines() if ln.startswith("cam0")] == ["cam0:"]
+    text = _export(report, "ros2").text
+    assert [ln for ln in text.splitlines() if not ln.startswith("#")] == [text.splitlines()[-1]]
     assert "imu.csv cam0: T_cam_imu: []" in text
     command = _export(report, "ros2", parent_frame="imu; rm -rf ~", child_frame="cam 0").text.splitlines()
     assert len(command) == 2 and command[1].endswith("--frame-id 'imu; rm -rf ~' --child-frame-id 'cam 0'")
+
+
+@pytest.mark.parametrize("source", ("/home/me/rig/imu0.csv", "C:\\Users\\me\\imu0.csv", "imu0.csv"))
+def test_no_folder_reaches_any_output(tmp_path, source):
+    """Issue 35: file names only, in the command, the notes and the warnings (the report's sensor path and the
+    base's folder are the user's own business)."""
+    report = _report(kind="OrientationStream")
+    report["inputs"]["sensor"]["source"] = source
+    base = _base(tmp_path, "kalibr")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        outputs = [export_calibration(report, "ros2"), export_calibration(report, "kalibr", base=base)]
+    said = [e.text for e in outputs] + [n for e in outputs for n in e.notes] + [str(w.message) for w in caught]
+    assert any("imu0.csv" in t for t in said) and any("base_kalibr.yaml" in t for t in said)
+    for folder in ("/home/me", "Users", str(tmp_path)):
+        assert not any(folder in t for t in said), folder
+
+
+def test_the_export_help_says_what_the_command_now_does():
+    import argparse
+
+    from replication.rig.export import add_parser
+
+    parser = argparse.ArgumentParser(prog="replication")
+    text = add_parser(parser.add_subparsers()).format_help()
+    assert "--one-camera" in text and "stays a rig" in " ".join(text.split())
+    assert "without --base a file is refused" in " ".join(text.split()) and "minimal" not in text
+    assert "replication/_shipped/docs/conventions.md" in " ".join(text.split())

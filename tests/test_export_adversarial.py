@@ -161,11 +161,16 @@ def test_euroc_sensor_yaml_without_sensor_type_is_not_taken_for_a_camera(tmp_pat
 
 
 @pytest.mark.parametrize("to", ["ros2", "orbslam3"])
-def test_offset_against_an_orientation_stream_is_warned_for_every_target(to):
+def test_offset_against_an_orientation_stream_is_warned_for_every_target(tmp_path, to):
     """Claim (4): ros2 and orbslam3 tell the user to add d to the stamps, without the ExportWarning."""
+    base = None
+    if to == "orbslam3":
+        base = tmp_path / "orb.yaml"
+        base.write_text(f"%YAML:1.0\nFile.version: \"1.0\"\nIMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n"
+                        f"   dt: f\n   data: [{I16}]\n")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        export_calibration(_report(kind="OrientationStream"), to)
+        export_calibration(_report(kind="OrientationStream"), to, base=base)
     assert any(issubclass(w.category, ExportWarning) for w in caught)
 
 

@@ -56,16 +56,16 @@ def test_the_core_dependencies_leave_out_the_notebook_stack():
     assert not set(core) & set(NOTEBOOK_STACK)
     extras = PYPROJECT["optional-dependencies"]
 
-    def installed_by(extra):  # the extra's packages, those of the extras it names ("replication[study]") included
+    def installed_by(extra):  # the extra's packages, those of the extras it names ("camimu-replication[study]") too
         names = set(_names(extras[extra]))
-        for inner in re.findall(r"^replication\[(\w+)\]$", "\n".join(extras[extra]), re.M):
+        for inner in re.findall(r"^camimu-replication\[(\w+)\]$", "\n".join(extras[extra]), re.M):
             names |= installed_by(inner)
-        return names - {"replication"}
+        return names - {"camimu-replication"}
 
     for module, extra in OPTIONAL.items():  # the extra a missing module's message names installs it
         assert module in installed_by(extra), (module, extra)
     assert set(OPTIONAL) == set(NOTEBOOK_STACK)
-    assert "replication[study]" in PYPROJECT["optional-dependencies"]["notebooks"]
+    assert "camimu-replication[study]" in PYPROJECT["optional-dependencies"]["notebooks"]
     setup = (ROOT / "scripts" / "setup.sh").read_text()
     assert re.search(r'-e "\$ROOT\[study,test,notebooks(,docs)?\]"', setup)  # README's two commands install everything
 
@@ -126,13 +126,74 @@ def test_a_command_that_needs_the_extra_says_which_to_install(rig, tmp_path, arg
         args = [*args, "--results", tmp_path / "results"]
     out = _blocked_run(args)
     assert out.returncode == 2, out.stderr
-    assert needs in out.stderr and "pip install 'replication[study]'" in out.stderr
+    assert needs in out.stderr and "in the project's clone, pip install -c requirements.lock '.[study]'" in out.stderr
     assert "Traceback" not in out.stderr and "verdict" not in out.stdout  # refused before any work
 
 
 def test_require_names_the_extra():
     assert require("math", "x").pi > 3
-    with pytest.raises(MissingExtra, match=r"the replay needs no_such_module_x, which is not installed: pip install "
-                                           r"'replication\[study\]'") as info:
+    with pytest.raises(MissingExtra, match=r"the replay needs no_such_module_x, which is not installed: in the "
+                                           r"project's clone, pip install -c requirements.lock '\.\[study\]'") as info:
         require("no_such_module_x", "the replay")
     assert isinstance(info.value, ImportError) and info.value.name == "no_such_module_x"
+
+
+# ------------------------------------------------------------------------------------ the distribution and a wheel
+
+def test_the_distribution_is_not_pypis_unrelated_replication_and_ships_what_commands_cite():
+    """Issue 35: ``replication`` on PyPI is another project; the name is checked free with ``pip index versions
+    camimu-replication`` (nothing found, 2026-12-04). The files commands read or cite outside the package are
+    copied into a wheel by setup.py, included in an sdist by MANIFEST.in, and listed once in _extras.SHIPPED."""
+    from replication._extras import DISTRIBUTION, SHIPPED, shipped
+
+    assert PYPROJECT["name"] == DISTRIBUTION == "camimu-replication"
+    import ast
+
+    tree = ast.parse((ROOT / "setup.py").read_text())
+    assigned = {t.id: n.value for n in tree.body if isinstance(n, ast.Assign) for t in n.targets}
+    assert ast.literal_eval(assigned["SHIPPED"]) == SHIPPED
+    assert sorted(ln.split()[1] for ln in (ROOT / "MANIFEST.in").read_text().splitlines()) == sorted(SHIPPED)
+    for name in SHIPPED:
+        assert shipped(name) == ROOT / name and shipped(name).is_file()
+    assert "data/real_data_manifest.csv" in SHIPPED and "docs/conventions.md" in SHIPPED
+
+
+def test_a_wheel_in_a_fresh_venv_runs_calibrate_export_and_fetch_data(rig, tmp_path):
+    """Issue 35: build the wheel, install it with the lock in a new virtual environment, and run the commands from a
+    folder outside the clone: every help text, a calibration, its export and fetch-data's manifest, with no file
+    missing. About 50 s (most of it pip installing the core's wheels); skipped if pip cannot reach them."""
+    d, R0 = rig
+    wheels, venv = tmp_path / "whl", tmp_path / "venv"
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, ROOT],
+                           capture_output=True, text=True, timeout=300)
+    assert built.returncode == 0, built.stderr
+    subprocess.run([sys.executable, "-m", "venv", venv], check=True, timeout=120)
+    python = venv / "bin" / "python"
+    installed = subprocess.run([python, "-m", "pip", "install", "-q", "-c", ROOT / "requirements.lock",
+                                *wheels.glob("camimu_replication-*.whl")], capture_output=True, text=True, timeout=600)
+    if installed.returncode != 0 and "No matching distribution" in installed.stderr:
+        pytest.skip(f"pip could not get the core's dependencies here: {installed.stderr.strip()[-200:]}")
+    assert installed.returncode == 0, installed.stderr
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+
+    def run(*args):
+        return subprocess.run([python, "-m", "replication", *map(str, args)], capture_output=True, text=True,
+                              cwd=outside, timeout=300)
+
+    where = subprocess.run([python, "-c", "import replication; print(replication.__file__)"], capture_output=True,
+                           text=True, cwd=outside)
+    assert str(venv) in where.stdout and str(ROOT / "replication") not in where.stdout  # the wheel, not the clone
+    for command in ("calibrate", "export", "fetch-data"):
+        out = run(command, "--help")
+        assert out.returncode == 0 and out.stderr == "" and "usage:" in out.stdout, (command, out.stderr)
+    package = Path(where.stdout.strip()).parent
+    assert (package / "_shipped" / "docs" / "conventions.md").is_file()  # what export --help cites
+    out = run("calibrate", "--camera", d / "cam.txt", "--sensor", d / "imu.csv", "--sensor-kind", "gyro",
+              "--bootstrap", 0, "--out", "r.json")
+    assert out.returncode == 0 and "verdict: OK" in out.stdout, out.stderr
+    out = run("export", "r.json", "--to", "ros2")
+    assert out.returncode == 0 and "static_transform_publisher" in out.stdout, out.stderr
+    out = run("fetch-data", "--check", outside / "empty")  # the manifest read offline: every file missing, none read
+    assert out.returncode == 1 and "files missing or not matching the manifest" in out.stderr, out.stderr
+    assert "No such file" not in out.stderr and "Traceback" not in out.stderr

@@ -1,11 +1,14 @@
 """Put a calibration into the user's own VIO configuration: Kalibr, OpenVINS, Basalt, ORB-SLAM3, ROS 2.
 
 ``python -m replication export REPORT.json --to kalibr|openvins|basalt|orbslam3|ros2 [--base FILE] --out FILE``
-(:func:`export_calibration` from Python). With ``--base``, the output is a copy of the user's file in which only the
-camera's rotation and the clock offset (in that tool's field and sign) are changed; translation, intrinsics, other
-cameras, comments and every other field are kept as written (:mod:`replication.rig.vioformats`). Without it, a minimal
-file: its translation is zero and marked as not estimated (a comment, and :class:`TranslationNotEstimatedWarning`).
-``ros2`` gives a ``static_transform_publisher`` command (REP-103; quaternion x y z w). Each tool's convention, and
+(:func:`export_calibration` from Python). The output is a copy of the user's own file (``--base``) in which only the
+rotations and the clock offset (in that tool's field and sign) are changed; translation, intrinsics, comments and
+every other field are kept as written (:mod:`replication.rig.vioformats`). A file with several cameras stays a rig:
+the correction of the calibrated camera's ``R0`` is carried to the others, so every camera-camera transform is
+unchanged (``--one-camera`` edits one camera only, and warns how far the rig moves). No tool loads a file holding
+only an extrinsic, so without ``--base`` a file target is refused, naming what the tool's loader needs
+(:data:`NEEDS_BASE`). ``ros2`` gives a ``static_transform_publisher`` command (REP-103; quaternion x y z w) whose
+zero translation is marked as not estimated (:class:`TranslationNotEstimatedWarning`). Each tool's convention, and
 where in its source or documentation it is stated: ``docs/conventions.md`` ("Other tools' files").
 
 The report says how far it can be trusted, and the export keeps saying it: a ``fail`` verdict is refused unless
@@ -26,10 +29,10 @@ import numpy as np
 from .._version import __version__
 from ..core.checks import check_rotation_matrices
 from ..core.solvers import ReplicationWarning
-from .datafile import fail, read_text
+from .datafile import DataFileError, fail, read_text
 from .vioformats import VioFile, format_number, read_vio_file
 
-__all__ = ["TARGETS", "Export", "ExportWarning", "TranslationNotEstimatedWarning", "export_calibration",
+__all__ = ["TARGETS", "NEEDS_BASE", "Export", "ExportWarning", "TranslationNotEstimatedWarning", "export_calibration",
            "read_report"]
 
 #: What ``--to`` accepts.
@@ -42,20 +45,21 @@ class ExportWarning(ReplicationWarning):
 
 
 class TranslationNotEstimatedWarning(ReplicationWarning):
-    """A minimal file or a ROS 2 command: the translation written is zero, not an estimate (only the rotation and
-    the clock offset are estimated here); measure it, or export into your own file with ``base``."""
+    """A ROS 2 command: the translation written is zero, not an estimate (only the rotation and the clock offset are
+    estimated here); put your measured translation in its ``--x --y --z``."""
 
 
 @dataclass(frozen=True)
 class Export:
-    """An exported calibration: ``text`` (the file's content, or the ROS 2 command), the fields ``changed``, and
-    ``notes`` (what was kept or not written, and why)."""
+    """An exported calibration: ``text`` (the file's content, or the ROS 2 command), the fields ``changed`` and
+    ``added`` (a key the base file lacked), and ``notes`` (what was kept or not written, and why)."""
 
     text: str
     to: str
     camera: str
     changed: tuple
     notes: tuple
+    added: tuple = ()
 
     def write(self, path) -> None:
         """Write ``text`` to ``path`` atomically (never half-written)."""
@@ -111,35 +115,34 @@ def _reasons(report) -> str:
 
 
 def _source(report) -> str:
-    """The sensor stream, on one line (a file name may hold anything: it is written into files and commands)."""
+    """The sensor stream, on one line, its file by name only (a file name may hold anything: it is written into
+    commands; a folder is the user's own business)."""
     sensor = (report.get("inputs") or {}).get("sensor") or {}
     sensor = sensor if isinstance(sensor, dict) else {}
-    return " ".join(f"{sensor.get('kind', 'a sensor stream')} {sensor.get('source', '')}".split())
+    source = sensor.get("source") or ""
+    name = Path(str(source).replace("\\", "/")).name if source else ""
+    return " ".join(f"{sensor.get('kind', 'a sensor stream')} {name}".split())
 
 
-# The minimal files: an identity rotation, zero translation and offset, into which the values are then written by
-# the same code that edits a user's file.
 _NOT_ESTIMATED = ("translation NOT estimated (zeros written): only the rotation and the clock offset come from "
-                  "this calibration; measure the translation or export into your own file with --base")
+                  "this calibration; put your measured translation in --x --y --z")
 
-
-def _minimal(to: str, camera: str, report: dict) -> str:
-    head = (f"replication {__version__} export of R0 (camera_from_sensor) estimated from {_source(report)}; "
-            f"{_NOT_ESTIMATED}")
-    rows = ["[1.0, 0.0, 0.0, 0.0]", "[0.0, 1.0, 0.0, 0.0]", "[0.0, 0.0, 1.0, 0.0]", "[0.0, 0.0, 0.0, 1.0]"]
-    if to in ("kalibr", "openvins"):
-        key = "T_cam_imu" if to == "kalibr" else "T_imu_cam"
-        lines = (["%YAML:1.0"] if to == "openvins" else []) + [f"# {head}", f"{camera}:",
-                                                                 "  timeshift_cam_imu: 0.0", f"  {key}:"]
-        return "\n".join(lines + [f"    - {r}" for r in rows]) + "\n"
-    if to == "orbslam3":
-        data = ", ".join(r.strip("[]") for r in rows)
-        return (f"%YAML:1.0\n# {head}\nFile.version: \"1.0\"\nIMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n"
-                f"   dt: f\n   data: [{data}]\n")
-    if camera != "cam0":
-        raise ValueError(f"a minimal Basalt file holds cam0 only; give --base with your calibration for {camera}")
-    pose = ", ".join(f'"{k}": {v}' for k, v in zip(("px", "py", "pz", "qx", "qy", "qz", "qw"), [0.0] * 6 + [1.0]))
-    return f'{{\n    "value0": {{\n        "T_imu_cam": [{{{pose}}}],\n        "cam_time_offset_ns": 0\n    }}\n}}\n'
+#: What each tool's loader requires that a calibration of R0 does not give: a file is written only into a base that
+#: has them (the sources: docs/conventions.md, "Other tools' files").
+NEEDS_BASE = {
+    "kalibr": ("Kalibr", "camera_model, intrinsics, distortion_model, distortion_coeffs, resolution and rostopic for "
+                         "each camera (ConfigReader.py)"),
+    "openvins": ("OpenVINS", "distortion_model, distortion_coeffs, intrinsics and resolution for each camera "
+                             "(VioManagerOptions.h)"),
+    "basalt": ("Basalt", "value0.intrinsics, resolution, calib_accel_bias, calib_gyro_bias, imu_update_rate, "
+                         "accel_noise_std, gyro_noise_std, accel_bias_std, gyro_bias_std and vignette (its calibration "
+                         "serialisation)"),
+    "orbslam3": ("ORB-SLAM3", "Camera.type, the camera's intrinsics and distortion (Camera1.fx ...), Camera.width, "
+                              "Camera.height, Camera.fps, the IMU's noises and Frequency (IMU.NoiseGyro ...), "
+                              "ORBextractor.* and Viewer.* (Settings.cc)"),
+}
+_ARTICLE = {"kalibr": "a Kalibr", "openvins": "an OpenVINS", "basalt": "a Basalt", "orbslam3": "an ORB-SLAM3",
+            "euroc": "an EuRoC sensor.yaml"}
 
 
 def _ros2(R0, report, parent_frame, child_frame) -> str:
@@ -154,7 +157,8 @@ def _ros2(R0, report, parent_frame, child_frame) -> str:
 
 
 def export_calibration(report, to: str, *, base=None, camera: str = "cam0", parent_frame: str = "imu_link",
-                       child_frame: str = "camera_optical_frame", force: bool = False) -> Export:
+                       child_frame: str = "camera_optical_frame", force: bool = False,
+                       whole_rig: bool = True) -> Export:
     """A calibration in another tool's format.
 
     Parameters
@@ -162,15 +166,21 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
     report : path, dict or CalibrationResult
         The calibration (``python -m replication calibrate ... --out REPORT.json``).
     to : {'kalibr', 'openvins', 'basalt', 'orbslam3', 'ros2'}
-    base : path, optional
-        The user's own file of that tool: the output is a copy with only ``camera``'s rotation and the clock offset
-        changed. Its format is recognised from its content and must be ``to``.
+    base : path
+        The user's own file of that tool (required but for ``ros2``: each tool's loader needs intrinsics and more
+        that a calibration of ``R0`` does not give, :data:`NEEDS_BASE`): the output is a copy in which only the
+        rotations and the clock offset are changed. Its format is recognised from its content and must be ``to``.
     camera : str
-        ``cam0``, ``cam1``, ... (Basalt: the index into ``T_imu_cam``; ORB-SLAM3: ``cam0`` = ``T_b_c1``).
+        ``cam0``, ``cam1``, ... (Basalt: the index into ``T_imu_cam``; ORB-SLAM3: ``cam0`` = ``T_b_c1``): the camera
+        the report calibrated.
     parent_frame, child_frame : str
         ``ros2``: the frame names of the command (the IMU's, the camera's optical frame: REP-103).
     force : bool
         Export a report whose verdict is ``fail`` (with an :class:`ExportWarning`) instead of refusing it.
+    whole_rig : bool
+        The file's other cameras turn with ``camera`` (by the same correction of the IMU frame), so every
+        camera-camera transform stays as the file has it; False changes ``camera`` only, with an
+        :class:`ExportWarning` saying how far each camera-camera rotation moves.
 
     Returns
     -------
@@ -180,8 +190,9 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
     Raises
     ------
     ValueError
-        A report that is not one, a ``fail`` verdict without ``force``, a base file of another format, a camera the
-        base file lacks (:class:`~replication.rig.datafile.DataFileError` for file problems, naming the file).
+        A report that is not one, a ``fail`` verdict without ``force``, no ``base`` (naming what the tool's loader
+        needs from it), a base file of another format, a camera the base file lacks
+        (:class:`~replication.rig.datafile.DataFileError` for file problems, naming the file).
     """
     if to not in TARGETS:
         raise ValueError(f"to must be one of {', '.join(TARGETS)}, got {to!r}")
@@ -191,11 +202,20 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
     if level == "fail" and not force:
         raise ValueError(f"the report's verdict is fail ({_reasons(report)}): not exported; force=True (--force) "
                          "writes it anyway")
+    if to not in ("ros2",) and base is None:
+        tool, fields = NEEDS_BASE[to]
+        raise ValueError(f"--to {to} needs --base: {tool} loads no file without {fields}, which this calibration does "
+                         f"not estimate; give your own {tool} file as --base (only the rotation and the clock offset "
+                         "are changed in it), or --to ros2 for the rotation alone")
     if level != "ok":
         warnings.warn(f"the report's verdict is {level}: {_reasons(report)}", ExportWarning, stacklevel=2)
-    d = report.get("time_offset_s")
-    notes = []
+    d, notes = report.get("time_offset_s"), []
     kind = (((report.get("inputs") or {}).get("sensor") or {}) or {}).get("kind")
+    if kind == "static poses":  # no clock: a number there (reports before schema 1.x wrote 0.0) was not measured
+        if d is not None:
+            notes.append(f"the report's time_offset_s ({format_number(d)} s) comes from static poses, which have no "
+                         "clock: it is not a measurement and is not exported")
+        d = None
     if d is not None and kind not in (None, "GyroStream"):
         warnings.warn(f"the clock offset was measured against {_source(report)}, not the IMU's gyro: it is the "
                       "IMU's only if that stream is stamped by the IMU's clock", ExportWarning, stacklevel=2)
@@ -204,18 +224,15 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
             raise ValueError("ros2 prints a command: there is no base file to edit")
         warnings.warn(f"ros2: {_NOT_ESTIMATED}", TranslationNotEstimatedWarning, stacklevel=2)
         return Export(_ros2(R0, report, parent_frame, child_frame), to, camera, ("rotation (qx qy qz qw)",),
-                      ("a static transform carries no clock offset: " + (
+                      tuple(notes) + ("a static transform carries no clock offset: " + (
                           "none was estimated" if d is None else
                           f"d = {format_number(round(d, 9))} s (t_imu = t_cam + d): add it to the camera messages' "
                           "time stamps"),))
-    if base is None:
-        file = VioFile(f"<minimal {to} file>", _minimal(to, camera, report))
-        warnings.warn(f"{to}: {_NOT_ESTIMATED}", TranslationNotEstimatedWarning, stacklevel=2)
-    else:
-        file = read_vio_file(base)
-        if file.format != to:
-            fail(file.path, f"is a {file.format} file, not {to}: give a {to} file as --base or --to {file.format}")
-        notes.append(f"kept from {file.path}: everything but the fields changed")
+    file = read_vio_file(base)
+    if file.format != to:
+        fail(file.path, f"is {_ARTICLE[file.format]} file, not {_ARTICLE[to].split()[1]}: give "
+                        f"{_ARTICLE[to]} file as --base, or --to {file.format}")
+    notes.append(f"kept from {file.path.name}: everything but the fields changed")
     if d is None:
         notes.append("no clock offset was estimated (static poses): the file's offset is left as it was")
     elif to == "orbslam3":
@@ -228,16 +245,68 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
         notes.append(f"OpenVINS reads one time offset, cam0's, for every camera: the offset measured with {camera} "
                      "was written there")
     if file.unread:
-        warnings.warn(f"{file.path}: {file.unread}", ExportWarning, stacklevel=2)
-    text, changed = file.with_values(camera, R0, d)
-    return Export(text, to, camera, tuple(changed), tuple(notes))
+        warnings.warn(f"{file.path.name}: {file.unread}", ExportWarning, stacklevel=2)
+    try:
+        text, changed, added = file.with_values(camera, R0, d, whole_rig=whole_rig)
+    except DataFileError as err:
+        if not whole_rig:
+            raise
+        file.with_values(camera, R0, d, whole_rig=False)  # the camera's own problem: raised as it is
+        others = [c for c in file.cameras() if c != camera]
+        raise DataFileError(err.path, f"{err.message} (the rig's other cameras, {', '.join(others)}, turn with "
+                                      f"{camera}; --one-camera edits {camera} only)", err.line, err.column) from None
+    kept = [c for c in file.cameras() if c != camera and file.time_offset_s(c) is not None] if to == "kalibr" else []
+    if whole_rig and added and kept:
+        notes.append(f"{camera} had no timeshift_cam_imu (added): {', '.join(kept)}'s offsets are left as they were, "
+                     "having no old value of it to move them by")
+    written = text[1:] if file.bom else text
+    notes += _rig_notes(file, VioFile(file.path, written.replace(file.newline, "\n")), camera, whole_rig)
+    return Export(text, to, camera, tuple(changed), tuple(notes), tuple(added))
+
+
+def _rig_notes(before, after, camera, whole_rig) -> list:
+    """What happened to the file's other cameras, checked on the text written: with the whole rig, every
+    camera-camera rotation and translation is as it was (else an error: the export is not written); with one camera
+    only, an :class:`ExportWarning` says how far each camera-camera rotation moved."""
+    from ..core.so3 import angle_between_deg
+
+    others = [c for c in before.cameras() if c != camera]
+    if not others:
+        return []
+    turn = angle_between_deg(before.camera_from_sensor(camera), after.camera_from_sensor(camera))
+    if not whole_rig:
+        kept = " with their T_cn_cnm1" if any(isinstance(before.doc.get(c), dict) and "T_cn_cnm1" in before.doc[c]
+                                               for c in others) else ""
+        warnings.warn(f"one camera only: {camera} is changed and {', '.join(others)} kept as written{kept}, so the "
+                      f"rotation between {camera} and each of them moves by {turn:.4g} deg (the file's stereo "
+                      "calibration no longer holds); leave out --one-camera to keep the rig whole",
+                      ExportWarning, stacklevel=3)
+        return []
+    moved = []
+    for cam in others:
+        pair = [(f.camera_from_sensor(cam) @ f.camera_from_sensor(camera).T,
+                 f.camera_from_sensor(camera) @ (f.camera_position(cam) - f.camera_position(camera)))
+                for f in (before, after)]
+        if angle_between_deg(pair[0][0], pair[1][0]) > 1e-9 or np.abs(pair[0][1] - pair[1][1]).max() > 1e-12:
+            raise RuntimeError(f"the export would change the {camera}-{cam} transform: not written (a bug; please "
+                               "report it with the files)")
+        shift = 1e3 * np.linalg.norm(after.camera_position(cam) - before.camera_position(cam))
+        moved.append(f"{cam}" + (f" (its position in the IMU frame moved {shift:.3g} mm with it)" if shift else ""))
+    return [f"the rig kept whole: {', '.join(moved)} turned with {camera} by the same {turn:.4g} deg, so every "
+            "camera-camera transform is as the file had it (--one-camera changes only the camera named)"]
 
 
 EXPORT_HELP = """Write a calibration report's R0 and clock offset into another tool's configuration.
 
-With --base, a copy of your own file in which only the camera's rotation and the clock offset are changed (the
-translation, intrinsics, other cameras and comments are kept); without it, a minimal file whose translation is
-zero and marked as not estimated. The conventions of each tool, with their sources: docs/conventions.md.
+--base is your own file of that tool (Kalibr camchain-imucam, OpenVINS kalibr_imucam_chain, Basalt calibration
+JSON, ORB-SLAM3 settings): the output is a copy in which only the rotations and the clock offset are changed (the
+translation, intrinsics, comments are kept). A file with several cameras stays a rig: the other cameras turn with
+the one calibrated (--camera), so every camera-camera transform is unchanged; --one-camera changes that camera only,
+with a warning saying how far the stereo calibration moves. Each tool's loader needs intrinsics that a calibration
+of R0 does not give, so without --base a file is refused (naming what the base must hold); --to ros2 prints a
+static_transform_publisher command instead. Each tool's frame direction, field, unit and sign, with the line of its
+source: docs/conventions.md, "Other tools' files" (in the project's clone, or shipped inside the installed package
+as replication/_shipped/docs/conventions.md); in short: python -m pydoc replication.rig.vioformats.
 
 examples:
   python -m replication export report.json --to kalibr --base camchain-imucam.yaml --out camchain-new.yaml
@@ -255,8 +324,11 @@ def add_parser(sub):
                          formatter_class=argparse.RawDescriptionHelpFormatter)
     exp.add_argument("report", help="the calibration report (calibrate --out REPORT.json)")
     exp.add_argument("--to", required=True, choices=TARGETS, help="the tool")
-    exp.add_argument("--base", help="your own file of that tool, to copy with only the rotation and offset changed")
-    exp.add_argument("--camera", default="cam0", help="the camera entry to change (default: cam0)")
+    exp.add_argument("--base", help="your own file of that tool, to copy with only the rotations and offset changed "
+                     "(required but for ros2)")
+    exp.add_argument("--camera", default="cam0", help="the camera the report calibrated (default: cam0)")
+    exp.add_argument("--one-camera", action="store_true", help="change --camera only, not the rest of the rig "
+                     "(moves every camera-camera rotation by the correction: a warning says how far)")
     exp.add_argument("--out", help="the file to write (default: standard output)")
     exp.add_argument("--parent-frame", default="imu_link", help="ros2: the IMU's frame (default: imu_link)")
     exp.add_argument("--child-frame", default="camera_optical_frame",
@@ -281,7 +353,8 @@ def export_command(args) -> int:
         check_clashes({"--out": args.out}, inputs)
         out = prepare_output(args.out, "--out") if args.out is not None else None
         result = export_calibration(args.report, args.to, base=args.base, camera=args.camera,
-                                    parent_frame=args.parent_frame, child_frame=args.child_frame, force=args.force)
+                                    parent_frame=args.parent_frame, child_frame=args.child_frame, force=args.force,
+                                    whole_rig=not getattr(args, "one_camera", False))
     except ValueError as err:  # DataFileError is a ValueError
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -293,7 +366,8 @@ def export_command(args) -> int:
         except OSError as err:
             print(f"error: --out {out}: cannot write ({os_reason(err)}); nothing was written there", file=sys.stderr)
             return 2
-    print(f"{args.to}: changed {', '.join(result.changed)}" + (f" in {out}" if out else ""), file=sys.stderr)
+    what = f"changed {', '.join(result.changed)}" + (f"; added {', '.join(result.added)}" if result.added else "")
+    print(f"{args.to}: {what}" + (f" in {Path(out).name}" if out else ""), file=sys.stderr)
     for note in result.notes:
         print(f"note: {note}", file=sys.stderr)
     return 0

@@ -23,13 +23,15 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._io import PROJECT_ROOT, os_reason, prepare_folder, same_file, write_atomic
+from .._extras import shipped
+from .._io import os_reason, prepare_folder, same_file, write_atomic
 from .datafile import fail, read_text
 
-__all__ = ["MANIFEST", "ManifestEntry", "NoNetwork", "load_manifest", "verify", "fetch", "sha256_of"]
+__all__ = ["MANIFEST", "MANIFEST_NAME", "ManifestEntry", "NoNetwork", "load_manifest", "verify", "fetch", "sha256_of"]
 
-#: The manifest shipped with the project.
-MANIFEST = PROJECT_ROOT / "data" / "real_data_manifest.csv"
+#: The manifest shipped with the project (the clone's ``data/``, or the copy an installed wheel carries).
+MANIFEST_NAME = "data/real_data_manifest.csv"
+MANIFEST = shipped(MANIFEST_NAME)
 COLUMNS = ["folder", "file", "bytes", "sha256", "repository", "commit", "path", "licence", "citation"]
 _LFS_POINTER = b"version https://git-lfs.github.com/spec/v1"
 
@@ -145,8 +147,8 @@ class NoNetwork(ConnectionError):
         super().__init__(
             f"no network: {url} could not be reached ({self.reason}){left}. Connect and run again (files already "
             f"verified are kept), or copy the files from a local copy laid out like DEST with --mirror FOLDER; "
-            f"{MANIFEST.relative_to(PROJECT_ROOT).as_posix()} lists each file's repository, commit, path, size and "
-            "SHA-256")
+            f"{MANIFEST_NAME} (fetch-data --help says where it is) lists each file's repository, commit, path, size "
+            "and SHA-256")
 
     def __reduce__(self):
         return type(self), (self.url, self.reason, self.pending)
@@ -284,7 +286,8 @@ def fetch_command(args) -> int:
 FETCH_HELP = """\
 Download the real recordings that notebook 07 and the real-data tests read, from their public origins
 (GitHub repositories at pinned commits; see data/real_data_manifest.csv for each file's repository, commit,
-path, size, SHA-256, licence and citation), verify every checksum, and write them to DEST. Then run with
+path, size, SHA-256, licence and citation: in the project's clone, or shipped inside the installed package as
+replication/_shipped/data/real_data_manifest.csv), verify every checksum, and write them to DEST. Then run with
 REPLICATION_REAL_DATA=DEST. Files already in DEST with the right checksum are kept.
 Without a network the fetch stops at the first server it cannot reach, with one message naming that URL and the
 reason; --mirror FOLDER takes the files from a local copy instead.

@@ -205,7 +205,8 @@ class VioFile:
 
     # -- the rotation --------------------------------------------------------------------------------------------
     def _matrix_nodes(self, camera):
-        """``(key, transposed, nine scalar nodes in row-major order)`` of the camera's extrinsic."""
+        """``(key, transposed, nine scalar nodes in row-major order, the translation's three)`` of the camera's
+        extrinsic."""
         import yaml
 
         self._check_camera(camera)
@@ -222,22 +223,24 @@ class VioFile:
         else:
             key = self._orbslam3_key if self.format == "orbslam3" else "T_BS"
             node, transposed, name = _child(self._root, key), True, key
-        nine, rows = [], []
+        nine, rows, three = [], [], []
         if isinstance(node, yaml.MappingNode):  # !!opencv-matrix or EuRoC's rows / cols / data
             data, shape = _child(node, "data"), [_child(node, k) for k in ("rows", "cols")]
             scalars = data.value if isinstance(data, yaml.SequenceNode) else []
             if [getattr(n, "value", None) for n in shape] == ["4", "4"] and len(scalars) == 16:
                 nine, rows = [scalars[r * 4 + c] for r in range(3) for c in range(3)], [data]
+                three = [scalars[r * 4 + 3] for r in range(3)]
             kind = _child(node, "dt")
             if kind is not None and kind.value not in ("f", "d"):
                 self.unwritable = f"{name} has dt: {kind.value} (not f or d): a rotation cannot be written into it"
         elif isinstance(node, yaml.SequenceNode) and len(node.value) == 4 and all(
                 isinstance(row, yaml.SequenceNode) and len(row.value) == 4 for row in node.value):
             nine, rows = [node.value[r].value[c] for r in range(3) for c in range(3)], node.value
-        if len(nine) != 9 or not all(isinstance(x, yaml.ScalarNode) for x in nine):
+            three = [node.value[r].value[3] for r in range(3)]
+        if len(nine) != 9 or not all(isinstance(x, yaml.ScalarNode) for x in nine + three):
             fail(self.path, f"{name} is not a 4x4 matrix (4 lists of 4 numbers, or rows: 4, cols: 4 and 16 data)")
-        self._not_shared([node, *rows], nine, name)
-        return key, transposed, nine
+        self._not_shared([node, *rows], nine + three, name)
+        return key, transposed, nine, three
 
     def _quaternion_nodes(self, camera):
         self._check_camera(camera)
@@ -276,13 +279,14 @@ class VioFile:
                 fail(self.path, f"value0.T_imu_cam[{camera[3:]}] quaternion has norm {np.linalg.norm(q):.9g}, not "
                                 f"within {QUATERNION_NORM_TOL:g} of 1")
             return Rotation.from_quat(q / np.linalg.norm(q)).as_matrix().T  # T_imu_cam's rotation: imu_from_camera
-        key, transposed, nine = self._matrix_nodes(camera)
+        key, transposed, nine, _ = self._matrix_nodes(camera)
         try:
             M = np.array([float(n.value) for n in nine]).reshape(3, 3)
         except ValueError:
             fail(self.path, f"{key} has an entry that is not a number")
         try:
-            M = check_rotation_matrices(M, f"rotation part of {key}", atol=1e-5)
+            named = f"{camera}.{key}" if self.format in ("kalibr", "openvins") else key
+            M = check_rotation_matrices(M, f"rotation part of {named}", atol=1e-5)
         except ValueError as err:
             fail(self.path, str(err))
         return M.T if transposed else M
@@ -310,50 +314,115 @@ class VioFile:
         except ValueError:
             fail(self.path, f"the time offset {node.value!r} is not a number", line=node.start_mark.line + 1)
 
+    # -- the rig: positions ---------------------------------------------------------------------------------------
+    def _translation(self, camera):
+        """``(stored as T_imu_cam, the three numbers as stored, their nodes)``: the camera's position in the IMU frame
+        (``T_imu_cam``, Basalt) or the IMU's in the camera frame (``T_cam_imu``)."""
+        if self.format == "basalt":
+            entry = self._root_value0("T_imu_cam").value[int(camera[3:])]
+            nodes, transposed = [_child(entry, k) for k in ("px", "py", "pz")], True
+            if any(n is None for n in nodes):
+                fail(self.path, f"value0.T_imu_cam[{camera[3:]}] has no px, py, pz")
+        else:
+            key, transposed, _, nodes = self._matrix_nodes(camera)
+        try:
+            return transposed, np.array([float(n.value) for n in nodes]), nodes
+        except ValueError:
+            fail(self.path, f"{camera}'s translation has an entry that is not a number")
+
+    def camera_position(self, camera: str = "cam0") -> np.ndarray:
+        """Where ``camera`` is in the IMU frame (metres), from its translation as this file states it."""
+        transposed, t, _ = self._translation(camera)
+        return t if transposed else -self.camera_from_sensor(camera).T @ t
+
     # -- writing ---------------------------------------------------------------------------------------------------
-    def with_values(self, camera: str, R0, time_offset_s: float | None) -> tuple[str, list[str]]:
+    def with_values(self, camera: str, R0, time_offset_s: float | None, whole_rig: bool = True):
         """The text of a copy with ``camera``'s rotation set to ``R0`` and, if given and the format has a field for
-        it, the clock offset set to ``time_offset_s``; and the names of the fields changed (or added)."""
+        it, the clock offset set to ``time_offset_s``; the names of the fields changed, and of those added.
+
+        ``whole_rig``: the other cameras turn with ``camera`` (each ``R_i`` becomes ``R_i C`` with the correction
+        ``C = R_old^T R0``), their positions in the IMU frame with them, and Kalibr's other per-camera clock offsets
+        move by the same amount, so that every camera-camera transform (Kalibr's ``T_cn_cnm1`` too) stays as it was.
+        The edited camera's translation is kept as stored."""
         if not FORMATS[self.format]:
             fail(self.path, f"{self.format} files are read as references only, not written")
         self._check_camera(camera)
         R0 = check_rotation_matrices(np.asarray(R0, dtype=float), "R0")
-        edits, changed = [], []
-        if self.format == "basalt":
-            from scipy.spatial.transform import Rotation
-
-            nodes = self._quaternion_nodes(camera)
-            old = np.array([float(n.value) for n in nodes])
-            q = Rotation.from_matrix(R0.T).as_quat()
-            q = -q if np.dot(q, old) < 0 else q  # the hemisphere of the file's own quaternion
-            edits += [(_span(n), format_number(v)) for n, v in zip(nodes, q)]
-            changed.append(f"value0.T_imu_cam[{camera[3:]}].qx..qw")
-        else:
-            key, transposed, nine = self._matrix_nodes(camera)
-            if self.unwritable:
-                fail(self.path, self.unwritable)
-            M = R0.T if transposed else R0
-            edits += [(_span(n), format_number(v)) for n, v in zip(nine, M.ravel())]
-            changed.append(f"{camera}.{key} rotation" if self.format in ("kalibr", "openvins") else f"{key} rotation")
+        others = [c for c in self.cameras() if c != camera] if whole_rig else []
+        C = self.camera_from_sensor(camera).T @ R0 if others else np.eye(3)
+        edits, changed, added = [], [], []
+        for cam in [camera, *others]:
+            rotation = R0 if cam == camera else self.camera_from_sensor(cam) @ C
+            edits += self._rotation_edits(cam, rotation, changed)
+        if others:
+            edits += self._position_edits(camera, others, C, changed)
         if time_offset_s is not None and self.format != "orbslam3":
-            node, scale = self._offset_node(camera)
-            ns = int(round(time_offset_s * 1e9))  # to the nanosecond, Basalt's unit: finer is noise
-            value = str(ns) if self.format == "basalt" else format_number(ns * 1e-9)
-            if node is not None:
-                self._not_shared([], [node], "the time offset")
-                edits.append((_span(node), value))
-            elif self.format == "basalt":
-                fail(self.path, "no value0.cam_time_offset_ns to set")
-            else:
-                edits.append(self._insertion(self._offset_camera(camera), f"timeshift_cam_imu: {value}"))
-            changed.append(f"{self._offset_camera(camera)}.timeshift_cam_imu" if self.format != "basalt"
-                           else "value0.cam_time_offset_ns")
+            edits += self._offset_edits(camera, others, time_offset_s, changed, added)
         text = self.text
         for span, value in sorted(edits, key=lambda e: e[0].start, reverse=True):
             text = text[:span.start] + value + text[span.end:]
         if self.newline != "\n":
             text = text.replace("\n", self.newline)
-        return ("\ufeff" if self.bom else "") + text, changed
+        return ("\ufeff" if self.bom else "") + text, changed, added
+
+    def _rotation_edits(self, camera, R, changed):
+        if self.format == "basalt":
+            from scipy.spatial.transform import Rotation
+
+            nodes = self._quaternion_nodes(camera)
+            old = np.array([float(n.value) for n in nodes])
+            q = Rotation.from_matrix(R.T).as_quat()
+            q = -q if np.dot(q, old) < 0 else q  # the hemisphere of the file's own quaternion
+            changed.append(f"value0.T_imu_cam[{camera[3:]}].qx..qw")
+            return [(_span(n), format_number(v)) for n, v in zip(nodes, q)]
+        key, transposed, nine, _ = self._matrix_nodes(camera)
+        if self.unwritable:
+            fail(self.path, self.unwritable)
+        changed.append(f"{camera}.{key} rotation" if self.format in ("kalibr", "openvins") else f"{key} rotation")
+        return [(_span(n), format_number(v)) for n, v in zip(nine, (R.T if transposed else R).ravel())]
+
+    def _position_edits(self, camera, others, C, changed):
+        """The other cameras' translations such that each one's transform to ``camera`` is kept: positions in the
+        IMU frame ``p_i -> p_c' + C^T (p_i - p_c)``. Stored as ``T_cam_imu`` next to a ``T_cam_imu`` anchor they
+        are unchanged (``t_i`` is the IMU's position in camera ``i``): left as written."""
+        anchor_imu_cam, _, _ = self._translation(camera)
+        p_c = self.camera_position(camera)
+        p_c_new = p_c if anchor_imu_cam else C.T @ p_c  # the anchor keeps its stored numbers
+        edits = []
+        for cam in others:
+            imu_cam, _, nodes = self._translation(cam)
+            if not imu_cam and not anchor_imu_cam:
+                continue
+            p_new = p_c_new + C.T @ (self.camera_position(cam) - p_c)
+            value = p_new if imu_cam else -(self.camera_from_sensor(cam) @ C) @ p_new
+            edits += [(_span(n), format_number(v)) for n, v in zip(nodes, value)]
+            changed.append(f"value0.T_imu_cam[{cam[3:]}].px..pz" if self.format == "basalt"
+                           else f"{cam}.{'T_imu_cam' if imu_cam else 'T_cam_imu'} translation")
+        return edits
+
+    def _offset_edits(self, camera, others, time_offset_s, changed, added):
+        where = self._offset_camera(camera)
+        node, scale = self._offset_node(camera)
+        ns = int(round(time_offset_s * 1e9))  # to the nanosecond, Basalt's unit: finer is noise
+        value = str(ns) if self.format == "basalt" else format_number(ns * 1e-9)
+        name = "value0.cam_time_offset_ns" if self.format == "basalt" else f"{where}.timeshift_cam_imu"
+        if node is not None:
+            self._not_shared([], [node], "the time offset")
+            edits, old = [(_span(node), value)], self.time_offset_s(camera)
+            changed.append(name)
+        elif self.format == "basalt":
+            fail(self.path, "no value0.cam_time_offset_ns to set")
+        else:
+            edits, old = [self._insertion(where, f"timeshift_cam_imu: {value}")], 0.0
+            added.append(name)
+        if self.format == "kalibr" and node is not None:  # one offset per camera: the others move with it (by how
+            for cam in others:                                 # much is unknown where the camera had none: kept)
+                other, _ = self._offset_node(cam)
+                if other is not None:
+                    self._not_shared([], [other], "the time offset")
+                    edits.append((_span(other), format_number(self.time_offset_s(cam) + ns * 1e-9 - old)))
+                    changed.append(f"{cam}.timeshift_cam_imu")
+        return edits
 
     def _insertion(self, camera, line):
         """An edit that adds ``line`` as the camera mapping's first key, at its indentation (block style only)."""
