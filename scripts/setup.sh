@@ -9,5 +9,9 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 PY="$VENV/bin/python"
 "$PY" -m pip install --quiet --disable-pip-version-check --upgrade pip
+# the distribution was named replication before it became camimu-replication: an older venv's install goes first
+if "$PY" -m pip show --quiet replication >/dev/null 2>&1; then
+    "$PY" -m pip uninstall --quiet --yes replication
+fi
 "$PY" -m pip install --quiet --disable-pip-version-check -c "$ROOT/requirements.lock" -e "$ROOT[study,test,notebooks,docs]"
 export PY
