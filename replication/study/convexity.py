@@ -24,7 +24,7 @@ from ..core.handeye import handeye_cost, kronecker_operator, vec
 from ..core.so3 import angle_between_deg, exp_map, skew
 from ..core.solvers import WEAK_GAP_FACTOR, ReplicationWarning, chordal_optimal, two_step
 from ..core.solvers.certificate import chordal_newton
-from ..core.stats import ROUNDING_RUNS, share_range, wilson_interval
+from ..core.stats import ROUNDING_RUNS, declared_bound, share_range, wilson_interval
 from .baselines import corrupt_pairs
 from .ledger import check_evidence
 from .simulation import simulate
@@ -447,7 +447,8 @@ def convex_problem_record(convexity: pd.DataFrame, random_starts: pd.DataFrame, 
         "Hessian eigenvalues, strictness, angles and costs: exact (deterministic) for each problem and minimum found; "
         "shares of runs: 10 % (one start) and 5 % (several) brackets, bounds, because turning every start by "
         f"{scale:g} rad changes the outcome of "
-        f"{share_range(changed / perturbed, 0.02, margin=ROUNDING_RUNS / perturbed)} of {perturbed} starts "
+        f"{declared_bound(100 * changed / perturbed, high=2, margin=100 * ROUNDING_RUNS / perturbed)} % of {perturbed} "
+        "starts "
         "(a bound; basins interleave finely, and a machine's rounding does the same), with 95 % Wilson intervals "
         "over each bracket's ends: one start "
         + ", ".join(f"[{100 * r['share low']:.0f}, {100 * r['share high']:.0f}] %" for _, r in rs.iterrows())
