@@ -167,14 +167,14 @@ def test_gap_share_uses_the_pairs_before_the_gaps():
 def test_solver_warnings_fail_only_for_a_wrong_answer(name, level):
     r = _reasons(dataclasses.replace(GOOD, warnings=(name, name)))["solver_warning"]
     assert (r.level, r.measured, r.threshold) == (level, None, None)
-    suffix = " (an answer away from the certified optimum of eq. (8))" if level == "fail" else ""
-    assert r.message == f"the solver issued {name}{suffix}"
+    assert name not in r.message and "use the default method chordal_optimal" in r.message
     assert [x.check for x in judge(dataclasses.replace(GOOD, warnings=(name, name))).reasons] == ["solver_warning"]
 
 
 def test_solver_warnings_are_listed_in_name_order():
     v = judge(dataclasses.replace(GOOD, warnings=("LocalMinimumWarning", "ConvergenceWarning")))
-    assert [r.message.split()[3] for r in v.reasons] == ["ConvergenceWarning", "LocalMinimumWarning"]
+    assert [r.message.split()[0] for r in v.reasons] == ["the", "the"]
+    assert "stopped before converging" in v.reasons[0].message and "certified optimum" in v.reasons[1].message
     assert v.level == "fail"
 
 
