@@ -371,10 +371,11 @@ def judge(e: Evidence, extra=()) -> Verdict:
             if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
                 continue  # the axis spread above says it, with its number
             reasons.append(Reason("observability", "warning", None, None,
-                                  "the solver issued ObservabilityWarning (its words in the warnings): one pair "
-                                  "alone carries the rotation about the dominant axis, or another rotation fits eq. "
-                                  "(8) almost as well (motions small for the noise, outlier pairs, or nearly a second "
-                                  "solution)"))
+                                  f"the motions barely determine R0 ({_motion_words(e) or 'no motion measure'}; the "
+                                  f"measured leverage is in the warnings): one pair alone carries the rotation about "
+                                  f"the dominant axis, or another rotation fits eq. (8) almost as well (motions small "
+                                  f"for the noise, outlier pairs, or nearly a second solution); add motion about "
+                                  f"other axes, or drop the pair named there"))
             continue
         reasons.append(_solver_reason(name, level, e))
     if e.mirror_fit_ratio is not None:
