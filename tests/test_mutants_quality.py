@@ -195,7 +195,8 @@ def test_observability_warning_is_said_once_with_the_spread_when_low():
 
 def _change(angle, significant=True):
     return SimpleNamespace(significant=significant, angle_deg=angle, split_time=12.34, n_before=40, n_after=60,
-                           p_value=1e-4, difference_radius_deg=0.3, R_before=np.eye(3), R_after=np.eye(3))
+                           p_value=1e-4, level=0.01, difference_radius_deg=0.3, R_before=np.eye(3),
+                           R_after=np.eye(3))
 
 
 def test_a_change_counts_only_when_significant_and_beyond_the_bounds():
@@ -206,6 +207,7 @@ def test_a_change_counts_only_when_significant_and_beyond_the_bounds():
     assert r.level == "warning"
     assert r.message.startswith(f"angle between R0 before and after 12.3 s {warn + EPS:.3g} deg > {warn:g} deg: "
                                 f"the 40 pairs before and the 60 after agree on different R0")
+    assert "(change test p = 0.0001 < the test's level 0.01, 95 % noise radius 0.3 deg)" in r.message
     assert ("R0 before (1.0000, 0.0000, 0.0000, 0.0000), after (1.0000, 0.0000, 0.0000, 0.0000) (w, x, y, z)"
             in r.message)
     assert _reasons(dataclasses.replace(GOOD, change=_change(fail)))["remount_deg"].level == "warning"
@@ -260,3 +262,16 @@ def test_verdict_of_lines_and_dicts():
     assert v.to_dict() == {"level": "fail", "reasons": [
         {"check": "a", "level": "warning", "measured": 1.0, "threshold": 2.0, "message": "m1"},
         {"check": "b", "level": "fail", "measured": None, "threshold": None, "message": "m2"}]}
+
+
+@pytest.mark.parametrize("p, level, significant, words", [
+    (0.049, 0.01, False, "p = 0.049 >= the test's level 0.01"),   # "within their noise (p = 0.049)" read as a paradox
+    (0.00999, 0.01, True, "p = 0.00999 < the test's level 0.01"),  # just below: digits enough to tell it from 0.01
+    (0.01001, 0.01, False, "p = 0.01001 >= the test's level 0.01"),  # just above
+    (1e-4, 0.01, True, "p = 0.0001 < the test's level 0.01"),
+    (0.25, None, False, "p = 0.25"),                                # an old report without the level
+])
+def test_a_p_value_is_printed_with_the_tests_level(p, level, significant, words):
+    from replication.rig.quality import p_with_level
+
+    assert p_with_level(p, level, significant) == words

@@ -96,7 +96,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS"]
+__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS", "p_with_level"]
 
 #: Verdict levels, best first.
 LEVELS = ("ok", "warning", "fail")
@@ -201,6 +201,17 @@ class Evidence:
     mirror_normal: tuple | None = None      # the sensor axis turned about least
     spectral_ratio: float | None = None     # sigma_2 / sigma_1 of K (the two-step iteration's rate: its square)
     method: str | None = None               # the solver that answered (named in what to do about its warnings)
+
+
+def p_with_level(p_value: float, level: float | None, significant: bool) -> str:
+    """A test's p-value next to its level, e.g. ``p = 0.049 >= the test's level 0.01`` (a p of 0.049 is "within the
+    noise" at level 0.01); as many digits as keep ``p`` and the level apart; without a level, ``p`` alone."""
+    if level is None:
+        return f"p = {p_value:.2g}"
+    digits = 2
+    while digits < 6 and float(f"{p_value:.{digits}g}") == float(level):
+        digits += 1
+    return f"p = {p_value:.{digits}g} {'<' if significant else '>='} the test's level {level:g}"
 
 
 def _above(check, value, name, unit, why):
@@ -393,9 +404,9 @@ def judge(e: Evidence, extra=()) -> Verdict:
         c = e.change
         reasons.append(_above("remount_deg", c.angle_deg, f"angle between R0 before and after {c.split_time:.1f} s",
                               " deg", f"the {c.n_before} pairs before and the {c.n_after} after agree on different R0 "
-                              f"beyond their noise (change test p = {c.p_value:.2g}, 95 % noise radius "
-                              f"{c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, or a "
-                              f"trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
+                              f"beyond their noise (change test {p_with_level(c.p_value, c.level, True)}, 95 % noise "
+                              f"radius {c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, "
+                              f"or a trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
                               f"{_quaternion(c.R_after)} (w, x, y, z); calibrate each part on its own"))
     if e.pairs_dropped_at_gaps:
         share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)

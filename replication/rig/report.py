@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.motions import MotionObservability
 from .association import offset_in_words
-from .quality import Verdict
+from .quality import Verdict, p_with_level
 
 __all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]
 
@@ -43,6 +43,8 @@ def json_safe(value):
     if isinstance(value, (float, np.floating)):
         return float(value) if math.isfinite(value) else None
     return value
+
+
 
 
 @dataclass(frozen=True)
@@ -193,10 +195,8 @@ class CalibrationResult:
             f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
         ]
         if math.isfinite(self.time_offset_correlation):
-            lo, hi = (1e3 * v for v in self.time_offset_ci95_s)
-            ci = f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms, " if math.isfinite(lo) or math.isfinite(hi) else ""
-            lines.append(f"time offset: {offset_in_words(self.time_offset_s, decimals=2)} ({ci}correlation "
-                         f"{self.time_offset_correlation:.4f}, "
+            words = offset_in_words(self.time_offset_s, decimals=2, ci95_s=self.time_offset_ci95_s)
+            lines.append(f"time offset: {words} (correlation {self.time_offset_correlation:.4f}, "
                          f"{'applied' if self.time_offset_applied else 'not applied'})")
         lines += [
             f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
@@ -205,9 +205,10 @@ class CalibrationResult:
         ]
         c = self.change_test
         if c is not None:
+            p_test = p_with_level(c["p_value"], c.get("level"), c["significant"]) if c["run"] else ""
             lines.append(f"change test: {c['note']}" if not c["run"] else (
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
-                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g}; splits "
+                + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
         if self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
