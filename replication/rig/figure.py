@@ -11,7 +11,7 @@ import numpy as np
 from ..core.so3 import as_quaternion, yaw_pitch_roll_deg
 from .quality import THRESHOLDS
 
-__all__ = ["calibration_figure", "headline"]
+__all__ = ["calibration_figure", "headline", "offset_zoom_ms"]
 
 _VERDICT_COLOUR = {"ok": "tab:green", "warning": "tab:orange", "fail": "tab:red"}
 _ROW_IN = 3.4  # height of a row of panels (inches)
@@ -130,19 +130,54 @@ def _stations_panel(ax, k, stations):
     ax.set_title(f"({k}) residual by station")
 
 
+#: Least width (ms) of the offset panel's zoom about the interval (a few fine-grid steps).
+_ZOOM_MIN_MS = 0.5
+
+
+def offset_zoom_ms(result):
+    """The offset panel's x range (ms): the 95 % interval with half its width either side (at least
+    :data:`_ZOOM_MIN_MS` wide), or None where the interval is not finite (the full search is shown)."""
+    lo, hi = (1e3 * float(v) for v in result.time_offset_ci95_s)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return None
+    pad = max(0.5 * (hi - lo), 0.5 * (_ZOOM_MIN_MS - (hi - lo)))
+    return lo - pad, hi + pad
+
+
 def _offset_panel(ax, k, result):
+    """Zoomed to the offset's 95 % interval (shaded, with 0 marked), the full search in an inset."""
     offsets, corr = result.diagnostics["offset_curve"]
-    ax.plot(1e3 * np.asarray(offsets), corr, lw=0.8)
-    ax.axvline(1e3 * result.time_offset_s, color="k", ls="--", lw=0.8,
-               label=f"chosen: {1e3 * result.time_offset_s:+.2f} ms")
+    x, corr = 1e3 * np.asarray(offsets, dtype=float), np.asarray(corr, dtype=float)
+    chosen = 1e3 * result.time_offset_s
+    zoom = offset_zoom_ms(result)
+    ax.plot(x, corr, ".-" if zoom else "-", lw=0.8, ms=3)
+    ax.axvline(chosen, color="k", ls="--", lw=0.8, label=f"chosen: {chosen:+.2f} ms")
     bound = result.parameters.get("max_offset_s")
-    if bound:
-        for x in (-bound, bound):
-            ax.axvline(1e3 * x, color="tab:red", ls=":", lw=0.8, label="search bound" if x < 0 else None)
+    if zoom is None:
+        if bound:
+            for b in (-bound, bound):
+                ax.axvline(1e3 * b, color="tab:red", ls=":", lw=0.8, label="search bound" if b < 0 else None)
+        ax.set_title(f"({k}) clock offset (no finite interval: the full search)")
+    else:
+        lo, hi = (1e3 * float(v) for v in result.time_offset_ci95_s)
+        ax.axvspan(lo, hi, color="tab:blue", alpha=0.15, label=f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms")
+        ax.axvline(0.0, color="grey", lw=0.8, label="0 (clocks agree)" + (": inside the interval" if lo <= 0 <= hi
+                                                                         else ""))
+        ax.set_xlim(*zoom)
+        inside = (x >= zoom[0]) & (x <= zoom[1])
+        if inside.any():
+            span = np.ptp(corr[inside])
+            ax.set_ylim(corr[inside].min() - 0.1 * span - 1e-6, corr[inside].max() + 0.1 * span + 1e-6)
+        inset = ax.inset_axes([0.32, 0.05, 0.36, 0.32])
+        inset.plot(x, corr, lw=0.6)
+        inset.axvspan(*zoom, color="tab:orange", alpha=0.4)
+        inset.tick_params(labelsize=5)
+        inset.text(0.02, 0.96, "full search" + (f" +-{1e3 * bound:g} ms" if bound else ""), fontsize=5, va="top",
+                   transform=inset.transAxes)
+        ax.set_title(f"({k}) clock offset, zoomed to its 95 % interval")
     ax.set_xlabel("sensor clock offset d (ms; d > 0: the sensor clock reads ahead)")
     ax.set_ylabel("correlation of angular speeds")
-    ax.legend(fontsize=7)
-    ax.set_title(f"({k}) clock offset")
+    ax.legend(fontsize=6, loc="upper right")
 
 
 def _station_pairs_panel(ax, k, station_pairs, residuals):
