@@ -41,6 +41,7 @@ def test_to_dict_holds_every_field():
     reason = Reason("n_pairs", "warning", 42.0, 30.0, "m")
     res = _result(verdict=Verdict.of([reason]), warnings=("W: x",), parameters={"p": 1}, inputs={"i": 2},
                   reference_error_deg=0.75, time_offset_ci95_s=(0.01, np.inf), time_offset_peak_margin=0.4,
+                  reference_errors_deg=(0.75, 0.5), reference_disagreement_deg=0.3, reference_reading="r",
                   bootstrap_resamples="pairs in moving blocks of 4", pose_residual_median_deg=[0.1, np.nan],
                   station_repeats={"stations": 3, "distinct": 2, "groups": [[0, 2]]},
                   change_test={"run": False, "note": "n"}, online={"o": 1})
@@ -75,6 +76,9 @@ def test_to_dict_holds_every_field():
         "online": {"o": 1},
         "observability": {"spectral_ratio": 0.5, "camera_axis_spread_deg": 12.34, "sensor_axis_spread_deg": 11.0},
         "reference_error_deg": 0.75,
+        "reference_errors_deg": [0.75, 0.5],
+        "reference_disagreement_deg": 0.3,
+        "reference_reading": "r",
     }
     json.dumps(d, allow_nan=False)
 

@@ -15,7 +15,7 @@ __all__ = ["calibration_figure", "headline", "offset_zoom_ms"]
 
 _VERDICT_COLOUR = {"ok": "tab:green", "warning": "tab:orange", "fail": "tab:red"}
 _ROW_IN = 3.4  # height of a row of panels (inches)
-_HEAD_IN = 0.9  # height of the text band that states R0
+_HEAD_IN = 0.9  # height of the text band that states R0 (five lines; taller for more)
 
 
 def _rotation_text(quaternion_wxyz, yaw_pitch_roll) -> str:
@@ -45,14 +45,25 @@ def headline(result, *, name: str | None = None, reference_name: str | None = No
                      "mean anything)")
     if result.reference_error_deg is None:
         lines.append("reference: none given")
+    elif result.reference_errors_deg is not None:  # two references: each error, the floor, the reading
+        names = reference_name.split(" and ") if reference_name and reference_name.count(" and ") == 1 else [None] * 2
+        for k, (key, error) in enumerate(zip(("reference_camera_from_sensor", "second_reference_camera_from_sensor"),
+                                             result.reference_errors_deg)):
+            lines.append(_reference_line(f"reference {k + 1}" + (f" ({names[k]})" if names[k] else ""),
+                                         result.inputs.get(key), error))
+        lines.append(f"reading: {result.reference_reading}")
     else:
-        ref = result.inputs.get("reference_camera_from_sensor")
         said = f"reference ({reference_name})" if reference_name else "reference"
-        if ref is not None:
-            ref = np.asarray(ref, dtype=float)
-            said += ": " + _rotation_text(as_quaternion(ref), yaw_pitch_roll_deg(ref))
-        lines.append(f"{said}; angle between R0 and it: {result.reference_error_deg:.3f} deg")
+        lines.append(_reference_line(said, result.inputs.get("reference_camera_from_sensor"),
+                                     result.reference_error_deg))
     return title, lines
+
+
+def _reference_line(said: str, ref, error_deg: float) -> str:
+    if ref is not None:
+        ref = np.asarray(ref, dtype=float)
+        said += ": " + _rotation_text(as_quaternion(ref), yaw_pitch_roll_deg(ref))
+    return f"{said}; angle between R0 and it: {error_deg:.3f} deg"
 
 
 def calibration_figure(result, *, name: str | None = None, reference_name: str | None = None):
@@ -90,14 +101,15 @@ def calibration_figure(result, *, name: str | None = None, reference_name: str |
         panels.append(lambda ax, k: _cloud_panel(ax, k, cloud, result))
     panels.append(lambda ax, k: _verdict_panel(ax, k, result))
     nrows = -(-len(panels) // 3) + (1 if online else 0)
-    fig = plt.figure(figsize=(14, _HEAD_IN + _ROW_IN * nrows))
-    grid = fig.add_gridspec(1 + nrows, 3, height_ratios=[_HEAD_IN] + [_ROW_IN] * nrows)
     title, lines = headline(result, name=name, reference_name=reference_name)
+    text = "\n".join(textwrap.fill(line, 150, subsequent_indent="    ") for line in lines)
+    head_in = _HEAD_IN * max(1.0, (text.count("\n") + 1) / 5)  # 5 lines fit the band
+    fig = plt.figure(figsize=(14, head_in + _ROW_IN * nrows))
+    grid = fig.add_gridspec(1 + nrows, 3, height_ratios=[head_in] + [_ROW_IN] * nrows)
     colour = _VERDICT_COLOUR[result.verdict.level]
     head = fig.add_subplot(grid[0, :])
     head.axis("off")
-    head.text(0.0, 1.0, "\n".join(textwrap.fill(line, 150, subsequent_indent="    ") for line in lines), fontsize=8,
-              va="top", family="monospace", transform=head.transAxes)
+    head.text(0.0, 1.0, text, fontsize=8, va="top", family="monospace", transform=head.transAxes)
     for k, draw in enumerate(panels):
         draw(fig.add_subplot(grid[1 + k // 3, k % 3]), chr(97 + k))
     if online:

@@ -80,7 +80,10 @@ class CalibrationResult:
         too few independent blocks for one to mean anything (see :mod:`replication.rig.quality`).
     observability : MotionObservability
     reference_error_deg : float or None
-        Angle to a reference rotation, when one was given.
+        Angle to a reference rotation, when one was given (with two: to the first).
+    reference_errors_deg, reference_disagreement_deg, reference_reading : tuple, float, str or None
+        With two references (e.g. two published calibrations): the angle to each, the angle between them (the
+        reference floor: an error below it is agreement, not accuracy) and which reading applies.
     bootstrap_resamples : str
         What the bootstrap resampled ("pairs in moving blocks of N", "stations", or "none").
     bootstrap_covers : str
@@ -124,6 +127,9 @@ class CalibrationResult:
     bootstrap_ci95_deg: float
     observability: MotionObservability = field(repr=False)
     reference_error_deg: float | None = None
+    reference_errors_deg: tuple | None = None
+    reference_disagreement_deg: float | None = None
+    reference_reading: str | None = None
     time_offset_ci95_s: tuple = (math.nan, math.nan)
     time_offset_peak_margin: float = math.nan
     bootstrap_resamples: str = "none"
@@ -178,6 +184,9 @@ class CalibrationResult:
                 "sensor_axis_spread_deg": float(obs.sensor_axis_spread_deg),
             },
             "reference_error_deg": self.reference_error_deg,
+            "reference_errors_deg": None if self.reference_errors_deg is None else list(self.reference_errors_deg),
+            "reference_disagreement_deg": self.reference_disagreement_deg,
+            "reference_reading": self.reference_reading,
         })
 
     def summary(self) -> str:
@@ -210,7 +219,12 @@ class CalibrationResult:
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
                 + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
-        if self.reference_error_deg is not None:
+        if self.reference_errors_deg is not None:
+            e1, e2 = self.reference_errors_deg
+            lines.append(f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree "
+                         f"by {self.reference_disagreement_deg:.3f} deg (the reference floor)")
+            lines.append(f"reading: {self.reference_reading}")
+        elif self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
         return "\n".join(lines)
 
