@@ -270,6 +270,7 @@ def test_verdict_of_lines_and_dicts():
     (0.01001, 0.01, False, "p = 0.01001 >= the test's level 0.01"),  # just above
     (1e-4, 0.01, True, "p = 0.0001 < the test's level 0.01"),
     (0.25, None, False, "p = 0.25"),                                # an old report without the level
+    (0.0100001, 0.01, True, "p = 0.0100001, at the test's level 0.01 (its threshold decided)"),  # never "p > level"
 ])
 def test_a_p_value_is_printed_with_the_tests_level(p, level, significant, words):
     from replication.rig.quality import p_with_level

@@ -211,6 +211,8 @@ def p_with_level(p_value: float, level: float | None, significant: bool) -> str:
     digits = 2
     while digits < 6 and float(f"{p_value:.{digits}g}") == float(level):
         digits += 1
+    if (p_value < level) != significant:  # at the boundary, the threshold decided: no comparison that reads wrong
+        return f"p = {p_value:.{digits}g}, at the test's level {level:g} (its threshold decided)"
     return f"p = {p_value:.{digits}g} {'<' if significant else '>='} the test's level {level:g}"
 
 
