@@ -5,6 +5,7 @@ The synthetic rig is the one of ``tests/test_calibrate_trust.py`` (a 20 Hz camer
 gyro; smooth three-axis motion), here with the gyro's clock shifted and optional noise on both streams. The truth
 is the shift: without it the rig's correlation peaks at -0.0001 ms.
 """
+import dataclasses
 import math
 
 import numpy as np
@@ -178,8 +179,36 @@ def test_offset_in_words(offset_s, words):
 
 def test_offset_in_words_to_more_decimals_and_on_the_estimate():
     assert offset_in_words(-0.00015594, decimals=3).startswith("-0.156 ms: the sensor sample stamped t - 0.156 ms")
-    found = offset_analysis(*_rig(12.3e-3), n_bootstrap=0)
-    assert found.in_words().startswith("+12.3 ms: the sensor sample stamped t + 12.3 ms matches")
+    found = offset_analysis(*_rig(12.3e-3), n_bootstrap=0)  # no interval: no direction claimed
+    assert found.in_words().startswith("+12.3 ms, no direction resolved: no 95 % interval was measured")
+    assert "ahead of the camera's" not in found.in_words()
+    resolved = dataclasses.replace(found, ci95_s=(0.0121, 0.0125))
+    assert resolved.in_words().startswith("+12.3 ms: the sensor sample stamped t + 12.3 ms matches")
+    assert "95 % interval [+12.1, +12.5] ms excludes 0" in resolved.in_words()
+
+
+#: (offset, interval) at both sides of 0: an end just beyond 0 (1 ns) resolves the direction, an end at or just past
+#: 0 does not (EuRoC MH01: -0.25 ms with [-0.59, +0.33] ms was worded "behind the camera's"; issue 35.4)
+@pytest.mark.parametrize("offset_s, ci95_s, side", [
+    (-0.25e-3, (-0.59e-3, 0.33e-3), None),        # EuRoC MH01 as measured
+    (-0.25e-3, (-0.59e-3, -1e-9), "behind"),      # just excluding 0, below
+    (-0.25e-3, (-0.59e-3, 0.0), None),            # its end at 0: includes it
+    (-0.25e-3, (-0.59e-3, 1e-9), None),           # just including 0
+    (0.25e-3, (1e-9, 0.59e-3), "ahead of"),       # just excluding 0, above
+    (0.25e-3, (-1e-9, 0.59e-3), None),            # just including 0
+    (0.25e-3, (0.0, 0.59e-3), None),
+    (0.25e-3, (1e-9, math.inf), "ahead of"),      # an open end beyond the search
+    (0.25e-3, (-math.inf, 0.59e-3), None),
+])
+def test_offset_direction_only_where_its_interval_excludes_0(offset_s, ci95_s, side):
+    words = offset_in_words(offset_s, decimals=2, ci95_s=ci95_s)
+    if side is None:
+        assert words.startswith("no offset resolved: ") and " includes 0 " in words
+        assert "ahead" not in words and "behind" not in words
+    else:
+        assert f"(sensor clock {side} the camera's by 0.25 ms, 95 % interval [" in words and "excludes 0" in words
+    if ci95_s == (-0.59e-3, 0.33e-3):
+        assert words.startswith("no offset resolved: -0.25 ms, its 95 % interval [-0.59, +0.33] ms includes 0")
 
 
 # ------------------------------------------------------------------------------------------- parameters

@@ -211,6 +211,7 @@ def test_a_short_recording_says_why_the_change_test_did_not_run(rng):
 
 class _Change:
     significant, split_time, n_before, n_after, p_value, difference_radius_deg = True, 10.0, 500, 500, 1e-6, 0.05
+    level = 0.01
     R_before = R_after = np.eye(3)
 
     def __init__(self, angle_deg, significant=True):

@@ -521,7 +521,28 @@ def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsy
     d = data_root() / "tumvi_room1_orbslam3mono"
     code = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",
                 "gyro", "--method", "sqp", "--bootstrap", "0")
-    assert code == EXIT_FAIL and "LocalMinimumWarning" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert code == EXIT_FAIL and "away from the certified optimum of eq. (8)" in out
+    assert "use the default method chordal_optimal" in out and "LocalMinimumWarning" not in out.split("R0 (")[0]
+
+
+@needs_real
+def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_warning(tmp_path, capsys):
+    """Issue 35.3: README's former example. The verdict says why the iteration hit its cap (sigma_2 / sigma_1 of K
+    0.9975 > 0.9863 at axis spread 3.2 deg) and what to do; the class stays in the report's warnings."""
+    d = data_root() / "euroc_mh01_orbslam3"
+    out = tmp_path / "euroc.json"
+    code = _cli("--camera", d / "orbslam3_mono_cam0_traj_runA.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
+                "--method", "two_step_left", "--bootstrap", "0", "--out", out)
+    text = capsys.readouterr().out
+    verdict = text.split("R0 (")[0]
+    assert code == 0 and "IterationCapWarning" not in verdict
+    assert "sigma_2 / sigma_1 of K 0.997" in verdict and "> 0.9863" in verdict and "camera axis spread 3.2" in verdict
+    assert "use the default method chordal_optimal" in verdict
+    report = json.loads(out.read_text())
+    assert any(w.startswith("IterationCapWarning") for w in report["warnings"])
+    (reason,) = [r for r in report["verdict"]["reasons"] if r["check"] == "solver_warning"]
+    assert reason["measured"] > reason["threshold"] == pytest.approx(0.98627, abs=1e-5)
 
 
 

@@ -237,3 +237,35 @@ def test_cli_names_the_recording_and_the_reference_file_in_the_figure(rig, tmp_p
     assert main([str(a) for a in args + ["--reference", tmp_path / "camchain.yaml"]]) in (0, 3)
     assert seen == {"name": "room1_cam + room1_imu", "reference_name": "camchain.yaml"}
     plt.close("all")
+
+
+def test_the_offset_panel_is_zoomed_to_the_interval_with_the_full_search_in_an_inset(rig):
+    """Issue 35.4: a sub-ms offset and its interval were invisible on a +-200 ms axis."""
+    import dataclasses
+
+    from replication.rig.figure import offset_zoom_ms
+
+    camera, gyro, _ = rig
+    r = calibrate(camera, gyro, n_bootstrap=0)
+    euroc = dataclasses.replace(r, time_offset_s=-0.25e-3, time_offset_ci95_s=(-0.59e-3, 0.33e-3))
+    assert offset_zoom_ms(euroc) == pytest.approx((-1.05, 0.79))
+    narrow = dataclasses.replace(r, time_offset_ci95_s=(0.1e-3, 0.2e-3))  # 0.1 ms wide: widened to 0.5 ms
+    assert offset_zoom_ms(narrow) == pytest.approx((-0.1, 0.4))
+    fig = euroc.plot()
+    (ax,) = [a for a in fig.axes if a.get_title().startswith("(b) clock offset")]
+    assert ax.get_title() == "(b) clock offset, zoomed to its 95 % interval"
+    assert ax.get_xlim() == pytest.approx((-1.05, 0.79))
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "95 % interval [-0.59, +0.33] ms" in legend and "0 (clocks agree): inside the interval" in legend
+    (inset,) = ax.child_axes
+    bound = 1e3 * r.parameters["max_offset_s"]
+    assert inset.get_xlim()[0] <= -0.9 * bound and inset.get_xlim()[1] >= 0.9 * bound  # the full search
+    assert "full search +-200 ms" in [t.get_text() for t in inset.texts]
+    excluded = dataclasses.replace(r, time_offset_s=12.3e-3, time_offset_ci95_s=(12.1e-3, 12.5e-3)).plot()
+    (ax,) = [a for a in excluded.axes if a.get_title().startswith("(b) clock offset")]
+    assert "0 (clocks agree)" in [t.get_text() for t in ax.get_legend().get_texts()]  # 0 outside: no "inside"
+    none = dataclasses.replace(r, time_offset_ci95_s=(math.nan, math.nan)).plot()
+    (ax,) = [a for a in none.axes if a.get_title().startswith("(b) clock offset")]
+    assert ax.get_title().endswith("(no finite interval: the full search)") and not ax.child_axes
+    assert ax.get_xlim()[0] <= -bound and ax.get_xlim()[1] >= bound
+    plt.close("all")

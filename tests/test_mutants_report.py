@@ -41,6 +41,7 @@ def test_to_dict_holds_every_field():
     reason = Reason("n_pairs", "warning", 42.0, 30.0, "m")
     res = _result(verdict=Verdict.of([reason]), warnings=("W: x",), parameters={"p": 1}, inputs={"i": 2},
                   reference_error_deg=0.75, time_offset_ci95_s=(0.01, np.inf), time_offset_peak_margin=0.4,
+                  reference_errors_deg=(0.75, 0.5), reference_disagreement_deg=0.3, reference_reading="r",
                   bootstrap_resamples="pairs in moving blocks of 4", pose_residual_median_deg=[0.1, np.nan],
                   station_repeats={"stations": 3, "distinct": 2, "groups": [[0, 2]]},
                   change_test={"run": False, "note": "n"}, online={"o": 1})
@@ -75,6 +76,9 @@ def test_to_dict_holds_every_field():
         "online": {"o": 1},
         "observability": {"spectral_ratio": 0.5, "camera_axis_spread_deg": 12.34, "sensor_axis_spread_deg": 11.0},
         "reference_error_deg": 0.75,
+        "reference_errors_deg": [0.75, 0.5],
+        "reference_disagreement_deg": 0.3,
+        "reference_reading": "r",
     }
     json.dumps(d, allow_nan=False)
 
@@ -94,7 +98,7 @@ def test_summary_of_a_stream_calibration_line_by_line():
                   time_offset_ci95_s=(0.0101, 0.0145), reference_error_deg=0.5,
                   bootstrap_resamples="pairs in moving blocks of 4",
                   change_test={"run": True, "split_time_s": 12.34, "angle_deg": 0.1234, "significant": False,
-                               "p_value": 0.25, "splits_from_s": 3.04, "splits_to_s": 57.06})
+                               "p_value": 0.25, "level": 0.01, "splits_from_s": 3.04, "splits_to_s": 57.06})
     assert res.summary().split("\n") == [
         "verdict: WARNING",
         "  warning: a reason",
@@ -105,13 +109,13 @@ def test_summary_of_a_stream_calibration_line_by_line():
         "quaternion (w, x, y, z): [0.5 0.5 0.5 0.5]",
         "yaw / pitch / roll (z-y'-x''): 90.000 / 1.500 / -2.250 deg",
         "time offset: +12.30 ms: the sensor sample stamped t + 12.30 ms matches the camera sample stamped t (sensor "
-        "clock ahead of the camera's by 12.30 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift) (95 % interval "
-        "[+10.10, +14.50] ms, correlation 0.9877, applied)",
+        "clock ahead of the camera's by 12.30 ms, 95 % interval [+10.10, +14.50] ms excludes 0; Kalibr's "
+        "timeshift_cam_imu, t_imu = t_cam + shift) (correlation 0.9877, applied)",
         "pair residuals: median 0.125 deg, rms 0.250 deg",
         f"bootstrap 95% radius: 0.346 deg (resampling pairs in moving blocks of 4); it covers {RADIUS_COVERS}",
         "axis spread camera 12.3 deg",
-        "change test: R0 before and after 12.3 s differ by 0.123 deg, within their noise (p = 0.25; splits tested from "
-        "3.0 to 57.1 s: a change outside cannot be told)",
+        "change test: R0 before and after 12.3 s differ by 0.123 deg, within their noise (p = 0.25 >= the test's level "
+        "0.01; splits tested from 3.0 to 57.1 s: a change outside cannot be told)",
         "angle to the reference: 0.500 deg",
     ]
 
@@ -128,13 +132,16 @@ def test_summary_variants():
                                  "p_value": 1e-5, "splits_from_s": 1.0, "splits_to_s": 9.0}).summary().split("\n")
     assert lines[0] == "verdict: OK"
     offset = next(line for line in lines if line.startswith("time offset: "))
-    assert offset.endswith(" (95 % interval [+nan, +20.00] ms, correlation 0.9877, not applied)")
+    assert offset.startswith("time offset: +12.30 ms, no direction resolved: its 95 % interval [+nan, +20.00] ms "
+                             "is not fully measured, so the data do not say whether the sensor clock is ahead or")
+    assert offset.endswith(" (correlation 0.9877, not applied)")
     assert "bootstrap 95% radius: not available (resampling none); it covers " in "\n".join(lines)
     assert lines[-1] == ("change test: R0 before and after 3.0 s differ by 2.000 deg, beyond their noise (p = 1e-05; "
                          "splits tested from 1.0 to 9.0 s: a change outside cannot be told)")
     lines = _result(time_offset_ci95_s=(-math.inf, math.inf), change_test={"run": False, "note": "too short"})\
         .summary().split("\n")
     offset = next(line for line in lines if line.startswith("time offset: "))
+    assert offset.startswith("time offset: no offset resolved: +12.30 ms, its 95 % interval [-inf, +inf] ms includes 0")
     assert offset.endswith("shift) (correlation 0.9877, applied)")
     assert lines[-1] == "change test: too short"
     assert not any(line.startswith("angle to the reference") for line in lines)

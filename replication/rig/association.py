@@ -14,6 +14,7 @@ Data model in :mod:`replication.rig.streams`, file I/O in :mod:`replication.rig.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -305,8 +306,8 @@ class OffsetEstimate:
     peak_separation_s: float = PEAK_SEPARATION_S
 
     def in_words(self) -> str:
-        """:func:`offset_in_words` of ``offset_s``."""
-        return offset_in_words(self.offset_s)
+        """:func:`offset_in_words` of ``offset_s`` and its interval (a direction only where it excludes 0)."""
+        return offset_in_words(self.offset_s, ci95_s=self.ci95_s)
 
 
 def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndarray:
@@ -408,8 +409,10 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
                           s["curve"], n_bootstrap, block_s)
 
 
-def offset_in_words(offset_s: float, decimals: int = 1) -> str:
+def offset_in_words(offset_s: float, decimals: int = 1, ci95_s=None) -> str:
     """The clock offset ``d`` and its sign in words, in ms to ``decimals`` decimals.
+
+    With ``ci95_s`` (its 95 % interval, s) the direction is said only where it excludes 0, else "no offset resolved".
 
     ``d`` is defined by "the sensor sample stamped ``t + d`` matches the camera sample stamped ``t``": one instant
     is stamped ``t_cam`` by the camera and ``t_imu = t_cam + d`` by the sensor, so ``d > 0`` means the sensor clock
@@ -430,13 +433,29 @@ def offset_in_words(offset_s: float, decimals: int = 1) -> str:
     decimals = int(check_number("decimals", decimals, minimum=0, integer=True, strict=False))
     ms = round(1e3 * abs(offset_s), decimals)
     kalibr = "Kalibr's timeshift_cam_imu, t_imu = t_cam + shift"
+    def _ms(value_s):  # in ms with its sign; two significant digits where the decimals would print a non-zero as 0
+        text = f"{1e3 * value_s:+.{decimals}f}"
+        return f"{1e3 * value_s:+.2g}" if value_s != 0 and math.isfinite(value_s) and float(text) == 0 else text
+    interval = ""
+    if ci95_s is not None:
+        lo, hi = (float(v) for v in ci95_s)
+        interval = f"[{_ms(lo)}, {_ms(hi)}] ms"
+        if math.isnan(lo) or math.isnan(hi):
+            missing = "no 95 % interval was measured (no bootstrap)" if math.isnan(lo) and math.isnan(hi) else (
+                f"its 95 % interval {interval} is not fully measured")
+            return f"{_ms(offset_s)} ms, no direction resolved: {missing}, so the data do not say whether the sensor " \
+                f"clock is ahead or behind ({kalibr})"
+        if lo <= 0 <= hi:
+            return (f"no offset resolved: {_ms(offset_s)} ms, its 95 % interval {interval} includes 0 (the "
+                    f"clocks agree within it; {kalibr})")
+        interval = f", 95 % interval {interval} excludes 0"
     if ms == 0:
         return (f"{0:.{decimals}f} ms: the sensor sample stamped t matches the camera sample stamped t (the clocks "
                 f"agree to {0.5 * 10.0 ** -decimals:g} ms; {kalibr})")
     v = f"{ms:.{decimals}f}"
     sign, side = ("+", "ahead of") if offset_s > 0 else ("-", "behind")
     return (f"{sign}{v} ms: the sensor sample stamped t {sign} {v} ms matches the camera sample stamped t (sensor "
-            f"clock {side} the camera's by {v} ms; {kalibr})")
+            f"clock {side} the camera's by {v} ms{interval}; {kalibr})")
 
 
 def motion_pairs(camera: OrientationStream, sensor: OrientationStream, interval: float, *, offset: float = 0.0):

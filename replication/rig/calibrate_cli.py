@@ -146,9 +146,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
                      help="time unit of the sensor file only (default: that of --time-unit)")
     cal.add_argument("--drop-repeated", action="store_true",
                      help="skip lines of a TUM trajectory that repeat the previous line verbatim")
-    cal.add_argument("--reference", help="a reference R0 to compare with: a Kalibr camchain, an OpenVINS or ORB-SLAM3 "
-                     "%%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's transformations.txt "
-                     "(recognised by content; default: none)")
+    cal.add_argument("--reference", action="append", help="a reference R0 to compare with: a Kalibr camchain, an "
+                     "OpenVINS or ORB-SLAM3 %%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's "
+                     "transformations.txt (recognised by content; default: none). Given twice (two published "
+                     "calibrations): the error to each, their disagreement (the reference floor) and which reading "
+                     "applies (an error below the floor is agreement, not accuracy)")
     cal.add_argument("--reference-camera", default="cam0",
                      help="camera entry of the reference file (cam0, cam1, ...; Basalt: its index)")
     cal.add_argument("--out", help="write the JSON report here (folders are created; default: no report)")
@@ -167,7 +169,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 #: The inputs and outputs of ``calibrate``: (option, attribute).
-INPUTS = (("--camera", "camera"), ("--sensor", "sensor"), ("--reference", "reference"))
+INPUTS = (("--camera", "camera"), ("--sensor", "sensor"), ("--reference", "reference"), ("--reference2", "reference2"))
+#: How an input is named in messages (the second --reference has no option of its own).
+_SHOWN = {"--reference2": "--reference (the second)"}
+
+
+def _split_references(args) -> None:
+    """``--reference`` given at most twice: ``args.reference`` the first (or None), ``args.reference2`` the second."""
+    given = args.reference if isinstance(args.reference, list) else [args.reference] if args.reference else []
+    if len(given) > 2:
+        raise ValueError(f"--reference given {len(given)} times: at most two (two published calibrations)")
+    args.reference, args.reference2 = (given + [None, None])[:2]
 OUTPUTS = (("--out", "out"), ("--plot", "plot"), ("--track", "track"))
 
 
@@ -178,12 +190,14 @@ def _check_paths(args) -> dict:
     the figure's extension is a known format; each output's folder is created and writable.
     """
     inputs = {option: getattr(args, attr) for option, attr in INPUTS}
-    kinds = {option: check_input(path, option) for option, path in inputs.items() if path is not None}
+    kinds = {option: check_input(path, _SHOWN.get(option, option)) for option, path in inputs.items()
+             if path is not None}
     pipes = [option for option, kind in kinds.items() if kind == "pipe"]
     for i, option in enumerate(pipes):
         for other in pipes[:i]:
             if same_file(inputs[option], inputs[other]):
-                raise ValueError(f"{option} is the same pipe as {other} ({inputs[option]}): a pipe can be read once")
+                raise ValueError(f"{_SHOWN.get(option, option)} is the same pipe as {_SHOWN.get(other, other)} "
+                                 f"({inputs[option]}): a pipe can be read once")
     check_clashes({option: getattr(args, attr) for option, attr in OUTPUTS}, inputs)
     if args.plot is not None:
         try:
@@ -215,7 +229,7 @@ def _read_inputs(args, kinds: dict):
                 else:  # hashed in blocks, not held in memory
                     entry = {"bytes": os.path.getsize(given), "sha256": sha256_of(given)}
             except OSError as err:
-                raise ValueError(f"{option} {given}: cannot be read ({os_reason(err)})") from None
+                raise ValueError(f"{_SHOWN.get(option, option)} {given}: cannot be read ({os_reason(err)})") from None
             if kind == "pipe":
                 copy = Path(tmp) / (option[2:] + Path(given).suffix)
                 copy.write_bytes(data)
@@ -325,6 +339,10 @@ def _load_all(args, kinds):
         try:
             camera, sensor = _load(args, paths)
             reference = load_reference(paths["--reference"], args.reference_camera) if args.reference else None
+            if args.reference2:
+                import numpy as np
+
+                reference = np.stack([reference, load_reference(paths["--reference2"], args.reference_camera)])
         except (ValueError, OSError) as err:
             text = str(err)
             for copy, shown in copies.items():
@@ -354,6 +372,7 @@ def _write(path, data, what: str) -> bool:
 def calibrate_command(args: argparse.Namespace) -> int:
     from ..core.solvers import solver_info
     from .calibration import OverlapError, calibrate
+    from .estimate import first_reference
     from .poses import calibrate_poses
 
     try:
@@ -364,6 +383,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
             raise ValueError("--online needs streams, not static pose sets (--poses)")
         if args.online:
             require("pandas", "calibrate --online")
+        _split_references(args)
         kinds = _check_paths(args)
         out = prepare_output(args.out, "--out") if args.out is not None else None
         plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
@@ -382,14 +402,15 @@ def calibrate_command(args: argparse.Namespace) -> int:
         return _error(err)
     print(result.summary())
     if args.online:
-        result, rows = _online(args, camera, sensor, reference, result)
+        result, rows = _online(args, camera, sensor, first_reference(reference), result)
         if track is not None:
             if not _write(track, rows.to_csv(index=False), "--track"):
                 return EXIT_BAD_INPUT
             print(f"online track written to {track}")
     if out is not None:
-        if args.reference:
-            files["reference"] = {**files["reference"], "camera_entry": args.reference_camera}
+        for key in ("reference", "reference2"):
+            if getattr(args, key):
+                files[key] = {**files[key], "camera_entry": args.reference_camera}
         report = {"command": ["python", "-m", "replication", *sys.argv[1:]] if sys.argv else [],
                   "cwd": os.getcwd(), "files": files,
                   "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
@@ -402,7 +423,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
     if plot is not None:
         try:
             result.plot(plot, name=f"{Path(args.camera).stem} + {Path(args.sensor).stem}",  # the recording
-                        reference_name=Path(args.reference).name if args.reference else None)
+                        reference_name=" and ".join(Path(r).name for r in (args.reference, args.reference2) if r)
+                        or None)
         except OSError as err:
             return _error(f"--plot {plot}: cannot write ({os_reason(err)}); nothing was written there")
         print(f"figure written to {plot}")

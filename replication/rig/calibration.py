@@ -38,7 +38,7 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
-from .estimate import check_common, check_options, solve_pairs, with_reasons
+from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
 from .streams import (  # integrate_gyro re-exported: a public name
@@ -318,8 +318,9 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         Moving-block bootstrap replicates (0: none).
     seed : int
         Seeds the bootstrap.
-    reference : None or array_like (3, 3)
-        A reference ``R0``; the result then reports the angle to it.
+    reference : None or array_like (3, 3) or (2, 3, 3)
+        A reference ``R0``; the result then reports the angle to it. Two references (e.g. two published
+        calibrations): the angle to each, their disagreement (the reference floor) and which reading applies.
     diagnose : bool
         Where the verdict is not ``ok``, look for the usual input mistakes (:mod:`replication.rig.diagnose`).
     progress : bool
@@ -339,7 +340,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         naming ``max_offset``, with the spans as durations and the likely
         time-unit mistake when their spans show one).
     """
-    reference = check_common(method, n_bootstrap, seed, reference)
+    references = check_common(method, n_bootstrap, seed, reference)  # one, or two (2, 3, 3)
+    reference = first_reference(references)
     check_options(method, options)
     check_number("interval", interval, minimum=0)
     check_number("stride", stride, minimum=1, integer=True, strict=False)
@@ -385,7 +387,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
     evidence.update(mirror)
     result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=reference, time_offset=(offset, corr, bool(correct_offset)),
+                          seed=seed, reference=references, time_offset=(offset, corr, bool(correct_offset)),
                           time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
                           change_test=_change_report(change, change_fit),
                           options=options, evidence=evidence, parameters=parameters, inputs=inputs,

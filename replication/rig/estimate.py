@@ -27,6 +27,7 @@ it. Conventions: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 import warnings
@@ -41,8 +42,8 @@ from ..core.solvers import ReplicationWarning, SolverAnswerError, checked_core, 
 from .quality import Evidence, Reason, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
 
-__all__ = ["check_common", "check_options", "solve_pairs", "with_reasons", "bootstrap_replicates", "block_indices",
-           "station_indices", "per_station_median"]
+__all__ = ["check_common", "first_reference", "reference_reading", "check_options", "solve_pairs", "with_reasons",
+           "bootstrap_replicates", "block_indices", "station_indices", "per_station_median"]
 
 
 def check_common(method, n_bootstrap, seed, reference):
@@ -57,9 +58,33 @@ def check_common(method, n_bootstrap, seed, reference):
     if ref.shape == (4, 4):
         raise ValueError("reference is a 4x4 transform; pass its rotation block "
                          "(the upper-left 3x3 camera_from_sensor)")
-    if ref.shape != (3, 3):
-        raise ValueError(f"reference must be a 3x3 rotation (camera_from_sensor), got shape {ref.shape}")
+    if ref.shape not in ((3, 3), (2, 3, 3)):
+        raise ValueError(f"reference must be a 3x3 rotation (camera_from_sensor), got shape {ref.shape} (two "
+                         f"references, e.g. two published calibrations: shape (2, 3, 3))")
     return check_rotation_matrices(ref, "reference", atol=1e-5)
+
+
+def first_reference(reference):
+    """The reference a single-reference check uses: the one given, or the first of two."""
+    if reference is None or np.ndim(reference) == 2:
+        return reference
+    return np.asarray(reference)[0]
+
+
+def reference_reading(errors_deg, disagreement_deg: float) -> str:
+    """Which reading two references' errors allow: an error below the references' own disagreement (the reference
+    floor) is agreement with them, not a measure of accuracy."""
+    e1, e2 = errors_deg
+    floor = f"the references' own disagreement {disagreement_deg:.3f} deg (the reference floor)"
+    if max(e1, e2) <= disagreement_deg:
+        return (f"agreement, not accuracy: both errors ({e1:.3f}, {e2:.3f} deg) are within {floor}, so the data "
+                f"cannot say which reference is closer to the truth, nor how close R0 is")
+    if min(e1, e2) > disagreement_deg:
+        return (f"a difference beyond the floor: both errors ({e1:.3f}, {e2:.3f} deg) exceed {floor}, so R0 differs "
+                f"from both by more than they differ from each other (R0's own error, or one the references share)")
+    closer = 1 if e1 <= e2 else 2
+    return (f"closer to reference {closer}: its error ({min(e1, e2):.3f} deg) is within {floor} and the other's "
+            f"({max(e1, e2):.3f} deg) is not; an error within the floor is agreement, not accuracy")
 
 
 def check_options(method, options):
@@ -201,6 +226,10 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     ``station_residual(R)``, each station's own residual at the estimate ``R``).
     """
     motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
+    references = None if reference is None or np.ndim(reference) == 2 else np.asarray(reference)
+    if references is not None:  # two references: the old fields and the first check use the first
+        reference = references[0]
+        inputs = {**inputs, "second_reference_camera_from_sensor": references[1]}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ReplicationWarning)
         sol = solve(method, motions, full_output=True, **options)
@@ -247,13 +276,15 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
                              bootstrap_deg=ci if math.isfinite(ci) else None,
                              axis_spread_deg=float(sol.observability.camera_axis_spread_deg),
                              warnings=tuple(w.category.__name__ for w in ours),
+                             spectral_ratio=float(sol.observability.spectral_ratio), method=method,
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
                              reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
                              pose_residual_kind=("its own residual" if station_residual else
                                                  "median residual of its pairs"),
                              **evidence),
-                    extra=[r for r in (bad_replicates, _repeats_reason(repeats)) if r is not None])
+                    extra=[r for r in (bad_replicates, _repeats_reason(repeats), _second_reason(R, references))
+                           if r is not None])
     offset, corr, applied = time_offset
     diagnostics = {"pair_times": pair_times, "residuals_deg": res, "bootstrap_rotvec_deg": boot,
                    "motion_median_deg": motion}
@@ -279,6 +310,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         bootstrap_ci95_deg=ci,
         observability=sol.observability,
         reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
+        **_two_references(R, references),
         verdict=verdict,
         warnings=tuple(f"{w.category.__name__}: {w.message}" for w in ours),
         parameters=parameters,
@@ -291,8 +323,27 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     )
 
 
+def _two_references(R, references) -> dict:
+    """The result's fields for two references: each error, their disagreement and the reading it allows."""
+    if references is None:
+        return {}
+    errors = tuple(float(angle_between_deg(R, ref)) for ref in references)
+    disagreement = float(angle_between_deg(references[0], references[1]))
+    return {"reference_errors_deg": errors, "reference_disagreement_deg": disagreement,
+            "reference_reading": reference_reading(errors, disagreement)}
+
+
+def _second_reason(R, references):
+    """The reference check of the second reference (the first is judged as a single one)."""
+    if references is None:
+        return None
+    found = judge(Evidence(n_pairs=10 ** 6, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None,
+                           reference_error_deg=float(angle_between_deg(R, references[1])))).reasons
+    return next((dataclasses.replace(r, check="second_reference_error_deg",
+                                     message=r.message.replace("the given reference", "the second reference"))
+                 for r in found if r.check == "reference_error_deg"), None)
+
+
 def with_reasons(result: CalibrationResult, reasons) -> CalibrationResult:
     """``result`` with further verdict reasons (the verdict's level follows)."""
-    import dataclasses
-
     return dataclasses.replace(result, verdict=Verdict.of((*result.verdict.reasons, *reasons)))

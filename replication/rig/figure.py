@@ -11,11 +11,11 @@ import numpy as np
 from ..core.so3 import as_quaternion, yaw_pitch_roll_deg
 from .quality import THRESHOLDS
 
-__all__ = ["calibration_figure", "headline"]
+__all__ = ["calibration_figure", "headline", "offset_zoom_ms"]
 
 _VERDICT_COLOUR = {"ok": "tab:green", "warning": "tab:orange", "fail": "tab:red"}
 _ROW_IN = 3.4  # height of a row of panels (inches)
-_HEAD_IN = 0.9  # height of the text band that states R0
+_HEAD_IN = 0.9  # height of the text band that states R0 (five lines; taller for more)
 
 
 def _rotation_text(quaternion_wxyz, yaw_pitch_roll) -> str:
@@ -45,14 +45,25 @@ def headline(result, *, name: str | None = None, reference_name: str | None = No
                      "mean anything)")
     if result.reference_error_deg is None:
         lines.append("reference: none given")
+    elif result.reference_errors_deg is not None:  # two references: each error, the floor, the reading
+        names = reference_name.split(" and ") if reference_name and reference_name.count(" and ") == 1 else [None] * 2
+        for k, (key, error) in enumerate(zip(("reference_camera_from_sensor", "second_reference_camera_from_sensor"),
+                                             result.reference_errors_deg)):
+            lines.append(_reference_line(f"reference {k + 1}" + (f" ({names[k]})" if names[k] else ""),
+                                         result.inputs.get(key), error))
+        lines.append(f"reading: {result.reference_reading}")
     else:
-        ref = result.inputs.get("reference_camera_from_sensor")
         said = f"reference ({reference_name})" if reference_name else "reference"
-        if ref is not None:
-            ref = np.asarray(ref, dtype=float)
-            said += ": " + _rotation_text(as_quaternion(ref), yaw_pitch_roll_deg(ref))
-        lines.append(f"{said}; angle between R0 and it: {result.reference_error_deg:.3f} deg")
+        lines.append(_reference_line(said, result.inputs.get("reference_camera_from_sensor"),
+                                     result.reference_error_deg))
     return title, lines
+
+
+def _reference_line(said: str, ref, error_deg: float) -> str:
+    if ref is not None:
+        ref = np.asarray(ref, dtype=float)
+        said += ": " + _rotation_text(as_quaternion(ref), yaw_pitch_roll_deg(ref))
+    return f"{said}; angle between R0 and it: {error_deg:.3f} deg"
 
 
 def calibration_figure(result, *, name: str | None = None, reference_name: str | None = None):
@@ -90,14 +101,15 @@ def calibration_figure(result, *, name: str | None = None, reference_name: str |
         panels.append(lambda ax, k: _cloud_panel(ax, k, cloud, result))
     panels.append(lambda ax, k: _verdict_panel(ax, k, result))
     nrows = -(-len(panels) // 3) + (1 if online else 0)
-    fig = plt.figure(figsize=(14, _HEAD_IN + _ROW_IN * nrows))
-    grid = fig.add_gridspec(1 + nrows, 3, height_ratios=[_HEAD_IN] + [_ROW_IN] * nrows)
     title, lines = headline(result, name=name, reference_name=reference_name)
+    text = "\n".join(textwrap.fill(line, 150, subsequent_indent="    ") for line in lines)
+    head_in = _HEAD_IN * max(1.0, (text.count("\n") + 1) / 5)  # 5 lines fit the band
+    fig = plt.figure(figsize=(14, head_in + _ROW_IN * nrows))
+    grid = fig.add_gridspec(1 + nrows, 3, height_ratios=[head_in] + [_ROW_IN] * nrows)
     colour = _VERDICT_COLOUR[result.verdict.level]
     head = fig.add_subplot(grid[0, :])
     head.axis("off")
-    head.text(0.0, 1.0, "\n".join(textwrap.fill(line, 150, subsequent_indent="    ") for line in lines), fontsize=8,
-              va="top", family="monospace", transform=head.transAxes)
+    head.text(0.0, 1.0, text, fontsize=8, va="top", family="monospace", transform=head.transAxes)
     for k, draw in enumerate(panels):
         draw(fig.add_subplot(grid[1 + k // 3, k % 3]), chr(97 + k))
     if online:
@@ -130,19 +142,54 @@ def _stations_panel(ax, k, stations):
     ax.set_title(f"({k}) residual by station")
 
 
+#: Least width (ms) of the offset panel's zoom about the interval (a few fine-grid steps).
+_ZOOM_MIN_MS = 0.5
+
+
+def offset_zoom_ms(result):
+    """The offset panel's x range (ms): the 95 % interval with half its width either side (at least
+    :data:`_ZOOM_MIN_MS` wide), or None where the interval is not finite (the full search is shown)."""
+    lo, hi = (1e3 * float(v) for v in result.time_offset_ci95_s)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return None
+    pad = max(0.5 * (hi - lo), 0.5 * (_ZOOM_MIN_MS - (hi - lo)))
+    return lo - pad, hi + pad
+
+
 def _offset_panel(ax, k, result):
+    """Zoomed to the offset's 95 % interval (shaded, with 0 marked), the full search in an inset."""
     offsets, corr = result.diagnostics["offset_curve"]
-    ax.plot(1e3 * np.asarray(offsets), corr, lw=0.8)
-    ax.axvline(1e3 * result.time_offset_s, color="k", ls="--", lw=0.8,
-               label=f"chosen: {1e3 * result.time_offset_s:+.2f} ms")
+    x, corr = 1e3 * np.asarray(offsets, dtype=float), np.asarray(corr, dtype=float)
+    chosen = 1e3 * result.time_offset_s
+    zoom = offset_zoom_ms(result)
+    ax.plot(x, corr, ".-" if zoom else "-", lw=0.8, ms=3)
+    ax.axvline(chosen, color="k", ls="--", lw=0.8, label=f"chosen: {chosen:+.2f} ms")
     bound = result.parameters.get("max_offset_s")
-    if bound:
-        for x in (-bound, bound):
-            ax.axvline(1e3 * x, color="tab:red", ls=":", lw=0.8, label="search bound" if x < 0 else None)
+    if zoom is None:
+        if bound:
+            for b in (-bound, bound):
+                ax.axvline(1e3 * b, color="tab:red", ls=":", lw=0.8, label="search bound" if b < 0 else None)
+        ax.set_title(f"({k}) clock offset (no finite interval: the full search)")
+    else:
+        lo, hi = (1e3 * float(v) for v in result.time_offset_ci95_s)
+        ax.axvspan(lo, hi, color="tab:blue", alpha=0.15, label=f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms")
+        ax.axvline(0.0, color="grey", lw=0.8, label="0 (clocks agree)" + (": inside the interval" if lo <= 0 <= hi
+                                                                         else ""))
+        ax.set_xlim(*zoom)
+        inside = (x >= zoom[0]) & (x <= zoom[1])
+        if inside.any():
+            span = np.ptp(corr[inside])
+            ax.set_ylim(corr[inside].min() - 0.1 * span - 1e-6, corr[inside].max() + 0.1 * span + 1e-6)
+        inset = ax.inset_axes([0.32, 0.05, 0.36, 0.32])
+        inset.plot(x, corr, lw=0.6)
+        inset.axvspan(*zoom, color="tab:orange", alpha=0.4)
+        inset.tick_params(labelsize=5)
+        inset.text(0.02, 0.96, "full search" + (f" +-{1e3 * bound:g} ms" if bound else ""), fontsize=5, va="top",
+                   transform=inset.transAxes)
+        ax.set_title(f"({k}) clock offset, zoomed to its 95 % interval")
     ax.set_xlabel("sensor clock offset d (ms; d > 0: the sensor clock reads ahead)")
     ax.set_ylabel("correlation of angular speeds")
-    ax.legend(fontsize=7)
-    ax.set_title(f"({k}) clock offset")
+    ax.legend(fontsize=6, loc="upper right")
 
 
 def _station_pairs_panel(ax, k, station_pairs, residuals):

@@ -14,7 +14,7 @@ import numpy as np
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import relative_rotations
 from ..core.so3 import rotation_angle_deg
-from .estimate import check_common, check_options, solve_pairs, with_reasons
+from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
 from .report import CalibrationResult
 
 __all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
@@ -51,7 +51,8 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         clearly better (:func:`replication.rig.diagnose.pose_direction`). Both sets inverted is a consistent problem
         for another unknown: only a reference reveals it.
     """
-    reference = check_common(method, n_bootstrap, seed, reference)
+    references = check_common(method, n_bootstrap, seed, reference)  # one, or two (2, 3, 3)
+    reference = first_reference(references)
     check_options(method, options)
     check_number("min_motion_deg", min_motion_deg, minimum=0, strict=False)
     C = check_rotation_matrices(camera_attitudes, "camera_attitudes", atol=1e-5)
@@ -68,7 +69,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
                          f"lower it or give poses that differ more")
     result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=reference, time_offset=(np.nan, np.nan, False), options=options,
+                          seed=seed, reference=references, time_offset=(np.nan, np.nan, False), options=options,
                           evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
                          stations=(i, j, len(C), labels),
                          station_residual=(lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None)

@@ -56,8 +56,12 @@ median motion per pair      < 1 deg          < 0.5 deg        a rig at rest, or 
                                                               3.9-52 deg at 1 s, 12.7 deg between Tabb's stations)
 solver warnings             any other        ``Local-         a local solver away from the certified optimum of
                             ``Replication-   MinimumWarning``, eq. (8), or a closed form off by a half-turn, is a wrong
-                            Warning``        ``Accuracy-      answer, whatever the other checks say
-                                             Warning``
+                            Warning``        ``Accuracy-      answer, whatever the other checks say. The verdict names
+                                             Warning``        the measured cause and what to do, not the class (which
+                                                              stays in ``warnings``): the two-step iteration's cap is
+                                                              sigma_2 / sigma_1 of K above 0.9863 (1e-12 in 1000
+                                                              iterations), near single-axis motion (EuRoC with
+                                                              two_step_left: 0.9975 at axis spread 3.2 deg)
 pairs across stream gaps    any dropped      more than half   a pair whose interval contains a gap in either stream
                                              dropped          (more than 5 sample intervals without data) is dropped
 sensor (gyro) rate          < 50 Hz          < 5 samples per  integrating a slow gyro over one interval leaves an
@@ -92,7 +96,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS"]
+__all__ = ["LEVELS", "EXIT_FAIL", "Reason", "Verdict", "Evidence", "judge", "THRESHOLDS", "p_with_level"]
 
 #: Verdict levels, best first.
 LEVELS = ("ok", "warning", "fail")
@@ -195,6 +199,21 @@ class Evidence:
     pose_residual_kind: str = "median residual of its pairs"  # or "its own residual" (consecutive pairs)
     mirror_fit_ratio: float | None = None   # the fit with the sensor's frame mirrored: its median residual / ours
     mirror_normal: tuple | None = None      # the sensor axis turned about least
+    spectral_ratio: float | None = None     # sigma_2 / sigma_1 of K (the two-step iteration's rate: its square)
+    method: str | None = None               # the solver that answered (named in what to do about its warnings)
+
+
+def p_with_level(p_value: float, level: float | None, significant: bool) -> str:
+    """A test's p-value next to its level, e.g. ``p = 0.049 >= the test's level 0.01`` (a p of 0.049 is "within the
+    noise" at level 0.01); as many digits as keep ``p`` and the level apart; without a level, ``p`` alone."""
+    if level is None:
+        return f"p = {p_value:.2g}"
+    digits = 2
+    while digits < 6 and float(f"{p_value:.{digits}g}") == float(level):
+        digits += 1
+    if (p_value < level) != significant:  # at the boundary, the threshold decided: no comparison that reads wrong
+        return f"p = {p_value:.{digits}g}, at the test's level {level:g} (its threshold decided)"
+    return f"p = {p_value:.{digits}g} {'<' if significant else '>='} the test's level {level:g}"
 
 
 def _above(check, value, name, unit, why):
@@ -243,6 +262,59 @@ def _outlying_poses(medians, kind="median residual of its pairs"):
                   f"outlying pose{'s' if len(bad) > 1 else ''} (0-based index, {kind}): "
                   f"{named} > {factor:g} x the stations' median {base:.3g} deg = {factor * base:.3g} deg: "
                   f"a bad measurement at that station (a target detection, a robot pose); its pairs pull R0")
+
+
+#: The solver a verdict recommends where the chosen one is slowed or misled by the motions (``calibrate``'s default).
+DEFAULT_METHOD = "chordal_optimal"
+#: The two-step iteration's cap and the relative precision it iterates to (``two_step``'s ``cap`` and ``tol``).
+_TWO_STEP_CAP, _TWO_STEP_TOL = 1000, 1e-12
+
+
+def _motion_words(e: Evidence) -> str:
+    """The motions' measured shape: camera axis spread (and median motion per pair, where known)."""
+    spread = "" if e.axis_spread_deg is None else f"camera axis spread {e.axis_spread_deg:.3g} deg"
+    motion = "" if e.motion_median_deg is None else f"median motion per pair {e.motion_median_deg:.3g} deg"
+    return ", ".join(w for w in (spread, motion) if w)
+
+
+def _solver_reason(name: str, level: str, e: Evidence) -> Reason:
+    """A solver's warning in the verdict: its measured cause and what to do, not the warning's class (the class and
+    the solver's own words stay in the result's ``warnings``)."""
+    method = f"solver {e.method!r}" if e.method else "the solver"
+    other = (f"use the default method {DEFAULT_METHOD}" if e.method != DEFAULT_METHOD
+             else "check the pairs (outliers, mismatched streams)")
+    shape = _motion_words(e)
+    if name == "IterationCapWarning":
+        ratio = e.spectral_ratio
+        cap_ratio = math.exp(math.log(_TWO_STEP_TOL) / (2 * _TWO_STEP_CAP))
+        known = ratio is not None and math.isfinite(ratio)
+        if known and cap_ratio < ratio < 1:
+            needed = math.log(_TWO_STEP_TOL) / (2 * math.log(ratio))
+            return Reason("solver_warning", level, float(ratio), cap_ratio,
+                          f"motions too close to one axis (or too small) for the two-step iteration: sigma_2 / "
+                          f"sigma_1 of K {ratio:.4f} > {cap_ratio:.4f} ({shape}), so {method} would need about "
+                          f"{needed:.0f} iterations (> its cap of {_TWO_STEP_CAP}) and answers with its limit in "
+                          f"closed form instead; {other}, which this does not slow, or add motion about other axes")
+        measured = f"sigma_2 / sigma_1 of K {ratio:.4f}, " if known else ""
+        return Reason("solver_warning", level, float(ratio) if known else None, cap_ratio if known else None,
+                      f"{method} did not reach its limit within its iterations ({measured}{shape}; or its start was "
+                      f"orthogonal to the limit: its words in the warnings) and answers with the limit in closed "
+                      f"form; {other}, or add motion about other axes")
+    causes = {
+        "LocalMinimumWarning": (f"the answer of {method} is away from the certified optimum of eq. "
+                                f"(8) and costs more (it stopped early or on another stationary point): {other}"),
+        "AccuracyWarning": (f"the answer of {method} is far from the certified minimiser of eq. "
+                            f"(8) (a closed form off by a half-turn on a motion near 180 deg, or not a rotation): "
+                            f"{other}"),
+        "ConvergenceWarning": (f"{method} stopped before converging (a fixed iteration count, or "
+                               f"its own stop), so its answer is not its fixed point: {other}, or let it iterate"),
+        "CertificateWarning": (f"the global optimality of the answer could not be certified (the "
+                               f"convex relaxation of eq. (8) was not tight), which motions small for the noise or "
+                               f"close to one axis cause ({shape or 'no motion measure'}): add motion about other "
+                               f"axes, or check it against a reference"),
+    }
+    message = causes.get(name, f"{method} warned ({name}; its words in the result's warnings)")
+    return Reason("solver_warning", level, None, None, message)
 
 
 def judge(e: Evidence, extra=()) -> Verdict:
@@ -312,13 +384,13 @@ def judge(e: Evidence, extra=()) -> Verdict:
             if e.axis_spread_deg is not None and e.axis_spread_deg < THRESHOLDS["axis_spread_deg"][0]:
                 continue  # the axis spread above says it, with its number
             reasons.append(Reason("observability", "warning", None, None,
-                                  "the solver issued ObservabilityWarning (its words in the warnings): one pair "
-                                  "alone carries the rotation about the dominant axis, or another rotation fits eq. "
-                                  "(8) almost as well (motions small for the noise, outlier pairs, or nearly a second "
-                                  "solution)"))
+                                  f"the motions barely determine R0 ({_motion_words(e) or 'no motion measure'}; the "
+                                  f"measured leverage is in the warnings): one pair alone carries the rotation about "
+                                  f"the dominant axis, or another rotation fits eq. (8) almost as well (motions small "
+                                  f"for the noise, outlier pairs, or nearly a second solution); add motion about "
+                                  f"other axes, or drop the pair named there"))
             continue
-        reasons.append(Reason("solver_warning", level, None, None, f"the solver issued {name}"
-                              + (" (an answer away from the certified optimum of eq. (8))" if level == "fail" else "")))
+        reasons.append(_solver_reason(name, level, e))
     if e.mirror_fit_ratio is not None:
         normal = "" if e.mirror_normal is None else f" (about {np.round(e.mirror_normal, 2).tolist()}, sensor frame)"
         reasons.append(_below("mirror_fit_ratio", e.mirror_fit_ratio, "median residual with the sensor's frame "
@@ -334,9 +406,9 @@ def judge(e: Evidence, extra=()) -> Verdict:
         c = e.change
         reasons.append(_above("remount_deg", c.angle_deg, f"angle between R0 before and after {c.split_time:.1f} s",
                               " deg", f"the {c.n_before} pairs before and the {c.n_after} after agree on different R0 "
-                              f"beyond their noise (change test p = {c.p_value:.2g}, 95 % noise radius "
-                              f"{c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, or a "
-                              f"trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
+                              f"beyond their noise (change test {p_with_level(c.p_value, c.level, True)}, 95 % noise "
+                              f"radius {c.difference_radius_deg:.2g} deg): the sensor re-mounted during the recording, "
+                              f"or a trajectory whose frame wanders; R0 before {_quaternion(c.R_before)}, after "
                               f"{_quaternion(c.R_after)} (w, x, y, z); calibrate each part on its own"))
     if e.pairs_dropped_at_gaps:
         share = e.pairs_dropped_at_gaps / max(1, e.pairs_before_gaps or 1)

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.motions import MotionObservability
 from .association import offset_in_words
-from .quality import Verdict
+from .quality import Verdict, p_with_level
 
 __all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]
 
@@ -43,6 +43,8 @@ def json_safe(value):
     if isinstance(value, (float, np.floating)):
         return float(value) if math.isfinite(value) else None
     return value
+
+
 
 
 @dataclass(frozen=True)
@@ -78,7 +80,10 @@ class CalibrationResult:
         too few independent blocks for one to mean anything (see :mod:`replication.rig.quality`).
     observability : MotionObservability
     reference_error_deg : float or None
-        Angle to a reference rotation, when one was given.
+        Angle to a reference rotation, when one was given (with two: to the first).
+    reference_errors_deg, reference_disagreement_deg, reference_reading : tuple, float, str or None
+        With two references (e.g. two published calibrations): the angle to each, the angle between them (the
+        reference floor: an error below it is agreement, not accuracy) and which reading applies.
     bootstrap_resamples : str
         What the bootstrap resampled ("pairs in moving blocks of N", "stations", or "none").
     bootstrap_covers : str
@@ -122,6 +127,9 @@ class CalibrationResult:
     bootstrap_ci95_deg: float
     observability: MotionObservability = field(repr=False)
     reference_error_deg: float | None = None
+    reference_errors_deg: tuple | None = None
+    reference_disagreement_deg: float | None = None
+    reference_reading: str | None = None
     time_offset_ci95_s: tuple = (math.nan, math.nan)
     time_offset_peak_margin: float = math.nan
     bootstrap_resamples: str = "none"
@@ -176,6 +184,9 @@ class CalibrationResult:
                 "sensor_axis_spread_deg": float(obs.sensor_axis_spread_deg),
             },
             "reference_error_deg": self.reference_error_deg,
+            "reference_errors_deg": None if self.reference_errors_deg is None else list(self.reference_errors_deg),
+            "reference_disagreement_deg": self.reference_disagreement_deg,
+            "reference_reading": self.reference_reading,
         })
 
     def summary(self) -> str:
@@ -193,10 +204,8 @@ class CalibrationResult:
             f"yaw / pitch / roll (z-y'-x''): {yaw:.3f} / {pitch:.3f} / {roll:.3f} deg",
         ]
         if math.isfinite(self.time_offset_correlation):
-            lo, hi = (1e3 * v for v in self.time_offset_ci95_s)
-            ci = f"95 % interval [{lo:+.2f}, {hi:+.2f}] ms, " if math.isfinite(lo) or math.isfinite(hi) else ""
-            lines.append(f"time offset: {offset_in_words(self.time_offset_s, decimals=2)} ({ci}correlation "
-                         f"{self.time_offset_correlation:.4f}, "
+            words = offset_in_words(self.time_offset_s, decimals=2, ci95_s=self.time_offset_ci95_s)
+            lines.append(f"time offset: {words} (correlation {self.time_offset_correlation:.4f}, "
                          f"{'applied' if self.time_offset_applied else 'not applied'})")
         lines += [
             f"pair residuals: median {self.residual_deg['median']:.3f} deg, rms {self.residual_deg['rms']:.3f} deg",
@@ -205,11 +214,17 @@ class CalibrationResult:
         ]
         c = self.change_test
         if c is not None:
+            p_test = p_with_level(c["p_value"], c.get("level"), c["significant"]) if c["run"] else ""
             lines.append(f"change test: {c['note']}" if not c["run"] else (
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
-                + ("beyond" if c["significant"] else "within") + f" their noise (p = {c['p_value']:.2g}; splits "
+                + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
-        if self.reference_error_deg is not None:
+        if self.reference_errors_deg is not None:
+            e1, e2 = self.reference_errors_deg
+            lines.append(f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree "
+                         f"by {self.reference_disagreement_deg:.3f} deg (the reference floor)")
+            lines.append(f"reading: {self.reference_reading}")
+        elif self.reference_error_deg is not None:
             lines.append(f"angle to the reference: {self.reference_error_deg:.3f} deg")
         return "\n".join(lines)
 
