@@ -21,6 +21,7 @@ import numpy as np
 ENV = "REPLICATION_JITTER"
 DEFAULT_SCALE = 1e-15
 MARGIN_ENV = "REPLICATION_MARGIN_SCALE"
+GUARD_LOG_ENV = "REPLICATION_GUARD_LOG"
 _ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 #: numpy's SIMD dispatch limited to AVX2 (an AVX-512 machine computes as one without it), or to the SSE4.2 baseline.
 AVX2 = "X86_V4 AVX512_ICL AVX512_SPR"
@@ -55,9 +56,6 @@ def margin_scale() -> float:
     if not scale >= 1.0:
         raise ValueError(f"{MARGIN_ENV} must be a number >= 1, got {text!r}")
     return scale
-
-
-GUARD_LOG_ENV = "REPLICATION_GUARD_LOG"
 
 
 def guard_failed(record: dict) -> bool:
