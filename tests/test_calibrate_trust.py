@@ -22,6 +22,7 @@ from replication.rig.quality import EXIT_FAIL, Evidence, judge
 from replication.rig.realdata import data_root, real_data_available
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.study import lab
+from replication.testing import write_euroc_imu, write_tum_trajectory
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())
@@ -306,15 +307,6 @@ def test_diagnostic_figure_has_every_panel(rig, tmp_path):
 
 # ------------------------------------------------------------------------------------------- the command line
 
-def _write_tum(path, stream):
-    q = so3.as_quaternion(stream.R)
-    rows = np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]])
-    np.savetxt(path, rows, fmt="%.9f")
-
-
-def _write_imu(path, gyro):
-    rows = np.column_stack([np.round(gyro.t * 1e9), gyro.omega, np.tile([0.0, 0.0, 9.81], (len(gyro.t), 1))])
-    np.savetxt(path, rows, fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,w,w,w,a,a,a")
 
 
 @pytest.fixture(scope="module")
@@ -322,9 +314,9 @@ def rig_files(rig, tmp_path_factory):
     d = tmp_path_factory.mktemp("cli")
     camera, gyro, _ = rig
     shifted = OrientationStream(camera.t + 1e3, camera.R, "c")  # EuRoC-like absolute times
-    _write_tum(d / "cam.txt", shifted)
-    _write_imu(d / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
-    _write_imu(d / "imu_deg.csv", GyroStream(gyro.t + 1e3, np.degrees(gyro.omega) / 10, "g"))  # slow deg/s
+    write_tum_trajectory(d / "cam.txt", shifted)
+    write_euroc_imu(d / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
+    write_euroc_imu(d / "imu_deg.csv", GyroStream(gyro.t + 1e3, np.degrees(gyro.omega) / 10, "g"))  # slow deg/s
     return d
 
 

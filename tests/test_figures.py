@@ -18,6 +18,7 @@ from replication.rig.poses import calibrate_poses
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.study import figures
 from replication.study.figures import METHOD_STYLE, live_figure, method_style, sqp_config_style, sweep_figure
+from replication.testing import write_euroc_imu, write_tum_trajectory
 
 matplotlib.use("Agg")
 R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
@@ -204,22 +205,14 @@ def test_headline_without_a_finite_radius_or_a_reference_matrix(rig):
     assert lines[2] == f"reference; angle between R0 and it: {r.reference_error_deg:.3f} deg"
 
 
-def _write_tum(path, stream):
-    q = so3.as_quaternion(stream.R)
-    np.savetxt(path, np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
-
-
-def _write_imu(path, gyro):
-    rows = np.column_stack([np.round(gyro.t * 1e9), gyro.omega, np.tile([0.0, 0.0, 9.81], (len(gyro.t), 1))])
-    np.savetxt(path, rows, fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,w,w,w,a,a,a")
 
 
 def test_cli_names_the_recording_and_the_reference_file_in_the_figure(rig, tmp_path, monkeypatch):
     import replication.rig.figure as figure
 
     camera, gyro, _ = rig
-    _write_tum(tmp_path / "room1_cam.txt", OrientationStream(camera.t + 1e3, camera.R, "c"))
-    _write_imu(tmp_path / "room1_imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
+    write_tum_trajectory(tmp_path / "room1_cam.txt", OrientationStream(camera.t + 1e3, camera.R, "c"))
+    write_euroc_imu(tmp_path / "room1_imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
     T = np.eye(4)
     T[:3, :3] = R0
     (tmp_path / "camchain.yaml").write_text("cam0:\n  T_cam_imu:\n" + "".join(f"  - {row.tolist()}\n" for row in T))

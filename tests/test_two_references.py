@@ -16,6 +16,7 @@ from replication.rig.calibration import calibrate
 from replication.rig.estimate import reference_reading
 from replication.rig.poses import calibrate_poses
 from replication.study.simulation import rig_streams
+from replication.testing import write_euroc_imu, write_tum_trajectory
 
 SCHEMA = json.loads((Path(__file__).resolve().parents[1] / "docs" / "calibration_report.schema.json").read_text())
 EPS = 1e-9
@@ -107,22 +108,14 @@ def _camchain(path, R):
     return path
 
 
-def _write_tum(path, stream):
-    q = so3.as_quaternion(stream.R)
-    np.savetxt(path, np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
-
-
-def _write_imu(path, gyro):
-    rows = np.column_stack([np.round(gyro.t * 1e9), gyro.omega, np.tile([0.0, 0.0, 9.81], (len(gyro.t), 1))])
-    np.savetxt(path, rows, fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,w,w,w,a,a,a")
 
 
 def test_cli_takes_reference_twice_not_three_times(rig, tmp_path, capsys):
     from replication.rig.streams import GyroStream, OrientationStream
 
     R0, camera, gyro = rig
-    _write_tum(tmp_path / "cam.txt", OrientationStream(camera.t + 1e3, camera.R, "c"))
-    _write_imu(tmp_path / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
+    write_tum_trajectory(tmp_path / "cam.txt", OrientationStream(camera.t + 1e3, camera.R, "c"))
+    write_euroc_imu(tmp_path / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
     a, b = _camchain(tmp_path / "a.yaml", _turned(R0, 0.15)), _camchain(tmp_path / "b.yaml", _turned(R0, -0.15))
     base = ["calibrate", "--camera", tmp_path / "cam.txt", "--sensor", tmp_path / "imu.csv", "--sensor-kind", "gyro",
             "--bootstrap", "0", "--quiet"]
