@@ -389,6 +389,29 @@ def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg
     assert (r.station_repeats is not None) is same
 
 
+@pytest.mark.parametrize("step_deg", [1.5, 1.0])
+def test_a_chain_of_close_stations_is_not_one_station(step_deg):
+    """Each station step_deg from the next (under the 2 deg of a repeat), 30 of them spanning tens of degrees: no group
+    may hold two stations further apart than 2 deg (a red-team case: a linked chain was read as one station)."""
+    from replication.rig.poses import repeated_stations
+
+    axis = np.array([0.0, 0.6, 0.8])
+    S = so3.exp_map(np.radians(step_deg) * np.arange(30)[:, None] * axis)
+    labels = repeated_stations(S, S, 2.0)
+    for g in np.unique(labels):
+        members = S[labels == g]
+        assert so3.rotation_angle_deg(members[-1] @ members[0].T) <= 2.0 + 1e-9
+    assert len(np.unique(labels)) >= 30 * step_deg / 3.0
+
+
+def test_a_station_joins_a_group_only_if_it_repeats_every_member():
+    from replication.rig.poses import repeated_stations
+
+    axis = np.array([1.0, 0.0, 0.0])
+    S = so3.exp_map(np.radians([0.0, 1.5, 3.0])[:, None] * axis)  # 0-1 and 1-2 within 2 deg, 0-2 not
+    assert repeated_stations(S, S, 2.0).tolist() == [0, 0, 2]
+
+
 # ------------------------------------------------------------------ name the culprit (issue 33, point 5)
 
 def _bad_stations(bad, N=20, seed=5, bad_deg=3.0):

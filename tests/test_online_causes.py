@@ -145,6 +145,8 @@ def test_a_keyframe_trajectory_beside_a_fast_gyro_is_not_a_unit_mistake():
     (0.1 * 1e9, "sensor ... ns"), (PLAUSIBLE_INTERVAL_RATIO[1] * 1e9, "sensor ... ns"),
     (PLAUSIBLE_INTERVAL_RATIO[1] * 1e9 * 1.01, None), (PLAUSIBLE_INTERVAL_RATIO[0] * 0.99, "camera ... ms"),
     (PLAUSIBLE_INTERVAL_RATIO[0] / 1e9, "camera ... ns"), (PLAUSIBLE_INTERVAL_RATIO[0] / 1e9 * 0.99, None),
+    # camera stamps in us (or ns) also fit the range read as ms (us): the unit nearest a typical rig is named
+    (0.1 / 1e6, "camera ... us"), (0.1 / 1e9, "camera ... ns"), (0.1 * 1e3, "sensor ... ms"),
 ])
 def test_time_units_by_the_ratio_of_sample_intervals(ratio, named):
     reason = time_unit_by_rate(0.05, 0.05 * ratio)

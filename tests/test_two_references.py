@@ -45,6 +45,21 @@ def test_the_reading_of_two_references_at_the_floor(errors, floor, reading):
     assert f"the references' own disagreement {floor:.3f} deg (the reference floor)" in text
 
 
+@pytest.mark.parametrize("errors, floor, radius, reading", [
+    ((0.0, 10.0), 10.0, 0.1, "closer to reference 1: its error (0.000 deg) is the smaller, by more than R0's"),
+    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # red team: was "agreement, not accuracy"
+    ((0.05, 0.05), 0.0, 0.1, "agreement within R0's radius"),           # the same reference twice: was "beyond"
+    ((0.1, 0.1), 0.0, 0.1, "agreement within R0's radius"),             # at the radius: within it
+    ((0.1 + EPS, 0.1 + EPS), 0.0, 0.1, "a difference beyond the floor"),
+    ((0.169, 0.234), 0.343, 0.09, "agreement, not accuracy"),           # EuRoC: 0.065 apart, within the radius
+    ((0.169, 0.234), 0.343, 0.064, "closer to reference 1"),            # ... and just beyond a smaller radius
+    ((0.2, 0.4), 0.3, 0.5, "agreement within R0's radius"),
+    ((0.2, 0.55), 0.35, 0.5, "not resolved: the errors (0.200, 0.550 deg) differ by no more than"),
+])
+def test_the_reading_weighs_the_difference_of_the_errors_against_r0s_radius(errors, floor, radius, reading):
+    assert reference_reading(errors, floor, radius).startswith(reading)
+
+
 def test_two_references_in_the_result_the_report_and_the_summary(rig):
     R0, camera, gyro = rig
     refs = np.stack([_turned(R0, 0.15), _turned(R0, -0.15)])  # 0.3 deg apart, the estimate between them

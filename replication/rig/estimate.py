@@ -71,20 +71,35 @@ def first_reference(reference):
     return np.asarray(reference)[0]
 
 
-def reference_reading(errors_deg, disagreement_deg: float) -> str:
+def reference_reading(errors_deg, disagreement_deg: float, radius_deg: float = float("nan")) -> str:
     """Which reading two references' errors allow: an error below the references' own disagreement (the reference
-    floor) is agreement with them, not a measure of accuracy."""
+    floor) is agreement with them, not a measure of accuracy. With R0's 95 % radius (``radius_deg``, finite), errors
+    that differ by no more than the radius cannot tell the references apart, and errors both within it are agreement
+    with both; a difference beyond it names the closer reference whatever the floor (references 10 deg apart, R0 on
+    one of them: closer to that one, not "agreement")."""
     e1, e2 = errors_deg
+    r = radius_deg if np.isfinite(radius_deg) and radius_deg >= 0 else None
     floor = f"the references' own disagreement {disagreement_deg:.3f} deg (the reference floor)"
+    if r is not None and max(e1, e2) <= r:
+        return (f"agreement within R0's radius: both errors ({e1:.3f}, {e2:.3f} deg) are within its 95 % radius "
+                f"{r:.3f} deg, and {floor}: R0 agrees with both references")
+    if min(e1, e2) > max(disagreement_deg, r or 0.0):
+        return (f"a difference beyond the floor: both errors ({e1:.3f}, {e2:.3f} deg) exceed {floor}"
+                + (f" and R0's 95 % radius {r:.3f} deg" if r is not None else "")
+                + ", so R0 differs from both by more than they differ from each other (R0's own error, or one the "
+                  "references share)")
+    resolved = abs(e1 - e2) > r if r is not None else max(e1, e2) > disagreement_deg
+    if resolved:
+        closer = 1 if e1 <= e2 else 2
+        why = (f"is the smaller, by more than R0's 95 % radius {r:.3f} deg ({floor})" if r is not None
+               else f"is within {floor} and the other's ({max(e1, e2):.3f} deg) is not")
+        return (f"closer to reference {closer}: its error ({min(e1, e2):.3f} deg) {why}; an error within the floor "
+                f"is agreement, not accuracy")
     if max(e1, e2) <= disagreement_deg:
         return (f"agreement, not accuracy: both errors ({e1:.3f}, {e2:.3f} deg) are within {floor}, so the data "
                 f"cannot say which reference is closer to the truth, nor how close R0 is")
-    if min(e1, e2) > disagreement_deg:
-        return (f"a difference beyond the floor: both errors ({e1:.3f}, {e2:.3f} deg) exceed {floor}, so R0 differs "
-                f"from both by more than they differ from each other (R0's own error, or one the references share)")
-    closer = 1 if e1 <= e2 else 2
-    return (f"closer to reference {closer}: its error ({min(e1, e2):.3f} deg) is within {floor} and the other's "
-            f"({max(e1, e2):.3f} deg) is not; an error within the floor is agreement, not accuracy")
+    return (f"not resolved: the errors ({e1:.3f}, {e2:.3f} deg) differ by no more than R0's 95 % radius {r:.3f} deg, "
+            f"so the data cannot say which reference is closer; {floor}")
 
 
 def check_options(method, options):
@@ -310,7 +325,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         bootstrap_ci95_deg=ci,
         observability=sol.observability,
         reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
-        **_two_references(R, references),
+        **_two_references(R, references, ci),
         verdict=verdict,
         warnings=tuple(f"{w.category.__name__}: {w.message}" for w in ours),
         parameters=parameters,
@@ -323,14 +338,15 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     )
 
 
-def _two_references(R, references) -> dict:
-    """The result's fields for two references: each error, their disagreement and the reading it allows."""
+def _two_references(R, references, radius_deg: float = float("nan")) -> dict:
+    """The result's fields for two references: each error, their disagreement and the reading it allows (with R0's
+    95 % radius, :func:`reference_reading`)."""
     if references is None:
         return {}
     errors = tuple(float(angle_between_deg(R, ref)) for ref in references)
     disagreement = float(angle_between_deg(references[0], references[1]))
     return {"reference_errors_deg": errors, "reference_disagreement_deg": disagreement,
-            "reference_reading": reference_reading(errors, disagreement)}
+            "reference_reading": reference_reading(errors, disagreement, radius_deg)}
 
 
 def _second_reason(R, references):

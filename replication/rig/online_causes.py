@@ -42,6 +42,9 @@ WIDE_SEARCH_SHARE = 0.25
 #: Correlation the wider search's peak needs to be named, and its least gain over the correlation found.
 WIDE_CORRELATION, WIDE_GAIN = 0.9, 0.1
 
+#: A typical rig's ratio of sample intervals (a 200 Hz gyro beside a 20 Hz camera): of the units that bring a ratio
+#: into the plausible range, the one nearest it is named.
+TYPICAL_INTERVAL_RATIO = 0.1
 _UNITS = {1e3: "ms", 1e6: "us", 1e9: "ns"}
 
 
@@ -92,15 +95,19 @@ def time_unit_by_rate(camera_dt: float | None, sensor_dt: float | None):
     low, high = PLAUSIBLE_INTERVAL_RATIO
     if low <= ratio <= high:
         return None
-    for factor, unit in _UNITS.items():
-        for side, scaled in (("sensor", ratio / factor), ("camera", ratio * factor)):
-            if low <= scaled <= high:
-                return Reason("time_unit", "fail", float(ratio), factor,
-                              f"the sensor's samples come every {sensor_dt:.4g} s and the camera's every "
-                              f"{camera_dt:.4g} s, a ratio of {ratio:.3g}: the {side} time stamps are likely in {unit} "
-                              f"read as seconds (TUM trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / "
-                              f"TUM-VI CSV files are in ns by format)")
-    return None
+    # of the units that bring the ratio into the plausible range, the one that brings it nearest a typical rig's (the
+    # range spans more than one factor of 1000: camera stamps in us also fit it read as ms, at its edge)
+    fits = [(abs(math.log(scaled / TYPICAL_INTERVAL_RATIO)), factor, unit, side)
+            for factor, unit in _UNITS.items()
+            for side, scaled in (("sensor", ratio / factor), ("camera", ratio * factor)) if low <= scaled <= high]
+    if not fits:
+        return None
+    _, factor, unit, side = min(fits)
+    return Reason("time_unit", "fail", float(ratio), factor,
+                  f"the sensor's samples come every {sensor_dt:.4g} s and the camera's every {camera_dt:.4g} s, a "
+                  f"ratio of {ratio:.3g}: the {side} time stamps are likely in {unit} read as seconds (TUM "
+                  f"trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns by "
+                  f"format)")
 
 
 def offset_beyond_search(camera, sensor, *, max_offset: float, window: float, found_correlation, resolution: float):

@@ -101,15 +101,26 @@ def own_residuals_deg(C, S, R) -> np.ndarray:
 
 def repeated_stations(C, S, within_deg: float) -> np.ndarray:
     """Station labels: stations whose camera and sensor attitudes both lie within ``within_deg`` of each other (a
-    station given twice, identical or re-measured within the noise) share a label (connected groups, labelled by
-    their first station); ``labels[k] == k`` for every station that repeats none before it."""
-    i, j = np.triu_indices(len(C), k=1)
-    same = ((rotation_angle_deg(C[j] @ np.swapaxes(C[i], -1, -2)) <= within_deg)
-            & (rotation_angle_deg(S[j] @ np.swapaxes(S[i], -1, -2)) <= within_deg))
-    labels = np.arange(len(C))
-    for a, b in zip(i[same], j[same]):  # union of the groups, each labelled by its smallest station
-        la, lb = labels[a], labels[b]
-        labels[labels == max(la, lb)] = min(la, lb)
+    station given twice, identical or re-measured within the noise) share a label, the group's first station;
+    ``labels[k] == k`` for every station that repeats none before it. A station joins a group only if it lies within
+    ``within_deg`` of every member (complete linkage): a chain of stations each close to the next, spanning more than
+    ``within_deg``, is distinct stations, not one."""
+    n = len(C)
+    i, j = np.triu_indices(n, k=1)
+    close = ((rotation_angle_deg(C[j] @ np.swapaxes(C[i], -1, -2)) <= within_deg)
+             & (rotation_angle_deg(S[j] @ np.swapaxes(S[i], -1, -2)) <= within_deg))
+    same = np.zeros((n, n), dtype=bool)
+    same[i, j] = same[j, i] = close
+    labels = np.arange(n)
+    groups: dict[int, list[int]] = {}
+    for k in range(n):
+        for first, members in groups.items():  # the earliest group every member of which k repeats
+            if same[k, members].all():
+                labels[k] = first
+                members.append(k)
+                break
+        else:
+            groups[k] = [k]
     return labels
 
 
