@@ -267,3 +267,17 @@ def test_the_verdict_is_the_worst_reason():
     verdict = judge(e)
     assert verdict.level == "fail" and {r.check: r.level for r in verdict.reasons} == {"n_pairs": "warning",
                                                                                       "bootstrap_deg": "fail"}
+
+
+@pytest.mark.parametrize("poses", [False, True])
+def test_the_remedies_are_for_static_poses_or_for_streams(poses):
+    """Static pose sets are told to add stations, streams to record longer (a red-team case: a pose set was told to
+    use a shorter interval)."""
+    e = dataclasses.replace(GOOD, n_pairs=2, blocks=1.0, pose_residual_medians_deg=(0.1, 0.1, 0.1) if poses else None)
+    reasons = {r.check: r.message for r in judge(e).reasons}
+    stream_words = ("stride", "recording", "overlap", "interval")
+    if poses:
+        assert "more static poses" in reasons["n_pairs"] and "more distinct stations" in reasons["blocks"]
+        assert not any(w in reasons["n_pairs"] + reasons["blocks"] for w in stream_words)
+    else:
+        assert "a longer recording" in reasons["n_pairs"] and "a shorter interval" in reasons["blocks"]

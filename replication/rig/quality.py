@@ -319,8 +319,10 @@ def _solver_reason(name: str, level: str, e: Evidence) -> Reason:
 
 def judge(e: Evidence, extra=()) -> Verdict:
     """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g. diagnoses)."""
-    reasons = [_below("n_pairs", e.n_pairs, "motion pairs", "", "too few for R0 and a check of it (3 unknowns; a "
-                      "smaller stride or interval, or a longer recording)")]
+    poses = e.pose_residual_medians_deg is not None  # static poses: the remedies are more stations, not a recording
+    reasons = [_below("n_pairs", e.n_pairs, "motion pairs", "", "too few for R0 and a check of it (3 unknowns; "
+                      + ("more static poses, each turned from the others by more than min_motion_deg)" if poses else
+                         "a smaller stride or interval, or a longer recording)"))]
     if e.bootstrap_failed:
         reasons.append(Reason("bootstrap_failed", "warning", None, None, f"no bootstrap radius: a resample of the "
                               f"pairs was refused ({e.bootstrap_failed}); too few or too similar pairs"))
@@ -355,7 +357,8 @@ def judge(e: Evidence, extra=()) -> Verdict:
                                   f"+-{1e3 * e.max_offset_s:g} ms: the true offset may be larger (raise max_offset)"))
     if e.blocks is not None:
         reasons.append(_below("blocks", e.blocks, "independent bootstrap blocks", "",
-                              "too few for a meaningful bootstrap radius (a longer overlap or a shorter interval)"))
+                              "too few for a meaningful bootstrap radius ("
+                              + ("more distinct stations)" if poses else "a longer overlap or a shorter interval)")))
     if e.overlap_s is not None and e.interval_s:
         reasons.append(_below("overlap_intervals", e.overlap_s / e.interval_s, "overlap of the streams in pairing "
                               "intervals", "", f"the streams overlap {e.overlap_s:.1f} s only"))
