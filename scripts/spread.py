@@ -11,10 +11,14 @@ one, number by number.
 For each stored number the report gives its *spread*: the values it takes over the last-bit variants (a stored
 number must not move: spread 0 at its printed precision), and its *margin*: a printed number does not carry its
 unrounded value, so its distance to the nearest rounding edge is measured as the relative input jitter it withstands
-(unchanged under the 1e-13 variant: a hundred times what a processor's rounding does to the inputs). A number
-that moves in any variant is *fragile*; the exit status is 1 if any is.
+(unchanged under the 1e-13 variant: a hundred times what a processor's rounding does to the inputs). Outputs of
+chaotic quantities go through a guard (``declared_bound``, ``bracket``, ``share_range`` of
+``replication.core.stats``) that checks the value's distance to its bound's or bracket's edges in its own units; the
+``margin`` variant doubles every guard's margin and logs, instead of raising, each guard that does not hold there,
+with its distance. A number that moves in any variant, or a guard that does not hold at twice its margin, is
+*fragile*; the exit status is 1 if any is.
 
-Usage::
+Usage (``bash scripts/spread ARGS`` runs it in the project's venv)::
 
     .venv/bin/python scripts/spread.py                       # every notebook, every variant (about 45 min, 2 cores)
     .venv/bin/python scripts/spread.py --notebooks 02 04 --variants avx2 margin
