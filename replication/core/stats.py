@@ -67,15 +67,21 @@ def format_ci(low, high, digits: int = 2) -> str:
     return f"[{low:.{digits}f}, {high:.{digits}f}]"
 
 
-def _guard(value, low, high, margin, what, text):
-    """Raise unless ``value`` lies ``margin`` (times :func:`replication._jitter.margin_scale`) inside
-    ``[low, high]``."""
+def _guard(value, low, high, margin, what, text, problem, *, at_zero=False):
+    """Raise ``ValueError("<what> <value> <problem>")`` unless ``value`` lies ``margin`` (times
+    :func:`replication._jitter.margin_scale`) inside ``[low, high]`` (``None``: that side unbounded); a value exactly
+    at the margin passes. A zero margin checks nothing unless ``at_zero``. Under ``REPLICATION_GUARD_LOG`` a guard that
+    does not hold is logged instead (:func:`replication._jitter.guard_failed`)."""
     margin = float(margin) * margin_scale()
-    ok = low + margin - 1e-12 <= value <= high - margin + 1e-12  # a count exactly at the margin passes
-    if margin and not ok and guard_failed({"what": what, "value": value, "bound": text, "margin": margin,
-                                           "distance": min(value - low, high - value)}):
-        raise ValueError(f"{what} {value:.4g} is within {margin:g} of an edge of its bracket {text}: another machine's "
-                         "rounding can move it across; show it with another step or a declared bound")
+    lo, hi = -np.inf if low is None else low, np.inf if high is None else high
+    tol = 1e-12 * max(1.0, abs(value))
+    if (margin or at_zero) and not lo + margin - tol <= value <= hi - margin + tol and guard_failed(
+            {"what": what, "value": value, "bound": text, "margin": margin, "distance": min(value - lo, hi - value)}):
+        raise ValueError(f"{what} {value:.4g} {problem.format(margin=margin, text=text)}")
+
+
+_IN_BRACKET = ("is within {margin:g} of an edge of its bracket {text}: another machine's rounding can move it across; "
+               "show it with another step or a declared bound")
 
 
 def bracket(value, width: float, *, margin: float = 0.0, what: str = "the value") -> str:
@@ -90,7 +96,7 @@ def bracket(value, width: float, *, margin: float = 0.0, what: str = "the value"
         raise ValueError(f"need a finite value and a positive width, got {value}, {width}")
     k = np.floor(value / width + 1e-9)
     text = f"{k * width:g}-{(k + 1) * width:g}"
-    _guard(value, k * width, (k + 1) * width, margin, what, text)
+    _guard(value, k * width, (k + 1) * width, margin, what, text, _IN_BRACKET)
     return text
 
 
@@ -121,22 +127,17 @@ def declared_bound(value, low=None, high=None, *, margin, what: str = "the value
     ...
     ValueError: the bound 0.37 is not at least 0.05 inside its declared bound (at most 0.4): ...
     """
-    value, margin = float(value), float(margin) * margin_scale()
+    value = float(value)
     if low is None and high is None:
         raise ValueError("declare low, high or both")
-    if not (np.isfinite(value) and margin >= 0):
+    if not (np.isfinite(value) and float(margin) >= 0):
         raise ValueError(f"need a finite value and a margin >= 0, got {value}, {margin}")
     if low is not None and high is not None:
         text = f"{low:{fmt}}-{high:{fmt}}" if low >= 0 else f"{low:{fmt}} to {high:{fmt}}"
     else:
         text = f"at least {low:{fmt}}" if high is None else f"at most {high:{fmt}}"
-    tol = 1e-12 * max(1.0, abs(value))  # a value exactly at the margin passes
-    inside = (low is None or value >= low + margin - tol) and (high is None or value <= high - margin + tol)
-    distance = min(np.inf if low is None else value - low, np.inf if high is None else high - value)
-    if not inside and guard_failed({"what": what, "value": value, "bound": text, "margin": margin,
-                                    "distance": distance}):
-        raise ValueError(f"{what} {value:.4g} is not at least {margin:g} inside its declared bound ({text}): measure "
-                         "its spread and declare a wider one")
+    _guard(value, low, high, margin, what, text, "is not at least {margin:g} inside its declared bound ({text}): "
+           "measure its spread and declare a wider one", at_zero=True)
     return text
 
 
@@ -158,7 +159,7 @@ def share_range(p, step: float = 0.05, *, margin: float = 0.0, what: str = "the 
     k = int(np.floor(p / step + 1e-9))
     low, high = k * step, min((k + 1) * step, 1.0)
     text = f"{100 * low:.0f}-{100 * high:.0f} %"
-    _guard(p, low, high, margin, what, text)  # 0 and 1 are edges too: "none" and "all"
+    _guard(p, low, high, margin, what, text, _IN_BRACKET)  # 0 and 1 are edges too: "none" and "all"
     return text
 
 
