@@ -33,7 +33,7 @@ import numpy as np
 
 from ..core.checks import check_number
 from ..core.handeye import pair_residual_deg, relative_rotations
-from ..core.so3 import rotation_angle_deg
+from ..core.so3 import canonical_axis, rotation_angle_deg
 from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
@@ -224,7 +224,7 @@ def _mirror_fit(camera, gyro, A, B, interval, offset, stride, keep) -> dict:
     mirrored = integrate_gyro(GyroStream(gyro.t, w - 2.0 * np.outer(w @ n, n), gyro.source))
     A_m, B_m, _ = motion_pairs(camera, mirrored, interval, offset=offset)
     ratio = median_residual(A_m[::stride][keep], B_m[::stride][keep]) / max(plain, MIRROR_FLOOR_DEG)
-    return {"mirror_fit_ratio": ratio, "mirror_normal": tuple(float(v) for v in n * np.sign(n[np.argmax(abs(n))]))}
+    return {"mirror_fit_ratio": ratio, "mirror_normal": tuple(float(v) for v in canonical_axis(n))}
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:

@@ -58,7 +58,7 @@ import numpy as np
 
 from ..core.checks import check_number, check_range, check_rotation_flat, check_rotation_matrices
 from ..core.handeye import unvec, vec
-from ..core.so3 import angle_between_deg, nearest_rotation_up_to_sign
+from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
@@ -375,7 +375,7 @@ class OnlineCalibrator:
         G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
         lam, V = np.linalg.eigh(G)
         self._excitation = math.degrees(math.sqrt(max(float(lam[0]), 0.0) / self._w))
-        self._weak_axis = V[:, 0] * math.copysign(1.0, V[int(np.argmax(abs(V[:, 0]))), 0])  # eigh's sign is arbitrary
+        self._weak_axis = canonical_axis(V[:, 0])
         if not lam[0] > 1e-12 * max(float(lam[-1]), 1e-300) or n_eff < self.min_pairs:
             self._radius, self._cov = math.inf, None
             return cost
