@@ -95,7 +95,7 @@ class LiveRig:
         check_number("offset_window", offset_window, minimum=0)
         if offset is None and not offset_window > 2.0 * max_offset + 1.0:
             raise ValueError(f"offset_window must exceed 2 max_offset + 1 s = {2.0 * max_offset + 1.0:g} s (the "
-                             f"offset search shifts the window by up to max_offset both ways), got {offset_window!r}")
+                             f"offset search shifts the window by up to max_offset both ways), got {offset_window}")
         check_number("stride", stride, minimum=1, integer=True, strict=False)
         for name, value in (("correct_offset", correct_offset), ("diagnose", diagnose)):
             if not isinstance(value, (bool, np.bool_)):
