@@ -757,3 +757,37 @@ def test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solve
     name = door_solver(lambda R, call: R)
     R_boot, failed, reflection, unfit = est.bootstrap_replicates(motions, name, {}, sets, masks=True)
     assert not (failed.any() or reflection.any() or unfit.any()) and R_boot.shape == (4, 3, 3)
+
+
+def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it(rig, door_solver):
+    """A solver that ignores its input (its first answer cached) would give a radius of zero: it fails, named; the
+    same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
+    as they should be) name nothing."""
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    name = door_solver(lambda R, call: first.setdefault("R", R) if R.ndim == 2 else np.broadcast_to(
+        first.setdefault("R", R[0]), R.shape).copy())
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    reason = _reasons(r)["bootstrap_answers"]
+    assert reason.level == "fail" and f"solver '{name}' returned the answer on all the pairs, unchanged" in (
+        reason.message) and "on every one of the 20 bootstrap replicates" in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg)
+    honest = calibrate_poses(noisy, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(honest) and honest.bootstrap_ci95_deg > 0
+    exact = calibrate_poses(C, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(exact) and math.isfinite(exact.bootstrap_ci95_deg)
+
+
+@pytest.mark.parametrize("turn, frozen", [(0.5, True), (2.0, False)])
+def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
+    """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned unchanged, or not."""
+    import replication.rig.estimate as est
+
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    step = so3.exp_map(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
+    name = door_solver(lambda R, call: first.setdefault("R", R) if call == 0 else step @ first["R"])
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    assert ("bootstrap_answers" in _reasons(r)) is frozen

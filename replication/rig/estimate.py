@@ -50,7 +50,7 @@ from .report import RADIUS_COVERS, CalibrationResult
 
 __all__ = ["check_common", "first_reference", "reference_reading", "check_options", "solve_pairs", "with_reasons",
            "bootstrap_replicates", "unfit_replicates", "block_indices", "station_indices", "per_station_median",
-           "REPLICATE_FIT_FACTOR", "REPLICATE_FIT_FLOOR_DEG"]
+           "REPLICATE_FIT_FACTOR", "REPLICATE_FIT_FLOOR_DEG", "FROZEN_DEG"]
 
 #: A bootstrap replicate is no solution of its resample when the root-mean-square residual of its pairs (cost (8) as
 #: an angle) exceeds this factor times that of the answer on all pairs, on the same pairs, ... Measured (the ratio of
@@ -62,6 +62,11 @@ __all__ = ["check_common", "first_reference", "reference_reading", "check_option
 REPLICATE_FIT_FACTOR = 4.0
 #: ... plus this (deg): residuals of noise-free data are rounding (1e-9 deg measured), whose ratios mean nothing.
 REPLICATE_FIT_FLOOR_DEG = 1e-6
+#: Replicates all within this angle (deg) of the answer on all the pairs, where the pairs leave more than
+#: :data:`REPLICATE_FIT_FLOOR_DEG`, are the answer returned unchanged (a solver that ignores its input): a radius of
+#: zero. Measured: the smallest spread of honest replicates on the recordings is their radius' scale, 0.01-0.4 deg;
+#: noise-free data leave 1e-9 deg, under the floor.
+FROZEN_DEG = 1e-9
 
 
 def check_common(method, n_bootstrap, seed, reference):
@@ -238,7 +243,8 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
         motions, R_boot, index_sets, fit_to, skip=failed | reflection)
     if masks:
         return R_boot, failed, reflection, unfit
-    bad = _bad_replicates(method, failed, reflection, unfit, fit)
+    bad = _bad_replicates(method, failed, reflection, unfit, fit,
+                          frozen=fit is not None and _frozen(R_boot, fit_to, failed | reflection, fit))
     if bad is not None:
         raise SolverAnswerError(bad.message)
     return R_boot
@@ -270,10 +276,26 @@ def unfit_replicates(motions, R_boot, index_sets, R, *, skip=None):
     return unfit, (own, full)
 
 
-def _bad_replicates(method, failed, reflection, unfit=None, fit=None):
+def _frozen(R_boot, R, skip, fit) -> bool:
+    """Whether every usable replicate is ``R`` itself (within :data:`FROZEN_DEG`) although the pairs leave more than
+    :data:`REPLICATE_FIT_FLOOR_DEG` (see :data:`FROZEN_DEG`)."""
+    usable = ~np.asarray(skip, dtype=bool)
+    if usable.sum() < 2 or not np.nanmax(fit[1][usable]) > REPLICATE_FIT_FLOOR_DEG:
+        return False
+    return bool(np.all(angle_between_deg(R_boot[usable], R) <= FROZEN_DEG))
+
+
+def _bad_replicates(method, failed, reflection, unfit=None, fit=None, frozen=False):
     """A ``fail`` reason naming the solver where some bootstrap replicates are no rotations or no solutions of their
     resamples (no radius then), or None."""
     unfit = np.zeros_like(failed) if unfit is None else unfit
+    if frozen:
+        n = int((~(failed | reflection)).sum())
+        return Reason("bootstrap_answers", "fail", float(n), 0.0,
+                      f"solver {method!r} returned the answer on all the pairs, unchanged within {FROZEN_DEG:g} deg, "
+                      f"on every one of the {n} bootstrap replicates although their pairs differ and leave up to "
+                      f"{np.nanmax(fit[1]):.3g} deg: it ignores its input, so no radius is given (it would be zero) "
+                      f"and its answer here is not to be trusted; use chordal_optimal")
     if not (failed.any() or reflection.any() or unfit.any()):
         return None
     parts = [f"declared a failure (NaN) on {int(failed.sum())}" if failed.any() else "",
@@ -346,8 +368,9 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
             boot_failed = str(err).split(":")[0]
         else:
-            fit = unfit_replicates(motions, R_boot, sets, R, skip=failed | reflection)[1] if unfit.any() else None
-            bad_replicates = _bad_replicates(method, failed, reflection, unfit, fit)
+            fit = unfit_replicates(motions, R_boot, sets, R, skip=failed | reflection)[1]
+            bad_replicates = _bad_replicates(method, failed, reflection, unfit, fit,
+                                             frozen=_frozen(R_boot, R, failed | reflection, fit))
             if bad_replicates is None:  # never a radius from non-rotations
                 ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
                 boot = np.degrees(log_map(R_boot @ R.T))
