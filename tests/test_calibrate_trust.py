@@ -635,7 +635,7 @@ def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solve
     sets = est.block_indices(np.random.default_rng(0), motions.J, 1, 4)
     with pytest.raises(ValueError, match=rf"solver '{name}' returned a reflection \(det -1\) on 1 of 4 bootstrap"):
         est.bootstrap_replicates(motions, name, {}, [s for s in sets])
-    R, failed, reflection = est.bootstrap_replicates(motions, name, {}, [s for s in sets], masks=True)
+    R, failed, reflection, unfit = est.bootstrap_replicates(motions, name, {}, [s for s in sets], masks=True)
     assert not reflection.any() and not failed.any()  # calls 4-7: the bad one (call 2) was in the first run
 
 
@@ -653,3 +653,141 @@ def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(
     slow = GyroStream((gyro.t + t0) / factor, gyro.omega * factor, "g")
     with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* \(seconds read as {unit}\)"):
         calibrate(early, slow, n_bootstrap=0)
+
+
+# ------------------------------------------------------------- replicates that are rotations but no solutions (33.1)
+
+def _random_rotation(R, call):
+    return so3.random_rotations(np.random.default_rng(call), 1)[0] if R.ndim == 2 else so3.random_rotations(
+        np.random.default_rng(call), R.shape[0])
+
+
+@pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
+def test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_radius(rig, door_solver, bad_calls,
+                                                                                    counted):
+    """Right on the calibration's own solve, random rotations on some replicates (rotations, so the registry's
+    checks pass them): without one, a radius; one of 20 (the boundary) already fails, naming the solver."""
+    C, S = _poses(rig)
+    name = door_solver(lambda R, call: _random_rotation(R, call) if call in bad_calls else R)
+    r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
+    reasons = _reasons(r)
+    if not counted:
+        assert "bootstrap_answers" not in reasons and math.isfinite(r.bootstrap_ci95_deg)
+        return
+    reason = reasons["bootstrap_answers"]
+    assert reason.level == "fail" and r.verdict.level == "fail" and reason.measured == counted
+    assert re.search(rf"solver '{name}' returned an answer that is no solution of its resample on {counted} of 20 "
+                     r"bootstrap replicates \(worst: root-mean-square pair residual [\d.]+ deg", reason.message)
+    assert "not a solution on resamples" in reason.message and "np." not in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg) and r.diagnostics["bootstrap_rotvec_deg"].size == 0
+
+
+def test_batched_replicates_that_are_no_solutions_fail_naming_the_solver(rig, door_solver):
+    camera, gyro, _ = rig
+    name = door_solver(lambda R, call: _random_rotation(R, call) if call == 1 else R)
+    r = calibrate(camera, gyro, method=name, **_fast(diagnose=False))
+    reason = _reasons(r)["bootstrap_answers"]
+    assert reason.level == "fail" and reason.measured == 30 and f"solver '{name}'" in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg)
+
+
+def _rms(residual_deg):
+    """Cost (8) of the pairs as an angle: the angle whose chordal distance is their root-mean-square one."""
+    return float(np.degrees(2 * np.arcsin(np.sqrt(np.mean(np.sin(np.radians(residual_deg) / 2) ** 2)))))
+
+
+def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solution(rig):
+    """A resample that draws an outlying station several times pulls the least-squares answer off the other
+    stations (their median residual grows 6-fold here): it is still the resample's optimum, and not blamed."""
+    C, S = _poses(rig)
+    rng = np.random.default_rng(2)
+    C = C @ so3.exp_map(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
+    k = rng.choice(len(C), 1)
+    C[k] = C[k] @ so3.exp_map(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
+    r = calibrate_poses(C, S, n_bootstrap=200, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(r) and math.isfinite(r.bootstrap_ci95_deg)
+
+
+@pytest.mark.parametrize("side", [-1, 1])
+def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs(rig, side):
+    """The boundary: a replicate turned from the answer by just less / more than the angle at which its root-mean-square
+    residual reaches REPLICATE_FIT_FACTOR times the answer's on the same pairs (noisy poses) is a solution / is not."""
+    import replication.rig.estimate as est
+    from replication.core.handeye import pair_residual_deg
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    C = C @ so3.exp_map(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    motions = prepare_motions(*pose_pairs(C, S))
+    R = calibrate_poses(C, S, n_bootstrap=0, diagnose=False).R
+    sets = [np.arange(0, motions.J, 2)]  # a resample: every other pair
+    base = _rms(pair_residual_deg(R, motions.A[sets[0]], motions.B[sets[0]]))
+    threshold = est.REPLICATE_FIT_FACTOR * base + est.REPLICATE_FIT_FLOOR_DEG
+
+    def turned(angle_deg):
+        return so3.exp_map(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
+
+    def own(angle_deg):
+        return _rms(pair_residual_deg(turned(angle_deg), motions.A[sets[0]], motions.B[sets[0]]))
+
+    lo, hi = 0.0, 90.0  # bisection for the angle where the replicate's median reaches the threshold
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if own(mid) < threshold else (lo, mid)
+    angle = hi * (1 + side * 1e-3)
+    flags, (mine, full) = est.unfit_replicates(motions, turned(angle)[None], sets, R)
+    assert full[0] == pytest.approx(base) and mine[0] == pytest.approx(own(angle))
+    assert bool(mine[0] > threshold) is (side > 0) and bool(flags[0]) is (side > 0)
+
+
+def test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solver(rig, door_solver):
+    import replication.rig.estimate as est
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    motions = prepare_motions(*pose_pairs(C, S))
+    sets = [s for s in est.block_indices(np.random.default_rng(0), motions.J, 1, 4)]
+    # calls 0-3: the replicates (call 2 the third), then one solve on all the pairs for the check
+    name = door_solver(lambda R, call: _random_rotation(R, call) if call == 2 else R)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned an answer that is no solution of its resample "
+                                         r"on 1 of 4 bootstrap replicates"):
+        est.bootstrap_replicates(motions, name, {}, sets)
+    name = door_solver(lambda R, call: R)
+    R_boot, failed, reflection, unfit = est.bootstrap_replicates(motions, name, {}, sets, masks=True)
+    assert not (failed.any() or reflection.any() or unfit.any()) and R_boot.shape == (4, 3, 3)
+
+
+def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it(rig, door_solver):
+    """A solver that ignores its input (its first answer cached) would give a radius of zero: it fails, named; the
+    same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
+    as they should be) name nothing."""
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    name = door_solver(lambda R, call: first.setdefault("R", R) if R.ndim == 2 else np.broadcast_to(
+        first.setdefault("R", R[0]), R.shape).copy())
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    reason = _reasons(r)["bootstrap_answers"]
+    assert reason.level == "fail" and f"solver '{name}' returned the answer on all the pairs, unchanged" in (
+        reason.message) and "on every one of the 20 bootstrap replicates" in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg)
+    honest = calibrate_poses(noisy, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(honest) and honest.bootstrap_ci95_deg > 0
+    exact = calibrate_poses(C, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(exact) and math.isfinite(exact.bootstrap_ci95_deg)
+
+
+@pytest.mark.parametrize("turn, frozen", [(0.5, True), (2.0, False)])
+def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
+    """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned unchanged, or not."""
+    import replication.rig.estimate as est
+
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    step = so3.exp_map(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
+    name = door_solver(lambda R, call: first.setdefault("R", R) if call == 0 else step @ first["R"])
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    assert ("bootstrap_answers" in _reasons(r)) is frozen

@@ -163,15 +163,20 @@ def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
         ) from None
 
 
+def _plain(value):
+    """``value`` for a message: a NumPy scalar as the Python one (``-1.0``, never ``np.float64(-1.0)``)."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def check_number(name: str, value, *, minimum=None, integer: bool = False, strict: bool = True):
     """``value``, or ``ValueError`` naming ``name`` unless it is a finite number (an integer if asked) above
     ``minimum`` (``>=`` if not ``strict``). Booleans are refused."""
     ok_type = (isinstance(value, (int, np.integer)) if integer
                else isinstance(value, (int, float, np.integer, np.floating)))
     if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
-        raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {value!r}")
+        raise ValueError(f"{name} must be a finite {'integer' if integer else 'number'}, got {_plain(value)!r}")
     if minimum is not None and (value <= minimum if strict else value < minimum):
-        raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {value!r}")
+        raise ValueError(f"{name} must be {'>' if strict else '>='} {minimum:g}, got {_plain(value)!r}")
     return value
 
 
@@ -181,7 +186,7 @@ def check_range(name: str, value, *, low: float, high: float, low_open: bool = T
     check_number(name, value)
     if (value <= low if low_open else value < low) or (value >= high if high_open else value > high):
         raise ValueError(f"{name} must be in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}, "
-                         f"got {value!r}")
+                         f"got {_plain(value)!r}")
     return float(value)
 
 

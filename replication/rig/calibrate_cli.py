@@ -41,7 +41,9 @@ threshold) is printed first and stored in the report; a fail exits with code 3 u
 Formats (recognised by --sensor-kind and the file name):
   camera / orientation sensor:
     *.txt  TUM / ORB-SLAM3 trajectory, lines "t tx ty tz qx qy qz qw" (t in s or ns: --time-unit), world<-body
-    *.csv  EuRoC / TUM-VI mocap or ground truth, "t[ns], px, py, pz, qw, qx, qy, qz", world<-body
+    *.csv  EuRoC / TUM-VI mocap or ground truth, "t[ns], px, py, pz, qw, qx, qy, qz", world<-body, as
+           shipped: EuRoC's 17-column state_groundtruth_estimate0/data.csv too (the first 8 used)
+  a time stamp repeated with another pose is refused unless --repeated keep-first|keep-last|mean
   gyro sensor (--sensor-kind gyro):
     *.csv  EuRoC / TUM-VI imu0/data.csv, "t[ns], wx, wy, wz [rad/s], ax, ay, az [m/s^2]"
   static pose sets (--poses): Tabb & Ahmad Yousef's cali.txt (camera) and robot_cali.txt (robot hand)
@@ -145,7 +147,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--sensor-time-unit", choices=units, default=None,
                      help="time unit of the sensor file only (default: that of --time-unit)")
     cal.add_argument("--drop-repeated", action="store_true",
-                     help="skip lines of a TUM trajectory that repeat the previous line verbatim")
+                     help="skip lines of a trajectory or CSV that repeat the previous line verbatim")
+    cal.add_argument("--repeated", choices=["refuse", "keep-first", "keep-last", "mean"], default="refuse",
+                     help="a time stamp repeated with a different pose (or rates): refuse the file, or keep the "
+                          "first, the last or the mean of each group (the report counts them)")
     cal.add_argument("--reference", action="append", help="a reference R0 to compare with: a Kalibr camchain, an "
                      "OpenVINS or ORB-SLAM3 %%YAML:1.0 file, Basalt's calib JSON, an EuRoC sensor.yaml or Tabb's "
                      "transformations.txt (recognised by content; default: none). Given twice (two published "
@@ -253,10 +258,17 @@ def _load(args, paths):
 
     if args.poses:
         return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
+    args.repeats = {"camera": {}, "sensor": {}}  # the loaders' tallies, for the report
     camera = _stream(paths["--camera"], "--camera", "orientation", time_unit=_unit(args, "camera"),
-                     drop_repeated=args.drop_repeated)
+                     drop_repeated=args.drop_repeated, repeated=args.repeated, tally=args.repeats["camera"])
     sensor = _stream(paths["--sensor"], "--sensor", args.sensor_kind, time_unit=_unit(args, "sensor"),
-                     drop_repeated=args.drop_repeated)
+                     drop_repeated=args.drop_repeated, repeated=args.repeated, tally=args.repeats["sensor"])
+    for side, tally in args.repeats.items():
+        if tally.get("repeated_timestamps"):
+            worst = tally["repeated_max_deg"]
+            print(f"--{side}: {tally['repeated_timestamps']} lines repeat an earlier line's time stamp "
+                  f"({tally['repeated_groups']} time stamps" + (f", poses up to {worst:.3g} deg apart" if worst
+                                                               is not None else "") + f"): --repeated {args.repeated}")
     return camera, sensor
 
 
@@ -275,7 +287,7 @@ def _stream(path, option: str, kind: str, **options):
             looks = "a gyro / IMU stream (t, wx, wy, wz, ax, ay, az: EuRoC / TUM-VI imu0/data.csv)"
             hint = ("give --sensor-kind gyro" if option == "--sensor" else
                     "--camera takes the camera's orientations; a gyro goes to --sensor with --sensor-kind gyro")
-        elif kind == "gyro" and err.found == len(EUROC_POSE_COLUMNS):
+        elif kind == "gyro" and err.found in (len(EUROC_POSE_COLUMNS), 17):
             looks = "an orientation stream (t, px, py, pz, qw, qx, qy, qz: EuRoC / TUM-VI mocap or ground truth)"
             hint = "leave out --sensor-kind gyro (orientation, the default, reads it)"
         else:
@@ -415,7 +427,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
                   "cwd": os.getcwd(), "files": files,
                   "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
                           "time_units": {"camera": _unit(args, "camera"), "sensor": _unit(args, "sensor")},
-                          "drop_repeated": args.drop_repeated, "accept": args.accept},
+                          "drop_repeated": args.drop_repeated, "repeated": args.repeated,
+                          "repeats": getattr(args, "repeats", None), "accept": args.accept},
                   **result.to_dict()}
         if not _write(out, json.dumps(report, indent=2, allow_nan=False) + "\n", "--out"):  # never half-written
             return EXIT_BAD_INPUT

@@ -402,7 +402,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
 
         found = input_mistakes(camera, sensor, base_residual_deg=result.residual_deg["median"],
                                motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
-                               max_offset=max_offset, calibrate=calibrate, reference=reference)
+                               max_offset=max_offset, calibrate=calibrate, reference=reference,
+                               R=result.R)  # with a reference: the IMU's own trajectory as camera, files swapped
         if found:
             result = with_reasons(result, found)
     return result

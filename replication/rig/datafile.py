@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import codecs
 import errno
+import math
 from pathlib import Path
 from typing import NoReturn
 
@@ -22,7 +23,7 @@ import numpy as np
 from .._jitter import jitter
 
 __all__ = ["DataFileError", "DataFileNotFound", "ColumnCountError", "fail", "read_text", "read_text_layout",
-           "read_lines", "read_table", "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
+           "read_lines", "read_table", "REPEATED", "is_number", "unit_quaternion_rotations", "QUATERNION_NORM_TOL"]
 
 #: Accepted deviation of a stored quaternion's norm from 1.
 QUATERNION_NORM_TOL = 1e-3
@@ -202,14 +203,29 @@ def read_lines(path, what: str | None = None) -> list[str]:
     return lines
 
 
+#: What a trajectory may do with a time stamp repeated with another pose (``read_table(repeated=...)``).
+REPEATED = ("refuse", "keep-first", "keep-last", "mean")
+
+
 def read_table(path, names, *, delimiter=None, what: str | None = None, header: bool = False,
-               drop_repeated: bool = False, increasing_first: bool = True):
+               drop_repeated: bool = False, increasing_first: bool = True, optional=(), repeated: str = "refuse",
+               quaternion=None, tally: dict | None = None):
     """Numeric rows of a text file, skipping blank and ``#`` lines; every error names file, line and column.
 
-    ``names``: the columns (their number is the expected count; a bad value names its column); ``delimiter``:
-    ``None`` splits on white space; ``header``: skip the first data line (a header of names); ``drop_repeated``:
-    skip a line identical in every value to the previous data line; ``increasing_first``: the first column
-    (a time stamp) must increase strictly.
+    ``names``: the columns (their number is the expected count; a bad value names its column); ``optional``: names
+    of further columns a file may carry after them (all its lines alike, the first data line decides; they are
+    checked as numbers and not returned); ``delimiter``: ``None`` splits on white space; ``header``: skip the first
+    data line (a header of names); ``drop_repeated``: skip a line identical in every value to the previous data line;
+    ``increasing_first``: the first column (a time stamp) must increase strictly.
+
+    ``repeated``: what to do with consecutive lines that share a time stamp but not every value (with
+    ``increasing_first``): ``"refuse"`` (the default: a :class:`DataFileError` naming the values that read it),
+    ``"keep-first"``, ``"keep-last"`` or ``"mean"`` of each group (``quaternion``: the indices of 4 quaternion
+    columns, averaged in one hemisphere and normalised; each line's quaternion is checked against
+    :data:`QUATERNION_NORM_TOL` first). ``tally``: a dict that receives ``repeated_timestamps`` (the lines merged
+    into an earlier one's time stamp), ``repeated_groups``, ``repeated_max_deg`` (the largest angle between two
+    quaternions of one group, with ``quaternion``; else None) and ``verbatim_repeats`` (lines dropped by
+    ``drop_repeated``).
     A line with another number of columns raises :class:`ColumnCountError`, any other problem
     :class:`DataFileError`.
 
@@ -217,10 +233,14 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     -------
     (data, lines) : ndarray (N, len(names)), ndarray (N,) of 1-based line numbers
     """
-    names = tuple(names)
-    n_columns = len(names)
+    if repeated not in REPEATED:
+        raise ValueError(f"repeated must be one of {', '.join(map(repr, REPEATED))}, got {repeated!r}")
+    names, optional = tuple(names), tuple(optional)
+    counts = (len(names), len(names) + len(optional)) if optional else (len(names),)
+    n_columns = None
     what = what or ", ".join(names)
-    rows, lines = [], []
+    groups, lines = [], []  # groups[k]: the rows that share kept row k's time stamp (one without repeats)
+    verbatim = 0
     skip_header = header
     for lineno, line in enumerate(read_lines(path), 1):
         text = line.strip()
@@ -230,24 +250,39 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
             skip_header = False
             continue
         parts = text.split(delimiter) if delimiter else text.split()
-        if len(parts) != n_columns:
-            raise ColumnCountError(path, f"expected {n_columns} columns ({what}), got {len(parts)}", lineno,
-                                   expected=n_columns, found=len(parts))
+        if n_columns is None and len(parts) in counts:
+            n_columns = len(parts)
+        if len(parts) != (n_columns or counts[0]):
+            expected = " or ".join(str(c) for c in counts) if n_columns is None else str(n_columns)
+            raise ColumnCountError(path, f"expected {expected} columns ({what}), got {len(parts)}", lineno,
+                                   expected=n_columns or counts[0], found=len(parts))
+        every = names + optional
         try:
             values = [float(p) for p in parts]
         except ValueError:
             col = next(i for i, p in enumerate(parts) if not is_number(p))
-            fail(path, f"not a number: {parts[col]!r}", line=lineno, column=col + 1, column_name=names[col])
-        bad = [i for i, v in enumerate(values) if not np.isfinite(v)]
+            fail(path, f"not a number: {parts[col]!r}", line=lineno, column=col + 1, column_name=every[col])
+        bad = [i for i, v in enumerate(values) if not math.isfinite(v)]
         if bad:
-            fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=names[bad[0]])
-        if drop_repeated and rows and values == rows[-1]:
+            fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=every[bad[0]])
+        values = values[:len(names)]
+        if groups and values == groups[-1][-1] and drop_repeated:
+            verbatim += 1
             continue
-        rows.append(values)
+        if groups and increasing_first and values[0] == groups[-1][0][0]:
+            if repeated == "refuse":
+                _refuse_repeat(path, values, groups[-1][0], lineno, names[0], quaternion)
+            groups[-1].append(values)
+            if repeated == "keep-last":
+                lines[-1] = lineno
+            continue
+        groups.append([values])
         lines.append(lineno)
-    if len(rows) < 2:
+    if len(groups) < 2:
         fail(path, f"fewer than 2 data lines ({what})")
-    data = np.array(rows)
+    data = np.array([_merged(path, g, repeated, quaternion, line) for g, line in zip(groups, lines)])
+    if tally is not None:
+        tally.update(_repeat_tally(groups, quaternion, verbatim))
     # the values move at their last bits under REPLICATION_JITTER; time stamps do not: they are the recorder's exact
     # ticks, which every machine parses to the same double and differences exactly alike
     if increasing_first:
@@ -257,9 +292,68 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     step = np.diff(data[:, 0])
     if increasing_first and np.any(step <= 0):
         k = int(np.flatnonzero(step <= 0)[0])
-        fail(path, f"timestamp not after the previous line's ({data[k + 1, 0]!r} <= {data[k, 0]!r})",
+        fail(path, f"timestamp not after the previous line's ({_number(data[k + 1, 0])} < {_number(data[k, 0])}): "
+             "the lines go back in time (sort them by time, or split the file where the clock restarts)",
              line=lines[k + 1], column=1, column_name=names[0])
     return data, np.array(lines)
+
+
+def _number(x) -> str:
+    """A value in a message: a plain number (never numpy's ``np.float64(...)``), integral values without ``.0``."""
+    x = float(x)
+    return str(int(x)) if x.is_integer() and abs(x) < 1e20 else repr(x)
+
+
+def _quaternion_angle_deg(q1, q2) -> float:
+    """The angle (deg) between the rotations of two quaternions (any norm, either sign)."""
+    q1, q2 = np.asarray(q1, dtype=float), np.asarray(q2, dtype=float)
+    c = abs(float(q1 @ q2)) / max(float(np.linalg.norm(q1) * np.linalg.norm(q2)), 1e-300)
+    return math.degrees(2.0 * math.acos(min(1.0, c)))
+
+
+def _refuse_repeat(path, values, first, lineno, name, quaternion):
+    if values == first:
+        why = ("the line repeats the previous one exactly; drop_repeated=True (calibrate --drop-repeated) skips such "
+               "lines")
+    else:
+        away = "" if quaternion is None else (
+            f", {_quaternion_angle_deg([values[i] for i in quaternion], [first[i] for i in quaternion]):.3g} deg away")
+        why = (f"the time stamp is repeated with a different pose{away}; repeated='keep-first', 'keep-last' or "
+               f"'mean' (calibrate --repeated keep-first|keep-last|mean) reads it, keeping one pose per time stamp")
+    fail(path, f"timestamp not after the previous line's ({_number(values[0])} = {_number(first[0])}): {why}",
+         line=lineno, column=1, column_name=name)
+
+
+def _merged(path, group, repeated, quaternion, line):
+    """One row for a group of rows sharing a time stamp, by ``repeated``."""
+    if len(group) == 1 or repeated == "keep-first":
+        return group[0]
+    if repeated == "keep-last":
+        return group[-1]
+    rows = np.array(group)
+    if quaternion is not None:
+        q = rows[:, list(quaternion)]
+        norm = np.linalg.norm(q, axis=1)
+        if np.any(np.abs(norm - 1.0) > QUATERNION_NORM_TOL):
+            k = int(np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOL)[0])
+            fail(path, f"quaternion norm {float(norm[k]):.6g} is not 1 (tolerance {QUATERNION_NORM_TOL:g}) in pose "
+                 f"{k + 1} of the {len(group)} sharing this line's time stamp; wrong column order or units?", line=line)
+        q = q * np.where(q @ q[0] < 0, -1.0, 1.0)[:, None]  # one hemisphere
+        rows[:, list(quaternion)] = q
+    mean = rows.mean(axis=0)
+    if quaternion is not None:
+        mean[list(quaternion)] /= np.linalg.norm(mean[list(quaternion)])
+    return mean.tolist()
+
+
+def _repeat_tally(groups, quaternion, verbatim) -> dict:
+    merged = [g for g in groups if len(g) > 1]
+    worst = None
+    if quaternion is not None and merged:
+        worst = max(_quaternion_angle_deg([a[i] for i in quaternion], [b[i] for i in quaternion])
+                    for g in merged for a in g for b in g)
+    return {"repeated_timestamps": sum(len(g) - 1 for g in merged), "repeated_groups": len(merged),
+            "repeated_max_deg": worst, "verbatim_repeats": verbatim}
 
 
 def is_number(text) -> bool:

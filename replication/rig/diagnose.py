@@ -18,6 +18,11 @@ rotation, when given, can tell them apart: the hypotheses whose estimate is with
 bound of it are then the ones named. Time-unit mistakes show before any calibration, in the streams' spans
 (:func:`replication.rig.calibration.calibrate` names them when refusing streams that do not overlap).
 
+With a reference that the estimate disagrees with beyond the reference check's ``fail`` bound,
+:func:`reference_mistakes` names two mistakes that no re-run shows, since the data fit: the camera file holding the
+IMU's own trajectory (a VIO output or the IMU's ground truth: ``R0`` within :data:`IMU_AS_CAMERA_DEG` of the
+identity, the reference far from it), and the two files swapped (``R0`` near the reference's inverse).
+
 The calibration to re-run is passed in (``calibrate=`` / ``calibrate_poses=``), so this module does not import
 :mod:`replication.rig.calibration`, which calls it.
 """
@@ -31,8 +36,17 @@ from ..core.so3 import angle_between_deg, as_quaternion, quaternion_to_matrix
 from .quality import THRESHOLDS, Reason
 from .streams import GyroStream, OrientationStream
 
-__all__ = ["input_mistakes", "pose_direction", "HYPOTHESES", "POSE_HYPOTHESES", "FIT_SHARE", "FIT_TO_MOTION",
-           "POSE_FIT_SHARE", "TIE_SHARE", "TIE_ATOL"]
+__all__ = ["input_mistakes", "pose_direction", "reference_mistakes", "HYPOTHESES", "POSE_HYPOTHESES", "FIT_SHARE",
+           "FIT_TO_MOTION", "POSE_FIT_SHARE", "TIE_SHARE", "TIE_ATOL", "IMU_AS_CAMERA_DEG"]
+
+#: The camera file looks like the IMU's own trajectory when ``R0`` is within this angle (deg) of the identity while
+#: the reference is more than twice as far from it. Measured with the IMU body's pose as the camera (TUM-VI mocap0
+#: against its raw gyro, intervals 0.5 / 1 / 2 s): 0.04-0.07 deg; with a gyro bias added, EuRoC's (about 0.08 rad/s)
+#: 0.42-0.98 deg, 0.1 rad/s on one axis and 0.05 on two 1.07-3.65 deg. The rigs' references are 89 deg (EuRoC cam0)
+#: and 179 deg (TUM-VI cam0) from the identity. The same bound (the reference check's fail bound) tells the files
+#: swapped: ``R0`` within it of the reference's inverse (EuRoC, ground truth as camera and the camera's SLAM
+#: trajectory as sensor: 0.14-0.18 deg; TUM-VI: 0.09-0.11 deg).
+IMU_AS_CAMERA_DEG = 5.0
 
 #: Static pose sets: an inverted hypothesis is named when its median residual is below this share of the input's.
 POSE_FIT_SHARE = 0.6
@@ -120,8 +134,36 @@ def _one_finding(fits, base, names, reference, what_else=""):
                   f"{base:.3g} deg to {best:.3g} deg{what_else}")
 
 
+def reference_mistakes(R, reference) -> list[Reason]:
+    """Reasons naming the likely cause where the estimate ``R`` disagrees with the ``reference`` beyond the reference
+    check's ``fail`` bound: the camera file holding the IMU's own trajectory (``R`` within :data:`IMU_AS_CAMERA_DEG`
+    of the identity, the reference more than twice that from it), or the camera and sensor files swapped (``R``
+    within the fail bound of the reference's inverse). ``[]`` otherwise, or without a reference."""
+    if reference is None or R is None:
+        return []
+    bound = THRESHOLDS["reference_error_deg"][1]
+    error = float(angle_between_deg(R, reference))
+    if not error > bound:
+        return []
+    to_identity, reference_to_identity = (float(angle_between_deg(M, np.eye(3))) for M in (R, reference))
+    if to_identity <= IMU_AS_CAMERA_DEG and reference_to_identity > 2 * IMU_AS_CAMERA_DEG:
+        return [Reason("imu_as_camera", "fail", to_identity, IMU_AS_CAMERA_DEG,
+                       f"the camera file looks like the IMU's own trajectory (a VIO output, or the IMU body's ground "
+                       f"truth or mocap): R0 within {to_identity:.3g} deg of the identity (<= {IMU_AS_CAMERA_DEG:g} "
+                       f"deg), while the reference is {reference_to_identity:.3g} deg from it; give the camera's own "
+                       f"trajectory (vision only), or the camera is mounted with the IMU's axes and the reference "
+                       f"is for another rig")]
+    swapped = float(angle_between_deg(R, np.swapaxes(reference, -1, -2)))
+    if swapped <= bound:
+        return [Reason("files_swapped", "fail", swapped, bound,
+                       f"the camera and sensor files look swapped: R0 is {swapped:.3g} deg from the reference's "
+                       f"inverse (<= {bound:g} deg) and {error:.3g} deg from the reference; give the camera's "
+                       f"trajectory as --camera and the sensor's as --sensor")]
+    return []
+
+
 def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: float, interval: float,
-                   max_offset: float, calibrate, reference=None) -> list[Reason]:
+                   max_offset: float, calibrate, reference=None, R=None) -> list[Reason]:
     """Reasons naming each input mistake whose undoing makes the calibration fit (see the module notes).
 
     Parameters
@@ -136,7 +178,10 @@ def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: floa
         :func:`replication.rig.calibration.calibrate` (re-run on each hypothesis, no bootstrap, no diagnosis).
     reference : (3, 3) array, optional
         A reference ``R0``: tells tied hypotheses apart where it agrees with some of them only.
+    R : (3, 3) array, optional
+        The calibration's estimate: with ``reference``, :func:`reference_mistakes` is checked too.
     """
+    named = reference_mistakes(R, reference)
     fits = []
     for order, (side, mistake) in enumerate(HYPOTHESES):
         streams = _undone(side, mistake, camera, sensor)
@@ -152,10 +197,11 @@ def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: floa
         if fit < FIT_SHARE * base_residual_deg and fit < FIT_TO_MOTION * trial.diagnostics["motion_median_deg"]:
             fits.append((order, fit, f"the {side} file holds {mistake}", trial.R, trial.time_offset_correlation))
     if not fits:
-        return []
+        return named
     tied, message = _one_finding(fits, base_residual_deg, lambda f: f[2], reference)
     message += f" (median motion {motion_deg:.3g} deg) and the time-offset correlation is {tied[0][4]:.3f}"
-    return [Reason("input_mistake", "fail", float(min(f[1] for f in fits)), float(base_residual_deg), message)]
+    return [Reason("input_mistake", "fail", float(min(f[1] for f in fits)), float(base_residual_deg), message),
+            *named]
 
 
 def pose_direction(C, S, *, base_residual_deg: float, pairs: str, min_motion_deg: float, calibrate_poses,

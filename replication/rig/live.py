@@ -95,7 +95,7 @@ class LiveRig:
         check_number("offset_window", offset_window, minimum=0)
         if offset is None and not offset_window > 2.0 * max_offset + 1.0:
             raise ValueError(f"offset_window must exceed 2 max_offset + 1 s = {2.0 * max_offset + 1.0:g} s (the "
-                             f"offset search shifts the window by up to max_offset both ways), got {offset_window!r}")
+                             f"offset search shifts the window by up to max_offset both ways), got {offset_window}")
         check_number("stride", stride, minimum=1, integer=True, strict=False)
         for name, value in (("correct_offset", correct_offset), ("diagnose", diagnose)):
             if not isinstance(value, (bool, np.bool_)):
@@ -148,9 +148,9 @@ class LiveRig:
             wx, wy, wz = (float(v) for v in np.asarray(omega, dtype=float).reshape(3))
         except (TypeError, ValueError):
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, "
-                             f"got t={t!r}, omega={omega!r}") from None
+                             f"got t={t!r}, omega={np.asarray(omega).tolist()!r}") from None
         if not math.isfinite(t + wx + wy + wz):
-            raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t!r}, omega={omega!r}")
+            raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t}, omega={[wx, wy, wz]}")
         self._sensor_kind("gyro")
         if self._last_gyro is None:
             Q = np.eye(3)
@@ -170,10 +170,10 @@ class LiveRig:
         """One sensor orientation (an orientation sensor instead of a gyro): time (s) and ``world_from_sensor``."""
         Q = check_rotation_matrices(world_from_sensor, "world_from_sensor")
         if Q.shape != (3, 3) or not math.isfinite(t):
-            raise ValueError(f"a sensor pose is a finite time and one 3x3 rotation, got t={t!r}, shape {Q.shape}")
+            raise ValueError(f"a sensor pose is a finite time and one 3x3 rotation, got t={float(t)}, shape {Q.shape}")
         self._sensor_kind("orientation")
         if self._gyro and not t > self._gyro[-1][0]:
-            raise ValueError(f"sensor time going backwards or repeated: {t!r} after {self._gyro[-1][0]!r}")
+            raise ValueError(f"sensor time going backwards or repeated: {float(t)} after {self._gyro[-1][0]}")
         if self._gyro:
             dt = t - self._gyro[-1][0]
             self._gyro_dt = dt if self._gyro_dt is None else 0.99 * self._gyro_dt + 0.01 * dt
@@ -192,9 +192,9 @@ class LiveRig:
         """One camera pose: time (s) and ``world_from_camera`` (3x3 rotation)."""
         C = check_rotation_matrices(world_from_camera, "world_from_camera")
         if C.shape != (3, 3) or not math.isfinite(t):
-            raise ValueError(f"a camera pose is a finite time and one 3x3 rotation, got t={t!r}, shape {C.shape}")
+            raise ValueError(f"a camera pose is a finite time and one 3x3 rotation, got t={float(t)}, shape {C.shape}")
         if not t > self._last_camera_t:
-            raise ValueError(f"camera time going backwards or repeated: {t!r} after {self._last_camera_t!r}")
+            raise ValueError(f"camera time going backwards or repeated: {float(t)} after {self._last_camera_t}")
         self._last_camera_t = float(t)
         self._now = max(self._now, float(t))
         self._camera.append((float(t), C))

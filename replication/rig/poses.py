@@ -132,7 +132,8 @@ def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0, station
     elif pairs == "consecutive":
         i, j = np.arange(len(C) - 1), np.arange(1, len(C))
     else:
-        raise ValueError(f"pairs must be 'all' or 'consecutive', got {pairs!r}")
+        shown = str(pairs) if isinstance(pairs, str) else pairs  # np.str_('x') shown as 'x'
+        raise ValueError(f"pairs must be 'all' or 'consecutive', got {shown!r}")
     A = relative_rotations(C, pairs=(i, j), atol=1e-5)  # eq. (3)
     B = relative_rotations(S, pairs=(i, j), atol=1e-5)  # eq. (4)
     if pairs == "all":

@@ -92,10 +92,14 @@ def _seconds(t, path, time_unit):
 
 TUM_COLUMNS = ("t", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
 EUROC_POSE_COLUMNS = ("t[ns]", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z")
+#: The 9 further columns of EuRoC's ``state_groundtruth_estimate0/data.csv`` (17 in all): velocity, gyro bias,
+#: accelerometer bias (``v_RS_R``, ``b_w_RS_S``, ``b_a_RS_S``); read as numbers, not used.
+EUROC_GROUNDTRUTH_EXTRA = ("v_x", "v_y", "v_z", "b_w_x", "b_w_y", "b_w_z", "b_a_x", "b_a_y", "b_a_z")
 EUROC_IMU_COLUMNS = ("t[ns]", "w_x", "w_y", "w_z", "a_x", "a_y", "a_z")
 
 
-def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = False) -> OrientationStream:
+def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = False, repeated: str = "refuse",
+                        tally: dict | None = None) -> OrientationStream:
     """A TUM / ORB-SLAM3 trajectory: lines ``t tx ty tz qx qy qz qw`` (scalar last).
 
     Each pose is ``T_world<-body`` (ORB-SLAM3's ``SaveTrajectoryEuRoC`` writes camera-to-world
@@ -103,40 +107,55 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
     ``world_from_body``. ``time_unit``: ``"s"``, ``"ms"``, ``"us"``, ``"ns"`` or ``"auto"`` (ns when timestamps
     exceed 1e12, as ORB-SLAM3's do). Translations are ignored. ``drop_repeated=True`` skips
     lines that repeat the previous line exactly (one of the shared ORB-SLAM3 runs has such
-    lines); otherwise a repeated timestamp is an error.
+    lines). A time stamp repeated with a *different* pose is refused unless ``repeated`` says which pose to keep:
+    ``"keep-first"``, ``"keep-last"`` or ``"mean"`` (the refusal names them); ``tally``, a dict, receives how many
+    lines were merged and the largest angle between two poses of one time stamp
+    (:func:`~replication.rig.datafile.read_table`).
 
     Raises
     ------
     DataFileError
         A missing or unreadable file, or the first malformed line (line and column named).
     """
-    data, lines = read_table(path, TUM_COLUMNS, what=" ".join(TUM_COLUMNS), drop_repeated=drop_repeated)
+    data, lines = read_table(path, TUM_COLUMNS, what=" ".join(TUM_COLUMNS), drop_repeated=drop_repeated,
+                             repeated=repeated, quaternion=(7, 4, 5, 6), tally=tally)
     R = unit_quaternion_rotations(path, data[:, [7, 4, 5, 6]], lines)
     return OrientationStream(_seconds(data[:, 0], path, time_unit), R, str(path))
 
 
-def load_euroc_mocap(path) -> OrientationStream:
-    """EuRoC / TUM-VI ``mocap0/data.csv`` or ground truth: ``t[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z``.
+def load_euroc_mocap(path, *, drop_repeated: bool = False, repeated: str = "refuse",
+                     tally: dict | None = None) -> OrientationStream:
+    """EuRoC / TUM-VI ``mocap0/data.csv`` or ground truth, as shipped: ``t[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z``.
 
+    8 columns (``mocap0/data.csv``; TUM-VI's ground truth) or the 17 of EuRoC's
+    ``state_groundtruth_estimate0/data.csv`` (header ``#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m],
+    q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y, v_RS_R_z, b_w_RS_S_x [rad s^-1],
+    b_w_RS_S_y, b_w_RS_S_z, b_a_RS_S_x [m s^-2], b_a_RS_S_y, b_a_RS_S_z``): the first 8 are used, the velocity and
+    the two biases are checked as numbers and left out; every line of a file has the same count.
     ``q_RS`` (scalar first) rotates body (sensor S) vectors into the world R: ``world_from_body``.
-    EuRoC's ``state_groundtruth_estimate0/data.csv`` has more columns; pass its first 8 only.
+    ``drop_repeated``, ``repeated`` and ``tally``: as :func:`load_tum_trajectory`'s.
     """
-    data, lines = read_table(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz")
+    data, lines = read_table(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz[, v_xyz, b_w_xyz, "
+                             "b_a_xyz]", optional=EUROC_GROUNDTRUTH_EXTRA, drop_repeated=drop_repeated,
+                             repeated=repeated, quaternion=(4, 5, 6, 7), tally=tally)
     R = unit_quaternion_rotations(path, data[:, 4:8], lines)
     return OrientationStream(data[:, 0] * 1e-9, R, str(path))
 
 
-def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0) -> GyroStream:
+def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, drop_repeated: bool = False, repeated: str = "refuse",
+                   tally: dict | None = None) -> GyroStream:
     """EuRoC / TUM-VI ``imu0/data.csv``: ``t[ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]``.
 
     Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are
-    rejected as a units error (deg/s stored as rad/s).
+    rejected as a units error (deg/s stored as rad/s). ``drop_repeated``, ``repeated`` and ``tally``: as
+    :func:`load_tum_trajectory`'s (``"mean"`` averages the rates).
     """
-    data, lines = read_table(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]")
+    data, lines = read_table(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]",
+                             drop_repeated=drop_repeated, repeated=repeated, tally=tally)
     w = data[:, 1:4]
     bad = np.flatnonzero(np.abs(w).max(axis=1) > max_rate_rad_s)
     if bad.size:
-        fail(path, f"angular rate {np.abs(w[bad[0]]).max():.4g} rad/s exceeds {max_rate_rad_s:g} rad/s; "
+        fail(path, f"angular rate {float(np.abs(w[bad[0]]).max()):.4g} rad/s exceeds {max_rate_rad_s:g} rad/s; "
              "are the rates in deg/s?", line=lines[bad[0]])
     return GyroStream(data[:, 0] * 1e-9, w, str(path))
 
@@ -224,14 +243,16 @@ def load_tabb_solution(path) -> np.ndarray:
     return _rotation_block(path, M, "Z")
 
 
-def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", drop_repeated: bool = False):
+def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", drop_repeated: bool = False,
+                repeated: str = "refuse", tally: dict | None = None):
     """Load a stream by kind and file type.
 
     ``kind="gyro"``: an EuRoC/TUM-VI ``imu0/data.csv`` (:func:`load_euroc_imu`).
-    ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth
+    ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth, 8 or 17 columns
     (:func:`load_euroc_mocap`), anything else as a TUM trajectory (:func:`load_tum_trajectory`,
-    which takes ``time_unit`` and ``drop_repeated``). EuRoC CSVs are in nanoseconds by their format:
-    a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them.
+    which takes ``time_unit``). EuRoC CSVs are in nanoseconds by their format:
+    a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them. ``drop_repeated``, ``repeated`` and
+    ``tally`` go to the loader (:func:`load_tum_trajectory`).
     """
     if kind not in ("gyro", "orientation"):
         raise ValueError(f"kind must be 'gyro' or 'orientation', got {kind!r}")
@@ -239,10 +260,10 @@ def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", dro
     if euroc and time_unit not in ("auto", "ns"):
         raise ValueError(f"{path}: EuRoC / TUM-VI CSV time stamps are nanoseconds by format; time_unit "
                          f"{time_unit!r} applies to TUM trajectories only")
+    common = dict(drop_repeated=drop_repeated, repeated=repeated, tally=tally)
     if kind == "gyro":
-        return load_euroc_imu(path)
-    return load_euroc_mocap(path) if euroc else load_tum_trajectory(path, time_unit=time_unit,
-                                                                    drop_repeated=drop_repeated)
+        return load_euroc_imu(path, **common)
+    return load_euroc_mocap(path, **common) if euroc else load_tum_trajectory(path, time_unit=time_unit, **common)
 
 
 def load_reference(path, camera: str = "cam0") -> np.ndarray:

@@ -109,7 +109,7 @@ def _check_times(t, source):
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         raise ValueError(f"{source}: timestamps not strictly increasing at sample {bad[0] + 1} "
-                         f"({t[bad[0]]!r} then {t[bad[0] + 1]!r})")
+                         f"({float(t[bad[0]])!r} then {float(t[bad[0] + 1])!r})")
 
 
 def integrate_gyro(gyro: GyroStream) -> OrientationStream:

@@ -144,9 +144,9 @@ class VinsExRotation:
 
     def __init__(self, window_size: int = 10, huber_deg: float = 5.0, ready_singular_value: float = 0.25):
         if int(window_size) != window_size or window_size < 1:
-            raise ValueError(f"window_size must be a positive integer, got {window_size!r}")
+            raise ValueError(f"window_size must be a positive integer, got {window_size}")
         if not huber_deg > 0:
-            raise ValueError(f"huber_deg must be positive, got {huber_deg!r}")
+            raise ValueError(f"huber_deg must be positive, got {huber_deg}")
         if not np.isfinite(ready_singular_value):
             raise ValueError(f"ready_singular_value must be finite, got {ready_singular_value!r}")
         self.window_size = int(window_size)
