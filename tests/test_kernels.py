@@ -449,3 +449,13 @@ def test_top_eigenvector3_falls_back_below_its_gap_bound_only(factor, to_lapack,
     assert (seen == [1]) is to_lapack
     want = original(S)[1][..., :, -1]
     assert np.max(np.minimum(np.abs(got - want).max(-1), np.abs(got + want).max(-1))) <= 1e-12
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_polar_factor_one_block_path_is_the_gathered_path_to_the_last_bit(mode, rng):
+    """A batch whose matrices are all safe skips the gather and scatter; one unsafe matrix more (to LAPACK) sends
+    the same matrices through the gathered path: the Newton iterates are the same to the last bit."""
+    X = _matrices("scaled_unit_vector", rng, (MIN_BATCH,))
+    alone = polar_factor(X, mode)
+    with_singular = polar_factor(np.concatenate([X, np.zeros((1, 3, 3))]), mode)
+    assert np.array_equal(alone, with_singular[:-1])

@@ -172,9 +172,15 @@ def polar_factor(M, mode: str = "rotation", *, method: str = "auto") -> np.ndarr
         safe = 2.0 * np.abs(det) > POLAR_SAFE * norm2 * np.sqrt(norm2)
     if mode == "rotation":
         safe &= det > 0
-    out = np.empty_like(x)
-    safe_idx = np.flatnonzero(safe)
-    for start in range(0, safe_idx.size, _CHUNK):  # blocks that stay in cache (no page faults per temporary)
+    if n <= _CHUNK and safe.all():  # one block, every matrix in it: no gather and scatter (the same arithmetic)
+        out, safe = _newton_polar(x, det)
+        if mode == "up_to_sign":
+            out *= np.where(det < 0, -1.0, 1.0)
+        safe_idx = ()
+    else:
+        out = np.empty_like(x)
+        safe_idx = np.flatnonzero(safe)
+    for start in range(0, len(safe_idx), _CHUNK):  # blocks that stay in cache (no page faults per temporary)
         idx = safe_idx[start:start + _CHUNK]
         Q, settled = _newton_polar(x[:, idx], det[idx])
         if mode == "up_to_sign":
@@ -204,8 +210,9 @@ def _newton_polar(x: np.ndarray, det: np.ndarray):
             alpha, beta = 0.5 * zeta, 0.5 / (zeta * d)
         else:
             alpha, beta = 0.5, 0.5 / d
-        X_new = alpha * X + beta * C
-        diff = X_new - X
+        X_new = alpha * X
+        X_new += beta * C
+        diff = np.subtract(X_new, X, out=X)  # X is not needed again: its buffer takes the step
         step = np.sqrt(np.einsum("kn,kn->n", diff, diff))
         X = X_new
         worst = float(np.max(step))

@@ -201,12 +201,13 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
         upper = np.asarray(_lagrangian_upper_bound(M, R), dtype=float)  # step 1 (fast path)
         ok = 2.0 * J * (upper - g) <= GAP_TOL * J
         how[ok] = "lagrangian"
-        R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
-        # the fallback may have replaced R: judge stationarity at the final answer
-        _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
-        grad_norm = np.linalg.norm(grad, axis=-1)
-        hmin = eigvalsh3(-hess)[..., 0]
-        local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
+        if not ok.all():
+            R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
+            # the fallback may have replaced R: judge stationarity at the final answer (else Newton's stands)
+            _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
+            grad_norm = np.linalg.norm(grad, axis=-1)
+            hmin = eigvalsh3(-hess)[..., 0]
+            local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     gap = np.clip(2.0 * J * (upper - g), 0.0, None)
     cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
     res = ChordalResult(
