@@ -315,7 +315,7 @@ def log_map(R) -> np.ndarray:
         d = np.einsum("nii->ni", Rf)
         k = np.argmax(0.5 * (d + d) - cf[:, None], axis=-1)
         rows = np.arange(k.size)
-        n = 0.5 * (Rf[rows, :, k] + Rf[rows, k, :])
+        n = 0.5 * (Rf[rows, :, k] + Rf[rows, k, :]) + 0.0  # + 0.0: S's x - c * 0 (c < 0) turns -0.0 into 0.0 too
         n[rows, k] -= cf
         n /= np.linalg.norm(n, axis=-1, keepdims=True)
         sign = np.where(np.einsum("ni,ni->n", n, v.reshape(-1, 3)[idx]) < 0, -1.0, 1.0)
