@@ -619,3 +619,17 @@ def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     for bad in ("mean", 0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="cost must be"):
             sqp(sim.A, sim.B, cost=bad)
+
+
+def test_newton_hessian_products_equal_the_contraction(rng):
+    """The Riemannian Hessian's D M D^T is taken as two matrix products: the contraction it replaced, to rounding."""
+    from replication.core.solvers.certificate import _GENERATORS, _derivatives
+
+    R = so3.random_rotations(rng, (200,))
+    G = rng.normal(size=(200, 9, 9))
+    M = G + np.swapaxes(G, -1, -2)
+    D = handeye.vec(R[..., None, :, :] @ _GENERATORS)
+    P = np.swapaxes(R, -1, -2) @ handeye.unvec(np.einsum("...ab,...b->...a", M, handeye.vec(R)))
+    Ps, tr = 0.5 * (P + np.swapaxes(P, -1, -2)), np.trace(P, axis1=-2, axis2=-1)[..., None, None]
+    want = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
+    assert np.max(np.abs(_derivatives(M, R)[2] - want)) <= 1e-13 * np.max(np.abs(want))

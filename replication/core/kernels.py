@@ -24,8 +24,8 @@ nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly co
 alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` (:data:`MIN_BATCH_LARGE`
 for :func:`solve3` and :func:`bottom_eigenvector4`) go to LAPACK as a whole: its per-call cost is then below the
 kernels' fixed Python cost. :func:`lapack_reference` switches every kernel to the LAPACK path (the "before" of
-``benchmarks/bench_kernels.py``). The 9x9 decompositions of ``K`` (its SVD, the eigenvalues of ``sym(K)``) stay with
-LAPACK (environment.md, issue 26, says why).
+``benchmarks/bench_kernels.py``). The 9x9 decompositions (one ``eigh`` of ``K^T K``, one of ``sym(K)``, the
+certificate's ``eigvalsh``) stay with LAPACK (environment.md, issues 26 and 38, says why).
 """
 from __future__ import annotations
 

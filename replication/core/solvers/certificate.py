@@ -120,7 +120,7 @@ def _derivatives(M, R):
     D = vec(R[..., None, :, :] @ _GENERATORS)  # (..., 3, 9): row k = vec(R [e_k]x)
     Ps = 0.5 * (P + np.swapaxes(P, -1, -2))
     tr = np.trace(P, axis1=-2, axis2=-1)[..., None, None]
-    hess = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
+    hess = 2.0 * ((D @ M) @ np.swapaxes(D, -1, -2)) + 2.0 * (Ps - tr * np.eye(3))  # D M D^T: two products
     return g, grad, hess
 
 
