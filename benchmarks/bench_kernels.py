@@ -2,6 +2,8 @@
 one ``cv2.calibrateHandEye`` call before and after, the paper's 1000 x 50 history, and where the time goes.
 
 Usage: python benchmarks/bench_kernels.py [--reps 7] [--runs 2000] [--single-calls 50] [--parts kernels solvers ...]
+       python benchmarks/bench_kernels.py --compare-with /tmp/base  (every ratio, base commit and this tree alternating;
+       the issue 38 table: ``git archive <base> | tar -x -C /tmp/base`` first)
 "Before" is the same code inside :func:`replication.core.kernels.lapack_reference` (one LAPACK call per matrix, as
 before the kernels); "after" the default. Every figure is the median over ``--reps`` interleaved repetitions (before,
 after, the cv2 call, in turn), with the range (min-max) beside it; ratios are taken within a repetition. Nothing is
@@ -172,26 +174,56 @@ def solver_table(sim, reps, n_single):
               f"{_summary(r[:, 1], '{:.3f}')} cv2 calls per problem")
 
 
-def ratios_once(n, n_single):
-    """One repetition on the code importable now: ``{solver: (batched, single)}`` ratios to one cv2 call measured in
-    this process, and the history's cv2 calls per problem (only APIs older than the kernels: a base commit runs it)."""
+def _best(fn, clock, reps=7):
+    """Smallest time of ``reps`` calls of ``fn`` on ``clock`` (``time.perf_counter``: wall; ``time.process_time``:
+    this process's CPU time, which other jobs on a shared machine disturb far less)."""
+    times = []
+    for _ in range(reps):
+        start = clock()
+        fn()
+        times.append(clock() - start)
+    return min(times)
+
+
+def _cv2_call(sim, clock):
+    """Seconds per bare ``cv2.calibrateHandEye`` (Tsai) call, best of 5 blocks of 100 (as ``bare_cv2_call``)."""
+    import cv2
+
+    Hg, Hc = [np.eye(3)], [np.eye(3)]
+    for a, b in zip(sim.A[0], sim.B[0]):
+        Hg.append(Hg[-1] @ a.T)
+        Hc.append(b @ Hc[-1])
+    zeros = [np.zeros((3, 1))] * len(Hg)
+    return _best(lambda: [cv2.calibrateHandEye(Hg, zeros, Hc, zeros, method=cv2.CALIB_HAND_EYE_TSAI)
+                          for _ in range(100)], clock, 5) / 100
+
+
+def ratios_once(n, n_single, reps=7):
+    """One process on the code importable now: per solver the ratio to one cv2 call, batched and single, each time
+    the best of ``reps`` calls, on the wall clock and on CPU time; the history's cv2 calls per problem; the load.
+    Only APIs older than the kernels are used, so a base commit runs it."""
     sim, hist = simulate(0, n), simulate(0, 1000)
     for name in SOLVERS:  # warm-up: first-call imports and caches out of the timings
         solve(name, sim.A[:300], sim.B[:300])
         solve(name, sim.A[0], sim.B[0])
-    cv = bare_cv2_call(sim.A[0], sim.B[0])
-    out = {}
-    for name in SOLVERS:
-        t_b = _seconds(lambda: solve(name, sim.A, sim.B)) / n
-        t_s = _seconds(lambda: [solve(name, sim.A[k], sim.B[k]) for k in range(n_single)]) / n_single
-        out[name] = (cv / t_b, cv / t_s)
-    out["history"] = _seconds(lambda: two_step(hist.A, hist.B, iterations=50)) / (1000 * cv)
+    out = {"load": os.getloadavg()[0]}
+    for clock, key in ((time.perf_counter, "wall"), (time.process_time, "cpu")):
+        cv = _cv2_call(sim, clock)
+        row = {"cv2_us": 1e6 * cv}
+        for name in SOLVERS:
+            t_b = _best(lambda: solve(name, sim.A, sim.B), clock, reps) / n
+            t_s = _best(lambda: [solve(name, sim.A[k], sim.B[k]) for k in range(n_single)], clock, reps) / n_single
+            row[name] = (cv / t_b, cv / t_s, 1e6 * t_b)
+        row["history"] = _best(lambda: two_step(hist.A, hist.B, iterations=50), clock, 3) / (1000 * cv)
+        out[key] = row
     return out
 
 
 def compare_with(base, reps, n, n_single):
-    """Ratios of the code at ``base`` (e.g. ``git archive 370d62f | tar -x -C /tmp/base``) and of this tree, one
-    process per repetition, alternating."""
+    """Ratios of the code at ``base`` (e.g. ``git archive 3ece4a3 | tar -x -C /tmp/base``) and of this tree in one
+    run: ``reps`` processes each, alternating base / this tree; in each process every figure is the best of 7 calls.
+    Prints, per solver, the best ratio over the processes and the median (min-max), on the wall clock and on CPU
+    time, the speed-up of this tree's best time over the base's, and the load average seen by each process."""
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     runs = {"base": [], "this tree": []}
     for _ in range(reps):
@@ -199,16 +231,27 @@ def compare_with(base, reps, n, n_single):
             env = dict(os.environ, PYTHONPATH=root)
             cmd = [sys.executable, os.path.abspath(__file__), "--ratios-json", "--runs", str(n),
                    "--single-calls", str(n_single)]
-            runs[label].append(json.loads(subprocess.run(cmd, env=env, check=True, capture_output=True,
-                                                         text=True).stdout.splitlines()[-1]))
-    print(f"ratio to one cv2 call, base {base} vs this tree (median (min-max) of {reps} alternating processes; "
-          f"batched: {n} problems; single: {n_single} calls)")
-    for name in SOLVERS:
-        line = "  ".join(f"{label} batched {_summary([r[name][0] for r in rs])} single "
-                         f"{_summary([r[name][1] for r in rs])}" for label, rs in runs.items())
-        print(f"  {name:16s} {line}")
-    line = "  ".join(f"{label} {_summary([r['history'] for r in rs], '{:.3f}')}" for label, rs in runs.items())
-    print(f"  history 1000 x 50, cv2 calls per problem: {line}")
+            done = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True, cwd=os.sep)
+            runs[label].append(json.loads(done.stdout.splitlines()[-1]))
+    loads = [r["load"] for rs in runs.values() for r in rs]
+    print(f"base {base} vs this tree {here}: {reps} processes each, alternating; every figure the best of 7 calls in "
+          f"its process; batched: {n} problems in one call; single: {n_single} calls of one problem; load average "
+          f"{min(loads):.1f}-{max(loads):.1f} on {os.cpu_count()} cores")
+    for key, what in (("wall", "wall clock"), ("cpu", "CPU time of the process")):
+        cvs = {label: [r[key]["cv2_us"] for r in rs] for label, rs in runs.items()}
+        print(f"\n{what}: one cv2 call " + "; ".join(f"{label} {_summary(v, '{:.0f}')} us" for label, v in cvs.items())
+              + "\nratio to one cv2 call: best over the processes, then median (min-max)")
+        for name in SOLVERS:
+            cells = []
+            for label, rs in runs.items():
+                b = [r[key][name][0] for r in rs]
+                single = max(r[key][name][1] for r in rs)
+                cells.append(f"{label} batched best {max(b):5.1f}, {_summary(b)}; single {single:.2f}")
+            speed = min(r[key][name][2] for r in runs["base"]) / min(r[key][name][2] for r in runs["this tree"])
+            print(f"  {name:16s} " + "  |  ".join(cells) + f"  |  speed-up {speed:.2f}x")
+        line = "  ".join(f"{label} best {min(r[key]['history'] for r in rs):.3f}, "
+                         f"{_summary([r[key]['history'] for r in rs], '{:.3f}')}" for label, rs in runs.items())
+        print(f"  history 1000 x 50, cv2 calls per problem: {line}")
 
 
 #: How the profile's functions are grouped: kernels, LAPACK calls, the rest by module.
@@ -244,7 +287,7 @@ def share_table(sim):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--reps", type=int, default=7)
+    parser.add_argument("--reps", type=int, default=7, help="repetitions; with --compare-with, processes per tree")
     parser.add_argument("--runs", type=int, default=2000)
     parser.add_argument("--single-calls", type=int, default=50)
     parser.add_argument("--parts", nargs="+", default=["kernels", "solvers", "lapack9", "shares"],

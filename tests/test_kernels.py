@@ -15,12 +15,14 @@ from replication.core.kernels import (
     MIN_BATCH_LARGE,
     POLAR_SAFE,
     SOLVE3_SAFE,
+    TOP3_SAFE,
     bottom_eigenvector4,
     eigvalsh3,
     lapack_reference,
     polar_factor,
     rotation_violation,
     solve3,
+    top_eigenvector3,
 )
 from replication.core.so3 import nearest_rotation, nearest_rotation_up_to_sign, random_rotations
 
@@ -392,3 +394,68 @@ def test_quaternion_from_rotation_vector_is_as_quaternion_without_the_log_map(sh
     assert np.array_equal(quaternion_from_rotation_vector(log_map(R)), as_quaternion(R))
     q = quaternion_from_rotation_vector(np.array([0.0, 0.0, np.pi / 2]))
     assert np.allclose(q, [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)], atol=1e-15)
+
+
+def test_cofactors_are_the_explicit_formula_to_the_last_bit(rng):
+    """Seven passes over (9, n) instead of 27 over (n,): the same products and differences in the same order."""
+    x = rng.normal(size=(9, 1000))
+    a, b, c, d, e, f, g, h, i = x
+    want = np.stack([e * i - f * h, f * g - d * i, d * h - e * g, c * h - b * i, a * i - c * g, b * g - a * h,
+                     b * f - c * e, c * d - a * f, a * e - b * d])
+    C, det = kernels._cofactors(x)
+    assert np.array_equal(C, want)
+    assert np.array_equal(det, a * want[0] + b * want[1] + c * want[2])
+    C3, det3 = kernels._cofactors(x, rows=3)
+    assert np.array_equal(C3, want[:3]) and np.array_equal(det3, det)
+
+
+def _gram3(kind, rng, n):
+    if kind == "rotation_vectors":  # the axis-spread Gram matrices sum_j w_j w_j^T
+        w = rng.normal(size=n + (20, 3)) * np.array([1.0, 0.3, 0.1])
+        return np.swapaxes(w, -1, -2) @ w
+    if kind == "rank_one":  # motions about one axis
+        w = rng.normal(size=n + (3, 1))
+        return w @ np.swapaxes(w, -1, -2)
+    if kind == "repeated_top":  # no unique dominant axis: LAPACK's answer
+        Q = random_rotations(rng, n)
+        return Q @ (np.array([0.2, 1.0, 1.0])[:, None] * np.swapaxes(Q, -1, -2))
+    if kind == "zero":
+        return np.zeros(n + (3, 3))
+    raise AssertionError(kind)
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("kind", ["rotation_vectors", "rank_one", "repeated_top", "zero"])
+def test_top_eigenvector3_matches_lapack_up_to_sign(kind, shape, rng):
+    S = _gram3(kind, rng, shape if shape else ())
+    got = top_eigenvector3(S, method="kernel")
+    want = np.linalg.eigh(S)[1][..., :, -1]
+    assert got.shape == S.shape[:-1]
+    diff = np.minimum(np.max(np.abs(got - want), axis=-1), np.max(np.abs(got + want), axis=-1))
+    assert np.max(diff) <= 1e-12
+    assert np.allclose(np.linalg.norm(got, axis=-1), 1.0, atol=1e-14)
+
+
+@pytest.mark.parametrize("factor, to_lapack", [(1.01, False), (0.99, True)])
+def test_top_eigenvector3_falls_back_below_its_gap_bound_only(factor, to_lapack, rng, monkeypatch):
+    Q = random_rotations(rng, ())
+    gap = factor * TOP3_SAFE  # (lambda_3 - lambda_2) / lambda_3
+    close = Q @ (np.array([0.1, 1.0 - gap, 1.0])[:, None] * Q.T)
+    S = np.concatenate([_gram3("rotation_vectors", rng, (MIN_BATCH,)), close[None]])
+    seen = []
+    original = np.linalg.eigh
+    monkeypatch.setattr(np.linalg, "eigh", lambda A: seen.append(len(A)) or original(A))
+    got = top_eigenvector3(S)
+    assert (seen == [1]) is to_lapack
+    want = original(S)[1][..., :, -1]
+    assert np.max(np.minimum(np.abs(got - want).max(-1), np.abs(got + want).max(-1))) <= 1e-12
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_polar_factor_one_block_path_is_the_gathered_path_to_the_last_bit(mode, rng):
+    """A batch whose matrices are all safe skips the gather and scatter; one unsafe matrix more (to LAPACK) sends
+    the same matrices through the gathered path: the Newton iterates are the same to the last bit."""
+    X = _matrices("scaled_unit_vector", rng, (MIN_BATCH,))
+    alone = polar_factor(X, mode)
+    with_singular = polar_factor(np.concatenate([X, np.zeros((1, 3, 3))]), mode)
+    assert np.array_equal(alone, with_singular[:-1])

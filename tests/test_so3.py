@@ -275,3 +275,11 @@ def test_conversions_keep_batch_shapes(rng, shape):
             np.testing.assert_array_equal(so3.exp_map(flat_w[k]), flat_R[k])
             np.testing.assert_array_equal(so3.log_map(flat_R[k]), so3.log_map(R).reshape(-1, 3)[k])
             np.testing.assert_array_equal(so3.as_quaternion(flat_R[k]), q.reshape(-1, 4)[k])
+
+
+def test_log_map_half_turns_with_signed_zero_entries_give_no_negative_zero():
+    """Beyond 120 deg the axis is a column of (R + R^T)/2 - c I; its off-diagonal entries are x - c * 0 (c < 0), which
+    turns an entry of -0.0 into 0.0: the rotation vector of diag(1, -1, -1) written with -0.0 is (pi, 0, 0)."""
+    R = np.array([[1.0, -0.0, -0.0], [-0.0, -1.0, -0.0], [-0.0, -0.0, -1.0]])
+    w = so3.log_map(R)
+    assert np.array_equal(w, [np.pi, 0.0, 0.0]) and not np.signbit(w).any()

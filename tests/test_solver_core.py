@@ -407,6 +407,80 @@ def test_motions_object_is_read_only_and_caches_K(problem):
         solve("andreff", m, B)
 
 
+def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
+    R0 = so3.random_rotations(rng, (n,))
+    A = so3.random_rotations(rng, (n, J))
+    B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
+    return A, B @ so3.random_rotations(rng, (n, J), angle_range_deg=(0.0, noise_deg))
+
+
+def test_singular_values_and_top_vectors_from_one_eigh_match_the_svd(rng):
+    """One eigh of K^T K stands for the SVD of K: the top pair to rounding, the small values within eps sigma_1^2 /
+    sigma_k (what their docstring states), the limit's vectors paired as K v1 = sigma_1 u1."""
+    m = Motions(*_noisy_batch(rng, J=3))  # J = 3: small singular values down to about 1e-5
+    U, s, Vt = np.linalg.svd(m.K)
+    sv = m.singular_values
+    assert np.max(np.abs(sv[..., :2] - s[..., :2]) / s[..., :2]) <= 1e-14
+    assert np.all(np.abs(sv - s) <= 8 * np.finfo(float).eps * s[..., :1] ** 2 / np.maximum(s, 1e-300) + 1e-15)
+    assert m.observability.kron_singular_values is sv
+    u1, s1, v1 = m.top_singular_vectors
+    sign = np.sign(np.einsum("...i,...i->...", v1, Vt[..., 0, :]))[..., None]
+    assert np.max(np.abs(v1 - sign * Vt[..., 0, :])) <= 1e-12
+    assert np.max(np.abs(u1 - sign * U[..., :, 0])) <= 1e-12
+    assert np.max(np.abs(np.einsum("...ab,...b->...a", m.K, v1) - s1[..., None] * u1)) <= 1e-14
+    assert np.max(np.abs(s1 - s[..., 0])) <= 1e-14
+
+
+def test_sym_eigvals_come_from_the_decomposition_made_first(rng):
+    A, B = _noisy_batch(rng)
+    fresh = Motions(A, B)
+    want = np.linalg.eigvalsh(fresh.sym)[..., ::-1]
+    assert np.array_equal(fresh.sym_eigvals, want)  # eigvalsh when nothing asked for the vectors
+    primed = Motions(A, B)
+    _ = primed.sym_eigh
+    assert primed.sym_eigvals is primed.sym_eigh[0]
+    assert np.max(np.abs(primed.sym_eigvals - want)) <= 1e-14
+
+
+@pytest.mark.parametrize("method, decompositions", [
+    ("chordal_optimal", {"eigh": 1, "eigvalsh": 1}),  # sym(K): start and checks; the Lagrangian certificate
+    ("andreff", {"eigh": 1}),  # sym(K): start and checks
+    ("two_step_right", {"eigh": 1, "eigvalsh": 1}),  # K^T K (limit, singular values); sym(K)'s eigenvalues
+])
+def test_each_9x9_decomposition_is_made_once(method, decompositions, rng, monkeypatch):
+    A, B = _noisy_batch(rng, n=MIN_BATCH_SOLVE, noise_deg=0.2)
+    seen = {"svd": 0, "eigh": 0, "eigvalsh": 0}
+    small_svd = []
+    for name in seen:
+        original = getattr(np.linalg, name)
+
+        def spy(M, *args, _name=name, _original=original, **kwargs):
+            if M.shape[-2:] == (9, 9):
+                seen[_name] += 1
+            elif _name == "svd" and len(M) == MIN_BATCH_SOLVE:
+                small_svd.append(M.shape)
+            return _original(M, *args, **kwargs)
+        monkeypatch.setattr(np.linalg, name, spy)
+    solve(method, A, B)
+    assert seen == {"svd": 0, "eigh": 0, "eigvalsh": 0, **decompositions}
+    assert not small_svd  # the two-step's Lipschitz bound: no 3x3 SVD per problem
+
+
+def test_chordal_observability_is_computed_when_read(rng, monkeypatch):
+    A, B = _noisy_batch(rng, n=50)
+    m = Motions(A, B)
+    res = chordal_optimal(m, None)
+    assert "observability" not in m._cache  # the certificate did not need the singular values of K
+    obs = res.observability
+    assert obs is m.observability and obs is res.observability
+    U, s, Vt = np.linalg.svd(m.K)
+    assert np.max(np.abs(obs.kron_singular_values[..., :2] - s[..., :2])) <= 1e-14
+    assert "_motions" not in repr(res)
+
+
+MIN_BATCH_SOLVE = 300
+
+
 # ----------------------------------------------------------------------------------------- from the referee's report
 
 def _half_turn(n):
@@ -545,3 +619,17 @@ def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     for bad in ("mean", 0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="cost must be"):
             sqp(sim.A, sim.B, cost=bad)
+
+
+def test_newton_hessian_products_equal_the_contraction(rng):
+    """The Riemannian Hessian's D M D^T is taken as two matrix products: the contraction it replaced, to rounding."""
+    from replication.core.solvers.certificate import _GENERATORS, _derivatives
+
+    R = so3.random_rotations(rng, (200,))
+    G = rng.normal(size=(200, 9, 9))
+    M = G + np.swapaxes(G, -1, -2)
+    D = handeye.vec(R[..., None, :, :] @ _GENERATORS)
+    P = np.swapaxes(R, -1, -2) @ handeye.unvec(np.einsum("...ab,...b->...a", M, handeye.vec(R)))
+    Ps, tr = 0.5 * (P + np.swapaxes(P, -1, -2)), np.trace(P, axis1=-2, axis2=-1)[..., None, None]
+    want = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
+    assert np.max(np.abs(_derivatives(M, R)[2] - want)) <= 1e-13 * np.max(np.abs(want))

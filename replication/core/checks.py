@@ -71,8 +71,8 @@ def check_matrices(M, name: str = "M") -> np.ndarray:
         raise ValueError(f"{name} must be a numeric array of 3x3 matrices: {exc}") from None
     if M.ndim < 2 or M.shape[-2:] != (3, 3):
         raise ValueError(f"{name} must have shape (..., 3, 3), got {M.shape}")
-    finite = np.isfinite(M).all(axis=(-2, -1))
-    if not finite.all():
+    if not np.isfinite(M).all():  # one reduction; the per-matrix mask only to name the first offender
+        finite = np.isfinite(M).all(axis=(-2, -1))
         raise ValueError(f"{name} contains NaN or inf (first at index {_first_index(~finite)})")
     return M
 

@@ -8,7 +8,8 @@ entries of a batch of 3x3 matrices as one contiguous array and do the arithmetic
   ``X <- (zeta X + X^{-T} / zeta) / 2`` (N. J. Higham, "Computing the polar decomposition -- with applications",
   SIAM J. Sci. Stat. Comput. 7(4), 1986), the inverse transpose from the cofactors;
 * :func:`eigvalsh3`: eigenvalues of symmetric 3x3 matrices in closed form (the trigonometric solution of the
-  characteristic cubic, O. K. Smith, Comm. ACM 4(4), 1961);
+  characteristic cubic, O. K. Smith, Comm. ACM 4(4), 1961); :func:`top_eigenvector3` the eigenvector of the largest
+  one (a cross product of two rows of ``S - lambda I``);
 * :func:`solve3`: 3x3 linear systems by the cofactors (Cramer's rule);
 * :func:`bottom_eigenvector4`: the eigenvector of the smallest eigenvalue of a symmetric positive semidefinite 4x4
   matrix (Horaud & Dornaika's quaternion), by power steps with the adjugate, checked by its residual against the
@@ -23,8 +24,8 @@ nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly co
 alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` (:data:`MIN_BATCH_LARGE`
 for :func:`solve3` and :func:`bottom_eigenvector4`) go to LAPACK as a whole: its per-call cost is then below the
 kernels' fixed Python cost. :func:`lapack_reference` switches every kernel to the LAPACK path (the "before" of
-``benchmarks/bench_kernels.py``). The 9x9 decompositions of ``K`` (its SVD, the eigenvalues of ``sym(K)``) stay with
-LAPACK (environment.md, issue 26, says why).
+``benchmarks/bench_kernels.py``). The 9x9 decompositions (one ``eigh`` of ``K^T K``, one of ``sym(K)``, the
+certificate's ``eigvalsh``) stay with LAPACK (environment.md, issues 26 and 38, says why).
 """
 from __future__ import annotations
 
@@ -32,8 +33,9 @@ import contextlib
 
 import numpy as np
 
-__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "MIN_BATCH", "MIN_BATCH_LARGE", "polar_factor",
-           "eigvalsh3", "solve3", "bottom_eigenvector4", "rotation_violation", "lapack_reference"]
+__all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "TOP3_SAFE", "MIN_BATCH", "MIN_BATCH_LARGE",
+           "polar_factor", "eigvalsh3", "top_eigenvector3", "solve3", "bottom_eigenvector4", "rotation_violation",
+           "lapack_reference"]
 
 #: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which :func:`polar_factor` hands a
 #: matrix to LAPACK: the polar factor's condition number is ``sigma_max / (sigma_2 + sigma_3)``, so at the bound the
@@ -89,13 +91,22 @@ def _entries(M: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(M.reshape(-1, 9).T)
 
 
-def _cofactors(x):
-    """Cofactor matrix (9, n) and determinant (n) of the matrices whose row-major entries are ``x`` (9, n)."""
-    a, b, c, d, e, f, g, h, i = x
-    C = np.stack([e * i - f * h, f * g - d * i, d * h - e * g,
-                  c * h - b * i, a * i - c * g, b * g - a * h,
-                  b * f - c * e, c * d - a * f, a * e - b * d])
-    return C, a * C[0] + b * C[1] + c * C[2]
+#: Row-major cofactor ``k`` of a 3x3 matrix is ``x[_P1[k]] x[_P2[k]] - x[_P3[k]] x[_P4[k]]`` (its entries ``x``).
+_P1, _P2 = np.array([4, 5, 3, 2, 0, 1, 1, 2, 0]), np.array([8, 6, 7, 7, 8, 6, 5, 3, 4])
+_P3, _P4 = np.array([5, 3, 4, 1, 2, 0, 2, 0, 1]), np.array([7, 8, 6, 8, 6, 7, 4, 5, 3])
+
+
+def _cofactors(x, rows: int = 9):
+    """Cofactor matrix (9, n) and determinant (n) of the matrices whose row-major entries are ``x`` (9, n).
+
+    Nine cofactors in seven NumPy passes over (9, n) (four gathers, two products, a difference) rather than 27 over
+    (n,) and a stack; each entry is still ``p q - r s`` in that order, and the determinant ``(a C_0 + b C_1) + c C_2``,
+    so the result is the same to the last bit. ``rows=3``: the first three cofactors only (enough for the
+    determinant)."""
+    C = x[_P1[:rows]] * x[_P2[:rows]]
+    C -= x[_P3[:rows]] * x[_P4[:rows]]
+    t = x[:3] * C[:3]
+    return C, t[0] + t[1] + t[2]
 
 
 def _lapack_polar(M: np.ndarray, mode: str) -> np.ndarray:
@@ -155,15 +166,21 @@ def polar_factor(M, mode: str = "rotation", *, method: str = "auto") -> np.ndarr
     if not _use_kernel(n, method):
         return _lapack_polar(M, mode)
     x = _entries(M)
-    _, det = _cofactors(x)
+    _, det = _cofactors(x, rows=3)
     norm2 = np.einsum("kn,kn->n", x, x)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         safe = 2.0 * np.abs(det) > POLAR_SAFE * norm2 * np.sqrt(norm2)
     if mode == "rotation":
         safe &= det > 0
-    out = np.empty_like(x)
-    safe_idx = np.flatnonzero(safe)
-    for start in range(0, safe_idx.size, _CHUNK):  # blocks that stay in cache (no page faults per temporary)
+    if n <= _CHUNK and safe.all():  # one block, every matrix in it: no gather and scatter (the same arithmetic)
+        out, safe = _newton_polar(x, det)
+        if mode == "up_to_sign":
+            out *= np.where(det < 0, -1.0, 1.0)
+        safe_idx = ()
+    else:
+        out = np.empty_like(x)
+        safe_idx = np.flatnonzero(safe)
+    for start in range(0, len(safe_idx), _CHUNK):  # blocks that stay in cache (no page faults per temporary)
         idx = safe_idx[start:start + _CHUNK]
         Q, settled = _newton_polar(x[:, idx], det[idx])
         if mode == "up_to_sign":
@@ -193,8 +210,9 @@ def _newton_polar(x: np.ndarray, det: np.ndarray):
             alpha, beta = 0.5 * zeta, 0.5 / (zeta * d)
         else:
             alpha, beta = 0.5, 0.5 / d
-        X_new = alpha * X + beta * C
-        diff = X_new - X
+        X_new = alpha * X
+        X_new += beta * C
+        diff = np.subtract(X_new, X, out=X)  # X is not needed again: its buffer takes the step
         step = np.sqrt(np.einsum("kn,kn->n", diff, diff))
         X = X_new
         worst = float(np.max(step))
@@ -242,6 +260,53 @@ def eigvalsh3(S, *, method: str = "auto") -> np.ndarray:
     if rest.size:
         out[rest] = np.linalg.eigvalsh(S.reshape(-1, 3, 3)[rest])
     return out.reshape(S.shape[:-1])
+
+
+#: Relative gap ``(lambda_3 - lambda_2) / lambda_3`` below which :func:`top_eigenvector3` hands a matrix to LAPACK:
+#: the cross-product eigenvector's error is about the eigenvalue's rounding over the gap (below 1e-12 above it).
+TOP3_SAFE = 1e-2
+
+
+def top_eigenvector3(S, *, method: str = "auto") -> np.ndarray:
+    """Unit eigenvectors of the largest eigenvalue of symmetric positive semidefinite 3x3 matrices, batched:
+    (..., 3, 3) -> (..., 3), as ``numpy.linalg.eigh(S)[1][..., :, -1]`` up to sign.
+
+    With ``lambda`` the largest eigenvalue (:func:`eigvalsh3`), the eigenvector is orthogonal to the rows of
+    ``S - lambda I``: the longest of the three cross products of two rows, normalised. Matrices whose two largest
+    eigenvalues are within :data:`TOP3_SAFE` of the largest (the direction then ill-determined), or with
+    ``lambda <= 0``, go to LAPACK.
+
+    Parameters
+    ----------
+    S : ndarray, shape (..., 3, 3)
+    method : {"auto", "kernel", "lapack"}
+        As in :func:`polar_factor`.
+    """
+    S = np.asarray(S, dtype=float)
+    n = S.size // 9
+    if not _use_kernel(n, method):
+        return np.linalg.eigh(S)[1][..., :, -1]
+    flat = S.reshape(-1, 3, 3)
+    ev = eigvalsh3(flat, method=method)
+    lam = ev[:, 2]
+    x = _entries(flat)
+    r = x.reshape(3, 3, -1).copy()  # rows of S - lambda I: r[i] (3, n)
+    r[0, 0] -= lam
+    r[1, 1] -= lam
+    r[2, 2] -= lam
+    c = np.stack([np.cross(r[0], r[1], axis=0), np.cross(r[0], r[2], axis=0), np.cross(r[1], r[2], axis=0)])
+    norm2 = np.einsum("pkn,pkn->pn", c, c)
+    best = np.argmax(norm2, axis=0)
+    cols = np.arange(c.shape[-1])
+    v = c[best, :, cols]  # (n, 3)
+    size = np.sqrt(norm2[best, cols])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        safe = (lam > 0) & (lam - ev[:, 1] > TOP3_SAFE * lam) & (size > 0)
+        v = v / np.where(size > 0, size, 1.0)[:, None]
+    rest = np.flatnonzero(~safe)
+    if rest.size:
+        v[rest] = np.linalg.eigh(flat[rest])[1][..., :, -1]
+    return v.reshape(S.shape[:-1])
 
 
 def solve3(A, b, *, method: str = "auto") -> np.ndarray:

@@ -3,8 +3,9 @@
 Every solver's public door (:func:`replication.core.solvers.solve` and each exported solver
 function) turns ``(A, B)`` into a :class:`Motions` by :func:`prepare_motions`; private solver
 cores receive it and never validate again. The operator ``K`` of
-:func:`replication.core.handeye.kronecker_operator`, its SVD and :class:`MotionObservability`
-are computed on first use and cached. Notation and frames: ``docs/conventions.md``.
+:func:`replication.core.handeye.kronecker_operator`, its decompositions (one ``eigh`` of ``K^T K`` for the
+singular values and the top singular vectors, one of ``sym(K)`` where a solver needs its eigenvectors) and
+:class:`MotionObservability` are computed on first use and cached. Notation and frames: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from .checks import _first_index
 from .handeye import check_motion_pairs, kronecker_operator
-from .kernels import eigvalsh3
+from .kernels import eigvalsh3, top_eigenvector3
 from .so3 import log_map
 
 __all__ = ["MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions"]
@@ -27,7 +28,7 @@ class MotionObservability:
     Attributes
     ----------
     kron_singular_values : ndarray, shape (..., 9)
-        Singular values of :func:`kronecker_operator`, descending. Noise-free,
+        Singular values of :func:`kronecker_operator`, descending (:attr:`Motions.singular_values`). Noise-free,
         ``sigma_1 = 1``; the fixed point ``K vec(R0) = vec(R0)`` is unique iff the
         motions are not all about one axis.
     spectral_ratio : ndarray, shape (...)
@@ -182,8 +183,37 @@ class Motions:
 
     @property
     def svd(self):
-        """``(U, s, Vt)`` of ``K`` (descending singular values), batched."""
+        """``(U, s, Vt)`` of ``K`` (descending singular values), batched (the full SVD; the solvers use
+        :attr:`singular_values` and :attr:`top_singular_vectors`, from one ``eigh`` of ``K^T K``)."""
         return self._cached("svd", lambda: np.linalg.svd(self.K))
+
+    def _gram_eigh(self):
+        """``eigh`` of ``K^T K``, eigenvalues descending (columns of the vectors in the same order): the one 9x9
+        decomposition behind :attr:`singular_values` and :attr:`top_singular_vectors` (half an SVD's cost)."""
+        def compute():
+            K = self.K
+            w, V = np.linalg.eigh(np.swapaxes(K, -1, -2) @ K)
+            return w[..., ::-1], V[..., :, ::-1]
+        return self._cached("gram_eigh", compute)
+
+    @property
+    def singular_values(self) -> np.ndarray:
+        """Singular values of ``K``, descending, shape (..., 9): ``sqrt`` of the eigenvalues of ``K^T K`` (within
+        about ``eps sigma_1^2 / sigma_k`` of the SVD's: relative rounding for the top ones, which decide
+        ``spectral_ratio``; an exact zero reads as up to about ``sqrt(eps) sigma_1``)."""
+        return self._cached("singular_values", lambda: np.sqrt(np.clip(self._gram_eigh()[0], 0.0, None)))
+
+    @property
+    def top_singular_vectors(self):
+        """``(u1, sigma_1, v1)``: the top right singular vector ``v1`` of ``K`` (the top eigenvector of ``K^T K``),
+        ``sigma_1 = ||K v1||`` and ``u1 = K v1 / sigma_1``, so ``K v1 = sigma_1 u1`` (the pairing of the two-step
+        iteration's limits); each to about ``eps / (1 - sigma_2 / sigma_1)`` as from the SVD."""
+        def compute():
+            v1 = self._gram_eigh()[1][..., :, 0]
+            Kv = np.einsum("...ab,...b->...a", self.K, v1)
+            s1 = np.sqrt(np.einsum("...a,...a->...", Kv, Kv))
+            return Kv / np.where(s1 > 0, s1, 1.0)[..., None], s1, v1
+        return self._cached("top_singular_vectors", compute)
 
     @property
     def rotation_vectors(self):
@@ -209,7 +239,7 @@ class Motions:
             out = []
             for w in self.rotation_vectors:
                 gram = np.swapaxes(w, -1, -2) @ w
-                n = np.linalg.eigh(gram)[1][..., :, -1]  # the dominant axis
+                n = top_eigenvector3(gram)  # the dominant axis
                 along = np.einsum("...ja,...a->...j", w, n)
                 perp = np.sum(w * w, axis=-1) - along ** 2  # squared turn about axes other than n
                 k = np.argmax(perp, axis=-1)
@@ -228,18 +258,39 @@ class Motions:
         return self._spreads()[0][1]
 
     @property
-    def sym_eigvals(self) -> np.ndarray:
-        """Eigenvalues of ``sym(K) = (K + K^T) / 2``, descending, shape (..., 9)."""
+    def sym(self) -> np.ndarray:
+        """``sym(K) = (K + K^T) / 2``, shape (..., 9, 9)."""
         def compute():
             K = self.K
-            return np.linalg.eigvalsh(0.5 * (K + np.swapaxes(K, -1, -2)))[..., ::-1]
+            return 0.5 * (K + np.swapaxes(K, -1, -2))
+        return self._cached("sym", compute)
+
+    @property
+    def sym_eigh(self):
+        """``(eigenvalues, eigenvectors)`` of ``sym(K)``, eigenvalues descending (vector columns in that order): the
+        relaxed start (:func:`replication.core.solvers.certificate.relaxed_rotation`) and, once computed,
+        :attr:`sym_eigvals` too, so a solver that needs both makes one decomposition (:func:`solve` asks for this
+        first for such solvers)."""
+        def compute():
+            w, V = np.linalg.eigh(self.sym)
+            return w[..., ::-1], V[..., :, ::-1]
+        return self._cached("sym_eigh", compute)
+
+    @property
+    def sym_eigvals(self) -> np.ndarray:
+        """Eigenvalues of ``sym(K) = (K + K^T) / 2``, descending, shape (..., 9): those of :attr:`sym_eigh` where it
+        was computed first, else ``eigvalsh`` (the two agree to rounding, about ``eps ||sym(K)||``)."""
+        def compute():
+            if "sym_eigh" in self._cache:
+                return self._cache["sym_eigh"][0]
+            return np.linalg.eigvalsh(self.sym)[..., ::-1]
         return self._cached("sym_eigvals", compute)
 
     @property
     def observability(self) -> MotionObservability:
         """The :class:`MotionObservability` diagnostic."""
         def compute():
-            sv = self.svd[1]
+            sv = self.singular_values
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = np.where(sv[..., 0] > 0, sv[..., 1] / sv[..., 0], 1.0)
             rate = np.maximum(_largest_singular_value(self.A.mean(axis=-3)),
@@ -293,7 +344,7 @@ class Motions:
 
 
 def prepare_motions(A, B=None, *, min_motions: int = 2, require_observable: bool = True,
-                    min_axis_spread_deg: float = 1e-6) -> Motions:
+                    min_axis_spread_deg: float = 1e-6, _sym_vectors: bool = False) -> Motions:
     """The public door: validate motion pairs once and return a :class:`Motions`.
 
     Parameters
@@ -309,6 +360,9 @@ def prepare_motions(A, B=None, *, min_motions: int = 2, require_observable: bool
         Raise ``ValueError`` for degenerate motion (see :func:`check_observable`).
     min_axis_spread_deg : float
         Degeneracy threshold (see :func:`check_observable`).
+    _sym_vectors : bool
+        For solvers that start from the relaxed solution: decompose ``sym(K)`` with its eigenvectors
+        (:attr:`Motions.sym_eigh`) before the checks, which then take its eigenvalues (one decomposition, not two).
 
     Returns
     -------
@@ -327,6 +381,9 @@ def prepare_motions(A, B=None, *, min_motions: int = 2, require_observable: bool
         if B is None:
             raise ValueError("B (sensor relative rotations) is missing")
         m = Motions(A, B)
+    if _sym_vectors:
+        m.require(min_motions=min_motions, observable=False)
+        _ = m.sym_eigh
     return m.require(min_motions=min_motions, observable=require_observable,
                      min_axis_spread_deg=min_axis_spread_deg)
 

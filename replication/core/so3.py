@@ -308,12 +308,18 @@ def log_map(R) -> np.ndarray:
     w = v * ratio[..., None]
     far = c < -0.5
     if far.any():
-        S = 0.5 * (R[far] + np.swapaxes(R[far], -1, -2)) - c[far][:, None, None] * np.eye(3)
-        k = np.argmax(np.einsum("nii->ni", S), axis=-1)  # the best-conditioned column of n n^T
-        n = np.take_along_axis(S, k[:, None, None], axis=-1)[..., 0]
+        # column k of S = (R + R^T) / 2 - c I, k the best-conditioned column of n n^T (its largest diagonal entry);
+        # only that column is formed, each entry by the same operations as in S
+        idx = np.flatnonzero(far)
+        Rf, cf = R.reshape(-1, 3, 3)[idx], c.reshape(-1)[idx]
+        d = np.einsum("nii->ni", Rf)
+        k = np.argmax(0.5 * (d + d) - cf[:, None], axis=-1)
+        rows = np.arange(k.size)
+        n = 0.5 * (Rf[rows, :, k] + Rf[rows, k, :]) + 0.0  # + 0.0: S's x - c * 0 (c < 0) turns -0.0 into 0.0 too
+        n[rows, k] -= cf
         n /= np.linalg.norm(n, axis=-1, keepdims=True)
-        sign = np.where(np.einsum("ni,ni->n", n, v[far]) < 0, -1.0, 1.0)
-        w[far] = n * (sign * theta[far])[:, None]
+        sign = np.where(np.einsum("ni,ni->n", n, v.reshape(-1, 3)[idx]) < 0, -1.0, 1.0)
+        w.reshape(-1, 3)[idx] = n * (sign * theta.reshape(-1)[idx])[:, None]  # w is a new contiguous array
     return w
 
 

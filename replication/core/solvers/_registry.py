@@ -61,6 +61,8 @@ WEAK_GAP_FACTOR = 3.0
 #: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
 #: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
 ANSWER_ATOL = 1e-6
+#: Solvers starting from the relaxed solution: :func:`solve` decomposes ``sym(K)`` once for them, vectors included.
+RELAXED_START = frozenset({"chordal_optimal", "andreff"})
 
 
 @dataclass(frozen=True)
@@ -204,7 +206,7 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
     below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
     outlier pairs, or near-symmetric motions).
     """
-    # the cached pieces of motions.observability these tests need, without the SVD of K it also holds
+    # the cached pieces of motions.observability these tests need, without the singular values of K it also holds
     camera_spread, sensor_spread = motions.axis_spread_deg
     rms_motion = motions.rms_motion_deg
     ev = motions.sym_eigvals
@@ -480,7 +482,7 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         first offending batch index and the measured violation).
     """
     info = solver_info(method)
-    motions = prepare_motions(A, B, min_motions=info.min_motions)
+    motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=method in RELAXED_START)
     warn_if_weak(motions, warn_axis_spread_deg, stacklevel=_stacklevel)
     R, failed, reflection = _checked_answer(method, motions, info.core(motions, **options))
     _warn_not_rotations(method, failed, reflection, _stacklevel)

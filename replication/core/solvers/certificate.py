@@ -24,7 +24,7 @@ Derivation (``R(w) = R exp([w]x)``, ``P = R^T unvec(M vec(R))``):
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -77,7 +77,9 @@ class ChordalResult:
     certificate : ndarray of str, shape (...)
         How: ``"lagrangian"`` (the fast O(3) dual at the Newton solution), ``"sdp"`` (the
         semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
-    observability : MotionObservability or None
+    observability : MotionObservability
+        How well the motions determine ``R0``, computed on first access (the certificate itself does not need the
+        singular values of ``K``; a call that never reads them does not pay for their decomposition).
     """
 
     R: np.ndarray
@@ -90,7 +92,12 @@ class ChordalResult:
     duality_gap: np.ndarray
     global_optimum: np.ndarray
     certificate: np.ndarray
-    observability: MotionObservability | None = None
+    _motions: Motions | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def observability(self) -> MotionObservability | None:
+        """See the class notes (``None`` for a result built without its motions)."""
+        return None if self._motions is None else self._motions.observability
 
     @property
     def sdp_used(self) -> np.ndarray:
@@ -113,7 +120,7 @@ def _derivatives(M, R):
     D = vec(R[..., None, :, :] @ _GENERATORS)  # (..., 3, 9): row k = vec(R [e_k]x)
     Ps = 0.5 * (P + np.swapaxes(P, -1, -2))
     tr = np.trace(P, axis1=-2, axis2=-1)[..., None, None]
-    hess = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
+    hess = 2.0 * ((D @ M) @ np.swapaxes(D, -1, -2)) + 2.0 * (Ps - tr * np.eye(3))  # D M D^T: two products
     return g, grad, hess
 
 
@@ -182,9 +189,8 @@ def _lagrangian_upper_bound(M, R):
 def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
                   hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
     """:func:`chordal_optimal` on validated motions."""
-    K, J = m.K, m.J
-    M = 0.5 * (K + np.swapaxes(K, -1, -2))
-    start = relaxed_rotation(K) if init is None else check_init(init, m.batch_shape)
+    K, J, M = m.K, m.J, m.sym
+    start = _relaxed_from_vectors(m.sym_eigh[1]) if init is None else check_init(init, m.batch_shape)
     R, g, grad, hess, its = chordal_newton(K, start, max_iterations=max_iterations, gradient_tol=gradient_tol)
     grad_norm = np.linalg.norm(grad, axis=-1)
     hmin = eigvalsh3(-hess)[..., 0]
@@ -195,19 +201,20 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
         upper = np.asarray(_lagrangian_upper_bound(M, R), dtype=float)  # step 1 (fast path)
         ok = 2.0 * J * (upper - g) <= GAP_TOL * J
         how[ok] = "lagrangian"
-        R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
-        # the fallback may have replaced R: judge stationarity at the final answer
-        _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
-        grad_norm = np.linalg.norm(grad, axis=-1)
-        hmin = eigvalsh3(-hess)[..., 0]
-        local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
+        if not ok.all():
+            R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
+            # the fallback may have replaced R: judge stationarity at the final answer (else Newton's stands)
+            _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
+            grad_norm = np.linalg.norm(grad, axis=-1)
+            hmin = eigvalsh3(-hess)[..., 0]
+            local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     gap = np.clip(2.0 * J * (upper - g), 0.0, None)
     cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
     res = ChordalResult(
         R=R, cost=cost, gradient_norm=2.0 * grad_norm, hessian_min_eigenvalue=2.0 * hmin, iterations=its,
         local_minimum=local, lower_bound=cost - gap if certify else upper, duality_gap=gap if certify else upper,
         global_optimum=(gap <= GAP_TOL * J) & local & certify, certificate=how.astype(str),
-        observability=m.observability,
+        _motions=m,
     )
     if certify and not res.global_optimum.all():
         bad = ~res.global_optimum
@@ -271,6 +278,12 @@ def relaxed_rotation(K) -> np.ndarray:
     ndarray, shape (..., 3, 3)
     """
     M = 0.5 * (K + np.swapaxes(K, -1, -2))
-    _, vecs = np.linalg.eigh(M)
+    return _relaxed_from_vectors(np.linalg.eigh(M)[1][..., :, ::-1])
+
+
+def _relaxed_from_vectors(vecs) -> np.ndarray:
+    """:func:`relaxed_rotation` from the eigenvectors of ``sym(K)``, columns by descending eigenvalue (as
+    :attr:`replication.core.motions.Motions.sym_eigh` holds them: one decomposition serves the start and the
+    eigenvalues every solver's checks need)."""
     # eigenvector of the largest eigenvalue of sym(K); it has no sign, so take the one with det > 0
-    return nearest_rotation_up_to_sign(unvec(vecs[..., :, -1]))
+    return nearest_rotation_up_to_sign(unvec(vecs[..., :, 0]))

@@ -29,7 +29,7 @@ from ..so3 import (
     skew,
 )
 from ._registry import register
-from .certificate import relaxed_rotation
+from .certificate import _relaxed_from_vectors
 
 __all__ = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz"]
 
@@ -150,7 +150,7 @@ def andreff(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    return relaxed_rotation(motions.K)  # eq. (12): null vector of the stacked I - B kron A
+    return _relaxed_from_vectors(motions.sym_eigh[1])  # eq. (12): null vector of the stacked I - B kron A
 
 
 @register(

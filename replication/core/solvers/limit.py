@@ -36,9 +36,9 @@ def _check_variant(variant: str) -> None:
 
 
 def _fixed_point(m: Motions, init: np.ndarray, variant: str):
-    """Projected limits ``(right, left)`` and the signed unit limits ``(u, v)`` from the SVD of ``K``."""
-    U, _, Vt = m.svd
-    u1, v1 = U[..., :, 0], Vt[..., 0, :]
+    """Projected limits ``(right, left)`` and the signed unit limits ``(u, v)`` from the top singular vectors of
+    ``K`` (:attr:`~replication.core.motions.Motions.top_singular_vectors`, one ``eigh`` of ``K^T K``)."""
+    u1, _, v1 = m.top_singular_vectors
     # the iteration keeps the sign of <init, v1>; u1 is paired with v1 (K v1 = sigma1 u1)
     c = np.where(np.einsum("...i,...i->...", vec(init), v1) < 0, -1.0, 1.0)[..., None]
     u, v = c * u1, c * v1
@@ -59,7 +59,7 @@ def _check_unique_limit(m: Motions) -> None:
             "axis of B_1^T B_2), so the limit is R0 Rot(c, phi) with phi set by the start. Add motion pairs, or "
             "use a solver that needs only two non-parallel motions (chordal_optimal, park_martin, andreff)"
         )
-    s = m.svd[1]
+    s = m.singular_values
     gap = 1.0 - s[..., 1] / s[..., 0]
     repeated = gap <= REPEATED_TOL
     if np.any(repeated):
@@ -74,7 +74,7 @@ def _check_unique_limit(m: Motions) -> None:
 
 
 def two_step_fixed_point(A, B=None, init=None, *, variant: str = "corrected"):
-    """Limits of the projected two-step iterates, from the SVD of ``K``.
+    """Limits of the projected two-step iterates, from the top singular vectors of ``K``.
 
     Parameters
     ----------

@@ -61,7 +61,7 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
     ValueError
         Malformed or degenerate input (see :func:`replication.core.motions.prepare_motions`).
     """
-    m = prepare_motions(A, B)
+    m = prepare_motions(A, B, _sym_vectors=True)  # one decomposition of sym(K): the relaxed start and the checks
     warn_if_weak(m)
     return _chordal_core(m, init=init, max_iterations=max_iterations, gradient_tol=gradient_tol,
                          hessian_tol=hessian_tol, certify=certify)
