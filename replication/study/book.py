@@ -46,7 +46,7 @@ TITLES = {
     "converge_15_vs_30": "15 iterations for the two-step method, 30 for SQP",
     "fig5_resilience": "Fig. 5: the two-step method is more resilient to noise",
     "lab_protocol": "The lab protocol: 10 data sets of held orientations",
-    "lab_averaging": "Averaging each orientation raises the signal-to-noise ratio",
+    "lab_averaging": "Averaging each orientation, rather than all samples, raises the SNR",
     "fig6_consistency": "Fig. 6: the 10 lab estimates of R0 agree",
     "fig6_accuracy": "Fig. 6: consistency shows robustness and reproducibility",
     "table2_reduction": "Table II: calibration reduces the orientation difference",
