@@ -34,6 +34,7 @@ TITLES = {
     "noise_bound_angle": "A noise vector under 0.02 keeps the noise angle under 1 deg",
     "two_step_10_iterations": "About 10 iterations bring the two-step estimate close to R0",
     "cost_to_zero": "The cost (8) falls to 0 in 10 iterations",
+    "either_minimises": "Either R^l or R^r minimises the cost (8)",
     "faster_than_sqp": "The two-step method converges faster than SQP",
     "smoother_monotone": "Each iteration brings the estimate closer and the cost lower",
     "sqp_diverts": "SQP may drift from R0 while its cost falls",
