@@ -56,6 +56,7 @@ TITLES = {
     "table2_measures_calibration": "Table II: a smaller difference means a better calibration",
     "table2_rms": "Table II: calibrated RMS differences of 0.63-0.99 deg",
     "fig7_projection": "Fig. 7: the projected sensor traces follow the camera's",
+    "online_recalibration": "The method meets the requirements of online re-calibration",
 }
 
 #: Each verdict's mark and CSS class (``docs/_static/book.css`` colours them): told apart at a glance and in print.
