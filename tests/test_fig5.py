@@ -330,12 +330,31 @@ def _record_inputs():
                 found=found.sort_index(), fresh=fresh.sort_index(), matching=matching)
 
 
-def _record(**changes):
+RANGE_ROWS = [("0-30 deg", "to its limit"), ("0-30 deg", "50 iterations"), ("0-90 deg", "to its limit"),
+              ("120-180 deg", "to its limit")]
+
+
+def _ranges(shift=0.0):
+    """Synthetic :func:`range_sweep` output: growth ratio 1.04 [1.01, 1.08] to 1.7 [1.6, 1.9] where both converge,
+    the stopped two-step 0.55 [0.4, 0.7], 6 times less accurate than SQP at 1 deg."""
+    idx = pd.MultiIndex.from_tuples(RANGE_ROWS, names=["motions", "two-step"])
+    growth = pd.DataFrame({"sqp_failed_share": 0.0, "ratio": [1.04, 0.55, 1.1, 1.7], "low": [1.01, 0.4, 1.05, 1.6],
+                           "high": [1.08, 0.7, 1.15, 1.9]}, index=idx)
+    growth[["ratio", "low", "high"]] += shift
+    levels = pd.DataFrame({"ratio": [1.01, 1.0, 6.0, 2.0, 1.05, 1.1, 1.3, 1.5],
+                           "ratio_low": [0.99, 0.98, 5.0, 1.8, 1.0, 1.05, 1.2, 1.4]},
+                          index=pd.MultiIndex.from_tuples([k + (lv,) for k in RANGE_ROWS for lv in (1.0, 10.0)],
+                                                          names=["motions", "two-step", "sensor noise (deg)"]))
+    return levels, growth
+
+
+def _record(ranges=None, **changes):
     inputs = {**_record_inputs(), **changes}
+    ranges = ranges or {"found": _ranges(), "fresh": _ranges(0.01), "seeds": "root seeds 45000-45001 and 46000-46001"}
     return resilience_record(inputs["grid_levels"], inputs["stop_levels"], inputs["sets"], inputs["found"],
                              inputs["fresh"], inputs["matching"], 0.015, 0.003, n_runs=150,
                              seeds={"found": "root seeds 5000-5002", "fresh": "root seeds 6000-6001",
-                                    "tuning": "root seed 7000"})
+                                    "tuning": "root seed 7000"}, ranges=ranges)
 
 
 def test_resilience_record_is_a_valid_record_with_the_measured_numbers():
@@ -417,3 +436,68 @@ def test_an_end_within_the_margin_of_the_declared_bound_is_refused(low, high, en
 
     with pytest.raises(ValueError, match=f"failing SQP's change, {end}.*declare a wider one"):
         rounding_bound(low, high)
+
+
+def test_resilience_record_scopes_the_growth_over_motion_ranges():
+    ev = _record()["evidence"]
+    assert ev.startswith("wherever the two-step method converges, as in Table I")
+    assert "the growth ratio moves with the motion range, from 1.04 [1.01, 1.08] with motions 0-30 deg to 1.70 " \
+        "[1.60, 1.90] with motions 120-180 deg (fresh: 1.05 [1.02, 1.09] to 1.71 [1.61, 1.91])" in ev
+    assert "with motions 0-30 deg the growths nearly tie (lower bounds 1.01-1.02)" in ev
+    assert "stopped at the paper's 50 iterations with small motions (0-30 deg) does grow more slowly (growth ratio " \
+        "0.55, upper bounds 0.70; fresh 0.56), but only because it has not converged: at 1 deg its error is 6.0 " \
+        "times SQP's" in ev
+    levels, growth = _ranges()
+    growth.loc[RANGE_ROWS[0], "low"] = 0.99
+    fresh_levels, fresh_growth = _ranges()
+    fresh_growth.loc[RANGE_ROWS[0], "low"] = 1.0
+    ev = _record(ranges={"found": (levels, growth), "fresh": (fresh_levels, fresh_growth), "seeds": "s"})["evidence"]
+    assert "with motions 0-30 deg the growths tie." in ev
+
+
+@pytest.mark.parametrize("which", ["found", "fresh"])
+@pytest.mark.parametrize("row, column, ok, bad, message", [
+    (RANGE_ROWS[0], "high", 1.0, 0.999, "no growth ratio's upper 95 % bound below 1 where both converge"),
+    (RANGE_ROWS[3], "low", 1.081, 1.08, "the widest motions resolved above that with the narrowest"),
+    (RANGE_ROWS[1], "sqp_failed_share", 0.0, 0.01, "SQP at the minimum of (8) in every run"),
+])
+def test_resilience_record_checks_the_motion_ranges_at_their_thresholds(which, row, column, ok, bad, message):
+    for value, raises in ((ok, False), (bad, True)):
+        levels, growth = _ranges()
+        growth.loc[row, column] = value
+        ranges = {"found": _ranges(), "fresh": _ranges(), "seeds": "s", which: (levels, growth)}
+        if raises:
+            with pytest.raises(ValueError, match=r"claim 'fig5_resilience': .*" + re.escape(message)):
+                _record(ranges=ranges)
+        else:
+            assert _record(ranges=ranges)["verdict"] == "fails"
+
+
+@pytest.mark.parametrize("which", ["found", "fresh"])
+def test_a_stopped_two_step_that_grows_more_slowly_must_be_the_less_accurate(which):
+    for value, raises in ((1.001, False), (1.0, True)):
+        levels, growth = _ranges()
+        levels.loc[RANGE_ROWS[1] + (1.0,), "ratio_low"] = value
+        ranges = {"found": _ranges(), "fresh": _ranges(), "seeds": "s", which: (levels, growth)}
+        if raises:
+            with pytest.raises(ValueError, match=r"grows resolved more slowly is the less accurate at 1 deg"):
+                _record(ranges=ranges)
+        else:
+            assert _record(ranges=ranges)["verdict"] == "fails"
+
+
+def test_range_sweep_runs_both_two_step_variants_on_one_set_of_problems():
+    from replication.study.fig5 import CONVERGED, range_sweep, range_table
+
+    per_level, growth = range_sweep([1.0, 10.0], 12, 45000, np.random.default_rng(0),
+                                    ranges={"0-30 deg": (0.0, 30.0), "0-90 deg": (0.0, 90.0)},
+                                    stop_short={"0-30 deg": 50}, n_boot=50)
+    assert list(growth.index) == [("0-30 deg", CONVERGED), ("0-30 deg", "50 iterations"), ("0-90 deg", CONVERGED)]
+    # the same problems and SQP: only the two-step error differs between the variants of one range
+    a, b = (per_level.loc[("0-30 deg", v)] for v in (CONVERGED, "50 iterations"))
+    assert np.array_equal(a["sqp"], b["sqp"]) and not np.allclose(a["two_step"], b["two_step"])
+    assert (a["two_step"] < b["two_step"]).all()  # stopped at 50 with small motions: farther from R0
+    table = range_table(per_level, growth)
+    assert list(table.columns) == ["SQP runs off the minimum", "two-step / SQP at 1 deg", "growth ratio"]
+    with pytest.raises(ValueError, match="stop_short names ranges"):
+        range_sweep([1.0, 10.0], 2, 1, np.random.default_rng(0), ranges={"a": None}, stop_short={"b": 50})

@@ -353,9 +353,14 @@ def test_diverting_table_with_fake_runs():
     cost = np.array([[9.0, 5.0, 4.0, 1.0], [9.0, 5.0, 4.0, 3.0]])   # always falling: every error rise diverts
     iterates = np.broadcast_to(np.eye(3), (2, 4, 3, 3)).copy()
     iterates[0, 2] *= 2.0                                           # run 0's rise (iteration 3) is off SO(3)
-    scale_runs = {("s", "as printed"): (SimpleNamespace(iterates=iterates, cost=cost), err)}
-    settings = {"s": (None, {"ours_right": err[::-1]}, {"ours_right": cost[::-1]})}
+    # the projected iterates read against R0 = I: run 0's projected error only falls, run 1's rises at iteration 3
+    proj_err = np.array([[1.0, 0.5, 0.4, 0.01], [1.0, 0.5, 0.6, 0.7]])
+    angles = 2 * np.arcsin(proj_err / (2 * np.sqrt(2)))
+    projected = exp_map(angles[..., None] * np.array([0.0, 0.0, 1.0]))
+    scale_runs = {("s", "as printed"): (SimpleNamespace(iterates=iterates, cost=cost, projected=projected), err)}
+    settings = {"s": (SimpleNamespace(R0=np.broadcast_to(np.eye(3), (2, 3, 3))), {"ours_right": err[::-1]},
+                      {"ours_right": cost[::-1]})}
     div = diverting_table(scale_runs, settings, ["s"], scale_names=("as printed",), bar=0.05, n_runs=1)
-    assert list(div.columns) == ["diverts, error > 0.05", "... and on a rotation"]
-    assert div.loc[("s", "SQP, eq. (8) as printed")].tolist() == [0.5, 0.0]
-    assert div.loc[("s", "two-step R^r")].tolist() == [0.0, 0.0]   # its first run rises to 0.03 only
+    assert list(div.columns) == ["diverts, error > 0.05", "... and on a rotation", "... read on projected iterates"]
+    assert div.loc[("s", "SQP, eq. (8) as printed")].tolist() == [0.5, 0.0, 0.5]
+    assert div.loc[("s", "two-step R^r")].tolist() == [0.0, 0.0, 0.0]   # its first run rises to 0.03 only

@@ -34,6 +34,7 @@ TITLES = {
     "noise_bound_angle": "A noise vector under 0.02 keeps the noise angle under 1 deg",
     "two_step_10_iterations": "About 10 iterations bring the two-step estimate close to R0",
     "cost_to_zero": "The cost (8) falls to 0 in 10 iterations",
+    "either_minimises": "Either R^l or R^r minimises the cost (8)",
     "faster_than_sqp": "The two-step method converges faster than SQP",
     "smoother_monotone": "Each iteration brings the estimate closer and the cost lower",
     "sqp_diverts": "SQP may drift from R0 while its cost falls",
@@ -46,7 +47,7 @@ TITLES = {
     "converge_15_vs_30": "15 iterations for the two-step method, 30 for SQP",
     "fig5_resilience": "Fig. 5: the two-step method is more resilient to noise",
     "lab_protocol": "The lab protocol: 10 data sets of held orientations",
-    "lab_averaging": "Averaging each orientation raises the signal-to-noise ratio",
+    "lab_averaging": "Averaging each orientation, rather than all samples, raises the SNR",
     "fig6_consistency": "Fig. 6: the 10 lab estimates of R0 agree",
     "fig6_accuracy": "Fig. 6: consistency shows robustness and reproducibility",
     "table2_reduction": "Table II: calibration reduces the orientation difference",
@@ -55,6 +56,7 @@ TITLES = {
     "table2_measures_calibration": "Table II: a smaller difference means a better calibration",
     "table2_rms": "Table II: calibrated RMS differences of 0.63-0.99 deg",
     "fig7_projection": "Fig. 7: the projected sensor traces follow the camera's",
+    "online_recalibration": "The method meets the requirements of online re-calibration",
 }
 
 #: Each verdict's mark and CSS class (``docs/_static/book.css`` colours them): told apart at a glance and in print.

@@ -17,7 +17,8 @@ fastchain     the seed studies' faster equivalents of chain steps: :func:`refine
               (PnP on many frames at once), :func:`ecompass_attitudes`, :func:`madgwick_marg`
 study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`seed_study`,
               :func:`seed_spread`, :func:`seed_findings` (counts with Wilson intervals, means
-              with standard errors), :func:`count_text`, :func:`sqp_shares`, :func:`seed_range`
+              with standard errors), :func:`count_text`, :func:`sqp_shares`, :func:`seed_range`,
+              :func:`pitch_bias_intervention`, :func:`intervention_finding` (one part switched off, many seeds)
 claims        :func:`lab_claims`: the notebook's ledger records on the lab experiment
 ============  ==========================================================================
 
@@ -51,7 +52,7 @@ _LAZY = {
     "refine_camera_orientations": "fastchain", "ecompass_attitudes": "fastchain", "madgwick_marg": "fastchain",
     "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study", "seed_spread": "study",
     "seed_findings": "study", "count_text": "study", "sqp_shares": "study", "check_sqp_shares": "study",
-    "seed_range": "study",
+    "seed_range": "study", "pitch_bias_intervention": "study", "intervention_finding": "study", "RESOLVE_DEG": "study",
     "lab_claims": "claims",
 }
 

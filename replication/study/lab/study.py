@@ -17,11 +17,12 @@ from ...core.solvers import ReplicationWarning, solve, sqp
 from ...core.stats import ROUNDING_RUNS, declared_bound, mean_se, wilson_interval
 from ..table2 import projection_statistics
 from .chain import LabResult, run_lab, static_motions
-from .settings import SOURCES, TABLE2_SOLVERS, LabSettings
+from .settings import PARTS, SOURCES, TABLE2_SOLVERS, LabSettings
 from .simulate import simulate_lab
 
 __all__ = ["summarize", "ablation", "sensitivity", "seed_study", "seed_spread", "seed_findings", "count_text",
-           "sqp_shares", "check_sqp_shares", "seed_range"]
+           "sqp_shares", "check_sqp_shares", "seed_range", "pitch_bias_intervention", "intervention_finding",
+           "RESOLVE_DEG"]
 
 
 #: The declared bound (deg) of the change of the two-step error with every sample instead of each orientation's mean,
@@ -198,6 +199,58 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
             row["rms_true_R0" + tag] = float(off_true["rms_deg"].mean())
         rows.append(row)
     return pd.DataFrame(rows).set_index("seed")
+
+
+#: The share (deg of |pitch bias|) the magnetometer intervention must resolve (issue 36): its 95 % interval on each
+#: set of seeds must be narrower than this on either side of its mean, or no verdict is drawn from it.
+RESOLVE_DEG = 0.1
+
+
+def pitch_bias_intervention(seeds, part: str, settings: LabSettings = LabSettings()) -> pd.DataFrame:
+    """Table II's pitch bias with the true ``R0`` per seed, as it is and with one error source or part switched off.
+
+    The same numbers as :func:`seed_study`'s ``pitch_bias_true_R0`` and ``pitch_bias_true_R0_without_<part>``
+    (``tests/test_lab_claims.py``), without the calibrations: the projection uses the true ``R0``, so only the
+    dynamic trial is run (the camera's attitudes once, the AHRS filter on both recordings), about a third of the
+    time, for the many seeds that resolving a small share needs.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index ``seed``; columns ``pitch_bias`` and ``pitch_bias_without`` (deg).
+    """
+    known = {**SOURCES, **PARTS}
+    if part not in known:
+        raise ValueError(f"unknown error source or part {part!r}; known: {', '.join(known)}")
+    rows = []
+    for seed in seeds:
+        seeded = dataclasses.replace(settings, seed=int(seed))
+        recording = simulate_lab(seeded)
+        result = run_lab(recording, {}, fast=True)
+        off_recording = simulate_lab(seeded.without(part))
+        if not off_recording.dynamic_markers.equals(recording.dynamic_markers):
+            raise ValueError(f"switching {part!r} off changed the marker pixels: the camera cannot be reused")
+        off = run_lab(off_recording, {}, fast=True, dynamic_camera=result.dynamic["camera_from_world"])
+        rows.append({"seed": int(seed),
+                     "pitch_bias": float(projection_statistics(result, result.truth).loc["pitch", "mean_deg"]),
+                     "pitch_bias_without": float(projection_statistics(off, off.truth).loc["pitch", "mean_deg"])})
+    return pd.DataFrame(rows).set_index("seed")
+
+
+def intervention_finding(frame: pd.DataFrame, *, resolve: float = RESOLVE_DEG) -> dict:
+    """The change of ``|pitch bias|`` with the part switched off (:func:`pitch_bias_intervention`), paired per seed.
+
+    Returns ``dict`` with ``value`` (mean change, deg), ``se``, ``low`` / ``high`` (its 95 % interval, mean ± 1.96
+    SE), ``n``, ``abs_pitch_bias`` (mean ``|pitch bias|`` as it is), ``resolved`` (the interval excludes 0),
+    ``fine`` (the interval's half-width below ``resolve``: a share of that size would be resolved) and ``text``
+    (``"mean ± SE [low, high]"``).
+    """
+    change = frame["pitch_bias_without"].abs() - frame["pitch_bias"].abs()
+    m, se = mean_se(change.to_numpy(dtype=float))
+    low, high = m - 1.96 * se, m + 1.96 * se
+    return {"value": float(m), "se": float(se), "low": float(low), "high": float(high), "n": len(frame),
+            "abs_pitch_bias": float(frame["pitch_bias"].abs().mean()), "resolved": bool(low > 0 or high < 0),
+            "fine": bool(1.96 * se < resolve), "text": f"{m:.3f} ± {se:.3f} [{low:.3f}, {high:.3f}]"}
 
 
 def seed_spread(values: pd.Series, digits: int = 2) -> str:

@@ -376,8 +376,9 @@ def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("a
     """Share of runs that "divert" (:func:`diverting_runs`) with one absolute error bar for every method.
 
     Per setting label: SQP at each cost scale (its raw iterates; second column: only iterations whose raw
-    iterate is within :data:`FEASIBLE_TOL` of a rotation, where a lower cost (8) means a better rotation), then
-    the two-step method on its first ``n_runs`` runs (always a rotation: both columns equal).
+    iterate is within :data:`FEASIBLE_TOL` of a rotation, where a lower cost (8) means a better rotation; third: the
+    error read on the projected iterates, the nearest rotations, against the raw iterates' cost), then the two-step
+    method on its first ``n_runs`` runs (always a rotation: the columns equal).
 
     Parameters
     ----------
@@ -395,21 +396,23 @@ def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("a
     Returns
     -------
     DataFrame
-        Index ``(label, "SQP, eq. (8) <scale>" | "two-step R^r")``; columns ``"diverts, error > <bar>"`` and
-        ``"... and on a rotation"`` (shares).
+        Index ``(label, "SQP, eq. (8) <scale>" | "two-step R^r")``; columns ``"diverts, error > <bar>"``,
+        ``"... and on a rotation"`` and ``"... read on projected iterates"`` (shares).
     """
     rows = {}
-    col, col_rot = f"diverts, error > {bar:g}", "... and on a rotation"
+    col, col_rot, col_proj = f"diverts, error > {bar:g}", "... and on a rotation", "... read on projected iterates"
     for label in labels:
         for name in scale_names:
             r, e = scale_runs[(label, name)]
             feasible = orthonormality_residual(r.iterates) < FEASIBLE_TOL
+            proj = frobenius_error(r.projected, settings[label][0].R0[:len(e), None])
             rows[(label, f"SQP, eq. (8) {name}")] = {
                 col: diverting_runs(e, r.cost, min_error=bar).mean(),
-                col_rot: diverting_runs(e, r.cost, min_error=bar, feasible=feasible).mean()}
+                col_rot: diverting_runs(e, r.cost, min_error=bar, feasible=feasible).mean(),
+                col_proj: diverting_runs(proj, r.cost, min_error=bar).mean()}
         e, c = settings[label][1][method][:n_runs], settings[label][2][method][:n_runs]
-        rows[(label, "two-step R^r")] = {col: diverting_runs(e, c, min_error=bar).mean(),
-                                         col_rot: diverting_runs(e, c, min_error=bar).mean()}
+        share = diverting_runs(e, c, min_error=bar).mean()
+        rows[(label, "two-step R^r")] = {col: share, col_rot: share, col_proj: share}
     return pd.DataFrame(rows).T
 
 
