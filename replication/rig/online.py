@@ -18,10 +18,10 @@ too small). The motion so far *determines* ``R0`` when
 * the excitation is at least :data:`MIN_EXCITATION_DEG` (single-axis motion, a rig turning at constant speed, or a
   rig at rest never get there: about the shared axis the data say nothing, whatever they say about the noise), and
 * the effective number of distinct pairs, ``(sum w)^2 / sum w^2`` over the pairs added, is at least ``min_pairs``.
-  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise: a stalled
-  stream re-sending its last pair, a recording fed twice) adds no information and shares the earlier pair's noise: it
-  is counted (:attr:`OnlineCalibrator.duplicates`) and not added. Pairs whose camera and sensor motions are both
-  below :data:`SMALL_MOTION_DEG` are never called repeats (a rig at rest repeats the identity with independent noise).
+  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise, or a tenth
+  of the pairs' noise once known, at most 5 times that: a stalled stream, a recording fed twice, copies with a tiny
+  jitter) adds no information and shares the earlier pair's noise: counted (:attr:`OnlineCalibrator.duplicates`), not
+  added (:class:`replication.rig.online_events.RepeatFilter`; motions at rest are never repeats).
 
 **The radius.** With independent, isotropic pair residuals of mean square ``s^2`` (``s^2 / 3`` per axis),
 ``cov(w) = (s^2 / 3) G^{-1}`` (with forgetting, the weighted form ``G^{-1} G_2 G^{-1}``). ``s^2`` comes from the cost
@@ -32,10 +32,10 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.rig.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs do not agree on a
-rotation the radius does not allow (:class:`replication.rig.online_guard.MisfitGuard`: within a few pairs of a
-re-mount, before the detector decides), and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not
-``fail``: the batch verdict's checks and thresholds). :meth:`OnlineCalibrator.status` says which fails, with its number.
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs (a run of high
+residuals, the last 20, 80, 160 or 320) do not agree on a rotation the radius does not allow
+(:class:`replication.rig.online_guard.MisfitGuard`: a re-mount smaller than the noise, before the detector decides;
+the published radius then includes their angle), and the verdict is not ``fail`` (the batch checks and thresholds).
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
 trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
@@ -111,8 +111,7 @@ class OnlineCalibrator:
     confirm_pairs : int
         Pairs in the confirmation window after an alarm (at least 5).
     noise_floor_deg, min_excitation_deg, duplicate_deg : float
-        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG` and :data:`DUPLICATE_DEG` (``duplicate_deg = 0``:
-        exact repeats only).
+        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG`, :data:`DUPLICATE_DEG` (0: exact repeats only).
     init : array_like (3, 3), optional
         Start of the iteration (default identity).
 
@@ -132,8 +131,8 @@ class OnlineCalibrator:
                  step_every: int = 5, refine_every: int = 10, min_pairs: int = MIN_PAIRS,
                  cusum_k: float = 2.0, cusum_h: float = 30.0, cusum_cap: float = 10.0, reference_rate: float = 1 / 30,
                  confirm_pairs: int = 10, max_confirm_pairs: int = 60, drift_pairs: int = 50,
-                 noise_floor_deg: float = NOISE_FLOOR_DEG,
-                 min_excitation_deg: float = MIN_EXCITATION_DEG, duplicate_deg: float = DUPLICATE_DEG, init=None):
+                 noise_floor_deg: float = NOISE_FLOOR_DEG, min_excitation_deg: float = MIN_EXCITATION_DEG,
+                 duplicate_deg: float = DUPLICATE_DEG, init=None):
         for name, value in (("target_deg", target_deg), ("cusum_h", cusum_h), ("cusum_k", cusum_k),
                             ("noise_floor_deg", noise_floor_deg), ("min_excitation_deg", min_excitation_deg)):
             check_number(name, value, minimum=0)
@@ -171,6 +170,7 @@ class OnlineCalibrator:
         self.duplicates = 0
         self.pairs_dropped = 0
         self._repeats = RepeatFilter(self.duplicate_deg)
+        self._repeats.set_noise(math.inf)  # before the noise is known: the widest tolerance
         self._detector = ChangeDetector(k=self.cusum_k, h=self.cusum_h, cap=self.cusum_cap,
                                         reference_rate=self.reference_rate, confirm_pairs=self.confirm_pairs,
                                         max_confirm_pairs=self.max_confirm_pairs, drift_pairs=self.drift_pairs,
@@ -242,7 +242,8 @@ class OnlineCalibrator:
 
     n_pairs = property(lambda self: self._n, doc="Pairs since the last (re)start, repeats excluded.")
 
-    radius = property(lambda self: self._radius, doc="The current error radius (degrees) at :attr:`level`.")
+    radius = property(lambda self: self._detector.guard.widen(self._radius), doc="The error radius (deg) at :attr:"
+                      "`level`; while recent pairs misfit, widened by their angle to the estimate.")
 
     @property
     def excitation_deg(self) -> float:
@@ -272,7 +273,7 @@ class OnlineCalibrator:
         return self._detector.undecided(MISFITS_WITHDRAW_READY)
 
     def _state(self, event) -> OnlineState:
-        return OnlineState(self._n, self._R, self._radius, self.ready, event == "remount", event, self.determined,
+        return OnlineState(self._n, self._R, self.radius, self.ready, event == "remount", event, self.determined,
                            self._detector.checking, self._refined)
 
     # ------------------------------------------------------------------------------------------------ update
@@ -372,6 +373,7 @@ class OnlineCalibrator:
         n_eff = self._n_eff
         s2 = cost / self._w * n_eff / (2.0 * max(n_eff - 3.0, 1.0))       # mean square residual angle per pair
         self._s2 = s2 = max(s2, math.radians(self.noise_floor_deg) ** 2)   # never below a real sensor's noise
+        self._repeats.set_noise(math.degrees(math.sqrt(s2)))               # near-copies far below it: repeats
         G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
         lam, V = np.linalg.eigh(G)
         self._excitation = math.degrees(math.sqrt(max(float(lam[0]), 0.0) / self._w))

@@ -35,7 +35,8 @@ _EYE = np.eye(3)
 
 __all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_deg", "drift_step",
            "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
-           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard",
+           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "GUARD_LONG_WINDOWS",
+           "MisfitGuard",
            "misfit_test"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
@@ -48,6 +49,10 @@ GUARD_MIN_PAIRS = 3
 GUARD_WINDOW = 20
 #: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
 GUARD_EVERY = 20
+#: Longer windows ``(pairs, every)``: the last ``pairs`` pairs tested every ``every`` pairs. A re-mount smaller than the
+#: pair noise (0.55-0.9 deg at 1 deg of noise) shows in no 20 pairs: the estimate's statistic grows with the window
+#: (about ``N angle^2 / s^2``), 0.55 deg at 1 deg of noise passes :data:`GUARD_LEVEL` in about 200 pairs.
+GUARD_LONG_WINDOWS = ((80, 20), (160, 20), (320, 40))
 #: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
 #: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
 #: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
@@ -141,11 +146,24 @@ class MisfitGuard:
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
         self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
-        self.clear()
+        self._ring = np.empty((max(n for n, _ in GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for long windows
+        self.forget()
 
     @property
     def misfit(self):
-        return self.run_misfit or self.window_misfit
+        return self.run_misfit or self.window_misfit or self.long_misfit
+
+    @property
+    def long_misfit(self):
+        """The long window whose test withdrew ``ready`` (of several, the highest statistic), or None."""
+        held = [m for m in self._long.values() if m is not None]
+        return max(held, key=lambda m: m[2]) if held else None
+
+    def widen(self, radius: float) -> float:
+        """The radius to publish: while the recent pairs agree on a rotation the radius does not allow, the estimate
+        may be that far off (their angle added); else ``radius``."""
+        m = self.misfit
+        return radius if m is None or not math.isfinite(m[1]) else radius + m[1]
 
     def describe(self) -> str:
         """The sentence for ``not_ready`` while :attr:`misfit` is set."""
@@ -155,9 +173,17 @@ class MisfitGuard:
                 f"change, not decided yet")
 
     def clear(self) -> None:
-        """Forget every pair (a decision, a start)."""
+        """Forget the run and the short window (a decision, a start); the long windows keep their pairs (still in
+        the estimate) until :meth:`forget` (a re-mount: a new guard)."""
         self._clear_run()
         self.window_misfit, self._since_window = None, 0
+
+    def forget(self) -> None:
+        """Forget the long windows' pairs too."""
+        self.clear()
+        self._long = {n: None for n, _ in GUARD_LONG_WINDOWS}     # per long window: its misfit or None
+        self._since_long = {n: 0 for n, _ in GUARD_LONG_WINDOWS}
+        self._count = 0      # pairs in the ring (since the last clear)
 
     def _clear_run(self) -> None:
         self.pairs.clear()
@@ -175,6 +201,21 @@ class MisfitGuard:
         elif stat <= self.clear_threshold:  # withdrawn until a window fits at a usual level (hysteresis)
             self.window_misfit = None
 
+    def _scan_long(self, R, cov, s2) -> None:
+        """The long windows that are due (:data:`GUARD_LONG_WINDOWS`), on the ring of the last pairs added."""
+        size, count = len(self._ring), self._count
+        for n, every in GUARD_LONG_WINDOWS:
+            self._since_long[n] += 1
+            if self._since_long[n] < every or count < n:
+                continue
+            self._since_long[n] = 0
+            window = self._ring[np.arange(count - n, count) % size]
+            stat, angle = misfit_test(R, cov, s2, window[:, 0], window[:, 1])
+            if stat > self.threshold:
+                self._long[n] = (n, angle, stat, self.threshold)
+            elif stat <= self.clear_threshold:
+                self._long[n] = None
+
     def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
         """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
         mean square residual); ``recent``: the last pairs added, this one included (a sequence of ``(A, B)``)."""
@@ -182,6 +223,10 @@ class MisfitGuard:
         self._since_window += 1
         if self._since_window >= GUARD_EVERY and len(recent) >= GUARD_WINDOW:
             self._scan(R, cov, s2, recent)
+        slot = self._ring[self._count % len(self._ring)]
+        slot[0], slot[1] = A, B
+        self._count += 1
+        self._scan_long(R, cov, s2)
         total = self.sum + z - GUARD_K
         if total <= 0.0:
             if self.sum:
