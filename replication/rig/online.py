@@ -62,7 +62,7 @@ from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
-from .online_guard import drift_lag_deg, follow_drift, recognise_drift
+from .online_guard import detector_reasons, drift_lag_deg, follow_drift, recognise_drift, track_drift
 
 __all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
@@ -176,7 +176,7 @@ class OnlineCalibrator:
                                         max_confirm_pairs=self.max_confirm_pairs, drift_pairs=self.drift_pairs,
                                         min_excitation_deg=self.min_excitation_deg,
                                         noise_floor_deg=self.noise_floor_deg, d2_floor=D2_FLOOR)
-        self._recent_motion = deque(maxlen=RECENT_PAIRS)
+        self._recent_motion, self._track = deque(maxlen=RECENT_PAIRS), deque(maxlen=400)  # track: (pair, R) of a drift
         self._context: dict = {}
         self.restart()
 
@@ -203,8 +203,7 @@ class OnlineCalibrator:
         self._rearm = False
         self._detector.reset()
         self._recent_res = deque(maxlen=RECENT_PAIRS)   # residual angles (deg) of pairs on arrival, once armed
-        self._verdict = None
-        self._refined = False
+        self._verdict, self._refined, self._told = None, False, None  # _told: an event of a refinement, not yet told
 
     def _flush(self) -> None:
         """Add the buffered pairs to the running sums (one batched product; weights lambda^age)."""
@@ -273,6 +272,7 @@ class OnlineCalibrator:
         return self._detector.undecided(MISFITS_WITHDRAW_READY)
 
     def _state(self, event) -> OnlineState:
+        event, self._told = event or self._told, None
         return OnlineState(self._n, self._R, self.radius, self.ready, event == "remount", event, self.determined,
                            self._detector.checking, self._refined)
 
@@ -360,6 +360,8 @@ class OnlineCalibrator:
         self._R = self._warm = R[int(np.argmax(g))]
         self._refined = True
         cost = self._update_radius()
+        if self._drift_rate is not None and track_drift(self):  # a drift followed: its rate measured on the track
+            cost, self._told = self._update_radius(), "drift_end"  # it stopped: no lag any more; said at this pair
         if self.determined and (not self._detector.armed or self._rearm):
             # the detector starts (or its reference restarts) once the motion determines R0
             self._rearm = False
@@ -486,13 +488,7 @@ class OnlineCalibrator:
             why.append(f"the motion does not determine R0: RMS rotation about axes perpendicular to "
                        f"{np.round(axis, 3).tolist() if axis else 'any axis'} (sensor frame) is "
                        f"{self._excitation:.3g} deg < {self.min_excitation_deg:g} deg; rotate about other axes")
-        if self._detector.checking:
-            why.append(f"a change is being confirmed ({len(self._detector.window)} of {self._detector.target} pairs)")
-        elif self._detector.misfits >= MISFITS_WITHDRAW_READY:
-            why.append(f"{self._detector.misfits} recent pairs do not fit the estimate (d^2 above "
-                       f"{self._detector.cap:g} x its level): a change or outliers, not decided yet")
-        if self._detector.guard.misfit is not None:
-            why.append(self._detector.guard.describe())
+        why += detector_reasons(self._detector, MISFITS_WITHDRAW_READY)
         if not self._radius < self.target_deg:
             why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
         if self._verdict is not None and self._verdict.level == "fail":

@@ -46,9 +46,10 @@ __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
            "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
-#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, and ``drift`` (a
-#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`).
-EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift")
+#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, ``drift`` (a
+#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a
+#: drift followed that stopped: :func:`replication.rig.online_guard.track_drift`).
+EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
 #: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
@@ -65,10 +66,9 @@ TRIM_FACTOR = 9.0
 #: an angle) are one pair repeated: independent measurements of real motion never agree that closely in all six
 #: degrees of freedom (the sensors' noise over a pairing interval is 0.005-0.5 deg).
 DUPLICATE_DEG = 0.01
-#: Once the pairs' noise is known (RMS residual ``s``), a pair within this share of ``s`` of an earlier one is a repeat
-#: too (a copy with a jitter far below the noise carries the same noise: counted once); at most
-#: :data:`REPEAT_MAX_FACTOR` times ``duplicate_deg``. Independent measurements of one motion differ by about ``0.6 s``
-#: per axis: all six axes within ``0.1 s`` by chance has odds below 1e-5.
+#: Once the pairs' noise ``s`` (RMS residual) is known, a pair within this share of ``s`` of an earlier one is a repeat
+#: too (a copy jittered far below the noise has the same noise), at most :data:`REPEAT_MAX_FACTOR` x ``duplicate_deg``:
+#: independent measurements of one motion differ by about ``0.6 s`` per axis (all six within ``0.1 s``: odds < 1e-5).
 REPEAT_NOISE_SHARE = 0.1
 REPEAT_MAX_FACTOR = 5.0
 #: Pairs whose camera and sensor motions are both below this (deg) are never called repeats (a rig at rest).

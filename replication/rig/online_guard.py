@@ -37,7 +37,7 @@ __all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_de
            "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
            "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "GUARD_LONG_WINDOWS",
            "MisfitGuard",
-           "misfit_test"]
+           "misfit_test", "track_drift", "detector_reasons", "TRACK_MEMORIES", "TRACK_MIN_PAIRS", "TRACK_Z"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
 #: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
@@ -53,6 +53,7 @@ GUARD_EVERY = 20
 #: pair noise (0.55-0.9 deg at 1 deg of noise) shows in no 20 pairs: the estimate's statistic grows with the window
 #: (about ``N angle^2 / s^2``), 0.55 deg at 1 deg of noise passes :data:`GUARD_LEVEL` in about 200 pairs.
 GUARD_LONG_WINDOWS = ((80, 20), (160, 20), (320, 40))
+GUARD_LONG_EVERY = 20  # the largest common divisor of their ``every`` (and of their ``n``): when any may be due
 #: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
 #: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
 #: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
@@ -156,8 +157,7 @@ class MisfitGuard:
     @property
     def long_misfit(self):
         """The long window whose test withdrew ``ready`` (of several, the highest statistic), or None."""
-        held = [m for m in self._long.values() if m is not None]
-        return max(held, key=lambda m: m[2]) if held else None
+        return self._long_worst
 
     def widen(self, radius: float) -> float:
         """The radius to publish: while the recent pairs agree on a rotation the radius does not allow, the estimate
@@ -182,7 +182,7 @@ class MisfitGuard:
         """Forget the long windows' pairs too."""
         self.clear()
         self._long = {n: None for n, _ in GUARD_LONG_WINDOWS}     # per long window: its misfit or None
-        self._since_long = {n: 0 for n, _ in GUARD_LONG_WINDOWS}
+        self._long_worst = None
         self._count = 0      # pairs in the ring (since the last clear)
 
     def _clear_run(self) -> None:
@@ -202,19 +202,20 @@ class MisfitGuard:
             self.window_misfit = None
 
     def _scan_long(self, R, cov, s2) -> None:
-        """The long windows that are due (:data:`GUARD_LONG_WINDOWS`), on the ring of the last pairs added."""
+        """The long windows due at this pair (:data:`GUARD_LONG_WINDOWS`: the first once the ring holds ``n`` pairs,
+        then every ``every``), on the ring of the last pairs added."""
         size, count = len(self._ring), self._count
         for n, every in GUARD_LONG_WINDOWS:
-            self._since_long[n] += 1
-            if self._since_long[n] < every or count < n:
+            if count < n or (count - n) % every:
                 continue
-            self._since_long[n] = 0
             window = self._ring[np.arange(count - n, count) % size]
             stat, angle = misfit_test(R, cov, s2, window[:, 0], window[:, 1])
             if stat > self.threshold:
                 self._long[n] = (n, angle, stat, self.threshold)
             elif stat <= self.clear_threshold:
                 self._long[n] = None
+        held = [m for m in self._long.values() if m is not None]
+        self._long_worst = max(held, key=lambda m: m[2]) if held else None
 
     def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
         """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
@@ -226,7 +227,8 @@ class MisfitGuard:
         slot = self._ring[self._count % len(self._ring)]
         slot[0], slot[1] = A, B
         self._count += 1
-        self._scan_long(R, cov, s2)
+        if self._count % GUARD_LONG_EVERY == 0:
+            self._scan_long(R, cov, s2)
         total = self.sum + z - GUARD_K
         if total <= 0.0:
             if self.sum:
@@ -310,7 +312,8 @@ def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
     new memory; no restart. Returns the event."""
     import dataclasses
 
-    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start
+    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start; its track begins
+        cal._track.clear()
         cal.events = [e for e in cal.events if not (e.kind == "remount" and e.pair == first)]
         cal.alarms = [a for a in cal.alarms if a != first]
     cal._flush()
@@ -340,3 +343,81 @@ def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> fl
     """The lag (deg) behind a drift of an estimate with forgetting ``lambda`` refined every ``every`` pairs: ``rate x
     (lambda / (1 - lambda) + every)`` (the weighted mean age of its pairs, and the pairs since its last refinement)."""
     return rate_deg_per_pair * (forgetting / (1.0 - forgetting) + every)
+
+
+# ------------------------------------------------------------------------------------------------ a drift followed
+#: While following a drift, its rate is measured again on the estimate's own track: the movement along the drift's
+#: axis between the estimate now and the one at least :data:`TRACK_MEMORIES` memories (``(1 + lambda) / (1 - lambda)``
+#: pairs) and :data:`TRACK_MIN_PAIRS` pairs ago (two nearly independent estimates). A movement that differs from the
+#: one the rate followed predicts by more than :data:`TRACK_Z` standard errors is a new rate (a drift that speeds up
+#: or slows down), or, nearer none than that prediction (below half of it), a drift that stopped: said
+#: (``drift_end``), and the estimator returns to its own memory. Over a memory the rate followed moves the estimate
+#: about twice its lag (half the target), so over 1.5 memories 0.375 deg at the default target.
+TRACK_MEMORIES = 1.5
+TRACK_MIN_PAIRS = 100
+TRACK_Z = 3.0
+
+
+def detector_reasons(detector, misfits_withdraw: int) -> list[str]:
+    """The sentences of ``not_ready`` the change detector (:class:`replication.rig.online_events.ChangeDetector`) and
+    its guard give: a change being confirmed, ``misfits_withdraw`` gross misfits or more, the recent pairs' misfit."""
+    why = []
+    if detector.checking:
+        why.append(f"a change is being confirmed ({len(detector.window)} of {detector.target} pairs)")
+    elif detector.misfits >= misfits_withdraw:
+        why.append(f"{detector.misfits} recent pairs do not fit the estimate (d^2 above {detector.cap:g} x its "
+                   f"level): a change or outliers, not decided yet")
+    if detector.guard.misfit is not None:
+        why.append(detector.guard.describe())
+    return why
+
+
+def track_drift(cal):
+    """Measure the drift followed by ``cal`` (:class:`replication.rig.online.OnlineCalibrator`) on its track of
+    estimates (see :data:`TRACK_MEMORIES`) and act: a new rate (forgetting and the drift event updated), or the drift's
+    end (event ``drift_end``, forgetting back to the calibrator's own). Returns the kind of event added, or None."""
+    import dataclasses
+
+    now, R_now = cal.n_total, cal._R
+    track = cal._track
+    track.append((now, R_now))
+    lam, rate, axis = cal.forgetting, cal._drift_rate, cal._drift_axis
+    span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS)
+    then = next((t for t in reversed(track) if now - t[0] >= span_least), None)
+    if then is None or cal._cov is None:
+        return None
+    span = now - then[0]
+    moved = math.degrees(float(drift_step(then[1], R_now) @ axis))
+    lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
+    var = max(float(axis @ cal._cov @ axis) - lag ** 2, 0.0)   # the estimate's noise along the axis, lag removed
+    se = math.degrees(math.sqrt(2.0 * var))                       # of the difference of two such estimates
+    if abs(moved - rate * span) <= TRACK_Z * se:
+        return None
+    drift = next((e for e in reversed(cal.events) if e.kind == "drift"), None)
+    track.clear()
+    track.append((now, R_now))
+    if moved < 0.5 * rate * span:  # nearer none than the rate followed, and beyond its standard errors: stopped
+        cal._drift_rate, cal._drift_axis, cal.forgetting = None, None, cal._fgt
+        onset = drift.onset_pair if drift is not None else then[0]
+        cal.events.append(dataclasses.replace(
+            drift, kind="drift_end", pair=now - 1, alarm_pair=now - 1, source="track", onset_pair=onset,
+            window_pairs=span, angle_deg=moved, threshold_deg=TRACK_Z * se, median_z_before=math.nan,
+            median_z_after=math.nan, pairs_dropped=0, R_before=np.array(then[1]), R_after=np.array(R_now),
+            rate_deg_per_pair=0.0,
+            message=f"the drift that began at pair {onset} stopped: the estimate moved {moved:.3g} deg along it in "
+                    f"the last {span} pairs, where its rate ({rate:.3g} deg per pair) says {rate * span:.3g} deg "
+                    f"(more than {TRACK_Z:g} standard errors, {TRACK_Z * se:.3g} deg, apart); no more forgetting: "
+                    f"full memory"))
+        return "drift_end"
+    new_rate = max(moved / span, 0.0)
+    cal._drift_rate = new_rate
+    cal.forgetting = lam = follow_forgetting(new_rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1),
+                                             cal.refine_every)
+    if drift is not None:
+        lag = drift_lag_deg(new_rate, lam, cal.refine_every)
+        k = cal.events.index(drift)
+        cal.events[k] = dataclasses.replace(drift, rate_deg_per_pair=new_rate, message=(
+            f"{drift.message.split('; rate now')[0]}; rate now {new_rate:.3g} deg per pair (measured over the last "
+            f"{span} pairs at pair {now}): forgetting {lam:.4g}, lag {lag:.3g} deg"
+            + ("" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg")))
+    return None
