@@ -227,7 +227,7 @@ def _tracked(moved_deg, span=400, rate=0.001, sd_deg=0.02):
     cal.events = [OnlineEvent("drift", 900, 900, "cusum", 500, 25, 0.4, 0.3, 1.0, 1.0, 0, np.eye(3), np.eye(3),
                               "the frame drifts", rate)]
     from collections import deque
-    cal._track = deque([(1000, np.eye(3))])
+    cal._track = deque([(1000, np.eye(3), cal._cov)])  # (pair, estimate, its covariance)
     return cal, track_drift(cal)
 
 

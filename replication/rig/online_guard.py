@@ -380,22 +380,22 @@ def track_drift(cal):
 
     now, R_now = cal.n_total, cal._R
     track = cal._track
-    track.append((now, R_now))
+    track.append((now, R_now, cal._cov))
     lam, rate, axis = cal.forgetting, cal._drift_rate, cal._drift_axis
     span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS)
     then = next((t for t in reversed(track) if now - t[0] >= span_least), None)
-    if then is None or cal._cov is None:
+    if then is None or cal._cov is None or then[2] is None:
         return None
     span = now - then[0]
     moved = math.degrees(float(drift_step(then[1], R_now) @ axis))
     lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
-    var = max(float(axis @ cal._cov @ axis) - lag ** 2, 0.0)   # the estimate's noise along the axis, lag removed
-    se = math.degrees(math.sqrt(2.0 * var))                       # of the difference of two such estimates
+    var = [max(float(axis @ c @ axis) - lag ** 2, 0.0) for c in (then[2], cal._cov)]  # noise along the axis, no lag
+    se = math.degrees(math.sqrt(sum(var)))                         # of the difference of the two estimates
     if abs(moved - rate * span) <= TRACK_Z * se:
         return None
     drift = next((e for e in reversed(cal.events) if e.kind == "drift"), None)
     track.clear()
-    track.append((now, R_now))
+    track.append((now, R_now, cal._cov))
     if moved < 0.5 * rate * span:  # nearer none than the rate followed, and beyond its standard errors: stopped
         cal._drift_rate, cal._drift_axis, cal.forgetting = None, None, cal._fgt
         onset = drift.onset_pair if drift is not None else then[0]
