@@ -332,22 +332,23 @@ def test_a_long_window_alone_keeps_ready_false_and_widens_the_radius():
 
 
 def test_the_long_windows_are_tested_at_their_cadence_on_their_last_pairs(rng):
-    from replication.rig.online_guard import GUARD_LONG_WINDOWS
+    from replication.rig.online_guard import GUARD_LONG_EVERY, GUARD_LONG_WINDOWS
 
-    assert GUARD_LONG_WINDOWS == ((80, 20), (160, 20), (320, 40))
-    R, A, B = _guard_pairs(rng, 330, offset_deg=0.5, noise_deg=1.0)
+    assert GUARD_LONG_WINDOWS == (80, 160, 320) and GUARD_LONG_EVERY == 20
+    R, A, B = _guard_pairs(rng, 340, offset_deg=0.5, noise_deg=1.0)
     s2 = math.radians(1.0) ** 2
+    cov = np.diag([1e-8, 2e-8, 3e-8])
     guard = MisfitGuard(64)
     guard.threshold = 0.0  # every test withdraws: the recorded statistic shows which window was tested when
     for k, (a, b) in enumerate(zip(A, B), 1):
         before = dict(guard._long)
-        guard.add(a, b, 0.0, R, None, s2)  # residuals of 0: no run
-        for n, every in GUARD_LONG_WINDOWS:
+        guard.add(a, b, 0.0, R, cov, s2)  # residuals of 0: no run
+        for n in GUARD_LONG_WINDOWS:
             tested = guard._long[n] is not before[n]
-            assert tested is (k >= n and (k - n) % every == 0)
-            if tested:
-                stat, angle = misfit_test(R, None, s2, A[k - n:k], B[k - n:k])
-                assert guard._long[n] == (n, pytest.approx(angle), pytest.approx(stat), 0.0)
+            assert tested is (k >= n and k % GUARD_LONG_EVERY == 0)
+            if tested:  # the tail sums equal the window solved on its own
+                stat, angle = misfit_test(R, cov, s2, A[k - n:k], B[k - n:k])
+                assert guard._long[n] == (n, pytest.approx(angle, rel=1e-9), pytest.approx(stat, rel=1e-9), 0.0)
     assert guard.long_misfit[2] == max(m[2] for m in guard._long.values())
 
 

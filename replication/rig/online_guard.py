@@ -49,11 +49,13 @@ GUARD_MIN_PAIRS = 3
 GUARD_WINDOW = 20
 #: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
 GUARD_EVERY = 20
-#: Longer windows ``(pairs, every)``: the last ``pairs`` pairs tested every ``every`` pairs. A re-mount smaller than the
-#: pair noise (0.55-0.9 deg at 1 deg of noise) shows in no 20 pairs: the estimate's statistic grows with the window
-#: (about ``N angle^2 / s^2``), 0.55 deg at 1 deg of noise passes :data:`GUARD_LEVEL` in about 200 pairs.
-GUARD_LONG_WINDOWS = ((80, 20), (160, 20), (320, 40))
-GUARD_LONG_EVERY = 20  # the largest common divisor of their ``every`` (and of their ``n``): when any may be due
+#: Longer windows: the last 80, 160 and 320 pairs. A re-mount smaller than the pair noise (0.55-0.9 deg at 1 deg of
+#: noise) shows in no 20 pairs: the statistic grows with the window (about ``N angle^2 / s^2``); 0.55 deg at 1 deg of
+#: noise passes :data:`GUARD_LEVEL` in about 120 pairs.
+GUARD_LONG_WINDOWS = (80, 160, 320)
+#: The long windows are tested together every this many pairs: one pass over the last 320 pairs' shares of the
+#: Gauss-Newton step, the shorter windows' sums its tails (about 4 us a pair).
+GUARD_LONG_EVERY = 20
 #: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
 #: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
 #: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
@@ -147,7 +149,7 @@ class MisfitGuard:
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
         self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
-        self._ring = np.empty((max(n for n, _ in GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for long windows
+        self._ring = np.empty((max(GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for the long windows
         self.forget()
 
     @property
@@ -181,7 +183,7 @@ class MisfitGuard:
     def forget(self) -> None:
         """Forget the long windows' pairs too."""
         self.clear()
-        self._long = {n: None for n, _ in GUARD_LONG_WINDOWS}     # per long window: its misfit or None
+        self._long = dict.fromkeys(GUARD_LONG_WINDOWS)     # per long window: its misfit or None
         self._long_worst = None
         self._count = 0      # pairs in the ring (since the last clear)
 
@@ -202,14 +204,23 @@ class MisfitGuard:
             self.window_misfit = None
 
     def _scan_long(self, R, cov, s2) -> None:
-        """The long windows due at this pair (:data:`GUARD_LONG_WINDOWS`: the first once the ring holds ``n`` pairs,
-        then every ``every``), on the ring of the last pairs added."""
+        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together: each pair's share of the
+        Gauss-Newton step (:func:`misfit_test`) once, each window's sums a tail of theirs."""
         size, count = len(self._ring), self._count
-        for n, every in GUARD_LONG_WINDOWS:
-            if count < n or (count - n) % every:
-                continue
-            window = self._ring[np.arange(count - n, count) % size]
-            stat, angle = misfit_test(R, cov, s2, window[:, 0], window[:, 1])
+        m = min(count, size)
+        if m < GUARD_LONG_WINDOWS[0]:
+            return
+        window = self._ring[np.arange(count - m, count) % size]
+        A, B = window[:, 0], window[:, 1]
+        E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
+        r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+        g = np.cumsum((0.5 * (r - np.einsum("jba,jb->ja", B, r)))[::-1], axis=0)   # tails: the last k pairs' sums
+        SB = np.cumsum(B[::-1], axis=0)
+        for n in GUARD_LONG_WINDOWS:
+            if n > m:
+                break
+            H = 2.0 * n * _EYE - SB[n - 1] - SB[n - 1].T
+            stat, angle = _statistic(g[n - 1].tolist(), H.ravel().tolist(), s2, cov)
             if stat > self.threshold:
                 self._long[n] = (n, angle, stat, self.threshold)
             elif stat <= self.clear_threshold:
