@@ -256,3 +256,17 @@ def test_a_drift_ends_nearer_none_than_its_rate(share, ended):
     cal, kind = _tracked(share * 0.001 * 400, sd_deg=0.01)
     assert (kind == "drift_end") is ended and (cal._drift_rate is None) is ended
     assert (cal.forgetting == 1.0) is ended
+
+
+def test_the_direction_so_far_ends_at_the_estimate_not_at_the_last_window():
+    """The last step's window estimate is a few pairs (seed [36, 4] of a slow drift: 0.28 deg off, its direction at a
+    cosine of 0.57 with the next step's: two re-mounts, two restarts); the estimate before the new event holds many:
+    the movement so far ends there. Here the window was 60 deg off the drift's axis, the estimate on it."""
+    x = np.array([1.0, 0.0, 0.0])
+    noisy = so3.exp_map(np.radians(0.3) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the window: cosine 0.5 with x
+    first = _event(100, np.eye(3), noisy)
+    now = so3.exp_map(np.radians(0.6) * x)      # the estimate before the next event: along x
+    event = _event(700, now, now @ so3.exp_map(np.radians(0.3) * x))
+    assert recognise_drift((100, noisy, first), event, None) is not None
+    off = so3.exp_map(np.radians(0.6) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the estimate itself off the step
+    assert recognise_drift((100, noisy, first), _event(700, off, off @ so3.exp_map(np.radians(0.3) * x)), None) is None

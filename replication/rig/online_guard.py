@@ -291,18 +291,19 @@ def drift_step(R_before, R_after) -> np.ndarray:
 def recognise_drift(last, event, following: float | None):
     """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`) continues the last
     change, ``last = (pair, R_latest, origin)``: the pair and estimate of the last re-mount or drift step, and the
-    re-mount that began it (an event). The step from ``R_latest`` to the event's own estimate must be small
+    re-mount that began it (an event). The step from the estimate before the event to the event's own must be small
     (:data:`DRIFT_MAX_STEP_DEG`, or twice what the drift followed at rate ``following`` (deg per pair) moves in the
     pairs between), within :data:`DRIFT_WITHIN_PAIRS`, and in the direction of the movement so far (from the origin's
-    estimate before it to ``R_latest``): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
+    estimate before it to the estimate before this event, ``event.R_before``: the window of the last step is a few
+    pairs, its direction noisy): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
     whose small steps are noisy) at least 0. Returns None or ``(rate_deg_per_pair, angle_deg,
     first_pair, axis)``: the angle between the origin's own estimate and the event's (where the frame was then and
     is now), its rate over the pairs between them, and the movement's direction (a unit vector, sensor frame)."""
     if last is None or not 0 < event.pair - last[0] <= DRIFT_WITHIN_PAIRS:
         return None
-    origin = last[2]
-    so_far = drift_step(origin.R_before, last[1])
-    step = drift_step(last[1], event.R_after)
+    origin = last[2]  # the movement so far ends at the estimate now (many pairs), not the last window's (a few)
+    so_far = drift_step(origin.R_before, event.R_before)
+    step = drift_step(event.R_before, event.R_after)
     a, b = float(np.linalg.norm(so_far)), float(np.linalg.norm(step))
     if a and b and float(np.linalg.norm(so_far + step)) == 0.0:
         return None
