@@ -100,7 +100,7 @@ class RepeatFilter:
 
     def __init__(self, tol_deg: float = DUPLICATE_DEG):
         self._tol = self._tol0 = math.radians(tol_deg)
-        self._inv = 1.0 / (CELL_TOLERANCES * self._tol) if self._tol else 0.0
+        self._inv = 1.0 / (CELL_TOLERANCES * REPEAT_MAX_FACTOR * self._tol) if self._tol else 0.0  # the widest
         self._small_trace = 1.0 + 2.0 * math.cos(math.radians(SMALL_MOTION_DEG))
         self._cells: dict = {}              # cell key -> row index, or list of row indices
         self._rows = np.empty((64, 18))      # the remembered pairs (flat A, flat B), grown by doubling
@@ -138,7 +138,7 @@ class RepeatFilter:
                 return True
             self._remember(key, fa + fb)
             return False
-        inv, edge = self._inv, tol * self._inv  # a cell spans CELL_TOLERANCES times the tolerance given
+        inv, edge = self._inv, tol * self._inv  # a cell spans CELL_TOLERANCES times the widest tolerance
         x, y, z = 0.5 * (fb[7] - fb[5]) * inv, 0.5 * (fb[2] - fb[6]) * inv, 0.5 * (fb[3] - fb[1]) * inv
         bx, by, bz = math.floor(x), math.floor(y), math.floor(z)
         x, y, z = x - bx, y - by, z - bz

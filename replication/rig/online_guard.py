@@ -150,6 +150,9 @@ class MisfitGuard:
         self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
         self._ring = np.empty((max(GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for the long windows
+        blocks = len(self._ring) // GUARD_LONG_EVERY  # the ring in blocks: their sums of B_j and of the shares g_j
+        self._block_B, self._block_g = np.zeros((blocks, 3, 3)), np.zeros((blocks, 3))
+        self._block_version, self._version, self._shares_R = np.full(blocks, -1), 0, None  # g_j at _shares_R
         self.forget()
 
     @property
@@ -204,23 +207,37 @@ class MisfitGuard:
             self.window_misfit = None
 
     def _scan_long(self, R, cov, s2) -> None:
-        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together: each pair's share of the
-        Gauss-Newton step (:func:`misfit_test`) once, each window's sums a tail of theirs."""
-        size, count = len(self._ring), self._count
-        m = min(count, size)
-        if m < GUARD_LONG_WINDOWS[0]:
+        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together on block sums of
+        :data:`GUARD_LONG_EVERY` pairs: each block's ``sum B_j`` once, its share of the Gauss-Newton step
+        (:func:`misfit_test`) once per estimate (recomputed only after a refinement); a window sums its blocks."""
+        every, count = GUARD_LONG_EVERY, self._count
+        blocks = len(self._block_g)
+        newest = (count // every - 1) % blocks
+        pairs = np.arange(count - every, count) % len(self._ring)
+        self._block_B[newest] = self._ring[pairs, 1].sum(axis=0)
+        self._block_version[newest] = -1
+        m = min(count, len(self._ring)) // every
+        if m < GUARD_LONG_WINDOWS[0] // every:
             return
-        window = self._ring[np.arange(count - m, count) % size]
-        A, B = window[:, 0], window[:, 1]
-        E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
-        r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
-        g = np.cumsum((0.5 * (r - np.einsum("jba,jb->ja", B, r)))[::-1], axis=0)   # tails: the last k pairs' sums
-        SB = np.cumsum(B[::-1], axis=0)
+        if R is not self._shares_R:  # a new estimate: every block's share is stale
+            self._shares_R, self._version = R, self._version + 1
+        ids = (count // every - 1 - np.arange(m)) % blocks            # newest first
+        stale = ids[self._block_version[ids] != self._version]
+        if len(stale):
+            at = ((stale * every)[:, None] + np.arange(every)).ravel()  # ring slots of those blocks' pairs
+            A, B = self._ring[at, 0], self._ring[at, 1]
+            E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
+            r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+            shares = 0.5 * (r - np.einsum("jba,jb->ja", B, r))
+            self._block_g[stale] = shares.reshape(len(stale), every, 3).sum(axis=1)
+            self._block_version[stale] = self._version
+        g, SB = np.cumsum(self._block_g[ids], axis=0), np.cumsum(self._block_B[ids], axis=0)
         for n in GUARD_LONG_WINDOWS:
-            if n > m:
+            k = n // every
+            if k > m:
                 break
-            H = 2.0 * n * _EYE - SB[n - 1] - SB[n - 1].T
-            stat, angle = _statistic(g[n - 1].tolist(), H.ravel().tolist(), s2, cov)
+            H = 2.0 * n * _EYE - SB[k - 1] - SB[k - 1].T
+            stat, angle = _statistic(g[k - 1].tolist(), H.ravel().tolist(), s2, cov)
             if stat > self.threshold:
                 self._long[n] = (n, angle, stat, self.threshold)
             elif stat <= self.clear_threshold:
@@ -235,8 +252,8 @@ class MisfitGuard:
         self._since_window += 1
         if self._since_window >= GUARD_EVERY and len(recent) >= GUARD_WINDOW:
             self._scan(R, cov, s2, recent)
-        slot = self._ring[self._count % len(self._ring)]
-        slot[0], slot[1] = A, B
+        k = self._count % len(self._ring)
+        self._ring[k, 0], self._ring[k, 1] = A, B
         self._count += 1
         if self._count % GUARD_LONG_EVERY == 0:
             self._scan_long(R, cov, s2)
