@@ -270,3 +270,24 @@ def test_the_direction_so_far_ends_at_the_estimate_not_at_the_last_window():
     assert recognise_drift((100, noisy, first), event, None) is not None
     off = so3.exp_map(np.radians(0.6) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the estimate itself off the step
     assert recognise_drift((100, noisy, first), _event(700, off, off @ so3.exp_map(np.radians(0.3) * x)), None) is None
+
+
+def test_the_report_schema_names_every_kind():
+    import json
+    from pathlib import Path
+
+    schema = json.loads((Path(__file__).parents[1] / "docs" / "calibration_report.schema.json").read_text())
+    found = []
+
+    def walk(node):
+        if isinstance(node, dict):
+            if "enum" in node and "remount" in node["enum"]:
+                found.append(tuple(node["enum"]))
+            for value in node.values():
+                walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+
+    walk(schema)
+    assert found == [EVENT_KINDS]

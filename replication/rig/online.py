@@ -44,7 +44,9 @@ farther off than the target. Notebook 08 shows this on EuRoC MH01.
 
 **Changes, confirmed and told apart** (:mod:`replication.rig.online_events`): once the motion determines ``R0``, a CUSUM
 on the pair residuals and a drift test raise alarms; the pairs after an alarm are solved on their own and the event
-is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``.
+is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``; a
+second re-mount that continues the first is a ``drift`` (followed with forgetting, its rate measured again on the
+estimate's track), and a drift followed that stops is a ``drift_end`` (:mod:`replication.rig.online_guard`).
 
 Notation and frames: ``docs/conventions.md`` (``A`` camera motions, ``B`` sensor motions, ``R0 =
 camera_from_sensor``).
