@@ -53,8 +53,8 @@ GUARD_EVERY = 20
 #: noise) shows in no 20 pairs: the statistic grows with the window (about ``N angle^2 / s^2``); 0.55 deg at 1 deg of
 #: noise passes :data:`GUARD_LEVEL` in about 120 pairs.
 GUARD_LONG_WINDOWS = (80, 160, 320)
-#: The long windows are tested together every this many pairs: one pass over the last 320 pairs' shares of the
-#: Gauss-Newton step, the shorter windows' sums its tails (about 4 us a pair).
+#: The long windows are tested together every this many pairs, on block sums of this many pairs (about 50 us a test,
+#: 100 us after a refinement: 3-5 us a pair).
 GUARD_LONG_EVERY = 20
 #: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
 #: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
