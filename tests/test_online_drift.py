@@ -36,7 +36,7 @@ def _drifting(seed, n, total_deg, noise_deg=0.05):
 
 
 def test_the_kinds_and_constants():
-    assert EVENT_KINDS == ("remount", "noise_change", "outliers", "new_information", "drift")
+    assert EVENT_KINDS == ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
     assert (DRIFT_WITHIN_PAIRS, DRIFT_COS, DRIFT_MAX_STEP_DEG, DRIFT_LAG_SHARE) == (2000, 0.7, 3.0, 0.25)
 
 
@@ -164,3 +164,130 @@ def test_the_memory_is_never_shorter_than_the_distinct_pairs_allow():
     assert follow_forgetting(0.1, 0.5, 0.8, 10) == 0.8  # the quarter would need a negative memory
     assert follow_forgetting(0.1 / 9.0, 0.5, 0.8, 10) == 0.8  # memory 1.25 pairs < 4 (lowest 0.8): clamped
     assert follow_forgetting(1e-15, 0.5, 0.8, 10) == 1.0 - 1e-9
+
+
+# ------------------------------------------------------------------------------------------------ a drift followed
+def _cubic(seed, n=1800, total_deg=6.0, noise_deg=0.1):
+    """A drift that speeds up: ``total_deg (j / n)^3`` about AXIS (rate at the end ``3 total_deg / n``)."""
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    Rt = lambda j: R0 @ so3.exp_map(np.radians(total_deg * (j / n) ** 3) * AXIS)  # noqa: E731
+    A, B = zip(*[[x[0] for x in pair_stream(rng, 1, Rt(j), noise_deg=noise_deg)] for j in range(n)])
+    return Rt, np.array(A), np.array(B)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_drift_that_speeds_up_is_followed_at_its_current_rate(seed):
+    """6 deg * (j / 1800)^3 at 0.1 deg of noise (a red-team case: ready while wrong on 92, 101 and 63 pairs of seeds
+    [71, 0/1/2], the rate reported stale: a third of the final one): the rate is measured again on the estimate's
+    track, the forgetting and the lag follow it; never ready while wrong, the rate within 25 % of the final one."""
+    Rt, A, B = _cubic([71, seed])
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, B)
+    drifts = [e for e in oc.events if e.kind == "drift"]
+    assert len(drifts) == 1 and sum(s.alarm for s in states) <= 1
+    assert not any(s.ready and so3.angle_between_deg(s.R, Rt(j)) > oc.target_deg for j, s in enumerate(states))
+    assert drifts[0].rate_deg_per_pair == pytest.approx(3 * 6.0 / 1800, rel=0.25)
+    assert "rate now" in drifts[0].message
+
+
+def test_a_drift_that_stops_is_said_and_full_memory_returns():
+    """2 deg over 1200 pairs, then still for 1800 (a red-team case: it kept forgetting, about 28 effective pairs, and
+    advised a longer recording): one ``drift`` and one ``drift_end`` within 500 pairs of the stop, forgetting back to
+    1, the effective pairs growing again."""
+    rng = np.random.default_rng([72, 0])
+    R0 = so3.random_rotations(rng, ())
+    Rt = lambda j: R0 @ so3.exp_map(np.radians(2.0 * min(j, 1200) / 1200) * AXIS)  # noqa: E731
+    A, B = zip(*[[x[0] for x in pair_stream(rng, 1, Rt(j), noise_deg=0.05)] for j in range(3000)])
+    oc = OnlineCalibrator()
+    states = oc.update_many(np.array(A), np.array(B))
+    kinds = [e.kind for e in oc.events if e.kind != "outliers"]
+    assert kinds == ["drift", "drift_end"] and sum(s.alarm for s in states) == 1
+    end = oc.events[-1]
+    assert 1200 < end.pair < 1700 and end.rate_deg_per_pair == 0.0 and states[end.pair].event == "drift_end"
+    assert "stopped" in end.message and "full memory" in end.message
+    assert oc.forgetting == 1.0 and oc.effective_pairs > 1000 and oc.error_deg(Rt(2999)) < 0.05
+    assert not any(s.ready and so3.angle_between_deg(s.R, Rt(j)) > oc.target_deg for j, s in enumerate(states))
+
+
+def _tracked(moved_deg, span=400, rate=0.001, sd_deg=0.02):
+    """A calibrator-like record following a drift at ``rate`` whose estimate moved ``moved_deg`` along its axis in
+    ``span`` pairs, the estimate's noise ``sd_deg`` along the axis (lag excluded)."""
+    from types import SimpleNamespace
+
+    from replication.rig.online_guard import track_drift
+
+    axis = AXIS / np.linalg.norm(AXIS)
+    lam = 0.99
+    lag = math.radians(drift_lag_deg(rate, lam, 10))
+    R = so3.exp_map(np.radians(moved_deg) * axis)
+    cal = SimpleNamespace(n_total=1000 + span, _R=R, forgetting=lam, _drift_rate=rate, _drift_axis=axis,
+                          _cov=np.eye(3) * math.radians(sd_deg) ** 2 + lag ** 2 * np.outer(axis, axis),
+                          refine_every=10, target_deg=0.5, min_pairs=10, _fgt=1.0)
+    cal.events = [OnlineEvent("drift", 900, 900, "cusum", 500, 25, 0.4, 0.3, 1.0, 1.0, 0, np.eye(3), np.eye(3),
+                              "the frame drifts", rate)]
+    from collections import deque
+    cal._track = deque([(1000, np.eye(3), cal._cov)])  # (pair, estimate, its covariance)
+    return cal, track_drift(cal)
+
+
+def test_the_track_needs_a_memory_and_a_half_of_pairs():
+    from replication.rig.online_guard import TRACK_MEMORIES, TRACK_MIN_PAIRS, TRACK_Z
+
+    assert (TRACK_MEMORIES, TRACK_MIN_PAIRS, TRACK_Z) == (1.5, 100, 3.0)
+    span = math.ceil(1.5 * 1.99 / 0.01)  # (1 + lambda) / (1 - lambda) at lambda 0.99: 199 pairs
+    cal, _ = _tracked(0.0, span=span - 1)
+    assert cal._drift_rate == 0.001  # not measured yet
+    cal, kind = _tracked(0.0, span=span)
+    assert kind == "drift_end"
+
+
+@pytest.mark.parametrize("z, changed", [(2.99, False), (3.01, True)])
+def test_a_new_rate_beyond_three_standard_errors(z, changed):
+    se = math.sqrt(2) * 0.02
+    cal, kind = _tracked(0.001 * 400 + z * se)
+    assert kind is None and (cal._drift_rate != 0.001) is changed and cal.forgetting != 1.0
+    if changed:
+        assert cal._drift_rate == pytest.approx((0.4 + z * se) / 400, rel=1e-6)
+
+
+@pytest.mark.parametrize("share, ended", [(0.49, True), (0.51, False)])
+def test_a_drift_ends_nearer_none_than_its_rate(share, ended):
+    cal, kind = _tracked(share * 0.001 * 400, sd_deg=0.01)
+    assert (kind == "drift_end") is ended and (cal._drift_rate is None) is ended
+    assert (cal.forgetting == 1.0) is ended
+
+
+def test_the_direction_so_far_ends_at_the_estimate_not_at_the_last_window():
+    """The last step's window estimate is a few pairs (seed [36, 4] of a slow drift: 0.28 deg off, its direction at a
+    cosine of 0.57 with the next step's: two re-mounts, two restarts); the estimate before the new event holds many:
+    the movement so far ends there. Here the window was 60 deg off the drift's axis, the estimate on it."""
+    x = np.array([1.0, 0.0, 0.0])
+    noisy = so3.exp_map(np.radians(0.3) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the window: cosine 0.5 with x
+    first = _event(100, np.eye(3), noisy)
+    now = so3.exp_map(np.radians(0.6) * x)      # the estimate before the next event: along x
+    event = _event(700, now, now @ so3.exp_map(np.radians(0.3) * x))
+    assert recognise_drift((100, noisy, first), event, None) is not None
+    off = so3.exp_map(np.radians(0.6) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the estimate itself off the step
+    assert recognise_drift((100, noisy, first), _event(700, off, off @ so3.exp_map(np.radians(0.3) * x)), None) is None
+
+
+def test_the_report_schema_names_every_kind():
+    import json
+    from pathlib import Path
+
+    schema = json.loads((Path(__file__).parents[1] / "docs" / "calibration_report.schema.json").read_text())
+    found = []
+
+    def walk(node):
+        if isinstance(node, dict):
+            if "enum" in node and "remount" in node["enum"]:
+                found.append(tuple(node["enum"]))
+            for value in node.values():
+                walk(value)
+        elif isinstance(node, list):
+            for value in node:
+                walk(value)
+
+    walk(schema)
+    assert found == [EVENT_KINDS]

@@ -310,3 +310,56 @@ def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned(
     assert [r["check"] for r in late["verdict"]["reasons"]] == ["end_undecided"]
     clean = replay(camera, gyro, OnlineCalibrator(target_deg=0.5), reference=R0).attrs["summary"]
     assert clean["ready"] and clean["verdict"]["level"] == "ok"
+
+
+# ------------------------------------------------------------------------------------------------ near copies
+def test_near_copies_of_pairs_are_counted_once_and_the_radius_covers_the_error():
+    """15 noisy pairs (0.3 deg) each given 8 times with a 1e-4 rad jitter (a red-team case: counted as new
+    information, the radius covered the error in 8 of 30 runs, seeds [5, 0..29]): copies far below the noise are
+    repeats, the radius covers the error in at least 26 of 30 (29 measured)."""
+    covered = 0
+    for seed in range(30):
+        rng = np.random.default_rng([5, seed])
+        R0 = so3.random_rotations(rng, ())
+        A, B = pair_stream(rng, 15, R0, noise_deg=0.3)
+        jitter = lambda M: so3.exp_map(rng.normal(0, 1e-4, (len(M), 3))) @ M  # noqa: E731
+        oc, _ = _feed(jitter(np.repeat(A, 8, axis=0)), jitter(np.repeat(B, 8, axis=0)))
+        oc.estimate()
+        assert oc.n_pairs <= 16 and oc.duplicates >= 104
+        covered += oc.error_deg(R0) <= oc.radius
+    assert covered >= 26
+
+
+@pytest.mark.parametrize("rms, tol", [(0.05, DUPLICATE_DEG), (0.2, 0.02), (0.4, 0.04), (0.6, 0.05), (math.inf, 0.05)])
+def test_the_repeat_tolerance_is_a_tenth_of_the_noise_between_its_bounds(rms, tol):
+    from replication.rig.online_events import REPEAT_MAX_FACTOR, REPEAT_NOISE_SHARE
+
+    assert (REPEAT_NOISE_SHARE, REPEAT_MAX_FACTOR) == (0.1, 5.0)
+    f = RepeatFilter()
+    f.set_noise(rms)
+    assert f.tolerance_deg == pytest.approx(tol, rel=1e-12)
+    g = RepeatFilter(0.0)
+    g.set_noise(rms)
+    assert g.tolerance_deg == 0.0  # exact repeats stay exact
+
+
+@pytest.mark.parametrize("share, repeat", [(0.99, True), (1.01, False)])
+def test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid(share, repeat):
+    rng = np.random.default_rng(61)
+    for _ in range(100):
+        A, B = so3.random_rotations(rng, 2)
+        f = RepeatFilter()
+        f.set_noise(0.3)
+        tol = math.radians(f.tolerance_deg)
+        assert f.tolerance_deg == pytest.approx(0.03)
+        f.seen(A.ravel().tolist(), B.ravel().tolist())
+        near = (B.ravel() + share * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
+        assert f.seen(A.ravel().tolist(), near) is repeat
+
+
+def test_the_calibrator_starts_at_the_widest_tolerance_and_then_takes_the_noise(rng, R0):
+    oc = OnlineCalibrator()
+    assert oc._repeats.tolerance_deg == pytest.approx(5 * DUPLICATE_DEG)  # the noise unknown: the widest
+    oc.update_many(*pair_stream(rng, 100, R0, noise_deg=0.3))
+    rms = oc.status()["rms_residual_deg"]
+    assert 0.2 < rms < 0.4 and oc._repeats.tolerance_deg == pytest.approx(0.1 * rms)

@@ -61,7 +61,8 @@ def test_a_1_deg_remount_withdraws_ready_within_a_few_pairs_before_the_detector_
         said = [m for m in oc.status()["not_ready"] if "beyond what its radius allows" in m]
         assert len(said) == (oc._detector.guard.misfit is not None)
         alone += (bool(said) and "agree on a rotation" in said[0] and not oc.checking and oc._detector.misfits < 2
-                  and oc.radius < oc.target_deg and oc.determined and oc.current_verdict.level != "fail")
+                  and oc.status()["radius_deg"] < oc.target_deg and oc.determined
+                  and oc.current_verdict.level != "fail")
     assert alone >= 3
 
 
@@ -77,9 +78,11 @@ def test_a_shift_too_small_for_any_residual_is_seen_by_the_guard():
         assert oc.ready
         k, state = _first_withdrawal(oc, A2, B2)
         guard = oc._detector.guard
-        assert k is not None and k < 30 and not oc.checking and oc._detector.misfits < 2 and oc.radius < 0.5
+        assert k is not None and k < 30 and not oc.checking and oc._detector.misfits < 2
+        assert oc.status()["radius_deg"] < 0.5 and oc.radius == pytest.approx(oc.status()["radius_deg"]
+                                                                              + guard.misfit[1])  # widened
         by.append("window" if guard.run_misfit is None else "run")
-        assert guard.misfit == (guard.run_misfit or guard.window_misfit) is not None
+        assert guard.misfit == (guard.run_misfit or guard.window_misfit or guard.long_misfit) is not None
     assert by.count("window") >= 1 and by.count("run") >= 5
 
 
@@ -283,3 +286,91 @@ def test_a_window_withdrawal_holds_until_a_window_fits_as_usual(rng):
     guard.clear_threshold = stat  # at the clearing level: it fits as usual
     guard._scan(R, None, s2, recent)
     assert guard.window_misfit is None
+
+
+# ------------------------------------------------------------------------------------------------ the long windows
+def _long_remount(seed, step_deg=0.7, noise_deg=1.0):
+    R1, (A1, B1), (A2, B2) = _remounted([23, seed], step_deg, noise_deg, before=600, after=600)
+    return R1, np.concatenate([A1, A2]), np.concatenate([B1, B2])
+
+
+@pytest.mark.parametrize("seed", [1, 3, 4])
+def test_a_remount_smaller_than_the_noise_withdraws_ready_within_the_long_windows(seed):
+    """0.7 deg at 1 deg of pair noise after 600 pairs (a red-team case: ready while more than 0.5 deg off on 301-739
+    of 1800 pairs, only an ``outliers`` event): no pair's residual and no 20 pairs show it. Was ready while wrong on
+    280, 249 and 270 of the 600 pairs after it (seeds [23, 1/3/4]); the long windows withdraw it within 150 pairs
+    (the statistic of 0.7 deg in N pairs at 1 deg of noise passes the 99.99 % level at N of about 100)."""
+    R1, A, B = _long_remount(seed)
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, B)
+    wrong = [j for j, s in enumerate(states[600:]) if s.ready and so3.angle_between_deg(s.R, R1) > 0.5]
+    assert len(wrong) <= 120 and max(wrong, default=0) < 150
+
+
+def test_a_long_window_alone_keeps_ready_false_and_widens_the_radius():
+    """The condition "recent pairs fit" by the long windows alone: on seed [23, 4] at pair 600 + 100 the last 80-320
+    pairs misfit while every other condition of ``ready`` holds (determined, the estimate's radius below the target,
+    no change being confirmed, no gross misfit, no run or 20-pair window, verdict not fail); ``not_ready`` says it and
+    the published radius includes the misfit's angle. Dropping the condition would leave ready true."""
+    R1, A, B = _long_remount(4)
+    oc = OnlineCalibrator()
+    for j in range(len(A)):
+        state = oc.update(A[j], B[j])
+        guard = oc._detector.guard
+        if j >= 600 and guard.long_misfit is not None and guard.run_misfit is None and guard.window_misfit is None:
+            break
+    else:
+        raise AssertionError("no long window withdrew ready")
+    n, angle, stat, threshold = guard.long_misfit
+    assert n in (80, 160, 320) and stat > threshold == guard.threshold
+    assert not state.ready and not oc.ready
+    assert (oc.determined and not oc.checking and oc._detector.misfits < 2 and oc.current_verdict.level != "fail"
+            and oc.status()["radius_deg"] < oc.target_deg)
+    assert any(f"the last {n} pairs agree on a rotation" in m for m in oc.status()["not_ready"])
+    assert oc.radius == pytest.approx(oc.status()["radius_deg"] + angle) and state.radius_deg == oc.radius
+    assert oc.error_deg(R1) <= oc.radius  # the widened radius covers the error the estimate has
+
+
+def test_the_long_windows_are_tested_at_their_cadence_on_their_last_pairs(rng):
+    from replication.rig.online_guard import GUARD_LONG_EVERY, GUARD_LONG_WINDOWS
+
+    assert GUARD_LONG_WINDOWS == (80, 160, 320) and GUARD_LONG_EVERY == 20
+    R, A, B = _guard_pairs(rng, 340, offset_deg=0.5, noise_deg=1.0)
+    s2 = math.radians(1.0) ** 2
+    cov = np.diag([1e-8, 2e-8, 3e-8])
+    guard = MisfitGuard(64)
+    guard.threshold = 0.0  # every test withdraws: the recorded statistic shows which window was tested when
+    for k, (a, b) in enumerate(zip(A, B), 1):
+        before = dict(guard._long)
+        guard.add(a, b, 0.0, R, cov, s2)  # residuals of 0: no run
+        for n in GUARD_LONG_WINDOWS:
+            tested = guard._long[n] is not before[n]
+            assert tested is (k >= n and k % GUARD_LONG_EVERY == 0)
+            if tested:  # the tail sums equal the window solved on its own
+                stat, angle = misfit_test(R, cov, s2, A[k - n:k], B[k - n:k])
+                assert guard._long[n] == (n, pytest.approx(angle, rel=1e-9), pytest.approx(stat, rel=1e-9), 0.0)
+    assert guard.long_misfit[2] == max(m[2] for m in guard._long.values())
+
+
+def test_a_decision_keeps_the_long_windows_and_a_remount_forgets_them(rng):
+    R, A, B = _guard_pairs(rng, 80, offset_deg=2.0)
+    s2 = math.radians(0.2) ** 2
+    guard = MisfitGuard(64)
+    for a, b in zip(A, B):
+        guard.add(a, b, 0.0, R, None, s2)
+    assert guard.long_misfit is not None and guard.long_misfit[0] == 80
+    guard.clear()  # an outliers / noise decision: the pairs are still in the estimate
+    assert guard.long_misfit is not None and guard.misfit == guard.long_misfit and guard._count == 80
+    guard.forget()
+    assert guard.long_misfit is None and guard.misfit is None and guard._count == 0
+
+
+@pytest.mark.parametrize("just, withdrawn", [(1 - 1e-9, True), (1 + 1e-9, False)])
+def test_a_long_window_withdraws_just_past_the_threshold(rng, just, withdrawn):
+    R, A, B = _guard_pairs(rng, 80, offset_deg=0.5, noise_deg=1.0)
+    s2 = math.radians(1.0) ** 2
+    guard = MisfitGuard(64)
+    guard.threshold = misfit_test(R, None, s2, A, B)[0] * just
+    for a, b in zip(A, B):
+        guard.add(a, b, 0.0, R, None, s2)
+    assert (guard.long_misfit is not None) is withdrawn

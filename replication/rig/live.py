@@ -417,9 +417,9 @@ class LiveRig:
             events.append({"kind": ev.kind, "t_s": seen - t0, "pair_end_s": end - t0, "alarm_t_s": alarm - t0,
                            "angle_deg": ev.angle_deg, "threshold_deg": ev.threshold_deg,
                            "pairs_dropped": ev.pairs_dropped, "message": ev.message, "rate_deg_s": None})
-            if ev.kind == "drift":  # deg/s over the pairs' time since the re-mount that began it
+            if ev.kind == "drift":  # deg/s: its rate per pair (the latest measured) x pairs per second since its start
                 span = end - self._event_times.get(ev.onset_pair, (math.nan,))[0]
-                events[-1]["rate_deg_s"] = ev.angle_deg / span if span > 0 else None
+                events[-1]["rate_deg_s"] = ev.rate_deg_per_pair * (ev.pair - ev.onset_pair) / span if span > 0 else None
         status = cal.status()
         return {
             "ready": bool(cal.ready) and undecided is None,

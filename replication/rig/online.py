@@ -18,10 +18,10 @@ too small). The motion so far *determines* ``R0`` when
 * the excitation is at least :data:`MIN_EXCITATION_DEG` (single-axis motion, a rig turning at constant speed, or a
   rig at rest never get there: about the shared axis the data say nothing, whatever they say about the noise), and
 * the effective number of distinct pairs, ``(sum w)^2 / sum w^2`` over the pairs added, is at least ``min_pairs``.
-  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise: a stalled
-  stream re-sending its last pair, a recording fed twice) adds no information and shares the earlier pair's noise: it
-  is counted (:attr:`OnlineCalibrator.duplicates`) and not added. Pairs whose camera and sensor motions are both
-  below :data:`SMALL_MOTION_DEG` are never called repeats (a rig at rest repeats the identity with independent noise).
+  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise, or a tenth
+  of the pairs' noise once known, at most 5 times that: a stalled stream, a recording fed twice, copies with a tiny
+  jitter) adds no information and shares the earlier pair's noise: counted (:attr:`OnlineCalibrator.duplicates`), not
+  added (:class:`replication.rig.online_events.RepeatFilter`; motions at rest are never repeats).
 
 **The radius.** With independent, isotropic pair residuals of mean square ``s^2`` (``s^2 / 3`` per axis),
 ``cov(w) = (s^2 / 3) G^{-1}`` (with forgetting, the weighted form ``G^{-1} G_2 G^{-1}``). ``s^2`` comes from the cost
@@ -32,10 +32,10 @@ quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenv
 overlap in time (:class:`replication.rig.live.LiveRig` forms pairs that share no pose).
 
 **Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs do not agree on a
-rotation the radius does not allow (:class:`replication.rig.online_guard.MisfitGuard`: within a few pairs of a
-re-mount, before the detector decides), and the residuals are plausible (:meth:`OnlineCalibrator.verdict` is not
-``fail``: the batch verdict's checks and thresholds). :meth:`OnlineCalibrator.status` says which fails, with its number.
+confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs (a run of high
+residuals, the last 20, 80, 160 or 320) do not agree on a rotation the radius does not allow
+(:class:`replication.rig.online_guard.MisfitGuard`: a re-mount smaller than the noise, before the detector decides;
+the published radius then includes their angle), and the verdict is not ``fail`` (the batch checks and thresholds).
 
 **What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
 trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
@@ -44,7 +44,9 @@ farther off than the target. Notebook 08 shows this on EuRoC MH01.
 
 **Changes, confirmed and told apart** (:mod:`replication.rig.online_events`): once the motion determines ``R0``, a CUSUM
 on the pair residuals and a drift test raise alarms; the pairs after an alarm are solved on their own and the event
-is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``.
+is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``; a
+second re-mount that continues the first is a ``drift`` (followed with forgetting, its rate measured again on the
+estimate's track), and a drift followed that stops is a ``drift_end`` (:mod:`replication.rig.online_guard`).
 
 Notation and frames: ``docs/conventions.md`` (``A`` camera motions, ``B`` sensor motions, ``R0 =
 camera_from_sensor``).
@@ -62,7 +64,7 @@ from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
-from .online_guard import drift_lag_deg, follow_drift, recognise_drift
+from .online_guard import detector_reasons, drift_lag_deg, follow_drift, recognise_drift, track_drift
 
 __all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
@@ -111,8 +113,7 @@ class OnlineCalibrator:
     confirm_pairs : int
         Pairs in the confirmation window after an alarm (at least 5).
     noise_floor_deg, min_excitation_deg, duplicate_deg : float
-        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG` and :data:`DUPLICATE_DEG` (``duplicate_deg = 0``:
-        exact repeats only).
+        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG`, :data:`DUPLICATE_DEG` (0: exact repeats only).
     init : array_like (3, 3), optional
         Start of the iteration (default identity).
 
@@ -132,8 +133,8 @@ class OnlineCalibrator:
                  step_every: int = 5, refine_every: int = 10, min_pairs: int = MIN_PAIRS,
                  cusum_k: float = 2.0, cusum_h: float = 30.0, cusum_cap: float = 10.0, reference_rate: float = 1 / 30,
                  confirm_pairs: int = 10, max_confirm_pairs: int = 60, drift_pairs: int = 50,
-                 noise_floor_deg: float = NOISE_FLOOR_DEG,
-                 min_excitation_deg: float = MIN_EXCITATION_DEG, duplicate_deg: float = DUPLICATE_DEG, init=None):
+                 noise_floor_deg: float = NOISE_FLOOR_DEG, min_excitation_deg: float = MIN_EXCITATION_DEG,
+                 duplicate_deg: float = DUPLICATE_DEG, init=None):
         for name, value in (("target_deg", target_deg), ("cusum_h", cusum_h), ("cusum_k", cusum_k),
                             ("noise_floor_deg", noise_floor_deg), ("min_excitation_deg", min_excitation_deg)):
             check_number(name, value, minimum=0)
@@ -171,12 +172,13 @@ class OnlineCalibrator:
         self.duplicates = 0
         self.pairs_dropped = 0
         self._repeats = RepeatFilter(self.duplicate_deg)
+        self._repeats.set_noise(math.inf)  # before the noise is known: the widest tolerance
         self._detector = ChangeDetector(k=self.cusum_k, h=self.cusum_h, cap=self.cusum_cap,
                                         reference_rate=self.reference_rate, confirm_pairs=self.confirm_pairs,
                                         max_confirm_pairs=self.max_confirm_pairs, drift_pairs=self.drift_pairs,
                                         min_excitation_deg=self.min_excitation_deg,
                                         noise_floor_deg=self.noise_floor_deg, d2_floor=D2_FLOOR)
-        self._recent_motion = deque(maxlen=RECENT_PAIRS)
+        self._recent_motion, self._track = deque(maxlen=RECENT_PAIRS), deque(maxlen=400)  # track: (pair, R) of a drift
         self._context: dict = {}
         self.restart()
 
@@ -203,8 +205,7 @@ class OnlineCalibrator:
         self._rearm = False
         self._detector.reset()
         self._recent_res = deque(maxlen=RECENT_PAIRS)   # residual angles (deg) of pairs on arrival, once armed
-        self._verdict = None
-        self._refined = False
+        self._verdict, self._refined, self._told = None, False, None  # _told: an event of a refinement, not yet told
 
     def _flush(self) -> None:
         """Add the buffered pairs to the running sums (one batched product; weights lambda^age)."""
@@ -242,7 +243,8 @@ class OnlineCalibrator:
 
     n_pairs = property(lambda self: self._n, doc="Pairs since the last (re)start, repeats excluded.")
 
-    radius = property(lambda self: self._radius, doc="The current error radius (degrees) at :attr:`level`.")
+    radius = property(lambda self: self._detector.guard.widen(self._radius), doc="The error radius (deg) at :attr:"
+                      "`level`; while recent pairs misfit, widened by their angle to the estimate.")
 
     @property
     def excitation_deg(self) -> float:
@@ -272,7 +274,8 @@ class OnlineCalibrator:
         return self._detector.undecided(MISFITS_WITHDRAW_READY)
 
     def _state(self, event) -> OnlineState:
-        return OnlineState(self._n, self._R, self._radius, self.ready, event == "remount", event, self.determined,
+        event, self._told = event or self._told, None
+        return OnlineState(self._n, self._R, self.radius, self.ready, event == "remount", event, self.determined,
                            self._detector.checking, self._refined)
 
     # ------------------------------------------------------------------------------------------------ update
@@ -359,6 +362,8 @@ class OnlineCalibrator:
         self._R = self._warm = R[int(np.argmax(g))]
         self._refined = True
         cost = self._update_radius()
+        if self._drift_rate is not None and track_drift(self):  # a drift followed: its rate measured on the track
+            cost, self._told = self._update_radius(), "drift_end"  # it stopped: no lag any more; said at this pair
         if self.determined and (not self._detector.armed or self._rearm):
             # the detector starts (or its reference restarts) once the motion determines R0
             self._rearm = False
@@ -372,6 +377,7 @@ class OnlineCalibrator:
         n_eff = self._n_eff
         s2 = cost / self._w * n_eff / (2.0 * max(n_eff - 3.0, 1.0))       # mean square residual angle per pair
         self._s2 = s2 = max(s2, math.radians(self.noise_floor_deg) ** 2)   # never below a real sensor's noise
+        self._repeats.set_noise(math.degrees(math.sqrt(s2)))               # near-copies far below it: repeats
         G = 2.0 * self._w * _EYE - self._SB - self._SB.T                    # sum_j w_j (2I - B_j - B_j^T)
         lam, V = np.linalg.eigh(G)
         self._excitation = math.degrees(math.sqrt(max(float(lam[0]), 0.0) / self._w))
@@ -484,13 +490,7 @@ class OnlineCalibrator:
             why.append(f"the motion does not determine R0: RMS rotation about axes perpendicular to "
                        f"{np.round(axis, 3).tolist() if axis else 'any axis'} (sensor frame) is "
                        f"{self._excitation:.3g} deg < {self.min_excitation_deg:g} deg; rotate about other axes")
-        if self._detector.checking:
-            why.append(f"a change is being confirmed ({len(self._detector.window)} of {self._detector.target} pairs)")
-        elif self._detector.misfits >= MISFITS_WITHDRAW_READY:
-            why.append(f"{self._detector.misfits} recent pairs do not fit the estimate (d^2 above "
-                       f"{self._detector.cap:g} x its level): a change or outliers, not decided yet")
-        if self._detector.guard.misfit is not None:
-            why.append(self._detector.guard.describe())
+        why += detector_reasons(self._detector, MISFITS_WITHDRAW_READY)
         if not self._radius < self.target_deg:
             why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
         if self._verdict is not None and self._verdict.level == "fail":

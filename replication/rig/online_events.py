@@ -42,12 +42,14 @@ from ..core.stats import _normal_quantile, radius_deg
 from .online_guard import MisfitGuard
 
 __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY",
+           "REPEAT_NOISE_SHARE", "REPEAT_MAX_FACTOR",
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
            "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
-#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, and ``drift`` (a
-#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`).
-EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift")
+#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, ``drift`` (a
+#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a
+#: drift followed that stopped: :func:`replication.rig.online_guard.track_drift`).
+EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
 #: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
@@ -64,6 +66,11 @@ TRIM_FACTOR = 9.0
 #: an angle) are one pair repeated: independent measurements of real motion never agree that closely in all six
 #: degrees of freedom (the sensors' noise over a pairing interval is 0.005-0.5 deg).
 DUPLICATE_DEG = 0.01
+#: Once the pairs' noise ``s`` (RMS residual) is known, a pair within this share of ``s`` of an earlier one is a repeat
+#: too (a copy jittered far below the noise has the same noise), at most :data:`REPEAT_MAX_FACTOR` x ``duplicate_deg``:
+#: independent measurements of one motion differ by about ``0.6 s`` per axis (all six within ``0.1 s``: odds < 1e-5).
+REPEAT_NOISE_SHARE = 0.1
+REPEAT_MAX_FACTOR = 5.0
 #: Pairs whose camera and sensor motions are both below this (deg) are never called repeats (a rig at rest).
 SMALL_MOTION_DEG = 0.5
 #: Pairs between the onset of a suspected change and its alarm that are kept (the CUSUM rises for at most
@@ -92,8 +99,8 @@ class RepeatFilter:
     """
 
     def __init__(self, tol_deg: float = DUPLICATE_DEG):
-        self._tol = math.radians(tol_deg)
-        self._inv = 1.0 / (CELL_TOLERANCES * self._tol) if self._tol else 0.0
+        self._tol = self._tol0 = math.radians(tol_deg)
+        self._inv = 1.0 / (CELL_TOLERANCES * REPEAT_MAX_FACTOR * self._tol) if self._tol else 0.0  # the widest
         self._small_trace = 1.0 + 2.0 * math.cos(math.radians(SMALL_MOTION_DEG))
         self._cells: dict = {}              # cell key -> row index, or list of row indices
         self._rows = np.empty((64, 18))      # the remembered pairs (flat A, flat B), grown by doubling
@@ -110,6 +117,14 @@ class RepeatFilter:
             [held, self.remembered] if isinstance(held, int) else held + [self.remembered])
         self.remembered += 1
 
+    def set_noise(self, rms_deg: float) -> None:
+        """The pairs' RMS residual (deg): the tolerance becomes :data:`REPEAT_NOISE_SHARE` of it, never below the
+        one given nor above :data:`REPEAT_MAX_FACTOR` times it (exact repeats only stay exact)."""
+        if self._tol0:
+            self._tol = min(max(self._tol0, REPEAT_NOISE_SHARE * math.radians(rms_deg)), REPEAT_MAX_FACTOR * self._tol0)
+
+    tolerance_deg = property(lambda self: math.degrees(self._tol), doc="The tolerance in use (deg).")
+
     def seen(self, fa, fb) -> bool:
         """Whether the pair (row-major flat ``A`` and ``B``, lists of 9 floats) repeats an earlier one; remembers it
         if not."""
@@ -123,7 +138,7 @@ class RepeatFilter:
                 return True
             self._remember(key, fa + fb)
             return False
-        inv, edge = self._inv, 1.0 / CELL_TOLERANCES
+        inv, edge = self._inv, tol * self._inv  # a cell spans CELL_TOLERANCES times the widest tolerance
         x, y, z = 0.5 * (fb[7] - fb[5]) * inv, 0.5 * (fb[2] - fb[6]) * inv, 0.5 * (fb[3] - fb[1]) * inv
         bx, by, bz = math.floor(x), math.floor(y), math.floor(z)
         x, y, z = x - bx, y - by, z - bz

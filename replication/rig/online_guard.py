@@ -35,8 +35,9 @@ _EYE = np.eye(3)
 
 __all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_deg", "drift_step",
            "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
-           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "MisfitGuard",
-           "misfit_test"]
+           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "GUARD_LONG_WINDOWS",
+           "MisfitGuard",
+           "misfit_test", "track_drift", "detector_reasons", "TRACK_MEMORIES", "TRACK_MIN_PAIRS", "TRACK_Z"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
 #: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
@@ -48,6 +49,13 @@ GUARD_MIN_PAIRS = 3
 GUARD_WINDOW = 20
 #: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
 GUARD_EVERY = 20
+#: Longer windows: the last 80, 160 and 320 pairs. A re-mount smaller than the pair noise (0.55-0.9 deg at 1 deg of
+#: noise) shows in no 20 pairs: the statistic grows with the window (about ``N angle^2 / s^2``); 0.55 deg at 1 deg of
+#: noise passes :data:`GUARD_LEVEL` in about 120 pairs.
+GUARD_LONG_WINDOWS = (80, 160, 320)
+#: The long windows are tested together every this many pairs, on block sums of this many pairs (about 50 us a test,
+#: 100 us after a refinement: 3-5 us a pair).
+GUARD_LONG_EVERY = 20
 #: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
 #: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
 #: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
@@ -141,11 +149,26 @@ class MisfitGuard:
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
         self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
-        self.clear()
+        self._ring = np.empty((max(GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for the long windows
+        blocks = len(self._ring) // GUARD_LONG_EVERY  # the ring in blocks: their sums of B_j and of the shares g_j
+        self._block_B, self._block_g = np.zeros((blocks, 3, 3)), np.zeros((blocks, 3))
+        self._block_version, self._version, self._shares_R = np.full(blocks, -1), 0, None  # g_j at _shares_R
+        self.forget()
 
     @property
     def misfit(self):
-        return self.run_misfit or self.window_misfit
+        return self.run_misfit or self.window_misfit or self.long_misfit
+
+    @property
+    def long_misfit(self):
+        """The long window whose test withdrew ``ready`` (of several, the highest statistic), or None."""
+        return self._long_worst
+
+    def widen(self, radius: float) -> float:
+        """The radius to publish: while the recent pairs agree on a rotation the radius does not allow, the estimate
+        may be that far off (their angle added); else ``radius``."""
+        m = self.misfit
+        return radius if m is None or not math.isfinite(m[1]) else radius + m[1]
 
     def describe(self) -> str:
         """The sentence for ``not_ready`` while :attr:`misfit` is set."""
@@ -155,9 +178,17 @@ class MisfitGuard:
                 f"change, not decided yet")
 
     def clear(self) -> None:
-        """Forget every pair (a decision, a start)."""
+        """Forget the run and the short window (a decision, a start); the long windows keep their pairs (still in
+        the estimate) until :meth:`forget` (a re-mount: a new guard)."""
         self._clear_run()
         self.window_misfit, self._since_window = None, 0
+
+    def forget(self) -> None:
+        """Forget the long windows' pairs too."""
+        self.clear()
+        self._long = dict.fromkeys(GUARD_LONG_WINDOWS)     # per long window: its misfit or None
+        self._long_worst = None
+        self._count = 0      # pairs in the ring (since the last clear)
 
     def _clear_run(self) -> None:
         self.pairs.clear()
@@ -175,6 +206,45 @@ class MisfitGuard:
         elif stat <= self.clear_threshold:  # withdrawn until a window fits at a usual level (hysteresis)
             self.window_misfit = None
 
+    def _scan_long(self, R, cov, s2) -> None:
+        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together on block sums of
+        :data:`GUARD_LONG_EVERY` pairs: each block's ``sum B_j`` once, its share of the Gauss-Newton step
+        (:func:`misfit_test`) once per estimate (recomputed only after a refinement); a window sums its blocks."""
+        every, count = GUARD_LONG_EVERY, self._count
+        blocks = len(self._block_g)
+        newest = (count // every - 1) % blocks
+        pairs = np.arange(count - every, count) % len(self._ring)
+        self._block_B[newest] = self._ring[pairs, 1].sum(axis=0)
+        self._block_version[newest] = -1
+        m = min(count, len(self._ring)) // every
+        if m < GUARD_LONG_WINDOWS[0] // every:
+            return
+        if R is not self._shares_R:  # a new estimate: every block's share is stale
+            self._shares_R, self._version = R, self._version + 1
+        ids = (count // every - 1 - np.arange(m)) % blocks            # newest first
+        stale = ids[self._block_version[ids] != self._version]
+        if len(stale):
+            at = ((stale * every)[:, None] + np.arange(every)).ravel()  # ring slots of those blocks' pairs
+            A, B = self._ring[at, 0], self._ring[at, 1]
+            E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
+            r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+            shares = 0.5 * (r - np.einsum("jba,jb->ja", B, r))
+            self._block_g[stale] = shares.reshape(len(stale), every, 3).sum(axis=1)
+            self._block_version[stale] = self._version
+        g, SB = np.cumsum(self._block_g[ids], axis=0), np.cumsum(self._block_B[ids], axis=0)
+        for n in GUARD_LONG_WINDOWS:
+            k = n // every
+            if k > m:
+                break
+            H = 2.0 * n * _EYE - SB[k - 1] - SB[k - 1].T
+            stat, angle = _statistic(g[k - 1].tolist(), H.ravel().tolist(), s2, cov)
+            if stat > self.threshold:
+                self._long[n] = (n, angle, stat, self.threshold)
+            elif stat <= self.clear_threshold:
+                self._long[n] = None
+        held = [m for m in self._long.values() if m is not None]
+        self._long_worst = max(held, key=lambda m: m[2]) if held else None
+
     def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
         """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
         mean square residual); ``recent``: the last pairs added, this one included (a sequence of ``(A, B)``)."""
@@ -182,6 +252,11 @@ class MisfitGuard:
         self._since_window += 1
         if self._since_window >= GUARD_EVERY and len(recent) >= GUARD_WINDOW:
             self._scan(R, cov, s2, recent)
+        k = self._count % len(self._ring)
+        self._ring[k, 0], self._ring[k, 1] = A, B
+        self._count += 1
+        if self._count % GUARD_LONG_EVERY == 0:
+            self._scan_long(R, cov, s2)
         total = self.sum + z - GUARD_K
         if total <= 0.0:
             if self.sum:
@@ -233,18 +308,19 @@ def drift_step(R_before, R_after) -> np.ndarray:
 def recognise_drift(last, event, following: float | None):
     """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`) continues the last
     change, ``last = (pair, R_latest, origin)``: the pair and estimate of the last re-mount or drift step, and the
-    re-mount that began it (an event). The step from ``R_latest`` to the event's own estimate must be small
+    re-mount that began it (an event). The step from the estimate before the event to the event's own must be small
     (:data:`DRIFT_MAX_STEP_DEG`, or twice what the drift followed at rate ``following`` (deg per pair) moves in the
     pairs between), within :data:`DRIFT_WITHIN_PAIRS`, and in the direction of the movement so far (from the origin's
-    estimate before it to ``R_latest``): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
+    estimate before it to the estimate before this event, ``event.R_before``: the window of the last step is a few
+    pairs, its direction noisy): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
     whose small steps are noisy) at least 0. Returns None or ``(rate_deg_per_pair, angle_deg,
     first_pair, axis)``: the angle between the origin's own estimate and the event's (where the frame was then and
     is now), its rate over the pairs between them, and the movement's direction (a unit vector, sensor frame)."""
     if last is None or not 0 < event.pair - last[0] <= DRIFT_WITHIN_PAIRS:
         return None
-    origin = last[2]
-    so_far = drift_step(origin.R_before, last[1])
-    step = drift_step(last[1], event.R_after)
+    origin = last[2]  # the movement so far ends at the estimate now (many pairs), not the last window's (a few)
+    so_far = drift_step(origin.R_before, event.R_before)
+    step = drift_step(event.R_before, event.R_after)
     a, b = float(np.linalg.norm(so_far)), float(np.linalg.norm(step))
     if a and b and float(np.linalg.norm(so_far + step)) == 0.0:
         return None
@@ -265,7 +341,8 @@ def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
     new memory; no restart. Returns the event."""
     import dataclasses
 
-    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start
+    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start; its track begins
+        cal._track.clear()
         cal.events = [e for e in cal.events if not (e.kind == "remount" and e.pair == first)]
         cal.alarms = [a for a in cal.alarms if a != first]
     cal._flush()
@@ -295,3 +372,81 @@ def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> fl
     """The lag (deg) behind a drift of an estimate with forgetting ``lambda`` refined every ``every`` pairs: ``rate x
     (lambda / (1 - lambda) + every)`` (the weighted mean age of its pairs, and the pairs since its last refinement)."""
     return rate_deg_per_pair * (forgetting / (1.0 - forgetting) + every)
+
+
+# ------------------------------------------------------------------------------------------------ a drift followed
+#: While following a drift, its rate is measured again on the estimate's own track: the movement along the drift's
+#: axis between the estimate now and the one at least :data:`TRACK_MEMORIES` memories (``(1 + lambda) / (1 - lambda)``
+#: pairs) and :data:`TRACK_MIN_PAIRS` pairs ago (two nearly independent estimates). A movement that differs from the
+#: one the rate followed predicts by more than :data:`TRACK_Z` standard errors is a new rate (a drift that speeds up
+#: or slows down), or, nearer none than that prediction (below half of it), a drift that stopped: said
+#: (``drift_end``), and the estimator returns to its own memory. Over a memory the rate followed moves the estimate
+#: about twice its lag (half the target), so over 1.5 memories 0.375 deg at the default target.
+TRACK_MEMORIES = 1.5
+TRACK_MIN_PAIRS = 100
+TRACK_Z = 3.0
+
+
+def detector_reasons(detector, misfits_withdraw: int) -> list[str]:
+    """The sentences of ``not_ready`` the change detector (:class:`replication.rig.online_events.ChangeDetector`) and
+    its guard give: a change being confirmed, ``misfits_withdraw`` gross misfits or more, the recent pairs' misfit."""
+    why = []
+    if detector.checking:
+        why.append(f"a change is being confirmed ({len(detector.window)} of {detector.target} pairs)")
+    elif detector.misfits >= misfits_withdraw:
+        why.append(f"{detector.misfits} recent pairs do not fit the estimate (d^2 above {detector.cap:g} x its "
+                   f"level): a change or outliers, not decided yet")
+    if detector.guard.misfit is not None:
+        why.append(detector.guard.describe())
+    return why
+
+
+def track_drift(cal):
+    """Measure the drift followed by ``cal`` (:class:`replication.rig.online.OnlineCalibrator`) on its track of
+    estimates (see :data:`TRACK_MEMORIES`) and act: a new rate (forgetting and the drift event updated), or the drift's
+    end (event ``drift_end``, forgetting back to the calibrator's own). Returns the kind of event added, or None."""
+    import dataclasses
+
+    now, R_now = cal.n_total, cal._R
+    track = cal._track
+    track.append((now, R_now, cal._cov))
+    lam, rate, axis = cal.forgetting, cal._drift_rate, cal._drift_axis
+    span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS)
+    then = next((t for t in reversed(track) if now - t[0] >= span_least), None)
+    if then is None or cal._cov is None or then[2] is None:
+        return None
+    span = now - then[0]
+    moved = math.degrees(float(drift_step(then[1], R_now) @ axis))
+    lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
+    var = [max(float(axis @ c @ axis) - lag ** 2, 0.0) for c in (then[2], cal._cov)]  # noise along the axis, no lag
+    se = math.degrees(math.sqrt(sum(var)))                         # of the difference of the two estimates
+    if abs(moved - rate * span) <= TRACK_Z * se:
+        return None
+    drift = next((e for e in reversed(cal.events) if e.kind == "drift"), None)
+    track.clear()
+    track.append((now, R_now, cal._cov))
+    if moved < 0.5 * rate * span:  # nearer none than the rate followed, and beyond its standard errors: stopped
+        cal._drift_rate, cal._drift_axis, cal.forgetting = None, None, cal._fgt
+        onset = drift.onset_pair if drift is not None else then[0]
+        cal.events.append(dataclasses.replace(
+            drift, kind="drift_end", pair=now - 1, alarm_pair=now - 1, source="track", onset_pair=onset,
+            window_pairs=span, angle_deg=moved, threshold_deg=TRACK_Z * se, median_z_before=math.nan,
+            median_z_after=math.nan, pairs_dropped=0, R_before=np.array(then[1]), R_after=np.array(R_now),
+            rate_deg_per_pair=0.0,
+            message=f"the drift that began at pair {onset} stopped: the estimate moved {moved:.3g} deg along it in "
+                    f"the last {span} pairs, where its rate ({rate:.3g} deg per pair) says {rate * span:.3g} deg "
+                    f"(more than {TRACK_Z:g} standard errors, {TRACK_Z * se:.3g} deg, apart); no more forgetting: "
+                    f"full memory"))
+        return "drift_end"
+    new_rate = max(moved / span, 0.0)
+    cal._drift_rate = new_rate
+    cal.forgetting = lam = follow_forgetting(new_rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1),
+                                             cal.refine_every)
+    if drift is not None:
+        lag = drift_lag_deg(new_rate, lam, cal.refine_every)
+        k = cal.events.index(drift)
+        cal.events[k] = dataclasses.replace(drift, rate_deg_per_pair=new_rate, message=(
+            f"{drift.message.split('; rate now')[0]}; rate now {new_rate:.3g} deg per pair (measured over the last "
+            f"{span} pairs at pair {now}): forgetting {lam:.4g}, lag {lag:.3g} deg"
+            + ("" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg")))
+    return None
