@@ -412,11 +412,15 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
                                    max_offset)
     if diagnose and result.verdict.level != "ok":
+        import functools
+
         from .diagnose import input_mistakes
 
-        found = input_mistakes(camera, sensor, base_residual_deg=result.residual_deg["median"],
+        found = input_mistakes(camera, gyro if model is not None else sensor,  # the sensor model: its bias removed
+                               base_residual_deg=result.residual_deg["median"],
                                motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
-                               max_offset=max_offset, calibrate=calibrate, reference=reference)
+                               max_offset=max_offset, calibrate=functools.partial(calibrate, gyro_bias=False),
+                               reference=reference)
         if found:
             result = with_reasons(result, found)
     return result

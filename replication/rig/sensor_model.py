@@ -24,8 +24,10 @@ Intervals: overlapping pairs share noise (a camera pose, a stretch of gyro sampl
 sandwich ``H^-1 S H^-1`` with ``S`` the Newey-West (Bartlett) sum of the per-pair gradients ``J_j^T w_j r_j`` over
 lags up to two pairing intervals; the 95 % intervals are +-1.96 standard deviations (their coverage is measured in
 ``benchmarks/bench_sensor_model.py``). The bias of each half of the recording is estimated the same way (the other
-parameters held): halves that differ beyond their noise (a chi-square test at level :data:`BIAS_CHANGE_LEVEL`) mean
-the bias drifts (with temperature) and one bias does not describe the recording.
+parameters held; one linearised step from the whole's solution): halves that differ beyond their noise (a chi-square
+test at level :data:`BIAS_CHANGE_LEVEL`) mean the bias drifts (with temperature) and one bias does not describe the
+recording. The bias absorbs a slow turn of the camera trajectory's frame (a SLAM's rotation drift), which every pair
+sees the same way.
 
 The verdict's reasons and what :func:`replication.rig.calibration.calibrate` does with the model:
 :mod:`replication.rig.sensor_verdict`. Conventions: ``docs/conventions.md``.
@@ -48,8 +50,9 @@ __all__ = ["SensorModel", "estimate_sensor_model", "rest_periods", "BIAS_CHANGE_
 BIAS_CHANGE_LEVEL = 0.01
 _CHI2_3 = {0.01: 11.344866730144373}
 #: A rest: at least this long (s) with the rates' spread (norm of the per-axis standard deviations) below
-#: :data:`REST_SPREAD_RAD_S` and their mean below :data:`REST_MEAN_RAD_S` (a gyro's bias is well below it).
-REST_MIN_S, REST_SPREAD_RAD_S, REST_MEAN_RAD_S = 1.0, 0.02, 0.3
+#: :data:`REST_SPREAD_RAD_S` and their mean below :data:`REST_MEAN_RAD_S` (a gyro's bias is well below it) in every
+#: window of :data:`REST_WINDOW_S`.
+REST_MIN_S, REST_SPREAD_RAD_S, REST_MEAN_RAD_S, REST_WINDOW_S = 1.0, 0.02, 0.3, 0.25
 #: The sensor model is not estimated where the angular speeds correlate less (the verdict's fail bound): the streams
 #: do not show one motion. Its reasons are not given where its pairs fit worse than :data:`MAX_FIT_RATIO` of the
 #: median motion (the residual check's fail bound): its numbers then describe no rig.
@@ -155,9 +158,10 @@ class SensorModel:
 
 def rest_periods(gyro: GyroStream, *, min_s: float = REST_MIN_S) -> list:
     """``(start, end)`` (s) of the stretches of at least ``min_s`` where the gyro rests: in every window of
-    ``min_s / 2`` the rates' spread is below :data:`REST_SPREAD_RAD_S` and their mean below :data:`REST_MEAN_RAD_S`."""
+    :data:`REST_WINDOW_S` the rates' spread is below :data:`REST_SPREAD_RAD_S` and their mean below
+    :data:`REST_MEAN_RAD_S`."""
     t, w = gyro.t, gyro.omega
-    n = max(2, int(round(0.5 * min_s / np.median(np.diff(t)))))
+    n = max(2, int(round(REST_WINDOW_S / np.median(np.diff(t)))))
     k = len(t) // n
     if k < 2:
         return []
@@ -370,11 +374,11 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     halves, halves_cov = [], []
     mid = np.median(ti)
-    for part in (ti <= mid, ti > mid):
-        (_, bh, _, _), rh, jh, wh, _ = _gauss_newton(X, b, d, kappa, A[part], ti[part], tk[part], t_mid, gyro.t,
-                                                     gyro.omega, np.arange(3, 6), iterations=3)
-        halves.append(bh)
-        halves_cov.append(_sandwich(rh, jh, wh, lags, np.arange(3, 6)))
+    for part in (ti <= mid, ti > mid):  # one Gauss-Newton step on the half's bias from the whole's solution
+        jh, wh = jac[part][:, :, 3:6], wts[part]
+        step = -np.linalg.solve(np.einsum("j,jai,jak->ik", wh, jh, jh), np.einsum("j,jai,ja->i", wh, jh, r[part]))
+        halves.append(b + step)
+        halves_cov.append(_sandwich(r[part] + jh @ step, jac[part], wh, lags, np.arange(3, 6)))
     diff = halves[0] - halves[1]
     stat = float(diff @ np.linalg.pinv(halves_cov[0] + halves_cov[1]) @ diff)
     H = np.einsum("j,jai,jak->ik", wts, jac, jac)
