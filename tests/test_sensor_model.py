@@ -208,3 +208,16 @@ def test_bias_change_reason_at_its_floor(biased):
 def test_a_model_that_does_not_fit_gives_no_reasons(biased):
     m = _model(biased, applied=False, fit_ratio=sm.MAX_FIT_RATIO * 1.01)
     assert sensor_reasons(m, interval=1.0, motion_median_deg=0.1) == []
+
+
+def test_a_model_that_fits_no_rig_is_not_applied(biased):
+    from replication.core.so3 import as_quaternion, quaternion_to_matrix
+    from replication.rig.streams import OrientationStream
+
+    _, camera, gyro, _ = biased
+    q = as_quaternion(camera.world_from_body)[:, [1, 2, 3, 0]]  # quaternions read in the wrong order
+    wrong = OrientationStream(camera.t, quaternion_to_matrix(q), "camera")
+    r = calibrate(wrong, gyro, n_bootstrap=0, diagnose=False)
+    assert r.sensor_model["sensor_model"]["bias_applied"] is False and r.sensor_model["gyro_bias_rad_s"] is None
+    (reason,) = [x for x in r.verdict.reasons if x.check == "gyro_bias_not_estimated"]
+    assert "fit no rig" in reason.message and "no bias was removed" in reason.message

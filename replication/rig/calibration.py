@@ -419,7 +419,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         found = input_mistakes(camera, gyro if model is not None else sensor,  # the sensor model: its bias removed
                                base_residual_deg=result.residual_deg["median"],
                                motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
-                               max_offset=max_offset, calibrate=functools.partial(calibrate, gyro_bias=False),
+                               max_offset=max_offset,
+                               calibrate=functools.partial(calibrate, gyro_bias=gyro_bias and model is None),
                                reference=reference)
         if found:
             result = with_reasons(result, found)

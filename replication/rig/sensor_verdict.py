@@ -100,11 +100,16 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
 
 
 def model_or_note(camera, gyro, interval, max_offset):
-    """``(model, None)`` (:func:`estimate_sensor_model`), or ``(None, why it could not be estimated)``."""
+    """``(model, None)`` (:func:`estimate_sensor_model`), or ``(None, why it could not be estimated or does not
+    fit)``."""
     try:
-        return estimate_sensor_model(camera, gyro, interval=interval, max_offset=max_offset), None
+        model = estimate_sensor_model(camera, gyro, interval=interval, max_offset=max_offset)
     except ValueError as err:
         return None, str(err)
+    if not model.fit_ratio <= MAX_FIT_RATIO:  # a bias fitted to streams that disagree would hide what is wrong
+        return None, (f"its pairs fit no rig: median residual {model.fit_ratio:.3g} of the median motion > "
+                      f"{MAX_FIT_RATIO:g}, so no bias was removed")
+    return model, None
 
 
 def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval, max_offset):
