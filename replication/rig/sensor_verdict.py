@@ -24,7 +24,7 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #:   (the bound on an offset left in, ``offset_left_ms``), 200 ppm over 60 s at 1 s;
 #: * ``gyro_bias_change_R0_deg``: where the halves' biases differ beyond their noise, how far half the difference
 #:   moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real recordings, where
-#:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 19 and 29 > 11.3, but
+#:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 13 and 20 > 11.3, but
 #:   0.006 deg on TUM-VI room1 and 0.0002 deg on EuRoC MH01 with a synthetic constant bias); 0.05 deg is 8 times
 #:   the larger and a seventh of EuRoC's reference floor (0.343 deg).
 SENSOR_THRESHOLDS = {
