@@ -221,3 +221,12 @@ def test_a_model_that_fits_no_rig_is_not_applied(biased):
     assert r.sensor_model["sensor_model"]["bias_applied"] is False and r.sensor_model["gyro_bias_rad_s"] is None
     (reason,) = [x for x in r.verdict.reasons if x.check == "gyro_bias_not_estimated"]
     assert "fit no rig" in reason.message and "no bias was removed" in reason.message
+
+
+def test_the_figure_states_the_bias_and_the_drift(biased):
+    from replication.rig.figure import headline
+
+    _, camera, gyro, _ = biased
+    _, lines = headline(calibrate(camera, gyro, n_bootstrap=0, diagnose=False))
+    assert any(x.startswith("gyro bias (x, y, z), deg/s with 95 % intervals: +5.7") for x in lines)
+    assert any(x.startswith("clock drift:") for x in lines)

@@ -56,7 +56,8 @@ def _sensor_fields(model) -> dict:
 
 
 def _sensor_lines(model) -> list:
-    """The summary's lines on a gyro's bias and the clock's drift."""
+    """The summary's (and the figure's) lines on a gyro's bias and the clock's drift, from a report's
+    ``sensor_model`` fields (none for an orientation sensor)."""
     if model is None:
         return []
     if model.get("gyro_bias_rad_s") is None:
