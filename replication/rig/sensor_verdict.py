@@ -22,6 +22,9 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #: * ``clock_drift_share``: half the offset's change over the overlap (the pairs' timing error at its ends, one offset
 #:   being applied) over the pairing interval, above, where the drift's interval excludes 0: 0.005 is 5 ms at 1 s
 #:   (the bound on an offset left in, ``offset_left_ms``), 200 ppm over 60 s at 1 s;
+#: * ``offset_disagreement_share``: the offset the pairs fit best (the model's, at the middle) minus the one applied
+#:   (the speeds' correlation) over the pairing interval, above, where outside the pairs' interval: the drift's bound
+#:   (a rig turning steadily about one axis while it rocks: 7.5-9.8 ms against 0.2 ms, R0 0.23-0.30 deg off, ok);
 #: * ``gyro_bias_change_R0_deg``: where the halves' biases differ beyond their noise, how far half the difference
 #:   moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real recordings, where
 #:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 13 and 20 > 11.3, but
@@ -31,6 +34,7 @@ SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
     "clock_drift_share": (0.005, None),
+    "offset_disagreement_share": (0.005, None),
     "gyro_bias_change_R0_deg": (0.05, None),
 }
 
@@ -139,5 +143,29 @@ def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval,
         return result
     result = dataclasses.replace(result, sensor_model=model.report())
     result.diagnostics.update(sensor_model=model)
-    return with_reasons(result, sensor_reasons(model, interval=interval,
-                                               motion_median_deg=result.diagnostics["motion_median_deg"]))
+    found = sensor_reasons(model, interval=interval, motion_median_deg=result.diagnostics["motion_median_deg"])
+    return with_reasons(result, found + [r for r in [_offsets_disagree(model, result, interval)] if r is not None])
+
+
+def _offsets_disagree(model, result, interval):
+    """A warning where the offset applied (the angular speeds' correlation) lies outside the pairs' 95 % interval for
+    it (the model's offset at the middle) and by more than the drift's bound share of the pairing interval
+    (:data:`SENSOR_THRESHOLDS` ``offset_disagreement_share``)."""
+    from .quality import Reason
+
+    if not model.fit_ratio <= MAX_FIT_RATIO or not result.time_offset_applied or model.covariance is None:
+        return None
+    gap = abs(model.offset_mid_s - result.time_offset_s)
+    noise = 1.959963984540054 * math.sqrt(max(model.covariance[6, 6], 0.0))
+    bound = SENSOR_THRESHOLDS["offset_disagreement_share"][0]
+    if gap <= noise or gap / interval <= bound:
+        return None
+    lo, hi = (1e3 * v for v in result.time_offset_ci95_s)
+    return Reason("offset_disagreement", "warning", float(gap / interval), bound,
+                  f"the pairs fit best with the clock offset at {1e3 * model.offset_mid_s:+.2f} ms (95 % interval "
+                  f"+-{1e3 * noise:.2g} ms), the angular speeds' correlation put it at "
+                  f"{1e3 * result.time_offset_s:+.2f} ms ([{lo:+.2f}, {hi:+.2f}] ms; applied): {1e3 * gap:.3g} ms "
+                  f"apart, {gap / interval:.3g} of the "
+                  f"{interval:g} s interval > {bound:g}, an error in every pair that R0's radius does not hold; the "
+                  f"speeds mislead the search where they barely vary (a steady turn); check the offset (--keep-clock "
+                  f"where the clocks are synchronised)")
