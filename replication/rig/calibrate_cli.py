@@ -135,6 +135,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--max-offset", type=_number(float, minimum=0), default=0.2,
                      help="largest clock offset searched (s)")
     cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
+    cal.add_argument("--no-gyro-bias", action="store_true",
+                     help="a gyro sensor: do not estimate and remove its bias (with R0); the rates as recorded")
     cal.add_argument("--bootstrap", type=_number(int, minimum=0, strict=False), default=200,
                      help="bootstrap replicates (0: none)")
     cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
@@ -407,7 +409,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
             result = calibrate_poses(camera, sensor, **common)
         else:
             result = calibrate(camera, sensor, interval=args.interval, stride=args.stride,
-                               max_offset=args.max_offset, correct_offset=not args.keep_clock, **common)
+                               max_offset=args.max_offset, correct_offset=not args.keep_clock,
+                               gyro_bias=not args.no_gyro_bias, **common)
     except OverlapError as err:
         return _error(err.named("--max-offset"))
     except (ValueError, OSError, MissingExtra) as err:

@@ -41,6 +41,7 @@ from .association import (  # re-exported: public names here
 from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
+from .sensor_verdict import model_or_note, with_sensor_model
 from .streams import (  # integrate_gyro re-exported: a public name
     PLAUSIBLE_SPAN_S,
     GyroStream,
@@ -292,7 +293,7 @@ def _change_report(c, fit) -> dict:
 
 def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
               stride: int = 1, max_offset: float = 0.2, correct_offset: bool = True, n_bootstrap: int = 200,
-              seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False,
+              seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False, gyro_bias: bool = True,
               **options) -> CalibrationResult:
     """``R0`` (camera_from_sensor) of a real rig from two timestamped streams, with a verdict on it.
 
@@ -325,6 +326,10 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         Where the verdict is not ``ok``, look for the usual input mistakes (:mod:`replication.rig.diagnose`).
     progress : bool
         Show a progress bar over the bootstrap (on standard error).
+    gyro_bias : bool
+        A gyro sensor: estimate its bias (and the clock's drift) with ``R0`` and remove the bias from the rates
+        before everything else (:mod:`replication.rig.sensor_model`); False: the rates as recorded (the bias is then
+        estimated only where the verdict is not ``ok``, and named if it is large).
     **options
         Passed to the solver.
 
@@ -355,6 +360,11 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
+    model, model_note = model_or_note(camera, gyro, interval, max_offset) if gyro is not None and gyro_bias else (
+        None, None)
+    if model is not None:  # the sensor model: the rates without the gyro's bias
+        gyro = model.corrected(gyro)
+        oriented = integrate_gyro(gyro)
     window = _gap_free_window(camera, oriented, max_offset)
     span = window.t[-1] - window.t[0]
     clock = offset_analysis(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
@@ -372,7 +382,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     block = max(1, round(interval / np.median(np.diff(camera.t)) / stride))
     lo, hi = max(camera.t[0], oriented.t[0] - used), min(camera.t[-1], oriented.t[-1] - used)
     parameters = {"method": method, "interval_s": interval, "stride": stride, "max_offset_s": max_offset,
-                  "correct_offset": bool(correct_offset), "n_bootstrap": n_bootstrap, "seed": seed,
+                  "correct_offset": bool(correct_offset), "gyro_bias": bool(gyro_bias), "n_bootstrap": n_bootstrap,
+                  "seed": seed,
                   "diagnose": bool(diagnose), "solver_options": {k: repr(v) for k, v in options.items()}}
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
@@ -397,12 +408,20 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])
+    if isinstance(sensor, GyroStream):  # the sensor model: its fields and reasons (model off: only where not ok)
+        result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
+                                   max_offset)
     if diagnose and result.verdict.level != "ok":
+        import functools
+
         from .diagnose import input_mistakes
 
-        found = input_mistakes(camera, sensor, base_residual_deg=result.residual_deg["median"],
+        found = input_mistakes(camera, gyro if model is not None else sensor,  # the sensor model: its bias removed
+                               base_residual_deg=result.residual_deg["median"],
                                motion_deg=result.diagnostics["motion_median_deg"], interval=interval,
-                               max_offset=max_offset, calibrate=calibrate, reference=reference,
+                               max_offset=max_offset,
+                               calibrate=functools.partial(calibrate, gyro_bias=gyro_bias and model is None),
+                               reference=reference,
                                R=result.R)  # with a reference: the IMU's own trajectory as camera, files swapped
         if found:
             result = with_reasons(result, found)

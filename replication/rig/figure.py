@@ -56,6 +56,8 @@ def headline(result, *, name: str | None = None, reference_name: str | None = No
         said = f"reference ({reference_name})" if reference_name else "reference"
         lines.append(_reference_line(said, result.inputs.get("reference_camera_from_sensor"),
                                      result.reference_error_deg))
+    if result.sensor_model is not None:  # a gyro: its bias and the clock's drift, as the summary states them
+        lines += [x for x in result.summary().splitlines() if x.startswith(("gyro bias", "clock drift"))]
     return title, lines
 
 

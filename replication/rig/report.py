@@ -47,6 +47,32 @@ def json_safe(value):
 
 
 
+_SENSOR_KEYS = ("gyro_bias_rad_s", "gyro_bias_ci95_rad_s", "clock_drift_ppm", "clock_drift_ci95_ppm", "sensor_model")
+
+
+def _sensor_fields(model) -> dict:
+    """The report's sensor-model fields (all null for an orientation sensor)."""
+    return {key: None if model is None else model.get(key) for key in _SENSOR_KEYS}
+
+
+def _sensor_lines(model) -> list:
+    """The summary's (and the figure's) lines on a gyro's bias and the clock's drift, from a report's
+    ``sensor_model`` fields (none for an orientation sensor)."""
+    if model is None:
+        return []
+    if model.get("gyro_bias_rad_s") is None:
+        return [f"gyro bias: not estimated ({model['sensor_model'].get('note')})"]
+    ci = np.degrees(model["gyro_bias_ci95_rad_s"])
+    axes = ", ".join(f"{np.degrees(b):+.3f} [{lo:+.3f}, {hi:+.3f}]" for b, (lo, hi) in zip(model["gyro_bias_rad_s"],
+                                                                                           ci))
+    lo, hi = model["clock_drift_ci95_ppm"]
+    details = model["sensor_model"]
+    return [f"gyro bias (x, y, z), deg/s with 95 % intervals: {axes} "
+            f"({'removed' if details['bias_applied'] else 'measured, not removed'})",
+            f"clock drift: {model['clock_drift_ppm']:+.1f} ppm, 95 % interval [{lo:+.1f}, {hi:+.1f}] ppm"
+            + ("" if details["drift_resolved"] else " (not resolved: it includes 0)")]
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """What :func:`replication.rig.calibration.calibrate` (and ``calibrate_poses``) return.
@@ -99,6 +125,10 @@ class CalibrationResult:
         recording? times since the camera's first sample), or why it was not run; None for static pose sets.
     online : dict or None
         ``calibrate --online``: what the online replay found (:meth:`replication.rig.live.LiveRig.summary`).
+    sensor_model : dict or None
+        A gyro sensor: its bias and the clock's drift estimated with ``R0`` (:mod:`replication.rig.sensor_model`):
+        ``gyro_bias_rad_s`` (3), ``gyro_bias_ci95_rad_s`` (3 x 2), ``clock_drift_ppm``, ``clock_drift_ci95_ppm``
+        (None where not estimated) and the details under ``sensor_model``; None for an orientation sensor.
     verdict : Verdict
         ``ok`` / ``warning`` / ``fail`` and every reason with its measured number and threshold
         (:mod:`replication.rig.quality`).
@@ -138,6 +168,7 @@ class CalibrationResult:
     station_repeats: dict | None = None
     change_test: dict | None = None
     online: dict | None = None
+    sensor_model: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
     warnings: tuple = ()
     parameters: dict = field(default_factory=dict)
@@ -187,6 +218,7 @@ class CalibrationResult:
             "reference_errors_deg": None if self.reference_errors_deg is None else list(self.reference_errors_deg),
             "reference_disagreement_deg": self.reference_disagreement_deg,
             "reference_reading": self.reference_reading,
+            **_sensor_fields(self.sensor_model),
         })
 
     def summary(self) -> str:
@@ -219,6 +251,7 @@ class CalibrationResult:
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
                 + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
+        lines += _sensor_lines(self.sensor_model)
         if self.reference_errors_deg is not None:
             e1, e2 = self.reference_errors_deg
             lines.append(f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree "

@@ -116,7 +116,9 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     """Orientation ``world_from_body`` (``Q(t_0) = I``) from body-frame rates, trapezoidal rule.
 
     ``Q_{k+1} = Q_k exp([(omega_k + omega_{k+1}) / 2] dt_k)``; the products are a batched
-    prefix scan (:func:`replication.core.so3.cumulative_product`). No bias is removed.
+    prefix scan (:func:`replication.core.so3.cumulative_product`). No bias is removed here:
+    :func:`replication.rig.calibration.calibrate` estimates a gyro's bias with ``R0`` and removes it first
+    (:mod:`replication.rig.sensor_model`; ``gyro_bias=False`` keeps the rates as recorded).
     """
     dt = np.diff(gyro.t)
     steps = exp_map(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])

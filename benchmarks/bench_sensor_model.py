@@ -1,0 +1,171 @@
+"""A raw gyro's bias and the clock's drift estimated with R0 (issue 34, points 1 and 3's drift half).
+
+Synthetic rigs (:func:`biased_rig`: the smooth three-axis motion of ``rig_streams``, 40 s, camera noise 0.05 deg,
+gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), over ``--runs`` seeded runs per set
+(seeds ``[SEED, set, run]``):
+
+* bias: each axis drawn in +-0.1 rad/s, half the runs with a 3 s rest at the start; the bias error per axis (median and
+  95th percentile of its absolute value), how often each axis's 95 % interval holds the truth (3 axes per run; Wilson
+  95 % interval), how often the halves' test fires (false alarms: the bias is constant) and the reason with it, how
+  often the drift (0 here) is resolved, and R0's error with and without the bias model (``calibrate``);
+* drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's drift reason fires;
+* time: ``calibrate`` with and without the model on the same input (median of the runs of the first set);
+* real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned into rates with the
+  issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in the shared data), against the
+  monocular ORB-SLAM3 camera: R0 with and without the model against both published calibrations.
+
+Usage: python benchmarks/bench_sensor_model.py [--runs 200] [--seed 3400] [--real]
+"""
+import argparse
+import time
+import warnings
+
+import numpy as np
+
+from replication.core.so3 import angle_between_deg, exp_map, log_map
+from replication.core.stats import wilson_interval
+from replication.rig.calibration import calibrate
+from replication.rig.sensor_model import estimate_sensor_model
+from replication.rig.streams import GyroStream, OrientationStream
+
+R0_TRUE = exp_map(np.radians([40.0, -70.0, 125.0]))
+
+
+def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_s=0.0, camera_noise_deg=0.0,
+               gyro_noise_deg_s=0.0, rng=None, phase=0.0):
+    """``(R0, camera, gyro)``: a camera at 20 Hz and a gyro at 200 Hz (one second beyond it on both sides) reading
+    ``omega + bias`` (rad/s), stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``; the rig rests for ``rest_s``
+    seconds, then starts moving over 2 s (the motion of :func:`replication.study.simulation.rig_streams`)."""
+
+    def world_from_camera(t):
+        s = np.clip((t - rest_s) / 2.0, 0.0, 1.0) if rest_s else np.ones_like(t)
+        env = (s * s * (3 - 2 * s))[:, None]
+        w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase),
+                      0.7 * np.cos(0.3 * t + phase)], axis=-1)
+        return exp_map(env * w)
+
+    t_cam = np.arange(0.0, seconds, 0.05)
+    C = world_from_camera(t_cam)
+    if camera_noise_deg:
+        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
+    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = world_from_camera(t_imu) @ R0_TRUE
+    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + np.asarray(bias, float)
+    if gyro_noise_deg_s:
+        omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
+    t = 0.5 * (t_imu[1:] + t_imu[:-1])
+    stamps = t + offset + ppm * 1e-6 * (t - 0.5 * seconds)
+    return R0_TRUE, OrientationStream(t_cam, C, "camera"), GyroStream(stamps, omega, "gyro")
+
+
+def _wilson(k, n):
+    lo, hi = wilson_interval(k, n)
+    return f"{k}/{n} = {k / n:.3f} [{lo:.3f}, {hi:.3f}]"
+
+
+def bias_set(runs, seed, with_calibrate):
+    errors, covered, halves, halves_reason, drift_resolved, r0 = [], 0, 0, 0, 0, {True: [], False: []}
+    times = {True: [], False: []}
+    for k in range(runs):
+        rng = np.random.default_rng([seed, 0, k])
+        bias = rng.uniform(-0.1, 0.1, 3)
+        R0, camera, gyro = biased_rig(bias=bias, offset=rng.uniform(-0.02, 0.02), rest_s=3.0 if k % 2 else 0.0,
+                                      camera_noise_deg=0.05, gyro_noise_deg_s=0.2, rng=rng, phase=rng.uniform(0, 6))
+        m = estimate_sensor_model(camera, gyro)
+        errors.append(m.bias_rad_s - bias)
+        covered += int(np.sum((m.bias_ci95_rad_s[:, 0] <= bias) & (bias <= m.bias_ci95_rad_s[:, 1])))
+        halves += int(m.bias_changes)
+        halves_reason += int(m.bias_changes and m.change_R0_deg > 0.05)
+        drift_resolved += int(m.drift_resolved)
+        if with_calibrate and k < with_calibrate:
+            for on in (True, False):
+                t0 = time.perf_counter()
+                r = calibrate(camera, gyro, n_bootstrap=50, gyro_bias=on, diagnose=False)
+                times[on].append(time.perf_counter() - t0)
+                r0[on].append(float(angle_between_deg(r.R, R0)))
+    e = np.abs(np.array(errors))
+    print(f"bias, {runs} runs (seeds [{seed}, 0, 0..{runs - 1}]), half with a 3 s rest:")
+    print("  |error| per axis, median (x, y, z): " + ", ".join(f"{v:.2e}" for v in np.median(e, axis=0))
+          + " rad/s; 95th percentile: " + ", ".join(f"{v:.2e}" for v in np.percentile(e, 95, axis=0)))
+    print(f"  95 % intervals holding the truth (axes): {_wilson(covered, 3 * runs)}")
+    print(f"  halves' test fires (constant bias): {_wilson(halves, runs)}; its reason: {_wilson(halves_reason, runs)}")
+    print(f"  drift (0 ppm) resolved: {_wilson(drift_resolved, runs)}")
+    if r0[True]:
+        n = len(r0[True])
+        print(f"  R0 error, calibrate, {n} runs: with the model median {np.median(r0[True]):.4f} deg, max "
+              f"{np.max(r0[True]):.4f}; without median {np.median(r0[False]):.3f} deg, max {np.max(r0[False]):.3f}")
+        on, off = np.median(times[True]), np.median(times[False])
+        print(f"  time of calibrate (n_bootstrap 50, no diagnosis): with the model median {on:.2f} s, without "
+              f"{off:.2f} s, ratio {on / off:.2f}")
+
+
+def drift_set(runs, seed):
+    from replication.rig.sensor_verdict import sensor_reasons
+
+    for j, ppm in enumerate((0.0, 50.0, 200.0)):
+        resolved = reason = 0
+        est = []
+        for k in range(runs):
+            rng = np.random.default_rng([seed, 1 + j, k])
+            _, camera, gyro = biased_rig(bias=rng.uniform(-0.1, 0.1, 3), offset=rng.uniform(-0.02, 0.02), ppm=ppm,
+                                         camera_noise_deg=0.05, gyro_noise_deg_s=0.2, rng=rng,
+                                         phase=rng.uniform(0, 6), seconds=60.0)
+            m = estimate_sensor_model(camera, gyro)
+            est.append(m.drift_ppm)
+            resolved += int(m.drift_resolved)
+            reason += int(any(r.check == "clock_drift" for r in sensor_reasons(m, interval=1.0,
+                                                                              motion_median_deg=30.0)))
+        print(f"drift {ppm:g} ppm over 60 s, {runs} runs (seeds [{seed}, {1 + j}, k]): median estimate "
+              f"{np.median(est):.1f} ppm; resolved {_wilson(resolved, runs)}; the verdict's reason "
+              f"{_wilson(reason, runs)}")
+
+
+def real():
+    from replication.rig import realdata
+
+    root = realdata.data_root()
+    tum, euroc = root / "tumvi_room1_orbslam3mono", root / "euroc_mh01_orbslam3"
+    cases = {}
+    cam = realdata.load_tum_trajectory(tum / "orbslam3_mono_cam0_traj.txt")
+    gyro = realdata.load_euroc_imu(tum / "imu0_data.csv")
+    refs = (realdata.load_reference(tum / "camchain.yaml"),
+            realdata.load_reference(tum / "basalt_tumvi_512_eucm_calib.json"))
+    cases["TUM-VI room1, raw gyro"] = (cam, gyro, refs)
+    cam = realdata.load_tum_trajectory(euroc / "orbslam3_mono_cam0_traj_runA.txt")
+    gt = realdata.load_tum_trajectory(euroc / "gt_body_MH_01_easy_tum.txt")
+    w = log_map(np.swapaxes(gt.R[:-1], -1, -2) @ gt.R[1:]) / np.diff(gt.t)[:, None]
+    w = w + np.array([-0.001, 0.020, 0.079]) + np.random.default_rng(34).normal(0, 1.7e-4 * np.sqrt(200), w.shape)
+    refs = (realdata.load_reference(euroc / "euroc_cam0_sensor.yaml"),
+            realdata.load_reference(euroc / "basalt_euroc_eucm_calib.json"))
+    cases["EuRoC MH01, ground truth as rates + the issue's bias"] = (cam, GyroStream(0.5 * (gt.t[1:] + gt.t[:-1]), w,
+                                                                                      "euroc rates"), refs)
+    for name, (cam, gyro, refs) in cases.items():
+        for on in (False, True):
+            t0 = time.perf_counter()
+            r = calibrate(cam, gyro, reference=np.stack(refs), gyro_bias=on)
+            dt = time.perf_counter() - t0
+            e1, e2 = r.reference_errors_deg
+            bias = r.sensor_model.get("gyro_bias_rad_s") if r.sensor_model else None
+            print(f"{name}, bias model {'on ' if on else 'off'}: {r.verdict.level}, to the dataset's {e1:.3f} deg, "
+                  f"to Basalt's {e2:.3f} deg (floor {r.reference_disagreement_deg:.3f}), radius "
+                  f"{r.bootstrap_ci95_deg:.3f} deg, bias {None if bias is None else np.round(bias, 4).tolist()}, "
+                  f"{dt:.1f} s; reasons: {[x.check for x in r.verdict.reasons]}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=200)
+    parser.add_argument("--seed", type=int, default=3400)
+    parser.add_argument("--calibrate-runs", type=int, default=20)
+    parser.add_argument("--drift-runs", type=int, default=50)
+    parser.add_argument("--real", action="store_true")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    if args.real:
+        real()
+    bias_set(args.runs, args.seed, args.calibrate_runs)
+    drift_set(args.drift_runs, args.seed)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,171 @@
+"""The verdict on a gyro's sensor model (:mod:`replication.rig.sensor_model`) and its place in
+:func:`replication.rig.calibration.calibrate`: estimated before everything else (:func:`model_or_note`), its fields
+and reasons added to the result (:func:`with_sensor_model`, :func:`sensor_reasons`, :data:`SENSOR_THRESHOLDS`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
+
+__all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
+
+#: ``(warning, fail)`` bounds of the checks on the sensor model (the reasoning in :func:`sensor_reasons`):
+#:
+#: * ``gyro_bias_to_motion`` (bias modelled): ``|b| T`` (the rotation the bias adds to a pair of interval ``T``)
+#:   over the median motion per pair, above: ``R0`` rests on the bias estimate, and the radius of ``R0`` (the pairs'
+#:   noise) does not hold the bias estimate's error, which every pair shares;
+#: * ``gyro_bias_left`` (bias not modelled): the same ratio, above: the pairs carry the bias (the residual checks'
+#:   own bounds, 0.1 and 0.3 of the motion);
+#: * ``clock_drift_share``: half the offset's change over the overlap (the pairs' timing error at its ends, one offset
+#:   being applied) over the pairing interval, above, where the drift's interval excludes 0: 0.005 is 5 ms at 1 s
+#:   (the bound on an offset left in, ``offset_left_ms``), 200 ppm over 60 s at 1 s;
+#: * ``offset_disagreement_share``: the offset the pairs fit best (the model's, at the middle) minus the one applied
+#:   (the speeds' correlation) over the pairing interval, above, where outside the pairs' interval: the drift's bound
+#:   (a rig turning steadily about one axis while it rocks: 7.5-9.8 ms against 0.2 ms, R0 0.23-0.30 deg off, ok);
+#: * ``gyro_bias_change_R0_deg``: where the halves' biases differ beyond their noise, how far half the difference
+#:   moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real recordings, where
+#:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 13 and 20 > 11.3, but
+#:   0.006 deg on TUM-VI room1 and 0.0002 deg on EuRoC MH01 with a synthetic constant bias); 0.05 deg is 8 times
+#:   the larger and a seventh of EuRoC's reference floor (0.343 deg).
+SENSOR_THRESHOLDS = {
+    "gyro_bias_to_motion": (1.0, None),
+    "gyro_bias_left": (0.1, 0.3),
+    "clock_drift_share": (0.005, None),
+    "offset_disagreement_share": (0.005, None),
+    "gyro_bias_change_R0_deg": (0.05, None),
+}
+
+
+def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: float) -> list:
+    """The verdict's reasons on the sensor model (:class:`replication.rig.quality.Reason`), thresholds in
+    :data:`SENSOR_THRESHOLDS`:
+
+    * the bias large against the motion: modelled, ``R0`` rests on its estimate (warning); not modelled, the pairs
+      carry it (warning, fail), named as a gyro bias with what to do;
+    * the bias of the two halves differs beyond their noise (warning: it drifts, with temperature);
+    * the clock drift resolved (its interval excludes 0) and half its change over the recording large against the
+      pairing interval (warning).
+
+    None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
+    """
+    from .quality import Reason
+
+    out = []
+    if not model.fit_ratio <= MAX_FIT_RATIO:  # the model does not fit: the calibration's own reasons say so
+        return out
+    b = model.bias_rad_s
+    per_pair = math.degrees(float(np.linalg.norm(b))) * interval
+    ratio = per_pair / motion_median_deg if motion_median_deg > 0 else math.inf
+    deg_s = "[" + ", ".join(f"{math.degrees(v):+.2f}" for v in b) + "] deg/s"
+    words = (f"the gyro bias {deg_s} ({np.linalg.norm(b):.3g} rad/s) turns each {interval:g} s pair by "
+             f"{per_pair:.3g} deg, {ratio:.3g} x the median motion per pair {motion_median_deg:.3g} deg (left in, "
+             f"it moves R0 by about {model.bias_R0_deg:.2g} deg)")
+    if model.applied:
+        warn = SENSOR_THRESHOLDS["gyro_bias_to_motion"][0]
+        if ratio > warn:
+            out.append(Reason("gyro_bias_to_motion", "warning", float(ratio), warn,
+                              f"large gyro bias, removed: {words} > {warn:g}: R0 rests on the bias estimate, whose "
+                              f"error every pair shares (not in R0's radius); a longer interval or larger motions "
+                              f"lower the share"))
+    else:
+        warn, fail = SENSOR_THRESHOLDS["gyro_bias_left"]
+        level = "fail" if ratio > fail else "warning" if ratio > warn else None
+        if level:
+            out.append(Reason("gyro_bias_left", level, float(ratio), fail if level == "fail" else warn,
+                              f"gyro bias not removed: {words} > {fail if level == 'fail' else warn:g}; the pairs "
+                              f"carry it, and their residuals with it: calibrate with the gyro bias model (the "
+                              f"default; gyro_bias=True, without --no-gyro-bias)"))
+    floor = SENSOR_THRESHOLDS["gyro_bias_change_R0_deg"][0]
+    if model.bias_changes and model.change_R0_deg > floor:
+        h0, h1 = (", ".join(f"{v:+.3f}" for v in np.degrees(h)) for h in model.halves_rad_s)
+        out.append(Reason("gyro_bias_change", "warning", float(model.change_R0_deg), floor,
+                          f"the gyro bias changes over the recording: first half [{h0}], second half [{h1}] deg/s, "
+                          f"beyond their noise "
+                          f"(chi-square {model.change_statistic:.3g} > {model.change_threshold:.3g}, level "
+                          f"{BIAS_CHANGE_LEVEL:g}), and half the difference moves R0 by {model.change_R0_deg:.3g} deg "
+                          f"> {floor:g} deg: it drifts (with temperature; or the camera trajectory's frame turns "
+                          f"slowly, which looks the same), and one bias leaves part of it in the pairs; let the IMU "
+                          f"warm up first, or calibrate shorter parts"))
+    warn = SENSOR_THRESHOLDS["clock_drift_share"][0]
+    change_ms = abs(model.drift_ppm) * 1e-6 * model.span_s * 1e3
+    share = 0.5 * change_ms * 1e-3 / interval
+    if model.drift_resolved and share > warn:
+        lo, hi = model.drift_ci95_ppm
+        out.append(Reason("clock_drift", "warning", float(share), warn,
+                          f"the sensor clock drifts {model.drift_ppm:+.1f} ppm (95 % interval [{lo:+.1f}, {hi:+.1f}] "
+                          f"ppm): the offset changes by {change_ms:.3g} ms over the {model.span_s:.1f} s of pairs, "
+                          f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
+                          f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
+                          f"(t - drift (t - t_mid)) or calibrate shorter parts"))
+    return out
+
+
+def model_or_note(camera, gyro, interval, max_offset):
+    """``(model, None)`` (:func:`estimate_sensor_model`), or ``(None, why it could not be estimated or does not
+    fit)``."""
+    try:
+        model = estimate_sensor_model(camera, gyro, interval=interval, max_offset=max_offset)
+    except ValueError as err:
+        return None, str(err)
+    if not model.fit_ratio <= MAX_FIT_RATIO:  # a bias fitted to streams that disagree would hide what is wrong
+        return None, (f"its pairs fit no rig: median residual {model.fit_ratio:.3g} of the median motion > "
+                      f"{MAX_FIT_RATIO:g}, so no bias was removed")
+    return model, None
+
+
+def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval, max_offset):
+    """``result`` (of :func:`replication.rig.calibration.calibrate`, a gyro sensor) with the sensor model's fields
+    and reasons; with the model off (``model`` None and no ``note``) the bias is measured where the verdict is not
+    ``ok`` (unless ``skip_measure``: no diagnosis asked), and named if it is large."""
+    import dataclasses
+
+    from .estimate import with_reasons
+    from .quality import Reason
+
+    off = model is None and note is None
+    if off and not skip_measure and result.verdict.level != "ok":
+        try:
+            model = estimate_sensor_model(camera, gyro, interval=interval, max_offset=max_offset, applied=False)
+        except ValueError as err:
+            note = str(err)
+    if model is None:
+        fields = {"gyro_bias_rad_s": None, "gyro_bias_ci95_rad_s": None, "clock_drift_ppm": None,
+                  "clock_drift_ci95_ppm": None, "sensor_model": {"bias_applied": False, "note": note or
+                                                                 "gyro bias model off (gyro_bias=False)"}}
+        result = dataclasses.replace(result, sensor_model=fields)
+        if note and not off:
+            result = with_reasons(result, [Reason("gyro_bias_not_estimated", "warning", None, None,
+                                                  f"the gyro bias was not estimated ({note}): the rates are used as "
+                                                  f"recorded, bias included")])
+        return result
+    result = dataclasses.replace(result, sensor_model=model.report())
+    result.diagnostics.update(sensor_model=model)
+    found = sensor_reasons(model, interval=interval, motion_median_deg=result.diagnostics["motion_median_deg"])
+    return with_reasons(result, found + [r for r in [_offsets_disagree(model, result, interval)] if r is not None])
+
+
+def _offsets_disagree(model, result, interval):
+    """A warning where the offset applied (the angular speeds' correlation) lies outside the pairs' 95 % interval for
+    it (the model's offset at the middle) and by more than the drift's bound share of the pairing interval
+    (:data:`SENSOR_THRESHOLDS` ``offset_disagreement_share``)."""
+    from .quality import Reason
+
+    if not model.fit_ratio <= MAX_FIT_RATIO or not result.time_offset_applied or model.covariance is None:
+        return None
+    gap = abs(model.offset_mid_s - result.time_offset_s)
+    noise = 1.959963984540054 * math.sqrt(max(model.covariance[6, 6], 0.0))
+    bound = SENSOR_THRESHOLDS["offset_disagreement_share"][0]
+    if gap <= noise or gap / interval <= bound:
+        return None
+    lo, hi = (1e3 * v for v in result.time_offset_ci95_s)
+    return Reason("offset_disagreement", "warning", float(gap / interval), bound,
+                  f"the pairs fit best with the clock offset at {1e3 * model.offset_mid_s:+.2f} ms (95 % interval "
+                  f"+-{1e3 * noise:.2g} ms), the angular speeds' correlation put it at "
+                  f"{1e3 * result.time_offset_s:+.2f} ms ([{lo:+.2f}, {hi:+.2f}] ms; applied): {1e3 * gap:.3g} ms "
+                  f"apart, {gap / interval:.3g} of the "
+                  f"{interval:g} s interval > {bound:g}, an error in every pair that R0's radius does not hold; the "
+                  f"speeds mislead the search where they barely vary (a steady turn); check the offset (--keep-clock "
+                  f"where the clocks are synchronised)")
