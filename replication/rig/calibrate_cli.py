@@ -133,6 +133,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--max-offset", type=_number(float, minimum=0), default=0.2,
                      help="largest clock offset searched (s)")
     cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
+    cal.add_argument("--use", choices=("all", "consistent"), default="all",
+                     help="fit R0 on every pair, or on the segments of the recording that agree with each other only "
+                          "(a stretch of lost tracking left out; the seconds used are reported)")
     cal.add_argument("--bootstrap", type=_number(int, minimum=0, strict=False), default=200,
                      help="bootstrap replicates (0: none)")
     cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
@@ -395,7 +398,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
             result = calibrate_poses(camera, sensor, **common)
         else:
             result = calibrate(camera, sensor, interval=args.interval, stride=args.stride,
-                               max_offset=args.max_offset, correct_offset=not args.keep_clock, **common)
+                               max_offset=args.max_offset, correct_offset=not args.keep_clock, use=args.use,
+                               **common)
     except OverlapError as err:
         return _error(err.named("--max-offset"))
     except (ValueError, OSError, MissingExtra) as err:

@@ -97,6 +97,11 @@ class CalibrationResult:
     change_test : dict or None
         Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
         recording? times since the camera's first sample), or why it was not run; None for static pose sets.
+    segments : dict or None
+        Streams: R0 per segment of the recording and whether the segments agree
+        (:func:`replication.rig.segments.segment_test`; times since the camera's first sample), the two radii (from
+        the pairs, from the spread between segments), the consistent part and what ``use="consistent"`` kept; or
+        why it was not run; None for static pose sets.
     online : dict or None
         ``calibrate --online``: what the online replay found (:meth:`replication.rig.live.LiveRig.summary`).
     verdict : Verdict
@@ -137,6 +142,7 @@ class CalibrationResult:
     pose_residual_median_deg: list | None = None
     station_repeats: dict | None = None
     change_test: dict | None = None
+    segments: dict | None = None
     online: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
     warnings: tuple = ()
@@ -177,6 +183,7 @@ class CalibrationResult:
             "pose_residual_median_deg": self.pose_residual_median_deg,
             "station_repeats": self.station_repeats,
             "change_test": self.change_test,
+            "segments": self.segments,
             "online": self.online,
             "observability": {
                 "spectral_ratio": float(obs.spectral_ratio),
