@@ -410,7 +410,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
             segs.segments[-1].end_s - segs.segments[0].start_s - kept_s), "pairs_kept": int(keep.sum())}
         A, B, t_start = A[keep], B[keep], t_start[keep]
     clock_parts = seg_mod.clock_segments(camera, oriented, max_offset=max_offset,
-                                         gaps=seg_mod.jump_candidates(oriented.t), seed=seed)
+                                         gaps=seg_mod.jump_candidates(oriented.t, max_offset), seed=seed,
+                                         offset_s=offset)
     # --- end of the change and segment tests
     evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset,
                     offset_correlation=corr, offset_peak_margin=clock.peak_margin,

@@ -399,64 +399,80 @@ class ClockJump:
                 "offset_after_s": self.offset_after_s, "at_gap": self.at_gap}
 
 
-def jump_candidates(t) -> np.ndarray:
-    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`), the
+def jump_candidates(t, max_offset: float = math.inf) -> np.ndarray:
+    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`; a skip beyond
+    ``max_offset``, the offset search's bound, is no jump it could measure: samples lost), the
     :data:`JUMP_CANDIDATES` longest, in time order."""
     dt = np.diff(t)
-    k = np.flatnonzero(dt > JUMP_GAP_FACTOR * np.median(dt))
+    step = np.median(dt)
+    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (dt - step <= max_offset))
     k = np.sort(k[np.argsort(-dt[k])[:JUMP_CANDIDATES]])
     return np.stack([t[k], t[k + 1]], axis=-1)
 
 
-def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_bootstrap: int = 50, seed: int = 0):
-    """The clock offset on each part of the recording between the sensor stream's gaps, and the jumps among them.
+def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_bootstrap: int = 50, seed: int = 0,
+                   offset_s: float | None = None, window_s: float = 2 * SEGMENT_S):
+    """The clock offset on each side of the sensor stream's gaps, and the jumps among them.
 
     A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in its stamps; a
-    gap where samples were lost leaves the offset as it was. Each part between gaps (at least :data:`SEGMENT_S`)
-    gets its own offset (:func:`replication.rig.association.offset_analysis`, ``n_bootstrap`` replicates for its
-    95 % interval); neighbouring parts whose offsets differ by more than :data:`JUMP_MIN_S` and by more than their
-    intervals allow (``1.96 sqrt(se_1^2 + se_2^2)``, ``se`` = interval width / 3.92) are a jump at that gap. Its
-    size is what the stamps skipped (the gap less one median interval) where the offsets moved the same way (the
-    offsets of parts of smooth motion may be off by several ms; the stamps are exact), else the offsets' change.
+    gap where samples were lost leaves the offset as it was. On each side of a gap, the camera's samples within
+    ``window_s`` of it (up to the neighbouring gaps; at least :data:`SEGMENT_S`) get their own offset
+    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's ``offset_s`` the search
+    spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
+    than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
+    it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
+    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``1.96 sqrt(se_1^2 + se_2^2)`` (``se`` = interval
+    width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
+    may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
+    jump, however long.
 
-    Returns ``(parts, jumps)``: one dict per part (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``), a list of
-    :class:`ClockJump`.
+    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``: NaN
+    where no jump was in question, the bootstrap being run only there), a list of :class:`ClockJump`.
     """
-    from .association import offset_analysis
+    from .association import estimate_time_offset, offset_analysis
 
     gaps = np.empty((0, 2)) if gaps is None else np.asarray(gaps, dtype=float).reshape(-1, 2)
     if not len(gaps):
         return [], []
-    bounds = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]]).reshape(-1, 2)
     step = float(np.median(np.diff(sensor.t)))
-    parts = []
-    for a, b in bounds:
-        inside = int(np.sum((camera.t >= a + max_offset) & (camera.t <= b - max_offset)))
-        if b - a < SEGMENT_S or inside < 10:
-            parts.append(None)
-            continue
-        part = camera.between(a + max_offset, b - max_offset)
+    if offset_s is not None and math.isfinite(offset_s):
+        max_offset = min(max_offset, abs(offset_s) + float(np.max(gaps[:, 1] - gaps[:, 0])) + 0.02)
+    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]])
+
+    def side(lo, hi):
+        if hi - lo < SEGMENT_S or np.sum((camera.t >= lo + max_offset) & (camera.t <= hi - max_offset)) < 10:
+            return None
+        view = camera.between(lo + max_offset, hi - max_offset)
         with np.errstate(all="ignore"):
-            est = offset_analysis(part, sensor, max_offset=max_offset, n_bootstrap=n_bootstrap, seed=seed,
-                                  block_s=min(1.0, 0.25 * (part.t[-1] - part.t[0])))
-        lo, hi = est.ci95_s
-        parts.append({"start_s": float(a), "end_s": float(b), "offset_s": float(est.offset_s),
-                      "ci95_s": [float(lo), float(hi)]})
-    jumps = []
+            d = estimate_time_offset(view, sensor, max_offset=max_offset)[0]
+        return {"start_s": float(lo), "end_s": float(hi), "offset_s": float(d), "ci95_s": [math.nan, math.nan],
+                "view": view}
+
+    def se(part):  # the side's 95 % interval, computed where a jump is in question only (the bootstrap's cost)
+        v = part["view"]
+        with np.errstate(all="ignore"):
+            est = offset_analysis(v, sensor, max_offset=max_offset, n_bootstrap=n_bootstrap, seed=seed,
+                                  block_s=min(1.0, 0.25 * (v.t[-1] - v.t[0])))
+        part["ci95_s"] = [float(x) for x in est.ci95_s]
+        lo, hi = part["ci95_s"]
+        return max((hi - lo) / 3.92, 0.0) if math.isfinite(hi - lo) else math.inf
+
+    def agrees(size, stamps, bound):
+        return abs(size) > max(JUMP_MIN_S, bound) and abs(stamps - size) <= max(0.5 * abs(stamps), bound + JUMP_MIN_S)
+
+    parts, jumps = [], []
     for i, gap in enumerate(gaps):
-        p, q = parts[i], parts[i + 1]
+        p = side(max(edges[2 * i], gap[0] - window_s), gap[0])
+        q = side(gap[1], min(edges[2 * i + 3], gap[1] + window_s))
+        parts += [x for x in (p, q) if x is not None]
         if p is None or q is None:
             continue
-        se = [max((x["ci95_s"][1] - x["ci95_s"][0]) / 3.92, 0.0) if np.all(np.isfinite(x["ci95_s"])) else math.inf
-              for x in (p, q)]
-        size, bound = q["offset_s"] - p["offset_s"], 1.96 * math.hypot(*se)
-        if abs(size) > max(JUMP_MIN_S, bound):
-            stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
-            if stamps * size > 0:  # the offsets moved the way the stamps skipped: a jump, which the gap measures
-                size = stamps
-            jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=float(size),
+        size = q["offset_s"] - p["offset_s"]
+        stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
+        if agrees(size, stamps, 0.0) and agrees(size, stamps, 1.96 * math.hypot(se(p), se(q))):
+            jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=stamps,
                                    offset_before_s=p["offset_s"], offset_after_s=q["offset_s"], at_gap=True))
-    return [x for x in parts if x is not None], jumps
+    return [{k: v for k, v in x.items() if k != "view"} for x in parts], jumps
 
 
 def clock_report(parts, jumps, t0: float) -> dict:
