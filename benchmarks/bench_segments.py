@@ -9,7 +9,8 @@ jumps, cost.
    segment is named, the angle to the true R0 with ``use="consistent"``;
 2. false alarms: rigs without a wander (bench_changepoint's CONFIGS without a gyro bias): the share where a segment
    is named as disagreeing (a verdict reason), and where the segments' omnibus test is significant;
-3. clock jumps of several sizes half-way, and none: detection and false alarms;
+3. clock jumps of several sizes half-way (JUMPS_MS), and none with samples lost (a gap, the clock unchanged):
+   detection and false alarms (replication.rig.segments.clock_segments as calibrate calls it);
 4. time: calibrate against the segment test alone.
 
 Run: python benchmarks/bench_segments.py [N] [BASE]     (tuning seeds: 40 0; fresh: 40 50000)
@@ -92,6 +93,46 @@ def false_alarms(seeds):
           f"{wilson(named, n)}; omnibus significant {wilson(omnibus, n)}; verdict not ok {wilson(worse, n)}")
 
 
+def lost_samples(gyro: GyroStream, at: float, count: int) -> GyroStream:
+    """``count`` gyro samples lost from ``at`` on (a gap in the stamps, the clock unchanged)."""
+    k = np.searchsorted(gyro.t, at)
+    keep = np.ones(len(gyro.t), bool)
+    keep[k:k + count] = False
+    return GyroStream(gyro.t[keep], gyro.omega[keep], gyro.source)
+
+
+JUMPS_MS = (1.0, 2.5, 5.0, 10.0, 30.0, 100.0)
+LOST_SAMPLES = (1, 4, 20, 40)
+
+
+def clock_jumps(seeds):
+    try:
+        from replication.rig.segments import clock_segments, jump_candidates
+    except ImportError:
+        print("3. clock jumps: no clock_segments here")
+        return
+    from replication.rig.streams import integrate_gyro
+
+    print(f"3. clock jumps half-way on 60 s rigs (camera 0.05 deg, gyro 0.005 rad/s), seeds {seeds[0]}..{seeds[-1]}:")
+    for ms in JUMPS_MS:
+        found, size_err = 0, []
+        for s in seeds:
+            camera, gyro = rig(s, 60, 0.05, 0.005)
+            sensor = integrate_gyro(jumped(gyro, 30.0, ms / 1e3))
+            _, jumps = clock_segments(camera, sensor, gaps=jump_candidates(sensor.t, 0.2), seed=s)
+            found += bool(jumps)
+            size_err += [abs(j.size_s - ms / 1e3) for j in jumps]
+        err = f"; |size error| max {1e3 * max(size_err):.3f} ms" if size_err else ""
+        print(f"   jump {ms:g} ms: found {wilson(found, len(seeds))}{err}")
+    for count in LOST_SAMPLES:
+        alarms = 0
+        for s in seeds:
+            camera, gyro = rig(s, 60, 0.05, 0.005)
+            sensor = integrate_gyro(lost_samples(gyro, 30.0, count))
+            alarms += bool(clock_segments(camera, sensor, gaps=jump_candidates(sensor.t, 0.2), seed=s)[1])
+        print(f"   no jump, {count} samples lost at 30 s ({5 * count} ms): a jump named {wilson(alarms, len(seeds))}")
+
+
 def timing(seed: int = 0):
     from replication.rig.association import motion_pairs
     from replication.rig.streams import integrate_gyro
@@ -117,6 +158,7 @@ def main(n: int = 40, base: int = 0):
     seeds = list(range(base, base + n))
     lost_tracking(seeds)
     false_alarms(seeds)
+    clock_jumps(seeds)
     timing(base)
 
 

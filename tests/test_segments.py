@@ -96,6 +96,9 @@ def test_one_verdict_at_three_intervals_on_a_lost_tracking_rig_and_the_consisten
     assert c.n_pairs < results[1].n_pairs
     (why,) = [r for r in c.verdict.reasons if r.check == "segments_consistent_part"]
     assert why.level == "warning" and "consistent part only" in why.message
+    assert c.verdict.level == "warning"  # the change test runs on the part used: the lost stretch fails it no more
+    assert so3.angle_between_deg(c.R, R0) < so3.angle_between_deg(results[1].R, R0)
+    assert "use='consistent': R0 from " in c.summary()
 
 
 def test_use_is_checked():

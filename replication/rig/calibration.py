@@ -400,8 +400,11 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the interval
     from . import segments as seg_mod
     As, Bs, ts, bs = _analysis_pairs(camera, oriented, used, gyro is not None, A, B, t_start, interval, stride, block)
-    change, change_fit = _change_test(As, Bs, ts, bs, float(camera.t[0]))
     segs, segs_note = seg_mod.run(As, Bs, ts, bs, float(camera.t[0])) if len(As) else (None, "not run: no pairs")
+    if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
+        part = seg_mod.consistent_mask(segs, ts, seg_mod.ANALYSIS_INTERVAL_S)
+        As, Bs, ts = As[part], Bs[part], ts[part]
+    change, change_fit = _change_test(As, Bs, ts, bs, float(camera.t[0]))
     segs_used = {"kept_s": None, "dropped_s": None, "pairs_kept": len(A)} if use == "consistent" else None
     if use == "consistent" and segs is not None:
         keep = seg_mod.consistent_mask(segs, t_start, interval) if segs.consistent else np.ones(len(A), bool)

@@ -47,6 +47,26 @@ def json_safe(value):
 
 
 
+def _segment_lines(s) -> list:
+    """The summary's lines on the segment test and the clock jumps (:mod:`replication.rig.segments`)."""
+    if s is None:
+        return []
+    if not s["run"]:
+        lines = [f"segments: {s['note']}"]
+    else:
+        n, bad = len(s["segments"]), s["disagreeing"]
+        named = ", ".join(f"{s['segments'][i]['start_s']:.1f}-{s['segments'][i]['end_s']:.1f} s" for i in bad)
+        lines = [f"segments: {n} of about 10 s (1 s pairs) " + (f"disagree: {named}" if bad else "agree") +
+                 f" (p = {s['p_value']:.2g}); 95 % radius from the pairs {s['pairs_radius_deg']:.3f} deg, from the "
+                 f"spread between segments {s['between_radius_deg']:.3f} deg"]
+    used = s.get("use")
+    if used is not None and used.get("kept_s") is not None:
+        spans = ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in s.get("consistent_spans_s", []))
+        lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs)")
+    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms" for j in s.get("clock_jumps", [])]
+    return lines
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """What :func:`replication.rig.calibration.calibrate` (and ``calibrate_poses``) return.
@@ -226,6 +246,7 @@ class CalibrationResult:
                 f"change test: R0 before and after {c['split_time_s']:.1f} s differ by {c['angle_deg']:.3f} deg, "
                 + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
+        lines += _segment_lines(self.segments)
         if self.reference_errors_deg is not None:
             e1, e2 = self.reference_errors_deg
             lines.append(f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree "
