@@ -133,3 +133,15 @@ def test_bad_parameters_are_named(kwargs, message):
     A, B, t, block = rig_pairs(*rig(3, 60, 0.05, 0.005))
     with pytest.raises(ValueError, match=message):
         segment_test(A, B, t, block=block, **kwargs)
+
+
+def test_the_command_line_takes_use_consistent():
+    import argparse
+
+    from replication.rig.calibrate_cli import add_parser
+
+    cal = add_parser(argparse.ArgumentParser().add_subparsers())
+    base = ["--camera", "c.txt", "--sensor", "s.txt"]
+    assert cal.parse_args(base).use == "all" and cal.parse_args([*base, "--use", "consistent"]).use == "consistent"
+    with pytest.raises(SystemExit):
+        cal.parse_args([*base, "--use", "best"])
