@@ -13,7 +13,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from bench_changepoint import R0, rig, rig_pairs  # noqa: E402
-from bench_segments import jumped, lost_rig  # noqa: E402
+from bench_segments import jumped, lost_rig, lost_samples  # noqa: E402
 
 from replication.core import so3  # noqa: E402
 from replication.rig.calibration import calibrate  # noqa: E402
@@ -107,10 +107,11 @@ def test_use_is_checked():
         calibrate(camera, gyro, use="best")
 
 
-@pytest.mark.parametrize("size, found", [(0.0, False), (0.001, False), (0.01, True), (0.03, True)])
-def test_a_clock_jump_is_found_with_its_time_and_size(size, found):
+@pytest.mark.parametrize("size, lost, found", [(0.0, 0, False), (0.001, 0, False), (0.0, 1, False), (0.0, 20, False),
+                                               (0.03, 0, True), (0.1, 0, True)])
+def test_a_clock_jump_is_found_with_its_time_and_size(size, lost, found):
     camera, gyro = rig(101, 60, 0.05, 0.005)
-    sensor = integrate_gyro(jumped(gyro, 30.0, size))
+    sensor = integrate_gyro(lost_samples(jumped(gyro, 30.0, size), 30.0, lost) if lost else jumped(gyro, 30.0, size))
     parts, jumps = clock_segments(camera, sensor, gaps=jump_candidates(sensor.t))
     assert bool(jumps) == found, (parts, jumps)
     if found:

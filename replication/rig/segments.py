@@ -60,7 +60,7 @@ from .changepoint import _fit, _long_run
 
 __all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S",
            "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
-           "clock_report", "clock_reasons", "jump_candidates"]
+           "clock_report", "clock_reasons", "jump_candidates", "JUMP_Z"]
 
 #: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
 #: of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills segments of its own.
@@ -72,6 +72,10 @@ MIN_SEGMENTS = 3
 #: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
 #: offset intervals.
 JUMP_MIN_S = 2e-3
+#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap intervals): 1.96 named
+#: one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40 synthetic rigs, the bootstrap interval of a
+#: 20 s side of smooth motion missing its offset by 7 ms (benchmarks/bench_segments.py, seeds 0-39).
+JUMP_Z = 3.0
 #: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
 #: the :data:`JUMP_CANDIDATES` longest are tested.
 JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
@@ -421,7 +425,7 @@ def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_boot
     spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
     than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
     it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
-    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``1.96 sqrt(se_1^2 + se_2^2)`` (``se`` = interval
+    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)`` (``se`` = interval
     width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
     may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
     jump, however long.
@@ -469,7 +473,7 @@ def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_boot
             continue
         size = q["offset_s"] - p["offset_s"]
         stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
-        if agrees(size, stamps, 0.0) and agrees(size, stamps, 1.96 * math.hypot(se(p), se(q))):
+        if agrees(size, stamps, 0.0) and agrees(size, stamps, JUMP_Z * math.hypot(se(p), se(q))):
             jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=stamps,
                                    offset_before_s=p["offset_s"], offset_after_s=q["offset_s"], at_gap=True))
     return [{k: v for k, v in x.items() if k != "view"} for x in parts], jumps
