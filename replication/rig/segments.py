@@ -1,15 +1,19 @@
 """Does ``R0`` hold over the whole recording? ``R0`` per segment of time, the segments that disagree, and the
-clock offset per segment (a jump of the sensor clock).
+clock offset on either side of the sensor's gaps (a jump of the sensor clock).
 
 :func:`segment_test` cuts the motion pairs of a calibration into segments of about :data:`SEGMENT_S` seconds and
 fits ``R0`` on each (the paper's eq. (8) over that segment's pairs, as :mod:`replication.rig.changepoint` fits
 each side of a split, with its ``_fit`` and ``_long_run``). Pairs overlap: the ``block`` pairs at the end of a
 segment that reach into the next one are left out, so that segments share no pose.
 
-**Each segment's radius.** As in the change test: ``C_i = phi (s_i^2 / 3) G_i^{-1}`` with ``s_i^2`` the segment's
-mean square residual angle, ``G_i = sum_j (2 I - B_j - B_j^T)`` over its pairs and ``phi`` the inflation for
-overlapping pairs, measured once over all segments (the long-run variance of the pair scores about each segment's
-own estimate over the model's), never below 1.
+**Each segment's radius.** As in the change test: ``C_i = phi (s^2 / 3) G_i^{-1}`` with ``G_i = sum_j (2 I - B_j -
+B_j^T)`` over its pairs, ``s^2`` the mean square residual angle of the segments' pairs about their own segment's
+estimate, pooled (a segment that disagrees does not inflate it; floored at
+:data:`replication.rig.changepoint.S2_FLOOR`), and ``phi`` the inflation for overlapping pairs, measured once, about
+the estimate of all the segments' pairs together (the long-run variance of the pair scores over the model's, never
+below 1). About each segment's own estimate its scores sum to zero, and over a segment of a few independent
+stretches that hides about half the long-run variance: so measured, the segments' errors were 2.4 times their
+covariance's scale on 60 s rigs (1.0-1.4 times as done here).
 
 **The test.** The segments' weighted mean ``R_bar`` (Gauss-Newton on ``sum_i d_i^T C_i^{-1} d_i``,
 ``d_i = log(R_bar^T R_i)``) and ``Q = sum_i d_i^T C_i^{-1} d_i``: with ``phi`` known, chi-square with ``3 (S - 1)``
@@ -37,12 +41,12 @@ change with the interval of the pairs ``R0`` is fitted on (a wandering SLAM fram
 at a longer interval: a public EuRoC run was ``ok`` at 1 s and ``fail`` at 2 s with per-interval tests).
 
 **Clock jumps.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
-the clock offset (:func:`replication.rig.association.offset_analysis`, with its interval) on each part of the
-recording between the sensor's gaps; neighbouring parts whose offsets differ beyond :data:`JUMP_MIN_S` and their
-intervals are a jump at that gap, named with its time and size (a ``fail``: the one offset removed is wrong for a
-part of the recording). Not corrected here. A jump without a gap (a clock stepping back leaves stamps out of
-order, refused by the loaders) is not looked for; per-segment offsets of 10 s scatter by several ms on smooth
-motion, too much to find jumps of a few ms without the gap's time.
+the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
+stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
+jump at that gap, named with its time and size (a ``fail``: the one offset removed is wrong for a part of the
+recording). Not corrected here. A jump without a gap (a clock stepping back leaves stamps out of order, refused by
+the loaders) is not looked for: offsets of 10-20 s of smooth motion scatter by several ms, too much to find jumps of
+a few ms without the gap's time (benchmarks/bench_segments.py: 30 ms found in 80 of 80 rigs, 10 ms in 7 of 80).
 
 Conventions: ``docs/conventions.md``.
 """
@@ -56,7 +60,7 @@ from scipy import stats as _st
 
 from ..core.so3 import angle_between_deg, exp_map, log_map
 from ..core.stats import radius_deg
-from .changepoint import _fit, _long_run
+from .changepoint import S2_FLOOR, _fit, _long_run
 
 __all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S",
            "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
@@ -175,11 +179,7 @@ class SegmentTest:
 
     def to_dict(self, t0: float = 0.0) -> dict:
         """For the JSON report (times less ``t0``)."""
-        segs = []
-        for s in self.segments:
-            d = s.to_dict()
-            d["start_s"], d["end_s"] = s.start_s - t0, s.end_s - t0
-            segs.append(d)
+        segs = [{**s.to_dict(), "start_s": s.start_s - t0, "end_s": s.end_s - t0} for s in self.segments]
         return {"run": True, "note": None, "significant": self.significant, "statistic": self.statistic,
                 "threshold": self.threshold, "p_value": self.p_value, "level": self.level, "dof": self.dof,
                 "inflation": self.inflation, "interval_s": self.interval_s, "segments": segs,
@@ -202,7 +202,7 @@ def _mean(R, W, start, iterations: int = 20):
     return Rb, np.linalg.inv(H)
 
 
-def _homogeneity(R, C, nu, level):
+def _homogeneity(R, C, nu):
     """Over the segments ``R``, ``C``: the mean, ``Q / dof``, each segment's leave-one-out statistic and angle."""
     S = len(R)
     W = np.linalg.inv(C)
@@ -270,20 +270,18 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
     PK = np.concatenate([np.zeros((1, 9, 9)), np.cumsum(kron, axis=0)])
     PB = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(B, axis=0)])
     R, cost, _, G = _fit(PK[stop] - PK[first], PB[stop] - PB[first], n)
-    # the noise scale and the inflation about the estimate of all the segments' pairs together: about each
-    # segment's own estimate its scores sum to zero, and over a segment of a few independent stretches that hides
-    # half the long-run variance (measured: its errors 2.4 x the radius so built on 60 s rigs, 1.0-1.4 x with this)
-    R1, cost1, s21, G1 = _fit((PK[stop] - PK[first]).sum(axis=0)[None], (PB[stop] - PB[first]).sum(axis=0)[None],
+    # the inflation about the estimate of all the segments' pairs together (module notes)
+    R1, _, s21, G1 = _fit((PK[stop] - PK[first]).sum(axis=0)[None], (PB[stop] - PB[first]).sum(axis=0)[None],
                               np.array([n.sum()]))
     omega = sum(_long_run(A[a:b], B[a:b], R1[0], m) for a, b in zip(first, stop))
     Gi = np.linalg.inv(G1[0])
     phi = max(1.0, float(np.trace(Gi @ omega @ Gi) / np.trace(Gi @ ((s21[0] / 3.0) * G1[0]) @ Gi)))
     # the noise scale from each segment's residuals about its own estimate, pooled (a segment that disagrees does
     # not inflate it); the inflation, a ratio, from the fit of all the pairs
-    s2 = np.full(S, max(float(cost.sum() / (2.0 * (n - 3.0)).sum()), 1e-12))
+    s2 = np.full(S, max(float(cost.sum() / (2.0 * (n - 3.0)).sum()), S2_FLOOR))
     C = phi * (s2 / 3.0)[:, None, None] * np.linalg.inv(G)
     nu = max((J - m) / (2 * m + 1), 1.0)
-    Rb, Cb, d, F, dof, z, p_i, ang = _homogeneity(R, C, nu, level)
+    Rb, Cb, d, F, dof, z, p_i, ang = _homogeneity(R, C, nu)
     thr = float(_st.f.isf(level, dof, nu))
     disagree = p_i < level / S
     # the consistent part: leave out the worst disagreeing segment until none disagrees
@@ -296,7 +294,7 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
             keep[:] = False
             break
         k = np.flatnonzero(keep)
-        *_, zk, pk, _ = _homogeneity(R[k], C[k], nu, level)
+        *_, zk, pk, _ = _homogeneity(R[k], C[k], nu)
         flagged = np.zeros(S, bool)
         flagged[k] = pk < level / len(k)
     if keep.any() and not keep.all():  # masking: a bad segment pulls the others' mean; judge against the kept part
@@ -463,7 +461,6 @@ def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_boot
 
     def agrees(size, stamps, bound):
         return abs(size) > max(JUMP_MIN_S, bound) and abs(stamps - size) <= max(0.5 * abs(stamps), bound + JUMP_MIN_S)
-
     parts, jumps = [], []
     for i, gap in enumerate(gaps):
         p = side(max(edges[2 * i], gap[0] - window_s), gap[0])
