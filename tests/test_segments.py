@@ -146,3 +146,14 @@ def test_the_command_line_takes_use_consistent():
     assert cal.parse_args(base).use == "all" and cal.parse_args([*base, "--use", "consistent"]).use == "consistent"
     with pytest.raises(SystemExit):
         cal.parse_args([*base, "--use", "best"])
+
+
+def test_the_consistent_part_keeps_the_pairs_inside_it():
+    from replication.rig.segments import consistent_mask
+
+    test = _fake(1.0)  # segments 0-10, 10-20 (disagrees), 20-30, 30-40 s; the consistent part 0-10 and 20-40 s
+    assert test.used_spans() == [[0.0, 10.0], [20.0, 40.0]]
+    t = np.array([0.0, 8.9, 9.1, 10.0, 19.5, 20.0, 38.9, 39.5, 39.9])
+    # a pair that ends past its span is out, but the last segment's pairs run one analysis interval past its start
+    assert consistent_mask(test, t, 1.0).tolist() == [True, True, False, False, False, True, True, True, True]
+    assert consistent_mask(test, t, 2.0).tolist() == [True, False, False, False, False, True, True, False, False]
