@@ -3,6 +3,7 @@ mounted otherwise is named with its times and left out by ``use="consistent"``, 
 their boundaries, calibrate gives one verdict at intervals 0.5, 1 and 2 s on a lost-tracking rig, a clock jump is
 found with its time and size, and no jump is not. The rigs are benchmarks/bench_changepoint.py's (camera 20 Hz, gyro
 200 Hz, smooth three-axis motion)."""
+import dataclasses
 import sys
 import warnings
 from pathlib import Path
@@ -70,16 +71,20 @@ def _fake(angle):
                        angle)
 
 
-@pytest.mark.parametrize("angle, level", [(WARN - 0.01, None), (WARN + 0.01, "warning"), (FAIL - 0.01, "warning"),
+@pytest.mark.parametrize("angle, level", [(0.05, "warning"), (WARN, "warning"), (FAIL - 0.01, "warning"),
                                           (FAIL + 0.01, "fail")])
 def test_the_verdict_follows_the_angle_of_the_disagreeing_segment(angle, level):
-    found = reasons(_fake(angle), 0.0)
-    if level is None:
-        assert found == []
-    else:
-        (r,) = found
-        assert r.check == "segments_disagree" and r.level == level and r.measured == pytest.approx(angle)
-        assert "10.0-20.0 s" in r.message and "use='consistent'" in r.message and "0.0-10.0 s, 20.0-40.0 s" in r.message
+    (r,) = reasons(_fake(angle), 0.0)
+    assert r.check == "segments_disagree" and r.level == level and r.measured == pytest.approx(angle)
+    assert "10.0-20.0 s" in r.message and "use='consistent'" in r.message and "0.0-10.0 s, 20.0-40.0 s" in r.message
+    assert r.threshold == (FAIL if level == "fail" else 0.0)
+
+
+def test_segments_that_agree_give_no_reason():
+    test = _fake(0.3)
+    test = SegmentTest(tuple(dataclasses.replace(s, disagrees=False) for s in test.segments),
+                       *[getattr(test, f.name) for f in dataclasses.fields(test)][1:])
+    assert reasons(test, 0.0) == []
 
 
 def test_one_verdict_at_three_intervals_on_a_lost_tracking_rig_and_the_consistent_part():

@@ -21,8 +21,9 @@ degrees of freedom when every segment sees the same ``R0``; ``phi`` is measured 
 (2 block + 1)`` independent stretches, so ``Q / (3 (S - 1))`` is compared with Fisher's F with ``(3 (S - 1),
 n_eff)`` degrees of freedom at false-alarm probability ``level``. Each segment against the others (leave one out):
 ``z_i = d_i^T (C_i + C_rest)^{-1} d_i`` over F(3, n_eff), Bonferroni over the segments (``level / S``): a segment
-*disagrees* where that is significant. The angle between the segment's ``R0`` and the others' says whether it
-matters (``remount_deg`` of :data:`replication.rig.quality.THRESHOLDS`, as for the change test).
+*disagrees* where that is significant: the verdict is then at best a ``warning`` (``ok`` only where the segments
+agree within their noise), a ``fail`` where the angle to the others exceeds ``remount_deg``'s fail bound
+(:data:`replication.rig.quality.THRESHOLDS`, as for the change test).
 
 **Two radii.** The pairs-only radius (the bootstrap of ``calibrate``, or here ``phi (sum_i C_i^{-1})^{-1}``) covers
 the pairs' own noise; an error every pair of a segment shares (a SLAM frame that wanders for a stretch, a
@@ -83,7 +84,6 @@ JUMP_Z = 3.0
 #: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
 #: the :data:`JUMP_CANDIDATES` longest are tested.
 JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
-_EYE = np.eye(3)
 
 
 @dataclass(frozen=True)
@@ -344,8 +344,9 @@ def consistent_mask(test, t_start, interval: float) -> np.ndarray:
 
 
 def reasons(test, t0: float, used=None, note=None) -> list:
-    """Verdict reasons: segments that disagree beyond their noise by more than ``remount_deg``
-    (:data:`replication.rig.quality.THRESHOLDS`), named with their times; what ``use="consistent"`` dropped."""
+    """Verdict reasons: segments that disagree with the rest beyond their noise, named with their times (a
+    ``warning``; a ``fail`` beyond ``remount_deg``'s fail bound, :data:`replication.rig.quality.THRESHOLDS`); what
+    ``use="consistent"`` dropped."""
     from .quality import THRESHOLDS, Reason
 
     out = []
@@ -354,8 +355,8 @@ def reasons(test, t0: float, used=None, note=None) -> list:
             out.append(Reason("segments_consistent_part", "warning", None, None,
                               f"use='consistent': the segment test did not run ({note}), so every pair was used"))
         return out
-    warn, fail = THRESHOLDS["remount_deg"]
-    bad = [i for i in test.disagreeing if test.segments[i].angle_deg > warn]
+    fail = THRESHOLDS["remount_deg"][1]
+    bad = list(test.disagreeing)  # ok only where every segment agrees with the rest within its noise
     spans = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in test.used_spans())
     if used is not None:
         if used["kept_s"] is None:
@@ -371,7 +372,7 @@ def reasons(test, t0: float, used=None, note=None) -> list:
     if not bad:
         return out
     worst = max(test.segments[i].angle_deg for i in bad)
-    level, bound = ("fail", fail) if worst > fail else ("warning", warn)
+    level, bound = ("fail", fail) if worst > fail else ("warning", 0.0)
     named = "; ".join(f"{test.segments[i].start_s - t0:.1f}-{test.segments[i].end_s - t0:.1f} s by "
                       f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f})"
                       for i in bad)
