@@ -98,7 +98,7 @@ def test_calibrate_help_shows_every_default_the_solvers_the_formats_and_an_examp
     cal = add_parser(argparse.ArgumentParser().add_subparsers())
     formatter = cal._get_formatter()
     options = [a for a in cal._actions if a.option_strings and a.dest != "help" and not a.required]
-    assert len(options) == 24  # all but --camera and --sensor (required: no default)
+    assert len(options) == 25  # all but --camera and --sensor (required: no default)
     for action in options:
         assert "default" in formatter._get_help_string(action), action.option_strings
     # an option without a default whose help does not say so gets no "(default: None)": its help must say it

@@ -44,7 +44,7 @@ def test_to_dict_holds_every_field():
                   reference_errors_deg=(0.75, 0.5), reference_disagreement_deg=0.3, reference_reading="r",
                   bootstrap_resamples="pairs in moving blocks of 4", pose_residual_median_deg=[0.1, np.nan],
                   station_repeats={"stations": 3, "distinct": 2, "groups": [[0, 2]]},
-                  change_test={"run": False, "note": "n"}, online={"o": 1})
+                  change_test={"run": False, "note": "n"}, segments={"run": False, "note": "s"}, online={"o": 1})
     d = res.to_dict()
     assert d == {
         "package": {"name": "replication", "version": __version__},
@@ -73,12 +73,15 @@ def test_to_dict_holds_every_field():
         "pose_residual_median_deg": [0.1, None],
         "station_repeats": {"stations": 3, "distinct": 2, "groups": [[0, 2]]},
         "change_test": {"run": False, "note": "n"},
+        "segments": {"run": False, "note": "s"},
         "online": {"o": 1},
         "observability": {"spectral_ratio": 0.5, "camera_axis_spread_deg": 12.34, "sensor_axis_spread_deg": 11.0},
         "reference_error_deg": 0.75,
         "reference_errors_deg": [0.75, 0.5],
         "reference_disagreement_deg": 0.3,
         "reference_reading": "r",
+        "gyro_bias_rad_s": None, "gyro_bias_ci95_rad_s": None, "clock_drift_ppm": None, "clock_drift_ci95_ppm": None,
+        "sensor_model": None,
     }
     json.dumps(d, allow_nan=False)
 

@@ -137,6 +137,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
     cal.add_argument("--no-gyro-bias", action="store_true",
                      help="a gyro sensor: do not estimate and remove its bias (with R0); the rates as recorded")
+    cal.add_argument("--use", choices=("all", "consistent"), default="all",
+                     help="fit R0 on every pair, or on the segments of the recording that agree with each other only "
+                          "(a stretch of lost tracking left out; the seconds used are reported)")
     cal.add_argument("--bootstrap", type=_number(int, minimum=0, strict=False), default=200,
                      help="bootstrap replicates (0: none)")
     cal.add_argument("--seed", type=_number(int, minimum=0, strict=False), default=0, help="seed of the bootstrap")
@@ -409,7 +412,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
             result = calibrate_poses(camera, sensor, **common)
         else:
             result = calibrate(camera, sensor, interval=args.interval, stride=args.stride,
-                               max_offset=args.max_offset, correct_offset=not args.keep_clock,
+                               max_offset=args.max_offset, correct_offset=not args.keep_clock, use=args.use,
                                gyro_bias=not args.no_gyro_bias, **common)
     except OverlapError as err:
         return _error(err.named("--max-offset"))

@@ -26,6 +26,7 @@ Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pi
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -266,7 +267,6 @@ def _change_test(A, B, t_start, block, t0):
     how well each side fits its own estimate (the larger median residual / median motion of the two sides: a
     re-mount leaves each side fitting, an input mistake neither); or ``(None, why)`` where it cannot run (too short
     a recording, one side's motions about one axis)."""
-    import dataclasses
 
     from .changepoint import two_segment_test
 
@@ -278,6 +278,21 @@ def _change_test(A, B, t_start, block, t0):
     fit = max(float(np.median(pair_residual_deg(R, a, b)) / max(np.median(rotation_angle_deg(a)), 1e-12))
               for R, a, b in ((c.R_before, A[:max(k - block, 1)], B[:max(k - block, 1)]), (c.R_after, A[k:], B[k:])))
     return dataclasses.replace(c, split_time=c.split_time - t0, split_times=c.split_times - t0), fit
+
+
+def _analysis_pairs(camera, oriented, offset, integrated, A, B, t_start, interval, stride, block):
+    """The pairs the change and segment tests run on: at :data:`replication.rig.segments.ANALYSIS_INTERVAL_S`, every
+    camera time, those across a sensor gap dropped (the calibration's own pairs where they are these)."""
+    from .segments import ANALYSIS_INTERVAL_S
+
+    if interval == ANALYSIS_INTERVAL_S and stride == 1:
+        return A, B, t_start, block
+    try:
+        As, Bs, ts = motion_pairs(camera, oriented, ANALYSIS_INTERVAL_S, offset=offset)
+    except ValueError:
+        return A[:0], B[:0], t_start[:0], block
+    keep = ~_pairs_across_gaps(ts, ANALYSIS_INTERVAL_S, offset, oriented.t, integrated=integrated)
+    return As[keep], Bs[keep], ts[keep], max(1, round(ANALYSIS_INTERVAL_S / np.median(np.diff(camera.t))))
 
 
 def _change_report(c, fit) -> dict:
@@ -294,7 +309,7 @@ def _change_report(c, fit) -> dict:
 def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optimal", interval: float = 1.0,
               stride: int = 1, max_offset: float = 0.2, correct_offset: bool = True, n_bootstrap: int = 200,
               seed: int = 0, reference=None, diagnose: bool = True, progress: bool = False, gyro_bias: bool = True,
-              **options) -> CalibrationResult:
+              use: str = "all", **options) -> CalibrationResult:
     """``R0`` (camera_from_sensor) of a real rig from two timestamped streams, with a verdict on it.
 
     Parameters
@@ -330,6 +345,9 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         A gyro sensor: estimate its bias (and the clock's drift) with ``R0`` and remove the bias from the rates
         before everything else (:mod:`replication.rig.sensor_model`); False: the rates as recorded (the bias is then
         estimated only where the verdict is not ``ok``, and named if it is large).
+    use : {"all", "consistent"}
+        ``"consistent"``: fit R0 on the pairs of the segments that agree with each other only
+        (:mod:`replication.rig.segments`), reported (the seconds used and why); ``"all"``: every pair.
     **options
         Passed to the solver.
 
@@ -351,6 +369,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     check_number("interval", interval, minimum=0)
     check_number("stride", stride, minimum=1, integer=True, strict=False)
     check_number("max_offset", max_offset, minimum=0)
+    if use not in ("all", "consistent"):
+        raise ValueError(f"use must be 'all' or 'consistent', got {use!r}")
     if not isinstance(camera, OrientationStream) or not isinstance(sensor, (OrientationStream, GyroStream)):
         raise ValueError("camera must be an OrientationStream and sensor an OrientationStream or GyroStream")
     same = _same_stream(camera, sensor)
@@ -382,13 +402,31 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     block = max(1, round(interval / np.median(np.diff(camera.t)) / stride))
     lo, hi = max(camera.t[0], oriented.t[0] - used), min(camera.t[-1], oriented.t[-1] - used)
     parameters = {"method": method, "interval_s": interval, "stride": stride, "max_offset_s": max_offset,
-                  "correct_offset": bool(correct_offset), "gyro_bias": bool(gyro_bias), "n_bootstrap": n_bootstrap,
-                  "seed": seed,
+                  "correct_offset": bool(correct_offset), "gyro_bias": bool(gyro_bias), "use": use,
+                  "n_bootstrap": n_bootstrap, "seed": seed,
                   "diagnose": bool(diagnose), "solver_options": {k: repr(v) for k, v in options.items()}}
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    change, change_fit = _change_test(A, B, t_start, block, float(camera.t[0]))
+    # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the interval
+    from . import segments as seg_mod
+    As, Bs, ts, bs = _analysis_pairs(camera, oriented, used, gyro is not None, A, B, t_start, interval, stride, block)
+    segs, segs_note = seg_mod.run(As, Bs, ts, bs, float(camera.t[0])) if len(As) else (None, "not run: no pairs")
+    if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
+        part = seg_mod.consistent_mask(segs, ts, seg_mod.ANALYSIS_INTERVAL_S)
+        As, Bs, ts = As[part], Bs[part], ts[part]
+    change, change_fit = _change_test(As, Bs, ts, bs, float(camera.t[0]))
+    segs_used = {"kept_s": None, "dropped_s": None, "pairs_kept": len(A)} if use == "consistent" else None
+    if use == "consistent" and segs is not None:
+        keep = seg_mod.consistent_mask(segs, t_start, interval) if segs.consistent else np.ones(len(A), bool)
+        kept_s = float(sum(b - a for a, b in segs.used_spans())) if segs.consistent else None
+        segs_used = {"kept_s": kept_s, "dropped_s": 0.0 if kept_s is None else float(
+            segs.segments[-1].end_s - segs.segments[0].start_s - kept_s), "pairs_kept": int(keep.sum())}
+        A, B, t_start = A[keep], B[keep], t_start[keep]
+    clock_parts = seg_mod.clock_segments(camera, oriented, max_offset=max_offset,
+                                         gaps=seg_mod.jump_candidates(oriented.t, max_offset), seed=seed,
+                                         offset_s=offset)
+    # --- end of the change and segment tests
     evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset,
                     offset_correlation=corr, offset_peak_margin=clock.peak_margin,
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
@@ -405,6 +443,11 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
                           pair_times=t_start, progress=progress, extra_diagnostics=mirror)
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
                               change=change)
+    segs_report = {**seg_mod.report(segs, segs_note, float(camera.t[0]), segs_used),
+                   **seg_mod.clock_report(*clock_parts, float(camera.t[0]))}
+    result = with_reasons(dataclasses.replace(result, segments=segs_report),  # the segment test, the clock jumps
+                          seg_mod.reasons(segs, float(camera.t[0]), segs_used, segs_note)
+                          + seg_mod.clock_reasons(clock_parts[1], float(camera.t[0]), offset))
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])

@@ -73,6 +73,26 @@ def _sensor_lines(model) -> list:
             + ("" if details["drift_resolved"] else " (not resolved: it includes 0)")]
 
 
+def _segment_lines(s) -> list:
+    """The summary's lines on the segment test and the clock jumps (:mod:`replication.rig.segments`)."""
+    if s is None:
+        return []
+    if not s["run"]:
+        lines = [f"segments: {s['note']}"]
+    else:
+        n, bad = len(s["segments"]), s["disagreeing"]
+        named = ", ".join(f"{s['segments'][i]['start_s']:.1f}-{s['segments'][i]['end_s']:.1f} s" for i in bad)
+        lines = [f"segments: {n} of about 10 s (1 s pairs) " + (f"disagree: {named}" if bad else "agree") +
+                 f" (p = {s['p_value']:.2g}); 95 % radius from the pairs {s['pairs_radius_deg']:.3f} deg, from the "
+                 f"spread between segments {s['between_radius_deg']:.3f} deg"]
+    used = s.get("use")
+    if used is not None and used.get("kept_s") is not None:
+        spans = ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in s.get("consistent_spans_s", []))
+        lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs)")
+    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms" for j in s.get("clock_jumps", [])]
+    return lines
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """What :func:`replication.rig.calibration.calibrate` (and ``calibrate_poses``) return.
@@ -123,6 +143,11 @@ class CalibrationResult:
     change_test : dict or None
         Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
         recording? times since the camera's first sample), or why it was not run; None for static pose sets.
+    segments : dict or None
+        Streams: R0 per segment of the recording and whether the segments agree
+        (:func:`replication.rig.segments.segment_test`; times since the camera's first sample), the two radii (from
+        the pairs, from the spread between segments), the consistent part and what ``use="consistent"`` kept; or
+        why it was not run; None for static pose sets.
     online : dict or None
         ``calibrate --online``: what the online replay found (:meth:`replication.rig.live.LiveRig.summary`).
     sensor_model : dict or None
@@ -167,6 +192,7 @@ class CalibrationResult:
     pose_residual_median_deg: list | None = None
     station_repeats: dict | None = None
     change_test: dict | None = None
+    segments: dict | None = None
     online: dict | None = None
     sensor_model: dict | None = None
     verdict: Verdict = field(default_factory=lambda: Verdict.of(()))
@@ -208,6 +234,7 @@ class CalibrationResult:
             "pose_residual_median_deg": self.pose_residual_median_deg,
             "station_repeats": self.station_repeats,
             "change_test": self.change_test,
+            "segments": self.segments,
             "online": self.online,
             "observability": {
                 "spectral_ratio": float(obs.spectral_ratio),
@@ -252,6 +279,7 @@ class CalibrationResult:
                 + ("beyond" if c["significant"] else "within") + f" their noise ({p_test}; splits "
                 f"tested from {c['splits_from_s']:.1f} to {c['splits_to_s']:.1f} s: a change outside cannot be told)"))
         lines += _sensor_lines(self.sensor_model)
+        lines += _segment_lines(self.segments)
         if self.reference_errors_deg is not None:
             e1, e2 = self.reference_errors_deg
             lines.append(f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree "

@@ -1,0 +1,500 @@
+"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time, the segments that disagree, and the
+clock offset on either side of the sensor's gaps (a jump of the sensor clock).
+
+:func:`segment_test` cuts the motion pairs of a calibration into segments of about :data:`SEGMENT_S` seconds and
+fits ``R0`` on each (the paper's eq. (8) over that segment's pairs, as :mod:`replication.rig.changepoint` fits
+each side of a split, with its ``_fit`` and ``_long_run``). Pairs overlap: the ``block`` pairs at the end of a
+segment that reach into the next one are left out, so that segments share no pose.
+
+**Each segment's radius.** As in the change test: ``C_i = phi (s^2 / 3) G_i^{-1}`` with ``G_i = sum_j (2 I - B_j -
+B_j^T)`` over its pairs, ``s^2`` the mean square residual angle of the segments' pairs about their own segment's
+estimate, pooled (a segment that disagrees does not inflate it; floored at
+:data:`replication.rig.changepoint.S2_FLOOR`), and ``phi`` the inflation for overlapping pairs, measured once, about
+the estimate of all the segments' pairs together (the long-run variance of the pair scores over the model's, never
+below 1). About each segment's own estimate its scores sum to zero, and over a segment of a few independent
+stretches that hides about half the long-run variance: so measured, the segments' errors were 2.4 times their
+covariance's scale on 60 s rigs (1.0-1.4 times as done here).
+
+**The test.** The segments' weighted mean ``R_bar`` (Gauss-Newton on ``sum_i d_i^T C_i^{-1} d_i``,
+``d_i = log(R_bar^T R_i)``) and ``Q = sum_i d_i^T C_i^{-1} d_i``: with ``phi`` known, chi-square with ``3 (S - 1)``
+degrees of freedom when every segment sees the same ``R0``; ``phi`` is measured on about ``n_eff = (J - block) /
+(2 block + 1)`` independent stretches, so ``Q / (3 (S - 1))`` is compared with Fisher's F with ``(3 (S - 1),
+n_eff)`` degrees of freedom at false-alarm probability ``level``. Each segment against the others (leave one out):
+``z_i = d_i^T (C_i + C_rest)^{-1} d_i`` over F(3, n_eff), Bonferroni over the segments (``level / S``): a segment
+*disagrees* where that is significant: the verdict is then at best a ``warning`` (``ok`` only where the segments
+agree within their noise), a ``fail`` where the angle to the others exceeds ``remount_deg``'s fail bound
+(:data:`replication.rig.quality.THRESHOLDS`, as for the change test).
+
+**Two radii.** The pairs-only radius (the bootstrap of ``calibrate``, or here ``phi (sum_i C_i^{-1})^{-1}``) covers
+the pairs' own noise; an error every pair of a segment shares (a SLAM frame that wanders for a stretch, a
+re-mount) is not in it. The *between-segment* radius is that of the segments' scatter about their mean: the
+pairs' covariance of the mean scaled by the segments' excess scatter ``max(1, Q / (3 (S - 1)))`` (Birge's ratio;
+weighted, so that a segment whose motions barely determine one axis does not blow it up): it covers what the
+pairs of a segment share, at the price of a wider radius where the segments disagree.
+
+**The consistent part.** The segment that disagrees most is left out and the rest tested again, until none
+disagrees; what is left (at least half of the segments) is the consistent part (``calibrate(use="consistent")``
+fits on its pairs only and reports the seconds used and why).
+
+**Interval.** ``calibrate`` runs this test (and the change test) on pairs at :data:`ANALYSIS_INTERVAL_S` whatever
+its ``interval``: whether the recording agrees with itself is a property of the data, so its verdict must not
+change with the interval of the pairs ``R0`` is fitted on (a wandering SLAM frame weighs more against the noise
+at a longer interval: a public EuRoC run was ``ok`` at 1 s and ``fail`` at 2 s with per-interval tests).
+
+**Clock jumps.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
+the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
+stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
+jump at that gap, named with its time and size (a ``fail``: the one offset removed is wrong for a part of the
+recording). Not corrected here. A jump without a gap (a clock stepping back leaves stamps out of order, refused by
+the loaders) is not looked for: offsets of 10-20 s of smooth motion scatter by several ms, too much to find jumps of
+a few ms without the gap's time (benchmarks/bench_segments.py: 30 ms found in 80 of 80 rigs, 10 ms in 7 of 80).
+
+Conventions: ``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as _st
+
+from ..core.so3 import angle_between_deg, exp_map, log_map
+from ..core.stats import radius_deg
+from .changepoint import S2_FLOOR, _fit, _long_run
+
+__all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S",
+           "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
+           "clock_report", "clock_reasons", "jump_candidates", "JUMP_Z"]
+
+#: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
+#: of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills segments of its own.
+SEGMENT_S = 10.0
+#: The pairs the segment and change tests run on, whatever ``calibrate``'s ``interval`` (module notes).
+ANALYSIS_INTERVAL_S = 1.0
+#: Fewest segments the test runs with (two are the change test's job).
+MIN_SEGMENTS = 3
+#: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
+#: offset intervals.
+JUMP_MIN_S = 2e-3
+#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap intervals): 1.96 named
+#: one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40 synthetic rigs, the bootstrap interval of a
+#: 20 s side of smooth motion missing its offset by 7 ms (benchmarks/bench_segments.py, seeds 0-39).
+JUMP_Z = 3.0
+#: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
+#: the :data:`JUMP_CANDIDATES` longest are tested.
+JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment: its time span (s, since the first camera sample in ``calibrate``'s report), pairs, ``R0``, its
+    95 % noise radius, its angle to the other segments' mean, that difference's statistic, p-value and whether it
+    disagrees (significant after Bonferroni over the segments)."""
+
+    start_s: float
+    end_s: float
+    n_pairs: int
+    R: np.ndarray = field(repr=False)
+    radius_deg: float
+    angle_deg: float
+    statistic: float
+    p_value: float
+    disagrees: bool
+
+    def to_dict(self) -> dict:
+        return {"start_s": self.start_s, "end_s": self.end_s, "n_pairs": self.n_pairs, "R0": self.R.tolist(),
+                "radius_deg": self.radius_deg, "angle_to_rest_deg": self.angle_deg, "statistic": self.statistic,
+                "p_value": self.p_value, "disagrees": self.disagrees}
+
+
+@dataclass(frozen=True)
+class SegmentTest:
+    """What :func:`segment_test` found (times as given in ``t``; ``calibrate`` reports them since the first camera
+    sample).
+
+    Attributes
+    ----------
+    segments : tuple of Segment
+    significant : bool
+        The segments disagree beyond their noise (``statistic > threshold``, false-alarm probability ``level``).
+    statistic, threshold, p_value, level, dof : float
+        ``Q / (3 (S - 1))``, the F quantile it is compared with, its p-value, the level, and ``3 (S - 1)``.
+    inflation, effective_blocks : float
+        ``phi`` and ``n_eff`` (module notes).
+    R_mean : ndarray (3, 3)
+        The segments' weighted mean.
+    pairs_radius_deg, between_radius_deg : float
+        95 % radius of ``R_mean`` from the pairs' noise, and from the segments' scatter (module notes).
+    consistent : tuple of int
+        The segments of the consistent part (every one where none disagrees; empty where no half of them agrees).
+    max_angle_deg : float
+        The largest angle of a disagreeing segment to the others' mean (0 where none disagrees).
+    interval_s : float or None
+        The pairs' interval, where known.
+    """
+
+    segments: tuple
+    significant: bool
+    statistic: float
+    threshold: float
+    p_value: float
+    level: float
+    dof: int
+    inflation: float
+    effective_blocks: float
+    R_mean: np.ndarray = field(repr=False)
+    pairs_radius_deg: float
+    between_radius_deg: float
+    consistent: tuple
+    max_angle_deg: float
+    interval_s: float | None = None
+
+    @property
+    def disagreeing(self) -> tuple:
+        """Indices of the segments that disagree with the others."""
+        return tuple(i for i, s in enumerate(self.segments) if s.disagrees)
+
+    def used_spans(self) -> list:
+        """The consistent part as ``[start_s, end_s]`` spans (neighbouring segments merged)."""
+        spans = []
+        for i in self.consistent:
+            s = self.segments[i]
+            if spans and math.isclose(spans[-1][1], s.start_s, abs_tol=1e-9):
+                spans[-1][1] = s.end_s
+            else:
+                spans.append([s.start_s, s.end_s])
+        return spans
+
+    def summary(self) -> str:
+        """One line: the verdict of the test with its numbers."""
+        bad = self.disagreeing
+        named = ", ".join(f"{self.segments[i].start_s:.1f}-{self.segments[i].end_s:.1f} s "
+                          f"({self.segments[i].angle_deg:.2f} deg)" for i in bad)
+        head = (f"{len(self.segments)} segments " + ("disagree" if self.significant else "agree within their noise")
+                + f" (statistic {self.statistic:.2f}, threshold {self.threshold:.2f}, p = {self.p_value:.2g})")
+        return head + (f"; disagreeing: {named}" if bad else "") + (
+            f"; radius from the pairs {self.pairs_radius_deg:.3f} deg, between segments "
+            f"{self.between_radius_deg:.3f} deg")
+
+    def to_dict(self, t0: float = 0.0) -> dict:
+        """For the JSON report (times less ``t0``)."""
+        segs = [{**s.to_dict(), "start_s": s.start_s - t0, "end_s": s.end_s - t0} for s in self.segments]
+        return {"run": True, "note": None, "significant": self.significant, "statistic": self.statistic,
+                "threshold": self.threshold, "p_value": self.p_value, "level": self.level, "dof": self.dof,
+                "inflation": self.inflation, "interval_s": self.interval_s, "segments": segs,
+                "disagreeing": list(self.disagreeing), "max_angle_deg": self.max_angle_deg,
+                "pairs_radius_deg": self.pairs_radius_deg, "between_radius_deg": self.between_radius_deg,
+                "consistent_segments": list(self.consistent),
+                "consistent_spans_s": [[a - t0, b - t0] for a, b in self.used_spans()]}
+
+
+def _mean(R, W, start, iterations: int = 20):
+    """Weighted mean rotation: Gauss-Newton on ``sum_i d_i^T W_i d_i``, ``d_i = log(R_bar^T R_i)``."""
+    Rb = start
+    H = W.sum(axis=0)
+    for _ in range(iterations):
+        d = log_map(Rb.T @ R)
+        step = np.linalg.solve(H, np.einsum("iab,ib->a", W, d))
+        Rb = Rb @ exp_map(step)
+        if np.linalg.norm(step) < 1e-12:
+            break
+    return Rb, np.linalg.inv(H)
+
+
+def _homogeneity(R, C, nu):
+    """Over the segments ``R``, ``C``: the mean, ``Q / dof``, each segment's leave-one-out statistic and angle."""
+    S = len(R)
+    W = np.linalg.inv(C)
+    Rb, Cb = _mean(R, W, R[int(np.argmin(np.trace(C, axis1=1, axis2=2)))])
+    d = log_map(Rb.T @ R)
+    dof = 3 * (S - 1)
+    F = float(np.einsum("ia,iab,ib->", d, W, d)) / dof
+    z, ang = np.empty(S), np.empty(S)
+    for i in range(S):
+        rest = np.arange(S) != i
+        Rr, Cr = _mean(R[rest], W[rest], Rb, iterations=5)
+        di = log_map(Rr.T @ R[i])
+        z[i] = float(di @ np.linalg.solve(C[i] + Cr, di)) / 3.0
+        ang[i] = float(angle_between_deg(R[i], Rr))
+    p_i = _st.f.sf(z, 3, nu)
+    return Rb, Cb, d, F, dof, z, p_i, ang
+
+
+def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level: float = 0.01,
+                 interval: float | None = None) -> SegmentTest:
+    """``R0`` per segment of about ``segment_s`` seconds, and whether the segments agree (module notes).
+
+    Parameters
+    ----------
+    A, B : array_like, shape (J, 3, 3)
+        Camera and sensor relative rotations of the pairs, in time order (eqs. (3)-(4)).
+    t : array_like, shape (J,)
+        The pairs' start times (s), non-decreasing.
+    block : int
+        Pairs per interval (as :func:`replication.rig.changepoint.two_segment_test`).
+    segment_s : float
+        Target segment length (s); the recording is cut into ``floor(span / segment_s)`` equal segments.
+    level : float
+        False-alarm probability, in (0, 0.5).
+    interval : float or None
+        The pairs' interval (s), reported.
+
+    Raises
+    ------
+    ValueError
+        Bad parameters (named), too short a recording for :data:`MIN_SEGMENTS` segments, or a segment whose
+        motions are about one axis only (its R0 is not determined).
+    """
+    from .changepoint import _check
+
+    A, B, t = _check(A, B, t, block, 0.1, level)
+    if not (isinstance(segment_s, (int, float)) and math.isfinite(segment_s) and segment_s > 0):
+        raise ValueError(f"segment_s must be a positive number of seconds, got {segment_s!r}")
+    J, m = len(A), int(block)
+    span = float(t[-1] - t[0])
+    S = int(span // segment_s)
+    if S < MIN_SEGMENTS:
+        raise ValueError(f"too short for a segment test: {span:.1f} s of pair start times make {S} segments of "
+                         f"{segment_s:g} s, fewer than {MIN_SEGMENTS}")
+    edges = t[0] + span * np.arange(S + 1) / S
+    seg = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, S - 1)
+    first = np.searchsorted(seg, np.arange(S))
+    last = np.append(first[1:], J)
+    stop = np.where(np.arange(S) < S - 1, last - m, last)  # the pairs reaching into the next segment: left out
+    n = (stop - first).astype(float)
+    if np.any(n < max(10, 3 * m)):
+        raise ValueError(f"too few pairs in a segment for a segment test: {int(n.min())} (segments of "
+                         f"{span / S:.1f} s, {m} pairs per interval)")
+    kron = np.einsum("jab,jcd->jacbd", B, A).reshape(J, 9, 9)
+    PK = np.concatenate([np.zeros((1, 9, 9)), np.cumsum(kron, axis=0)])
+    PB = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(B, axis=0)])
+    R, cost, _, G = _fit(PK[stop] - PK[first], PB[stop] - PB[first], n)
+    # the inflation about the estimate of all the segments' pairs together (module notes)
+    R1, _, s21, G1 = _fit((PK[stop] - PK[first]).sum(axis=0)[None], (PB[stop] - PB[first]).sum(axis=0)[None],
+                              np.array([n.sum()]))
+    omega = sum(_long_run(A[a:b], B[a:b], R1[0], m) for a, b in zip(first, stop))
+    Gi = np.linalg.inv(G1[0])
+    phi = max(1.0, float(np.trace(Gi @ omega @ Gi) / np.trace(Gi @ ((s21[0] / 3.0) * G1[0]) @ Gi)))
+    # the noise scale from each segment's residuals about its own estimate, pooled (a segment that disagrees does
+    # not inflate it); the inflation, a ratio, from the fit of all the pairs
+    s2 = np.full(S, max(float(cost.sum() / (2.0 * (n - 3.0)).sum()), S2_FLOOR))
+    C = phi * (s2 / 3.0)[:, None, None] * np.linalg.inv(G)
+    nu = max((J - m) / (2 * m + 1), 1.0)
+    Rb, Cb, d, F, dof, z, p_i, ang = _homogeneity(R, C, nu)
+    thr = float(_st.f.isf(level, dof, nu))
+    disagree = p_i < level / S
+    # the consistent part: leave out the worst disagreeing segment until none disagrees
+    keep = np.ones(S, bool)
+    flagged = disagree.copy()
+    while flagged.any():
+        worst = np.flatnonzero(keep)[int(np.argmax(np.where(flagged, z, -np.inf)[keep]))]
+        keep[worst] = False
+        if keep.sum() < max(2, math.ceil(S / 2)):
+            keep[:] = False
+            break
+        k = np.flatnonzero(keep)
+        *_, zk, pk, _ = _homogeneity(R[k], C[k], nu)
+        flagged = np.zeros(S, bool)
+        flagged[k] = pk < level / len(k)
+    if keep.any() and not keep.all():  # masking: a bad segment pulls the others' mean; judge against the kept part
+        W_all = np.linalg.inv(C)
+        Rk, Ck = _mean(R[keep], W_all[keep], R[np.flatnonzero(keep)[0]])
+        for i in np.flatnonzero(~keep):
+            di = log_map(Rk.T @ R[i])
+            z[i] = float(di @ np.linalg.solve(C[i] + Ck, di)) / 3.0
+            ang[i] = float(angle_between_deg(R[i], Rk))
+        p_i = _st.f.sf(z, 3, nu)
+        disagree = ~keep
+    between = radius_deg(max(1.0, F) * Cb, 0.95)  # the pairs' radius scaled by the segments' excess scatter
+    segments = tuple(Segment(start_s=float(edges[i]), end_s=float(edges[i + 1]), n_pairs=int(n[i]), R=R[i],
+                             radius_deg=radius_deg(C[i], 0.95), angle_deg=float(ang[i]), statistic=float(z[i]),
+                             p_value=float(p_i[i]), disagrees=bool(disagree[i])) for i in range(S))
+    return SegmentTest(segments=segments, significant=bool(F > thr), statistic=F, threshold=thr,
+                       p_value=float(_st.f.sf(F, dof, nu)), level=float(level), dof=dof, inflation=phi,
+                       effective_blocks=float(nu), R_mean=Rb, pairs_radius_deg=radius_deg(Cb, 0.95),
+                       between_radius_deg=between, consistent=tuple(int(i) for i in np.flatnonzero(keep)),
+                       max_angle_deg=float(ang[disagree].max()) if disagree.any() else 0.0,
+                       interval_s=None if interval is None else float(interval))
+
+
+def run(A, B, t, block: int, t0: float, interval: float = ANALYSIS_INTERVAL_S):
+    """:func:`segment_test` for ``calibrate``: ``(test, None)``, or ``(None, why)`` where it cannot run (too short a
+    recording, a segment whose motions are about one axis)."""
+    try:
+        return segment_test(A, B, t, block=block, interval=interval), None
+    except ValueError as err:
+        return None, f"not run: {err}"
+
+
+def report(test, note, t0: float, used=None) -> dict:
+    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept."""
+    if test is None:
+        return {"run": False, "note": note, "use": used}
+    return {**test.to_dict(t0), "use": used}
+
+
+def consistent_mask(test, t_start, interval: float) -> np.ndarray:
+    """The pairs (start times ``t_start``, ``interval`` long) that lie inside the consistent part of ``test``."""
+    keep = np.zeros(len(t_start), bool)
+    last = test.segments[-1].end_s
+    for a, b in test.used_spans():  # the last segment's pairs reach one analysis interval past its last start
+        keep |= (t_start >= a) & (t_start + interval <= b + (ANALYSIS_INTERVAL_S if b == last else 0.0))
+    return keep
+
+
+def reasons(test, t0: float, used=None, note=None) -> list:
+    """Verdict reasons: segments that disagree with the rest beyond their noise, named with their times (a
+    ``warning``; a ``fail`` beyond ``remount_deg``'s fail bound, :data:`replication.rig.quality.THRESHOLDS`); what
+    ``use="consistent"`` dropped."""
+    from .quality import THRESHOLDS, Reason
+
+    out = []
+    if test is None:
+        if used is not None:
+            out.append(Reason("segments_consistent_part", "warning", None, None,
+                              f"use='consistent': the segment test did not run ({note}), so every pair was used"))
+        return out
+    fail = THRESHOLDS["remount_deg"][1]
+    bad = list(test.disagreeing)  # ok only where every segment agrees with the rest within its noise
+    spans = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in test.used_spans())
+    if used is not None:
+        if used["kept_s"] is None:
+            out.append(Reason("segments_consistent_part", "fail", None, None,
+                              "use='consistent': no half of the recording's segments agrees on R0 (the segments "
+                              "disagree throughout); R0 is from all the pairs and not to be trusted"))
+        elif used["dropped_s"]:
+            out.append(Reason("segments_consistent_part", "warning", float(used["dropped_s"]), 0.0,
+                              f"use='consistent': R0 is from the consistent part only ({spans}, "
+                              f"{used['kept_s']:.1f} s); {used['dropped_s']:.1f} s left out where segments "
+                              f"disagreed with the rest beyond their noise"))
+        return out
+    if not bad:
+        return out
+    worst = max(test.segments[i].angle_deg for i in bad)
+    level, bound = ("fail", fail) if worst > fail else ("warning", 0.0)
+    named = "; ".join(f"{test.segments[i].start_s - t0:.1f}-{test.segments[i].end_s - t0:.1f} s by "
+                      f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f})"
+                      for i in bad)
+    keep = (f"the consistent part is {spans}: calibrate on it with use='consistent' (--use consistent)"
+            if test.consistent else "no half of the segments agrees")
+    out.append(Reason("segments_disagree", level, worst, bound,
+                      f"R0 differs along the recording: segments of {ANALYSIS_INTERVAL_S:g} s pairs disagree with "
+                      f"the rest beyond their noise ({named}; the segments' test p = {test.p_value:.2g}): a "
+                      f"trajectory whose frame wanders or is lost for a stretch, or a re-mount; the radius from the "
+                      f"spread between segments is {test.between_radius_deg:.2f} deg (from the pairs "
+                      f"{test.pairs_radius_deg:.2f}); {keep}"))
+    return out
+
+
+@dataclass(frozen=True)
+class ClockJump:
+    """A jump of the sensor clock: at ``time_s`` (s, on the camera's clock) the offset changes by ``size_s``."""
+
+    time_s: float
+    size_s: float
+    offset_before_s: float
+    offset_after_s: float
+    at_gap: bool
+
+    def to_dict(self, t0: float = 0.0) -> dict:
+        return {"time_s": self.time_s - t0, "size_s": self.size_s, "offset_before_s": self.offset_before_s,
+                "offset_after_s": self.offset_after_s, "at_gap": self.at_gap}
+
+
+def jump_candidates(t, max_offset: float = math.inf) -> np.ndarray:
+    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`; a skip beyond
+    ``max_offset``, the offset search's bound, is no jump it could measure: samples lost), the
+    :data:`JUMP_CANDIDATES` longest, in time order."""
+    dt = np.diff(t)
+    step = np.median(dt)
+    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (dt - step <= max_offset))
+    k = np.sort(k[np.argsort(-dt[k])[:JUMP_CANDIDATES]])
+    return np.stack([t[k], t[k + 1]], axis=-1)
+
+
+def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_bootstrap: int = 50, seed: int = 0,
+                   offset_s: float | None = None, window_s: float = 2 * SEGMENT_S):
+    """The clock offset on each side of the sensor stream's gaps, and the jumps among them.
+
+    A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in its stamps; a
+    gap where samples were lost leaves the offset as it was. On each side of a gap, the camera's samples within
+    ``window_s`` of it (up to the neighbouring gaps; at least :data:`SEGMENT_S`) get their own offset
+    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's ``offset_s`` the search
+    spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
+    than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
+    it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
+    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)`` (``se`` = interval
+    width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
+    may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
+    jump, however long.
+
+    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``: NaN
+    where no jump was in question, the bootstrap being run only there), a list of :class:`ClockJump`.
+    """
+    from .association import estimate_time_offset, offset_analysis
+
+    gaps = np.empty((0, 2)) if gaps is None else np.asarray(gaps, dtype=float).reshape(-1, 2)
+    if not len(gaps):
+        return [], []
+    step = float(np.median(np.diff(sensor.t)))
+    if offset_s is not None and math.isfinite(offset_s):
+        max_offset = min(max_offset, abs(offset_s) + float(np.max(gaps[:, 1] - gaps[:, 0])) + 0.02)
+    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]])
+
+    def side(lo, hi):
+        if hi - lo < SEGMENT_S or np.sum((camera.t >= lo + max_offset) & (camera.t <= hi - max_offset)) < 10:
+            return None
+        view = camera.between(lo + max_offset, hi - max_offset)
+        with np.errstate(all="ignore"):
+            d = estimate_time_offset(view, sensor, max_offset=max_offset)[0]
+        return {"start_s": float(lo), "end_s": float(hi), "offset_s": float(d), "ci95_s": [math.nan, math.nan],
+                "view": view}
+
+    def se(part):  # the side's 95 % interval, computed where a jump is in question only (the bootstrap's cost)
+        v = part["view"]
+        with np.errstate(all="ignore"):
+            est = offset_analysis(v, sensor, max_offset=max_offset, n_bootstrap=n_bootstrap, seed=seed,
+                                  block_s=min(1.0, 0.25 * (v.t[-1] - v.t[0])))
+        part["ci95_s"] = [float(x) for x in est.ci95_s]
+        lo, hi = part["ci95_s"]
+        return max((hi - lo) / 3.92, 0.0) if math.isfinite(hi - lo) else math.inf
+
+    def agrees(size, stamps, bound):
+        return abs(size) > max(JUMP_MIN_S, bound) and abs(stamps - size) <= max(0.5 * abs(stamps), bound + JUMP_MIN_S)
+    parts, jumps = [], []
+    for i, gap in enumerate(gaps):
+        p = side(max(edges[2 * i], gap[0] - window_s), gap[0])
+        q = side(gap[1], min(edges[2 * i + 3], gap[1] + window_s))
+        parts += [x for x in (p, q) if x is not None]
+        if p is None or q is None:
+            continue
+        size = q["offset_s"] - p["offset_s"]
+        stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
+        if agrees(size, stamps, 0.0) and agrees(size, stamps, JUMP_Z * math.hypot(se(p), se(q))):
+            jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=stamps,
+                                   offset_before_s=p["offset_s"], offset_after_s=q["offset_s"], at_gap=True))
+    return [{k: v for k, v in x.items() if k != "view"} for x in parts], jumps
+
+
+def clock_report(parts, jumps, t0: float) -> dict:
+    """The clock offset of each part between the sensor's gaps and the jumps, for the report (times since ``t0``,
+    on the sensor's clock for the parts)."""
+    return {"clock_offsets": [{**o, "start_s": o["start_s"] - t0, "end_s": o["end_s"] - t0} for o in parts],
+            "clock_jumps": [j.to_dict(t0) for j in jumps]}
+
+
+def clock_reasons(jumps, t0: float, offset_s: float) -> list:
+    """A ``fail`` reason per recording with clock jumps: the one offset removed is wrong for part of it."""
+    from .quality import Reason
+
+    if not jumps:
+        return []
+    named = "; ".join(f"at {j.time_s - t0:.1f} s by {1e3 * j.size_s:+.1f} ms (offset {1e3 * j.offset_before_s:+.1f} "
+                      f"ms before, {1e3 * j.offset_after_s:+.1f} ms after"
+                      + (", where the sensor stream has a gap)" if j.at_gap else ")") for j in jumps)
+    worst = max(abs(j.size_s) for j in jumps)
+    return [Reason("clock_jump", "fail", worst, JUMP_MIN_S,
+                   f"the sensor clock jumps: {named}; the one offset removed ({1e3 * offset_s:+.2f} ms) is wrong for "
+                   f"part of the recording, and its interval does not say so; calibrate each part on its own, or "
+                   f"correct the sensor's time stamps at the jump")]
