@@ -10,7 +10,7 @@ import pytest
 from replication.__main__ import main
 from replication.core import so3
 from replication.rig import realdata as rd
-from replication.rig.datafile import ColumnCountError, DataFileError, read_table
+from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError, read_table
 from replication.rig.live import LiveRig
 from replication.rig.online import OnlineCalibrator
 from replication.rig.streams import GyroStream, OrientationStream
@@ -254,3 +254,28 @@ def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
         with pytest.raises(ValueError) as err:
             build()
         assert phrase in str(err.value) and not NUMPY_REPR.search(str(err.value)), str(err.value)
+
+
+def test_a_sign_flipped_quaternion_under_one_stamp_is_the_same_pose_and_dropped_on_request(tmp_path):
+    rows = _gt_rows()
+    twin = list(rows[2])
+    twin[4:8] = [-v for v in twin[4:8]]
+    path = _write(tmp_path / "flip.csv", GT_HEADER, rows[:3] + [twin] + rows[3:])
+    with pytest.raises(DataFileError, match=r"repeats the previous one with its quaternion's sign flipped"):
+        rd.load_euroc_mocap(path)
+    tally = {}
+    s = rd.load_euroc_mocap(path, drop_repeated=True, tally=tally)
+    assert s.t.size == 6 and tally["verbatim_repeats"] == 1
+
+
+@pytest.mark.parametrize("angle, refused", [(MEAN_MAX_DEG - 1, False), (MEAN_MAX_DEG + 1, True),
+                                            (180.0, True)])
+def test_the_mean_of_poses_far_apart_is_refused_naming_the_other_policies(tmp_path, angle, refused):
+    path, _ = _repeated(tmp_path, angle)
+    if refused:
+        with pytest.raises(DataFileError, match=r"deg apart .*their mean is no pose; repeated='keep-first' or"):
+            rd.load_euroc_mocap(path, repeated="mean")
+    else:
+        s = rd.load_euroc_mocap(path, repeated="mean")
+        assert so3.angle_between_deg(s.R[2], _rotations(6)[2]) == pytest.approx(angle / 2, abs=1e-5)
+    assert rd.load_euroc_mocap(path, repeated="keep-first").t.size == 6

@@ -21,6 +21,7 @@ from replication.rig.calibration import calibrate  # noqa: E402
 from replication.rig.changepoint import remounted  # noqa: E402
 from replication.rig.quality import THRESHOLDS  # noqa: E402
 from replication.rig.segments import (  # noqa: E402
+    MAX_LEFT_OUT_SHARE,
     Segment,
     SegmentTest,
     clock_segments,
@@ -162,3 +163,18 @@ def test_the_consistent_part_keeps_the_pairs_inside_it():
     # a pair that ends past its span is out, but the last segment's pairs run one analysis interval past its start
     assert consistent_mask(test, t, 1.0).tolist() == [True, True, False, False, False, True, True, True, True]
     assert consistent_mask(test, t, 2.0).tolist() == [True, False, False, False, False, True, True, False, False]
+
+
+@pytest.mark.parametrize("share, angle, level", [
+    (MAX_LEFT_OUT_SHARE - 0.01, FAIL + 0.5, "warning"),   # a short stretch left out: the majority kept
+    (MAX_LEFT_OUT_SHARE + 0.01, FAIL + 0.5, "fail"),      # much left out, far off: which part is right is unknown
+    (MAX_LEFT_OUT_SHARE + 0.01, FAIL - 0.01, "warning"),  # much left out, but within the fail bound
+])
+def test_the_consistent_part_fails_when_much_is_left_out_and_it_disagrees_beyond_the_fail_bound(share, angle, level):
+    total = 100.0
+    used = {"kept_s": total * (1 - share), "dropped_s": total * share, "pairs_kept": 50}
+    (r,) = reasons(_fake(angle), 0.0, used)
+    assert r.check == "segments_consistent_part" and r.level == level
+    assert r.measured == pytest.approx(share) and r.threshold == pytest.approx(MAX_LEFT_OUT_SHARE)
+    assert "majority" in r.message and f"{angle:.2f} deg" in r.message
+    assert ("calibrate each on its own" in r.message) == (level == "fail")

@@ -203,6 +203,8 @@ def read_lines(path, what: str | None = None) -> list[str]:
     return lines
 
 
+#: ``repeated="mean"`` refuses poses of one time stamp further apart than this (deg).
+MEAN_MAX_DEG = 90.0
 #: What a trajectory may do with a time stamp repeated with another pose (``read_table(repeated=...)``).
 REPEATED = ("refuse", "keep-first", "keep-last", "mean")
 
@@ -266,7 +268,7 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
         if bad:
             fail(path, "NaN or inf", line=lineno, column=bad[0] + 1, column_name=every[bad[0]])
         values = values[:len(names)]
-        if groups and values == groups[-1][-1] and drop_repeated:
+        if groups and drop_repeated and _same_pose(values, groups[-1][-1], quaternion):
             verbatim += 1
             continue
         if groups and increasing_first and values[0] == groups[-1][0][0]:
@@ -311,9 +313,18 @@ def _quaternion_angle_deg(q1, q2) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, c)))
 
 
+def _same_pose(values, other, quaternion) -> bool:
+    """Whether two lines hold the same values, a quaternion and its negative (one rotation) counting as equal."""
+    if values == other or quaternion is None:
+        return values == other
+    rest = [i for i in range(len(values)) if i not in quaternion]
+    return all(values[i] == other[i] for i in rest) and all(values[i] == -other[i] for i in quaternion)
+
+
 def _refuse_repeat(path, values, first, lineno, name, quaternion):
-    if values == first:
-        why = ("the line repeats the previous one exactly; drop_repeated=True (calibrate --drop-repeated) skips such "
+    if _same_pose(values, first, quaternion):
+        how = "exactly" if values == first else "with its quaternion's sign flipped (one rotation)"
+        why = (f"the line repeats the previous one {how}; drop_repeated=True (calibrate --drop-repeated) skips such "
                "lines")
     else:
         away = "" if quaternion is None else (
@@ -338,6 +349,10 @@ def _merged(path, group, repeated, quaternion, line):
             k = int(np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOL)[0])
             fail(path, f"quaternion norm {float(norm[k]):.6g} is not 1 (tolerance {QUATERNION_NORM_TOL:g}) in pose "
                  f"{k + 1} of the {len(group)} sharing this line's time stamp; wrong column order or units?", line=line)
+        spread = max(_quaternion_angle_deg(a, b) for a in q for b in q)
+        if spread > MEAN_MAX_DEG:  # beyond it the mean of the rotations is no pose of the group (at 180: undefined)
+            fail(path, f"the {len(group)} poses sharing this line's time stamp are {spread:.3g} deg apart (more than "
+                 f"{MEAN_MAX_DEG:g}): their mean is no pose; repeated='keep-first' or 'keep-last' reads it", line=line)
         q = q * np.where(q @ q[0] < 0, -1.0, 1.0)[:, None]  # one hemisphere
         rows[:, list(quaternion)] = q
     mean = rows.mean(axis=0)

@@ -2,52 +2,42 @@
 clock offset on either side of the sensor's gaps (a jump of the sensor clock).
 
 :func:`segment_test` cuts the motion pairs of a calibration into segments of about :data:`SEGMENT_S` seconds and
-fits ``R0`` on each (the paper's eq. (8) over that segment's pairs, as :mod:`replication.rig.changepoint` fits
-each side of a split, with its ``_fit`` and ``_long_run``). Pairs overlap: the ``block`` pairs at the end of a
-segment that reach into the next one are left out, so that segments share no pose.
+fits ``R0`` on each (eq. (8) over its pairs, as :mod:`replication.rig.changepoint` fits each side of a split);
+pairs that reach into the next segment are left out, so that segments share no pose.
 
 **Each segment's radius.** As in the change test: ``C_i = phi (s^2 / 3) G_i^{-1}`` with ``G_i = sum_j (2 I - B_j -
 B_j^T)`` over its pairs, ``s^2`` the mean square residual angle of the segments' pairs about their own segment's
 estimate, pooled (a segment that disagrees does not inflate it; floored at
 :data:`replication.rig.changepoint.S2_FLOOR`), and ``phi`` the inflation for overlapping pairs, measured once, about
 the estimate of all the segments' pairs together (the long-run variance of the pair scores over the model's, never
-below 1). About each segment's own estimate its scores sum to zero, and over a segment of a few independent
-stretches that hides about half the long-run variance: so measured, the segments' errors were 2.4 times their
-covariance's scale on 60 s rigs (1.0-1.4 times as done here).
+below 1; about each segment's own estimate its scores sum to zero, which hides about half of it).
 
-**The test.** The segments' weighted mean ``R_bar`` (Gauss-Newton on ``sum_i d_i^T C_i^{-1} d_i``,
-``d_i = log(R_bar^T R_i)``) and ``Q = sum_i d_i^T C_i^{-1} d_i``: with ``phi`` known, chi-square with ``3 (S - 1)``
-degrees of freedom when every segment sees the same ``R0``; ``phi`` is measured on about ``n_eff = (J - block) /
-(2 block + 1)`` independent stretches, so ``Q / (3 (S - 1))`` is compared with Fisher's F with ``(3 (S - 1),
-n_eff)`` degrees of freedom at false-alarm probability ``level``. Each segment against the others (leave one out):
-``z_i = d_i^T (C_i + C_rest)^{-1} d_i`` over F(3, n_eff), Bonferroni over the segments (``level / S``): a segment
-*disagrees* where that is significant: the verdict is then at best a ``warning`` (``ok`` only where the segments
-agree within their noise), a ``fail`` where the angle to the others exceeds ``remount_deg``'s fail bound
-(:data:`replication.rig.quality.THRESHOLDS`, as for the change test).
+**The test.** The segments' weighted mean ``R_bar`` (Gauss-Newton on ``Q = sum_i d_i^T C_i^{-1} d_i``,
+``d_i = log(R_bar^T R_i)``); ``Q / (3 (S - 1))`` against Fisher's F with ``(3 (S - 1), n_eff)`` degrees of freedom
+(``n_eff = (J - block) / (2 block + 1)`` independent stretches) at ``level``. Each segment against the rest:
+``z_i = d_i^T (C_i + C_rest)^{-1} d_i`` over F(3, n_eff) at ``level / S``: a segment *disagrees* where significant;
+the verdict is then at best a ``warning``, a ``fail`` beyond ``remount_deg``'s fail bound (as the change test).
 
-**Two radii.** The pairs-only radius (the bootstrap of ``calibrate``, or here ``phi (sum_i C_i^{-1})^{-1}``) covers
-the pairs' own noise; an error every pair of a segment shares (a SLAM frame that wanders for a stretch, a
-re-mount) is not in it. The *between-segment* radius is that of the segments' scatter about their mean: the
-pairs' covariance of the mean scaled by the segments' excess scatter ``max(1, Q / (3 (S - 1)))`` (Birge's ratio;
-weighted, so that a segment whose motions barely determine one axis does not blow it up): it covers what the
-pairs of a segment share, at the price of a wider radius where the segments disagree.
+**Two radii.** The pairs-only radius (``calibrate``'s bootstrap, or ``phi (sum_i C_i^{-1})^{-1}``) covers the
+pairs' own noise, not an error every pair of a segment shares (a wandering SLAM frame, a re-mount). The
+*between-segment* radius is that of the segments' scatter about their mean: the pairs' covariance of the mean scaled
+by the segments' excess scatter ``max(1, Q / (3 (S - 1)))`` (Birge's ratio, weighted): it covers what the pairs of a
+segment share, at the price of a wider radius where the segments disagree.
 
 **The consistent part.** The segment that disagrees most is left out and the rest tested again, until none
 disagrees; what is left (at least half of the segments) is the consistent part (``calibrate(use="consistent")``
-fits on its pairs only and reports the seconds used and why).
+fits on its pairs only and reports the seconds used and why). It is the majority, which the pairs cannot show to be
+right: left out beyond :data:`MAX_LEFT_OUT_SHARE` of the recording (and beyond the fail bound) it is a ``fail``.
 
 **Interval.** ``calibrate`` runs this test (and the change test) on pairs at :data:`ANALYSIS_INTERVAL_S` whatever
-its ``interval``: whether the recording agrees with itself is a property of the data, so its verdict must not
-change with the interval of the pairs ``R0`` is fitted on (a wandering SLAM frame weighs more against the noise
-at a longer interval: a public EuRoC run was ``ok`` at 1 s and ``fail`` at 2 s with per-interval tests).
+its ``interval``: whether the recording agrees with itself is a property of the data, not of the pairs' interval.
 
 **Clock jumps.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
 the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
 stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
 jump at that gap, named with its time and size (a ``fail``: the one offset removed is wrong for a part of the
-recording). Not corrected here. A jump without a gap (a clock stepping back leaves stamps out of order, refused by
-the loaders) is not looked for: offsets of 10-20 s of smooth motion scatter by several ms, too much to find jumps of
-a few ms without the gap's time (benchmarks/bench_segments.py: 30 ms found in 80 of 80 rigs, 10 ms in 7 of 80).
+recording). Not corrected here. A jump without a gap is not looked for: offsets of 10-20 s of smooth motion
+scatter by several ms (benchmarks/bench_segments.py: 30 ms found in 80 of 80 rigs, 10 ms in 7 of 80).
 
 Conventions: ``docs/conventions.md``.
 """
@@ -63,8 +53,8 @@ from ..core.so3 import angle_between_deg, exp_map, log_map
 from ..core.stats import radius_deg
 from .changepoint import S2_FLOOR, _fit, _long_run
 
-__all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S",
-           "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
+__all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S", "ANALYSIS_INTERVAL_S",
+           "MIN_SEGMENTS", "MAX_LEFT_OUT_SHARE", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
            "clock_report", "clock_reasons", "jump_candidates", "JUMP_Z"]
 
 #: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
@@ -74,6 +64,8 @@ SEGMENT_S = 10.0
 ANALYSIS_INTERVAL_S = 1.0
 #: Fewest segments the test runs with (two are the change test's job).
 MIN_SEGMENTS = 3
+#: ``use="consistent"`` keeps the majority: left out beyond this share it may be the wrong part (a ``fail``).
+MAX_LEFT_OUT_SHARE = 1 / 3
 #: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
 #: offset intervals.
 JUMP_MIN_S = 2e-3
@@ -364,10 +356,17 @@ def reasons(test, t0: float, used=None, note=None) -> list:
                               "use='consistent': no half of the recording's segments agrees on R0 (the segments "
                               "disagree throughout); R0 is from all the pairs and not to be trusted"))
         elif used["dropped_s"]:
-            out.append(Reason("segments_consistent_part", "warning", float(used["dropped_s"]), 0.0,
+            share = used["dropped_s"] / (used["dropped_s"] + used["kept_s"])
+            worst = max((test.segments[i].angle_deg for i in bad), default=0.0)
+            level = "fail" if share > MAX_LEFT_OUT_SHARE and worst > fail else "warning"
+            out.append(Reason("segments_consistent_part", level, float(share), MAX_LEFT_OUT_SHARE,
                               f"use='consistent': R0 is from the consistent part only ({spans}, "
-                              f"{used['kept_s']:.1f} s); {used['dropped_s']:.1f} s left out where segments "
-                              f"disagreed with the rest beyond their noise"))
+                              f"{used['kept_s']:.1f} s); {used['dropped_s']:.1f} s ({100 * share:.0f} % of the "
+                              f"recording) left out where segments disagreed with the rest by up to {worst:.2f} deg: "
+                              f"the part kept is the majority, which the pairs cannot show to be the right one; if "
+                              f"the part left out is the well-tracked one, R0 is off by about that angle"
+                              + ("; with this much left out, check the tracking of both parts or calibrate each on "
+                                 "its own" if level == "fail" else "")))
         return out
     if not bad:
         return out
