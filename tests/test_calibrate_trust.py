@@ -596,18 +596,27 @@ def test_a_solver_returning_2R_on_replicates_is_refused_naming_it_at_every_door(
 def test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius(
         rig, door_solver, what, answer, words, bad_calls, counted):
     """No bad replicate: a radius and no such reason; one bad replicate of 20 (the boundary) already fails."""
+    name, r, reason = _bad_replicates(rig, door_solver, lambda R, call: answer(R), bad_calls, counted)
+    if reason is not None:
+        assert re.search(rf"solver '{name}' {words} on {counted} of 20 bootstrap replicates", reason.message)
+        assert r.to_dict()["bootstrap_ci95_deg"] is None
+
+
+def _bad_replicates(rig, door_solver, answer, bad_calls, counted):
+    """A pose-set calibration with a solver giving ``answer(R, call)`` on the calls ``bad_calls`` (the first call is
+    the calibration's own solve): without bad calls a radius and no reason; else a ``bootstrap_answers`` fail counting
+    them, and no radius. Returns the solver's name, the result and the reason (None without bad calls)."""
     C, S = _poses(rig)
-    name = door_solver(lambda R, call: answer(R) if call in bad_calls else R)
+    name = door_solver(lambda R, call: answer(R, call) if call in bad_calls else R)
     r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
     reasons = _reasons(r)
     if not counted:
         assert "bootstrap_answers" not in reasons and math.isfinite(r.bootstrap_ci95_deg)
-        return
+        return name, r, None
     reason = reasons["bootstrap_answers"]
     assert reason.level == "fail" and r.verdict.level == "fail" and reason.measured == counted
-    assert re.search(rf"solver '{name}' {words} on {counted} of 20 bootstrap replicates", reason.message)
     assert not math.isfinite(r.bootstrap_ci95_deg) and r.diagnostics["bootstrap_rotvec_deg"].size == 0
-    assert r.to_dict()["bootstrap_ci95_deg"] is None
+    return name, r, reason
 
 
 @pytest.mark.parametrize("answer, words", [(lambda R: -R, r"returned a reflection \(det -1\)"),
@@ -667,19 +676,12 @@ def test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_rad
                                                                                     counted):
     """Right on the calibration's own solve, random rotations on some replicates (rotations, so the registry's
     checks pass them): without one, a radius; one of 20 (the boundary) already fails, naming the solver."""
-    C, S = _poses(rig)
-    name = door_solver(lambda R, call: _random_rotation(R, call) if call in bad_calls else R)
-    r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
-    reasons = _reasons(r)
-    if not counted:
-        assert "bootstrap_answers" not in reasons and math.isfinite(r.bootstrap_ci95_deg)
+    name, r, reason = _bad_replicates(rig, door_solver, _random_rotation, bad_calls, counted)
+    if reason is None:
         return
-    reason = reasons["bootstrap_answers"]
-    assert reason.level == "fail" and r.verdict.level == "fail" and reason.measured == counted
     assert re.search(rf"solver '{name}' returned an answer that is no solution of its resample on {counted} of 20 "
                      r"bootstrap replicates \(worst: root-mean-square pair residual [\d.]+ deg", reason.message)
     assert "not a solution on resamples" in reason.message and "np." not in reason.message
-    assert not math.isfinite(r.bootstrap_ci95_deg) and r.diagnostics["bootstrap_rotvec_deg"].size == 0
 
 
 def test_batched_replicates_that_are_no_solutions_fail_naming_the_solver(rig, door_solver):
