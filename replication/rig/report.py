@@ -45,8 +45,6 @@ def json_safe(value):
     return value
 
 
-
-
 _SENSOR_KEYS = ("gyro_bias_rad_s", "gyro_bias_ci95_rad_s", "clock_drift_ppm", "clock_drift_ci95_ppm", "sensor_model")
 
 
