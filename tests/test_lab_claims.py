@@ -450,30 +450,21 @@ def test_intervention_finding_mean_se_and_interval():
 
 
 @pytest.mark.parametrize("which", [0, 1])
-@pytest.mark.parametrize("half_width, ok", [(0.1 - 1e-6, True), (0.1 + 1e-6, False)])
-def test_the_pitch_share_must_be_resolved_to_a_tenth_of_a_degree(which, half_width, ok):
+@pytest.mark.parametrize("frame, ok, words", [
+    ({"half_width": 0.1 - 1e-6}, True, ""),           # the share resolved to a tenth of a degree, just inside
+    ({"half_width": 0.1 + 1e-6}, False, "resolved to [+]-0.1 deg"),
+    ({"mean": -0.25 * 1.9 + 1e-6}, True, ""),         # the share below a quarter of |pitch bias|, just inside
+    ({"mean": -0.25 * 1.9 - 1e-6}, False, "less than a quarter"),
+])
+def test_the_pitch_share_must_be_resolved_and_stay_below_a_quarter(which, frame, ok, words):
     inputs = lab_claims_inputs()
     frames = list(inputs["pitch_cal"])
-    frames[which] = pitch_frame(frames[which].index, half_width=half_width)
+    frames[which] = pitch_frame(frames[which].index, **frame)
     inputs["pitch_cal"] = tuple(frames)
     if ok:
         assert len(lab_claims(**inputs)) == 10
     else:
-        with pytest.raises(ValueError, match="^claim 'table2_measures_calibration'.*resolved to [+]-0.1 deg"):
-            lab_claims(**inputs)
-
-
-@pytest.mark.parametrize("which", [0, 1])
-@pytest.mark.parametrize("mean, ok", [(-0.25 * 1.9 + 1e-6, True), (-0.25 * 1.9 - 1e-6, False)])
-def test_the_pitch_share_must_stay_below_a_quarter(which, mean, ok):
-    inputs = lab_claims_inputs()
-    frames = list(inputs["pitch_cal"])
-    frames[which] = pitch_frame(frames[which].index, mean=mean)
-    inputs["pitch_cal"] = tuple(frames)
-    if ok:
-        assert len(lab_claims(**inputs)) == 10
-    else:
-        with pytest.raises(ValueError, match="^claim 'table2_measures_calibration'.*less than a quarter"):
+        with pytest.raises(ValueError, match=f"^claim 'table2_measures_calibration'.*{words}"):
             lab_claims(**inputs)
 
 
