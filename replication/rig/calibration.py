@@ -411,7 +411,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the interval
     from . import segments as seg_mod
     As, Bs, ts, bs = _analysis_pairs(camera, oriented, used, gyro is not None, A, B, t_start, interval, stride, block)
-    segs, segs_note = seg_mod.run(As, Bs, ts, bs, float(camera.t[0])) if len(As) else (None, "not run: no pairs")
+    segs, segs_note = seg_mod.run(As, Bs, ts, bs) if len(As) else (None, "not run: no pairs")
     if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
         part = seg_mod.consistent_mask(segs, ts, seg_mod.ANALYSIS_INTERVAL_S)
         As, Bs, ts = As[part], Bs[part], ts[part]

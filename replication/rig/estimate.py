@@ -212,7 +212,8 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
 
     Returns the replicates' answers ``R_boot``; with ``masks`` ``(R_boot, failed, reflection, unfit)``, with the
     masks of the solver's declared failures (NaN blocks), reflections and answers that are no solutions, which never
-    enter a radius (without ``masks`` any of them raises). Raises :class:`~replication.core.solvers.SolverAnswerError`
+    enter a radius (without ``masks`` any of them raises); with ``masks="reason"`` ``(R_boot, reason)``, the ``fail``
+    reason naming the solver, or None. Raises :class:`~replication.core.solvers.SolverAnswerError`
     (a ``ValueError`` naming the solver) where an answer is neither a rotation nor a NaN block (e.g. ``2 R``)."""
     out = []
     with warnings.catch_warnings():
@@ -241,10 +242,12 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
         fit_to = None if full_failed or full_reflection else full
     unfit, fit = (np.zeros(len(R_boot), dtype=bool), None) if fit_to is None else unfit_replicates(
         motions, R_boot, index_sets, fit_to, skip=failed | reflection)
-    if masks:
-        return R_boot, failed, reflection, unfit
     bad = _bad_replicates(method, failed, reflection, unfit, fit,
                           frozen=fit is not None and _frozen(R_boot, fit_to, failed | reflection, fit))
+    if masks == "reason":  # solve_pairs: the masks and the reason, the replicates' fit measured once
+        return R_boot, bad
+    if masks:
+        return R_boot, failed, reflection, unfit
     if bad is not None:
         raise SolverAnswerError(bad.message)
     return R_boot
@@ -361,16 +364,13 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     if n_bootstrap and units >= 3:
         try:
             sets = index_sets()
-            R_boot, failed, reflection, unfit = bootstrap_replicates(motions, method, options, sets,
-                                                                     progress=progress, masks=True, fit_to=R)
+            R_boot, bad_replicates = bootstrap_replicates(motions, method, options, sets, progress=progress,
+                                                          masks="reason", fit_to=R)
         except SolverAnswerError:  # the solver broke its contract: the registry's error, naming it
             raise
         except ValueError as err:  # a resample of few pairs can be degenerate: no radius, and say why
             boot_failed = str(err).split(":")[0]
         else:
-            fit = unfit_replicates(motions, R_boot, sets, R, skip=failed | reflection)[1]
-            bad_replicates = _bad_replicates(method, failed, reflection, unfit, fit,
-                                             frozen=_frozen(R_boot, R, failed | reflection, fit))
             if bad_replicates is None:  # never a radius from non-rotations
                 ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
                 boot = np.degrees(log_map(R_boot @ R.T))

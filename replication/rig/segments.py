@@ -310,7 +310,7 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
                        interval_s=None if interval is None else float(interval))
 
 
-def run(A, B, t, block: int, t0: float, interval: float = ANALYSIS_INTERVAL_S):
+def run(A, B, t, block: int, interval: float = ANALYSIS_INTERVAL_S):
     """:func:`segment_test` for ``calibrate``: ``(test, None)``, or ``(None, why)`` where it cannot run (too short a
     recording, a segment whose motions are about one axis)."""
     try:

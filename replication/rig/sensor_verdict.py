@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
+from .sensor_model import _Z95, BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
 
@@ -156,7 +156,7 @@ def _offsets_disagree(model, result, interval):
     if not model.fit_ratio <= MAX_FIT_RATIO or not result.time_offset_applied or model.covariance is None:
         return None
     gap = abs(model.offset_mid_s - result.time_offset_s)
-    noise = 1.959963984540054 * math.sqrt(max(model.covariance[6, 6], 0.0))
+    noise = _Z95 * math.sqrt(max(model.covariance[6, 6], 0.0))
     bound = SENSOR_THRESHOLDS["offset_disagreement_share"][0]
     if gap <= noise or gap / interval <= bound:
         return None

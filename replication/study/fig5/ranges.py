@@ -17,7 +17,7 @@ import pandas as pd
 from ...core.so3 import angle_between_deg, frobenius_error
 from ...core.solvers import ReplicationWarning, chordal_optimal, sqp, two_step
 from ..simulation import noise_bound_for_angle_deg, simulate
-from .sweep import AT_MINIMUM_DEG, resilience
+from .sweep import AT_MINIMUM_DEG, _interval, resilience
 
 __all__ = ["CONVERGED", "range_sweep", "range_table"]
 
@@ -86,13 +86,10 @@ def range_sweep(levels, n_runs: int, seed: int, rng: np.random.Generator, *, ran
 def range_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float = 1.0) -> pd.DataFrame:
     """One text row per (motions, two-step): SQP's runs off the minimum, the two-step / SQP error ratio at ``low``
     and the growth ratio, each ``"r [low, high]"`` (95 % bootstrap), or ``"-"`` where SQP left the minimum."""
-    def interval(v, lo, hi):
-        return "-" if pd.isna(v) else f"{v:.2f} [{lo:.2f}, {hi:.2f}]"
-
     at_low = per_level.xs(low, level=-1)
     out = pd.DataFrame({
         "SQP runs off the minimum": growth["sqp_failed_share"].map(lambda p: f"{100 * p:.0f} %"),
         f"two-step / SQP at {low:g} deg": at_low.apply(
-            lambda r: interval(r["ratio"], r["ratio_low"], r["ratio_high"]), axis=1),
-        "growth ratio": growth.apply(lambda r: interval(r["ratio"], r["low"], r["high"]), axis=1)})
+            lambda r: _interval(r["ratio"], r["ratio_low"], r["ratio_high"]), axis=1),
+        "growth ratio": growth.apply(lambda r: _interval(r["ratio"], r["low"], r["high"]), axis=1)})
     return out.loc[growth.index]
