@@ -253,9 +253,9 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
 def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
     """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
     cert = global_certificate(motions) if cert is None else cert
-    K, J = motions.K, motions.J
+    J = motions.J
     x = vec(R)
-    g = np.einsum("...a,...ab,...b->...", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
+    g = np.einsum("...a,...ab,...b->...", x, motions.sym, x)
     # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J * 3
     gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
     return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
@@ -280,8 +280,7 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
     off = above & (angle > WRONG_POINT_DEG)  # another stationary point
     short = ~off & (angle > LOCAL_ANGLE_TOL_DEG)  # in the right basin, not at its bottom
     if np.any(off):
-        K = motions.K
-        grad = _derivatives(0.5 * (K + np.swapaxes(K, -1, -2)), np.asarray(R, dtype=float))[1]
+        grad = _derivatives(motions.sym, np.asarray(R, dtype=float))[1]
         moving = 2.0 * np.linalg.norm(grad, axis=-1) > STATIONARY_TOL  # |grad (8)| / J: not a stationary point
         parts = []
         if np.any(off & moving):
@@ -352,9 +351,8 @@ def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: s
     flat, usable = R.reshape(-1, 3, 3), usable.reshape(-1)
     safe = np.where(usable[:, None, None], flat, np.eye(3))
     flagged = np.zeros(len(flat), dtype=bool)
-    K = motions.K.reshape(-1, 9, 9)
     x = vec(safe)
-    g = np.einsum("na,nab,nb->n", x, 0.5 * (K + np.swapaxes(K, -1, -2)), x)
+    g = np.einsum("na,nab,nb->n", x, motions.sym.reshape(-1, 9, 9), x)
     cost = 2.0 * J * (3.0 - g)
     lower = 6.0 * J * np.maximum(1.0 - motions.sym_eigvals[..., 0].reshape(-1), 0.0)  # relaxation bound on f*
     screen = usable & (cost > GROSS_FACTOR * lower + LOCAL_ATOL * J)
