@@ -72,14 +72,19 @@ def _chi2_3(level: float) -> float:
     return 3.0 * (1.0 - 2.0 / 27.0 + _normal_quantile(level) * math.sqrt(2.0 / 27.0)) ** 3
 
 
+def _misfit_vectors(R, A, B) -> np.ndarray:
+    """Each pair's misfit of ``R`` as the axial vector of ``E = R^T A R B^T`` (times ``2 sin`` of its angle), (J, 3)."""
+    E = np.swapaxes(R, -1, -2) @ A @ R @ np.swapaxes(B, -1, -2)
+    return np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+
+
 def misfit_test(R, cov, s2, A, B) -> tuple[float, float]:
     """The pairs ``(A, B)`` solved on their own by one Gauss-Newton step from ``R`` (as
     :func:`replication.rig.online_events.drift_test`): ``(statistic, angle_deg)``, the statistic ``w^T (C_w +
     cov)^{-1} w`` (``C_w = (s^2 / 3) G_w^{-1}``, ``s^2`` the estimate's mean square residual ``s2``, ``cov`` its
     covariance or None), ``angle_deg = |w|`` in degrees; ``(0, nan)`` where the pairs do not determine a rotation
     (``G_w`` singular)."""
-    E = np.swapaxes(R, -1, -2) @ A @ R @ np.swapaxes(B, -1, -2)
-    r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+    r = _misfit_vectors(R, A, B)
     SB = B.sum(axis=0)
     H = 2.0 * len(A) * _EYE - SB - SB.T
     g = 0.5 * (r.sum(axis=0) - np.einsum("jba,jb->a", B, r))
@@ -226,8 +231,7 @@ class MisfitGuard:
         if len(stale):
             at = ((stale * every)[:, None] + np.arange(every)).ravel()  # ring slots of those blocks' pairs
             A, B = self._ring[at, 0], self._ring[at, 1]
-            E = R.T @ A @ R @ np.swapaxes(B, -1, -2)
-            r = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
+            r = _misfit_vectors(R, A, B)
             shares = 0.5 * (r - np.einsum("jba,jb->ja", B, r))
             self._block_g[stale] = shares.reshape(len(stale), every, 3).sum(axis=1)
             self._block_version[stale] = self._version
