@@ -194,6 +194,12 @@ def _mean(R, W, start, iterations: int = 20):
     return Rb, np.linalg.inv(H)
 
 
+def _against(Ri, Ci, Rr, Cr) -> tuple[float, float]:
+    """A segment against the others' mean ``Rr``, covariance ``Cr``: ``d^T (C_i + C_r)^{-1} d / 3`` and the angle."""
+    di = log_map(Rr.T @ Ri)
+    return float(di @ np.linalg.solve(Ci + Cr, di)) / 3.0, float(angle_between_deg(Ri, Rr))
+
+
 def _homogeneity(R, C, nu):
     """Over the segments ``R``, ``C``: the mean, ``Q / dof``, each segment's leave-one-out statistic and angle."""
     S = len(R)
@@ -203,12 +209,8 @@ def _homogeneity(R, C, nu):
     dof = 3 * (S - 1)
     F = float(np.einsum("ia,iab,ib->", d, W, d)) / dof
     z, ang = np.empty(S), np.empty(S)
-    for i in range(S):
-        rest = np.arange(S) != i
-        Rr, Cr = _mean(R[rest], W[rest], Rb, iterations=5)
-        di = log_map(Rr.T @ R[i])
-        z[i] = float(di @ np.linalg.solve(C[i] + Cr, di)) / 3.0
-        ang[i] = float(angle_between_deg(R[i], Rr))
+    for i, rest in enumerate(np.arange(S) != np.arange(S)[:, None]):
+        z[i], ang[i] = _against(R[i], C[i], *_mean(R[rest], W[rest], Rb, iterations=5))
     p_i = _st.f.sf(z, 3, nu)
     return Rb, Cb, d, F, dof, z, p_i, ang
 
@@ -293,9 +295,7 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
         W_all = np.linalg.inv(C)
         Rk, Ck = _mean(R[keep], W_all[keep], R[np.flatnonzero(keep)[0]])
         for i in np.flatnonzero(~keep):
-            di = log_map(Rk.T @ R[i])
-            z[i] = float(di @ np.linalg.solve(C[i] + Ck, di)) / 3.0
-            ang[i] = float(angle_between_deg(R[i], Rk))
+            z[i], ang[i] = _against(R[i], C[i], Rk, Ck)
         p_i = _st.f.sf(z, 3, nu)
         disagree = ~keep
     between = radius_deg(max(1.0, F) * Cb, 0.95)  # the pairs' radius scaled by the segments' excess scatter
