@@ -1,17 +1,5 @@
-"""Time association of two streams: the clock offset between them and the motion pairs they share.
-
-* :func:`estimate_time_offset`: the offset ``d`` (a sensor sample at ``t + d`` matches the camera at ``t``)
-  that maximises the correlation of the two streams' angular speeds, refined below the search grid;
-* :func:`offset_analysis`: the same offset with a 95 % block-bootstrap interval and the margin of its
-  correlation peak over the next one (:class:`OffsetEstimate`); :func:`offset_in_words` states its sign;
-* :func:`motion_pairs`: for every camera time ``t_i`` the camera time ``t_j`` closest to ``t_i + interval``;
-  ``A = Qc_j^T Qc_i``, ``B = Qs(t_j)^T Qs(t_i)`` with ``Qs`` slerp-interpolated (eqs. (3)-(4) with
-  ``C = Q^T``; :func:`replication.core.handeye.relative_rotations`);
-* :func:`stream_pairs`: both, after integrating a gyro stream.
-
-Data model in :mod:`replication.rig.streams`, file I/O in :mod:`replication.rig.realdata`, the solve in
-:mod:`replication.rig.calibration` (the layout of evo). Conventions: ``docs/conventions.md``.
-"""
+"""Time association of two streams: the clock offset between them and the motion pairs they share. Theory and measured
+numbers: ``docs/reading.md``, section ``replication.rig.association``."""
 from __future__ import annotations
 
 import math

@@ -1,29 +1,5 @@
-"""Calibrate a real rig: ``R0`` from a camera orientation stream and a sensor stream.
-
-:func:`calibrate` turns two timestamped streams into motion pairs and solves
-``A_j R0 = R0 B_j`` (the paper's eq. (7)) with any registered solver:
-
-1. the sensor stream becomes an orientation stream (raw gyro samples are integrated,
-   trapezoidal rate, body frame: ``Q(t + dt) = Q(t) exp([omega] dt)``);
-2. the clock offset between the streams is estimated by cross-correlating their
-   angular speeds, refined below the search grid, with a 95 % block-bootstrap interval and the margin of its
-   correlation peak over any other (:func:`replication.rig.association.offset_analysis`), reported (and by default
-   removed);
-3. pairs at ``interval`` seconds (steps 2-3: :mod:`replication.rig.association`);
-4. the solver, the residual of every pair, the observability diagnostic, and a
-   moving-block bootstrap over the pairs (overlapping pairs are correlated, so
-   blocks span ``interval``) for a confidence radius in degrees;
-5. a change test (:mod:`replication.rig.changepoint`: do the pairs before and after some time agree on the same
-   ``R0``? a re-mount during the recording fails the verdict, naming the time and both estimates);
-6. a verdict (:mod:`replication.rig.quality`: ``ok`` / ``warning`` / ``fail`` with every reason
-   measured) and, where it is not ``ok``, a search for the usual input mistakes by name
-   (:mod:`replication.rig.diagnose`). Pairs whose interval crosses a gap in a stream are dropped.
-
-Every parameter is checked before any work, with its name in the message.
-
-Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
-``docs/conventions.md``.
-"""
+"""Calibrate a real rig: ``R0`` from a camera orientation stream and a sensor stream. Theory and measured numbers:
+``docs/judging.md``, section ``replication.rig.calibration``."""
 from __future__ import annotations
 
 import dataclasses

@@ -1,15 +1,5 @@
-"""Reading text data files, and the one error every loader raises about them.
-
-Every loader of this package (:mod:`replication.rig.realdata`, :mod:`replication.study.lab.recording`,
-:mod:`replication.study.paper`) opens its files with :func:`read_text` or :func:`read_lines`
-and reports a problem in a file with :func:`fail`, so all of them raise
-:class:`DataFileError`: a ``ValueError`` that carries the file, the line and the column
-of the problem and prints them on one line, e.g.
-``data/t.txt, line 12, column 8 ('qw'): not a number: 'x'``.
-
-A missing file (or a directory where a file is expected) raises :class:`DataFileNotFound`,
-which is also a ``FileNotFoundError``, as the loaders raised before.
-"""
+"""Reading text data files, and the one error every loader raises about them. Theory and measured numbers:
+``docs/reading.md``, section ``replication.rig.datafile``."""
 from __future__ import annotations
 
 import codecs

@@ -1,31 +1,5 @@
-"""Name the usual input mistakes of a calibration where the data show them.
-
-When a calibration's verdict is not ``ok``, :func:`input_mistakes` re-reads the inputs under each usual mistake
-undone and calibrates again (quickly: the certified minimiser, no bootstrap):
-
-* quaternion component order: a file's ``(w, x, y, z)`` read as ``(x, y, z, w)``, or the reverse, for the camera
-  stream and for an orientation sensor stream;
-* pose direction: ``camera_from_world`` (or ``sensor_from_world``) written where ``world_from_body`` belongs;
-* gyro units: rates in deg/s read as rad/s.
-
-A hypothesis *fits* when, with it undone, the median pair residual falls below :data:`FIT_SHARE` of the
-calibration's and below :data:`FIT_TO_MOTION` of the median motion (what a correct ``R0`` leaves, see
-:mod:`replication.rig.quality`). Hypotheses that fit within :data:`TIE_SHARE` of the best one cannot be told apart by
-the data (some mistakes change every motion the same way up to one fixed rotation, which ``R0`` absorbs; undoing
-either side's inversion of a static pose set gives the same residual): they are named together as one finding, in
-the fixed order of :data:`HYPOTHESES` (never in an order set by last-bit differences of their residuals). A reference
-rotation, when given, can tell them apart: the hypotheses whose estimate is within the reference check's ``fail``
-bound of it are then the ones named. Time-unit mistakes show before any calibration, in the streams' spans
-(:func:`replication.rig.calibration.calibrate` names them when refusing streams that do not overlap).
-
-With a reference that the estimate disagrees with beyond the reference check's ``fail`` bound,
-:func:`reference_mistakes` names two mistakes that no re-run shows, since the data fit: the camera file holding the
-IMU's own trajectory (a VIO output or the IMU's ground truth: ``R0`` within :data:`IMU_AS_CAMERA_DEG` of the
-identity, the reference far from it), and the two files swapped (``R0`` near the reference's inverse).
-
-The calibration to re-run is passed in (``calibrate=`` / ``calibrate_poses=``), so this module does not import
-:mod:`replication.rig.calibration`, which calls it.
-"""
+"""Name the usual input mistakes of a calibration where the data show them. Theory and measured numbers:
+``docs/judging.md``, section ``replication.rig.diagnose``."""
 from __future__ import annotations
 
 import warnings

@@ -1,21 +1,5 @@
-"""Loaders for real camera / IMU / robot recordings and their published reference rotations.
-
-The recordings live outside the project (they are not ours to redistribute); their folder
-is found by :func:`data_root`: an explicit argument, else ``$REPLICATION_REAL_DATA``, else
-``../shared/data/real`` next to the project. Each folder's ``README.txt`` gives provenance,
-formats and frames.
-
-Every loader converts its format to the package's conventions (``docs/conventions.md``): an
-:class:`~replication.rig.streams.OrientationStream` of ``world_from_body`` rotations at times in
-seconds, a :class:`~replication.rig.streams.GyroStream` in rad/s (both re-exported here), every
-reference rotation as ``camera_from_sensor`` (the paper's ``R0``). Stored quaternions must have
-a norm within :data:`replication.rig.datafile.QUATERNION_NORM_TOL` of 1 and are normalised.
-
-Malformed files raise :class:`~replication.rig.datafile.DataFileError` (a ``ValueError``)
-naming the file, the line and column where known, and the problem; a missing file raises
-:class:`~replication.rig.datafile.DataFileNotFound` (also a ``FileNotFoundError``). Nothing is
-written anywhere by a loader.
-"""
+"""Loaders for real camera / IMU / robot recordings and their published reference rotations. Theory and measured
+numbers: ``docs/reading.md``, section ``replication.rig.realdata``."""
 from __future__ import annotations
 
 import os

@@ -1,16 +1,5 @@
-"""Timestamped rotation streams: orientations, gyroscope rates, and gyro integration.
-
-* An :class:`OrientationStream` holds ``world_from_body`` rotations (a SLAM / mocap
-  trajectory's quaternions rotate body vectors into the world) at times in seconds;
-  :meth:`OrientationStream.at` slerp-interpolates them. In the paper's notation the
-  body-from-world attitude is ``C_t = Q_t^T``.
-* A :class:`GyroStream` holds angular velocity in rad/s, in the body (IMU) frame.
-* :func:`integrate_gyro` turns a :class:`GyroStream` into an :class:`OrientationStream`.
-
-This module needs only NumPy, :mod:`replication.core.so3` and (when interpolating)
-``scipy.spatial.transform``: no solver, no optimiser. :mod:`replication.rig.realdata` and
-:mod:`replication.rig.calibration` re-export its names.
-"""
+"""Timestamped rotation streams: orientations, gyroscope rates, and gyro integration. Theory and measured numbers:
+``docs/reading.md``, section ``replication.rig.streams``."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field

@@ -1,25 +1,5 @@
-"""Camera-IMU calibration files of the VIO ecosystem: read ``R0`` and the clock offset, change them in a copy.
-
-Each format stores the camera-IMU rotation in its own direction and the clock offset under its own name and sign;
-the conventions below, and the source line each comes from, are in ``docs/conventions.md`` ("Other tools' files").
-``R0 = camera_from_sensor`` (``v_cam = R0 v_imu``) and ``d`` is this package's clock offset (the IMU sample stamped
-``t + d`` matches the camera sample stamped ``t``: ``t_imu = t_cam + d``).
-
-========  =================================================  ==========================  ==========================
-format    file and entry                                     rotation stored             clock offset field
-========  =================================================  ==========================  ==========================
-kalibr    camchain(-imucam) YAML, ``<cam>.T_cam_imu``        ``R0``                      ``timeshift_cam_imu`` = d
-openvins  ``kalibr_imucam_chain.yaml`` (``%YAML:1.0``)       ``T_imu_cam``: ``R0ᵀ``;     ``timeshift_cam_imu`` = d
-                                                             ``T_cam_imu``: ``R0``
-basalt    calibration JSON, ``value0.T_imu_cam[i]``          ``R0ᵀ`` (quaternion xyzw)   ``cam_time_offset_ns`` = d
-orbslam3  settings YAML (``%YAML:1.0``), ``IMU.T_b_c1``      ``R0ᵀ`` (body = IMU)        none
-euroc     ``sensor.yaml`` ``T_BS`` (read only)               ``R0ᵀ``                     none
-========  =================================================  ==========================  ==========================
-
-A file is edited in its text: the nine numbers of the rotation (and the offset's one) are replaced where they stand,
-so comments, the ``%YAML:1.0`` header, the translation, the intrinsics and every other field stay byte for byte. The
-spans come from PyYAML's node marks (JSON is parsed as YAML for them, and by :mod:`json` for the values).
-"""
+"""Camera-IMU calibration files of the VIO ecosystem: read ``R0`` and the clock offset, change them in a copy. Theory
+and measured numbers: ``docs/reading.md``, section ``replication.rig.vioformats``."""
 from __future__ import annotations
 
 import json
