@@ -5,7 +5,7 @@ Prints a table (absolute figures and the ratio to one bare ``cv2.calibrateHandEy
 measured in the same run); nothing is asserted (figures go to environment.md). Each figure is the best of a
 few repeats, through ``solve()`` with default options (validation, observability diagnostics, the two-step
 method run to its limit, the global certificate of ``chordal_optimal``, SQP's check against it).
-Targets (issue 11), batched vs the bare cv2 call: closed forms >= 20x, ``chordal_optimal`` with its global
+Targets, batched vs the bare cv2 call: closed forms >= 20x, ``chordal_optimal`` with its global
 certificate >= 4x, ``two_step`` (auto) >= 4x.
 """
 import argparse

@@ -1,7 +1,7 @@
 """Wall time of ``replication.calibrate`` on the full TUM-VI room1 recording (raw gyro), bootstrap included.
 
 Usage: python benchmarks/bench_calibrate.py [--data PATH] [--bootstrap 200]
-Issue 6's target: <= 2 s per calibration on the 2-core machine (loading the files not counted; printed apart).
+Target: <= 2 s per calibration on the 2-core machine (loading the files not counted; printed apart).
 Nothing is asserted; the figures go to environment.md.
 """
 import argparse

@@ -1,4 +1,4 @@
-"""A camera frame that wanders (issue 33, point 4): events, restarts and ``ready`` of the online estimator.
+"""A camera frame that wanders: events, restarts and ``ready`` of the online estimator.
 
 A live replay (:func:`replication.rig.live.replay`, 1 s pairs) of a synthetic 600 s rig whose camera_from_sensor turns
 by 2 deg about a fixed axis, uniformly over the recording, at three noise levels (camera / gyro 0.05 deg / 0.05 deg/s,

@@ -1,4 +1,4 @@
-"""The batched small-matrix kernels (issue 26): each kernel against the LAPACK call it replaces, every solver against
+"""The batched small-matrix kernels: each kernel against the LAPACK call it replaces, every solver against
 one ``cv2.calibrateHandEye`` call before and after, the paper's 1000 x 50 history, and where the time goes.
 
 Usage: python benchmarks/bench_kernels.py [--reps 7] [--runs 2000] [--single-calls 50] [--parts kernels solvers ...]
@@ -7,7 +7,7 @@ Usage: python benchmarks/bench_kernels.py [--reps 7] [--runs 2000] [--single-cal
 "Before" is the same code inside :func:`replication.core.kernels.lapack_reference` (one LAPACK call per matrix, as
 before the kernels); "after" the default. Every figure is the median over ``--reps`` interleaved repetitions (before,
 after, the cv2 call, in turn), with the range (min-max) beside it; ratios are taken within a repetition. Nothing is
-asserted (figures go to environment.md). Targets (issue 26): each kernel >= 10x the LAPACK call on the same batch;
+asserted (figures go to environment.md). Targets: each kernel >= 10x the LAPACK call on the same batch;
 closed forms >= 40x one cv2 call batched; chordal_optimal (certified) >= 30x; two_step (auto) >= 15x; the 1000 x 50
 history <= 0.1 cv2 calls per problem.
 """

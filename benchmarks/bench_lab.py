@@ -1,4 +1,4 @@
-"""Simulated lab (issue 4): time to generate the recordings, load them, run the chain, and
+"""Simulated lab: time to generate the recordings, load them, run the chain, and
 re-execute notebook 05 end to end (target: generation + notebook <= 2 min on 2 cores).
 
 Run: python benchmarks/bench_lab.py

@@ -1,12 +1,12 @@
 """How long the online estimator stays ``ready`` while wrong after a re-mount, and how often it withdraws ``ready``
-without any change (issue 33, point 3).
+without any change.
 
 Wrong means farther from the current mounting than the target (0.5 deg). Re-mounts of 0.5, 1 and 2 deg about a random
 axis, at two noise levels, over ``--runs`` seeded runs each, seeds ``[SEED, set-up, noise index, step index, run]``
 for runs ``--first`` .. ``--first + --runs - 1`` (tune on one range, confirm on a disjoint one):
 
 * pairs: 600 independent pairs of :func:`replication.study.live_study.pair_stream` (pair residual RMS 0.3 or 1 deg,
-  motions of 5-60 deg), then 1200 after the re-mount (the red-team case's 1800); counted in pairs;
+  motions of 5-60 deg), then 1200 after the re-mount (a case of 1800 was reported); counted in pairs;
 * seconds (``--live``): a live replay (:func:`replication.rig.live.replay`, 1 s pairs, camera 20 Hz, gyro 200 Hz) of
   a 150 s synthetic rig re-mounted at 70 s (camera / gyro noise 0.3 deg / 0.3 deg/s or 1 deg / 1 deg/s); counted in
   seconds (the pairs' time spans while ready and wrong);

@@ -1,4 +1,4 @@
-"""A raw gyro's bias and the clock's drift estimated with R0 (issue 34, points 1 and 3's drift half).
+"""A raw gyro's bias and the clock's drift estimated with R0.
 
 Synthetic rigs (:func:`biased_rig`: the smooth three-axis motion of ``rig_streams``, 40 s, camera noise 0.05 deg,
 gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), over ``--runs`` seeded runs per set

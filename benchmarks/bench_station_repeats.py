@@ -1,4 +1,4 @@
-"""Coverage of the station radius on static pose sets whose stations repeat (issue 33, point 2): ``N`` distinct
+"""Coverage of the station radius on static pose sets whose stations repeat: ``N`` distinct
 stations each given ``r`` times, either identical copies or re-measured with fresh noise, the share of runs whose
 error is within the stated 95 % radius with its Wilson 95 % interval; runs without a radius (a resample refused:
 the verdict says so) are counted apart. ``--old`` counts every station as distinct (the bootstrap before the

@@ -232,7 +232,7 @@ def _speeds(camera, sensor, offset, lo, hi):
 
 
 #: The change test's splits leave at least this share of the pairs (and 5 blocks) on each side. 0.15 missed
-#: re-mounts in the last 8 % of a recording (red team: ok, 4.6 deg off); 0.05 found a 2 or 5 deg re-mount at 92 %
+#: re-mounts in the last 8 % of a recording (a verdict ok 4.6 deg off); 0.05 found a 2 or 5 deg re-mount at 92 %
 #: of 60 s rigs in 20/20 each (0.15: 8/20 and 4/20); false alarms on rigs without a change 1 of 320 (0.15: 2 of
 #: 320), two disjoint sets of 160 seeds (benchmarks/bench_change_ends.py).
 CHANGE_MIN_SHARE = 0.05

@@ -1,4 +1,4 @@
-"""The growth ratio over motion ranges, and a two-step method that stops short (notebook 04, section 4; issue 36).
+"""The growth ratio over motion ranges, and a two-step method that stops short (notebook 04, section 4).
 
 Where both methods converge (SQP from the identity at the certified minimum of (8), the two-step iteration run to
 its limit), how much faster the two-step error grows with the sensor noise depends on the motions: the ledger's

@@ -201,7 +201,7 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
     return pd.DataFrame(rows).set_index("seed")
 
 
-#: The share (deg of |pitch bias|) the magnetometer intervention must resolve (issue 36): its 95 % interval on each
+#: The share (deg of |pitch bias|) the magnetometer intervention must resolve: its 95 % interval on each
 #: set of seeds must be narrower than this on either side of its mean, or no verdict is drawn from it.
 RESOLVE_DEG = 0.1
 

@@ -4,7 +4,7 @@
 errors (its three printed decimals taken as a bound), convergence measures with bootstrap intervals.
 :mod:`.grid`: the grid over the unstated settings (section 2). :mod:`.study`: the notebook's other studies, section
 by section. :mod:`.claims` and :mod:`.cell_claims`: the ledger records of its section 5. :mod:`.minimum`: SQP's
-failures at the paper's and SLSQP's default caps, the two-step iterates against the certified minimum (issue 36).
+failures at the paper's and SLSQP's default caps, the two-step iterates against the certified minimum.
 SQP appears once per named variant (:data:`replication.core.solvers.SQP_VARIANTS`), as columns
 ``"optimization (analytic)"`` etc.; each is compared with the paper's single "Optimization" column.
 Table II sits beside it in :mod:`replication.study.table2`.

@@ -1,4 +1,4 @@
-"""Two measurements of notebook 03 added in the third referee round (issue 36), on seeds no earlier study used.
+"""Two measurements of notebook 03 on seeds no other study uses.
 
 * :func:`sqp_cap_shares`: SQP (analytic, eq. (8) as printed) from the far start with SLSQP's default cap of 100
   iterations as well as the paper's 50: one run to the larger cap, read at each (SLSQP's path does not depend on its
