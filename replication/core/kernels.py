@@ -1,32 +1,5 @@
-"""Batched small-matrix kernels: elementwise NumPy over the batch instead of one LAPACK call per 3x3 matrix.
-
-``numpy.linalg`` runs one LAPACK call per matrix of a batch (about 5 us for a 3x3 SVD): on the paper's
-1000 x 50 protocol that, not the arithmetic, is where the time goes. The kernels here treat each of the nine
-entries of a batch of 3x3 matrices as one contiguous array and do the arithmetic on those arrays:
-
-* :func:`polar_factor`: the nearest orthogonal matrix / rotation (eqs. (16)-(17)), by the scaled Newton iteration
-  ``X <- (zeta X + X^{-T} / zeta) / 2`` (N. J. Higham, "Computing the polar decomposition -- with applications",
-  SIAM J. Sci. Stat. Comput. 7(4), 1986), the inverse transpose from the cofactors;
-* :func:`eigvalsh3`: eigenvalues of symmetric 3x3 matrices in closed form (the trigonometric solution of the
-  characteristic cubic, O. K. Smith, Comm. ACM 4(4), 1961); :func:`top_eigenvector3` the eigenvector of the largest
-  one (a cross product of two rows of ``S - lambda I``);
-* :func:`solve3`: 3x3 linear systems by the cofactors (Cramer's rule);
-* :func:`bottom_eigenvector4`: the eigenvector of the smallest eigenvalue of a symmetric positive semidefinite 4x4
-  matrix (Horaud & Dornaika's quaternion), by power steps with the adjugate, checked by its residual against the
-  gap to the other three eigenvalues;
-* :func:`rotation_violation`: the rotation test of :func:`~replication.core.checks.check_rotation_matrices` in one
-  fused pass (orthonormality, determinant, finiteness).
-
-Each kernel agrees with the LAPACK path to 1e-12 where it is used (``tests/test_kernels.py``: random,
-near-rotation, rank-deficient, repeated-singular-value and reflection inputs). Where a closed form is not safe --
-a matrix far from full rank (``2 |det M| / ||M||_F^3`` below :data:`POLAR_SAFE`), a reflection asked to become the
-nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly conditioned system -- those entries
-alone go to LAPACK, so the answer is LAPACK's there. Batches smaller than :data:`MIN_BATCH` (:data:`MIN_BATCH_LARGE`
-for :func:`solve3` and :func:`bottom_eigenvector4`) go to LAPACK as a whole: its per-call cost is then below the
-kernels' fixed Python cost. :func:`lapack_reference` switches every kernel to the LAPACK path (the "before" of
-``benchmarks/bench_kernels.py``). The 9x9 decompositions (one ``eigh`` of ``K^T K``, one of ``sym(K)``, the
-certificate's ``eigvalsh``) stay with LAPACK (environment.md, issues 26 and 38, says why).
-"""
+"""Batched small-matrix kernels: elementwise NumPy over the batch instead of one LAPACK call per 3x3 matrix. Theory and
+measured numbers: ``docs/methods.md``, section ``replication.core.kernels``."""
 from __future__ import annotations
 
 import contextlib

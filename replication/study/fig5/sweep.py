@@ -1,26 +1,5 @@
-"""The noise sweep of Fig. 5: both methods' errors per sensor-noise level, over a grid of settings.
-
-The paper (Sec. III-A): with the noise on ``Delta R_i`` rising from 1 to 10 deg (1 deg on ``Delta R_c``), the
-two-step error grows "much slower than that of the traditional optimization method": it is "more resilient to
-the noise". Which SQP, which motions, which start and which noise distribution are not stated, so
-:func:`noise_sweep` takes each as a setting, and :func:`resilience` reduces a sweep to what the claim needs,
-with uncertainties:
-
-* per level, the two-step error (``R^r``) and SQP's, as means with standard errors;
-* SQP runs that do not end at the certified global minimiser of eq. (8) (from a far start SLSQP stops at its
-  iteration limit) are counted, not averaged as digits: where such a run stops depends on rounding;
-* the ratio two-step / SQP of the mean errors, with a paired bootstrap interval over problems, where SQP reached
-  the global minimum in every run of the level;
-* the growth ratio ``(two-step error at the top level - at the bottom) / (the same for SQP)``, with a bootstrap
-  interval (problems resampled per level, the two methods paired on the same problems): below 1 means the
-  two-step error grows more slowly, as the paper claims; and each method's change of its mean error, with its
-  interval (where SQP fails, its change over all runs: whether it grows at all).
-
-:func:`sweep_grid` runs the notebook's grid of settings (motions x start x noise distribution x SQP
-configuration), :func:`summary_table` and :func:`fig5_figure` show it. :func:`problem_sets` groups its rows by
-the problems they ran on (rows on one problem set where SQP ends at the same minimiser repeat one measurement);
-:func:`variants_of` and :func:`confirmation_table` run rows again on fresh seeds and compare.
-"""
+"""The noise sweep of Fig. 5: both methods' errors per sensor-noise level, over a grid of settings. Theory and measured
+numbers: ``docs/studies.md``, section ``replication.study.fig5.sweep``."""
 from __future__ import annotations
 
 import warnings

@@ -1,18 +1,5 @@
-"""The experiment's processing chain (Sec. III-B): attitudes from raw samples, motions, calibration, Table II.
-
-* camera: ``cv2.solvePnP`` on the (mean) marker pixels with the calibrated intrinsics gives
-  ``C_t = camera_from_wand`` (the role of the paper's ref. [38]);
-* sensor, static: accelerometer + magnetometer through ``ahrs.common.orientation.ecompass``;
-  dynamic: the Madgwick MARG filter (``ahrs.filters.Madgwick``), ``world_from_sensor``;
-* the seed studies' faster equivalents of these steps are in :mod:`replication.study.lab.fastchain`;
-* motions ``Delta R_c = C_k C_t^T``, ``Delta R_i = I_k I_t^T`` (eqs. (3)-(4),
-  :func:`replication.core.handeye.relative_rotations`), one solve per data set, and the dynamic trial
-  projected as ``R0 Delta R_i R0^T`` (Table II, :mod:`replication.study.table2`).
-
-The sensor's world is the local gravity / magnetic frame of ``ecompass`` and of the Madgwick
-filter; only relative rotations are used, so the camera's and the sensor's worlds need not be
-related. Frames and conventions: ``docs/conventions.md``.
-"""
+"""The experiment's processing chain (Sec. III-B): attitudes from raw samples, motions, calibration, Table II. Theory
+and measured numbers: ``docs/studies.md``, section ``replication.study.lab.chain``."""
 from __future__ import annotations
 
 import warnings

@@ -1,20 +1,5 @@
-"""What the lab records (:class:`LabRecording`), and the files it is stored in: writer and validating loader.
-
-The columns and units are named here once. A recording is a folder (schema: ``data/README.md``) with
-
-* ``rig.json`` -- calibrated camera intrinsics, wand geometry, sample rates, units;
-* ``static_imu.csv``, ``static_markers.csv`` -- the static data sets (columns ``set``,
-  ``pose``, ``t`` and the samples);
-* ``dynamic_imu.csv``, ``dynamic_markers.csv`` -- the dynamic trial (``t`` and samples);
-* ``truth.json`` (optional, simulation only) -- the true ``camera_from_sensor`` (a rotation: checked).
-
-:func:`load_lab` checks every file before returning and raises
-:class:`~replication.rig.datafile.DataFileError` (a ``ValueError``) naming the file, the line
-(the header is line 1) and the column of the first problem; a missing file raises
-:class:`~replication.rig.datafile.DataFileNotFound` (also a ``FileNotFoundError``). It never
-writes. :func:`write_lab` writes every file to a temporary name first and renames it, so an
-interrupted run leaves no half-written file. This module imports no solver.
-"""
+"""What the lab records (:class:`LabRecording`), and the files it is stored in: writer and validating loader. Theory
+and measured numbers: ``docs/studies.md``, section ``replication.study.lab.recording``."""
 from __future__ import annotations
 
 import io

@@ -1,19 +1,5 @@
-"""The simulated lab of Sec. III-B from first principles: camera, wand, IMU and the protocol.
-
-* **camera**: a pinhole camera with lens distortion looks at a wand of 9 markers at
-  known, non-coplanar 3-D positions; marker pixels come from ``cv2.projectPoints``
-  plus pixel noise;
-* **IMU**: accelerometer, gyroscope and magnetometer samples at 100 Hz with white
-  noise, bias, scale and axis misalignment of the size the parts' datasheets give
-  (ADXL330, ITG-3200, HMC5843; see :class:`~replication.study.lab.settings.LabSettings`);
-* **static protocol**: ``n_sets`` data sets of 10-20 static orientations facing the
-  wand, at least 5 s each; **dynamic trial**: slow rotations within a small volume.
-
-The wand frame ``W`` is the camera's world: x right, y up, z out of the wand towards the
-camera. Every random draw comes from a ``numpy.random.Generator`` seeded by
-``LabSettings.seed``; switching an error source off (:meth:`LabSettings.without`) keeps
-every other draw unchanged, so the ablation compares like with like.
-"""
+"""The simulated lab of Sec. III-B from first principles: camera, wand, IMU and the protocol. Theory and measured
+numbers: ``docs/studies.md``, section ``replication.study.lab.simulate``."""
 from __future__ import annotations
 
 import cv2
