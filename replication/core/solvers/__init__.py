@@ -29,7 +29,6 @@ from ._registry import (
     LOCAL_ATOL,
     LOCAL_RTOL,
     WEAK_GAP_FACTOR,
-    Solution,
     SolverAnswerError,
     SolverInfo,
     available,
@@ -55,6 +54,7 @@ from .limit import two_step_fixed_point
 from .msac import robust
 from .opencv import calibrate_hand_eye
 from .optimal import chordal_optimal
+from .result import Solution
 from .slsqp import SQP_VARIANTS, SQPResult, sqp
 
 __all__ = [

@@ -8,6 +8,7 @@ OpenCV's ``calibration_handeye.cpp``).
 from __future__ import annotations
 
 import functools
+import inspect
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,12 +17,13 @@ import numpy as np
 
 from ..checks import _first_index, det3
 from ..handeye import handeye_cost, vec
-from ..motions import MotionObservability, Motions, prepare_motions
+from ..motions import Motions, prepare_motions
 from ..so3 import angle_between_deg
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
 from .certificate import GAP_TOL, _derivatives, global_certificate
+from .result import Solution
 
-__all__ = ["SolverInfo", "Solution", "register", "available", "solver_info", "solve",
+__all__ = ["SolverInfo", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
            "ANSWER_ATOL", "check_answer", "warn_if_weak", "SolverAnswerError", "checked_core"]
 
@@ -102,41 +104,6 @@ class SolverInfo:
     equivariant: bool = True
 
 
-@dataclass(frozen=True)
-class Solution:
-    """What :func:`solve` returns with ``full_output=True``.
-
-    Attributes
-    ----------
-    R : ndarray, shape (..., 3, 3)
-        Estimate of ``R0`` (camera_from_sensor); NaN where the solver declared a failure.
-    method : str
-    cost : ndarray, shape (...)
-        Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2`` (NaN where ``R`` is NaN).
-    observability : MotionObservability
-        How well the motions determine ``R0`` (see
-        :class:`replication.core.motions.MotionObservability`).
-    lower_bound : ndarray, shape (...)
-        Certified lower bound on the minimum of eq. (8) over SO(3)
-        (:func:`replication.core.solvers.chordal_optimal`'s certificate).
-    duality_gap : ndarray, shape (...)
-        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8) over SO(3);
-        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection).
-    global_optimum : ndarray of bool, shape (...)
-        ``R`` is a rotation certified to be the global minimiser of eq. (8) (``duality_gap`` at most
-        ``GAP_TOL * J``); never for a NaN or a reflection. The paper's two-step method is not, once
-        there is noise: its fixed point is not the minimiser of its own cost.
-    """
-
-    R: np.ndarray
-    method: str
-    cost: np.ndarray
-    observability: MotionObservability
-    lower_bound: np.ndarray
-    duality_gap: np.ndarray
-    global_optimum: np.ndarray
-
-
 _REGISTRY: dict[str, SolverInfo] = {}
 
 
@@ -175,9 +142,21 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
             return solve(name, A, B, _stacklevel=4, **options)
 
         public.core = core
+        public.__signature__ = _door_signature(core)  # what the door takes, not the core's (motions, ...)
         return public
 
     return decorate
+
+
+def _door_signature(core) -> inspect.Signature:
+    """``(A, B=None, *, full_output=False, warn_axis_spread_deg=1.0, <the core's options>)``: :func:`solve`'s."""
+    P = inspect.Parameter
+    head = [P("A", P.POSITIONAL_OR_KEYWORD), P("B", P.POSITIONAL_OR_KEYWORD, default=None),
+            P("full_output", P.KEYWORD_ONLY, default=False, annotation="bool"),
+            P("warn_axis_spread_deg", P.KEYWORD_ONLY, default=1.0, annotation="float")]
+    options = [p if p.kind in (P.KEYWORD_ONLY, P.VAR_KEYWORD) else p.replace(kind=P.KEYWORD_ONLY)
+               for p in list(inspect.signature(core).parameters.values())[1:] if p.kind != P.VAR_POSITIONAL]
+    return inspect.Signature(head + options, return_annotation="np.ndarray | Solution")
 
 
 def available() -> list[str]:

@@ -1,0 +1,56 @@
+"""One solver shape: the registered doors show what they take; the registry's flags; solve_pairs' arguments."""
+import inspect
+
+import numpy as np
+import pytest
+
+from replication.core import solvers
+from replication.core.so3 import random_rotations
+from replication.core.solvers import _registry, available, register, solve
+
+#: The registered solvers exported as functions of their own name (the others are reached through ``solve``).
+EXPORTED_DOORS = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "robust"]
+
+
+def _problem(seed=0, J=8):
+    rng = np.random.default_rng(seed)
+    R0 = random_rotations(rng, ())
+    A = random_rotations(rng, J)
+    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
+
+
+@pytest.mark.parametrize("name", EXPORTED_DOORS)
+def test_a_registered_door_shows_the_doors_signature_not_the_cores(name):
+    door = getattr(solvers, name)
+    params = inspect.signature(door).parameters
+    assert list(params)[:4] == ["A", "B", "full_output", "warn_axis_spread_deg"]
+    assert "motions" not in params
+    assert params["B"].default is None and params["full_output"].default is False
+    core_options = list(inspect.signature(_registry.solver_info(name).core).parameters)[1:]
+    assert list(params)[4:] == core_options  # the core's own options, keyword-only, with their defaults
+    assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in list(params.values())[2:])
+
+
+def test_the_signature_binds_what_the_door_accepts_and_refuses_what_it_does_not():
+    R0, A, B = _problem()
+    sig = inspect.signature(solvers.robust)
+    sig.bind(A, B, threshold_deg=3.0, seed=1, full_output=True)  # what a caller may write
+    with pytest.raises(TypeError):
+        sig.bind(A, B, threshold=3.0)  # a misspelt option: the signature says no, as the call does
+    with pytest.raises(TypeError):
+        solvers.robust(A, B, threshold=3.0)
+    np.testing.assert_array_equal(solvers.robust(A, B, threshold_deg=3.0), solve("robust", A, B, threshold_deg=3.0))
+
+
+def test_a_newly_registered_door_shows_its_options(monkeypatch):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+
+    def core(motions, gain=2.0, *, steps: int = 3):
+        return np.broadcast_to(np.eye(3), motions.batch_shape + (3, 3)).copy()
+
+    door = register("shape_test_solver", reference="test")(core)
+    params = inspect.signature(door).parameters
+    assert list(params) == ["A", "B", "full_output", "warn_axis_spread_deg", "gain", "steps"]
+    assert params["gain"].kind is inspect.Parameter.KEYWORD_ONLY and params["gain"].default == 2.0
+    assert door.__doc__ == core.__doc__ and door.core is core
+    assert "shape_test_solver" in available()
