@@ -5,8 +5,10 @@ import numpy as np
 import pytest
 
 from replication.core import solvers
+from replication.core.motions import Motions
 from replication.core.so3 import random_rotations
 from replication.core.solvers import _registry, available, register, solve
+from replication.core.solvers.certificate import relaxed_rotation
 
 #: The registered solvers exported as functions of their own name (the others are reached through ``solve``).
 EXPORTED_DOORS = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "robust"]
@@ -54,3 +56,20 @@ def test_a_newly_registered_door_shows_its_options(monkeypatch):
     assert params["gain"].kind is inspect.Parameter.KEYWORD_ONLY and params["gain"].default == 2.0
     assert door.__doc__ == core.__doc__ and door.core is core
     assert "shape_test_solver" in available()
+
+
+def test_relaxed_start_is_a_flag_of_the_solvers_that_read_the_relaxed_solution():
+    flagged = {name for name in available() if _registry.solver_info(name).relaxed_start}
+    assert flagged == {"andreff", "chordal_optimal"}
+    assert not hasattr(_registry, "RELAXED_START")  # one place says it: the solver's registration
+
+
+@pytest.mark.parametrize("relaxed_start", [False, True])
+def test_solve_decomposes_sym_k_once_for_a_relaxed_start_solver(monkeypatch, relaxed_start):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    name = f"relaxed_{relaxed_start}"
+    register(name, reference="test", relaxed_start=relaxed_start)(lambda motions: relaxed_rotation(motions.K))
+    m = Motions(*_problem(1)[1:])
+    solve(name, m)
+    # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the same array)
+    assert (m.sym_eigvals is m.sym_eigh[0]) is relaxed_start

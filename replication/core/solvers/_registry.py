@@ -63,8 +63,6 @@ WEAK_GAP_FACTOR = 3.0
 #: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
 #: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
 ANSWER_ATOL = 1e-6
-#: Solvers starting from the relaxed solution: :func:`solve` decomposes ``sym(K)`` once for them, vectors included.
-RELAXED_START = frozenset({"chordal_optimal", "andreff"})
 
 
 @dataclass(frozen=True)
@@ -94,6 +92,11 @@ class SolverInfo:
         maps the estimate to ``G R``, and likewise for the sensor frame
         (``B -> G B G^T``, ``R -> R G^T``), also with noisy data. Tsai & Lenz's
         Gibbs-vector parametrisation is not.
+    relaxed_start : bool
+        ``True`` for a solver that reads the eigenvectors of ``sym(K)`` (the relaxed solution,
+        ``motions.sym_eigh``): :func:`solve` then decomposes ``sym(K)`` once, vectors included, and its answer
+        checks read its eigenvalues (equal to ``eigvalsh``'s to rounding) instead of decomposing again: one
+        decomposition, not two.
     """
 
     name: str
@@ -102,13 +105,14 @@ class SolverInfo:
     min_motions: int
     local: bool = False
     equivariant: bool = True
+    relaxed_start: bool = False
 
 
 _REGISTRY: dict[str, SolverInfo] = {}
 
 
 def register(name: str, *, reference: str, min_motions: int = 2, local: bool = False,
-             equivariant: bool = True):
+             equivariant: bool = True, relaxed_start: bool = False):
     """Decorator adding a solver core to the registry; returns its public, validating door.
 
     The decorated ``core(motions, **options)`` receives a
@@ -135,7 +139,8 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
     def decorate(core):
         if name in _REGISTRY:
             raise ValueError(f"a solver named {name!r} is already registered")
-        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant))
+        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant),
+                                     bool(relaxed_start))
 
         @functools.wraps(core)
         def public(A, B=None, **options):
@@ -459,7 +464,7 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         first offending batch index and the measured violation).
     """
     info = solver_info(method)
-    motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=method in RELAXED_START)
+    motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=info.relaxed_start)
     warn_if_weak(motions, warn_axis_spread_deg, stacklevel=_stacklevel)
     R, failed, reflection = _checked_answer(method, motions, info.core(motions, **options))
     _warn_not_rotations(method, failed, reflection, _stacklevel)

@@ -67,7 +67,7 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
                          hessian_tol=hessian_tol, certify=certify)
 
 
-@register("chordal_optimal", reference=REFERENCE)
+@register("chordal_optimal", reference=REFERENCE, relaxed_start=True)
 def _solve_chordal(motions, **options):
     if "certify" in options:
         raise ValueError("solve('chordal_optimal') always certifies its answer; call "
