@@ -14,7 +14,7 @@ import numpy as np
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import relative_rotations
 from ..core.so3 import rotation_angle_deg
-from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
+from .estimate import Provenance, Resampling, check_common, check_options, first_reference, solve_pairs, with_reasons
 from .report import CalibrationResult
 
 __all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
@@ -68,11 +68,11 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     if len(A) < 2:
         raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
                          f"lower it or give poses that differ more")
-    result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=references, time_offset=(np.nan, np.nan, False), options=options,
-                          evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
-                         stations=(i, j, len(C), labels),
-                         station_residual=(lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None)
+    own = (lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None
+    result = solve_pairs(A, B, method=method, options=options, reference=references, evidence={},
+                         resampling=Resampling(n_bootstrap=n_bootstrap, seed=seed, stations=(i, j, len(C), labels),
+                                               station_residual=own, progress=progress),
+                         provenance=Provenance(parameters=parameters, inputs=inputs))
     if diagnose:
         from .diagnose import pose_direction
 
