@@ -47,7 +47,7 @@ from ._warnings import (
     ObservabilityWarning,
     ReplicationWarning,
 )
-from .certificate import GAP_TOL, ChordalResult, global_certificate
+from .certificate import GAP_TOL, global_certificate
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
 from .iteration import TwoStepResult, two_step
 from .limit import two_step_fixed_point
@@ -92,7 +92,6 @@ __all__ = [
     "andreff",
     "tsai_lenz",
     "chordal_optimal",
-    "ChordalResult",
     "global_certificate",
     "robust",
     "pair_residual_deg",

@@ -477,5 +477,6 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
 
     cost, lower, gap = _gap_to_global(motions, R)
     gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
-    return Solution(R=R, method=method, cost=cost, observability=motions.observability, lower_bound=lower,
-                    duality_gap=gap, global_optimum=gap <= GAP_TOL * motions.J)
+    return Solution(R=R, method=method, cost=cost, lower_bound=lower, duality_gap=gap,
+                    global_optimum=gap <= GAP_TOL * motions.J, certificate=global_certificate(motions).certificate,
+                    _motions=motions)
