@@ -88,7 +88,7 @@ def _noisy_pairs(seed=2, J=30, noise_deg=0.2):
 
 
 def test_solve_pairs_takes_the_pairs_and_six_named_groups():
-    from replication.rig.estimate import solve_pairs
+    from replication.rig.solve_and_judge import solve_pairs
 
     params = inspect.signature(solve_pairs).parameters
     assert list(params) == ["A", "B", "method", "options", "reference", "evidence", "resampling", "provenance"]
@@ -99,7 +99,7 @@ def test_solve_pairs_takes_the_pairs_and_six_named_groups():
 def test_the_groups_are_frozen():
     import dataclasses
 
-    from replication.rig.estimate import Provenance, Resampling
+    from replication.rig.solve_and_judge import Provenance, Resampling
 
     with pytest.raises(dataclasses.FrozenInstanceError):
         Resampling(n_bootstrap=10, seed=0).seed = 1
@@ -111,7 +111,7 @@ def test_the_groups_are_frozen():
 
 
 def test_solve_pairs_reports_its_provenance_and_resamples_as_told():
-    from replication.rig.estimate import Provenance, Resampling, solve_pairs
+    from replication.rig.solve_and_judge import Provenance, Resampling, solve_pairs
 
     R0, A, B = _noisy_pairs()
     times = np.arange(len(A)) * 0.5

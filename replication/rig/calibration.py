@@ -39,10 +39,18 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
-from .estimate import Provenance, Resampling, check_common, check_options, first_reference, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
 from .sensor_verdict import model_or_note, with_sensor_model
+from .solve_and_judge import (
+    Provenance,
+    Resampling,
+    check_common,
+    check_options,
+    first_reference,
+    solve_pairs,
+    with_reasons,
+)
 from .streams import (  # integrate_gyro re-exported: a public name
     PLAUSIBLE_SPAN_S,
     GyroStream,
