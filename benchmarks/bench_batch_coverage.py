@@ -19,8 +19,8 @@ from replication.core import so3
 from replication.core.motions import prepare_motions
 from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
-from replication.rig.estimate import block_indices, bootstrap_replicates
 from replication.rig.poses import calibrate_poses, pose_pairs
+from replication.rig.solve_and_judge import block_indices, bootstrap_replicates
 from replication.study.simulation import rig_streams
 
 

@@ -47,7 +47,7 @@ def test_pose_sets_resample_stations_not_pairs(rng):
     pairs = calibrate_poses(C, S, n_bootstrap=100, seed=1, pairs="consecutive")
     assert pairs.bootstrap_resamples == "pairs in moving blocks of 2"
     # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations' information
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
 
     J = r.n_pairs
     by_pairs = est.block_indices(np.random.default_rng(1), J, 1, 100)
@@ -448,8 +448,8 @@ def test_with_consecutive_pairs_a_clean_set_blames_no_station():
 
 
 def test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_its_neighbours():
-    from replication.rig.estimate import per_station_median
     from replication.rig.poses import own_residuals_deg, pose_pairs
+    from replication.rig.solve_and_judge import per_station_median
 
     C, S = _bad_stations([7], bad_deg=6.0)
     r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)

@@ -441,7 +441,7 @@ def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig)
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
     camera, gyro, _ = rig
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
 
     def refuse(*a, **k):
         raise ValueError("degenerate motion: a resample")
@@ -634,7 +634,7 @@ def test_a_solver_whose_own_answer_is_no_rotation_is_refused_naming_it(rig, door
 
 
 def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solver):
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
     from replication.core.motions import prepare_motions
     from replication.rig.poses import pose_pairs
 
@@ -714,7 +714,7 @@ def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solutio
 def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs(rig, side):
     """The boundary: a replicate turned from the answer by just less / more than the angle at which its root-mean-square
     residual reaches REPLICATE_FIT_FACTOR times the answer's on the same pairs (noisy poses) is a solution / is not."""
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
     from replication.core.handeye import pair_residual_deg
     from replication.core.motions import prepare_motions
     from replication.rig.poses import pose_pairs
@@ -744,7 +744,7 @@ def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_p
 
 
 def test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solver(rig, door_solver):
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
     from replication.core.motions import prepare_motions
     from replication.rig.poses import pose_pairs
 
@@ -784,7 +784,7 @@ def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_
 @pytest.mark.parametrize("turn, frozen", [(0.5, True), (2.0, False)])
 def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
     """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned unchanged, or not."""
-    import replication.rig.estimate as est
+    import replication.rig.solve_and_judge as est
 
     C, S = _poses(rig)
     noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))

@@ -13,8 +13,8 @@ import pytest
 from replication.__main__ import main
 from replication.core import so3
 from replication.rig.calibration import calibrate
-from replication.rig.estimate import reference_reading
 from replication.rig.poses import calibrate_poses
+from replication.rig.solve_and_judge import reference_reading
 from replication.study.simulation import rig_streams
 from replication.testing import write_euroc_imu, write_tum_trajectory
 

@@ -389,8 +389,8 @@ def _write(path, data, what: str) -> bool:
 def calibrate_command(args: argparse.Namespace) -> int:
     from ..core.solvers import solver_info
     from .calibration import OverlapError, calibrate
-    from .estimate import first_reference
     from .poses import calibrate_poses
+    from .solve_and_judge import first_reference
 
     try:
         solver_info(args.method)

@@ -15,10 +15,18 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
-from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
 from .quality import THRESHOLDS
 from .report import CalibrationResult  # re-exported: a public name here
 from .sensor_verdict import model_or_note, with_sensor_model
+from .solve_and_judge import (
+    Provenance,
+    Resampling,
+    check_common,
+    check_options,
+    first_reference,
+    solve_pairs,
+    with_reasons,
+)
 from .streams import (  # integrate_gyro re-exported: a public name
     PLAUSIBLE_SPAN_S,
     GyroStream,
@@ -411,12 +419,13 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
                     pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
     mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
     evidence.update(mirror)
-    result = solve_pairs(A, B, method=method, interval=float(interval), block=block, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=references, time_offset=(offset, corr, bool(correct_offset)),
-                          time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
-                          change_test=_change_report(change, change_fit),
-                          options=options, evidence=evidence, parameters=parameters, inputs=inputs,
-                          pair_times=t_start, progress=progress, extra_diagnostics=mirror)
+    result = solve_pairs(
+        A, B, method=method, options=options, reference=references, evidence=evidence,
+        resampling=Resampling(n_bootstrap=n_bootstrap, seed=seed, block=block, progress=progress),
+        provenance=Provenance(interval=float(interval), time_offset=(offset, corr, bool(correct_offset)),
+                              time_offset_ci95_s=clock.ci95_s, time_offset_peak_margin=clock.peak_margin,
+                              change_test=_change_report(change, change_fit), parameters=parameters, inputs=inputs,
+                              pair_times=t_start, extra_diagnostics=mirror))
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
                               change=change)
     segs_report = {**seg_mod.report(segs, segs_note, float(camera.t[0]), segs_used),

@@ -2,7 +2,7 @@
 and a chessboard camera, Tabb & Ahmad Yousef's data), with a verdict.
 
 Every pair of stations ``(i, j)`` (or consecutive ones) gives a motion pair (eqs. (3)-(4)); the solve, the
-residuals and the verdict are :func:`replication.rig.estimate.solve_pairs`'s, the bootstrap resamples *stations*
+residuals and the verdict are :func:`replication.rig.solve_and_judge.solve_pairs`'s, the bootstrap resamples *stations*
 (each station's measurement error is in every pair that uses it), each station's median residual is reported, and
 an outlying station is named in the verdict. The pose direction is always checked
 (:func:`replication.rig.diagnose.pose_direction`). Conventions: ``docs/conventions.md``.
@@ -14,8 +14,16 @@ import numpy as np
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import relative_rotations
 from ..core.so3 import rotation_angle_deg
-from .estimate import check_common, check_options, first_reference, solve_pairs, with_reasons
 from .report import CalibrationResult
+from .solve_and_judge import (
+    Provenance,
+    Resampling,
+    check_common,
+    check_options,
+    first_reference,
+    solve_pairs,
+    with_reasons,
+)
 
 __all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
            "SAME_STATION_FLOOR_DEG"]
@@ -45,7 +53,7 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
         Drop pairs whose sensor rotation is smaller than this.
     n_bootstrap, seed, reference, progress, **options
         As in :func:`replication.rig.calibration.calibrate`. The bootstrap resamples stations (with ``pairs="all"``;
-        blocks of two pairs with ``"consecutive"``): see :mod:`replication.rig.estimate`.
+        blocks of two pairs with ``"consecutive"``): see :mod:`replication.rig.solve_and_judge`.
     diagnose : bool
         Also calibrate with either pose set inverted, and fail naming the pose direction when one of them fits
         clearly better (:func:`replication.rig.diagnose.pose_direction`). Both sets inverted is a consistent problem
@@ -68,11 +76,11 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     if len(A) < 2:
         raise ValueError(f"{len(A)} pose pairs left after dropping those under min_motion_deg = {min_motion_deg:g}; "
                          f"lower it or give poses that differ more")
-    result = solve_pairs(A, B, method=method, interval=float("nan"), block=1, n_bootstrap=n_bootstrap,
-                          seed=seed, reference=references, time_offset=(np.nan, np.nan, False), options=options,
-                          evidence={}, parameters=parameters, inputs=inputs, pair_times=None, progress=progress,
-                         stations=(i, j, len(C), labels),
-                         station_residual=(lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None)
+    own = (lambda R: own_residuals_deg(C, S, R)) if pairs == "consecutive" else None
+    result = solve_pairs(A, B, method=method, options=options, reference=references, evidence={},
+                         resampling=Resampling(n_bootstrap=n_bootstrap, seed=seed, stations=(i, j, len(C), labels),
+                                               station_residual=own, progress=progress),
+                         provenance=Provenance(parameters=parameters, inputs=inputs))
     if diagnose:
         from .diagnose import pose_direction
 

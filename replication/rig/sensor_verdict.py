@@ -122,8 +122,8 @@ def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval,
     ``ok`` (unless ``skip_measure``: no diagnosis asked), and named if it is large."""
     import dataclasses
 
-    from .estimate import with_reasons
     from .quality import Reason
+    from .solve_and_judge import with_reasons
 
     off = model is None and note is None
     if off and not skip_measure and result.verdict.level != "ok":

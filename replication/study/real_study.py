@@ -222,8 +222,8 @@ def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
     resampling its pairs one by one (what it did before, treating the ``N (N - 1) / 2`` pairs as independent)."""
     from ..core.motions import prepare_motions
     from ..core.so3 import angle_between_deg
-    from ..rig.estimate import block_indices, bootstrap_replicates
     from ..rig.poses import calibrate_poses, pose_pairs
+    from ..rig.solve_and_judge import block_indices, bootstrap_replicates
 
     r = calibrate_poses(C, S, n_bootstrap=n_bootstrap, seed=seed)
     motions = prepare_motions(*pose_pairs(C, S))

@@ -29,7 +29,6 @@ from ._registry import (
     LOCAL_ATOL,
     LOCAL_RTOL,
     WEAK_GAP_FACTOR,
-    Solution,
     SolverAnswerError,
     SolverInfo,
     available,
@@ -48,13 +47,14 @@ from ._warnings import (
     ObservabilityWarning,
     ReplicationWarning,
 )
-from .certificate import GAP_TOL, ChordalResult, global_certificate
+from .certificate import GAP_TOL, global_certificate
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
 from .iteration import TwoStepResult, two_step
 from .limit import two_step_fixed_point
 from .msac import robust
 from .opencv import calibrate_hand_eye
 from .optimal import chordal_optimal
+from .result import Solution
 from .slsqp import SQP_VARIANTS, SQPResult, sqp
 
 __all__ = [
@@ -92,7 +92,6 @@ __all__ = [
     "andreff",
     "tsai_lenz",
     "chordal_optimal",
-    "ChordalResult",
     "global_certificate",
     "robust",
     "pair_residual_deg",

@@ -8,6 +8,7 @@ OpenCV's ``calibration_handeye.cpp``).
 from __future__ import annotations
 
 import functools
+import inspect
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,12 +17,13 @@ import numpy as np
 
 from ..checks import _first_index, det3
 from ..handeye import handeye_cost, vec
-from ..motions import MotionObservability, Motions, prepare_motions
+from ..motions import Motions, prepare_motions
 from ..so3 import angle_between_deg
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
 from .certificate import GAP_TOL, _derivatives, global_certificate
+from .result import Solution
 
-__all__ = ["SolverInfo", "Solution", "register", "available", "solver_info", "solve",
+__all__ = ["SolverInfo", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
            "ANSWER_ATOL", "check_answer", "warn_if_weak", "SolverAnswerError", "checked_core"]
 
@@ -61,8 +63,6 @@ WEAK_GAP_FACTOR = 3.0
 #: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
 #: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
 ANSWER_ATOL = 1e-6
-#: Solvers starting from the relaxed solution: :func:`solve` decomposes ``sym(K)`` once for them, vectors included.
-RELAXED_START = frozenset({"chordal_optimal", "andreff"})
 
 
 @dataclass(frozen=True)
@@ -92,6 +92,11 @@ class SolverInfo:
         maps the estimate to ``G R``, and likewise for the sensor frame
         (``B -> G B G^T``, ``R -> R G^T``), also with noisy data. Tsai & Lenz's
         Gibbs-vector parametrisation is not.
+    relaxed_start : bool
+        ``True`` for a solver that reads the eigenvectors of ``sym(K)`` (the relaxed solution,
+        ``motions.sym_eigh``): :func:`solve` then decomposes ``sym(K)`` once, vectors included, and its answer
+        checks read its eigenvalues (equal to ``eigvalsh``'s to rounding) instead of decomposing again: one
+        decomposition, not two.
     """
 
     name: str
@@ -100,48 +105,14 @@ class SolverInfo:
     min_motions: int
     local: bool = False
     equivariant: bool = True
-
-
-@dataclass(frozen=True)
-class Solution:
-    """What :func:`solve` returns with ``full_output=True``.
-
-    Attributes
-    ----------
-    R : ndarray, shape (..., 3, 3)
-        Estimate of ``R0`` (camera_from_sensor); NaN where the solver declared a failure.
-    method : str
-    cost : ndarray, shape (...)
-        Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2`` (NaN where ``R`` is NaN).
-    observability : MotionObservability
-        How well the motions determine ``R0`` (see
-        :class:`replication.core.motions.MotionObservability`).
-    lower_bound : ndarray, shape (...)
-        Certified lower bound on the minimum of eq. (8) over SO(3)
-        (:func:`replication.core.solvers.chordal_optimal`'s certificate).
-    duality_gap : ndarray, shape (...)
-        ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8) over SO(3);
-        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection).
-    global_optimum : ndarray of bool, shape (...)
-        ``R`` is a rotation certified to be the global minimiser of eq. (8) (``duality_gap`` at most
-        ``GAP_TOL * J``); never for a NaN or a reflection. The paper's two-step method is not, once
-        there is noise: its fixed point is not the minimiser of its own cost.
-    """
-
-    R: np.ndarray
-    method: str
-    cost: np.ndarray
-    observability: MotionObservability
-    lower_bound: np.ndarray
-    duality_gap: np.ndarray
-    global_optimum: np.ndarray
+    relaxed_start: bool = False
 
 
 _REGISTRY: dict[str, SolverInfo] = {}
 
 
 def register(name: str, *, reference: str, min_motions: int = 2, local: bool = False,
-             equivariant: bool = True):
+             equivariant: bool = True, relaxed_start: bool = False):
     """Decorator adding a solver core to the registry; returns its public, validating door.
 
     The decorated ``core(motions, **options)`` receives a
@@ -168,16 +139,29 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
     def decorate(core):
         if name in _REGISTRY:
             raise ValueError(f"a solver named {name!r} is already registered")
-        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant))
+        _REGISTRY[name] = SolverInfo(name, core, reference, int(min_motions), bool(local), bool(equivariant),
+                                     bool(relaxed_start))
 
         @functools.wraps(core)
         def public(A, B=None, **options):
             return solve(name, A, B, _stacklevel=4, **options)
 
         public.core = core
+        public.__signature__ = _door_signature(core)  # what the door takes, not the core's (motions, ...)
         return public
 
     return decorate
+
+
+def _door_signature(core) -> inspect.Signature:
+    """``(A, B=None, *, full_output=False, warn_axis_spread_deg=1.0, <the core's options>)``: :func:`solve`'s."""
+    P = inspect.Parameter
+    head = [P("A", P.POSITIONAL_OR_KEYWORD), P("B", P.POSITIONAL_OR_KEYWORD, default=None),
+            P("full_output", P.KEYWORD_ONLY, default=False, annotation="bool"),
+            P("warn_axis_spread_deg", P.KEYWORD_ONLY, default=1.0, annotation="float")]
+    options = [p if p.kind in (P.KEYWORD_ONLY, P.VAR_KEYWORD) else p.replace(kind=P.KEYWORD_ONLY)
+               for p in list(inspect.signature(core).parameters.values())[1:] if p.kind != P.VAR_POSITIONAL]
+    return inspect.Signature(head + options, return_annotation="np.ndarray | Solution")
 
 
 def available() -> list[str]:
@@ -480,7 +464,7 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
         first offending batch index and the measured violation).
     """
     info = solver_info(method)
-    motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=method in RELAXED_START)
+    motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=info.relaxed_start)
     warn_if_weak(motions, warn_axis_spread_deg, stacklevel=_stacklevel)
     R, failed, reflection = _checked_answer(method, motions, info.core(motions, **options))
     _warn_not_rotations(method, failed, reflection, _stacklevel)
@@ -493,5 +477,6 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
 
     cost, lower, gap = _gap_to_global(motions, R)
     gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
-    return Solution(R=R, method=method, cost=cost, observability=motions.observability, lower_bound=lower,
-                    duality_gap=gap, global_optimum=gap <= GAP_TOL * motions.J)
+    return Solution(R=R, method=method, cost=cost, lower_bound=lower, duality_gap=gap,
+                    global_optimum=gap <= GAP_TOL * motions.J, certificate=global_certificate(motions).certificate,
+                    _motions=motions)

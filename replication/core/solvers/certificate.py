@@ -24,85 +24,25 @@ Derivation (``R(w) = R exp([w]x)``, ``P = R^T unvec(M vec(R))``):
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..checks import check_init
 from ..handeye import unvec, vec
 from ..kernels import eigvalsh3, solve3
-from ..motions import MotionObservability, Motions
+from ..motions import Motions
 from ..so3 import exp_map, nearest_rotation_up_to_sign, skew
 from ._sdp import relaxation, upper_bound
 from ._warnings import CertificateWarning
+from .result import Solution
 
-__all__ = ["ChordalResult", "chordal_newton", "global_certificate", "relaxed_rotation", "GAP_TOL"]
+__all__ = ["chordal_newton", "global_certificate", "relaxed_rotation", "GAP_TOL"]
 
 #: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8) of
 #: the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
 GAP_TOL = 1e-8
 
 _GENERATORS = skew(np.eye(3))  # [e_k]x, k = 1, 2, 3
-
-
-@dataclass(frozen=True)
-class ChordalResult:
-    """Output of :func:`chordal_optimal`.
-
-    Attributes
-    ----------
-    R : ndarray, shape (..., 3, 3)
-        The minimiser of eq. (8) on SO(3) (``camera_from_sensor``).
-    cost : ndarray, shape (...)
-        Eq. (8) at ``R``.
-    gradient_norm : ndarray, shape (...)
-        Norm of the Riemannian gradient of eq. (8) at ``R`` divided by ``J``.
-    hessian_min_eigenvalue : ndarray, shape (...)
-        Smallest eigenvalue of the Riemannian Hessian of eq. (8) at ``R``, divided by ``J``.
-    iterations : ndarray of int, shape (...)
-        Newton iterations used (from the relaxed start; the fallback's polish not counted).
-    local_minimum : ndarray of bool, shape (...)
-        ``gradient_norm <= 2 gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol``
-        (first- and second-order sufficient conditions for a strict local minimum).
-    lower_bound : ndarray, shape (...)
-        A certified lower bound on the minimum of eq. (8) over SO(3) (NaN where no
-        certificate was computed).
-    duality_gap : ndarray, shape (...)
-        ``cost - lower_bound`` (>= 0 up to rounding).
-    global_optimum : ndarray of bool, shape (...)
-        ``local_minimum`` and ``duality_gap <= GAP_TOL * J``: ``R`` is a strict local minimiser whose cost
-        is certified to be within ``GAP_TOL * J`` of the global minimum of eq. (8). Where another minimum
-        has a cost within that tolerance (motions that nearly admit a second solution; an
-        :class:`~replication.core.solvers.ObservabilityWarning` says so), eq. (8) cannot tell the two apart.
-    certificate : ndarray of str, shape (...)
-        How: ``"lagrangian"`` (the fast O(3) dual at the Newton solution), ``"sdp"`` (the
-        semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
-    observability : MotionObservability
-        How well the motions determine ``R0``, computed on first access (the certificate itself does not need the
-        singular values of ``K``; a call that never reads them does not pay for their decomposition).
-    """
-
-    R: np.ndarray
-    cost: np.ndarray
-    gradient_norm: np.ndarray
-    hessian_min_eigenvalue: np.ndarray
-    iterations: np.ndarray
-    local_minimum: np.ndarray
-    lower_bound: np.ndarray
-    duality_gap: np.ndarray
-    global_optimum: np.ndarray
-    certificate: np.ndarray
-    _motions: Motions | None = field(default=None, repr=False, compare=False)
-
-    @property
-    def observability(self) -> MotionObservability | None:
-        """See the class notes (``None`` for a result built without its motions)."""
-        return None if self._motions is None else self._motions.observability
-
-    @property
-    def sdp_used(self) -> np.ndarray:
-        """Problems the fast certificate could not settle (the relaxation was solved)."""
-        return self.certificate != "lagrangian"
 
 
 def _vee_asym(P):
@@ -187,7 +127,7 @@ def _lagrangian_upper_bound(M, R):
 
 
 def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
-                  hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
+                  hessian_tol: float = 0.0, certify: bool = True) -> Solution:
     """:func:`chordal_optimal` on validated motions."""
     K, J, M = m.K, m.J, m.sym
     start = _relaxed_from_vectors(m.sym_eigh[1]) if init is None else check_init(init, m.batch_shape)
@@ -210,11 +150,11 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
             local = (grad_norm <= gradient_tol) & (hmin > hessian_tol)
     gap = np.clip(2.0 * J * (upper - g), 0.0, None)
     cost = np.clip(2.0 * J * (3.0 - g), 0.0, None)  # eq. (8) on SO(3)
-    res = ChordalResult(
-        R=R, cost=cost, gradient_norm=2.0 * grad_norm, hessian_min_eigenvalue=2.0 * hmin, iterations=its,
-        local_minimum=local, lower_bound=cost - gap if certify else upper, duality_gap=gap if certify else upper,
-        global_optimum=(gap <= GAP_TOL * J) & local & certify, certificate=how.astype(str),
-        _motions=m,
+    res = Solution(
+        R=R, method="chordal_optimal", cost=cost, lower_bound=cost - gap if certify else upper,
+        duality_gap=gap if certify else upper, global_optimum=(gap <= GAP_TOL * J) & local & certify,
+        certificate=how.astype(str), iterations=its, gradient_norm=2.0 * grad_norm,
+        hessian_min_eigenvalue=2.0 * hmin, local_minimum=local, _motions=m,
     )
     if certify and not res.global_optimum.all():
         bad = ~res.global_optimum
@@ -255,7 +195,7 @@ def _sdp_fallback(K, M, J, R, g, upper, how, todo):
     return R, g, upper, how
 
 
-def global_certificate(motions: Motions) -> ChordalResult:
+def global_certificate(motions: Motions) -> Solution:
     """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`.
 
     Raises ``ValueError`` for degenerate motion (see :meth:`replication.core.motions.Motions.require`).

@@ -123,6 +123,7 @@ def horaud_dornaika(motions):
     "andreff",
     reference="N. Andreff, R. Horaud and B. Espiau, 'Robot hand-eye calibration using "
     "structure-from-motion', Int. J. Robotics Research 20(3), 2001, Sec. 3 (eq. (12), rotation part)",
+    relaxed_start=True,
 )
 def andreff(motions):
     """Andreff et al. (2001): Kronecker-product linear system, solved by SVD/eigendecomposition.

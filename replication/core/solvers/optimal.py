@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from ..motions import prepare_motions
 from ._registry import register, warn_if_weak
-from .certificate import ChordalResult, _chordal_core, global_certificate
+from .certificate import _chordal_core, global_certificate
+from .result import Solution
 
 __all__ = ["chordal_optimal"]
 
@@ -22,7 +23,7 @@ REFERENCE = (
 )
 
 def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
-                    hessian_tol: float = 0.0, certify: bool = True) -> ChordalResult:
+                    hessian_tol: float = 0.0, certify: bool = True) -> Solution:
     """The global minimiser of the paper's eq. (8) over SO(3), with a certificate of global optimality.
 
     Solves ``min_{R in SO(3)} sum_j ||A_j R - R B_j||_F^2`` (eq. (8) subject to
@@ -54,7 +55,10 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
 
     Returns
     -------
-    ChordalResult
+    Solution
+        The answer, its cost (8) and certificate (as :func:`replication.core.solvers.solve` returns with
+        ``full_output=True``), and how the Newton iteration ended (``iterations``, ``gradient_norm``,
+        ``hessian_min_eigenvalue``, ``local_minimum``).
 
     Raises
     ------
@@ -67,7 +71,7 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
                          hessian_tol=hessian_tol, certify=certify)
 
 
-@register("chordal_optimal", reference=REFERENCE)
+@register("chordal_optimal", reference=REFERENCE, relaxed_start=True)
 def _solve_chordal(motions, **options):
     if "certify" in options:
         raise ValueError("solve('chordal_optimal') always certifies its answer; call "

@@ -37,6 +37,8 @@ import dataclasses
 import math
 import sys
 import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -48,7 +50,8 @@ from ..core.solvers import ReplicationWarning, SolverAnswerError, checked_core, 
 from .quality import Evidence, Reason, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
 
-__all__ = ["check_common", "first_reference", "reference_reading", "check_options", "solve_pairs", "with_reasons",
+__all__ = ["check_common", "first_reference", "reference_reading", "check_options", "solve_pairs", "Resampling",
+           "Provenance", "with_reasons",
            "bootstrap_replicates", "unfit_replicates", "block_indices", "station_indices", "per_station_median",
            "REPLICATE_FIT_FACTOR", "REPLICATE_FIT_FLOOR_DEG", "FROZEN_DEG"]
 
@@ -320,16 +323,54 @@ def _bad_replicates(method, failed, reflection, unfit=None, fit=None, frozen=Fal
                   f"its answer here is not to be trusted; use chordal_optimal")
 
 
-def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, time_offset, options, evidence,
-                parameters, inputs, pair_times, progress, stations=None, extra_diagnostics=None,
-                time_offset_ci95_s=(math.nan, math.nan), time_offset_peak_margin=math.nan, change_test=None,
-                station_residual=None):
+@dataclass(frozen=True)
+class Resampling:
+    """How :func:`solve_pairs` measures the radius: ``n_bootstrap`` replicates from ``seed``, resampling moving blocks
+    of ``block`` pairs (streams), or, with ``stations = (i, j, N[, labels])`` (pair ``k`` between static stations
+    ``i_k`` and ``j_k``), resampling stations, whose median residual (or, with ``station_residual(R)``, whose own
+    residual at the estimate ``R``) is also reported and judged; ``progress`` shows a progress bar."""
+
+    n_bootstrap: int
+    seed: int | None
+    block: int = 1
+    stations: tuple | None = None
+    station_residual: Callable | None = None
+    progress: bool = False
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """What :func:`solve_pairs` carries into the report unjudged: the pairing ``interval`` (s, NaN for poses), the
+    clock (``time_offset = (offset, correlation, applied)``, its 95 % interval and peak margin), the change test's
+    report, the call's ``parameters`` and ``inputs``, each pair's start time and further diagnostics."""
+
+    interval: float = math.nan
+    time_offset: tuple = (math.nan, math.nan, False)
+    time_offset_ci95_s: tuple = (math.nan, math.nan)
+    time_offset_peak_margin: float = math.nan
+    change_test: dict | None = None
+    parameters: dict = field(default_factory=dict)
+    inputs: dict = field(default_factory=dict)
+    pair_times: np.ndarray | None = None
+    extra_diagnostics: dict | None = None
+
+
+def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, resampling: Resampling,
+                provenance: Provenance):
     """Solve, residuals, bootstrap, verdict: a :class:`~replication.rig.report.CalibrationResult`.
 
-    ``stations = (i, j, N)``: the pairs come from static stations (pair ``k`` between stations ``i_k`` and
-    ``j_k``): the bootstrap resamples stations, and each station's median residual is reported and judged (or, with
-    ``station_residual(R)``, each station's own residual at the estimate ``R``).
+    ``method(**options)`` solves the pairs, ``reference`` (one rotation, two stacked, or None) and ``evidence`` (the
+    caller's measurements, :class:`~replication.rig.quality.Evidence`'s fields) join the verdict; the radius is
+    measured as ``resampling`` says (:class:`Resampling`); ``provenance`` goes into the report (:class:`Provenance`).
     """
+    n_bootstrap, seed, block, stations, station_residual, progress = (
+        resampling.n_bootstrap, resampling.seed, resampling.block, resampling.stations, resampling.station_residual,
+        resampling.progress)
+    interval, time_offset, time_offset_ci95_s, time_offset_peak_margin, change_test = (
+        provenance.interval, provenance.time_offset, provenance.time_offset_ci95_s,
+        provenance.time_offset_peak_margin, provenance.change_test)
+    parameters, inputs, pair_times, extra_diagnostics = (
+        provenance.parameters, provenance.inputs, provenance.pair_times, provenance.extra_diagnostics)
     motions = prepare_motions(A, B)  # validated once: the solve and every bootstrap replicate use it
     references = None if reference is None or np.ndim(reference) == 2 else np.asarray(reference)
     if references is not None:  # two references: the old fields and the first check use the first
