@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig import realdata as rd
 from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError, read_table

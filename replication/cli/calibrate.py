@@ -26,9 +26,9 @@ from pathlib import Path
 
 from .._extras import MissingExtra, require
 from .._io import check_clashes, check_input, figure_format, os_reason, prepare_output, same_file, write_atomic
-from .quality import EXIT_FAIL
+from ..rig.quality import DEFAULT_METHOD, EXIT_FAIL
 
-__all__ = ["CALIBRATE_HELP", "CALIBRATE_EXAMPLES", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
+__all__ = ["CALIBRATE_HELP", "CALIBRATE_EXAMPLES", "add_parser", "run", "EXIT_BAD_INPUT"]
 
 #: Exit code for bad input (argparse's own, too).
 EXIT_BAD_INPUT = 2
@@ -74,10 +74,6 @@ CALIBRATE_EXAMPLES = """Examples:
   python -m replication calibrate --poses --camera cali.txt --sensor robot_cali.txt --reference transformations.txt
 """
 
-#: The solver ``calibrate`` uses unless ``--method`` names another.
-DEFAULT_METHOD = "chordal_optimal"
-
-
 class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """``calibrate --help``: the description and epilog as written, the registered solvers listed in place of
     ``{solvers}`` (looked up when the help is shown, so other commands do not import the solvers), and each option's
@@ -120,6 +116,7 @@ def _number(kind, *, minimum=None, strict=True):
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
+    """The ``calibrate`` sub-command: every option of ``calibrate`` is declared here, in one place."""
     cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer", description=CALIBRATE_HELP,
                          epilog=CALIBRATE_EXAMPLES, formatter_class=_HelpFormatter)
     cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera), or camera poses (--poses)")
@@ -174,7 +171,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--target", type=_number(float, minimum=0), default=0.5,
                      help="with --online: ready once the 95 %% radius is below this (deg)")
     cal.add_argument("--quiet", action="store_true", help="no progress bar")
-    cal.set_defaults(func=calibrate_command)
+    cal.set_defaults(func=run)
     return cal
 
 
@@ -225,7 +222,7 @@ def _read_inputs(args, kinds: dict):
     extension kept: the loaders recognise formats by it) that the loaders read, and its entry records the pipe, the
     bytes and the SHA-256 of what was read, no path to read again.
     """
-    from .fetch import sha256_of
+    from ..rig.fetch import sha256_of
 
     paths, files, copies = {}, {}, {}
     with tempfile.TemporaryDirectory(prefix="replication-inputs-") as tmp:
@@ -259,7 +256,7 @@ def _named(stream, copies: dict, given):
 
 
 def _load(args, paths):
-    from . import realdata
+    from ..rig import realdata
 
     if args.poses:
         return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
@@ -281,8 +278,8 @@ def _stream(path, option: str, kind: str, **options):
     """:func:`~replication.rig.realdata.load_stream`; a CSV whose lines have the other kind's number of columns (7: an
     IMU stream read as orientations; 8: orientations read as a gyro) is said to look like that kind, naming the
     option to give."""
-    from .datafile import ColumnCountError
-    from .realdata import EUROC_IMU_COLUMNS, EUROC_POSE_COLUMNS, load_stream
+    from ..rig.datafile import ColumnCountError
+    from ..rig.realdata import EUROC_IMU_COLUMNS, EUROC_POSE_COLUMNS, load_stream
 
     try:
         return load_stream(path, kind, **options)
@@ -316,8 +313,8 @@ def _online(args, camera, sensor, reference, result):
     search and whether to apply it); print what it found; return the result with the online summary and track."""
     import dataclasses
 
-    from .live import replay
-    from .online import OnlineCalibrator
+    from ..rig.live import replay
+    from ..rig.online import OnlineCalibrator
 
     rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
                   max_offset=args.max_offset, correct_offset=not args.keep_clock, stride=args.stride,
@@ -350,7 +347,7 @@ def _online(args, camera, sensor, reference, result):
 def _load_all(args, kinds):
     """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors about a pipe's
     copy name the pipe as given."""
-    from .realdata import load_reference
+    from ..rig.realdata import load_reference
 
     with _read_inputs(args, kinds) as (paths, files, copies):
         try:
@@ -386,11 +383,11 @@ def _write(path, data, what: str) -> bool:
     return True
 
 
-def calibrate_command(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from ..core.solvers import solver_info
-    from .calibration import OverlapError, calibrate
-    from .estimate import first_reference
-    from .poses import calibrate_poses
+    from ..rig.calibration import OverlapError, calibrate
+    from ..rig.estimate import first_reference
+    from ..rig.poses import calibrate_poses
 
     try:
         solver_info(args.method)
