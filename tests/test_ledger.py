@@ -463,7 +463,7 @@ def test_a_reader_that_stops_early_ends_the_output_quietly():
     output (1 MB) is larger than a pipe's buffer, so the pipe does break; without the wrapper it prints a traceback."""
     script = ("import sys, replication.cli as m\n"
               "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
-              "sys.exit(m._main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
+              "sys.exit(m.main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
     runs = {}
     for how in ("wrapped", "bare"):
         runs[how] = subprocess.run(f"'{sys.executable}' -c \"$S\" {how} | head -n 1; exit ${{PIPESTATUS[0]}}",

@@ -11,7 +11,7 @@ import warnings
 
 from .._version import __version__
 
-__all__ = ["DESCRIPTION", "main"]
+__all__ = ["DESCRIPTION", "main", "main_closing_pipes"]
 
 #: The top parser's description (``python -m replication --help``).
 DESCRIPTION = """Command line.
@@ -67,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     return _run(args)
 
 
-def _main_closing_pipes():
+def main_closing_pipes():
     """``main`` for the command line: a reader that stops early (``| head``) ends the output quietly, exit 141."""
     try:
         code = main()
