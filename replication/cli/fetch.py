@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from .._io import os_reason
-from ..rig import fetch as rig_fetch  # looked up when run, as the library's own names are
+from ..rig import fetch as rig_fetch  # called through the module: a stand-in set on it is what runs
 
 __all__ = ["FETCH_HELP", "add_parser", "run"]
 
