@@ -20,7 +20,7 @@ def pytest_configure(config):
 
 
 def pytest_collection_modifyitems(config, items):
-    from replication.__main__ import needs_real_data
+    from replication.cli.reproduce import needs_real_data
     from replication.rig.realdata import data_root, real_data_available
 
     # the longest files first (the portability re-run, then the notebooks), so that two xdist workers finish together

@@ -9,7 +9,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from replication.__main__ import execute_notebook
+from replication.cli.reproduce import execute_notebook
 from replication.study.lab import load_lab, run_lab, simulate_lab, write_lab
 
 ROOT = Path(__file__).resolve().parent.parent

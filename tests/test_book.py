@@ -53,7 +53,7 @@ def test_counts_name_every_verdict_even_at_zero(collected):
 
 
 def test_cli_claims_summary_prints_the_compact_table(collected, capsys):
-    from replication.__main__ import main
+    from replication.cli import main
 
     assert main(["claims", "--summary"]) == 0
     assert capsys.readouterr().out == ledger.to_summary(collected)

@@ -13,7 +13,7 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig.calibration import _same_stream, calibrate
 from replication.rig.datafile import DataFileError

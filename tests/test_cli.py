@@ -50,7 +50,7 @@ def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
 
 def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
     """(That the committed data/lab equal the generator's output is tests/test_lab.py's check.)"""
-    from replication.__main__ import main
+    from replication.cli import main
     from replication.study.lab import load_lab
 
     assert main(["generate-lab", "--out", str(tmp_path / "a"), "--seed", "7"]) == 0
@@ -78,8 +78,8 @@ def test_version_prints_the_package_version():
 def test_calibrate_help_shows_every_default_the_solvers_the_formats_and_an_example():
     import argparse
 
+    from replication.cli.calibrate import add_parser
     from replication.core.solvers import available
-    from replication.rig.calibrate_cli import add_parser
 
     out = _run("calibrate", "--help")
     assert out.returncode == 0, out.stderr
@@ -132,7 +132,7 @@ def _imu_like_csv(path, n_columns, rows=4):
                  "truth); leave out --sensor-kind gyro"),  # EuRoC's state_groundtruth_estimate0/data.csv
 ])
 def test_a_sensor_file_of_the_other_kind_names_the_option(tmp_path, capsys, kind, n_columns, hint):
-    from replication.__main__ import main
+    from replication.cli import main
 
     camera = tmp_path / "cam.txt"
     camera.write_text("".join(f"{t} 0 0 0 0 0 0 1\n" for t in range(4)))
@@ -153,7 +153,7 @@ def test_the_files_of_the_hints_are_what_they_are_said_to_look_like(tmp_path):
 
 
 def test_an_imu_file_given_as_the_camera_says_where_it_goes(tmp_path, capsys):
-    from replication.__main__ import main
+    from replication.cli import main
 
     imu = _imu_like_csv(tmp_path / "data.csv", 7)
     assert main(["calibrate", "--camera", str(imu), "--sensor", str(imu), "--sensor-kind", "gyro"]) == 2
@@ -185,7 +185,7 @@ def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
 def test_the_warning_formatter_says_each_warning_once_on_one_line():
     import io
 
-    from replication.__main__ import _one_line_warnings
+    from replication.cli import _one_line_warnings
     from replication.core.solvers import AccuracyWarning, ObservabilityWarning
 
     show, file = _one_line_warnings(), io.StringIO()
@@ -199,11 +199,11 @@ def test_the_warning_formatter_says_each_warning_once_on_one_line():
 def test_the_warning_formatter_is_installed_only_while_a_command_runs(tmp_path):
     import warnings
 
-    from replication.__main__ import main
+    from replication.cli import main
 
     before = warnings.showwarning
     assert main(["fetch-data", str(tmp_path), "--check"]) == 1
     assert warnings.showwarning is before
     code = ("import warnings; before = warnings.showwarning; import replication.__main__, "
-            "replication.rig.calibrate_cli; print(warnings.showwarning is before)")
+            "replication.cli.calibrate; print(warnings.showwarning is before)")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout == "True\n"

@@ -23,7 +23,7 @@ import pytest
 import replication.rig.calibration as cal
 import replication.rig.poses as poses
 from replication import _io
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig import fetch
 from replication.rig.calibration import OverlapError, calibrate
@@ -358,7 +358,7 @@ def _disk_full(*args, **kwargs):
 @pytest.mark.parametrize("option, name", [("--out", "r.json"), ("--plot", "f.pdf"), ("--track", "t.csv")])
 def test_a_disk_error_while_writing_an_output_is_a_message(files, tmp_path, option, name, monkeypatch, capsys):
     """The write itself fails (a full disk), after the checks passed: exit 2 naming the output and the reason."""
-    import replication.rig.calibrate_cli as cli
+    import replication.cli.calibrate as cli
 
     monkeypatch.setattr(cli, "write_atomic", _disk_full)
     monkeypatch.setattr(_io, "write_atomic", _disk_full)  # CalibrationResult.plot's
@@ -439,7 +439,7 @@ def test_fetch_data_refuses_its_mirror_as_destination(tmp_path, one_entry, capsy
 def notebook_folder(tmp_path, monkeypatch):
     import nbformat
 
-    import replication.__main__ as entry
+    import replication.cli.reproduce as entry
 
     folder = tmp_path / "nb"
     folder.mkdir()

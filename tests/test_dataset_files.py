@@ -7,7 +7,7 @@ import re
 import numpy as np
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig import realdata as rd
 from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError, read_table
@@ -237,7 +237,7 @@ def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
     from replication.core.checks import check_number, check_range
     from replication.rig.calibration import calibrate
     from replication.rig.poses import calibrate_poses
-    from replication.rig.vins_rule import VinsExRotation
+    from replication.study.vins_rule import VinsExRotation
 
     cam, sen = _rig_streams()
     cases = [

@@ -680,7 +680,7 @@ def test_no_folder_reaches_any_output(tmp_path, source):
 def test_the_export_help_says_what_the_command_now_does():
     import argparse
 
-    from replication.rig.export import add_parser
+    from replication.cli.export import add_parser
 
     parser = argparse.ArgumentParser(prog="replication")
     text = add_parser(parser.add_subparsers()).format_help()

@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 import yaml
 
+from replication.cli.export import run as export_command
 from replication.core import so3
 from replication.rig.datafile import DataFileError
-from replication.rig.export import ExportWarning, export_calibration, export_command
+from replication.rig.export import ExportWarning, export_calibration
 from replication.rig.realdata import data_root, load_reference, real_data_available
 from replication.rig.vioformats import read_vio_file
 

@@ -182,7 +182,7 @@ def _unreachable(error):
     (TimeoutError("timed out"), "timed out"),
 ])
 def test_without_a_network_fetch_data_says_so_once(tmp_path, monkeypatch, capsys, error, reason):
-    from replication.__main__ import main
+    from replication.cli import main
 
     urlopen, calls = _unreachable(error)
     monkeypatch.setattr(urllib.request, "urlopen", urlopen)
@@ -199,7 +199,7 @@ def test_without_a_network_fetch_data_says_so_once(tmp_path, monkeypatch, capsys
 def test_a_server_that_answers_with_an_error_fails_that_file_only(tmp_path, monkeypatch, capsys):
     """The other side of the line: an HTTP error is the file's problem, said per file with its URL; the fetch goes
     on."""
-    from replication.__main__ import main
+    from replication.cli import main
 
     urlopen, calls = _unreachable(urllib.error.HTTPError("u", 404, "Not Found", {}, None))
     monkeypatch.setattr(urllib.request, "urlopen", urlopen)

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from matplotlib.colors import to_rgba
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.core.solvers import _registry, available, register
 from replication.rig.calibration import calibrate

@@ -1,9 +1,10 @@
 """The house rules of the package layout (README, "Layout").
 
-Three rooms and a hall: ``replication/core`` (the maths and the solvers), ``replication/rig`` (calibrating a real rig),
-``replication/study`` (the paper's replication), and at the top the package face, the command line, the atomic writer
-and the testing helpers. Arrows run study -> rig -> core only, at module level and inside functions; no import cycle
-anywhere; every name has one home; notebooks call public names in short cells.
+Three rooms, the command line's room and a hall: ``replication/core`` (the maths and the solvers), ``replication/rig``
+(calibrating a real rig), ``replication/study`` (the paper's replication), ``replication/cli`` (the commands, on the top
+floor), and the package face, ``__main__``, the atomic writer and the testing helpers. Arrows run cli -> study -> rig ->
+core only, at module level and inside functions; only ``__main__`` imports cli, and only cli imports argparse; no import
+cycle anywhere; every name has one home; notebooks call public names in short cells.
 """
 import ast
 import importlib
@@ -27,9 +28,9 @@ PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replic
                                     if m.ispkg)
 #: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
 #: writer, the version and the optional packages) import nothing of the package and serve every room; the rest of the
-#: hall is on top.
+#: hall and the command line are on top, and ``__main__`` (the entry that runs the command line) above them.
 ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4,
-         "__main__": 4, "testing": 4}
+         "testing": 4, "cli": 4, "__main__": 5}
 MAX_TOP_LEVEL_MODULES = 8
 MAX_CELL_LINES = 60
 
@@ -98,7 +99,7 @@ def test_every_subpackage_is_installed():
 def test_the_top_level_is_three_rooms_and_a_small_hall():
     modules = sorted(p.name for p in PACKAGE.glob("*.py"))
     folders = sorted(p.name for p in PACKAGE.iterdir() if p.is_dir() and (p / "__init__.py").exists())
-    assert folders == ["core", "rig", "study"]
+    assert folders == ["cli", "core", "rig", "study"]
     assert len(modules) <= MAX_TOP_LEVEL_MODULES, modules
     assert {m.removesuffix(".py") for m in modules} <= set(ROOMS), f"{modules}: a module in no room of ROOMS"
 
@@ -142,6 +143,38 @@ def test_arrows_run_study_rig_core_only(module):
     for line, target in imports_of(module):
         assert ROOMS[_room(target)] <= own, (f"{MODULES[module].relative_to(ROOT)}:{line} imports {target}: "
                                              f"{_room(module)} may import only from its own room or below")
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if _room(m) != "cli"))
+def test_only_the_entry_imports_the_command_line(module):
+    """The command line imports the library, never the reverse: outside ``replication/cli`` only ``__main__`` may."""
+    if module == "replication.__main__":
+        assert any(_room(target) == "cli" for _, target in imports_of(module)), "__main__ does not run replication.cli"
+        return
+    into = [(line, target) for line, target in imports_of(module) if _room(target) == "cli"]
+    assert not into, f"{MODULES[module].relative_to(ROOT)} imports the command line: {into}"
+
+
+def argparse_lines(source: str) -> list:
+    """The lines of ``source`` importing argparse (``import argparse``, ``from argparse import ...``), at any depth."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import) and any(a.name.split(".")[0] == "argparse" for a in node.names):
+            found.append(node.lineno)
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "argparse" and not node.level:
+            found.append(node.lineno)
+    return found
+
+
+def test_the_argparse_finder_sees_every_form():
+    assert argparse_lines("import argparse\ndef f():\n    from argparse import Namespace\n") == [1, 3]
+    assert argparse_lines("import argparsex\nimport json as argparse\n") == []
+
+
+@pytest.mark.parametrize("module", sorted(m for m in MODULES if _room(m) != "cli"))
+def test_library_modules_are_free_of_argparse(module):
+    lines = argparse_lines(MODULES[module].read_text(encoding="utf-8"))
+    assert not lines, f"{MODULES[module].relative_to(ROOT)}:{lines} imports argparse: a command's parser lives in cli/"
 
 
 def find_cycle(graph: dict):

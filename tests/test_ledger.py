@@ -350,7 +350,7 @@ def project(tmp_path, monkeypatch):
 
 
 def _claims_cli(*args):
-    from replication.__main__ import main
+    from replication.cli import main
 
     return main(["claims", *args])
 
@@ -461,9 +461,9 @@ def test_the_repository_ledger_passes_check():
 def test_a_reader_that_stops_early_ends_the_output_quietly():
     """``python -m replication ... | head -n 1``: no BrokenPipeError traceback (red team), exit 141 (SIGPIPE's). The
     output (1 MB) is larger than a pipe's buffer, so the pipe does break; without the wrapper it prints a traceback."""
-    script = ("import sys, replication.__main__ as m\n"
+    script = ("import sys, replication.cli as m\n"
               "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
-              "sys.exit(m._main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
+              "sys.exit(m.main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
     runs = {}
     for how in ("wrapped", "bare"):
         runs[how] = subprocess.run(f"'{sys.executable}' -c \"$S\" {how} | head -n 1; exit ${{PIPESTATUS[0]}}",

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig.live import LiveRig, replay
 from replication.rig.online import OnlineCalibrator

@@ -186,7 +186,7 @@ def test_live_rig_refuses_time_going_back_and_drops_pairs_across_a_gap():
 def test_cli_online_writes_the_track(tmp_path, capsys):
     import pandas as pd
 
-    from replication.__main__ import main
+    from replication.cli import main
 
     R0, camera, gyro, _ = _streams()
     cam_file, imu_file = tmp_path / "cam.txt", tmp_path / "imu.csv"

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig import online_causes
 from replication.rig.live import replay

@@ -145,7 +145,7 @@ def test_bad_parameters_are_named(kwargs, message):
 def test_the_command_line_takes_use_consistent():
     import argparse
 
-    from replication.rig.calibrate_cli import add_parser
+    from replication.cli.calibrate import add_parser
 
     cal = add_parser(argparse.ArgumentParser().add_subparsers())
     base = ["--camera", "c.txt", "--sensor", "s.txt"]

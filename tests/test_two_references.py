@@ -10,7 +10,7 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication.__main__ import main
+from replication.cli import main
 from replication.core import so3
 from replication.rig.calibration import calibrate
 from replication.rig.poses import calibrate_poses

@@ -1,10 +1,10 @@
-"""Tests of the VINS-Mono extrinsic-rotation initialiser port (replication/rig/vins_rule.py)."""
+"""Tests of the VINS-Mono extrinsic-rotation initialiser port (replication/study/vins_rule.py)."""
 import numpy as np
 import pytest
 
 from replication.core.handeye import relative_rotations
 from replication.core.so3 import angle_between_deg, exp_map, quaternion_to_matrix, random_rotations
-from replication.rig.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
+from replication.study.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
 from replication.testing import assert_rotations_close
 
 

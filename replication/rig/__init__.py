@@ -4,6 +4,6 @@ Built on :mod:`replication.core`; the paper's studies (:mod:`replication.study`)
 (:mod:`.streams`, :mod:`.datafile`, :mod:`.realdata`, :mod:`.fetch`), time (:mod:`.association`), the
 calibration (:mod:`.calibration`, :mod:`.poses`, :mod:`.solve_and_judge`), its judges (:mod:`.quality`,
 :mod:`.diagnose`, :mod:`.changepoint`), what it returns (:mod:`.report`, :mod:`.figure`), online
-(:mod:`.online`, :mod:`.online_events`, :mod:`.live`, :mod:`.vins_rule`) and the command
-(:mod:`.calibrate_cli`).
+(:mod:`.online`, :mod:`.online_events`, :mod:`.live`). Its commands live in
+:mod:`replication.cli`.
 """

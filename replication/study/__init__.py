@@ -6,5 +6,6 @@ Built on :mod:`replication.rig` and :mod:`replication.core`; nothing below impor
 :mod:`.table1` (notebook 03), :mod:`.fig5` (04),
 :mod:`.lab` and :mod:`.table2` (05), :mod:`.baselines` and :mod:`.convexity` (06; the latter also 01's
 section 3d), :mod:`.real_study` (07),
-:mod:`.live_study` (08), :mod:`.figures` and :mod:`.notebook` (the notebooks' figures and setup).
+:mod:`.live_study` and :mod:`.vins_rule` (08: VINS-Mono's rule, the baseline its replays compare with),
+:mod:`.figures` and :mod:`.notebook` (the notebooks' figures and setup).
 """

@@ -4,7 +4,7 @@ events over long simulated streams (false re-mounts per hour, outlier bursts, no
 of each size), live replays of the real recordings beside VINS-Mono's initialiser rule, and the cost per pair.
 
 Every replay feeds :class:`replication.rig.live.LiveRig` the recorded streams in time order; VINS-Mono's rule
-(:class:`replication.rig.vins_rule.VinsExRotation`) gets exactly the same pairs. Simulated pair streams come from
+(:class:`replication.study.vins_rule.VinsExRotation`) gets exactly the same pairs. Simulated pair streams come from
 :func:`pair_stream`, simulated rigs from :func:`replication.study.simulation.rig_streams`.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ from ..core.stats import mean_se, poisson_upper, wilson_interval
 from ..rig.live import replay
 from ..rig.online import MIN_PAIRS, OnlineCalibrator
 from ..rig.online_events import EVENT_KINDS
-from ..rig.vins_rule import VinsExRotation
+from .vins_rule import VinsExRotation
 
 __all__ = ["coverage_study", "ready_coverage", "pair_stream", "degenerate_streams", "online_mistakes",
            "event_rates", "detection_study", "live_run", "ready_table", "remount_study", "update_costs",

@@ -15,20 +15,19 @@ number of columns (an IMU file read as orientations, or the reverse) is said to 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import json
 import math
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 from .._extras import MissingExtra, require
-from .._io import check_clashes, check_input, figure_format, os_reason, prepare_output, same_file, write_atomic
-from .quality import EXIT_FAIL
+from .._io import os_reason, prepare_output, write_atomic
+from ..rig.quality import DEFAULT_METHOD, EXIT_FAIL
+from .calibrate_inputs import check_paths, load_all, split_references, time_unit
 
-__all__ = ["CALIBRATE_HELP", "CALIBRATE_EXAMPLES", "add_parser", "calibrate_command", "EXIT_BAD_INPUT"]
+__all__ = ["CALIBRATE_HELP", "CALIBRATE_EXAMPLES", "add_parser", "run", "EXIT_BAD_INPUT"]
 
 #: Exit code for bad input (argparse's own, too).
 EXIT_BAD_INPUT = 2
@@ -74,10 +73,6 @@ CALIBRATE_EXAMPLES = """Examples:
   python -m replication calibrate --poses --camera cali.txt --sensor robot_cali.txt --reference transformations.txt
 """
 
-#: The solver ``calibrate`` uses unless ``--method`` names another.
-DEFAULT_METHOD = "chordal_optimal"
-
-
 class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
     """``calibrate --help``: the description and epilog as written, the registered solvers listed in place of
     ``{solvers}`` (looked up when the help is shown, so other commands do not import the solvers), and each option's
@@ -120,6 +115,7 @@ def _number(kind, *, minimum=None, strict=True):
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
+    """The ``calibrate`` sub-command: every option of ``calibrate`` is declared here, in one place."""
     cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer", description=CALIBRATE_HELP,
                          epilog=CALIBRATE_EXAMPLES, formatter_class=_HelpFormatter)
     cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera), or camera poses (--poses)")
@@ -174,150 +170,16 @@ def add_parser(sub) -> argparse.ArgumentParser:
     cal.add_argument("--target", type=_number(float, minimum=0), default=0.5,
                      help="with --online: ready once the 95 %% radius is below this (deg)")
     cal.add_argument("--quiet", action="store_true", help="no progress bar")
-    cal.set_defaults(func=calibrate_command)
+    cal.set_defaults(func=run)
     return cal
-
-
-#: The inputs and outputs of ``calibrate``: (option, attribute).
-INPUTS = (("--camera", "camera"), ("--sensor", "sensor"), ("--reference", "reference"), ("--reference2", "reference2"))
-#: How an input is named in messages (the second --reference has no option of its own).
-_SHOWN = {"--reference2": "--reference (the second)"}
-
-
-def _split_references(args) -> None:
-    """``--reference`` given at most twice: ``args.reference`` the first (or None), ``args.reference2`` the second."""
-    given = args.reference if isinstance(args.reference, list) else [args.reference] if args.reference else []
-    if len(given) > 2:
-        raise ValueError(f"--reference given {len(given)} times: at most two (two published calibrations)")
-    args.reference, args.reference2 = (given + [None, None])[:2]
-OUTPUTS = (("--out", "out"), ("--plot", "plot"), ("--track", "track"))
-
-
-def _check_paths(args) -> dict:
-    """Every path before any work; ``{option: "file" | "pipe"}`` of the inputs given.
-
-    Inputs exist and are regular files or pipes (a pipe is given once); no output is an input or another output;
-    the figure's extension is a known format; each output's folder is created and writable.
-    """
-    inputs = {option: getattr(args, attr) for option, attr in INPUTS}
-    kinds = {option: check_input(path, _SHOWN.get(option, option)) for option, path in inputs.items()
-             if path is not None}
-    pipes = [option for option, kind in kinds.items() if kind == "pipe"]
-    for i, option in enumerate(pipes):
-        for other in pipes[:i]:
-            if same_file(inputs[option], inputs[other]):
-                raise ValueError(f"{_SHOWN.get(option, option)} is the same pipe as {_SHOWN.get(other, other)} "
-                                 f"({inputs[option]}): a pipe can be read once")
-    check_clashes({option: getattr(args, attr) for option, attr in OUTPUTS}, inputs)
-    if args.plot is not None:
-        try:
-            figure_format(args.plot)
-        except ValueError as err:
-            raise ValueError(f"--plot {err}") from None
-    return kinds
-
-
-@contextlib.contextmanager
-def _read_inputs(args, kinds: dict):
-    """Read every input once: ``(paths to load from, report entries, {copy: shown name})``.
-
-    A regular file is loaded from its path and hashed now; a pipe is read whole into a temporary copy (its name's
-    extension kept: the loaders recognise formats by it) that the loaders read, and its entry records the pipe, the
-    bytes and the SHA-256 of what was read, no path to read again.
-    """
-    from .fetch import sha256_of
-
-    paths, files, copies = {}, {}, {}
-    with tempfile.TemporaryDirectory(prefix="replication-inputs-") as tmp:
-        for option, kind in kinds.items():
-            given = getattr(args, option[2:])
-            try:
-                if kind == "pipe":
-                    with open(given, "rb") as f:
-                        data = f.read()
-                    entry = {"bytes": len(data), "sha256": sha256_of(data)}
-                else:  # hashed in blocks, not held in memory
-                    entry = {"bytes": os.path.getsize(given), "sha256": sha256_of(given)}
-            except OSError as err:
-                raise ValueError(f"{_SHOWN.get(option, option)} {given}: cannot be read ({os_reason(err)})") from None
-            if kind == "pipe":
-                copy = Path(tmp) / (option[2:] + Path(given).suffix)
-                copy.write_bytes(data)
-                paths[option], copies[str(copy)] = copy, f"{given} (a pipe, read once)"
-                files[option[2:]] = {"pipe": True, "given": str(given), **entry}
-            else:
-                paths[option] = given
-                files[option[2:]] = {"path": str(Path(given).resolve()), **entry}
-        yield paths, files, copies
-
-
-def _named(stream, copies: dict, given):
-    """``stream`` with its source the name given on the command line where it was loaded from a pipe's copy."""
-    if str(stream.source) in copies:
-        return dataclasses.replace(stream, source=str(given))
-    return stream
-
-
-def _load(args, paths):
-    from . import realdata
-
-    if args.poses:
-        return realdata.load_tabb_camera_poses(paths["--camera"]), realdata.load_tabb_poses(paths["--sensor"])
-    args.repeats = {"camera": {}, "sensor": {}}  # the loaders' tallies, for the report
-    camera = _stream(paths["--camera"], "--camera", "orientation", time_unit=_unit(args, "camera"),
-                     drop_repeated=args.drop_repeated, repeated=args.repeated, tally=args.repeats["camera"])
-    sensor = _stream(paths["--sensor"], "--sensor", args.sensor_kind, time_unit=_unit(args, "sensor"),
-                     drop_repeated=args.drop_repeated, repeated=args.repeated, tally=args.repeats["sensor"])
-    for side, tally in args.repeats.items():
-        if tally.get("repeated_timestamps"):
-            worst = tally["repeated_max_deg"]
-            print(f"--{side}: {tally['repeated_timestamps']} lines repeat an earlier line's time stamp "
-                  f"({tally['repeated_groups']} time stamps" + (f", poses up to {worst:.3g} deg apart" if worst
-                                                               is not None else "") + f"): --repeated {args.repeated}")
-    return camera, sensor
-
-
-def _stream(path, option: str, kind: str, **options):
-    """:func:`~replication.rig.realdata.load_stream`; a CSV whose lines have the other kind's number of columns (7: an
-    IMU stream read as orientations; 8: orientations read as a gyro) is said to look like that kind, naming the
-    option to give."""
-    from .datafile import ColumnCountError
-    from .realdata import EUROC_IMU_COLUMNS, EUROC_POSE_COLUMNS, load_stream
-
-    try:
-        return load_stream(path, kind, **options)
-    except ColumnCountError as err:
-        csv = Path(path).suffix.lower() == ".csv"
-        if kind == "orientation" and csv and err.found == len(EUROC_IMU_COLUMNS):
-            looks = "a gyro / IMU stream (t, wx, wy, wz, ax, ay, az: EuRoC / TUM-VI imu0/data.csv)"
-            hint = ("give --sensor-kind gyro" if option == "--sensor" else
-                    "--camera takes the camera's orientations; a gyro goes to --sensor with --sensor-kind gyro")
-        elif kind == "gyro" and err.found in (len(EUROC_POSE_COLUMNS), 17):
-            looks = "an orientation stream (t, px, py, pz, qw, qx, qy, qz: EuRoC / TUM-VI mocap or ground truth)"
-            hint = "leave out --sensor-kind gyro (orientation, the default, reads it)"
-        else:
-            raise
-        raise ColumnCountError(err.path, f"{err.message}: the file looks like {looks}; {hint}", err.line,
-                               expected=err.expected, found=err.found) from None
-
-
-def _unit(args, side: str) -> str:
-    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM files), else auto."""
-    own = getattr(args, f"{side}_time_unit")
-    if own is not None:
-        return own
-    path = args.camera if side == "camera" else args.sensor
-    csv = side == "sensor" and args.sensor_kind == "gyro" or str(path).lower().endswith(".csv")
-    return "auto" if args.time_unit is None or csv else args.time_unit
 
 
 def _online(args, camera, sensor, reference, result):
     """Replay the streams through the online estimator with the batch options (interval, stride, clock offset
     search and whether to apply it); print what it found; return the result with the online summary and track."""
-    import dataclasses
 
-    from .live import replay
-    from .online import OnlineCalibrator
+    from ..rig.live import replay
+    from ..rig.online import OnlineCalibrator
 
     rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
                   max_offset=args.max_offset, correct_offset=not args.keep_clock, stride=args.stride,
@@ -347,29 +209,6 @@ def _online(args, camera, sensor, reference, result):
     return dataclasses.replace(result, online=summary, diagnostics=diagnostics), rows
 
 
-def _load_all(args, kinds):
-    """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors about a pipe's
-    copy name the pipe as given."""
-    from .realdata import load_reference
-
-    with _read_inputs(args, kinds) as (paths, files, copies):
-        try:
-            camera, sensor = _load(args, paths)
-            reference = load_reference(paths["--reference"], args.reference_camera) if args.reference else None
-            if args.reference2:
-                import numpy as np
-
-                reference = np.stack([reference, load_reference(paths["--reference2"], args.reference_camera)])
-        except (ValueError, OSError) as err:
-            text = str(err)
-            for copy, shown in copies.items():
-                text = text.replace(copy, shown)
-            raise ValueError(text) from None
-        if not args.poses:
-            camera, sensor = _named(camera, copies, args.camera), _named(sensor, copies, args.sensor)
-    return camera, sensor, reference, files
-
-
 def _error(text) -> int:
     print(f"error: {text}", file=sys.stderr)
     return EXIT_BAD_INPUT
@@ -386,11 +225,11 @@ def _write(path, data, what: str) -> bool:
     return True
 
 
-def calibrate_command(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace) -> int:
     from ..core.solvers import solver_info
-    from .calibration import OverlapError, calibrate
-    from .poses import calibrate_poses
-    from .solve_and_judge import first_reference
+    from ..rig.calibration import OverlapError, calibrate
+    from ..rig.poses import calibrate_poses
+    from ..rig.solve_and_judge import first_reference
 
     try:
         solver_info(args.method)
@@ -400,12 +239,12 @@ def calibrate_command(args: argparse.Namespace) -> int:
             raise ValueError("--online needs streams, not static pose sets (--poses)")
         if args.online:
             require("pandas", "calibrate --online")
-        _split_references(args)
-        kinds = _check_paths(args)
+        split_references(args)
+        kinds = check_paths(args)
         out = prepare_output(args.out, "--out") if args.out is not None else None
         plot = prepare_output(args.plot, "--plot") if args.plot is not None else None
         track = prepare_output(args.track, "--track") if args.track is not None else None
-        camera, sensor, reference, files = _load_all(args, kinds)
+        camera, sensor, reference, files = load_all(args, kinds)
         common = dict(method=args.method, n_bootstrap=args.bootstrap, seed=args.seed, reference=reference,
                       progress=not args.quiet and sys.stderr.isatty())
         if args.poses:
@@ -432,7 +271,7 @@ def calibrate_command(args: argparse.Namespace) -> int:
         report = {"command": ["python", "-m", "replication", *sys.argv[1:]] if sys.argv else [],
                   "cwd": os.getcwd(), "files": files,
                   "cli": {"sensor_kind": "poses" if args.poses else args.sensor_kind,
-                          "time_units": {"camera": _unit(args, "camera"), "sensor": _unit(args, "sensor")},
+                          "time_units": {"camera": time_unit(args, "camera"), "sensor": time_unit(args, "sensor")},
                           "drop_repeated": args.drop_repeated, "repeated": args.repeated,
                           "repeats": getattr(args, "repeats", None), "accept": args.accept},
                   **result.to_dict()}
