@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_lab_claims import lab_claims_inputs
+from test_lab_claims import lab_claims, lab_claims_inputs
 
 from replication.study import ledger, paper
-from replication.study.lab import lab_claims, seed_spread
+from replication.study.lab import seed_spread
 from replication.study.table1 import SECTION5_SETTINGS, sqp_and_table_claims, two_step_claims
 
 CLAIMS_CSV = Path(__file__).resolve().parent.parent / "data" / "paper" / "claims.csv"
