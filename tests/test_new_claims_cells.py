@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from test_claims_records import _confirm, _reference
 from test_fig5 import FAIL, _record_inputs
-from test_lab_claims import lab_study
+from test_lab_claims import lab_claims_inputs, lab_study
 
 from replication.study.fig5 import claims as fig5_claims
 from replication.study.lab import claims as lab_claims
@@ -116,6 +116,36 @@ def test_a_lab_claim_names_the_fresh_set_where_its_check_fails():
         lab_claims.table2_reduction(lab_study(range(1, 21)), fresh)
     fresh.loc[fresh.index[-6], "rms_sensor_frame"] = 24.0   # 5 of 20: still most
     assert lab_claims.table2_reduction(lab_study(range(1, 21)), fresh)["verdict"] == "holds"
+
+
+@pytest.mark.parametrize("fresh_seeds, shared", [(range(21, 41), None), (range(20, 40), "20"),
+                                                 (range(1, 21), "1, 2, 3, 4, 5 ...")])
+def test_the_fresh_seeds_of_a_lab_claim_must_be_disjoint_from_the_first(fresh_seeds, shared):
+    study, fresh = lab_study(range(1, 21)), lab_study(fresh_seeds)
+    if shared is None:
+        assert lab_claims.fig6_accuracy(study, fresh)["verdict"] == "holds only if"
+    else:
+        with pytest.raises(ValueError, match=rf"^the seed study: the fresh seeds repeat .*\({re.escape(shared)}\); "
+                                             "a finding is confirmed only on seeds disjoint"):
+            lab_claims.fig6_accuracy(study, fresh)
+
+
+def test_the_pitch_intervention_is_confirmed_on_disjoint_seeds():
+    inputs = lab_claims_inputs()
+    kw = dict(pitch_true=-4.09, true_r0_pitch=inputs["frames"].loc["true R0", "pitch mean"])
+    first, again = inputs["pitch_cal"]
+    assert lab_claims.table2_measures_calibration(inputs["study"], inputs["fresh"], pitch_cal=(first, again), **kw)
+    with pytest.raises(ValueError, match="^the pitch-bias intervention: the fresh seeds repeat 120 of"):
+        lab_claims.table2_measures_calibration(inputs["study"], inputs["fresh"], pitch_cal=(first, first), **kw)
+
+
+def test_runs_refuse_a_confirmation_on_the_seeds_it_confirms():
+    with pytest.raises(ValueError, match="two different root seeds"):
+        Runs(n_runs=1000, n_slow=300, n_grid=300, seeds=(1000, 1000), reference=_reference())
+    runs = Runs(n_runs=1000, n_slow=300, n_grid=300, seeds=(1000, 21000), reference=_reference())
+    with pytest.raises(ValueError, match="confirmed on root seed 21000, one of the seeds they were found on"):
+        runs.setting(_confirm())                      # its root seed is 21000
+    assert "fresh root seed 21001" in runs.setting({**_confirm(), "seed": 21001})
 
 
 def test_runs_name_the_seeds_and_the_confirmation_in_the_setting():

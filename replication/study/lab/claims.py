@@ -10,7 +10,7 @@ import pandas as pd
 
 from ...core.stats import declared_bound
 from ..ledger import check_evidence
-from .seed_sets import LAB_SETTING, SeedSets, found_setting
+from .seed_sets import LAB_SETTING, SeedSets, check_disjoint, found_setting
 from .study import (
     ALL_MINUS_MEAN_BOUND,
     RESOLVE_DEG,
@@ -262,6 +262,7 @@ def _check_blindness(s: SeedSets, small: str) -> None:
 def _pitch_shares(pitch_cal) -> tuple[list, list]:
     """The seeds and :func:`intervention_finding` of each pitch-bias intervention, each checked: resolved to
     :data:`RESOLVE_DEG` and below a quarter of |pitch bias|."""
+    check_disjoint(pitch_cal[0].index, pitch_cal[1].index, "the pitch-bias intervention")
     seeds, shares = [seed_range(frame) for frame in pitch_cal], [intervention_finding(frame) for frame in pitch_cal]
     for label, p in zip(seeds, shares):
         check_evidence(p["fine"], "table2_measures_calibration",

@@ -9,11 +9,21 @@ import pandas as pd
 
 from .study import seed_findings, seed_range, seed_spread
 
-__all__ = ["LAB_SETTING", "SeedSets", "found_setting"]
+__all__ = ["LAB_SETTING", "SeedSets", "check_disjoint", "found_setting"]
 
 #: The setting of every record of the lab.
 LAB_SETTING = "simulated lab (LabSettings defaults: datasheet noise, residual calibration errors as documented)"
 _COMMITTED = "(and the committed draw, seed 20130501)"
+
+
+def check_disjoint(found, fresh, what: str) -> None:
+    """``ValueError`` naming the shared seeds unless the ``fresh`` seeds are disjoint from the ``found`` ones: a
+    finding is confirmed only on seeds it was not made on."""
+    shared = sorted(set(found) & set(fresh))
+    if shared:
+        shown = ", ".join(str(int(s)) for s in shared[:5]) + (" ..." if len(shared) > 5 else "")
+        raise ValueError(f"{what}: the fresh seeds repeat {len(shared)} of the seeds the findings were made on "
+                         f"({shown}); a finding is confirmed only on seeds disjoint from those")
 
 
 def found_setting(study: pd.DataFrame) -> str:
@@ -28,6 +38,7 @@ class SeedSets:
     ``"fresh seeds 21-40"``)."""
 
     def __init__(self, study: pd.DataFrame, fresh: pd.DataFrame):
+        check_disjoint(study.index, fresh.index, "the seed study")
         self.study, self.fresh = study, fresh
         self.found, self.confirmed = seed_findings(study), seed_findings(fresh)
         found_seeds, fresh_seeds = seed_range(study), seed_range(fresh)

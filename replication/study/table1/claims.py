@@ -54,9 +54,17 @@ class Runs:
     seeds: tuple
     reference: pd.DataFrame
 
+    def __post_init__(self):
+        if len(self.seeds) != 2 or self.seeds[0] == self.seeds[1]:
+            raise ValueError(f"Runs: seeds must be two different root seeds (first, fresh), got {list(self.seeds)}")
+
     def setting(self, confirm: dict) -> str:
-        """The setting of section 5's records, with the confirmation runs ``confirm`` (:func:`fresh_seed_counts`)."""
+        """The setting of section 5's records, with the confirmation runs ``confirm`` (:func:`fresh_seed_counts`):
+        ``ValueError`` if their root seed is one of :attr:`seeds` (a count is confirmed only on fresh seeds)."""
         seeds = self.seeds
+        if confirm["seed"] in seeds:
+            raise ValueError(f"the counts are confirmed on root seed {confirm['seed']}, one of the seeds they were "
+                             f"found on ({seeds[0]}, {seeds[1]}): a count is confirmed only on fresh seeds")
         return (f"{self.n_runs} runs each: our defaults (Haar motions, identity start, v uniform in the ball) and "
                 f"motion angles 0-90 deg from the identity on root seed {seeds[0]}; the matched setting (0-90 deg, "
                 f"start 150 deg from R0) on fresh root seed {seeds[1]}; SQP variants analytic and per-pair cost "
