@@ -7,11 +7,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_lab_claims import lab_claims_inputs
+from test_lab_claims import lab_claims, lab_claims_inputs
 
 from replication.study import ledger, paper
-from replication.study.lab import lab_claims, seed_spread
-from replication.study.table1 import SECTION5_SETTINGS, sqp_and_table_claims, two_step_claims
+from replication.study import table1 as t1
+from replication.study.lab import seed_spread
+from replication.study.table1 import SECTION5_SETTINGS
 
 CLAIMS_CSV = Path(__file__).resolve().parent.parent / "data" / "paper" / "claims.csv"
 DEF, IDENT, FAR = SECTION5_SETTINGS  # "defaults", "0-90 deg, identity start", "matched (fresh seeds)"
@@ -138,6 +139,33 @@ def _table1_inputs():
                               "seeds": (41000, 42000)},
                   **common)
     return first, second
+
+
+def two_step_claims(settings, conv, cost_ratio, min_cost, scales, scale_names, *, sqp_names, caps, n_runs, n_slow,
+                    seeds, confirm, fresh_minimum, reference):
+    """Notebook 03's two-step records (section 5), one call per claim with its numbers, in the ledger's order."""
+    runs = t1.Runs(n_runs=n_runs, n_slow=n_slow, n_grid=300, seeds=seeds, reference=reference)
+    return [t1.two_step_10_iterations(settings, conv, runs, confirm, caps=caps),
+            t1.cost_to_zero(cost_ratio, min_cost, fresh_minimum, runs, confirm),
+            t1.faster_than_sqp(conv, scales, runs, confirm, sqp_names=sqp_names, caps=caps, scale_names=scale_names),
+            t1.smoother_monotone(conv, runs, confirm)]
+
+
+def sqp_and_table_claims(conv, div, fails, scales, far_scaled, cmp_default, cmp_matched, matched, sens, left_closer,
+                         fresh, scale_names, *, sqp_names, caps, n_runs, n_slow, seeds, confirm, cap_shares,
+                         n_grid=300, bar=0.05, reference):
+    """Notebook 03's other records: SQP's (section 5 and its cost scales) and Table I's cells (section 2), one call
+    per claim with its numbers, in the ledger's order."""
+    runs = t1.Runs(n_runs=n_runs, n_slow=n_slow, n_grid=n_grid, seeds=seeds, reference=reference)
+    far_fail = fails.loc["matched setting (fresh seeds)", "optimization (analytic)"]
+    return [t1.sqp_diverts(conv, div, runs, confirm, bar=bar),
+            t1.sqp_30_iterations(conv, far_fail, far_scaled, cap_shares, runs, confirm, sqp_names=sqp_names,
+                                 caps=caps),
+            t1.table1_final(cmp_default, cmp_matched, sens, runs),
+            t1.table1_early(cmp_default, cmp_matched, matched, sens, left_closer, fresh, runs),
+            t1.table1_sqp(cmp_default, far_scaled, runs, confirm, sqp_names=sqp_names),
+            t1.converge_15_vs_30(conv, scales, runs, confirm, sqp_names=sqp_names, caps=caps,
+                                 scale_names=scale_names)]
 
 
 def _valid(records):

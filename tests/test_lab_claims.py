@@ -1,7 +1,7 @@
 """Notebook 05's seed study over two sets of seeds and the pieces it rests on: the faster equivalents of the lab's
 chain (each against the original), the all-sample calibration, the interventions with the camera reused, the
-findings with their intervals, and each check of :func:`replication.study.lab.lab_claims` raising just past its
-threshold (on the fresh seeds too) and not just before it."""
+findings with their intervals, and each check of the lab's claims (:mod:`replication.study.lab.claims`) raising
+just past its threshold (on the fresh seeds too) and not just before it."""
 import dataclasses
 
 import cv2
@@ -13,7 +13,7 @@ from conftest import SMALL_LAB
 from replication.core import so3
 from replication.core.stats import wilson_interval
 from replication.study import lab
-from replication.study.lab import chain, count_text, fastchain, lab_claims, seed_findings, seed_range, sqp_shares
+from replication.study.lab import chain, claims, count_text, fastchain, seed_findings, seed_range, sqp_shares
 from replication.study.lab.recording import marker_pixels
 
 SQP_RUNS = ["100 iterations", "1000 iterations", "cost (8) / 2J"]
@@ -164,7 +164,7 @@ def test_count_text_and_seed_range():
 
 
 def lab_study(seeds):
-    """A synthetic :func:`seed_study` frame whose findings pass every check of :func:`lab_claims`, each with a
+    """A synthetic :func:`seed_study` frame whose findings pass every check of the lab's claims, each with a
     margin the threshold tests below compute."""
     seeds = pd.Index(list(seeds), name="seed")
     n = len(seeds)
@@ -206,8 +206,8 @@ def pitch_frame(seeds, mean=0.02, half_width=0.06, base=1.9):
 
 
 def lab_claims_inputs():
-    """The keyword arguments of :func:`lab_claims`: synthetic seed studies (seeds 1-20 and fresh 21-40) and the
-    committed draw's quantities."""
+    """The keyword arguments of :func:`lab_claims` (the notebook's calls above): synthetic seed studies (seeds 1-20
+    and fresh 21-40) and the committed draw's quantities."""
     frames = pd.DataFrame({"pitch mean": [-4.09, -1.58, 1.43, 0.2]},
                           index=pd.MultiIndex.from_tuples([("true R0", 0.0), ("true R0", 5.0), ("true R0", 10.0),
                                                            ("ours_right", 0.0)], names=["R0", "reference time (s)"]))
@@ -223,6 +223,28 @@ def lab_claims_inputs():
         checks={"ours and SQP agree (largest RMS difference between methods, deg)": 0.012}, pitch_true=-4.09,
         frames=frames, bounds=BOUNDS, sqp_runs=SQP_RUNS,
         pitch_cal=(pitch_frame(range(900001, 900121)), pitch_frame(range(910001, 910121))))
+
+
+def lab_claims(study, fresh, *, poses, held, summary, ablation_table, sensitivity_table, table2, checks, pitch_true,
+               frames, bounds, sqp_runs, pitch_cal):
+    """The lab's ten records as notebook 05 makes them, one call per claim with its numbers (in the notebook's
+    cells: "The recordings", "The lab over 20 seeds", "The lab over fresh seeds" and the pitch-bias intervention),
+    listed in the ledger's order."""
+    records = [
+        claims.lab_protocol(poses, held),
+        claims.fig6_consistency(study, summary.loc["ours_right", "spread_mean_deg"],
+                                ablation_table.loc["without magnetic field deflection", "spread_ours_right"]),
+        claims.table2_rms(study, sensitivity_table["rms_ours_right"]),
+        claims.fig7_projection(study, table2.xs("sensor_frame", level="method")["correlation"]),
+        claims.lab_averaging(study, fresh), claims.fig6_accuracy(study, fresh), claims.table2_reduction(study, fresh),
+        claims.table2_correlation(study, fresh),
+        claims.table2_methods_agree(
+            study, fresh, largest_rms_difference=checks["ours and SQP agree (largest RMS difference between methods, "
+                                                        "deg)"], bounds=bounds, sqp_runs=sqp_runs),
+        claims.table2_measures_calibration(study, fresh, pitch_true=pitch_true,
+                                           true_r0_pitch=frames.loc["true R0", "pitch mean"], pitch_cal=pitch_cal),
+    ]
+    return sorted(records, key=lambda r: list(claims.SECTIONS).index(r["claim"]))
 
 
 def test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_errors():

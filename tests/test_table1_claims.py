@@ -7,7 +7,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from test_claims_records import DEF, FAR, IDENT, ORDERS, _table1_inputs, check_just_inside_and_past
+from test_claims_records import (
+    DEF,
+    FAR,
+    IDENT,
+    ORDERS,
+    _table1_inputs,
+    check_just_inside_and_past,
+    sqp_and_table_claims,
+    two_step_claims,
+)
 
 from replication.core.handeye import handeye_cost, operator_T, operator_T_adjoint
 from replication.core.so3 import frobenius_error, nearest_rotation
@@ -29,9 +38,7 @@ from replication.study.table1 import (
     paper_two_step_means,
     printed_z,
     share_ci,
-    sqp_and_table_claims,
     table1,
-    two_step_claims,
     two_step_means,
     versus_paper,
 )

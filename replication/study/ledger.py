@@ -160,7 +160,7 @@ def check_evidence(holds, claim: str, condition: str) -> None:
     """Nothing if ``holds``; else ``ValueError`` naming the claim and the ``condition`` its verdict rests on.
 
     The sanity checks of the functions that build a notebook's records (e.g.
-    :func:`replication.study.table1.two_step_claims`): the measured numbers must bear the verdict, or no
+    :func:`replication.study.table1.two_step_10_iterations`): the measured numbers must bear the verdict, or no
     record is made. ``condition`` says what should hold, with the measured values.
     """
     if not holds:

@@ -7,7 +7,8 @@ grows "much slower than that of the traditional optimization method": it is "mor
 stated), its growth ratios with bootstrap intervals, the grid's rows grouped by problem set, fresh-seed runs and
 the figure. :mod:`.stop_short`: SQPs that stop short of the minimum of eq. (8) as the paper's Table I SQP does,
 matched to it. :mod:`.ranges`: the growth ratio over motion ranges, and a two-step method that stops short.
-:mod:`.claims`: the ledger record of ``fig5_resilience``.
+:mod:`.claims`: the ledger record of ``fig5_resilience``, from its four pieces of evidence, each checked in the section
+that measures it.
 """
 from .claims import *  # noqa: F403
 from .claims import __all__ as _claims_names

@@ -19,7 +19,10 @@ study         :func:`summarize`, :func:`ablation`, :func:`sensitivity`, :func:`s
               :func:`seed_spread`, :func:`seed_findings` (counts with Wilson intervals, means
               with standard errors), :func:`count_text`, :func:`sqp_shares`, :func:`seed_range`,
               :func:`pitch_bias_intervention`, :func:`intervention_finding` (one part switched off, many seeds)
-claims        :func:`lab_claims`: the notebook's ledger records on the lab experiment
+seed_sets     :class:`SeedSets`: the seed study on the seeds of its findings and on fresh ones, in the
+              ledger's words
+claims        one function per claim of the lab (``lab_averaging``, ...): each checks its numbers and returns
+              its ledger record, called from the notebook cell that measures them
 ============  ==========================================================================
 
 Table II's statistics and its comparison with the paper live beside Table I's in
@@ -53,7 +56,7 @@ _LAZY = {
     "summarize": "study", "ablation": "study", "sensitivity": "study", "seed_study": "study", "seed_spread": "study",
     "seed_findings": "study", "count_text": "study", "sqp_shares": "study", "check_sqp_shares": "study",
     "seed_range": "study", "pitch_bias_intervention": "study", "intervention_finding": "study", "RESOLVE_DEG": "study",
-    "lab_claims": "claims",
+    "SeedSets": "seed_sets",
 }
 
 __all__ = [

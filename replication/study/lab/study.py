@@ -256,7 +256,7 @@ def intervention_finding(frame: pd.DataFrame, *, resolve: float = RESOLVE_DEG) -
 def seed_spread(values: pd.Series, digits: int = 2) -> str:
     """``"<mean> (SD <sd>; <min>-<max>)"``: a quantity over the seeds (a column of :func:`seed_study`).
 
-    Notebook 05, "The lab over 20 seeds" (its seed table) and its claims (:func:`replication.study.lab.lab_claims`);
+    Notebook 05, "The lab over 20 seeds" (its seed table) and its claims (:mod:`replication.study.lab.claims`);
     ``digits`` decimals, the SD with ``ddof=1``.
     """
     return (f"{values.mean():.{digits}f} (SD {values.std(ddof=1):.{digits}f}; "
@@ -288,7 +288,7 @@ def seed_findings(study: pd.DataFrame) -> pd.DataFrame:
     differences and means with their standard errors.
 
     Notebook 05, "The lab over fresh seeds": each finding on the seeds it was found on beside the fresh ones
-    (:func:`replication.study.lab.lab_claims` builds the records from them). Which findings there are follows
+    (:mod:`replication.study.lab.claims` builds the records from them). Which findings there are follows
     the columns of ``study`` (:func:`seed_study`): the turned ``R0`` (``rms_turned_<a>``), the parts switched off
     (``..._without_<part>``), the single and all-sample calibrations.
 

@@ -1,7 +1,8 @@
 """The ledger records of Table I's two-step cells (``table1_final``, ``table1_early``) of
 ``notebooks/03_table1_monte_carlo.ipynb``: our Table I against the paper's, the paper's three printed decimals taken
-as a bound (:func:`replication.study.table1.printed_z`), over the grid of unstated settings of its section 2.
-Built by :func:`replication.study.table1.sqp_and_table_claims`.
+as a bound (:func:`replication.study.table1.printed_z`), over the grid of unstated settings of its section 2. One
+function per claim, called from the notebook cell that measures its numbers; the run counts and seeds they name:
+:class:`~replication.study.table1.Runs`.
 """
 from __future__ import annotations
 
@@ -11,7 +12,10 @@ from ..ledger import check_evidence
 from .grid import PRINTED_ORDER, paper_left_farther
 from .table import EARLY, PRINTED_HALF_UNIT
 
-__all__ = ["ROUNDED", "table1_cell_claims"]
+#: The notebook section (its heading) where both records' evidence is measured.
+GRID_SECTION = "2. Sensitivity to the unstated settings"
+
+__all__ = ["ROUNDED", "table1_final", "table1_early"]
 
 #: How a comparison with the paper's Table I takes its rounding (the ``uncertainty`` of the records that make one).
 ROUNDED = ("the paper's 3 printed decimals put each of its values within ±0.0005: a bound from rounding, so z is "
@@ -23,19 +27,14 @@ _GRID_LEVELS = {"motions": "motion ranges", "start": "starts", "noise": "noise d
                 "half-steps": "half-step orders"}
 
 
-def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, matched: pd.DataFrame,
-                       sens: pd.DataFrame, left_closer: pd.Series, fresh: pd.DataFrame, *, reference: pd.DataFrame,
-                       n_runs: int, n_grid: int, seeds) -> list[dict]:
-    """The ``table1_final`` and ``table1_early`` records (without their sections, which
-    :func:`~replication.study.table1.sqp_and_table_claims` adds).
+def table1_final(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, sens: pd.DataFrame, runs) -> dict:
+    """``table1_final``: iterations 20-50 are of the paper's order of magnitude, not its numbers.
 
-    The arguments are those of :func:`~replication.study.table1.sqp_and_table_claims` of the same names.
-
-    Raises
-    ------
-    ValueError
-        A check of the numbers a verdict rests on failing (:func:`replication.study.ledger.check_evidence`).
+    ``cmp_default``, ``cmp_matched``: :func:`~replication.study.table1.versus_paper` at our defaults and at the matched
+    setting; ``sens``: :func:`~replication.study.table1.sensitivity_grid`'s table (its ``R^r @50`` per noise
+    distribution); ``runs``: :class:`~replication.study.table1.Runs`.
     """
+    reference, n_runs, n_grid, seeds = runs.reference, runs.n_runs, runs.n_grid, runs.seeds
     final_rows = cmp_default.loc[[20, 30, 50]].loc[(slice(None), _TWO_STEP), :]
     final_rows_m = cmp_matched.loc[[20, 30, 50]].loc[(slice(None), _TWO_STEP), :]
     floors = sens.xs(("0-90 deg", "R0 turned 150 deg", PRINTED_ORDER), level=("motions", "start", "half-steps"))[
@@ -50,7 +49,7 @@ def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, mat
                    f"{floors.max():.4f}; the paper's {low:.4f}-{high:.4f} before rounding)")
     def z_range(key):
         return f"{final_rows[key].abs().min():.1f}-{final_rows[key].abs().max():.1f}"
-    final = dict(
+    return dict(
         claim="table1_final", verdict="undecidable from the text",
         evidence=f"same order of magnitude (ours / paper {final_rows['ratio'].min():.2f}-"
                  f"{final_rows['ratio'].max():.2f} at our defaults, {final_rows_m['ratio'].min():.2f}-"
@@ -66,7 +65,37 @@ def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, mat
         uncertainty=f"SE about 0.0001 per cell (ours and the paper's); {ROUNDED}; z per cell in table1_vs_paper; the "
                     "counts are of table cells, not samples (no interval)",
         setting=f"{n_runs} runs at our defaults on root seed {seeds[0]} and {n_runs} runs at the matched setting on "
-                f"fresh root seed {seeds[1]}; {n_grid} runs per noise distribution (root seed {seeds[0]})")
+                f"fresh root seed {seeds[1]}; {n_grid} runs per noise distribution (root seed {seeds[0]})",
+        section=GRID_SECTION)
+
+
+def _left_closer_counts(left_closer: pd.Series, fresh: pd.DataFrame, reference: pd.DataFrame) -> tuple:
+    """Of the early cells above the floor, in how many our ``R^l`` is the closer to ``R0``, per half-step order, on
+    the grid and on fresh seeds (``(closer, fresh_closer, others)``); checked: the paper's ``R^l`` the farther
+    whatever its rounding, ours the closer in every such cell in the printed order and in none in the other."""
+    closer = left_closer.groupby(level="half-steps").agg(["sum", "size"])
+    fresh_closer = fresh.groupby(level="half-steps")[["R^l closer", "early cells"]].sum()
+    fresh_closer.columns = ["sum", "size"]
+    others = [o for o in closer.index if o != PRINTED_ORDER]
+    for label, counts in (("", closer), (" (fresh seeds, the closest settings)", fresh_closer)):
+        check_evidence(paper_left_farther(reference) and counts.loc[PRINTED_ORDER, "sum"] == counts.loc[
+            PRINTED_ORDER, "size"] and all(counts.loc[o, "sum"] == 0 for o in others if o in counts.index),
+            "table1_early", f"the paper's R^l is the farther at every early iteration whatever its rounding, ours the "
+            f"closer in every early cell above the floor in the printed order, the farther in the other{label} "
+            f"({counts.to_dict()})")
+    return closer, fresh_closer, others
+
+
+def table1_early(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, matched: pd.DataFrame, sens: pd.DataFrame,
+                 left_closer: pd.Series, fresh: pd.DataFrame, runs) -> dict:
+    """``table1_early``: whether iterations 2-10 are reproduced depends on settings the paper does not state.
+
+    ``matched``: :func:`~replication.study.table1.table1` at the matched setting; ``sens``, ``left_closer``:
+    :func:`~replication.study.table1.sensitivity_grid` (the table, with ``early cells agreeing``; per early cell above
+    the floor, index level ``half-steps``, is our ``R^l`` closer to ``R0`` than ``R^r``?); ``fresh``:
+    :func:`~replication.study.table1.fresh_mismatch` of the closest settings; the rest as :func:`table1_final`.
+    """
+    reference, n_runs, n_grid, seeds = runs.reference, runs.n_runs, runs.n_grid, runs.seeds
     early = cmp_matched.loc[list(EARLY)].loc[(slice(None), _TWO_STEP), :]
     early_d = cmp_default.loc[list(EARLY)].loc[(slice(None), _TWO_STEP), :]
     n_cells = 2 * len(EARLY)
@@ -80,16 +109,7 @@ def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, mat
     check_evidence(best < n_cells and best_fresh < n_cells, "table1_early",
                    f"no setting of the grid, nor of its closest on fresh seeds, has all {n_cells} early cells agreeing "
                    f"with the paper's (most: {best}, fresh {best_fresh})")
-    closer = left_closer.groupby(level="half-steps").agg(["sum", "size"])
-    fresh_closer = fresh.groupby(level="half-steps")[["R^l closer", "early cells"]].sum()
-    fresh_closer.columns = ["sum", "size"]
-    others = [o for o in closer.index if o != PRINTED_ORDER]
-    for label, counts in (("", closer), (" (fresh seeds, the closest settings)", fresh_closer)):
-        check_evidence(paper_left_farther(reference) and counts.loc[PRINTED_ORDER, "sum"] == counts.loc[
-            PRINTED_ORDER, "size"] and all(counts.loc[o, "sum"] == 0 for o in others if o in counts.index),
-            "table1_early", f"the paper's R^l is the farther at every early iteration whatever its rounding, ours the "
-            f"closer in every early cell above the floor in the printed order, the farther in the other{label} "
-            f"({counts.to_dict()})")
+    closer, fresh_closer, others = _left_closer_counts(left_closer, fresh, reference)
 
     def order_counts(counts):
         return (f"{counts.loc[PRINTED_ORDER, 'sum']} of {counts.loc[PRINTED_ORDER, 'size']} in the printed order, "
@@ -97,7 +117,7 @@ def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, mat
                 + " in the other")
     n_settings = len(sens)
     levels = {_GRID_LEVELS.get(name, name): sens.index.unique(level=name).size for name in sens.index.names}
-    return [final, dict(
+    return dict(
         claim="table1_early", verdict="undecidable from the text",
         evidence="whether iterations 2-10 are reproduced depends on the start, the motions and the order of the two "
                  "half-steps in the paper's code, none stated. None of the "
@@ -125,4 +145,5 @@ def table1_cell_claims(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, mat
         setting=f"the grid: {n_grid} runs per setting on root seed {seeds[0]} (the settings share their draws); the "
                 f"closest settings again on fresh root seed {seeds[1]} ({n_grid} runs per noise distribution); the "
                 f"matched setting on {n_runs} runs of fresh root seed {seeds[1]}; our defaults on {n_runs} runs of "
-                f"root seed {seeds[0]}")]
+                f"root seed {seeds[0]}",
+        section=GRID_SECTION)
