@@ -189,9 +189,9 @@ class OnlineCalibrator:
         self._SB = np.zeros((3, 3))    # sum of weights x B  (G = 2 w I - SB - SB^T)
         self._SB2 = np.zeros((3, 3))   # sum of squared weights x B (forgetting: the covariance's middle factor)
         self._w = 0.0                  # sum of weights (J without forgetting)
-        self._w2 = 0.0                 # sum of squared weights
+        self._w2, self._wt = 0.0, 0.0  # sums of squared weights and of weights x pair index (the centroid)
         self._n = 0                    # pairs since the start (repeats excluded, outliers included)
-        self._bufA, self._bufB = [], []  # pairs not yet in the sums (at most 16)
+        self._buf = []                 # pairs not yet in the sums (at most 16): (A, B, pair index)
         start = self._init if init is None and not hasattr(self, "_R") else (self._R if init is None else init)
         self._R = np.array(start, dtype=float)      # the published estimate: the last refinement's minimiser
         self._warm = self._R                          # the two-step iterate: the next refinement's start
@@ -209,9 +209,9 @@ class OnlineCalibrator:
 
     def _flush(self) -> None:
         """Add the buffered pairs to the running sums (one batched product; weights lambda^age)."""
-        if not self._bufA:
+        if not self._buf:
             return
-        A, B = np.array(self._bufA), np.array(self._bufB)
+        A, B, T = (np.array(x, dtype=float) for x in zip(*self._buf))
         m = len(A)
         w = self.forgetting ** np.arange(m - 1, -1, -1.0)
         decay = self.forgetting ** m
@@ -223,14 +223,13 @@ class OnlineCalibrator:
         self._SB2 = decay ** 2 * self._SB2 + np.einsum("i,iab->ab", w ** 2, B)
         self._w = decay * self._w + w.sum()
         self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
+        self._wt = decay * self._wt + float(w @ T)
         self._n_eff = self._w ** 2 / self._w2
-        self._bufA.clear()
-        self._bufB.clear()
+        self._buf.clear()
 
     def _add(self, A, B) -> None:
-        self._bufA.append(A)
-        self._bufB.append(B)
-        if len(self._bufA) >= 16:  # O(1) memory: the buffer goes into the sums in batches
+        self._buf.append((A, B, self.n_total - 1))
+        if len(self._buf) >= 16:  # O(1) memory: the buffer goes into the sums in batches
             self._flush()
 
     @property
@@ -242,6 +241,9 @@ class OnlineCalibrator:
     R = property(lambda self: self._R, doc="The published estimate (the last refinement's minimiser of eq. (8)).")
 
     n_pairs = property(lambda self: self._n, doc="Pairs since the last (re)start, repeats excluded.")
+
+    centroid = property(lambda self: self._wt / self._w if self._w else float(self.n_total), doc="The weighted mean "
+                        "index of the pairs in the sums (at the last flush): a steady drift is where the estimate is")
 
     radius = property(lambda self: self._detector.guard.widen(self._radius), doc="The error radius (deg) at :attr:"
                       "`level`; while recent pairs misfit, widened by their angle to the estimate.")
