@@ -386,14 +386,13 @@ def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> fl
 #: estimates' centroids (the weighted mean index of their pairs, ``OnlineCalibrator.centroid``): a steady drift
 #: moves an estimate as far as its centroid moves, whereas an estimate soon after a restart or a cut of the memory
 #: lags less than a steady one (counted between the pairs received, it moved about half what the rate predicts).
-#: A drift's end is said only once none and the rate followed are at least ``4 TRACK_Z`` standard errors apart
-#: (until then the span grows): a drift that goes on, its rate over-estimated by a quarter and tested every
-#: refinement on a short span, was said to stop in 15 of 30 runs (0.002 deg per pair at 0.3 deg of pair noise; 6 of
-#: 30 at ``2 TRACK_Z``). A movement that differs from the
-#: one the rate followed predicts by more than :data:`TRACK_Z` standard errors is a new rate (a drift that speeds up
-#: or slows down), or, nearer none than that prediction (below half of it), a drift that stopped: said
-#: (``drift_end``), and the estimator returns to its own memory. Over a memory the rate followed moves the estimate
-#: about twice its lag (half the target), so over 1.5 memories 0.375 deg at the default target.
+#: The span is also long enough for none and the rate followed to be ``4 TRACK_Z`` standard errors apart, and a
+#: drift's end is said only once they are (else the track waits): a drift that goes on, its rate over-estimated by a
+#: quarter and tested every refinement on a short span, was said to stop in 15 of 30 runs (0.002 deg per pair at
+#: 0.3 deg of pair noise). A movement that differs from the one the rate followed predicts by more than
+#: :data:`TRACK_Z` standard errors is a new rate (a drift that speeds up or slows down), or, nearer none than that
+#: prediction (below half of it), a drift that stopped: said (``drift_end``), and the estimator returns to its own
+#: memory. Over a memory the rate followed moves the estimate about twice its lag (half the target).
 TRACK_MEMORIES = 1.5
 TRACK_MIN_PAIRS = 100
 TRACK_Z = 3.0
@@ -423,12 +422,15 @@ def track_drift(cal):
     track = cal._track
     track.append((at, R_now, cal._cov))
     lam, rate, axis = cal.forgetting, cal._drift_rate, cal._drift_axis
-    span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS)
+    lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
+    if cal._cov is None:
+        return None
+    se_now = math.degrees(math.sqrt(2.0 * max(float(axis @ cal._cov @ axis) - lag ** 2, 0.0)))  # two such estimates
+    span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS, 4 * TRACK_Z * se_now / rate)
     then = next((t for t in reversed(track) if at - t[0] >= span_least), None)
-    if then is None or cal._cov is None or then[2] is None:
+    if then is None or then[2] is None:
         return None
     span = at - then[0]  # between the centroids: an estimate after a restart lags less than a steady one
-    lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
     var = [max(float(axis @ c @ axis) - lag ** 2, 0.0) for c in (then[2], cal._cov)]  # noise along the axis, no lag
     se = math.degrees(math.sqrt(sum(var)))                         # of the difference of the two estimates
     whole = drift_step(cal._last_step[2].R_before, R_now) if cal._last_step is not None else np.zeros(3)
