@@ -10,7 +10,7 @@ import pytest
 from replication.core import so3
 from replication.rig.online import OnlineCalibrator
 from replication.rig.online_events import OnlineEvent
-from replication.rig.online_guard import TRACK_Z, drift_lag_deg, track_drift
+from replication.rig.online_guard import TRACK_APART, TRACK_Z, drift_lag_deg, track_drift
 from replication.study.live_study import pair_stream
 
 AXIS = np.array([0.6, -0.48, 0.64])
@@ -67,10 +67,11 @@ def _tracked(moved_deg, sd_deg, span=400, rate=0.001):
 
 
 @pytest.mark.parametrize("factor, ended", [(1.01, False), (0.99, True)])
-def test_an_end_waits_until_none_and_the_rate_are_four_z_standard_errors_apart(factor, ended):
-    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at least 4 Z
-    standard errors of the two estimates' difference; below that the track waits (no new rate either)."""
-    se = 0.4 / (4 * TRACK_Z) * factor
+def test_an_end_waits_until_none_and_the_rate_are_far_enough_apart(factor, ended):
+    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at least
+    TRACK_APART x Z standard errors of the two estimates' difference; below that the track waits (no new rate)."""
+    assert TRACK_APART == 3.0
+    se = 0.4 / (TRACK_APART * TRACK_Z) * factor
     cal, kind = _tracked(0.0, sd_deg=se / math.sqrt(2))
     assert (kind == "drift_end") is ended and (cal._drift_rate is None) is ended
     assert len(cal._track) == (1 if ended else 2)
@@ -106,8 +107,13 @@ def test_the_live_rig_removes_the_gyro_bias_and_publishes_it_with_its_interval()
     assert np.all(lo <= BIAS) and np.all(BIAS <= hi) and np.all(hi - lo < 0.01)
     assert rig.bias_effect_deg < rig.calibrator.target_deg
     assert rig.calibrator.error_deg(R0) < 0.1 and rig.calibrator.ready
+    summary = rig.summary()
+    assert summary["gyro_bias_rad_s"] == rig.bias.bias_rad_s.tolist() and summary["ready"]
+    assert summary["gyro_bias_ci95_rad_s"] == rig.bias.bias_ci95_rad_s.tolist()
+    assert summary["gyro_bias_R0_deg"] == rig.bias_effect_deg
     kept = _live(camera, gyro, gyro_bias=False)  # the bias left in: R0 about a degree off, and not ready
     assert kept.bias is None and kept.calibrator.error_deg(R0) > 0.5 and not kept.calibrator.ready
+    assert kept.summary()["gyro_bias_rad_s"] is None
 
 
 def test_a_bias_that_could_not_be_estimated_withholds_ready_naming_it():
@@ -129,3 +135,10 @@ def test_a_bias_interval_that_leaves_r0_beyond_the_target_withholds_ready(factor
     assert model is not None and again == effect and (found is not None) is reason
     if reason:
         assert found.check == "gyro_bias" and found.level == "fail" and "leaves R0" in found.message
+
+
+def test_gyro_bias_must_be_a_bool():
+    from replication.rig.live import LiveRig
+
+    with pytest.raises(ValueError, match="gyro_bias must be True or False"):
+        LiveRig(OnlineCalibrator(), gyro_bias="yes")

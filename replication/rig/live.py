@@ -434,6 +434,9 @@ class LiveRig:
             "clock_offset_s": self.offset, "clock_offset_given": self.offset_given,
             "clock_offset_correlation": self.offset_correlation, "clock_offset_applied": self.used_offset is not None
             and self.used_offset != 0.0 if not self.offset_given else True,
+            "gyro_bias_rad_s": None if self.bias is None else self.bias.bias_rad_s.tolist(),
+            "gyro_bias_ci95_rad_s": None if self.bias is None else self.bias.bias_ci95_rad_s.tolist(),
+            "gyro_bias_R0_deg": None if self.bias is None else float(self.bias_effect_deg),
             "note": self.offset_note,
             "events": events,
             "not_ready": status["not_ready"],
