@@ -37,8 +37,8 @@ __all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_de
            "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
            "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "GUARD_LONG_WINDOWS",
            "MisfitGuard",
-           "misfit_test", "track_drift", "detector_reasons", "TRACK_MEMORIES", "TRACK_MIN_PAIRS", "TRACK_Z",
-           "TRACK_APART"]
+           "misfit_test", "track_drift", "detector_reasons", "not_ready_reasons", "TRACK_MEMORIES", "TRACK_MIN_PAIRS",
+           "TRACK_Z", "TRACK_APART"]
 
 #: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
 #: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
@@ -415,6 +415,26 @@ def detector_reasons(detector, misfits_withdraw: int) -> list[str]:
                    f"level): a change or outliers, not decided yet")
     if detector.guard.misfit is not None:
         why.append(detector.guard.describe())
+    return why
+
+
+def not_ready_reasons(cal, misfits_withdraw: int) -> list[str]:
+    """The sentences of ``not_ready`` (:meth:`replication.rig.online.OnlineCalibrator.status`): one per unmet condition
+    of ``ready`` of the calibrator ``cal``, with its number."""
+    why = []
+    if cal._n_eff < cal.min_pairs:
+        why.append(f"{cal._n_eff:.1f} effective distinct pairs < {cal.min_pairs}"
+                   + (f" ({cal.duplicates} repeated pairs refused)" if cal.duplicates else ""))
+    if cal._excitation < cal.min_excitation_deg:
+        axis = None if cal._weak_axis is None else cal._weak_axis.tolist()
+        why.append(f"the motion does not determine R0: RMS rotation about axes perpendicular to "
+                   f"{np.round(axis, 3).tolist() if axis else 'any axis'} (sensor frame) is "
+                   f"{cal._excitation:.3g} deg < {cal.min_excitation_deg:g} deg; rotate about other axes")
+    why += detector_reasons(cal._detector, misfits_withdraw)
+    if not cal._radius < cal.target_deg:
+        why.append(f"{100 * cal.level:g} % radius {cal._radius:.3g} deg >= target {cal.target_deg:g} deg")
+    if cal._verdict is not None and cal._verdict.level == "fail":
+        why += [r.message for r in cal._verdict.reasons if r.level == "fail"]
     return why
 
 
