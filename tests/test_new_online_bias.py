@@ -142,3 +142,24 @@ def test_gyro_bias_must_be_a_bool():
 
     with pytest.raises(ValueError, match="gyro_bias must be True or False"):
         LiveRig(OnlineCalibrator(), gyro_bias="yes")
+
+
+def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
+    """12 s at rest, then 40 s of motion (offset given): the bias cannot be estimated on the first 20 s (most pairs
+    at rest fit no rig), so the pairs wait; half a window later it is, and R0 is right."""
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+    from replication.study.simulation import rig_streams
+
+    rng = np.random.default_rng(7)
+    R0, cam, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    rest, moving = np.arange(0.0, 12.0, 0.05), gyro.t > 0
+    camera = OrientationStream(np.r_[rest, cam.t + 12.0], np.concatenate(
+        [np.repeat(cam.world_from_body[:1], len(rest), 0), cam.world_from_body]))
+    t_rest = np.arange(-1.0, 12.0, 0.005)
+    omega = np.concatenate([rng.normal(0, np.radians(0.2), (len(t_rest), 3)), gyro.omega[moving]]) + BIAS
+    rows = replay(camera, GyroStream(np.r_[t_rest, gyro.t[moving] + 12.0], omega), OnlineCalibrator(), offset=0.0,
+                  reference=R0, diagnose=False)
+    summary = rows.attrs["summary"]
+    assert summary["gyro_bias_rad_s"] == pytest.approx(BIAS.tolist(), abs=0.003)
+    assert rows["t_seen"].iloc[0] >= 30.0 and summary["ready"] and rows["error_deg"].iloc[-1] < 0.1

@@ -120,6 +120,7 @@ class LiveRig:
         self._no_offset = False      # the offset search found no overlap: no pairs
         self.bias, self.bias_effect_deg, self._b = None, None, (0.0, 0.0, 0.0)  # the gyro bias: model, its R0 radius
         self._raw = [] if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, or done)
+        self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
 
     # ------------------------------------------------------------------------------------------------ input
     def _sensor_kind(self, kind: str) -> None:

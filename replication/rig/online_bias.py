@@ -19,7 +19,11 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["exp3", "start_bias", "start_rig_bias", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S"]
+__all__ = ["exp3", "start_bias", "start_rig_bias", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S",
+           "BIAS_WAIT_WINDOWS"]
+
+#: Where the bias cannot be estimated on the first window, the live rig waits for more data up to this many windows.
+BIAS_WAIT_WINDOWS = 4
 
 #: The finite-difference step of :func:`bias_effect_deg` (rad/s): small against any bias that matters, large against
 #: the solver's convergence (1e-10 in the gradient).
@@ -111,20 +115,29 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
 
 
 def start_rig_bias(rig) -> bool:
-    """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias`), removed from
-    its rates (its buffer integrated again from the raw samples) and any reason named; False while the window has not
-    arrived yet (at the end of the streams: whatever arrived)."""
+    """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias` on every camera
+    pose and raw rate held so far), removed from its rates (its buffer integrated again from the raw samples) and any
+    reason named. False while it waits: for the first window, and, where the bias could not be estimated on it (a
+    rig at rest at the start), for more data, every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are
+    held meanwhile; at the end of the streams: whatever arrived)."""
+    from .streams import GyroStream, OrientationStream
+
     gyro, cam = rig._gyro, rig._camera
-    if not rig._finished and (gyro[-1][0] - gyro[0][0] < rig.offset_window or not cam
-                              or cam[-1][0] - rig._early_camera[0][0] < rig.offset_window):
+    span = cam[-1][0] - cam[0][0] if cam else 0.0
+    if not rig._finished and (gyro[-1][0] - gyro[0][0] < rig.offset_window or span < rig._bias_next):
         return False
-    camera, raw = rig._streams()
-    rig.bias, rig.bias_effect_deg, reason = start_bias(camera, raw, interval=rig.interval, max_offset=rig.max_offset,
-                                                       target_deg=rig.calibrator.target_deg)
-    if rig.bias is not None:
-        rig._b = b = tuple(float(v) for v in rig.bias.bias_rad_s)
+    camera = OrientationStream(np.array([c[0] for c in cam]), np.array([c[1] for c in cam]), "camera (live)")
+    raw = GyroStream(np.array([g[0] for g in rig._raw]), np.array([g[1] for g in rig._raw]), "gyro (live)")
+    model, effect, reason = start_bias(camera, raw, interval=rig.interval, max_offset=rig.max_offset,
+                                       target_deg=rig.calibrator.target_deg)
+    if model is None and not rig._finished and span < BIAS_WAIT_WINDOWS * rig.offset_window:
+        rig._bias_next = span + 0.5 * rig.offset_window
+        return False
+    rig.bias, rig.bias_effect_deg = model, effect
+    if model is not None:
+        rig._b = b = tuple(float(v) for v in model.bias_rad_s)
         rebuilt = reintegrate(rig._raw, b)
-        rig._gyro = deque(x for x in rebuilt if x[0] >= gyro[0][0])
+        rig._gyro = deque(rebuilt)
         rig._last_gyro = (rebuilt[-1][0], tuple(w - c for w, c in zip(rig._raw[-1][1], b)), rebuilt[-1][1])
     rig._raw = None
     if reason is not None:
