@@ -163,3 +163,16 @@ def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
     summary = rows.attrs["summary"]
     assert summary["gyro_bias_rad_s"] == pytest.approx(BIAS.tolist(), abs=0.003)
     assert rows["t_seen"].iloc[0] >= 30.0 and summary["ready"] and rows["error_deg"].iloc[-1] < 0.1
+
+
+@pytest.mark.parametrize("seconds", [24.995, 25.005])
+def test_raw_samples_are_held_for_at_most_five_windows(seconds):
+    """Samples every 10 ms: the held span stays within five windows, and no sample is dropped that is within it."""
+    from replication.rig.online_bias import BIAS_WAIT_WINDOWS, hold_raw
+
+    assert BIAS_WAIT_WINDOWS == 4
+    raw = deque()
+    for t in np.arange(0.0, 100.0, 0.01):
+        hold_raw(raw, float(t), (0.0, 0.0, 0.0), seconds / 5)
+    span = raw[-1][0] - raw[0][0]
+    assert span <= seconds < span + 0.01

@@ -16,7 +16,7 @@ from .._extras import require
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 from .online import OnlineCalibrator
-from .online_bias import exp3, start_rig_bias
+from .online_bias import exp3, hold_raw, start_rig_bias
 from .quality import Verdict
 from .report import RADIUS_COVERS
 
@@ -119,7 +119,7 @@ class LiveRig:
         self._finished = False
         self._no_offset = False      # the offset search found no overlap: no pairs
         self.bias, self.bias_effect_deg, self._b = None, None, (0.0, 0.0, 0.0)  # the gyro bias: model, its R0 radius
-        self._raw = [] if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, or done)
+        self._raw = deque() if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, done)
         self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
 
     # ------------------------------------------------------------------------------------------------ input
@@ -146,7 +146,7 @@ class LiveRig:
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t}, omega={[wx, wy, wz]}")
         self._sensor_kind("gyro")
         if self._raw is not None:
-            self._raw.append((t, (wx, wy, wz)))
+            hold_raw(self._raw, t, (wx, wy, wz), self.offset_window)
         wx, wy, wz = wx - self._b[0], wy - self._b[1], wz - self._b[2]
         if self._last_gyro is None:
             Q = np.eye(3)

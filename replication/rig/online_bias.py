@@ -19,7 +19,7 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["exp3", "start_bias", "start_rig_bias", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S",
+__all__ = ["exp3", "start_bias", "start_rig_bias", "hold_raw", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S",
            "BIAS_WAIT_WINDOWS"]
 
 #: Where the bias cannot be estimated on the first window, the live rig waits for more data up to this many windows.
@@ -112,6 +112,15 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
         f"known only to within [{', '.join(f'{a:.3g}..{b:.3g}' for a, b in zip(lo, hi))}] rad/s: that leaves R0 "
         f"uncertain by {effect:.3g} deg (95 %){why} >= the target {target_deg:g} deg; move more (about every "
         f"axis) in the first window, or give a longer offset_window"))
+
+
+def hold_raw(raw, t: float, omega, window: float) -> None:
+    """Hold one raw gyro sample ``(t, omega)`` in the deque ``raw`` until the bias is estimated, the oldest dropped
+    beyond ``BIAS_WAIT_WINDOWS + 1`` windows (O(1) memory where no bias is ever tried: no camera, no clock offset;
+    the integration starts where the held samples do, and pairs use relative rotations only)."""
+    raw.append((t, omega))
+    while t - raw[0][0] > (BIAS_WAIT_WINDOWS + 1) * window:
+        raw.popleft()
 
 
 def start_rig_bias(rig) -> bool:
