@@ -176,3 +176,22 @@ def test_raw_samples_are_held_for_at_most_five_windows(seconds):
         hold_raw(raw, float(t), (0.0, 0.0, 0.0), seconds / 5)
     span = raw[-1][0] - raw[0][0]
     assert span <= seconds < span + 0.01
+
+
+def test_pairs_held_while_the_bias_waits_are_all_formed_when_it_gives_up():
+    """A rig at rest for 100 s (offset given): no bias on any window; after four windows it gives up, names why, and
+    every held camera pose is still covered by the gyro (no pair dropped as if across a gap)."""
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    rng = np.random.default_rng(3)
+    t_cam, t_gyro = np.arange(0.0, 100.0, 0.05), np.arange(-1.0, 101.0, 0.005)
+    camera = OrientationStream(t_cam, np.repeat(so3.random_rotations(rng, ())[None], len(t_cam), 0))
+    gyro = GyroStream(t_gyro, rng.normal(0.0, np.radians(0.2), (len(t_gyro), 3)) + BIAS)
+    rows = replay(camera, gyro, OnlineCalibrator(), offset=0.0, diagnose=False)
+    summary = rows.attrs["summary"]
+    assert summary["pairs_dropped_at_gaps"] == 0 and summary["pairs"] + summary["repeated_pairs"] >= 45
+    assert summary["gyro_bias_rad_s"] is None and not summary["ready"]
+    assert any(r["check"] == "gyro_bias" and "could not be estimated" in r["message"]
+               for r in summary["verdict"]["reasons"])
+    assert rows["t_seen"].iloc[0] >= 80.0

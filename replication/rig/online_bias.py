@@ -143,11 +143,10 @@ def start_rig_bias(rig) -> bool:
         rig._bias_next = span + 0.5 * rig.offset_window
         return False
     rig.bias, rig.bias_effect_deg = model, effect
-    if model is not None:
-        rig._b = b = tuple(float(v) for v in model.bias_rad_s)
-        rebuilt = reintegrate(rig._raw, b)
-        rig._gyro = deque(rebuilt)
-        rig._last_gyro = (rebuilt[-1][0], tuple(w - c for w, c in zip(rig._raw[-1][1], b)), rebuilt[-1][1])
+    rig._b = b = (0.0, 0.0, 0.0) if model is None else tuple(float(v) for v in model.bias_rad_s)
+    rebuilt = reintegrate(rig._raw, b)  # every held pose covered again (the buffer keeps a window only)
+    rig._gyro = deque(rebuilt)
+    rig._last_gyro = (rebuilt[-1][0], tuple(w - c for w, c in zip(rig._raw[-1][1], b)), rebuilt[-1][1])
     rig._raw = None
     if reason is not None:
         rig._name(reason)
