@@ -90,7 +90,8 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
 
     span = float(camera.t[-1] - camera.t[0]) if len(camera.t) else 0.0
     try:
-        model, note = model_or_note(camera, gyro, interval, max_offset)
+        with np.errstate(invalid="ignore", divide="ignore"):  # a rig at rest: no speed to correlate, said below
+            model, note = model_or_note(camera, gyro, interval, max_offset)
     except ValueError as err:  # streams too short for any pair
         model, note = None, str(err)
     if model is None:
