@@ -223,7 +223,8 @@ def _tracked(moved_deg, span=400, rate=0.001, sd_deg=0.02):
     R = so3.exp_map(np.radians(moved_deg) * axis)
     cal = SimpleNamespace(n_total=1000 + span, _R=R, forgetting=lam, _drift_rate=rate, _drift_axis=axis,
                           _cov=np.eye(3) * math.radians(sd_deg) ** 2 + lag ** 2 * np.outer(axis, axis),
-                          refine_every=10, target_deg=0.5, min_pairs=10, _fgt=1.0)
+                          refine_every=10, target_deg=0.5, min_pairs=10, _fgt=1.0, centroid=1000.0 + span,
+                          _last_step=None)
     cal.events = [OnlineEvent("drift", 900, 900, "cusum", 500, 25, 0.4, 0.3, 1.0, 1.0, 0, np.eye(3), np.eye(3),
                               "the frame drifts", rate)]
     from collections import deque
@@ -236,9 +237,9 @@ def test_the_track_needs_a_memory_and_a_half_of_pairs():
 
     assert (TRACK_MEMORIES, TRACK_MIN_PAIRS, TRACK_Z) == (1.5, 100, 3.0)
     span = math.ceil(1.5 * 1.99 / 0.01)  # (1 + lambda) / (1 - lambda) at lambda 0.99: 199 pairs
-    cal, _ = _tracked(0.0, span=span - 1)
+    cal, _ = _tracked(0.0, span=span - 1, sd_deg=0.01)
     assert cal._drift_rate == 0.001  # not measured yet
-    cal, kind = _tracked(0.0, span=span)
+    cal, kind = _tracked(0.0, span=span, sd_deg=0.01)
     assert kind == "drift_end"
 
 

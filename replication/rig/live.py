@@ -16,6 +16,7 @@ from .._extras import require
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 from .online import OnlineCalibrator
+from .online_bias import exp3, hold_raw, start_rig_bias
 from .quality import Verdict
 from .report import RADIUS_COVERS
 
@@ -23,20 +24,6 @@ __all__ = ["LiveRig", "replay", "OFFSET_RESOLUTION"]
 
 #: Resolution of the clock-offset search (s), as :func:`replication.rig.calibration.calibrate` uses.
 OFFSET_RESOLUTION = 0.5e-3
-
-
-def _exp3(x: float, y: float, z: float) -> np.ndarray:
-    """``exp([w]x)`` of one rotation vector (Rodrigues' formula in plain Python: the per-sample hot path of a live gyro;
-    :func:`replication.core.so3.exp_map` is the batched form, equal to rounding)."""
-    t2 = x * x + y * y + z * z
-    if t2 < 1e-16:  # second order: sin(t)/t and (1 - cos t)/t^2 to within 1e-24
-        a, b = 1.0 - t2 / 6.0, 0.5 - t2 / 24.0
-    else:
-        t = math.sqrt(t2)
-        a, b = math.sin(t) / t, (1.0 - math.cos(t)) / t2
-    return np.array([[1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
-                     [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
-                     [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
 
 
 class LiveRig:
@@ -77,13 +64,16 @@ class LiveRig:
         Run the input-mistake diagnosis when the verdict fails.
     on_pair : callable, optional
         Called with ``(t, A, B)`` for every pair used (e.g. to feed another estimator the same pairs).
+    gyro_bias : bool
+        A gyro: estimate its bias on the first ``offset_window`` seconds (pairs wait for them, also with a given
+        offset) and remove it from every rate (:mod:`replication.rig.online_bias`; :attr:`bias` the model, or None).
     """
 
     GAP_FACTOR = 5.0
 
     def __init__(self, calibrator: OnlineCalibrator, *, interval: float = 1.0, offset: float | None = None,
                  offset_window: float | None = None, max_offset: float = 0.2, correct_offset: bool = True,
-                 stride: int = 1, diagnose: bool = True, on_pair=None):
+                 stride: int = 1, diagnose: bool = True, on_pair=None, gyro_bias: bool = True):
         if not isinstance(calibrator, OnlineCalibrator):
             raise ValueError(f"calibrator must be an OnlineCalibrator, got {type(calibrator).__name__}")
         check_number("interval", interval, minimum=0)
@@ -97,7 +87,7 @@ class LiveRig:
             raise ValueError(f"offset_window must exceed 2 max_offset + 1 s = {2.0 * max_offset + 1.0:g} s (the "
                              f"offset search shifts the window by up to max_offset both ways), got {offset_window}")
         check_number("stride", stride, minimum=1, integer=True, strict=False)
-        for name, value in (("correct_offset", correct_offset), ("diagnose", diagnose)):
+        for name, value in (("correct_offset", correct_offset), ("diagnose", diagnose), ("gyro_bias", gyro_bias)):
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"{name} must be True or False, got {value!r}")
         if on_pair is not None and not callable(on_pair):
@@ -128,6 +118,9 @@ class LiveRig:
         self._diagnosis = None
         self._finished = False
         self._no_offset = False      # the offset search found no overlap: no pairs
+        self.bias, self.bias_effect_deg, self._b = None, None, (0.0, 0.0, 0.0)  # the gyro bias: model, its R0 radius
+        self._raw = deque() if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, done)
+        self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
 
     # ------------------------------------------------------------------------------------------------ input
     def _sensor_kind(self, kind: str) -> None:
@@ -152,6 +145,9 @@ class LiveRig:
         if not math.isfinite(t + wx + wy + wz):
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t}, omega={[wx, wy, wz]}")
         self._sensor_kind("gyro")
+        if self._raw is not None:
+            hold_raw(self._raw, t, (wx, wy, wz), self.offset_window)
+        wx, wy, wz = wx - self._b[0], wy - self._b[1], wz - self._b[2]
         if self._last_gyro is None:
             Q = np.eye(3)
         else:
@@ -161,7 +157,7 @@ class LiveRig:
             dt = t - t0
             self._gyro_dt = dt if self._gyro_dt is None else 0.99 * self._gyro_dt + 0.01 * dt  # a running typical step
             h = 0.5 * dt  # the trapezoidal rule of integrate_gyro
-            Q = Q0 @ _exp3(h * (vx + wx), h * (vy + wy), h * (vz + wz))
+            Q = Q0 @ exp3(h * (vx + wx), h * (vy + wy), h * (vz + wz))
         self._last_gyro = (t, (wx, wy, wz), Q)
         self._keep_early(self._early_sensor, t, np.array((wx, wy, wz)))
         self._push(t, Q)
@@ -183,7 +179,8 @@ class LiveRig:
     def _push(self, t, Q) -> None:
         self._now = max(self._now, t)
         self._gyro.append((t, Q))
-        keep = self.interval + 2 * self.max_offset + 1.0 + (self.offset_window if self.offset is None else 0.0)
+        keep = self.interval + 2 * self.max_offset + 1.0 + (self.offset_window if self.offset is None or (
+            self._raw is not None and self._kind == "gyro") else 0.0)
         while len(self._gyro) > 2 and self._gyro[0][0] < t - keep:
             self._gyro.popleft()
         self._drain()
@@ -291,6 +288,8 @@ class LiveRig:
             self._estimate_offset()
             if self.offset is None:
                 return
+        if self._raw is not None and self._kind == "gyro" and not start_rig_bias(self):
+            return
         offset = self.used_offset
         while self._camera:
             t, C = self._camera[0]
@@ -436,6 +435,9 @@ class LiveRig:
             "clock_offset_s": self.offset, "clock_offset_given": self.offset_given,
             "clock_offset_correlation": self.offset_correlation, "clock_offset_applied": self.used_offset is not None
             and self.used_offset != 0.0 if not self.offset_given else True,
+            "gyro_bias_rad_s": None if self.bias is None else self.bias.bias_rad_s.tolist(),
+            "gyro_bias_ci95_rad_s": None if self.bias is None else self.bias.bias_ci95_rad_s.tolist(),
+            "gyro_bias_R0_deg": None if self.bias is None else float(self.bias_effect_deg),
             "note": self.offset_note,
             "events": events,
             "not_ready": status["not_ready"],
@@ -445,7 +447,7 @@ class LiveRig:
 
 def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.0, offset: float | None = None,
            max_offset: float = 0.2, correct_offset: bool = True, stride: int = 1, offset_window: float | None = None,
-           reference=None, remount=None, on_pair=None, diagnose: bool = True):
+           reference=None, remount=None, on_pair=None, diagnose: bool = True, gyro_bias: bool = True):
     """Feed two recorded streams (camera poses; gyro samples or sensor orientations) to a :class:`LiveRig` in time
     order, as if live; one row per pair.
 
@@ -463,7 +465,7 @@ def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.
     """
     pd = require("pandas", "replay (its table of pairs; calibrate --online)")
     rig = LiveRig(calibrator, interval=interval, offset=offset, max_offset=max_offset, correct_offset=correct_offset,
-                  stride=stride, offset_window=offset_window, on_pair=on_pair, diagnose=diagnose)
+                  stride=stride, offset_window=offset_window, on_pair=on_pair, diagnose=diagnose, gyro_bias=gyro_bias)
     events = sorted([(t, 1, k) for k, t in enumerate(camera.t)] + [(t, 0, k) for k, t in enumerate(sensor.t)])
     R_re = None if remount is None else np.asarray(remount[1], dtype=float)
     gyro_kind = hasattr(sensor, "omega")

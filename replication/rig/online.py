@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from typing import NamedTuple
 
 import numpy as np
 
@@ -63,10 +64,10 @@ from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
-from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, OnlineState, RepeatFilter, residual_angle_deg
-from .online_guard import detector_reasons, drift_lag_deg, follow_drift, recognise_drift, track_drift
+from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, RepeatFilter, residual_angle_deg
+from .online_guard import drift_lag_deg, follow_drift, not_ready_reasons, recognise_drift, track_drift
 
-__all__ = ["OnlineCalibrator", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
+__all__ = ["OnlineCalibrator", "OnlineState", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
 _EYE = np.eye(3)
 #: Floor of the change detector's reference level ``d^2``: a residual of 0.01 deg (``d^2 ~ 2 theta^2``), below any
@@ -86,6 +87,20 @@ MIN_PAIRS = 10
 MISFITS_WITHDRAW_READY = 2
 #: Recent pairs whose residuals and motions the online verdict reads (its medians).
 RECENT_PAIRS = 200
+
+
+class OnlineState(NamedTuple):
+    """What :meth:`OnlineCalibrator.update` returns after each pair (an immutable record)."""
+
+    n_pairs: int          # pairs since the last (re)start, repeats excluded
+    R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
+    radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
+    ready: bool           # determined, radius below the target, recent pairs fit, no change pending, verdict ok
+    alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
+    event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
+    determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
+    checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
+    estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
 
 
 class OnlineCalibrator:
@@ -189,9 +204,9 @@ class OnlineCalibrator:
         self._SB = np.zeros((3, 3))    # sum of weights x B  (G = 2 w I - SB - SB^T)
         self._SB2 = np.zeros((3, 3))   # sum of squared weights x B (forgetting: the covariance's middle factor)
         self._w = 0.0                  # sum of weights (J without forgetting)
-        self._w2 = 0.0                 # sum of squared weights
+        self._w2, self._wt = 0.0, 0.0  # sums of squared weights and of weights x pair index (the centroid)
         self._n = 0                    # pairs since the start (repeats excluded, outliers included)
-        self._bufA, self._bufB = [], []  # pairs not yet in the sums (at most 16)
+        self._buf = []                 # pairs not yet in the sums (at most 16): (A, B, pair index)
         start = self._init if init is None and not hasattr(self, "_R") else (self._R if init is None else init)
         self._R = np.array(start, dtype=float)      # the published estimate: the last refinement's minimiser
         self._warm = self._R                          # the two-step iterate: the next refinement's start
@@ -209,9 +224,9 @@ class OnlineCalibrator:
 
     def _flush(self) -> None:
         """Add the buffered pairs to the running sums (one batched product; weights lambda^age)."""
-        if not self._bufA:
+        if not self._buf:
             return
-        A, B = np.array(self._bufA), np.array(self._bufB)
+        A, B, T = (np.array(x, dtype=float) for x in zip(*self._buf))
         m = len(A)
         w = self.forgetting ** np.arange(m - 1, -1, -1.0)
         decay = self.forgetting ** m
@@ -223,14 +238,13 @@ class OnlineCalibrator:
         self._SB2 = decay ** 2 * self._SB2 + np.einsum("i,iab->ab", w ** 2, B)
         self._w = decay * self._w + w.sum()
         self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
+        self._wt = decay * self._wt + float(w @ T)
         self._n_eff = self._w ** 2 / self._w2
-        self._bufA.clear()
-        self._bufB.clear()
+        self._buf.clear()
 
     def _add(self, A, B) -> None:
-        self._bufA.append(A)
-        self._bufB.append(B)
-        if len(self._bufA) >= 16:  # O(1) memory: the buffer goes into the sums in batches
+        self._buf.append((A, B, self.n_total - 1))
+        if len(self._buf) >= 16:  # O(1) memory: the buffer goes into the sums in batches
             self._flush()
 
     @property
@@ -242,6 +256,9 @@ class OnlineCalibrator:
     R = property(lambda self: self._R, doc="The published estimate (the last refinement's minimiser of eq. (8)).")
 
     n_pairs = property(lambda self: self._n, doc="Pairs since the last (re)start, repeats excluded.")
+
+    centroid = property(lambda self: self._wt / self._w if self._w else float(self.n_total), doc="The weighted mean "
+                        "index of the pairs in the sums (at the last flush): a steady drift is where the estimate is")
 
     radius = property(lambda self: self._detector.guard.widen(self._radius), doc="The error radius (deg) at :attr:"
                       "`level`; while recent pairs misfit, widened by their angle to the estimate.")
@@ -480,19 +497,4 @@ class OnlineCalibrator:
     def status(self) -> dict:
         """:meth:`evidence` with ``ready`` and, while not ready, ``not_ready``: one sentence per unmet condition,
         with its number."""
-        e = self.evidence()
-        why = []
-        if self._n_eff < self.min_pairs:
-            why.append(f"{self._n_eff:.1f} effective distinct pairs < {self.min_pairs}"
-                       + (f" ({self.duplicates} repeated pairs refused)" if self.duplicates else ""))
-        if self._excitation < self.min_excitation_deg:
-            axis = e["least_excited_axis_sensor"]
-            why.append(f"the motion does not determine R0: RMS rotation about axes perpendicular to "
-                       f"{np.round(axis, 3).tolist() if axis else 'any axis'} (sensor frame) is "
-                       f"{self._excitation:.3g} deg < {self.min_excitation_deg:g} deg; rotate about other axes")
-        why += detector_reasons(self._detector, MISFITS_WITHDRAW_READY)
-        if not self._radius < self.target_deg:
-            why.append(f"{100 * self.level:g} % radius {self._radius:.3g} deg >= target {self.target_deg:g} deg")
-        if self._verdict is not None and self._verdict.level == "fail":
-            why += [r.message for r in self._verdict.reasons if r.level == "fail"]
-        return {**e, "ready": self.ready, "not_ready": why}
+        return {**self.evidence(), "ready": self.ready, "not_ready": not_ready_reasons(self, MISFITS_WITHDRAW_READY)}

@@ -33,7 +33,6 @@ import math
 import warnings
 from collections import deque
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
@@ -335,20 +334,6 @@ def describe(kind: str, info: dict, n_window: int, dropped: int) -> str:
                            f"deg, better than the estimate (median d^2/m {info['median_z_after']:.3g} vs "
                            f"{info['median_z_before']:.3g}): new information (typically better-excited motion), added",
     }[kind]
-
-
-class OnlineState(NamedTuple):
-    """What :meth:`OnlineCalibrator.update` returns after each pair (an immutable record)."""
-
-    n_pairs: int          # pairs since the last (re)start, repeats excluded
-    R: np.ndarray         # current camera_from_sensor estimate (the last refinement's minimiser of eq. (8))
-    radius_deg: float     # error radius at the calibrator's level (inf while the motion does not determine R0)
-    ready: bool           # determined, radius below the target, recent pairs fit, no change pending, verdict ok
-    alarm: bool           # a re-mount was confirmed at this pair (the calibrator then started over)
-    event: str | None = None   # the kind of the event decided at this pair (EVENT_KINDS), if any
-    determined: bool = False   # the motion so far determines R0 (excitation and distinct pairs)
-    checking: bool = False     # a change is being confirmed (the pairs are held out of the estimate)
-    estimated: bool = False    # R is an estimate (a refinement has run since the last start), not the start
 
 
 class ChangeDetector:

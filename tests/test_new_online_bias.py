@@ -1,0 +1,197 @@
+"""New tests of branch online-bias: the drift's end on the estimates' centroids (point 2) and the live gyro bias
+(point 1). The lead folds them into the units' files."""
+import math
+from collections import deque
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from replication.core import so3
+from replication.rig.online import OnlineCalibrator
+from replication.rig.online_events import OnlineEvent
+from replication.rig.online_guard import TRACK_APART, TRACK_Z, drift_lag_deg, track_drift
+from replication.study.live_study import pair_stream
+
+AXIS = np.array([0.6, -0.48, 0.64])
+
+
+def _drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
+    rng = np.random.default_rng([seed, 7])
+    R0 = so3.random_rotations(rng, ())
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    A, B = pair_stream(rng, n_before, R0, noise_deg=noise_deg)
+    more = [pair_stream(rng, 1, R0 @ so3.exp_map(np.radians(rate_deg * (k + 1)) * axis), noise_deg=noise_deg)
+            for k in range(n_drift)]
+    return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
+
+
+def test_a_steady_drift_is_not_said_to_end():
+    """0.002 deg per pair for 1500 pairs at 0.3 deg of pair noise (seed 20000 of the red team's reproducer said
+    ``drift_end`` 220 pairs after the drift was recognised): followed, never ended."""
+    A, B = _drift_pairs(20000)
+    cal = OnlineCalibrator()
+    cal.update_many(A, B)
+    kinds = [e.kind for e in cal.events]
+    assert "drift" in kinds and "drift_end" not in kinds
+
+
+def test_the_centroid_is_the_weighted_mean_pair_index():
+    A, B = _drift_pairs(1, n_before=40, n_drift=0)
+    cal = OnlineCalibrator()
+    cal.update_many(A[:33], B[:33])
+    cal.K  # noqa: B018  (flushes the buffer)
+    assert cal.centroid == pytest.approx(16.0)
+    lam = OnlineCalibrator(forgetting=0.9)
+    lam.update_many(A[:40], B[:40])
+    lam.K  # noqa: B018
+    w = 0.9 ** np.arange(39, -1, -1.0)
+    assert lam.centroid == pytest.approx(float(w @ np.arange(40) / w.sum()))
+
+
+def _tracked(moved_deg, sd_deg, span=400, rate=0.001):
+    """A calibrator-like record following a drift at ``rate``; its estimate moved ``moved_deg`` along the drift's
+    axis over ``span`` pairs of centroid, its noise ``sd_deg`` along the axis."""
+    axis = AXIS / np.linalg.norm(AXIS)
+    lam = 0.99
+    lag = math.radians(drift_lag_deg(rate, lam, 10))
+    cov = np.eye(3) * math.radians(sd_deg) ** 2 + lag ** 2 * np.outer(axis, axis)
+    cal = SimpleNamespace(n_total=1000 + span, centroid=1000.0 + span, _R=so3.exp_map(np.radians(moved_deg) * axis),
+                          forgetting=lam, _drift_rate=rate, _drift_axis=axis, _cov=cov, refine_every=10,
+                          target_deg=0.5, min_pairs=10, _fgt=1.0, _last_step=None)
+    cal.events = [OnlineEvent("drift", 900, 900, "cusum", 500, 25, 0.4, 0.3, 1.0, 1.0, 0, np.eye(3), np.eye(3),
+                              "the frame drifts", rate)]
+    cal._track = deque([(1000.0, np.eye(3), cal._cov)])
+    return cal, track_drift(cal)
+
+
+@pytest.mark.parametrize("factor, ended", [(1.01, False), (0.99, True)])
+def test_an_end_waits_until_none_and_the_rate_are_far_enough_apart(factor, ended):
+    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at least
+    TRACK_APART x Z standard errors of the two estimates' difference; below that the track waits (no new rate)."""
+    assert TRACK_APART == 3.0
+    se = 0.4 / (TRACK_APART * TRACK_Z) * factor
+    cal, kind = _tracked(0.0, sd_deg=se / math.sqrt(2))
+    assert (kind == "drift_end") is ended and (cal._drift_rate is None) is ended
+    assert len(cal._track) == (1 if ended else 2)
+
+
+# ------------------------------------------------------------------------------------------------ the live gyro bias
+BIAS = np.array([0.06, -0.08, 0.04])
+
+
+def _biased_rig(seconds=40.0, seed=5):
+    from replication.rig.streams import GyroStream
+    from replication.study.simulation import rig_streams
+
+    R0, camera, gyro, _ = rig_streams(seconds, rng=np.random.default_rng(seed), camera_noise_deg=0.05,
+                                      gyro_noise_deg_s=0.2)
+    return R0, camera, GyroStream(gyro.t, gyro.omega + BIAS, "gyro")
+
+
+def _live(camera, gyro, **options):
+    from replication.rig.live import LiveRig
+
+    rig = LiveRig(OnlineCalibrator(), diagnose=False, **options)
+    for t, kind, k in sorted([(t, 1, k) for k, t in enumerate(camera.t)] + [(t, 0, k) for k, t in enumerate(gyro.t)]):
+        rig.add_camera(t, camera.world_from_body[k]) if kind else rig.add_gyro(t, gyro.omega[k])
+    rig.finish()
+    return rig
+
+
+def test_the_live_rig_removes_the_gyro_bias_and_publishes_it_with_its_interval():
+    R0, camera, gyro = _biased_rig()
+    rig = _live(camera, gyro)
+    lo, hi = rig.bias.bias_ci95_rad_s[:, 0], rig.bias.bias_ci95_rad_s[:, 1]
+    assert np.all(lo <= BIAS) and np.all(BIAS <= hi) and np.all(hi - lo < 0.01)
+    assert rig.bias_effect_deg < rig.calibrator.target_deg
+    assert rig.calibrator.error_deg(R0) < 0.1 and rig.calibrator.ready
+    summary = rig.summary()
+    assert summary["gyro_bias_rad_s"] == rig.bias.bias_rad_s.tolist() and summary["ready"]
+    assert summary["gyro_bias_ci95_rad_s"] == rig.bias.bias_ci95_rad_s.tolist()
+    assert summary["gyro_bias_R0_deg"] == rig.bias_effect_deg
+    kept = _live(camera, gyro, gyro_bias=False)  # the bias left in: R0 about a degree off, and not ready
+    assert kept.bias is None and kept.calibrator.error_deg(R0) > 0.5 and not kept.calibrator.ready
+    assert kept.summary()["gyro_bias_rad_s"] is None
+
+
+def test_a_bias_that_could_not_be_estimated_withholds_ready_naming_it():
+    _, camera, gyro = _biased_rig(seconds=1.5)
+    rig = _live(camera, gyro)
+    assert rig.bias is None
+    reasons = [r for r in rig.verdict().reasons if r.check == "gyro_bias"]
+    assert len(reasons) == 1 and reasons[0].level == "fail" and "could not be estimated" in reasons[0].message
+    assert any("gyro bias" in why for why in rig.calibrator.status()["not_ready"]) and not rig.calibrator.ready
+
+
+@pytest.mark.parametrize("factor, reason", [(1.01, False), (0.99, True)])
+def test_a_bias_interval_that_leaves_r0_beyond_the_target_withholds_ready(factor, reason):
+    from replication.rig.online_bias import start_bias
+
+    _, camera, gyro = _biased_rig(seconds=20.0)
+    _, effect, _ = start_bias(camera, gyro, interval=1.0, max_offset=0.2, target_deg=1.0)
+    model, again, found = start_bias(camera, gyro, interval=1.0, max_offset=0.2, target_deg=effect * factor)
+    assert model is not None and again == effect and (found is not None) is reason
+    if reason:
+        assert found.check == "gyro_bias" and found.level == "fail" and "leaves R0" in found.message
+
+
+def test_gyro_bias_must_be_a_bool():
+    from replication.rig.live import LiveRig
+
+    with pytest.raises(ValueError, match="gyro_bias must be True or False"):
+        LiveRig(OnlineCalibrator(), gyro_bias="yes")
+
+
+def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
+    """12 s at rest, then 40 s of motion (offset given): the bias cannot be estimated on the first 20 s (most pairs
+    at rest fit no rig), so the pairs wait; half a window later it is, and R0 is right."""
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+    from replication.study.simulation import rig_streams
+
+    rng = np.random.default_rng(7)
+    R0, cam, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    rest, moving = np.arange(0.0, 12.0, 0.05), gyro.t > 0
+    camera = OrientationStream(np.r_[rest, cam.t + 12.0], np.concatenate(
+        [np.repeat(cam.world_from_body[:1], len(rest), 0), cam.world_from_body]))
+    t_rest = np.arange(-1.0, 12.0, 0.005)
+    omega = np.concatenate([rng.normal(0, np.radians(0.2), (len(t_rest), 3)), gyro.omega[moving]]) + BIAS
+    rows = replay(camera, GyroStream(np.r_[t_rest, gyro.t[moving] + 12.0], omega), OnlineCalibrator(), offset=0.0,
+                  reference=R0, diagnose=False)
+    summary = rows.attrs["summary"]
+    assert summary["gyro_bias_rad_s"] == pytest.approx(BIAS.tolist(), abs=0.003)
+    assert rows["t_seen"].iloc[0] >= 30.0 and summary["ready"] and rows["error_deg"].iloc[-1] < 0.1
+
+
+@pytest.mark.parametrize("seconds", [24.995, 25.005])
+def test_raw_samples_are_held_for_at_most_five_windows(seconds):
+    """Samples every 10 ms: the held span stays within five windows, and no sample is dropped that is within it."""
+    from replication.rig.online_bias import BIAS_WAIT_WINDOWS, hold_raw
+
+    assert BIAS_WAIT_WINDOWS == 4
+    raw = deque()
+    for t in np.arange(0.0, 100.0, 0.01):
+        hold_raw(raw, float(t), (0.0, 0.0, 0.0), seconds / 5)
+    span = raw[-1][0] - raw[0][0]
+    assert span <= seconds < span + 0.01
+
+
+def test_pairs_held_while_the_bias_waits_are_all_formed_when_it_gives_up():
+    """A rig at rest for 100 s (offset given): no bias on any window; after four windows it gives up, names why, and
+    every held camera pose is still covered by the gyro (no pair dropped as if across a gap)."""
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    rng = np.random.default_rng(3)
+    t_cam, t_gyro = np.arange(0.0, 100.0, 0.05), np.arange(-1.0, 101.0, 0.005)
+    camera = OrientationStream(t_cam, np.repeat(so3.random_rotations(rng, ())[None], len(t_cam), 0))
+    gyro = GyroStream(t_gyro, rng.normal(0.0, np.radians(0.2), (len(t_gyro), 3)) + BIAS)
+    rows = replay(camera, gyro, OnlineCalibrator(), offset=0.0, diagnose=False)
+    summary = rows.attrs["summary"]
+    assert summary["pairs_dropped_at_gaps"] == 0 and summary["pairs"] + summary["repeated_pairs"] >= 45
+    assert summary["gyro_bias_rad_s"] is None and not summary["ready"]
+    assert any(r["check"] == "gyro_bias" and "could not be estimated" in r["message"]
+               for r in summary["verdict"]["reasons"])
+    assert rows["t_seen"].iloc[0] >= 80.0
