@@ -132,7 +132,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
                      help="largest clock offset searched (s)")
     cal.add_argument("--keep-clock", action="store_true", help="report the clock offset but do not remove it")
     cal.add_argument("--no-gyro-bias", action="store_true",
-                     help="a gyro sensor: do not estimate and remove its bias (with R0); the rates as recorded")
+                     help="a gyro sensor: do not estimate and remove its bias (with R0; with --online, on the "
+                          "live rig's first window too); the rates as recorded")
     cal.add_argument("--use", choices=("all", "consistent"), default="all",
                      help="fit R0 on every pair, or on the segments of the recording that agree with each other only "
                           "(a stretch of lost tracking left out; the seconds used are reported)")
@@ -183,7 +184,7 @@ def _online(args, camera, sensor, reference, result):
 
     rows = replay(camera, sensor, OnlineCalibrator(target_deg=args.target), interval=args.interval,
                   max_offset=args.max_offset, correct_offset=not args.keep_clock, stride=args.stride,
-                  reference=reference)
+                  reference=reference, gyro_bias=not args.no_gyro_bias)
     summary = rows.attrs["summary"]
     offset = summary["clock_offset_s"]
     head = (f"online: {len(rows)} pairs at {args.interval:g} s"
