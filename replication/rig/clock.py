@@ -17,13 +17,13 @@ data, per window of :data:`PROFILE_WINDOW_S` seconds of 1 s pairs. With ``R0`` k
 out as the transition). Their chi-squares are divided by the step model's excess scatter
 ``max(1, chi2_step / (W - 4))`` (the windows' offsets of smooth motion scatter beyond their standard errors); a step
 is named (a ``clock_jump``, ``fail``) where it fits better than both others by more than :data:`STEP_LR` and is
-larger than :data:`JUMP_MIN_S`. Its time is the boundary (or the transition window's centre, to half a window) or,
-where a clock's stamps skip there, the skip; which clock stepped is told by the skip (camera or sensor); without a
-skip it cannot be told. A drift is then not named (it was the step). The threshold and the detection rates:
-``benchmarks/bench_clock.py``.
+larger than :data:`JUMP_MIN_S`. Its time is the split of the pairs about the chosen boundary that fits the two
+offsets best (to within two pairing intervals) or, where a clock's stamps skip there, the skip; which clock stepped
+is told by the skip (camera or sensor); without a skip it cannot be told. A drift is then not named (it was the
+step). The threshold and the detection rates: ``benchmarks/bench_clock.py``.
 
-**What is done with them.** ``calibrate`` does not correct ``R0`` for a step: the step's time is known to half a
-window only where no stamp skip marks it, and the pairs around it are wrong (samples lost or a camera frame
+**What is done with them.** ``calibrate`` does not correct ``R0`` for a step: the step's time is known to two
+pairing intervals only where no stamp skip marks it, and the pairs around it are wrong (samples lost or a camera frame
 skipped), so the verdict is a ``fail`` naming the step (calibrate each part on its own, or mend the stamps). The
 change and segment tests, which would otherwise read a clock effect as a change of ``R0``, run on the sensor
 re-stamped by :func:`corrected_sensor`: a found step (the sensor's stamps after it shifted back, a gap cut over its
@@ -57,8 +57,10 @@ JUMP_Z = 3.0
 JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
 #: Length of a window of the offset profile (s): 5 s of 1 s pairs at 20 Hz are 80 pairs.
 PROFILE_WINDOW_S = 5.0
-#: A step is named where its scaled chi-square is below both the ramp's and the one offset's by more than this.
-STEP_LR = 25.0
+#: A step is named where its scaled chi-square is below both the ramp's and the one offset's by more than this. On
+#: bench_clock.py's tuning seeds 0-39 the least of the two gains reached 26.3 on clean rigs (95 % quantile 16.7) and
+#: 29.6 on 50 ppm drifts (200 ppm: below 0); a 5 ms step's median was 36.8, a 10 ms step's 5 % quantile 57.1.
+STEP_LR = 40.0
 #: Fewest windows the profile runs with (the step model has 4 parameters).
 PROFILE_MIN_WINDOWS = 6
 _H = 1e-3  # the offset's finite difference (s)
@@ -326,7 +328,7 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     if min(r_drift, r_one) > STEP_LR and abs(m1 - m0) > JUMP_MIN_S:
         j = (tc[i] >= edges[max(b - 1, 0)]) & (tc[i] < edges[min(b + 2, W)])  # the step's time from its pairs
         at = _split(Ai[j], sensor, tc[i[j]], tc[k[j]], m0, m1, R, m)
-        res = interval
+        res = 2.0 * interval  # the split's error reached 1.4 s for 5 ms steps (bench_clock.py, seeds 0-39)
         width = res + interval
         cam, sen = _skip(tc, at, width), _skip(ts, at + m0, width)
         clock = "camera" if cam is not None else "sensor" if sen is not None else "unknown"
@@ -353,19 +355,21 @@ def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
 
 
 def corrected_sensor(sensor: OrientationStream, offset: float, *, jumps=(), drift=None, interval: float = 1.0):
-    """``sensor`` re-stamped so that the one ``offset`` holds throughout: after each jump its stamps shifted back by
-    the jump's size, the stamps within the jump's time resolution plus ``interval`` of it cut (a gap, so that pairs
-    across it are dropped); or, without jumps, ``drift = (ppm, t_mid, offset_mid)`` removed (the sample stamped
-    ``s`` restamped ``t + offset``, ``t = (s - offset_mid + k t_mid) / (1 + k)``). None where there is nothing to
-    correct."""
+    """``sensor`` re-stamped so that the one ``offset`` holds throughout: with jumps, its stamps before the first
+    shifted by ``offset`` less the offset there and after each further by the jump's size, the stamps within the
+    jump's time resolution plus ``interval`` of it cut (a gap, so that pairs across it are dropped); or, without
+    jumps, ``drift = (ppm, t_mid, offset_mid)`` removed (the sample stamped ``s`` restamped ``t + offset``,
+    ``t = (s - offset_mid + k t_mid) / (1 + k)``). None where there is nothing to correct."""
     t = sensor.t.astype(float).copy()
     keep = np.ones(len(t), bool)
     if jumps:
+        jumps = sorted(jumps, key=lambda j: j.time_s)
+        new = t + (offset - jumps[0].offset_before_s)
         for j in jumps:
             at = j.time_s + j.offset_before_s
-            cut = j.time_resolution_s + interval + abs(j.size_s)
-            keep &= np.abs(t - at) > cut
-            t = np.where(t > at, t - j.size_s, t)
+            keep &= np.abs(t - at) > j.time_resolution_s + interval + abs(j.size_s)
+            new = np.where(t > at, new - j.size_s, new)
+        t = new
     elif drift is not None:
         k = drift[0] * 1e-6
         t = (t - drift[2] + k * drift[1]) / (1.0 + k) + offset
