@@ -48,7 +48,7 @@ from ..core.stats import radius_deg
 from .changepoint import S2_FLOOR, _fit, _long_run
 
 __all__ = ["Segment", "SegmentTest", "segment_test", "SEGMENT_S", "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS",
-           "MAX_LEFT_OUT_SHARE", "run", "report", "reasons", "consistent_mask"]
+           "MAX_LEFT_OUT_SHARE", "run", "report", "reasons", "consistent_mask", "parts_angle_deg"]
 
 #: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
 #: of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills segments of its own.
@@ -130,10 +130,11 @@ class SegmentTest:
         """Indices of the segments that disagree with the others."""
         return tuple(i for i, s in enumerate(self.segments) if s.disagrees)
 
-    def used_spans(self) -> list:
-        """The consistent part as ``[start_s, end_s]`` spans (neighbouring segments merged)."""
+    def used_spans(self, left_out: bool = False) -> list:
+        """The consistent part (``left_out``: the rest) as ``[start_s, end_s]`` spans (neighbouring segments
+        merged)."""
         spans = []
-        for i in self.consistent:
+        for i in (sorted(set(range(len(self.segments))) - set(self.consistent)) if left_out else self.consistent):
             s = self.segments[i]
             if spans and math.isclose(spans[-1][1], s.start_s, abs_tol=1e-9):
                 spans[-1][1] = s.end_s
@@ -302,10 +303,29 @@ def run(A, B, t, block: int, interval: float = ANALYSIS_INTERVAL_S):
         return None, f"not run: {err}"
 
 
+def parts_angle_deg(test) -> float:
+    """The angle (deg) between the ``R0`` of the consistent part and that of the rest, each the pair-weighted
+    chordal mean of its segments' (0 where nothing is left out): how far ``R0`` moves if the rest is right."""
+    keep = np.zeros(len(test.segments), bool)
+    keep[list(test.consistent)] = True
+    if keep.all() or not keep.any():
+        return 0.0
+
+    def mean(k):
+        u, _, vt = np.linalg.svd(sum(s.n_pairs * s.R for s, k_i in zip(test.segments, k) if k_i))
+        return u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt
+    return float(angle_between_deg(mean(keep), mean(~keep)))
+
+
 def report(test, note, t0: float, used=None) -> dict:
-    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept."""
+    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept, with
+    the spans kept and left out and :func:`parts_angle_deg` where it kept a part."""
     if test is None:
         return {"run": False, "note": note, "use": used}
+    if used is not None and used.get("kept_s") is not None:
+        used = {**used, "kept_spans_s": [[a - t0, b - t0] for a, b in test.used_spans()],
+                "left_out_spans_s": [[a - t0, b - t0] for a, b in test.used_spans(left_out=True)],
+                "R0_moves_deg_if_left_out_part_is_right": parts_angle_deg(test)}
     return {**test.to_dict(t0), "use": used}
 
 
@@ -342,12 +362,15 @@ def reasons(test, t0: float, used=None, note=None) -> list:
             share = used["dropped_s"] / (used["dropped_s"] + used["kept_s"])
             worst = max((test.segments[i].angle_deg for i in bad), default=0.0)
             level = "fail" if share > MAX_LEFT_OUT_SHARE and worst > fail else "warning"
+            out_spans = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in test.used_spans(left_out=True))
             out.append(Reason("segments_consistent_part", level, float(share), MAX_LEFT_OUT_SHARE,
-                              f"use='consistent': R0 is from the consistent part only ({spans}, "
-                              f"{used['kept_s']:.1f} s); {used['dropped_s']:.1f} s ({100 * share:.0f} % of the "
-                              f"recording) left out where segments disagreed with the rest by up to {worst:.2f} deg: "
-                              f"the part kept is the majority, which the pairs cannot show to be the right one; if "
-                              f"the part left out is the well-tracked one, R0 is off by about that angle"
+                              f"use='consistent': R0 is from the consistent part only (kept: {spans}, "
+                              f"{used['kept_s']:.1f} s); left out: {out_spans} ({used['dropped_s']:.1f} s, "
+                              f"{100 * share:.0f} % of the recording), where segments disagreed with the rest by up "
+                              f"to {worst:.2f} deg. The part kept is the majority, not known to be the right one: "
+                              f"without a reference the pairs cannot tell which part is right; if the part left out "
+                              f"is the well-tracked one, R0 moves by {parts_angle_deg(test):.2f} deg (the two "
+                              f"parts' R0 apart)"
                               + ("; with this much left out, check the tracking of both parts or calibrate each on "
                                  "its own" if level == "fail" else "")))
         return out
@@ -358,8 +381,9 @@ def reasons(test, t0: float, used=None, note=None) -> list:
     named = "; ".join(f"{test.segments[i].start_s - t0:.1f}-{test.segments[i].end_s - t0:.1f} s by "
                       f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f})"
                       for i in bad)
-    keep = (f"the consistent part is {spans}: calibrate on it with use='consistent' (--use consistent)"
-            if test.consistent else "no half of the segments agrees")
+    keep = (f"the consistent part (the majority, whose segments agree; the pairs cannot tell whether it or the "
+            f"rest is right) is {spans}: calibrate on it with use='consistent' (--use consistent) where its "
+            f"tracking is known to be the good one" if test.consistent else "no half of the segments agrees")
     out.append(Reason("segments_disagree", level, worst, bound,
                       f"R0 differs along the recording: segments of {ANALYSIS_INTERVAL_S:g} s pairs disagree with "
                       f"the rest beyond their noise ({named}; the segments' test p = {test.p_value:.2g}): a "
