@@ -147,3 +147,10 @@ def test_use_consistent_keeping_a_wrong_majority_says_which_seconds_and_by_how_m
     text = " ".join(x.message for x in r.verdict.reasons) + " ".join(r.summary().splitlines())
     assert "is the right one" not in text.replace("if the part left out is the well-tracked one", "")
     assert "not known to be right" in r.summary()
+
+
+def test_a_window_without_pairs_is_left_out_not_the_profile():
+    camera, gyro = _rig(8007)
+    keep = (gyro.t < 27.0) | (gyro.t > 33.5)  # 6.5 s of gyro lost (a gap in its stamps, the clock unchanged)
+    p = _profile(camera, GyroStream(gyro.t[keep], gyro.omega[keep], "gyro"))
+    assert p is not None and p.step is None and len(p.t_s) < 12 and not np.any((p.t_s > 28.0) & (p.t_s < 32.0))

@@ -11,7 +11,7 @@ show the first, and the second is not in the sensor's stamps: :func:`offset_prof
 data, per window of :data:`PROFILE_WINDOW_S` seconds of 1 s pairs. With ``R0`` known, the residual of a pair
 ``r_j = log(B_j^T R0^T A_j R0)`` changes with the offset ``d`` applied to the sensor by ``g_j = d r_j / d d``
 (a finite difference of the sensor's interpolated orientations); each window's offset is Gauss-Newton on its pairs
-(two steps), its standard error the Newey-West (Bartlett, lags up to two pairing intervals) variance of the scores
+(three steps), its standard error the Newey-West (Bartlett, lags up to two pairing intervals) variance of the scores
 ``g_j . r_j`` over ``(sum g_j . g_j)^2``. Three models are fitted to the windows' offsets by weighted least squares:
 *one offset*, *a drift* (a ramp) and *a step* (two offsets, the step at a window boundary, or inside a window left
 out as the transition). Their chi-squares are divided by the step model's excess scatter
@@ -213,7 +213,7 @@ def _residuals(Ai, sensor, ti, tk, d, R):
 
 
 def _window_offset(Ai, sensor, ti, tk, d, R, lags):
-    """One window's offset (two Gauss-Newton steps from ``d``) and its Newey-West standard error."""
+    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error."""
     for _ in range(3):
         r = _residuals(Ai, sensor, ti, tk, d, R)
         g = (_residuals(Ai, sensor, ti, tk, d + _H, R) - r) / _H
@@ -285,7 +285,8 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
 
     ``sensor``: an OrientationStream (a gyro integrated), ``R``: ``R0``, ``offset``: the one offset applied (s);
     ``sensor_stamps``: the sensor's own stamps where ``sensor`` was re-sampled (default ``sensor.t``). Returns an
-    :class:`OffsetProfile`, or None where the recording makes fewer than :data:`PROFILE_MIN_WINDOWS` windows.
+    :class:`OffsetProfile`, or None where the recording makes fewer than :data:`PROFILE_MIN_WINDOWS` windows with
+    at least three pairing intervals of pairs and motion (the others are left out).
     """
     tc = camera.t
     dt = float(np.median(np.diff(tc)))
@@ -311,16 +312,18 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     A = np.swapaxes(Qc[k], -1, -2) @ Qc[i]
     Ai = R.T @ A @ R
     where = np.clip(np.searchsorted(edges, tc[i], side="right") - 1, 0, W - 1)
-    tw, dw, sw = np.empty(W), np.empty(W), np.empty(W)
+    tw, dw, sw = np.full(W, np.nan), np.full(W, np.nan), np.full(W, np.nan)
     for w in range(W):
         j = where == w
-        if j.sum() < 3 * m:
-            return None
-        tw[w] = 0.5 * (edges[w] + edges[w + 1])
-        with np.errstate(all="ignore"):
-            dw[w], sw[w] = _window_offset(Ai[j], sensor, tc[i[j]], tc[k[j]], float(offset), R, 2 * m)
-    if not (np.all(np.isfinite(dw)) and np.all(np.isfinite(sw)) and np.all(sw > 0)):
+        if j.sum() >= 3 * m:  # a window of too few pairs (a gap) is left out
+            tw[w] = 0.5 * (edges[w] + edges[w + 1])
+            with np.errstate(all="ignore"):
+                dw[w], sw[w] = _window_offset(Ai[j], sensor, tc[i[j]], tc[k[j]], float(offset), R, 2 * m)
+    good = np.isfinite(dw) & np.isfinite(sw) & (sw > 0)  # a window without motion determines no offset
+    if good.sum() < PROFILE_MIN_WINDOWS:
         return None
+    tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
+    W = len(tw)
     c0, c1, slope, (c2, (b, x, m0, m1)) = _fits(tw, dw, 1.0 / sw ** 2)
     scale = max(1.0, c2 / max(W - 4, 1))
     r_drift, r_one = (c1 - c2) / scale, (c0 - c2) / scale
