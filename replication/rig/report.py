@@ -89,7 +89,8 @@ def _segment_lines(s) -> list:
         lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs; the majority, not known to be "
                      f"right: {used.get('R0_moves_deg_if_left_out_part_is_right', math.nan):.2f} deg away if the part "
                      f"left out is)")
-    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms" for j in s.get("clock_jumps", [])]
+    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms (clock: {j.get('clock', 'sensor')})"
+              for j in s.get("clock_jumps", [])]
     return lines
 
 
