@@ -154,3 +154,12 @@ def test_a_window_without_pairs_is_left_out_not_the_profile():
     keep = (gyro.t < 27.0) | (gyro.t > 33.5)  # 6.5 s of gyro lost (a gap in its stamps, the clock unchanged)
     p = _profile(camera, GyroStream(gyro.t[keep], gyro.omega[keep], "gyro"))
     assert p is not None and p.step is None and len(p.t_s) < 12 and not np.any((p.t_s > 28.0) & (p.t_s < 32.0))
+    assert p.windows_left_out >= 1 and len(p.t_s) + p.windows_left_out == 11  # 11 windows of 5.45 s
+
+
+def test_a_step_beyond_the_first_search_is_found_and_one_beyond_the_reach_is_not_a_crash():
+    camera, gyro = _rig(8008)
+    p = _profile(camera, lost(gyro, 30.0, 30))  # 150 ms lost, stamps even
+    assert p.step is not None and p.step.size_s == pytest.approx(-0.150, abs=0.003)
+    far = _profile(camera, lost(gyro, 30.0, 80))  # 400 ms: beyond PROFILE_REACH_S, its windows left out
+    assert far is not None and far.windows_left_out >= 4

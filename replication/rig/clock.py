@@ -66,6 +66,9 @@ STEP_LR = 40.0
 #: Fewest windows the profile runs with (the step model has 4 parameters).
 PROFILE_MIN_WINDOWS = 6
 _H = 1e-3  # the offset's finite difference (s)
+#: A window's offset is searched within this of the one offset applied (s); a window whose offset leaves it (the
+#: streams show no common motion there) is left out of the profile and counted.
+PROFILE_REACH_S = 0.3
 
 @dataclass(frozen=True)
 class ClockJump:
@@ -186,6 +189,8 @@ class OffsetProfile:
         The step (where chosen).
     drift_ppm : float
         The ramp's slope (1e-6 s per s).
+    windows_left_out : int
+        Windows without enough pairs or motion, or whose offset left :data:`PROFILE_REACH_S`.
     """
 
     t_s: np.ndarray
@@ -199,12 +204,14 @@ class OffsetProfile:
     step: ClockJump | None
     drift_ppm: float
     threshold: float = STEP_LR
+    windows_left_out: int = 0
 
     def to_dict(self, t0: float = 0.0) -> dict:
         return {"t_s": (self.t_s - t0).tolist(), "offset_s": self.offset_s.tolist(), "se_s": self.se_s.tolist(),
                 "chi2": dict(self.chi2), "scale": self.scale, "ratio_drift": self.ratio_drift,
                 "ratio_one": self.ratio_one, "threshold": self.threshold, "choice": self.choice,
-                "drift_ppm": self.drift_ppm, "step": None if self.step is None else self.step.to_dict(t0)}
+                "drift_ppm": self.drift_ppm, "windows_left_out": self.windows_left_out,
+                "step": None if self.step is None else self.step.to_dict(t0)}
 
 
 def _residuals(Ai, sensor, ti, tk, d, R):
@@ -214,9 +221,13 @@ def _residuals(Ai, sensor, ti, tk, d, R):
     return log_map(np.swapaxes(B, -1, -2) @ Ai)
 
 
-def _window_offset(Ai, sensor, ti, tk, d, R, lags):
-    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error."""
+def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
+    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error; NaN where a
+    step leaves ``d +- bound`` (the streams do not show one motion there, or no motion)."""
+    d0 = d
     for _ in range(3):
+        if not abs(d - d0) <= bound:
+            return math.nan, math.nan
         r = _residuals(Ai, sensor, ti, tk, d, R)
         g = (_residuals(Ai, sensor, ti, tk, d + _H, R) - r) / _H
         H = float(np.einsum("ja,ja->", g, g))
@@ -225,6 +236,8 @@ def _window_offset(Ai, sensor, ti, tk, d, R, lags):
         if _ == 2:
             break
         d += step
+    if not abs(d + step - d0) <= bound:
+        return math.nan, math.nan
     u = u + step * np.einsum("ja,ja->j", g, g)  # the scores at the final offset (first order)
     lrv = float(u @ u) + 2.0 * sum((1 - k / (lags + 1)) * float(u[k:] @ u[:-k])
                                    for k in range(1, min(lags, len(u) - 1) + 1))
@@ -295,7 +308,7 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     m = max(1, round(interval / dt))
     i = np.arange(len(tc) - m)
     k = i + m
-    margin = 0.1
+    margin = PROFILE_REACH_S
     ok = (np.abs(tc[k] - tc[i] - interval) <= 0.5 * dt) & (tc[i] + offset - margin >= sensor.t[0]) & (
         tc[k] + offset + margin <= sensor.t[-1])
     ts = sensor.t if sensor_stamps is None else np.asarray(sensor_stamps, float)
@@ -320,10 +333,12 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
         if j.sum() >= 3 * m:  # a window of too few pairs (a gap) is left out
             tw[w] = 0.5 * (edges[w] + edges[w + 1])
             with np.errstate(all="ignore"):
-                dw[w], sw[w] = _window_offset(Ai[j], sensor, tc[i[j]], tc[k[j]], float(offset), R, 2 * m)
+                dw[w], sw[w] = _window_offset(Ai[j], sensor, tc[i[j]], tc[k[j]], float(offset), R, 2 * m,
+                                              margin - 2 * _H)
     good = np.isfinite(dw) & np.isfinite(sw) & (sw > 0)  # a window without motion determines no offset
     if good.sum() < PROFILE_MIN_WINDOWS:
         return None
+    left_out = int(W - good.sum())
     tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
     W = len(tw)
     c0, c1, slope, (c2, (b, x, m0, m1)) = _fits(tw, dw, 1.0 / sw ** 2)
@@ -346,7 +361,8 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     choice = "step" if step is not None else "drift" if (c0 - c1) / scale > STEP_LR else "one offset"
     return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, chi2={"one offset": c0, "drift": c1, "step": c2},
                          scale=float(scale), ratio_drift=float(r_drift), ratio_one=float(r_one), choice=choice,
-                         step=step, drift_ppm=float(1e6 * slope))
+                         step=step, drift_ppm=float(1e6 * slope), windows_left_out=left_out,
+                         threshold=STEP_LR)
 
 
 def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
