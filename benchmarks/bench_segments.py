@@ -10,7 +10,7 @@ jumps, cost.
 2. false alarms: rigs without a wander (bench_changepoint's CONFIGS without a gyro bias): the share where a segment
    is named as disagreeing (a verdict reason), and where the segments' omnibus test is significant;
 3. clock jumps of several sizes half-way (JUMPS_MS), and none with samples lost (a gap, the clock unchanged):
-   detection and false alarms (replication.rig.segments.clock_segments as calibrate calls it);
+   detection and false alarms (replication.rig.clock.clock_segments as calibrate calls it);
 4. time: calibrate against the segment test alone.
 
 Run: python benchmarks/bench_segments.py [N] [BASE]     (tuning seeds: 40 0; fresh: 40 50000)
@@ -107,7 +107,7 @@ LOST_SAMPLES = (1, 4, 20, 40)
 
 def clock_jumps(seeds):
     try:
-        from replication.rig.segments import clock_segments, jump_candidates
+        from replication.rig.clock import clock_segments, jump_candidates
     except ImportError:
         print("3. clock jumps: no clock_segments here")
         return

@@ -19,13 +19,12 @@ from bench_segments import jumped, lost_rig, lost_samples  # noqa: E402
 from replication.core import so3  # noqa: E402
 from replication.rig.calibration import calibrate  # noqa: E402
 from replication.rig.changepoint import remounted  # noqa: E402
+from replication.rig.clock import clock_segments, jump_candidates  # noqa: E402
 from replication.rig.quality import THRESHOLDS  # noqa: E402
 from replication.rig.segments import (  # noqa: E402
     MAX_LEFT_OUT_SHARE,
     Segment,
     SegmentTest,
-    clock_segments,
-    jump_candidates,
     reasons,
     segment_test,
 )

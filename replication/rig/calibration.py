@@ -15,7 +15,7 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
-from .quality import THRESHOLDS
+from .quality import THRESHOLDS, Verdict
 from .report import CalibrationResult  # re-exported: a public name here
 from .sensor_verdict import model_or_note, with_sensor_model
 from .solve_and_judge import (
@@ -266,7 +266,8 @@ def _change_test(A, B, t_start, block, t0):
 
 def _analysis_pairs(camera, oriented, offset, integrated, A, B, t_start, interval, stride, block):
     """The pairs the change and segment tests run on: at :data:`replication.rig.segments.ANALYSIS_INTERVAL_S`, every
-    camera time, those across a sensor gap dropped (the calibration's own pairs where they are these)."""
+    camera time, those across a sensor gap dropped (the calibration's own pairs where they are these; ``stride`` 0:
+    never, the sensor having been re-stamped)."""
     from .segments import ANALYSIS_INTERVAL_S
 
     if interval == ANALYSIS_INTERVAL_S and stride == 1:
@@ -393,8 +394,12 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
     # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the interval
+    from . import clock as clock_mod
     from . import segments as seg_mod
-    As, Bs, ts, bs = _analysis_pairs(camera, oriented, used, gyro is not None, A, B, t_start, interval, stride, block)
+    clock_parts, jumps, profile, fixed = clock_mod.clock_analysis(  # a clock's step or drift removed for the tests
+        camera, oriented, A, B, used, model, max_offset=max_offset, seed=seed)
+    As, Bs, ts, bs = _analysis_pairs(camera, fixed or oriented, used, gyro is not None, A, B, t_start, interval,
+                                     stride if fixed is None else 0, block)
     segs, segs_note = seg_mod.run(As, Bs, ts, bs) if len(As) else (None, "not run: no pairs")
     if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
         part = seg_mod.consistent_mask(segs, ts, seg_mod.ANALYSIS_INTERVAL_S)
@@ -407,9 +412,6 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         segs_used = {"kept_s": kept_s, "dropped_s": 0.0 if kept_s is None else float(
             segs.segments[-1].end_s - segs.segments[0].start_s - kept_s), "pairs_kept": int(keep.sum())}
         A, B, t_start = A[keep], B[keep], t_start[keep]
-    clock_parts = seg_mod.clock_segments(camera, oriented, max_offset=max_offset,
-                                         gaps=seg_mod.jump_candidates(oriented.t, max_offset), seed=seed,
-                                         offset_s=offset)
     # --- end of the change and segment tests
     evidence = dict(change=change, change_sides_fit=change_fit if change is not None else None, offset_s=offset,
                     offset_correlation=corr, offset_peak_margin=clock.peak_margin,
@@ -429,16 +431,19 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
                               change=change)
     segs_report = {**seg_mod.report(segs, segs_note, float(camera.t[0]), segs_used),
-                   **seg_mod.clock_report(*clock_parts, float(camera.t[0]))}
+                   **clock_mod.clock_report(clock_parts, jumps, float(camera.t[0]), profile)}
     result = with_reasons(dataclasses.replace(result, segments=segs_report),  # the segment test, the clock jumps
                           seg_mod.reasons(segs, float(camera.t[0]), segs_used, segs_note)
-                          + seg_mod.clock_reasons(clock_parts[1], float(camera.t[0]), offset))
+                          + clock_mod.clock_reasons(jumps, float(camera.t[0]), offset))
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])
     if isinstance(sensor, GyroStream):  # the sensor model: its fields and reasons (model off: only where not ok)
         result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
                                    max_offset)
+        if jumps:  # a step of the clock reads as a drift to the sensor model: named once, as the step
+            result = dataclasses.replace(result, verdict=Verdict.of(
+                tuple(x for x in result.verdict.reasons if x.check != "clock_drift")))
     if diagnose and result.verdict.level != "ok":
         import functools
 

@@ -86,8 +86,11 @@ def _segment_lines(s) -> list:
     used = s.get("use")
     if used is not None and used.get("kept_s") is not None:
         spans = ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in s.get("consistent_spans_s", []))
-        lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs)")
-    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms" for j in s.get("clock_jumps", [])]
+        lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs; the majority, not known to be "
+                     f"right: {used.get('R0_moves_deg_if_left_out_part_is_right', math.nan):.2f} deg away if the part "
+                     f"left out is)")
+    lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms (clock: {j.get('clock', 'sensor')})"
+              for j in s.get("clock_jumps", [])]
     return lines
 
 

@@ -1,5 +1,4 @@
-"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time, the segments that disagree, and the
-clock offset on either side of the sensor's gaps (a jump of the sensor clock).
+"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time and the segments that disagree.
 
 :func:`segment_test` cuts the motion pairs of a calibration into segments of about :data:`SEGMENT_S` seconds and
 fits ``R0`` on each (eq. (8) over its pairs, as :mod:`replication.rig.changepoint` fits each side of a split);
@@ -32,12 +31,7 @@ right: left out beyond :data:`MAX_LEFT_OUT_SHARE` of the recording (and beyond t
 **Interval.** ``calibrate`` runs this test (and the change test) on pairs at :data:`ANALYSIS_INTERVAL_S` whatever
 its ``interval``: whether the recording agrees with itself is a property of the data, not of the pairs' interval.
 
-**Clock jumps.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
-the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
-stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
-jump at that gap, named with its time and size (a ``fail``: the one offset removed is wrong for a part of the
-recording). Not corrected here. A jump without a gap is not looked for: offsets of 10-20 s of smooth motion
-scatter by several ms (benchmarks/bench_segments.py: 30 ms found in 80 of 80 rigs, 10 ms in 7 of 80).
+**Clock jumps**: :mod:`replication.rig.clock`.
 
 Conventions: ``docs/conventions.md``.
 """
@@ -53,9 +47,8 @@ from ..core.so3 import angle_between_deg, exp_map, log_map
 from ..core.stats import radius_deg
 from .changepoint import S2_FLOOR, _fit, _long_run
 
-__all__ = ["Segment", "SegmentTest", "segment_test", "ClockJump", "clock_segments", "SEGMENT_S", "ANALYSIS_INTERVAL_S",
-           "MIN_SEGMENTS", "MAX_LEFT_OUT_SHARE", "JUMP_MIN_S", "run", "report", "reasons", "consistent_mask",
-           "clock_report", "clock_reasons", "jump_candidates", "JUMP_Z"]
+__all__ = ["Segment", "SegmentTest", "segment_test", "SEGMENT_S", "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS",
+           "MAX_LEFT_OUT_SHARE", "run", "report", "reasons", "consistent_mask", "parts_angle_deg"]
 
 #: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
 #: of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills segments of its own.
@@ -66,16 +59,6 @@ ANALYSIS_INTERVAL_S = 1.0
 MIN_SEGMENTS = 3
 #: ``use="consistent"`` keeps the majority: left out beyond this share it may be the wrong part (a ``fail``).
 MAX_LEFT_OUT_SHARE = 1 / 3
-#: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
-#: offset intervals.
-JUMP_MIN_S = 2e-3
-#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap intervals): 1.96 named
-#: one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40 synthetic rigs, the bootstrap interval of a
-#: 20 s side of smooth motion missing its offset by 7 ms (benchmarks/bench_segments.py, seeds 0-39).
-JUMP_Z = 3.0
-#: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
-#: the :data:`JUMP_CANDIDATES` longest are tested.
-JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
 
 
 @dataclass(frozen=True)
@@ -147,10 +130,11 @@ class SegmentTest:
         """Indices of the segments that disagree with the others."""
         return tuple(i for i, s in enumerate(self.segments) if s.disagrees)
 
-    def used_spans(self) -> list:
-        """The consistent part as ``[start_s, end_s]`` spans (neighbouring segments merged)."""
+    def used_spans(self, left_out: bool = False) -> list:
+        """The consistent part (``left_out``: the rest) as ``[start_s, end_s]`` spans (neighbouring segments
+        merged)."""
         spans = []
-        for i in self.consistent:
+        for i in (sorted(set(range(len(self.segments))) - set(self.consistent)) if left_out else self.consistent):
             s = self.segments[i]
             if spans and math.isclose(spans[-1][1], s.start_s, abs_tol=1e-9):
                 spans[-1][1] = s.end_s
@@ -319,10 +303,29 @@ def run(A, B, t, block: int, interval: float = ANALYSIS_INTERVAL_S):
         return None, f"not run: {err}"
 
 
+def parts_angle_deg(test) -> float:
+    """The angle (deg) between the ``R0`` of the consistent part and that of the rest, each the pair-weighted
+    chordal mean of its segments' (0 where nothing is left out): how far ``R0`` moves if the rest is right."""
+    keep = np.zeros(len(test.segments), bool)
+    keep[list(test.consistent)] = True
+    if keep.all() or not keep.any():
+        return 0.0
+
+    def mean(k):
+        u, _, vt = np.linalg.svd(sum(s.n_pairs * s.R for s, k_i in zip(test.segments, k) if k_i))
+        return u @ np.diag([1.0, 1.0, np.linalg.det(u @ vt)]) @ vt
+    return float(angle_between_deg(mean(keep), mean(~keep)))
+
+
 def report(test, note, t0: float, used=None) -> dict:
-    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept."""
+    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept, with
+    the spans kept and left out and :func:`parts_angle_deg` where it kept a part."""
     if test is None:
         return {"run": False, "note": note, "use": used}
+    if used is not None and used.get("kept_s") is not None:
+        used = {**used, "kept_spans_s": [[a - t0, b - t0] for a, b in test.used_spans()],
+                "left_out_spans_s": [[a - t0, b - t0] for a, b in test.used_spans(left_out=True)],
+                "R0_moves_deg_if_left_out_part_is_right": parts_angle_deg(test)}
     return {**test.to_dict(t0), "use": used}
 
 
@@ -359,12 +362,15 @@ def reasons(test, t0: float, used=None, note=None) -> list:
             share = used["dropped_s"] / (used["dropped_s"] + used["kept_s"])
             worst = max((test.segments[i].angle_deg for i in bad), default=0.0)
             level = "fail" if share > MAX_LEFT_OUT_SHARE and worst > fail else "warning"
+            out_spans = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in test.used_spans(left_out=True))
             out.append(Reason("segments_consistent_part", level, float(share), MAX_LEFT_OUT_SHARE,
-                              f"use='consistent': R0 is from the consistent part only ({spans}, "
-                              f"{used['kept_s']:.1f} s); {used['dropped_s']:.1f} s ({100 * share:.0f} % of the "
-                              f"recording) left out where segments disagreed with the rest by up to {worst:.2f} deg: "
-                              f"the part kept is the majority, which the pairs cannot show to be the right one; if "
-                              f"the part left out is the well-tracked one, R0 is off by about that angle"
+                              f"use='consistent': R0 is from the consistent part only (kept: {spans}, "
+                              f"{used['kept_s']:.1f} s); left out: {out_spans} ({used['dropped_s']:.1f} s, "
+                              f"{100 * share:.0f} % of the recording), where segments disagreed with the rest by up "
+                              f"to {worst:.2f} deg. The part kept is the majority, not known to be the right one: "
+                              f"without a reference the pairs cannot tell which part is right; if the part left out "
+                              f"is the well-tracked one, R0 moves by {parts_angle_deg(test):.2f} deg (the two "
+                              f"parts' R0 apart)"
                               + ("; with this much left out, check the tracking of both parts or calibrate each on "
                                  "its own" if level == "fail" else "")))
         return out
@@ -375,8 +381,9 @@ def reasons(test, t0: float, used=None, note=None) -> list:
     named = "; ".join(f"{test.segments[i].start_s - t0:.1f}-{test.segments[i].end_s - t0:.1f} s by "
                       f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f})"
                       for i in bad)
-    keep = (f"the consistent part is {spans}: calibrate on it with use='consistent' (--use consistent)"
-            if test.consistent else "no half of the segments agrees")
+    keep = (f"the consistent part (the majority, whose segments agree; the pairs cannot tell whether it or the "
+            f"rest is right) is {spans}: calibrate on it with use='consistent' (--use consistent) where its "
+            f"tracking is known to be the good one" if test.consistent else "no half of the segments agrees")
     out.append(Reason("segments_disagree", level, worst, bound,
                       f"R0 differs along the recording: segments of {ANALYSIS_INTERVAL_S:g} s pairs disagree with "
                       f"the rest beyond their noise ({named}; the segments' test p = {test.p_value:.2g}): a "
@@ -384,116 +391,3 @@ def reasons(test, t0: float, used=None, note=None) -> list:
                       f"spread between segments is {test.between_radius_deg:.2f} deg (from the pairs "
                       f"{test.pairs_radius_deg:.2f}); {keep}"))
     return out
-
-
-@dataclass(frozen=True)
-class ClockJump:
-    """A jump of the sensor clock: at ``time_s`` (s, on the camera's clock) the offset changes by ``size_s``."""
-
-    time_s: float
-    size_s: float
-    offset_before_s: float
-    offset_after_s: float
-    at_gap: bool
-
-    def to_dict(self, t0: float = 0.0) -> dict:
-        return {"time_s": self.time_s - t0, "size_s": self.size_s, "offset_before_s": self.offset_before_s,
-                "offset_after_s": self.offset_after_s, "at_gap": self.at_gap}
-
-
-def jump_candidates(t, max_offset: float = math.inf) -> np.ndarray:
-    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`; a skip beyond
-    ``max_offset``, the offset search's bound, is no jump it could measure: samples lost), the
-    :data:`JUMP_CANDIDATES` longest, in time order."""
-    dt = np.diff(t)
-    step = np.median(dt)
-    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (dt - step <= max_offset))
-    k = np.sort(k[np.argsort(-dt[k])[:JUMP_CANDIDATES]])
-    return np.stack([t[k], t[k + 1]], axis=-1)
-
-
-def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_bootstrap: int = 50, seed: int = 0,
-                   offset_s: float | None = None, window_s: float = 2 * SEGMENT_S):
-    """The clock offset on each side of the sensor stream's gaps, and the jumps among them.
-
-    A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in its stamps; a
-    gap where samples were lost leaves the offset as it was. On each side of a gap, the camera's samples within
-    ``window_s`` of it (up to the neighbouring gaps; at least :data:`SEGMENT_S`) get their own offset
-    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's ``offset_s`` the search
-    spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
-    than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
-    it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
-    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)`` (``se`` = interval
-    width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
-    may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
-    jump, however long.
-
-    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``: NaN
-    where no jump was in question, the bootstrap being run only there), a list of :class:`ClockJump`.
-    """
-    from .association import estimate_time_offset, offset_analysis
-
-    gaps = np.empty((0, 2)) if gaps is None else np.asarray(gaps, dtype=float).reshape(-1, 2)
-    if not len(gaps):
-        return [], []
-    step = float(np.median(np.diff(sensor.t)))
-    if offset_s is not None and math.isfinite(offset_s):
-        max_offset = min(max_offset, abs(offset_s) + float(np.max(gaps[:, 1] - gaps[:, 0])) + 0.02)
-    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]])
-
-    def side(lo, hi):
-        if hi - lo < SEGMENT_S or np.sum((camera.t >= lo + max_offset) & (camera.t <= hi - max_offset)) < 10:
-            return None
-        view = camera.between(lo + max_offset, hi - max_offset)
-        with np.errstate(all="ignore"):
-            d = estimate_time_offset(view, sensor, max_offset=max_offset)[0]
-        return {"start_s": float(lo), "end_s": float(hi), "offset_s": float(d), "ci95_s": [math.nan, math.nan],
-                "view": view}
-
-    def se(part):  # the side's 95 % interval, computed where a jump is in question only (the bootstrap's cost)
-        v = part["view"]
-        with np.errstate(all="ignore"):
-            est = offset_analysis(v, sensor, max_offset=max_offset, n_bootstrap=n_bootstrap, seed=seed,
-                                  block_s=min(1.0, 0.25 * (v.t[-1] - v.t[0])))
-        part["ci95_s"] = [float(x) for x in est.ci95_s]
-        lo, hi = part["ci95_s"]
-        return max((hi - lo) / 3.92, 0.0) if math.isfinite(hi - lo) else math.inf
-
-    def agrees(size, stamps, bound):
-        return abs(size) > max(JUMP_MIN_S, bound) and abs(stamps - size) <= max(0.5 * abs(stamps), bound + JUMP_MIN_S)
-    parts, jumps = [], []
-    for i, gap in enumerate(gaps):
-        p = side(max(edges[2 * i], gap[0] - window_s), gap[0])
-        q = side(gap[1], min(edges[2 * i + 3], gap[1] + window_s))
-        parts += [x for x in (p, q) if x is not None]
-        if p is None or q is None:
-            continue
-        size = q["offset_s"] - p["offset_s"]
-        stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
-        if agrees(size, stamps, 0.0) and agrees(size, stamps, JUMP_Z * math.hypot(se(p), se(q))):
-            jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=stamps,
-                                   offset_before_s=p["offset_s"], offset_after_s=q["offset_s"], at_gap=True))
-    return [{k: v for k, v in x.items() if k != "view"} for x in parts], jumps
-
-
-def clock_report(parts, jumps, t0: float) -> dict:
-    """The clock offset of each part between the sensor's gaps and the jumps, for the report (times since ``t0``,
-    on the sensor's clock for the parts)."""
-    return {"clock_offsets": [{**o, "start_s": o["start_s"] - t0, "end_s": o["end_s"] - t0} for o in parts],
-            "clock_jumps": [j.to_dict(t0) for j in jumps]}
-
-
-def clock_reasons(jumps, t0: float, offset_s: float) -> list:
-    """A ``fail`` reason per recording with clock jumps: the one offset removed is wrong for part of it."""
-    from .quality import Reason
-
-    if not jumps:
-        return []
-    named = "; ".join(f"at {j.time_s - t0:.1f} s by {1e3 * j.size_s:+.1f} ms (offset {1e3 * j.offset_before_s:+.1f} "
-                      f"ms before, {1e3 * j.offset_after_s:+.1f} ms after"
-                      + (", where the sensor stream has a gap)" if j.at_gap else ")") for j in jumps)
-    worst = max(abs(j.size_s) for j in jumps)
-    return [Reason("clock_jump", "fail", worst, JUMP_MIN_S,
-                   f"the sensor clock jumps: {named}; the one offset removed ({1e3 * offset_s:+.2f} ms) is wrong for "
-                   f"part of the recording, and its interval does not say so; calibrate each part on its own, or "
-                   f"correct the sensor's time stamps at the jump")]

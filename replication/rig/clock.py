@@ -1,0 +1,459 @@
+"""The clocks: the offset between the camera's and the sensor's clock along the recording, and its jumps (issue 34).
+
+**Jumps at a gap.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
+the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
+stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
+jump at that gap, named with its time and size.
+
+**Steps without a gap, and the camera's clock.** A clock can step without a skip in its stamps (a gyro that loses
+samples and stamps on evenly) and the camera's clock can jump (a skip in the camera's stamps). The stamps do not
+show the first, and the second is not in the sensor's stamps: :func:`offset_profile` measures the offset from the
+data, per window of :data:`PROFILE_WINDOW_S` seconds of 1 s pairs. With ``R0`` known, the residual of a pair
+``r_j = log(B_j^T R0^T A_j R0)`` changes with the offset ``d`` applied to the sensor by ``g_j = d r_j / d d``
+(a finite difference of the sensor's interpolated orientations); each window's offset is Gauss-Newton on its pairs
+(three steps), its standard error the Newey-West (Bartlett, lags up to two pairing intervals) variance of the scores
+``g_j . r_j`` over ``(sum g_j . g_j)^2``. Three models are fitted to the windows' offsets by weighted least squares:
+*one offset*, *a drift* (a ramp) and *a step* (two offsets, the step at a window boundary, or inside a window left
+out as the transition). Their chi-squares are divided by the step model's excess scatter
+``max(1, chi2_step / (W - 4))`` (the windows' offsets of smooth motion scatter beyond their standard errors); a step
+is named (a ``clock_jump``, ``fail``) where it fits better than both others by more than :data:`STEP_LR` and is
+larger than :data:`JUMP_MIN_S`. Its time is the split of the pairs about the chosen boundary that fits the two
+offsets best (to within two pairing intervals) or, where a clock's stamps skip there, the skip; which clock stepped
+is told by the skip (camera or sensor); without a skip it cannot be told. A drift is then not named (it was the
+step). The threshold and the detection rates: ``benchmarks/bench_clock.py`` (a 10 ms step in a minute: 40 of 40;
+5 ms: about half; fewer windows, fewer found: 10 ms in 17 of 40 recordings of 40 s). A step not found leaves the
+verdict as before (the sensor model may name it a drift).
+
+**What is done with them.** ``calibrate`` does not correct ``R0`` for a step: the step's time is known to two
+pairing intervals only where no stamp skip marks it, and the pairs around it are wrong (samples lost or a camera frame
+skipped), so the verdict is a ``fail`` naming the step (calibrate each part on its own, or mend the stamps). The
+change and segment tests, which would otherwise read a clock effect as a change of ``R0``, run on the sensor
+re-stamped by :func:`corrected_sensor`: a found step (the sensor's stamps after it shifted back, a gap cut over its
+uncertain time) or else a resolved drift of the sensor model removed.
+
+Conventions: ``docs/conventions.md``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.so3 import log_map
+from .segments import SEGMENT_S
+from .streams import OrientationStream
+
+__all__ = ["ClockJump", "clock_segments", "jump_candidates", "clock_report", "clock_reasons", "JUMP_MIN_S", "JUMP_Z",
+           "OffsetProfile", "offset_profile", "corrected_sensor", "PROFILE_WINDOW_S", "STEP_LR"]
+
+#: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
+#: offset intervals.
+JUMP_MIN_S = 2e-3
+#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap intervals): 1.96 named
+#: one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40 synthetic rigs, the bootstrap interval of a
+#: 20 s side of smooth motion missing its offset by 7 ms (benchmarks/bench_segments.py, seeds 0-39).
+JUMP_Z = 3.0
+#: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
+#: the :data:`JUMP_CANDIDATES` longest are tested.
+JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
+#: Length of a window of the offset profile (s): 5 s of 1 s pairs at 20 Hz are 80 pairs.
+PROFILE_WINDOW_S = 5.0
+#: A step is named where its scaled chi-square is below both the ramp's and the one offset's by more than this. On
+#: bench_clock.py's tuning seeds 0-39 the least of the two gains reached 26.3 on clean rigs (95 % quantile 16.7) and
+#: 29.6 on 50 ppm drifts (200 ppm: below 0); a 5 ms step's median was 36.8, a 10 ms step's 5 % quantile 57.1. On
+#: fresh seeds 90000-90039: no false step in 120 clean and drifting rigs (maximum 30.0), 5 ms found in 20 of 40,
+#: 10-50 ms in 40 of 40 each (bench_clock.py's notes).
+STEP_LR = 40.0
+#: Fewest windows the profile runs with (the step model has 4 parameters).
+PROFILE_MIN_WINDOWS = 6
+_H = 1e-3  # the offset's finite difference (s)
+#: A window's offset is searched within this of the one offset applied (s); a window whose offset leaves it (the
+#: streams show no common motion there) is left out of the profile and counted.
+PROFILE_REACH_S = 0.3
+
+@dataclass(frozen=True)
+class ClockJump:
+    """A jump of a clock: at ``time_s`` (s, on the camera's clock, to within ``time_resolution_s``) the offset of the
+    sensor's clock to the camera's changes by ``size_s``. ``clock``: ``"sensor"``, ``"camera"`` (the clock whose
+    stamps skip there) or ``"unknown"`` (no skip in either's stamps); ``found_by``: ``"gap"`` (:func:`clock_segments`)
+    or ``"profile"`` (:func:`offset_profile`)."""
+
+    time_s: float
+    size_s: float
+    offset_before_s: float
+    offset_after_s: float
+    at_gap: bool
+    clock: str = "sensor"
+    time_resolution_s: float = 0.0
+    found_by: str = "gap"
+
+    def to_dict(self, t0: float = 0.0) -> dict:
+        return {"time_s": self.time_s - t0, "size_s": self.size_s, "offset_before_s": self.offset_before_s,
+                "offset_after_s": self.offset_after_s, "at_gap": self.at_gap, "clock": self.clock,
+                "time_resolution_s": self.time_resolution_s, "found_by": self.found_by}
+
+
+def jump_candidates(t, max_offset: float = math.inf) -> np.ndarray:
+    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`; a skip beyond
+    ``max_offset``, the offset search's bound, is no jump it could measure: samples lost), the
+    :data:`JUMP_CANDIDATES` longest, in time order."""
+    dt = np.diff(t)
+    step = np.median(dt)
+    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (dt - step <= max_offset))
+    k = np.sort(k[np.argsort(-dt[k])[:JUMP_CANDIDATES]])
+    return np.stack([t[k], t[k + 1]], axis=-1)
+
+
+def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_bootstrap: int = 50, seed: int = 0,
+                   offset_s: float | None = None, window_s: float = 2 * SEGMENT_S):
+    """The clock offset on each side of the sensor stream's gaps, and the jumps among them.
+
+    A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in its stamps; a
+    gap where samples were lost leaves the offset as it was. On each side of a gap, the camera's samples within
+    ``window_s`` of it (up to the neighbouring gaps; at least :data:`SEGMENT_S`) get their own offset
+    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's ``offset_s`` the search
+    spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
+    than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
+    it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
+    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)`` (``se`` = interval
+    width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
+    may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
+    jump, however long.
+
+    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``: NaN
+    where no jump was in question, the bootstrap being run only there), a list of :class:`ClockJump`.
+    """
+    from .association import estimate_time_offset, offset_analysis
+
+    gaps = np.empty((0, 2)) if gaps is None else np.asarray(gaps, dtype=float).reshape(-1, 2)
+    if not len(gaps):
+        return [], []
+    step = float(np.median(np.diff(sensor.t)))
+    if offset_s is not None and math.isfinite(offset_s):
+        max_offset = min(max_offset, abs(offset_s) + float(np.max(gaps[:, 1] - gaps[:, 0])) + 0.02)
+    edges = np.concatenate([[sensor.t[0]], gaps.ravel(), [sensor.t[-1]]])
+
+    def side(lo, hi):
+        if hi - lo < SEGMENT_S or np.sum((camera.t >= lo + max_offset) & (camera.t <= hi - max_offset)) < 10:
+            return None
+        view = camera.between(lo + max_offset, hi - max_offset)
+        with np.errstate(all="ignore"):
+            d = estimate_time_offset(view, sensor, max_offset=max_offset)[0]
+        return {"start_s": float(lo), "end_s": float(hi), "offset_s": float(d), "ci95_s": [math.nan, math.nan],
+                "view": view}
+
+    def se(part):  # the side's 95 % interval, computed where a jump is in question only (the bootstrap's cost)
+        v = part["view"]
+        with np.errstate(all="ignore"):
+            est = offset_analysis(v, sensor, max_offset=max_offset, n_bootstrap=n_bootstrap, seed=seed,
+                                  block_s=min(1.0, 0.25 * (v.t[-1] - v.t[0])))
+        part["ci95_s"] = [float(x) for x in est.ci95_s]
+        lo, hi = part["ci95_s"]
+        return max((hi - lo) / 3.92, 0.0) if math.isfinite(hi - lo) else math.inf
+
+    def agrees(size, stamps, bound):
+        return abs(size) > max(JUMP_MIN_S, bound) and abs(stamps - size) <= max(0.5 * abs(stamps), bound + JUMP_MIN_S)
+    parts, jumps = [], []
+    for i, gap in enumerate(gaps):
+        p = side(max(edges[2 * i], gap[0] - window_s), gap[0])
+        q = side(gap[1], min(edges[2 * i + 3], gap[1] + window_s))
+        parts += [x for x in (p, q) if x is not None]
+        if p is None or q is None:
+            continue
+        size = q["offset_s"] - p["offset_s"]
+        stamps = float(gap[1] - gap[0] - step)  # what the stamps skipped beyond one sample interval
+        if agrees(size, stamps, 0.0) and agrees(size, stamps, JUMP_Z * math.hypot(se(p), se(q))):
+            jumps.append(ClockJump(time_s=float(gap[0] - p["offset_s"]), size_s=stamps,
+                                   offset_before_s=p["offset_s"], offset_after_s=q["offset_s"], at_gap=True))
+    return [{k: v for k, v in x.items() if k != "view"} for x in parts], jumps
+
+
+@dataclass(frozen=True)
+class OffsetProfile:
+    """The clock offset per window and the model chosen for it (:func:`offset_profile`; times on the camera's clock).
+
+    Attributes
+    ----------
+    t_s, offset_s, se_s : ndarray (W,)
+        Each window's centre, offset (s; the sensor sample stamped ``t + offset`` matches the camera sample stamped
+        ``t``) and its standard error.
+    chi2 : dict
+        The weighted chi-square of ``"one offset"``, ``"drift"`` and ``"step"``, unscaled.
+    scale : float
+        The step model's excess scatter ``max(1, chi2_step / (W - 4))`` the likelihood ratios are divided by.
+    ratio_drift, ratio_one : float
+        The step's scaled chi-square improvement over the ramp and over one offset.
+    choice : str
+        ``"step"`` where both ratios exceed :data:`STEP_LR` and the step exceeds :data:`JUMP_MIN_S`; else
+        ``"drift"`` where the ramp fits better than one offset by more than :data:`STEP_LR`; else ``"one offset"``.
+    step : ClockJump or None
+        The step (where chosen).
+    drift_ppm : float
+        The ramp's slope (1e-6 s per s).
+    windows_left_out : int
+        Windows without enough pairs or motion, or whose offset left :data:`PROFILE_REACH_S`.
+    """
+
+    t_s: np.ndarray
+    offset_s: np.ndarray
+    se_s: np.ndarray
+    chi2: dict
+    scale: float
+    ratio_drift: float
+    ratio_one: float
+    choice: str
+    step: ClockJump | None
+    drift_ppm: float
+    threshold: float = STEP_LR
+    windows_left_out: int = 0
+
+    def to_dict(self, t0: float = 0.0) -> dict:
+        return {"t_s": (self.t_s - t0).tolist(), "offset_s": self.offset_s.tolist(), "se_s": self.se_s.tolist(),
+                "chi2": dict(self.chi2), "scale": self.scale, "ratio_drift": self.ratio_drift,
+                "ratio_one": self.ratio_one, "threshold": self.threshold, "choice": self.choice,
+                "drift_ppm": self.drift_ppm, "windows_left_out": self.windows_left_out,
+                "step": None if self.step is None else self.step.to_dict(t0)}
+
+
+def _residuals(Ai, sensor, ti, tk, d, R):
+    """``r_j = log(B_j^T R^T A_j R)`` of the pairs ``(ti, tk)`` with the sensor at ``t + d`` (``Ai``: ``R^T A_j R``)."""
+    Qi, Qk = sensor.at(ti + d), sensor.at(tk + d)
+    B = np.swapaxes(Qk, -1, -2) @ Qi
+    return log_map(np.swapaxes(B, -1, -2) @ Ai)
+
+
+def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
+    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error; NaN where a
+    step leaves ``d +- bound`` (the streams do not show one motion there, or no motion)."""
+    d0 = d
+    for _ in range(3):
+        if not abs(d - d0) <= bound:
+            return math.nan, math.nan
+        r = _residuals(Ai, sensor, ti, tk, d, R)
+        g = (_residuals(Ai, sensor, ti, tk, d + _H, R) - r) / _H
+        H = float(np.einsum("ja,ja->", g, g))
+        u = np.einsum("ja,ja->j", g, r)
+        step = -float(u.sum()) / H
+        if _ == 2:
+            break
+        d += step
+    if not abs(d + step - d0) <= bound:
+        return math.nan, math.nan
+    u = u + step * np.einsum("ja,ja->j", g, g)  # the scores at the final offset (first order)
+    lrv = float(u @ u) + 2.0 * sum((1 - k / (lags + 1)) * float(u[k:] @ u[:-k])
+                                   for k in range(1, min(lags, len(u) - 1) + 1))
+    return d + step, math.sqrt(max(lrv, 0.0)) / H
+
+
+def _fits(t, d, w):
+    """The chi-squares of one offset, a ramp and the best step (and where: boundary ``b``, left-out window ``x``)."""
+    def mean_chi(k):
+        if not k.any():
+            return 0.0, 0.0
+        m = float(np.sum(w[k] * d[k]) / np.sum(w[k]))
+        return m, float(np.sum(w[k] * (d[k] - m) ** 2))
+
+    _, c0 = mean_chi(np.ones(len(d), bool))
+    X = np.stack([np.ones_like(t), t - t.mean()], axis=1)
+    coef = np.linalg.lstsq(X * np.sqrt(w)[:, None], d * np.sqrt(w), rcond=None)[0]
+    c1 = float(np.sum(w * (d - X @ coef) ** 2))
+    best = (math.inf, None)
+    idx = np.arange(len(d))
+    for b in range(1, len(d)):
+        for x in (None, b):  # a step at the boundary before window b, or inside window b (left out)
+            if x is not None and b == len(d) - 1:
+                continue
+            lo, hi = (idx < b), (idx > b) if x is not None else (idx >= b)
+            (m0, ca), (m1, cb) = mean_chi(lo), mean_chi(hi)
+            if ca + cb < best[0]:
+                best = (ca + cb, (b, x, m0, m1))
+    return c0, c1, coef[1], best
+
+
+def _split(Ai, sensor, ti, tk, m0, m1, R, m):
+    """The time of a step from offset ``m0`` to ``m1`` among the pairs ``(ti, tk)``: the split of least cost
+    ``sum |r_j(m0)|^2`` before, ``sum |r_j(m1)|^2`` after, the ``m`` pairs just before it (across it) at their
+    smaller cost; the first pair start after it."""
+    c0 = np.sum(_residuals(Ai, sensor, ti, tk, m0, R) ** 2, axis=-1)
+    c1 = np.sum(_residuals(Ai, sensor, ti, tk, m1, R) ** 2, axis=-1)
+    P0, P1, Pm = (np.concatenate([[0.0], np.cumsum(c)]) for c in (c0, c1, np.minimum(c0, c1)))
+    q = np.arange(m, len(ti) + 1)
+    cost = P0[q - m] + (P1[-1] - P1[q]) + (Pm[q] - Pm[q - m])
+    best = int(q[int(np.argmin(cost))])
+    return float(ti[min(best, len(ti) - 1)])
+
+
+def _skip(t, near, width):
+    """The largest stamp skip (``> JUMP_GAP_FACTOR`` median intervals) of ``t`` within ``width`` of ``near``, or
+    None: ``(time, skipped beyond one interval)``."""
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (np.abs(t[:-1] - near) <= width))
+    if not len(k):
+        return None
+    k = k[int(np.argmax(dt[k]))]
+    return float(t[k]), float(dt[k] - step)
+
+
+def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s: float = PROFILE_WINDOW_S,
+                   sensor_stamps=None):
+    """The clock offset per window of ``window_s`` seconds and the model that fits it (module notes).
+
+    ``sensor``: an OrientationStream (a gyro integrated), ``R``: ``R0``, ``offset``: the one offset applied (s);
+    ``sensor_stamps``: the sensor's own stamps where ``sensor`` was re-sampled (default ``sensor.t``). Returns an
+    :class:`OffsetProfile`, or None where the recording makes fewer than :data:`PROFILE_MIN_WINDOWS` windows with
+    at least three pairing intervals of pairs and motion (the others are left out).
+    """
+    tc = camera.t
+    dt = float(np.median(np.diff(tc)))
+    m = max(1, round(interval / dt))
+    i = np.arange(len(tc) - m)
+    k = i + m
+    margin = PROFILE_REACH_S
+    ok = (np.abs(tc[k] - tc[i] - interval) <= 0.5 * dt) & (tc[i] + offset - margin >= sensor.t[0]) & (
+        tc[k] + offset + margin <= sensor.t[-1])
+    ts = sensor.t if sensor_stamps is None else np.asarray(sensor_stamps, float)
+    sdt = np.diff(ts)
+    gaps = np.flatnonzero(sdt > JUMP_GAP_FACTOR * np.median(sdt))
+    for g in gaps:  # pairs across a sensor gap: their integration or interpolation is wrong
+        ok &= ~((tc[i] + offset - margin < ts[g + 1]) & (tc[k] + offset + margin > ts[g]))
+    i, k = i[ok], k[ok]
+    if not len(i):
+        return None
+    W = int((tc[k[-1]] - tc[i[0]]) // window_s)
+    if W < PROFILE_MIN_WINDOWS:
+        return None
+    edges = tc[i[0]] + (tc[k[-1]] - tc[i[0]]) * np.arange(W + 1) / W
+    Qc = camera.world_from_body
+    A = np.swapaxes(Qc[k], -1, -2) @ Qc[i]
+    Ai = R.T @ A @ R
+    where = np.clip(np.searchsorted(edges, tc[i], side="right") - 1, 0, W - 1)
+    tw, dw, sw = np.full(W, np.nan), np.full(W, np.nan), np.full(W, np.nan)
+    for w in range(W):
+        j = where == w
+        if j.sum() >= 3 * m:  # a window of too few pairs (a gap) is left out
+            tw[w] = 0.5 * (edges[w] + edges[w + 1])
+            with np.errstate(all="ignore"):
+                dw[w], sw[w] = _window_offset(Ai[j], sensor, tc[i[j]], tc[k[j]], float(offset), R, 2 * m,
+                                              margin - 2 * _H)
+    good = np.isfinite(dw) & np.isfinite(sw) & (sw > 0)  # a window without motion determines no offset
+    if good.sum() < PROFILE_MIN_WINDOWS:
+        return None
+    left_out = int(W - good.sum())
+    tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
+    W = len(tw)
+    c0, c1, slope, (c2, (b, x, m0, m1)) = _fits(tw, dw, 1.0 / sw ** 2)
+    scale = max(1.0, c2 / max(W - 4, 1))
+    r_drift, r_one = (c1 - c2) / scale, (c0 - c2) / scale
+    step = None
+    if min(r_drift, r_one) > STEP_LR and abs(m1 - m0) > JUMP_MIN_S:
+        j = (tc[i] >= edges[max(b - 1, 0)]) & (tc[i] < edges[min(b + 2, W)])  # the step's time from its pairs
+        at = _split(Ai[j], sensor, tc[i[j]], tc[k[j]], m0, m1, R, m)
+        res = 2.0 * interval  # the split's error reached 1.4 s for 5 ms steps (bench_clock.py, seeds 0-39)
+        width = res + interval
+        cam, sen = _skip(tc, at, width), _skip(ts, at + m0, width)
+        clock = "camera" if cam is not None else "sensor" if sen is not None else "unknown"
+        if cam is not None:
+            at, res = cam[0], dt
+        elif sen is not None:
+            at, res = sen[0] - m0, float(np.median(sdt))
+        step = ClockJump(time_s=float(at), size_s=float(m1 - m0), offset_before_s=float(m0), offset_after_s=float(m1),
+                         at_gap=sen is not None, clock=clock, time_resolution_s=float(res), found_by="profile")
+    choice = "step" if step is not None else "drift" if (c0 - c1) / scale > STEP_LR else "one offset"
+    return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, chi2={"one offset": c0, "drift": c1, "step": c2},
+                         scale=float(scale), ratio_drift=float(r_drift), ratio_one=float(r_one), choice=choice,
+                         step=step, drift_ppm=float(1e6 * slope), windows_left_out=left_out,
+                         threshold=STEP_LR)
+
+
+def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
+    """The jumps found at the sensor's gaps and the profile's step, once each (the gap's where both found one)."""
+    out = list(jumps)
+    if profile is not None and profile.step is not None:
+        s = profile.step
+        if not any(abs(j.time_s - s.time_s) <= window_s for j in out):
+            out.append(s)
+    return sorted(out, key=lambda j: j.time_s)
+
+
+def corrected_sensor(sensor: OrientationStream, offset: float, *, jumps=(), drift=None, interval: float = 1.0):
+    """``sensor`` re-stamped so that the one ``offset`` holds throughout: with jumps, its stamps before the first
+    shifted by ``offset`` less the offset there and after each further by the jump's size, the stamps within the
+    jump's time resolution plus ``interval`` of it cut (a gap, so that pairs across it are dropped); or, without
+    jumps, ``drift = (ppm, t_mid, offset_mid)`` removed (the sample stamped ``s`` restamped ``t + offset``,
+    ``t = (s - offset_mid + k t_mid) / (1 + k)``). None where there is nothing to correct."""
+    t = sensor.t.astype(float).copy()
+    keep = np.ones(len(t), bool)
+    if jumps:
+        jumps = sorted(jumps, key=lambda j: j.time_s)
+        new = t + (offset - jumps[0].offset_before_s)
+        for j in jumps:
+            at = j.time_s + j.offset_before_s
+            keep &= np.abs(t - at) > j.time_resolution_s + interval + abs(j.size_s)
+            new = np.where(t > at, new - j.size_s, new)
+        t = new
+    elif drift is not None:
+        k = drift[0] * 1e-6
+        t = (t - drift[2] + k * drift[1]) / (1.0 + k) + offset
+    else:
+        return None
+    t, Q = t[keep], sensor.world_from_body[keep]
+    order = np.argsort(t, kind="stable")
+    return OrientationStream(t[order], Q[order], sensor.source)
+
+
+def clock_analysis(camera, oriented, A, B, offset, model=None, *, max_offset: float = 0.2, seed: int = 0,
+                   sensor_stamps=None):
+    """``calibrate``'s clock step: the jumps at the sensor's gaps (:func:`clock_segments`), the offset profile
+    (:func:`offset_profile`, ``R0`` from the sensor ``model`` or from the pairs ``A``, ``B``) and the sensor
+    re-stamped for the change and segment tests (:func:`corrected_sensor`: the jumps, or the model's drift where
+    resolved). Returns ``(parts, jumps, profile, corrected or None)``."""
+    from .changepoint import _fit
+
+    parts, jumps = clock_segments(camera, oriented, max_offset=max_offset, seed=seed, offset_s=offset,
+                                  gaps=jump_candidates(oriented.t, max_offset))
+    if model is not None:
+        R = model.R
+    else:
+        kron = np.einsum("jab,jcd->acbd", B, A).reshape(9, 9)
+        R = _fit(kron[None], B.sum(axis=0)[None], np.array([float(len(A))]))[0][0]
+    profile = offset_profile(camera, oriented, R, offset, sensor_stamps=sensor_stamps)
+    jumps = merged_jumps(jumps, profile)
+    drift = (model.drift_ppm, model.t_mid_s, model.offset_mid_s) if model is not None and model.drift_resolved else None
+    return parts, jumps, profile, corrected_sensor(oriented, offset, jumps=jumps, drift=drift)
+
+
+def clock_report(parts, jumps, t0: float, profile=None) -> dict:
+    """The clock offset of each part between the sensor's gaps, the offset profile and the jumps, for the report
+    (times since ``t0``, on the sensor's clock for the parts)."""
+    return {"clock_offsets": [{**o, "start_s": o["start_s"] - t0, "end_s": o["end_s"] - t0} for o in parts],
+            "clock_profile": None if profile is None else profile.to_dict(t0),
+            "clock_jumps": [j.to_dict(t0) for j in jumps]}
+
+
+def _where(j, t0):
+    at = f"at {j.time_s - t0:.1f} s" + (f" (+-{j.time_resolution_s:.1f} s)" if j.time_resolution_s >= 0.05 else "")
+    who = {"sensor": "the sensor's clock jumped",
+           "camera": f"the camera's stamps skip there: its clock jumped by {-1e3 * j.size_s:+.1f} ms",
+           "unknown": "no skip in either clock's stamps: one of them lost samples and stamped on evenly (which one "
+                      "cannot be told from the data)"}[j.clock]
+    how = ("where the sensor stream has a gap" if j.at_gap and j.found_by == "gap" else
+           "found in the offset per window: a step fits it better than one offset and than a steady drift"
+           if j.found_by == "profile" else "")
+    return (f"{at} by {1e3 * j.size_s:+.1f} ms (offset {1e3 * j.offset_before_s:+.1f} ms before, "
+            f"{1e3 * j.offset_after_s:+.1f} ms after; {who}" + (f"; {how})" if how else ")"))
+
+
+def clock_reasons(jumps, t0: float, offset_s: float) -> list:
+    """A ``fail`` reason per recording with clock jumps: the one offset removed is wrong for part of it."""
+    from .quality import Reason
+
+    if not jumps:
+        return []
+    named = "; ".join(_where(j, t0) for j in jumps)
+    worst = max(abs(j.size_s) for j in jumps)
+    return [Reason("clock_jump", "fail", worst, JUMP_MIN_S,
+                   f"the clock offset jumps: {named}; the one offset removed ({1e3 * offset_s:+.2f} ms) is wrong for "
+                   f"part of the recording, and its interval does not say so; R0 is not corrected for it; calibrate "
+                   f"each part on its own, or correct the time stamps at the jump")]
