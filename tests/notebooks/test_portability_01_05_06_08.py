@@ -8,7 +8,7 @@ computes as one without it; on a machine without AVX-512 it changes nothing), Op
 with one thread, and ``MPLBACKEND=Agg``; every stored output is compared as the normal nbval run does. A stored digit
 that rounding can flip fails here. The longer matrix (the SSE4.2 baseline, Nehalem and SkylakeX kernels, a
 1e-11 jitter with doubled guards) is ``scripts/spread.py``, run before committing notebook outputs. The notebooks
-are split between this file and ``test_portability_part2.py`` so that two xdist workers (``--dist loadfile``) share
+are split between this file and ``test_portability_02_03_04_07.py`` so that two xdist workers (``--dist loadfile``) share
 the re-runs. Deselect with ``-m "not portability"``.
 """
 import os
@@ -20,11 +20,11 @@ import pytest
 
 from replication._jitter import VARIANTS
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OTHER_MACHINE = {**VARIANTS["avx2"], "MPLBACKEND": "Agg"}
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 #: The notebooks this file re-runs (about half the time: 08, 05, 06, 01 took 160, 128, 61, 10 s); the rest are
-#: test_portability_part2.py's.
+#: test_portability_02_03_04_07.py's.
 PART1 = ("01", "05", "06", "08")
 
 

@@ -24,7 +24,7 @@ from replication.rig.streams import GyroStream, OrientationStream
 from replication.study import lab
 from replication.testing import write_euroc_imu, write_tum_trajectory
 
-SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
+SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parents[2] / "docs"
                      / "calibration_report.schema.json").read_text())
 R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
 

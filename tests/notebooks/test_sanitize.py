@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 from nbval.plugin import get_sanitize_patterns
 
-CFG = Path(__file__).resolve().parent / "sanitize.cfg"
+CFG = Path(__file__).resolve().parents[1] / "sanitize.cfg"
 
 
 def _sanitize(text):

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 from bench_changepoint import R0, rig, rig_pairs  # noqa: E402
 from bench_segments import jumped, lost_rig, lost_samples  # noqa: E402

@@ -19,7 +19,7 @@ import pytest
 from replication.rig import fetch
 from replication.rig import realdata as rd
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 HAVE_REAL = rd.real_data_available()
 needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
                                 "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST")
@@ -29,7 +29,8 @@ def _files_the_project_reads():
     """File names of the real-data folder that notebook 07 and the tests open."""
     nb = json.loads((ROOT / "notebooks" / "07_real_data.ipynb").read_text())
     text = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code")
-    text += (ROOT / "tests" / "test_realdata.py").read_text() + (ROOT / "benchmarks" / "bench_calibrate.py").read_text()
+    text += (ROOT / "tests" / "rig" / "test_realdata.py").read_text()
+    text += (ROOT / "benchmarks" / "bench_calibrate.py").read_text()
     names = set(re.findall(r"[\w.-]+\.(?:txt|csv|yaml)", text))
     runs = re.findall(r'"(\w*traj_run\w*)"', text)  # names built from a run label
     names |= {f"orbslam3_{r}.txt" for r in runs}

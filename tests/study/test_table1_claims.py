@@ -36,7 +36,7 @@ from replication.study.table1 import (
     versus_paper,
 )
 
-NOTEBOOK = Path(__file__).resolve().parent.parent / "notebooks" / "03_table1_monte_carlo.ipynb"
+NOTEBOOK = Path(__file__).resolve().parents[2] / "notebooks" / "03_table1_monte_carlo.ipynb"
 
 
 # ---- the paper's rounding -----------------------------------------------------------------------------------------

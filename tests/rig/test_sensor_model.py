@@ -14,7 +14,7 @@ from replication.rig.calibration import calibrate
 from replication.rig.sensor_verdict import SENSOR_THRESHOLDS, sensor_reasons
 from replication.rig.streams import GyroStream
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = json.loads((ROOT / "docs" / "calibration_report.schema.json").read_text())
 _spec = importlib.util.spec_from_file_location("bench_sensor_model", ROOT / "benchmarks" / "bench_sensor_model.py")
 bench = importlib.util.module_from_spec(_spec)
