@@ -2,7 +2,7 @@
 
 1. the tail approximation of the threshold against simulated 3-dimensional Brownian bridges;
 2. false alarms without a change on synthetic rigs (a camera at 20 Hz and a gyro at 200 Hz on one rigid body, 60
-   or 135 s of smooth three-axis motion as in tests/test_calibrate_trust.py, noise on the camera orientations and
+   or 135 s of smooth three-axis motion as in tests/rig/test_calibration.py, noise on the camera orientations and
    the gyro at several levels), on one seed set and again on a disjoint one, with Wilson 95 % intervals; what a
    slowly wandering camera frame does (not a change, and not white noise); re-mounts on the rigs;
 3. the real recordings as recorded (pairs as calibrate forms them: its clock offset, interval 1 s, its block);

@@ -5,7 +5,7 @@
   uniform in +-20 ms); the error of each is ``estimate(shifted) - estimate(unshifted) - shift``, before (the
   0.5 ms fine grid's maximum, the computation of before) and after (the refined offset), with the 95 % interval
   of :func:`replication.rig.association.offset_analysis` on each shifted stream;
-* coverage of that interval over synthetic rigs (the rig of ``tests/test_association.py``, 30 s) with independent
+* coverage of that interval over synthetic rigs (the rig of ``tests/rig/test_association.py``, 30 s) with independent
   noise on the camera's poses and the gyro, each with an injected off-grid offset: the share of intervals holding
   it, with a Wilson 95 % interval on the share;
 * the peak margin on the recordings and on a periodic motion, at the default search (+-0.2 s) and a wider one;
@@ -75,7 +75,7 @@ R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
 
 
 def noisy_rig(offset, camera_noise_deg, gyro_noise, rng, seconds=30.0):
-    """The rig of ``tests/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
+    """The rig of ``tests/rig/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
     (200 Hz, noise in rad/s per sample) whose clock reads ``offset`` s ahead."""
     def world_from_camera(t):
         return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))

@@ -17,7 +17,7 @@ entries of a batch of 3x3 matrices as one contiguous array and do the arithmetic
 * :func:`rotation_violation`: the rotation test of :func:`~replication.core.checks.check_rotation_matrices` in one
   fused pass (orthonormality, determinant, finiteness).
 
-Each kernel agrees with the LAPACK path to 1e-12 where it is used (``tests/test_kernels.py``: random,
+Each kernel agrees with the LAPACK path to 1e-12 where it is used (``tests/core/test_kernels.py``: random,
 near-rotation, rank-deficient, repeated-singular-value and reflection inputs). Where a closed form is not safe --
 a matrix far from full rank (``2 |det M| / ||M||_F^3`` below :data:`POLAR_SAFE`), a reflection asked to become the
 nearest rotation, two eigenvalues close together (:data:`EIG3_SAFE`), a badly conditioned system -- those entries
