@@ -36,10 +36,11 @@ from replication.rig.realdata import (
 )
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.study.live_study import REMOUNT_AXIS
+from replication.testing import RIG_R0, rig_motion, rig_streams
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = RIG_R0
 #: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per 200 Hz sample),
 #: gyro bias (rad/s, constant)).
 CONFIGS = [(60, 0.02, 0.002, 0.0), (60, 0.1, 0.005, 0.0), (60, 0.0, 0.005, 0.0), (60, 0.3, 0.02, 0.005),
@@ -79,24 +80,15 @@ def rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias_rad_s
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
 
-    def world_from_camera(t):
-        w = np.stack([0.9 * np.sin(0.7 * t + phase[0]), 0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
-                      0.7 * np.cos(0.3 * t + phase[2])], axis=-1)
-        return so3.exp_map(w)
-
     t_cam = np.arange(0.0, seconds, 0.05)
     noise = so3.exp_map(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
     if drift_deg:
         steps = rng.normal(0.0, np.radians(drift_deg) * np.sqrt(0.05 / 10.0), (len(t_cam), 3))
         noise = so3.exp_map(np.cumsum(steps, axis=0)) @ noise
-    camera = OrientationStream(t_cam, world_from_camera(t_cam) @ noise, "camera")
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    omega += rng.normal(0.0, gyro_rad_s, omega.shape) + bias_rad_s * rng.normal(size=3) / np.sqrt(3.0)
-    gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
-    if remount is not None:
-        gyro = remounted(gyro, *remount)
+    camera = OrientationStream(t_cam, rig_motion(t_cam, phase) @ noise, "camera")  # a wander is no rotation vector
+    _, _, gyro, _ = rig_streams(
+        seconds, phase=phase, remount=remount,
+        gyro_noise_deg_s=lambda n: rng.normal(0.0, gyro_rad_s, n) + bias_rad_s * rng.normal(size=3) / np.sqrt(3.0))
     return camera, gyro
 
 

@@ -27,15 +27,16 @@ from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_model import estimate_sensor_model
 from replication.rig.streams import GyroStream, OrientationStream
+from replication.testing import RIG_R0
 
-R0_TRUE = exp_map(np.radians([40.0, -70.0, 125.0]))
+R0_TRUE = RIG_R0
 
 
 def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_s=0.0, camera_noise_deg=0.0,
                gyro_noise_deg_s=0.0, rng=None, phase=0.0):
     """``(R0, camera, gyro)``: a camera at 20 Hz and a gyro at 200 Hz (one second beyond it on both sides) reading
     ``omega + bias`` (rad/s), stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``; the rig rests for ``rest_s``
-    seconds, then starts moving over 2 s (the motion of :func:`replication.study.simulation.rig_streams`)."""
+    seconds, then starts moving over 2 s (the motion of :func:`replication.testing.rig_streams`)."""
 
     def world_from_camera(t):
         s = np.clip((t - rest_s) / 2.0, 0.0, 1.0) if rest_s else np.ones_like(t)

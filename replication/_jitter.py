@@ -1,16 +1,16 @@
 """Last-bit jitter of every generated and loaded input, for the portability re-runs.
 
 With ``REPLICATION_JITTER`` unset (or ``0``) :func:`jitter` returns its argument untouched: the normal runs are
-bit-for-bit what they were. With ``REPLICATION_JITTER=SEED`` (a positive integer) or ``SEED:SCALE``, every float
-array passed through it is multiplied elementwise by ``1 + SCALE * u``, ``u`` uniform in [-1, 1] and ``SCALE``
-1e-15 by default (a few units in the last place). The draw is seeded by ``SEED`` and the array's own bytes, so a
-jittered run is a stable function of its seed whatever the order of the calls. The entry points that call it: the
-simulations (``study.simulation``: ``simulate``, ``opencv_protocol``, ``rig_streams``; ``core.so3.random_rotations``),
-the simulated lab (its loader and its in-memory recordings) and the real-data loaders (``rig.datafile.read_table``,
-the references). Time stamps are left as they are: they are a recorder's exact ticks, which every machine parses to
-the same double and differences alike (a relative jitter of an epoch in ns would move them by microseconds). A stored
-output that changes under it is a digit that another processor's rounding can flip (``docs/reproducing.md``, "What
-strict nbval compares").
+bit-for-bit what they were. With ``REPLICATION_JITTER=SEED`` (a positive integer) or ``SEED:SCALE``, every float array
+passed through it is multiplied elementwise by ``1 + SCALE * u``, ``u`` uniform in [-1, 1] and ``SCALE`` 1e-15 by
+default (a few units in the last place). The draw is seeded by ``SEED`` and the array's own bytes, so a jittered run is
+a stable function of its seed whatever the order of the calls. The entry points that call it: the simulations
+(``study.simulation``: ``simulate``, ``opencv_protocol``; ``testing.rig_streams``; ``core.so3.random_rotations``), the
+simulated lab (its loader and its in-memory recordings) and the real-data loaders (``rig.datafile.read_table``, the
+references). Time stamps are left as they are: they are a recorder's exact ticks, which every machine parses to the same
+double and differences alike (a relative jitter of an epoch in ns would move them by microseconds). A stored output that
+changes under it is a digit that another processor's rounding can flip (``docs/reproducing.md``, "What strict nbval
+compares").
 """
 import json
 import os

@@ -17,6 +17,7 @@ import tomllib
 
 from replication._extras import OPTIONAL, MissingExtra, require
 from replication.core import so3
+from replication.testing import RIG_R0, rig_motion
 
 ROOT = Path(__file__).resolve().parent.parent
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
@@ -74,10 +75,7 @@ def test_the_core_dependencies_leave_out_the_notebook_stack():
 def rig(tmp_path_factory):
     """30 s of a camera (TUM, 20 Hz) and a rigidly attached gyro (EuRoC imu0 CSV, 200 Hz)."""
     d = tmp_path_factory.mktemp("light")
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
-
-    def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
+    R0, world_from_camera = RIG_R0, rig_motion
 
     t = np.arange(0.0, 30.0, 0.05)
     q = so3.as_quaternion(world_from_camera(t))

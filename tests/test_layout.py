@@ -26,10 +26,11 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
                                     if m.ispkg)
 #: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
-#: writer, the version and the optional packages) import nothing of the package and serve every room; the rest of the
-#: hall is on top.
-ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4,
-         "__main__": 4, "testing": 4}
+#: writer, the version and the optional packages) import nothing of the package and serve every room; the testing
+#: helpers (the synthetic rig) stand with rig, whose streams they build, so that the online studies use the same rig
+#: as the tests; the rest of the hall is on top.
+ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "testing": 2, "study": 3,
+         "__init__": 4, "__main__": 4}
 MAX_TOP_LEVEL_MODULES = 8
 MAX_CELL_LINES = 60
 

@@ -20,7 +20,7 @@ from replication.__main__ import main
 from replication.core import so3
 from replication.rig import fetch
 from replication.rig.calibration import OverlapError, calibrate
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 
 def test_reproduce_executes_notebooks_in_order_and_writes_results(tmp_path):
@@ -186,7 +186,7 @@ def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
 
     t = np.arange(0.0, 30.0, 0.05)
     Q = so3.exp_map(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1))
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    from replication.testing import RIG_R0 as R0
     for name, R in [("cam.txt", Q), ("sensor.txt", Q @ R0)]:
         q = so3.as_quaternion(R)
         np.savetxt(tmp_path / name, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
@@ -231,8 +231,8 @@ def test_the_warning_formatter_is_installed_only_while_a_command_runs(tmp_path):
 #
 # Each refused run is checked for its exit code, its message on standard error, no work done (the calibration,
 # the downloads or the notebooks replaced by a failure) and its inputs byte-identical afterwards. The synthetic rig
-# (:func:`replication.study.simulation.rig_streams`) is written as a TUM trajectory and an EuRoC IMU CSV on Unix-like
-# absolute times (1.52e9 s), the scale at which the old overlap message printed ``1.52053e+09..1.52053e+09``.
+# (:func:`replication.testing.rig_streams`) is written as a TUM trajectory and an EuRoC IMU CSV on Unix-like absolute
+# times (1.52e9 s), the scale at which the old overlap message printed ``1.52053e+09..1.52053e+09``.
 
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -24,12 +24,10 @@ from replication.rig.association import (
 )
 from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.testing import RIG_R0, rig_motion, rig_streams
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
-
-
-def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
+R0 = RIG_R0
+_world_from_camera = rig_motion
 
 
 def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0):
@@ -37,14 +35,10 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
     sensor sample stamped ``t + offset`` is the camera's at ``t``); noise on the camera's poses (deg per axis) and
     on the gyro's rates (rad/s per sample), from ``seed``."""
     rng = np.random.default_rng(seed)
-    t_cam = np.arange(0.0, seconds, 0.05)
-    noise = so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg), size=(len(t_cam), 3)))
-    camera = OrientationStream(t_cam, _world_from_camera(t_cam) @ noise, "camera")
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = _world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    omega = omega + rng.normal(scale=gyro_noise, size=omega.shape)
-    return camera, integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
+    _, camera, gyro, _ = rig_streams(seconds, offset=offset,
+                                     camera_noise_deg=lambda n: rng.normal(scale=np.radians(camera_noise_deg), size=n),
+                                     gyro_noise_deg_s=lambda n: rng.normal(scale=gyro_noise, size=n))
+    return camera, integrate_gyro(gyro)
 
 
 def _periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0, offset=0.0):

@@ -28,30 +28,16 @@ from replication.rig.realdata import data_root, real_data_available
 from replication.rig.report import RADIUS_COVERS
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.study import lab
-from replication.study.simulation import rig_streams
-from replication.testing import write_euroc_imu, write_tum_trajectory
+from replication.testing import RIG_R0, rig_streams, write_euroc_imu, write_tum_trajectory
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parents[2] / "docs"
                      / "calibration_report.schema.json").read_text())
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
-
-
-def _world_from_camera(t, phase=0.0):
-    w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase), 0.7 * np.cos(0.3 * t + phase)],
-                 axis=-1)
-    return so3.exp_map(w)
+R0 = RIG_R0
 
 
 def _rig(seconds=60.0, phase=0.0):
-    t_cam = np.arange(0.0, seconds, 0.05)
-    camera = OrientationStream(t_cam, _world_from_camera(t_cam, phase), "camera")
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = _world_from_camera(t_imu, phase) @ R0  # world_from_sensor: v_cam = R0 v_sensor
-    rel = np.swapaxes(Q[:-1], -1, -2) @ Q[1:]
-    omega = so3.log_map(rel) / 0.005  # body rates over each step, stamped at its midpoint
-    gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
-    sensor = OrientationStream(t_imu[::2], Q[::2], "sensor")
-    return camera, gyro, sensor
+    """``(camera, gyro, sensor)`` of the synthetic rig (:func:`replication.testing.rig_streams`), noise-free."""
+    return rig_streams(seconds, phase=phase)[1:]
 
 
 @pytest.fixture(scope="module")
@@ -1038,7 +1024,7 @@ def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40
     from replication.rig.streams import GyroStream, OrientationStream
 
     rng = np.random.default_rng(seed)
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    R0 = RIG_R0
     dt = 2e-3
     t = np.arange(-1.0, seconds + 1.0, dt)
     w = np.stack([0.7 * np.sin(0.9 * t), 0.6 * np.sin(1.3 * t + 1.0), out_of_plane * np.sin(0.5 * t + 2.0)], -1)

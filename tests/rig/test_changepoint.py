@@ -35,11 +35,11 @@ from replication.rig.realdata import (
     real_data_available,
 )
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
-from replication.testing import assert_rotations_close
+from replication.testing import RIG_R0, assert_rotations_close, rig_streams
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = RIG_R0
 STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))  # a 2 deg re-mount about a generic axis
 BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
@@ -49,19 +49,10 @@ def _rig(seed, seconds=60.0, cam_deg=0.05, gyro_rad_s=0.005, remount=None):
     gyro."""
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
-
-    def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t + phase[0]), 0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
-                                     0.7 * np.cos(0.3 * t + phase[2])], axis=-1))
-
-    t_cam = np.arange(0.0, seconds, 0.05)
-    camera = OrientationStream(t_cam, world_from_camera(t_cam) @ so3.exp_map(
-        rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3))), "camera")
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(0.0, gyro_rad_s, (len(t_imu) - 1, 3))
-    gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
-    return camera, gyro if remount is None else remounted(gyro, *remount)
+    _, camera, gyro, _ = rig_streams(seconds, phase=phase, remount=remount,
+                                     camera_noise_deg=lambda n: rng.normal(0.0, np.radians(cam_deg), n),
+                                     gyro_noise_deg_s=lambda n: rng.normal(0.0, gyro_rad_s, n))
+    return camera, gyro
 
 
 def _pairs(camera, sensor):

@@ -21,9 +21,10 @@ from replication.rig.diagnose import (
 )
 from replication.rig.quality import THRESHOLDS
 from replication.rig.streams import GyroStream, OrientationStream
+from replication.testing import RIG_R0
 
 #: A camera-IMU rotation far from the identity (a camera's reference).
-R_CAM = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R_CAM = RIG_R0
 FAIL = THRESHOLDS["reference_error_deg"][1]
 Z = np.array([0.0, 0.0, 1.0])
 

@@ -32,26 +32,17 @@ from replication.rig.export import (
     read_report,
 )
 from replication.rig.realdata import data_root, load_reference, real_data_available
-from replication.rig.streams import GyroStream, OrientationStream
 from replication.rig.vioformats import format_number, read_vio_file
+from replication.testing import RIG_R0, rig_streams
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
-R_TRUE = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R_TRUE = RIG_R0
 FILE_FORMATS = ("kalibr", "openvins", "basalt", "orbslam3")
-
-
-def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
 
 
 def _rig(offset, seconds=30.0):
     """A 20 Hz camera and a rigid 200 Hz gyro (raw rates) whose clock reads ``offset`` s ahead of the camera's."""
-    t_cam = np.arange(0.0, seconds, 0.05)
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = _world_from_camera(t_imu) @ R_TRUE
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    return (OrientationStream(t_cam, _world_from_camera(t_cam), "camera"),
-            GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
+    return rig_streams(seconds, offset=offset)[1:3]
 
 
 def _report(R=R_TRUE, d=0.0123456789, level="ok", kind="GyroStream"):
@@ -705,7 +696,7 @@ def test_the_export_help_says_what_the_command_now_does():
 # behaviour the product claims; every one failed before the fixes it guards. No calibration is run.
 
 
-R = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R = RIG_R0
 REAL = data_root() if real_data_available() else Path("/nonexistent")
 BASALT = REAL / "euroc_mh01_orbslam3" / "basalt_euroc_ds_calib.json"
 CAMCHAIN = REAL / "tumvi_room1_orbslam3mono" / "camchain.yaml"

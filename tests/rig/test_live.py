@@ -14,7 +14,7 @@ from replication.rig.live import OFFSET_RESOLUTION, LiveRig, replay
 from replication.rig.online import OnlineCalibrator
 from replication.rig.report import RADIUS_COVERS  # noqa: E402
 from replication.rig.streams import GyroStream, OrientationStream
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parents[2] / "docs"
                      / "calibration_report.schema.json").read_text())

@@ -131,17 +131,10 @@ def test_bad_settings_are_refused(kwargs, message):
 # ------------------------------------------------------------------------------------------------ the live front end
 
 def _streams(seconds=60.0, phase=0.0):
-    from replication.rig.streams import GyroStream, OrientationStream
+    """The synthetic rig, its first motion component shifted by ``phase``, the orientation sensor at 200 Hz."""
+    from replication.testing import rig_streams
 
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
-    t = np.arange(0.0, seconds, 0.05)
-    world = lambda t: so3.exp_map(np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0),  # noqa: E731
-                                            0.7 * np.cos(0.3 * t)], axis=-1))
-    camera = OrientationStream(t, world(t), "camera")
-    ti = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world(ti) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    return R0, camera, GyroStream(0.5 * (ti[1:] + ti[:-1]), omega, "gyro"), OrientationStream(ti, Q, "sensor")
+    return rig_streams(seconds, phase=(phase, 0.0, 0.0), sensor_step=1)
 
 
 def test_live_replay_of_gyro_and_of_orientations_converges_with_one_pair_per_interval():
@@ -542,7 +535,7 @@ def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned(
     """A 5 deg re-mount 3 s before the end of a 60 s replay (three pairs, too few for the CUSUM to alarm): the
     summary is not ready and its verdict warns; without the re-mount, ready and no such warning."""
     from replication.rig.live import replay
-    from replication.study.simulation import rig_streams
+    from replication.testing import rig_streams
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(900), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
     R = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))

@@ -22,7 +22,7 @@ from replication.rig.online_causes import (
     time_unit_by_rate,
 )
 from replication.rig.streams import GyroStream, OrientationStream
-from replication.study.simulation import rig_streams
+from replication.testing import RIG_R0, rig_streams
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def _fails(summary):
 def _spinning(seconds=60.0, deg_s=30.0, seed=5, noise=0.05):
     """A rig turning at a constant angular velocity about one axis (camera and gyro noise ``noise``, deg, deg/s)."""
     rng = np.random.default_rng(seed)
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    R0 = RIG_R0
     axis = np.array([0.2, 0.5, 0.8]) / np.linalg.norm([0.2, 0.5, 0.8])
     t, ti = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
     C = so3.exp_map(np.outer(np.radians(deg_s) * t, axis)) @ so3.exp_map(

@@ -28,7 +28,7 @@ from replication.rig.online_guard import (
 )
 from replication.rig.streams import OrientationStream
 from replication.study.live_study import pair_stream
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 AXIS = np.array([0.6, 0.0, 0.8])
 

@@ -11,17 +11,16 @@ import pytest
 from matplotlib.colors import to_rgba
 
 from replication.__main__ import main
-from replication.core import so3
 from replication.core.solvers import _registry, available, register
 from replication.rig.calibration import calibrate
 from replication.rig.poses import calibrate_poses
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.study import figures
 from replication.study.figures import METHOD_STYLE, live_figure, method_style, sqp_config_style, sweep_figure
-from replication.testing import write_euroc_imu, write_tum_trajectory
+from replication.testing import RIG_R0, rig_streams, write_euroc_imu, write_tum_trajectory
 
 matplotlib.use("Agg")
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = RIG_R0
 
 
 def _drawn(ax) -> int:
@@ -129,18 +128,9 @@ def test_live_figure_labels_its_target_lines_and_names_each_recording():
 
 # ----------------------------------------------------------------------------------------- the calibration figure
 
-def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
-
-
 @pytest.fixture(scope="module")
 def rig():
-    t_cam = np.arange(0.0, 30.0, 0.05)
-    camera = OrientationStream(t_cam, _world_from_camera(t_cam), "camera")
-    t_imu = np.arange(-1.0, 31.0, 0.005)
-    Q = _world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    return camera, GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro"), OrientationStream(t_imu, Q, "sensor")
+    return rig_streams(30.0, sensor_step=1)[1:]
 
 
 def _poses(rig):
