@@ -7,6 +7,7 @@ is the shift: without it the rig's correlation peaks at -0.0001 ms.
 """
 import dataclasses
 import math
+import tracemalloc
 import warnings
 
 import numpy as np
@@ -592,3 +593,84 @@ def test_orientations_off_orthogonal_by_a_few_millionths_still_pair():
     sen = OrientationStream(tc, R.copy(), "sen")
     A, B, t = motion_pairs(cam, sen, 0.25)
     assert len(t) == 16 and np.allclose(A, B)
+
+
+# ----------------------------------------------------------------------------------------------------------------------
+# The offset search in blocks: bounded memory, bit-identical to the search over all offsets at once (figures behind the
+# block size: benchmarks/bench_bounded.py).
+
+
+def _offset_streams(seconds=30.0, offset=0.0123):
+    rng = np.random.default_rng(8)
+    R0 = so3.random_rotations(rng, ())
+
+    def attitude(t):
+        return so3.exp_map(np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t), np.sin(0.45 * t + 1.0),
+                                     np.cos(0.3 * t) + 0.1 * np.sin(4.1 * t)], axis=-1))
+
+    tc, tg = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = attitude(np.concatenate([tg[:1] - 0.005, tg, tg[-1:] + 0.005]) - offset) @ R0
+    omega = so3.log_map(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) / 0.01
+    return OrientationStream(tc, attitude(tc), "camera"), integrate_gyro(GyroStream(tg, omega, "gyro"))
+
+
+def _correlations_before(cam, sensor, t, offsets):
+    """The correlation of before (all offsets in one array)."""
+    Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
+    sen = association._speed(Qs, t)
+    a = cam - cam.mean()
+    b = sen - sen.mean(axis=1, keepdims=True)
+    return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
+
+
+@pytest.fixture(scope="module")
+def offset_problem():
+    camera, sensor = _offset_streams()
+    keep = (camera.t >= sensor.t[0] + 1.0) & (camera.t <= sensor.t[-1] - 1.0)
+    t = camera.t[keep]
+    return camera, sensor, t, association._speed(camera.R[keep], t)
+
+
+def test_offset_blocks_are_bit_identical(offset_problem):
+    _, sensor, t, cam = offset_problem
+    offsets = np.arange(-0.3, 0.3 + 1e-12, 0.01)  # 61 offsets
+    one = association._correlations(cam, sensor, t, offsets, block_samples=len(offsets) * len(t))
+    np.testing.assert_array_equal(one, _correlations_before(cam, sensor, t, offsets))  # one block: as before
+    blocked = [association._correlations(cam, sensor, t, offsets, block_samples=per * len(t)) for per in (1, 4, 7, 60)]
+    for other in blocked[1:]:
+        np.testing.assert_array_equal(other, blocked[0])  # the block size does not touch an offset's arithmetic
+    np.testing.assert_allclose(blocked[0], one, rtol=0, atol=1e-14)  # sum(b * a) vs BLAS's b @ a: a few ulp
+
+
+def test_offset_search_in_small_blocks_finds_the_same_offset(offset_problem, monkeypatch):
+    camera, sensor, _, _ = offset_problem
+    default = association.estimate_time_offset(camera, sensor)
+    assert abs(default[0] - 0.0123) < 0.5e-3
+    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 3000)  # about 5 offsets per block
+    blocked = association.estimate_time_offset(camera, sensor)
+    assert blocked[0] == default[0] and abs(blocked[1] - default[1]) < 1e-14
+
+
+def test_offset_search_memory_does_not_grow_with_max_offset(offset_problem, monkeypatch):
+    camera, sensor, _, _ = offset_problem
+    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 2 ** 14)
+    peaks = []
+    for max_offset in (0.3, 3.0):  # 61 and 601 candidate offsets
+        tracemalloc.start()
+        try:
+            association.estimate_time_offset(camera, sensor, max_offset=max_offset)
+            peaks.append(tracemalloc.get_traced_memory()[1])
+        finally:
+            tracemalloc.stop()
+    # in one array, 601 offsets x ~480 camera times x ~150 bytes would take ~40 MB
+    assert peaks[1] < 1.3 * peaks[0] + 0.5e6 and peaks[1] < 10e6, peaks
+
+
+@pytest.mark.parametrize("name, value", [("max_offset", 0), ("max_offset", -0.1), ("max_offset", np.nan),
+                                         ("max_offset", np.inf), ("max_offset", "0.2"), ("max_offset", True),
+                                         ("resolution", 0.0), ("resolution", -1e-3), ("resolution", np.inf),
+                                         ("resolution", np.nan), ("resolution", None)])
+def test_offset_search_refuses_bad_arguments(offset_problem, name, value):
+    camera, sensor, _, _ = offset_problem
+    with pytest.raises(ValueError, match=name):
+        association.estimate_time_offset(camera, sensor, **{name: value})
