@@ -16,19 +16,25 @@ __all__ = ["RIG_R0", "rig_motion", "rig_streams", "assert_rotations_close", "wri
 RIG_R0 = exp_map(np.radians([40.0, -70.0, 125.0]))
 
 
-def rig_motion(t, phase=0.0):
+def rig_motion(t, phase=0.0, rest_s: float = 0.0):
     """The synthetic rig's ``world_from_camera`` at times ``t`` (s): smooth turns about all three axes, rotation-vector
     components ``0.9 sin(0.7 t + p0)``, ``0.8 sin(0.45 t + 1 + p1)``, ``0.7 cos(0.3 t + p2)`` (angles up to 0.9 rad,
-    periods of 9-21 s); ``phase`` (a number or one per component) shifts the motion (another trajectory)."""
+    periods of 9-21 s); ``phase`` (a number or one per component) shifts the motion (another trajectory). With
+    ``rest_s``, the rig rests until ``rest_s`` and starts moving over the next 2 s (a smoothstep on the rotation
+    vector)."""
     t = np.asarray(t, dtype=float)
     p = np.broadcast_to(np.asarray(phase, dtype=float), (3,))
-    return exp_map(np.stack([0.9 * np.sin(0.7 * t + p[0]), 0.8 * np.sin(0.45 * t + 1.0 + p[1]),
-                             0.7 * np.cos(0.3 * t + p[2])], axis=-1))
+    w = np.stack([0.9 * np.sin(0.7 * t + p[0]), 0.8 * np.sin(0.45 * t + 1.0 + p[1]), 0.7 * np.cos(0.3 * t + p[2])],
+                 axis=-1)
+    if rest_s:
+        s = np.clip((t - rest_s) / 2.0, 0.0, 1.0)
+        w = (s * s * (3 - 2 * s))[..., None] * w
+    return exp_map(w)
 
 
 def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | None = None,
                 camera_noise_deg=0.0, gyro_noise_deg_s=0.0, phase=0.0, offset: float = 0.0,
-                sensor_step: int = 2, remount=None):
+                sensor_step: int = 2, remount=None, bias=None, ppm: float = 0.0, rest_s: float = 0.0):
     """A synthetic rig's streams: a camera at 20 Hz and, rigidly attached (``v_cam = R0 v_sensor``), a gyro at
     200 Hz and an orientation sensor at ``200 / sensor_step`` Hz, moving as :func:`rig_motion`.
 
@@ -51,6 +57,13 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
         ``t`` are stamped ``t + offset``.
     sensor_step : int
         The orientation sensor keeps every ``sensor_step``-th sample of the 200 Hz grid.
+    bias : (3,), optional
+        A constant gyro bias (rad/s) added to every rate (before the noise).
+    ppm : float
+        The gyro's clock runs fast by ``ppm`` parts per million about the middle of the recording: its sample of
+        camera time ``t`` is stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``.
+    rest_s : float
+        The rig rests until ``rest_s`` (s), then starts moving over 2 s (:func:`rig_motion`).
     remount : (float, (3, 3)), optional
         ``(time, R)``: the sensor is re-mounted ``R`` further from ``time`` (s, on the sensor's clock) on
         (:func:`replication.rig.changepoint.remounted`, applied to the gyro and the orientation sensor).
@@ -67,22 +80,24 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
     if any(drawn) and not isinstance(rng, np.random.Generator):
         raise ValueError("noise needs rng, a numpy.random.Generator")
     t_cam = np.arange(0.0, seconds, 0.05)
-    C = rig_motion(t_cam, phase)
+    C = rig_motion(t_cam, phase, rest_s)
     if callable(camera_noise_deg):
         C = C @ exp_map(camera_noise_deg((len(t_cam), 3)))
     elif camera_noise_deg:
         C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = rig_motion(t_imu, phase) @ R0  # world_from_sensor
+    Q = rig_motion(t_imu, phase, rest_s) @ R0  # world_from_sensor
     omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005  # body rates over each step, at its midpoint
+    if bias is not None:
+        omega = omega + np.asarray(bias, dtype=float)
     if callable(gyro_noise_deg_s):
         omega = omega + gyro_noise_deg_s(omega.shape)
     elif gyro_noise_deg_s:
         omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
     C, omega, Q = jitter(C), jitter(omega), jitter(Q)
     t_gyro = 0.5 * (t_imu[1:] + t_imu[:-1])
-    if offset:
-        t_gyro, t_imu = t_gyro + offset, t_imu + offset
+    if offset or ppm:
+        t_gyro, t_imu = t_gyro + offset + ppm * 1e-6 * (t_gyro - 0.5 * seconds), t_imu + offset
     gyro = GyroStream(t_gyro, omega, "gyro")
     sensor = OrientationStream(t_imu[::sensor_step], Q[::sensor_step], "sensor")
     if remount is not None:

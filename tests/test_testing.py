@@ -71,3 +71,18 @@ def test_noise_without_a_generator_is_refused(kw):
     with pytest.raises(ValueError, match="noise needs rng, a numpy.random.Generator"):
         rig_streams(5.0, **kw)
     rig_streams(5.0, camera_noise_deg=lambda shape: np.zeros(shape))  # a caller's own draws need none
+
+
+def test_a_bias_a_fast_clock_and_a_rest_are_what_they_say():
+    _, camera0, gyro0, _ = rig_streams(20.0)
+    _, camera, gyro, _ = rig_streams(20.0, bias=(0.1, -0.1, 0.07), ppm=100.0, offset=0.01, rest_s=3.0)
+    # the clock: offset plus 100 ppm about the middle (10 s): 1 ms late at the end, 1 ms early at the start
+    np.testing.assert_allclose(gyro.t - gyro0.t, 0.01 + 1e-4 * (gyro0.t - 10.0), atol=1e-12)
+    # the rest: no motion before 3 s, full motion from 5 s on; the bias: every rate moved by it
+    still = gyro0.t < 3.0
+    np.testing.assert_allclose(gyro.omega[still], np.tile([0.1, -0.1, 0.07], (still.sum(), 1)), atol=1e-9)
+    moving = gyro0.t > 5.0
+    np.testing.assert_allclose(gyro.omega[moving] - gyro0.omega[moving], np.tile([0.1, -0.1, 0.07], (moving.sum(), 1)),
+                               atol=1e-9)
+    assert np.array_equal(camera.R[camera.t > 5.0], camera0.R[camera0.t > 5.0])
+    assert so3.angle_between_deg(camera.R[0], camera.R[camera.t < 3.0][-1]) < 1e-9

@@ -1,6 +1,5 @@
 """A raw gyro's bias and the clock's drift estimated with R0 (issue 34.1 and 34.3's drift half)."""
 import dataclasses
-import importlib.util
 import json
 from pathlib import Path
 
@@ -8,24 +7,23 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication.core.so3 import angle_between_deg, exp_map
+from replication.core.so3 import angle_between_deg, exp_map, log_map
 from replication.rig import sensor_model as sm
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_verdict import SENSOR_THRESHOLDS, sensor_reasons
-from replication.rig.streams import GyroStream
+from replication.rig.streams import GyroStream, OrientationStream
+from replication.testing import RIG_R0, rig_streams
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = json.loads((ROOT / "docs" / "calibration_report.schema.json").read_text())
-_spec = importlib.util.spec_from_file_location("bench_sensor_model", ROOT / "benchmarks" / "bench_sensor_model.py")
-bench = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(bench)
 BIAS = np.array([0.1, -0.1, 0.07])
 
 
 def _rig(seed=0, **kw):
+    """``(R0, camera, gyro)`` of the synthetic rig (:func:`replication.testing.rig_streams`): 30 s, noise on both."""
     rng = np.random.default_rng(seed)
     kw = {"seconds": 30.0, "camera_noise_deg": 0.05, "gyro_noise_deg_s": 0.2, "rng": rng, **kw}
-    return bench.biased_rig(**kw)
+    return rig_streams(**kw)[:3]
 
 
 @pytest.fixture(scope="module")
@@ -234,7 +232,7 @@ def test_the_figure_states_the_bias_and_the_drift(biased):
 
 def _steady_turn(seed=2):
     """A rig turning steadily about z (0.35 rad/s) while it rocks about x and y: the angular speeds barely vary."""
-    R0, rng = bench.R0_TRUE, np.random.default_rng(seed)
+    R0, rng = RIG_R0, np.random.default_rng(seed)
 
     def world_from_camera(t):
         rock = exp_map(np.stack([0.5 * np.sin(0.7 * t), 0.4 * np.sin(0.45 * t + 1), 0 * t], -1))
@@ -243,9 +241,9 @@ def _steady_turn(seed=2):
     t_cam, t_imu = np.arange(0, 40, 0.05), np.arange(-1, 41, 0.005)
     C = world_from_camera(t_cam) @ exp_map(rng.normal(0, np.radians(0.05) / np.sqrt(3), (len(t_cam), 3)))
     Q = world_from_camera(t_imu) @ R0
-    w = bench.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + BIAS + rng.normal(0, np.radians(0.2),
+    w = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + BIAS + rng.normal(0, np.radians(0.2),
                                                                                          (len(t_imu) - 1, 3))
-    return R0, bench.OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), w, "gyro")
+    return R0, OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), w, "gyro")
 
 
 def test_an_offset_the_pairs_refuse_is_named():
