@@ -9,7 +9,8 @@ from ._jitter import jitter
 from .core.checks import check_matrices
 from .core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 
-__all__ = ["RIG_R0", "rig_motion", "rig_streams", "assert_rotations_close", "write_tum_trajectory", "write_euroc_imu"]
+__all__ = ["RIG_R0", "rig_motion", "rig_streams", "noisy_rig", "rig_pairs", "camera_lost", "clock_jumped",
+           "samples_lost", "assert_rotations_close", "write_tum_trajectory", "write_euroc_imu"]
 
 #: The synthetic rig's ``camera_from_sensor``: 40, -70, 125 deg as a rotation vector's components (a generic mounting,
 #: about 150 deg).
@@ -105,6 +106,74 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
 
         gyro, sensor = remounted(gyro, *remount), remounted(sensor, *remount)
     return R0, OrientationStream(t_cam, C, "camera"), gyro, sensor
+
+
+def noisy_rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias_rad_s: float = 0.0, remount=None,
+              drift_deg: float = 0.0):
+    """``(camera, gyro)`` of :func:`rig_streams` as the change and segment tests draw it from ``seed``: the motion's
+    phases uniform per component, then noise of ``cam_deg`` (deg) per axis on each camera orientation and
+    ``gyro_rad_s`` (rad/s) per axis on each gyro sample, and a constant gyro bias of ``bias_rad_s`` (rad/s) in a random
+    direction.
+
+    ``drift_deg``: the camera frame also wanders (a random walk of ``drift_deg`` per 10 s per axis, as a SLAM
+    trajectory's error may); ``remount = (t, R)``: the gyro is re-mounted ``R`` further at ``t``."""
+    from .rig.streams import OrientationStream
+
+    rng = np.random.default_rng(seed)
+    phase = rng.uniform(0.0, 2.0 * np.pi, 3)
+    t_cam = np.arange(0.0, seconds, 0.05)
+    noise = exp_map(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
+    if drift_deg:
+        steps = rng.normal(0.0, np.radians(drift_deg) * np.sqrt(0.05 / 10.0), (len(t_cam), 3))
+        noise = exp_map(np.cumsum(steps, axis=0)) @ noise
+    camera = OrientationStream(t_cam, rig_motion(t_cam, phase) @ noise, "camera")  # a wander is no rotation vector
+    _, _, gyro, _ = rig_streams(
+        seconds, phase=phase, remount=remount,
+        gyro_noise_deg_s=lambda n: rng.normal(0.0, gyro_rad_s, n) + bias_rad_s * rng.normal(size=3) / np.sqrt(3.0))
+    return camera, gyro
+
+
+def rig_pairs(camera, gyro, interval: float = 1.0):
+    """``(A, B, t, block)``: pairs as ``calibrate`` forms them (the gyro integrated, the clock offset estimated and
+    removed; no gaps) and the camera frames per interval."""
+    from .rig.association import estimate_time_offset, motion_pairs
+    from .rig.streams import integrate_gyro
+
+    sensor = integrate_gyro(gyro)
+    offset, _ = estimate_time_offset(camera, sensor, resolution=0.5e-3)
+    A, B, t = motion_pairs(camera, sensor, interval, offset=offset)
+    return A, B, t, max(1, round(interval / np.median(np.diff(camera.t))))
+
+
+def camera_lost(camera, rng: np.random.Generator, wander_deg: float, lost_s: float):
+    """``camera`` whose frame wanders during ``[0, lost_s)``: a random walk of ``wander_deg`` per 10 s about each
+    camera axis, bridged back to the true frame at ``lost_s`` (a SLAM frame lost and re-found)."""
+    from .rig.streams import OrientationStream
+
+    t = camera.t
+    steps = rng.normal(0.0, np.radians(wander_deg) * np.sqrt(0.05 / 10.0), (len(t), 3)) * (t < lost_s)[:, None]
+    path = np.cumsum(steps, axis=0)
+    path -= np.minimum(t / lost_s, 1.0)[:, None] * path[-1]  # a bridge: the frame is found again at lost_s
+    walk = exp_map(path)  # the camera frame wanders: world_from_camera' = world_from_camera W(t)
+    return OrientationStream(t, camera.world_from_body @ walk, "camera (lost for a stretch)")
+
+
+def clock_jumped(gyro, at: float, size: float):
+    """``gyro`` whose clock jumps ahead by ``size`` s at ``at`` (its stamps from then on read ``size`` later)."""
+    from .rig.streams import GyroStream
+
+    t = np.where(gyro.t >= at, gyro.t + size, gyro.t)
+    return GyroStream(t, gyro.omega, gyro.source)
+
+
+def samples_lost(gyro, at: float, count: int):
+    """``gyro`` with ``count`` samples lost from ``at`` on (a gap in the stamps, the clock unchanged)."""
+    from .rig.streams import GyroStream
+
+    k = np.searchsorted(gyro.t, at)
+    keep = np.ones(len(gyro.t), bool)
+    keep[k:k + count] = False
+    return GyroStream(gyro.t[keep], gyro.omega[keep], gyro.source)
 
 
 def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> None:

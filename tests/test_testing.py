@@ -5,7 +5,16 @@ import pytest
 from replication.core import so3
 from replication.rig.changepoint import remounted
 from replication.rig.streams import GyroStream, OrientationStream
-from replication.testing import RIG_R0, rig_motion, rig_streams
+from replication.testing import (
+    RIG_R0,
+    camera_lost,
+    clock_jumped,
+    noisy_rig,
+    rig_motion,
+    rig_pairs,
+    rig_streams,
+    samples_lost,
+)
 
 
 def test_the_rig_is_rigid_with_r0_and_its_rates_at_the_step_midpoints():
@@ -86,3 +95,26 @@ def test_a_bias_a_fast_clock_and_a_rest_are_what_they_say():
                                atol=1e-9)
     assert np.array_equal(camera.R[camera.t > 5.0], camera0.R[camera0.t > 5.0])
     assert so3.angle_between_deg(camera.R[0], camera.R[camera.t < 3.0][-1]) < 1e-9
+
+
+def test_the_stream_edits_jump_the_clock_lose_samples_and_lose_the_camera_for_a_stretch():
+    camera, gyro = noisy_rig(1, 20.0, 0.05, 0.005)
+    jumped = clock_jumped(gyro, 10.0, 0.03)
+    assert np.array_equal(jumped.t[gyro.t < 10.0], gyro.t[gyro.t < 10.0])
+    np.testing.assert_allclose(jumped.t[gyro.t >= 10.0] - gyro.t[gyro.t >= 10.0], 0.03, atol=1e-12)
+    lost = samples_lost(gyro, 10.0, 7)
+    assert len(lost.t) == len(gyro.t) - 7 and np.diff(lost.t).max() == pytest.approx(0.04, abs=1e-9)
+    wandered = camera_lost(camera, np.random.default_rng(0), 5.0, 12.0)
+    off = so3.angle_between_deg(wandered.R, camera.R)
+    assert off[(camera.t > 2.0) & (camera.t < 10.0)].max() > 0.1  # lost
+    assert off[camera.t >= 12.0].max() < 1e-9  # found again, exactly the true frame
+
+
+def test_the_noisy_rig_is_seeded_and_its_pairs_recover_r0():
+    a, b = noisy_rig(3, 15.0, 0.05, 0.005), noisy_rig(3, 15.0, 0.05, 0.005)
+    assert np.array_equal(a[0].R, b[0].R) and np.array_equal(a[1].omega, b[1].omega)
+    assert not np.array_equal(noisy_rig(4, 15.0, 0.05, 0.005)[0].R, a[0].R)
+    A, B, t, block = rig_pairs(*a)
+    assert block == 20 and len(A) == len(B) == len(t) > 10
+    # A = R0 B R0^T (camera motions from the sensor's): within the noise for every pair
+    assert np.max(so3.angle_between_deg(A, RIG_R0 @ B @ RIG_R0.T)) < 0.5

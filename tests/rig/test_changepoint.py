@@ -35,7 +35,7 @@ from replication.rig.realdata import (
     real_data_available,
 )
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
-from replication.testing import RIG_R0, assert_rotations_close, rig_streams
+from replication.testing import RIG_R0, assert_rotations_close, noisy_rig
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
@@ -45,14 +45,9 @@ BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
 
 def _rig(seed, seconds=60.0, cam_deg=0.05, gyro_rad_s=0.005, remount=None):
-    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise; ``remount = (t, R)`` re-mounts the
-    gyro."""
-    rng = np.random.default_rng(seed)
-    phase = rng.uniform(0.0, 2.0 * np.pi, 3)
-    _, camera, gyro, _ = rig_streams(seconds, phase=phase, remount=remount,
-                                     camera_noise_deg=lambda n: rng.normal(0.0, np.radians(cam_deg), n),
-                                     gyro_noise_deg_s=lambda n: rng.normal(0.0, gyro_rad_s, n))
-    return camera, gyro
+    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise (:func:`replication.testing.noisy_rig`);
+    ``remount = (t, R)`` re-mounts the gyro."""
+    return noisy_rig(seed, seconds, cam_deg, gyro_rad_s, remount=remount)
 
 
 def _pairs(camera, sensor):

@@ -1,26 +1,19 @@
 """The segment test and the clock jumps (replication.rig.segments): segments that agree are not named, a stretch
 mounted otherwise is named with its times and left out by ``use="consistent"``, the verdict's angle bounds hold at
 their boundaries, calibrate gives one verdict at intervals 0.5, 1 and 2 s on a lost-tracking rig, a clock jump is
-found with its time and size, and no jump is not. The rigs are benchmarks/bench_changepoint.py's (camera 20 Hz, gyro
-200 Hz, smooth three-axis motion)."""
+found with its time and size, and no jump is not. The rigs are :func:`replication.testing.noisy_rig` (camera 20 Hz,
+gyro 200 Hz, smooth three-axis motion), as in benchmarks/bench_changepoint.py and bench_segments.py."""
 import dataclasses
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-
-from bench_changepoint import R0, rig, rig_pairs  # noqa: E402
-from bench_segments import jumped, lost_rig, lost_samples  # noqa: E402
-
-from replication.core import so3  # noqa: E402
-from replication.rig.calibration import calibrate  # noqa: E402
-from replication.rig.changepoint import remounted  # noqa: E402
-from replication.rig.quality import THRESHOLDS  # noqa: E402
-from replication.rig.segments import (  # noqa: E402
+from replication.core import so3
+from replication.rig.calibration import calibrate
+from replication.rig.changepoint import remounted
+from replication.rig.quality import THRESHOLDS
+from replication.rig.segments import (
     MAX_LEFT_OUT_SHARE,
     Segment,
     SegmentTest,
@@ -29,7 +22,9 @@ from replication.rig.segments import (  # noqa: E402
     reasons,
     segment_test,
 )
-from replication.rig.streams import integrate_gyro  # noqa: E402
+from replication.rig.streams import integrate_gyro
+from replication.testing import RIG_R0 as R0
+from replication.testing import camera_lost, clock_jumped, noisy_rig, rig_pairs, samples_lost
 
 WARN, FAIL = THRESHOLDS["remount_deg"]
 STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
@@ -43,7 +38,7 @@ def _cal(camera, sensor, **kw):
 
 @pytest.mark.parametrize("seed", [11, 12, 13])
 def test_segments_that_agree_are_not_named(seed):
-    A, B, t, block = rig_pairs(*rig(seed, 60, 0.05, 0.005))
+    A, B, t, block = rig_pairs(*noisy_rig(seed, 60, 0.05, 0.005))
     r = segment_test(A, B, t, block=block)
     assert len(r.segments) == 5 and not r.disagreeing, r.summary()
     assert r.consistent == tuple(range(5)) and r.max_angle_deg == 0.0
@@ -53,7 +48,7 @@ def test_segments_that_agree_are_not_named(seed):
 
 
 def test_a_stretch_mounted_otherwise_is_named_and_left_out():
-    camera, gyro = rig(21, 60, 0.05, 0.005)
+    camera, gyro = noisy_rig(21, 60, 0.05, 0.005)
     gyro = remounted(remounted(gyro, 24.0, STEP), 36.0, STEP.T)  # 2 deg off from 24 to 36 s
     A, B, t, block = rig_pairs(camera, gyro)
     r = segment_test(A, B, t, block=block)
@@ -89,7 +84,8 @@ def test_segments_that_agree_give_no_reason():
 
 
 def test_one_verdict_at_three_intervals_on_a_lost_tracking_rig_and_the_consistent_part():
-    camera, gyro = lost_rig(0)
+    camera, gyro = noisy_rig(0, 180.0, 0.05, 0.005)  # bench_segments' lost_rig(0)
+    camera = camera_lost(camera, np.random.default_rng(10 ** 6), 1.0, 46.0)
     results = [_cal(camera, gyro, interval=iv) for iv in (0.5, 1.0, 2.0)]
     assert len({r.verdict.level for r in results}) == 1 and results[0].verdict.level == "fail"
     seg = results[1].to_dict()["segments"]
@@ -108,7 +104,7 @@ def test_one_verdict_at_three_intervals_on_a_lost_tracking_rig_and_the_consisten
 
 
 def test_use_is_checked():
-    camera, gyro = rig(1, 30, 0.05, 0.005)
+    camera, gyro = noisy_rig(1, 30, 0.05, 0.005)
     with pytest.raises(ValueError, match="use must be 'all' or 'consistent'"):
         calibrate(camera, gyro, use="best")
 
@@ -116,8 +112,9 @@ def test_use_is_checked():
 @pytest.mark.parametrize("size, lost, found", [(0.0, 0, False), (0.001, 0, False), (0.0, 1, False), (0.0, 20, False),
                                                (0.03, 0, True), (0.1, 0, True)])
 def test_a_clock_jump_is_found_with_its_time_and_size(size, lost, found):
-    camera, gyro = rig(101, 60, 0.05, 0.005)
-    sensor = integrate_gyro(lost_samples(jumped(gyro, 30.0, size), 30.0, lost) if lost else jumped(gyro, 30.0, size))
+    camera, gyro = noisy_rig(101, 60, 0.05, 0.005)
+    jumped = clock_jumped(gyro, 30.0, size)
+    sensor = integrate_gyro(samples_lost(jumped, 30.0, lost) if lost else jumped)
     parts, jumps = clock_segments(camera, sensor, gaps=jump_candidates(sensor.t))
     assert bool(jumps) == found, (parts, jumps)
     if found:
@@ -126,8 +123,8 @@ def test_a_clock_jump_is_found_with_its_time_and_size(size, lost, found):
 
 
 def test_a_clock_jump_fails_calibrate_naming_it():
-    camera, gyro = rig(102, 60, 0.05, 0.005)
-    r = _cal(camera, jumped(gyro, 30.0, 0.03))
+    camera, gyro = noisy_rig(102, 60, 0.05, 0.005)
+    r = _cal(camera, clock_jumped(gyro, 30.0, 0.03))
     (why,) = [x for x in r.verdict.reasons if x.check == "clock_jump"]
     assert why.level == "fail" and "at 30.0 s by +" in why.message and "ms" in why.message
     (j,) = r.segments["clock_jumps"]
@@ -137,7 +134,7 @@ def test_a_clock_jump_fails_calibrate_naming_it():
 @pytest.mark.parametrize("kwargs, message", [({"segment_s": -1.0}, "segment_s must be a positive"),
                                              ({"segment_s": 25.0}, "too short for a segment test")])
 def test_bad_parameters_are_named(kwargs, message):
-    A, B, t, block = rig_pairs(*rig(3, 60, 0.05, 0.005))
+    A, B, t, block = rig_pairs(*noisy_rig(3, 60, 0.05, 0.005))
     with pytest.raises(ValueError, match=message):
         segment_test(A, B, t, block=block, **kwargs)
 
