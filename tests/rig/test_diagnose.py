@@ -21,7 +21,7 @@ from replication.rig.diagnose import (
 )
 from replication.rig.quality import THRESHOLDS
 from replication.rig.streams import GyroStream, OrientationStream
-from replication.testing import RIG_R0
+from replication.testing import RIG_R0, rig_motion
 
 #: A camera-IMU rotation far from the identity (a camera's reference).
 R_CAM = RIG_R0
@@ -33,9 +33,7 @@ def _turn(deg, axis=Z):
     return so3.exp_map(np.radians(deg) * np.asarray(axis))
 
 
-def _world_from_imu(t):
-    w = np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1)
-    return so3.exp_map(w)
+_world_from_imu = rig_motion  # the synthetic rig's motion, here the IMU's
 
 
 @pytest.fixture(scope="module")

@@ -16,6 +16,7 @@ from replication.rig.live import LiveRig
 from replication.rig.online import OnlineCalibrator
 from replication.rig.poses import calibrate_poses
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.testing import rig_motion
 
 HAVE_REAL = rd.real_data_available()
 needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
@@ -336,8 +337,7 @@ def _cli_files(tmp_path, angle_deg):
     """A camera TUM trajectory and a 17-column ground truth of the same rig, the latter with one
     time stamp repeated with a pose ``angle_deg`` away."""
     t = 1403636580.0 + np.arange(0.0, 40.0, 0.05)
-    w = np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1)
-    R = so3.exp_map(w)
+    R = rig_motion(t)  # the synthetic rig's motion
     q = so3.as_quaternion(R)
     cam = tmp_path / "cam.txt"
     np.savetxt(cam, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
