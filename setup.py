@@ -12,7 +12,7 @@ from setuptools import setup
 from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
-#: The project files a wheel ships (the same list as replication._extras.SHIPPED; tests/test_install.py checks both).
+#: The project files a wheel ships (the same list as replication._extras.SHIPPED; tests/test_extras.py checks both).
 SHIPPED = ("data/real_data_manifest.csv", "docs/conventions.md", "docs/calibration_report.schema.json")
 
 

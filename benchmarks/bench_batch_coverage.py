@@ -1,7 +1,7 @@
 """Coverage of the batch radii in simulation, where R0 is known: the share of runs whose error is within the stated
 95 % bootstrap radius, with its Wilson 95 % interval (the runs are independent).
 
-* streams (``calibrate``): a synthetic rig (``simulation.rig_streams``: camera at 20 Hz, gyro at 200 Hz, smooth
+* streams (``calibrate``): a synthetic rig (``replication.testing.rig_streams``: camera at 20 Hz, gyro at 200 Hz, smooth
   three-axis motion) with Gaussian noise on every camera orientation and every gyro sample; the moving-block
   bootstrap over the pairs (blocks of one pairing interval);
 * static pose sets (``calibrate_poses``): stations with independent noise on both attitudes; the station bootstrap
@@ -21,7 +21,7 @@ from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
 from replication.rig.poses import calibrate_poses, pose_pairs
 from replication.rig.solve_and_judge import block_indices, bootstrap_replicates
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 
 def _share(hits):

@@ -2,7 +2,7 @@
 
 1. the tail approximation of the threshold against simulated 3-dimensional Brownian bridges;
 2. false alarms without a change on synthetic rigs (a camera at 20 Hz and a gyro at 200 Hz on one rigid body, 60
-   or 135 s of smooth three-axis motion as in tests/test_calibrate_trust.py, noise on the camera orientations and
+   or 135 s of smooth three-axis motion as in tests/rig/test_calibration.py, noise on the camera orientations and
    the gyro at several levels), on one seed set and again on a disjoint one, with Wilson 95 % intervals; what a
    slowly wandering camera frame does (not a change, and not white noise); re-mounts on the rigs;
 3. the real recordings as recorded (pairs as calibrate forms them: its clock offset, interval 1 s, its block);
@@ -23,7 +23,7 @@ import numpy as np
 from scipy.stats import binomtest
 
 from replication.core import so3
-from replication.rig.association import estimate_time_offset, motion_pairs
+from replication.rig.association import motion_pairs
 from replication.rig.calibration import calibrate
 from replication.rig.changepoint import remounted, threshold, two_segment_test
 from replication.rig.quality import THRESHOLDS
@@ -34,12 +34,14 @@ from replication.rig.realdata import (
     load_tum_trajectory,
     real_data_available,
 )
-from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.rig.streams import GyroStream, integrate_gyro
 from replication.study.live_study import REMOUNT_AXIS
+from replication.testing import RIG_R0, rig_pairs
+from replication.testing import noisy_rig as rig
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = RIG_R0
 #: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per 200 Hz sample),
 #: gyro bias (rad/s, constant)).
 CONFIGS = [(60, 0.02, 0.002, 0.0), (60, 0.1, 0.005, 0.0), (60, 0.0, 0.005, 0.0), (60, 0.3, 0.02, 0.005),
@@ -68,44 +70,6 @@ def bridge_check(n_bridges: int = 50_000, n_steps: int = 1000, seed: int = 0, sh
         approx = threshold(a, 1e12, share, 1 - share)  # a recording so long that the inflation is known
         print(f"   level {a:g}: simulated {np.quantile(sups, 1 - a):.2f}, approximation {approx:.2f} "
               f"(simulated exceedance of it {np.mean(sups > approx):.4f})")
-
-
-def rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias_rad_s: float = 0.0, remount=None,
-        drift_deg: float = 0.0):
-    """A camera at 20 Hz and a gyro at 200 Hz on one rigid body (smooth three-axis motion, random phases), with noise.
-
-    ``drift_deg``: the camera frame also wanders (a random walk of ``drift_deg`` per 10 s per axis, as a SLAM
-    trajectory's error may); ``remount = (t, R)``: the gyro is re-mounted ``R`` further at ``t``."""
-    rng = np.random.default_rng(seed)
-    phase = rng.uniform(0.0, 2.0 * np.pi, 3)
-
-    def world_from_camera(t):
-        w = np.stack([0.9 * np.sin(0.7 * t + phase[0]), 0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
-                      0.7 * np.cos(0.3 * t + phase[2])], axis=-1)
-        return so3.exp_map(w)
-
-    t_cam = np.arange(0.0, seconds, 0.05)
-    noise = so3.exp_map(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
-    if drift_deg:
-        steps = rng.normal(0.0, np.radians(drift_deg) * np.sqrt(0.05 / 10.0), (len(t_cam), 3))
-        noise = so3.exp_map(np.cumsum(steps, axis=0)) @ noise
-    camera = OrientationStream(t_cam, world_from_camera(t_cam) @ noise, "camera")
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
-    omega += rng.normal(0.0, gyro_rad_s, omega.shape) + bias_rad_s * rng.normal(size=3) / np.sqrt(3.0)
-    gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
-    if remount is not None:
-        gyro = remounted(gyro, *remount)
-    return camera, gyro
-
-
-def rig_pairs(camera, gyro, interval: float = 1.0):
-    """Pairs as calibrate forms them (the gyro integrated, the clock offset estimated and removed; no gaps here)."""
-    sensor = integrate_gyro(gyro)
-    offset, _ = estimate_time_offset(camera, sensor, resolution=0.5e-3)
-    A, B, t = motion_pairs(camera, sensor, interval, offset=offset)
-    return A, B, t, max(1, round(interval / np.median(np.diff(camera.t))))
 
 
 def _false_alarm_run(args):

@@ -18,7 +18,7 @@ from replication.core.stats import wilson_interval
 from replication.rig.live import replay
 from replication.rig.online import OnlineCalibrator
 from replication.rig.streams import OrientationStream
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 SECONDS, TOTAL_DEG, AXIS = 600.0, 2.0, np.array([0.6, 0.0, 0.8])
 

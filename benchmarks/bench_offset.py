@@ -5,7 +5,7 @@
   uniform in +-20 ms); the error of each is ``estimate(shifted) - estimate(unshifted) - shift``, before (the
   0.5 ms fine grid's maximum, the computation of before) and after (the refined offset), with the 95 % interval
   of :func:`replication.rig.association.offset_analysis` on each shifted stream;
-* coverage of that interval over synthetic rigs (the rig of ``tests/test_association.py``, 30 s) with independent
+* coverage of that interval over synthetic rigs (the rig of ``tests/rig/test_association.py``, 30 s) with independent
   noise on the camera's poses and the gyro, each with an injected off-grid offset: the share of intervals holding
   it, with a Wilson 95 % interval on the share;
 * the peak margin on the recordings and on a periodic motion, at the default search (+-0.2 s) and a wider one;
@@ -24,6 +24,7 @@ from replication.rig import association, realdata
 from replication.rig.association import estimate_time_offset, offset_analysis
 from replication.rig.calibration import _gap_free_window
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.testing import RIG_R0, rig_streams
 
 ISSUE_MS = (0.13, 0.37, 1.71, 2.29, -3.43)
 
@@ -71,23 +72,16 @@ def injection(name, camera, shifted, shifts):
           f"({1e3 * min(widths):.3f}-{1e3 * max(widths):.3f})")
 
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = RIG_R0
 
 
 def noisy_rig(offset, camera_noise_deg, gyro_noise, rng, seconds=30.0):
-    """The rig of ``tests/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
+    """The rig of ``tests/rig/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
     (200 Hz, noise in rad/s per sample) whose clock reads ``offset`` s ahead."""
-    def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
-
-    t_cam, t_imu = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
-    camera = world_from_camera(t_cam) @ so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg),
-                                                               size=(len(t_cam), 3)))
-    Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(scale=gyro_noise,
-                                                                                    size=(len(t_imu) - 1, 3))
-    return (OrientationStream(t_cam, camera, "camera"),
-            integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro")))
+    _, camera, gyro, _ = rig_streams(seconds, offset=offset,
+                                     camera_noise_deg=lambda n: rng.normal(scale=np.radians(camera_noise_deg), size=n),
+                                     gyro_noise_deg_s=lambda n: rng.normal(scale=gyro_noise, size=n))
+    return camera, integrate_gyro(gyro)
 
 
 def wilson(k, n, z=1.959964):

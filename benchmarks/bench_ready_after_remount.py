@@ -24,7 +24,7 @@ from replication.core.stats import wilson_interval
 from replication.rig.live import replay
 from replication.rig.online import OnlineCalibrator
 from replication.study.live_study import pair_stream
-from replication.study.simulation import rig_streams
+from replication.testing import rig_streams
 
 STEPS_DEG = (0.5, 1.0, 2.0)
 PAIR_NOISE_DEG = (0.3, 1.0)

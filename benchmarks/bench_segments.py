@@ -25,7 +25,9 @@ from bench_changepoint import CONFIGS, R0, rig, wilson
 
 from replication.core import so3
 from replication.rig.calibration import calibrate
-from replication.rig.streams import GyroStream, OrientationStream
+from replication.testing import camera_lost
+from replication.testing import clock_jumped as jumped
+from replication.testing import samples_lost as lost_samples
 
 WANDER_DEG, LOST_S, SECONDS = 1.0, 46.0, 180.0
 INTERVALS = (0.5, 1.0, 2.0)
@@ -34,19 +36,7 @@ INTERVALS = (0.5, 1.0, 2.0)
 def lost_rig(seed: int, wander_deg: float = WANDER_DEG, lost_s: float = LOST_S, seconds: float = SECONDS):
     """bench_changepoint's rig (camera 0.05 deg, gyro 0.005 rad/s) whose camera frame wanders during [0, lost_s)."""
     camera, gyro = rig(seed, seconds, 0.05, 0.005)
-    rng = np.random.default_rng(10 ** 6 + seed)
-    t = camera.t
-    steps = rng.normal(0.0, np.radians(wander_deg) * np.sqrt(0.05 / 10.0), (len(t), 3)) * (t < lost_s)[:, None]
-    path = np.cumsum(steps, axis=0)
-    path -= np.minimum(t / lost_s, 1.0)[:, None] * path[-1]  # a bridge: the frame is found again at lost_s
-    walk = so3.exp_map(path)  # the camera frame wanders: world_from_camera' = world_from_camera W(t)
-    return OrientationStream(t, camera.world_from_body @ walk, "camera (lost for a stretch)"), gyro
-
-
-def jumped(gyro: GyroStream, at: float, size: float) -> GyroStream:
-    """The gyro's clock jumps ahead by ``size`` s at ``at`` (its stamps from then on read ``size`` later)."""
-    t = np.where(gyro.t >= at, gyro.t + size, gyro.t)
-    return GyroStream(t, gyro.omega, gyro.source)
+    return camera_lost(camera, np.random.default_rng(10 ** 6 + seed), wander_deg, lost_s), gyro
 
 
 def _cal(camera, sensor, **kw):
@@ -91,14 +81,6 @@ def false_alarms(seeds):
     n = len(seeds)
     print(f"2. no wander ({len(configs)} settings), seeds {seeds[0]}..{seeds[-1]}: a segment named "
           f"{wilson(named, n)}; omnibus significant {wilson(omnibus, n)}; verdict not ok {wilson(worse, n)}")
-
-
-def lost_samples(gyro: GyroStream, at: float, count: int) -> GyroStream:
-    """``count`` gyro samples lost from ``at`` on (a gap in the stamps, the clock unchanged)."""
-    k = np.searchsorted(gyro.t, at)
-    keep = np.ones(len(gyro.t), bool)
-    keep[k:k + count] = False
-    return GyroStream(gyro.t[keep], gyro.omega[keep], gyro.source)
 
 
 JUMPS_MS = (1.0, 2.5, 5.0, 10.0, 30.0, 100.0)

@@ -22,40 +22,26 @@ import warnings
 
 import numpy as np
 
-from replication.core.so3 import angle_between_deg, exp_map, log_map
+from replication.core.so3 import angle_between_deg, log_map
 from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_model import estimate_sensor_model
-from replication.rig.streams import GyroStream, OrientationStream
+from replication.rig.streams import GyroStream
+from replication.testing import RIG_R0, rig_streams
 
-R0_TRUE = exp_map(np.radians([40.0, -70.0, 125.0]))
+R0_TRUE = RIG_R0
 
 
 def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_s=0.0, camera_noise_deg=0.0,
                gyro_noise_deg_s=0.0, rng=None, phase=0.0):
     """``(R0, camera, gyro)``: a camera at 20 Hz and a gyro at 200 Hz (one second beyond it on both sides) reading
     ``omega + bias`` (rad/s), stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``; the rig rests for ``rest_s``
-    seconds, then starts moving over 2 s (the motion of :func:`replication.study.simulation.rig_streams`)."""
+    seconds, then starts moving over 2 s (the motion of :func:`replication.testing.rig_streams`)."""
 
-    def world_from_camera(t):
-        s = np.clip((t - rest_s) / 2.0, 0.0, 1.0) if rest_s else np.ones_like(t)
-        env = (s * s * (3 - 2 * s))[:, None]
-        w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase),
-                      0.7 * np.cos(0.3 * t + phase)], axis=-1)
-        return exp_map(env * w)
-
-    t_cam = np.arange(0.0, seconds, 0.05)
-    C = world_from_camera(t_cam)
-    if camera_noise_deg:
-        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world_from_camera(t_imu) @ R0_TRUE
-    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + np.asarray(bias, float)
-    if gyro_noise_deg_s:
-        omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
-    t = 0.5 * (t_imu[1:] + t_imu[:-1])
-    stamps = t + offset + ppm * 1e-6 * (t - 0.5 * seconds)
-    return R0_TRUE, OrientationStream(t_cam, C, "camera"), GyroStream(stamps, omega, "gyro")
+    R0, camera, gyro, _ = rig_streams(seconds, rng=rng, camera_noise_deg=camera_noise_deg,
+                                      gyro_noise_deg_s=gyro_noise_deg_s, phase=phase, offset=offset, bias=bias, ppm=ppm,
+                                      rest_s=rest_s)
+    return R0, camera, gyro
 
 
 def _wilson(k, n):

@@ -17,7 +17,7 @@ nb_execution_mode = "off"
 nb_execution_raise_on_error = True
 # the claim records' own output type (application/vnd.replication.claim+json, read by `claims`) is shown as the
 # text/plain line stored beside it; MyST-NB parses every type of a bundle before choosing one and warns about a type
-# it has no renderer for: that warning only (the notebooks hold no other unknown type: tests/test_book.py checks)
+# it has no renderer for: that warning only (the notebooks hold no other unknown type: tests/study/test_book.py checks)
 nb_mime_priority_overrides = [("html", "application/vnd.replication.claim+json", None)]
 suppress_warnings = ["mystnb.unknown_mime_type"]
 myst_heading_anchors = 6

@@ -22,7 +22,7 @@ DISTRIBUTION = "camimu-replication"
 #: The project files that commands cite, copied into a wheel under ``replication/_shipped/`` (setup.py).
 SHIPPED = ("data/real_data_manifest.csv", "docs/conventions.md", "docs/calibration_report.schema.json")
 
-#: Optional top-level module -> the extra of pyproject.toml that installs it (tests/test_install.py checks both).
+#: Optional top-level module -> the extra of pyproject.toml that installs it (tests/test_extras.py checks both).
 OPTIONAL = {"pandas": "study", "tabulate": "study", "tqdm": "study", "nbclient": "study", "nbformat": "study",
             "ipykernel": "study", "ahrs": "study", "jupyter": "notebooks"}
 

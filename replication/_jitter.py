@@ -19,7 +19,8 @@ SSE42 = "X86_V3 " + AVX2
 #: jitters at 1e-13 (100 times the last-bit jitter, a few hundred units in the last place: an output it moves sits
 #: near a rounding edge; 1e-11 broke the notebooks' 1e-12 checks of exact identities) and doubles every
 #: guard's margin (:func:`margin_scale`: what passes there has room for a machine's spread). The README's test
-#: command re-runs the notebooks under ``avx2`` (``tests/test_portability.py``); ``scripts/spread.py`` under all.
+#: command re-runs the notebooks under ``avx2`` (``tests/notebooks/test_portability_*.py``); ``scripts/spread.py``
+#: under all.
 VARIANTS = {
     "jitter": {ENV: "1"},
     "avx2": {ENV: "2", "NPY_DISABLE_CPU_FEATURES": AVX2, "OPENBLAS_CORETYPE": "Haswell", **_ONE_THREAD},

@@ -7,7 +7,8 @@ import pytest
 from replication._jitter import DEFAULT_SCALE, ENV, LAST_BIT, VARIANTS, jitter, jitter_setting
 from replication.core.so3 import random_rotations
 from replication.rig.datafile import read_table
-from replication.study.simulation import opencv_protocol, rig_streams, simulate
+from replication.study.simulation import opencv_protocol, simulate
+from replication.testing import rig_streams
 
 
 def test_off_by_default_and_at_zero_returns_the_same_object(monkeypatch):

@@ -27,10 +27,12 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
                                     if m.ispkg)
 #: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
-#: writer, the version and the optional packages) import nothing of the package and serve every room; the rest of the
-#: hall and the command line are on top, and ``__main__`` (the entry that runs the command line) above them.
-ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "study": 3, "__init__": 4,
-         "testing": 4, "cli": 4, "__main__": 5}
+#: writer, the version and the optional packages) import nothing of the package and serve every room; the testing
+#: helpers (the synthetic rig) stand with rig, whose streams they build, so that the online studies use the same rig
+#: as the tests; the rest of the hall and the command line are on top, and ``__main__`` (the entry that runs the
+#: command line) above them.
+ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "testing": 2, "study": 3,
+         "__init__": 4, "cli": 4, "__main__": 5}
 MAX_TOP_LEVEL_MODULES = 8
 MAX_CELL_LINES = 60
 
@@ -279,3 +281,85 @@ def test_the_private_import_finder_sees_names_and_modules():
 def test_notebooks_import_no_private_name(path):
     found = {i: names for i, src in _code_cells(path) if (names := private_imports(src))}
     assert not found, f"{path.name} imports private names (cell index: names): {found}"
+
+
+# ------------------------------------------------------------------------------------------------- the tests' homes
+TESTS = ROOT / "tests"
+#: Test files named for no module, each with what it tests instead.
+TESTS_OF_NO_MODULE = {"tests/test_layout.py": "the package's layout as a whole"}
+
+
+def _snake(name: str) -> str:
+    return "".join(f"_{c.lower()}" if c.isupper() and i else c.lower() for i, c in enumerate(name))
+
+
+def unit_names(room: str) -> set:
+    """The names a test file of ``room`` may take: each module's path below the room, its parts joined by ``_``
+    without their leading underscores (``core/solvers/_registry.py``: ``solvers_registry``; a package: its own
+    name), and each public class of the room in snake case (``OnlineCalibrator``: ``online_calibrator``)."""
+    names = set()
+    for module, path in MODULES.items():
+        parts = module.split(".")
+        if parts[0] != "replication":
+            continue
+        if room == "hall":
+            if len(parts) == 2 and parts[1] in ROOMS and parts[1] not in ("core", "rig", "study", "__init__"):
+                names.add(parts[1].strip("_"))
+            continue
+        if len(parts) < 3 or parts[1] != room:
+            continue
+        names.add("_".join(p.lstrip("_") for p in parts[2:]))
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        names |= {_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
+    return names
+
+
+def misnamed_test_file(path: Path) -> str | None:
+    """Why a test file's name names nothing it could test, or None: ``tests/<room>/test_<unit>.py`` for the rooms
+    core, rig and study (:func:`unit_names`), ``tests/test_<module>.py`` for the hall's modules,
+    ``tests/scripts/test_<script>.py`` for ``scripts/<script>.py``, and in ``tests/notebooks/`` the nbval sanitiser
+    (``test_sanitize.py``) and the portability re-runs named by the notebooks they re-run."""
+    rel = path.relative_to(ROOT).as_posix()
+    if rel in TESTS_OF_NO_MODULE:
+        return None
+    folder = path.parent.relative_to(TESTS).as_posix()
+    name = path.stem.removeprefix("test_")
+    if folder in ("core", "rig", "study", "."):
+        units = unit_names("hall" if folder == "." else folder)
+        return None if name in units else f"{rel}: no module or public class {name!r} in {folder} ({sorted(units)})"
+    if folder == "scripts":
+        return None if (ROOT / "scripts" / f"{name}.py").exists() else f"{rel}: no scripts/{name}.py"
+    if folder == "notebooks":
+        numbers = {p.name[:2] for p in NOTEBOOKS}
+        if name == "sanitize" or (name.startswith("portability_")
+                                  and set(name.removeprefix("portability_").split("_")) <= numbers):
+            return None
+        return f"{rel}: tests/notebooks/ holds test_sanitize.py and test_portability_<notebook numbers>.py only"
+    return f"{rel}: a test folder that is no room (core, rig, study, scripts, notebooks)"
+
+
+def test_every_test_file_is_named_for_the_unit_it_tests():
+    files = sorted(TESTS.rglob("test_*.py"))
+    assert len(files) > 40
+    assert [why for why in map(misnamed_test_file, files) if why] == []
+
+
+def test_the_test_file_rule_refuses_history_and_missing_units(tmp_path):
+    assert misnamed_test_file(TESTS / "rig" / "test_online.py") is None
+    assert misnamed_test_file(TESTS / "core" / "test_solvers_registry.py") is None  # core/solvers/_registry.py
+    assert misnamed_test_file(TESTS / "rig" / "test_online_calibrator.py") is None  # the public class
+    assert misnamed_test_file(TESTS / "test_main.py") is None  # replication/__main__.py
+    assert "no module or public class 'mutants_online'" in misnamed_test_file(TESTS / "rig" / "test_mutants_online.py")
+    assert "no module or public class 'online_judging'" in misnamed_test_file(TESTS / "rig" / "test_online_judging.py")
+    assert "no module or public class 'so3'" in misnamed_test_file(TESTS / "rig" / "test_so3.py")  # another room's
+    assert "no scripts/nope.py" in misnamed_test_file(TESTS / "scripts" / "test_nope.py")
+    history = TESTS / "notebooks" / "test_portability_part2.py"
+    assert "test_portability_<notebook numbers>" in misnamed_test_file(history)
+    assert "no room" in misnamed_test_file(TESTS / "misc" / "test_so3.py")
+
+
+def test_the_portability_files_share_out_every_notebook_once():
+    files = (TESTS / "notebooks").glob("test_portability_*.py")
+    parts = [p.stem.removeprefix("test_portability_").split("_") for p in files]
+    assert len(parts) == 2  # one per xdist worker (scripts/test runs two, --dist loadfile)
+    assert sorted(sum(parts, [])) == [p.name[:2] for p in NOTEBOOKS]

@@ -83,7 +83,7 @@ BIAS = np.array([0.06, -0.08, 0.04])
 
 def _biased_rig(seconds=40.0, seed=5):
     from replication.rig.streams import GyroStream
-    from replication.study.simulation import rig_streams
+    from replication.testing import rig_streams
 
     R0, camera, gyro, _ = rig_streams(seconds, rng=np.random.default_rng(seed), camera_noise_deg=0.05,
                                       gyro_noise_deg_s=0.2)
@@ -149,7 +149,7 @@ def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
     at rest fit no rig), so the pairs wait; half a window later it is, and R0 is right."""
     from replication.rig.live import replay
     from replication.rig.streams import GyroStream, OrientationStream
-    from replication.study.simulation import rig_streams
+    from replication.testing import rig_streams
 
     rng = np.random.default_rng(7)
     R0, cam, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2)

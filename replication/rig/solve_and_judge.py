@@ -59,7 +59,7 @@ __all__ = ["check_common", "first_reference", "reference_reading", "check_option
 #: an angle) exceeds this factor times that of the answer on all pairs, on the same pairs, ... Measured (the ratio of
 #: the two, every registered solver, 200 replicates, seed 0): TUM-VI, EuRoC MH01 and Tabb DS1 0.92-1.06, except sqp
 #: on EuRoC, one replicate at 26.6 (a local minimum: 2.9 deg against 0.11); the synthetic rig of tests/
-#: test_calibrate_trust.py (50 replicates) with 0.2 deg noise 1.00-1.02, OpenCV's wrappers up to 1.75; noise-free up
+#: test_calibration.py (50 replicates) with 0.2 deg noise 1.00-1.02, OpenCV's wrappers up to 1.75; noise-free up
 #: to 3.0 (1e-9 deg residuals, under the floor); a pose set with 1-3 outlying stations of 30-120 deg (3 seeds, both
 #: pairings) up to 1.00 (chordal_optimal), 1.01 (robust), 1.78 (two_step_left). A random rotation: tens to hundreds.
 REPLICATE_FIT_FACTOR = 4.0

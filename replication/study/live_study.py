@@ -5,7 +5,7 @@ of each size), live replays of the real recordings beside VINS-Mono's initialise
 
 Every replay feeds :class:`replication.rig.live.LiveRig` the recorded streams in time order; VINS-Mono's rule
 (:class:`replication.study.vins_rule.VinsExRotation`) gets exactly the same pairs. Simulated pair streams come from
-:func:`pair_stream`, simulated rigs from :func:`replication.study.simulation.rig_streams`.
+:func:`pair_stream`, simulated rigs from :func:`replication.testing.rig_streams`.
 """
 from __future__ import annotations
 
@@ -184,7 +184,7 @@ def online_mistakes(*, seed: int, seconds: float = 90.0, target_deg: float = 0.5
     """The usual input mistakes made on purpose on a synthetic rig (camera at 20 Hz, gyro at 200 Hz, small noise),
     replayed as if live: whether the estimator ever says ``ready``, its final verdict and the reasons it names."""
     from ..rig.streams import GyroStream, OrientationStream
-    from .simulation import rig_streams
+    from ..testing import rig_streams
 
     rng = np.random.default_rng(seed)
     R0, camera, gyro, sensor = rig_streams(seconds, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)

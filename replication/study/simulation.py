@@ -22,7 +22,7 @@ from .paper import r0_camera_from_sensor
 
 __all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg",
            "OpenCVProtocolProblem", "opencv_protocol", "MATCHED_MOTIONS_DEG", "MATCHED_START_DEG",
-           "MATCHED_START_AXIS", "matched_start", "rig_streams"]
+           "MATCHED_START_AXIS", "matched_start"]
 
 
 def noise_bound_for_angle_deg(angle_deg: float) -> float:
@@ -217,50 +217,3 @@ def matched_start() -> np.ndarray:
     """The matched setting's start: the paper's ``R0`` turned by 150 deg about a fixed axis (see
     :data:`MATCHED_MOTIONS_DEG`)."""
     return r0_camera_from_sensor() @ exp_map(np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS))
-
-
-def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | None = None,
-                camera_noise_deg: float = 0.0, gyro_noise_deg_s: float = 0.0, phase: float = 0.0):
-    """A synthetic rig's streams: a camera at 20 Hz and, rigidly attached (``v_cam = R0 v_sensor``), a gyro at
-    200 Hz and an orientation sensor at 100 Hz, moving smoothly about all three axes (angles of up to 0.9 rad,
-    periods of 9-21 s).
-
-    Parameters
-    ----------
-    seconds : float
-        Length of the camera stream (the sensor streams extend one second beyond it on both sides).
-    R0 : (3, 3), optional
-        ``camera_from_sensor`` (default: 40, -70, 125 deg as a rotation vector's components).
-    rng : numpy.random.Generator, optional
-        Needed for noise: isotropic Gaussian rotation-vector noise of RMS ``camera_noise_deg`` on each camera
-        orientation, and white noise of RMS ``gyro_noise_deg_s`` (deg/s, per axis) on each gyro sample.
-    phase : float
-        Shifts the motion (another trajectory).
-
-    Returns
-    -------
-    (R0, camera, gyro, sensor) : (ndarray, OrientationStream, GyroStream, OrientationStream)
-    """
-    from ..rig.streams import GyroStream, OrientationStream
-
-    R0 = exp_map(np.radians([40.0, -70.0, 125.0])) if R0 is None else np.asarray(R0, dtype=float)
-    if (camera_noise_deg or gyro_noise_deg_s) and not isinstance(rng, np.random.Generator):
-        raise ValueError("noise needs rng, a numpy.random.Generator")
-
-    def world_from_camera(t):
-        w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase),
-                      0.7 * np.cos(0.3 * t + phase)], axis=-1)
-        return exp_map(w)
-
-    t_cam = np.arange(0.0, seconds, 0.05)
-    C = world_from_camera(t_cam)
-    if camera_noise_deg:
-        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
-    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = world_from_camera(t_imu) @ R0  # world_from_sensor
-    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005  # body rates over each step, at its midpoint
-    if gyro_noise_deg_s:
-        omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
-    C, omega, Q = jitter(C), jitter(omega), jitter(Q)
-    return (R0, OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro"),
-            OrientationStream(t_imu[::2], Q[::2], "sensor"))

@@ -25,7 +25,7 @@ together, and zero translations leave them without a solution):
 
 With made-up non-zero translations both return a wrong rotation (the
 translations are then inconsistent with the rotations); see
-``tests/test_baselines.py``. They are not registered.
+``tests/core/test_solvers.py``. They are not registered.
 
 Cost: the ``N (N - 1) / 2`` pose pairs make one ``cv2.calibrateHandEye`` call grow as ``N^2`` (measured,
 OpenCV 4.14, 2 cores: ``CALIB_HAND_EYE_PARK`` 0.13 s at 200 poses, 0.51 s at 400, 2.0 s at 800, 8.2 s at

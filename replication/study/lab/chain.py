@@ -34,7 +34,7 @@ def camera_orientations(uv, rig, *, refine: str = "opencv") -> np.ndarray:
     refine : {"opencv", "batched"}
         How the SQPnP solution is refined to the least reprojection error: ``cv2.solvePnPRefineLM`` image by
         image, or Gauss-Newton on all images at once (:mod:`replication.study.lab.fastchain`: the same minimum to
-        about 1e-6 deg, ``tests/test_lab_claims.py``; faster on many images).
+        about 1e-6 deg, ``tests/study/test_lab_claims.py``; faster on many images).
 
     Returns
     -------
@@ -263,7 +263,7 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS, *, fast: bo
         The dynamic trial through the faster equivalents of the seed studies: the camera by
         ``camera_orientations(..., refine="batched")``, the sensor by ``dynamic_sensor_orientations(...,
         madgwick="transcribed")`` (each equal to the default to about 1e-6 deg and to rounding,
-        ``tests/test_lab_claims.py``).
+        ``tests/study/test_lab_claims.py``).
     dynamic_camera : array_like (M, 3, 3), optional
         The dynamic trial's camera attitudes (``LabResult.dynamic["camera_from_world"]``) of a run on a recording
         with the same marker pixels (e.g. the same seed with IMU errors switched off), reused instead of

@@ -1,5 +1,6 @@
 """Faster equivalents of steps of the lab's processing chain (:mod:`replication.study.lab.chain`), for the seed
-studies of ``notebooks/05_table2_experiment.ipynb``, each checked against the original in ``tests/test_lab_claims.py``:
+studies of ``notebooks/05_table2_experiment.ipynb``, each checked against the original in
+``tests/study/test_lab_claims.py``:
 
 * :func:`refine_camera_orientations`: PnP's least squares (the reprojection error ``cv2.solvePnPRefineLM``
   minimises) solved for many images at once, by Gauss-Newton with the analytic Jacobian of OpenCV's camera model
@@ -58,7 +59,7 @@ def refine_camera_orientations(uv, rig, C0, t0, *, iterations: int = 3) -> np.nd
 
     Gauss-Newton from a nearby pose (each image's own, e.g. the PnP pose of the mean pixels of a static
     orientation), with the analytic Jacobian of :func:`_project`; converges to the pose
-    :func:`~replication.study.lab.chain.camera_orientations` finds (``tests/test_lab_claims.py``) at a fraction of
+    :func:`~replication.study.lab.chain.camera_orientations` finds (``tests/study/test_lab_claims.py``) at a fraction of
     its cost per image.
 
     Parameters
@@ -71,7 +72,7 @@ def refine_camera_orientations(uv, rig, C0, t0, *, iterations: int = 3) -> np.nd
         Starting poses (:func:`~replication.study.lab.chain.camera_poses`).
     iterations : int
         Gauss-Newton steps (from a static orientation's mean pose each takes about two digits off the angle to
-        OpenCV's answer: three leave about 1e-5 deg, ``tests/test_lab_claims.py``).
+        OpenCV's answer: three leave about 1e-5 deg, ``tests/study/test_lab_claims.py``).
 
     Returns
     -------
@@ -132,7 +133,7 @@ def madgwick_marg(gyr, acc, mag, rate_hz: float, gain: float = 0.041) -> np.ndar
     The same operations in the same order as ``Madgwick.updateMARG`` (and ``updateIMU`` where the magnetometer
     reads zero), started like it by ``ecompass(acc[0], mag[0], frame="NED", representation="quaternion")``;
     about 8 times faster, because it skips ``ahrs``' per-sample array checks and small-array overheads. It agrees
-    with ``ahrs`` to rounding where the accelerometer or magnetometer is noisy (``tests/test_lab_claims.py``);
+    with ``ahrs`` to rounding where the accelerometer or magnetometer is noisy (``tests/study/test_lab_claims.py``);
     without noise on either, both follow rounding (:attr:`LabSettings.noise_free_dynamic_attitude`).
 
     Returns

@@ -209,7 +209,7 @@ class LabSettings:
         noise-free accelerometer and magnetometer the gradient is zero up to rounding and its
         direction, hence the filter's chatter in the dynamic trial, is set by rounding: Table II's
         statistics then change at the 1e-3 deg level between CPUs and BLAS kernels
-        (demonstrated in ``tests/test_lab.py``). With either noise on they do not.
+        (demonstrated in ``tests/study/test_lab.py``). With either noise on they do not.
         """
         return not np.any(self.acc_noise_density_ug) and not self.mag_noise_ut
 

@@ -210,7 +210,7 @@ def pitch_bias_intervention(seeds, part: str, settings: LabSettings = LabSetting
     """Table II's pitch bias with the true ``R0`` per seed, as it is and with one error source or part switched off.
 
     The same numbers as :func:`seed_study`'s ``pitch_bias_true_R0`` and ``pitch_bias_true_R0_without_<part>``
-    (``tests/test_lab_claims.py``), without the calibrations: the projection uses the true ``R0``, so only the
+    (``tests/study/test_lab_claims.py``), without the calibrations: the projection uses the true ``R0``, so only the
     dynamic trial is run (the camera's attitudes once, the AHRS filter on both recordings), about a third of the
     time, for the many seeds that resolving a small share needs.
 

@@ -1,0 +1,1393 @@
+"""calibrate judges its own answer: bad input across the API and the command line ends in a clear error, a correct
+answer, or a warning / fail verdict naming the cause. None is silent.
+
+Most cases use a synthetic rig whose R0 is known: a camera trajectory at 20 Hz and, rigidly attached, a gyro at
+200 Hz (or an orientation sensor at 100 Hz), 60 s of smooth three-axis motion. The real recordings (TUM-VI,
+EuRoC, Tabb) check the command line end to end.
+"""
+import dataclasses
+import json
+import math
+import re
+from pathlib import Path
+
+import jsonschema
+import numpy as np
+import pytest
+
+from replication.cli import main
+from replication.core import so3
+from replication.rig.association import offset_in_words
+from replication.rig.calibration import _same_stream, calibrate
+from replication.rig.datafile import DataFileError
+from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
+from replication.rig.poses import calibrate_poses
+from replication.rig.quality import EXIT_FAIL, THRESHOLDS, Evidence, judge
+from replication.rig.realdata import data_root, real_data_available
+from replication.rig.report import RADIUS_COVERS
+from replication.rig.solve_and_judge import reference_reading
+from replication.rig.streams import GyroStream, OrientationStream
+from replication.study import lab
+from replication.testing import RIG_R0, rig_streams, write_euroc_imu, write_tum_trajectory
+
+SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parents[2] / "docs"
+                     / "calibration_report.schema.json").read_text())
+R0 = RIG_R0
+
+
+def _rig(seconds=60.0, phase=0.0):
+    """``(camera, gyro, sensor)`` of the synthetic rig (:func:`replication.testing.rig_streams`), noise-free."""
+    return rig_streams(seconds, phase=phase)[1:]
+
+
+@pytest.fixture(scope="module")
+def rig():
+    return _rig()
+
+
+def _q_reordered(stream, order):
+    q = so3.as_quaternion(stream.world_from_body)[:, order]
+    return OrientationStream(stream.t, so3.quaternion_to_matrix(q), stream.source)
+
+
+def _fast(**kw):
+    return {"n_bootstrap": 30, "reference": R0, **kw}
+
+
+def _reasons(result):
+    return {r.check: r for r in result.verdict.reasons}
+
+
+# ------------------------------------------------------------------------------------------- the good case and cases
+
+def test_clean_rig_is_ok_and_right(rig):
+    camera, gyro, sensor = rig
+    for s in (gyro, sensor):
+        r = calibrate(camera, s, **_fast())
+        assert r.verdict.level == "ok", r.verdict.lines()
+        assert r.reference_error_deg < 0.05
+
+
+def test_clock_offset_beyond_the_search_fails_at_the_bound(rig):
+    camera, gyro, _ = rig
+    late = GyroStream(gyro.t + 10.0, gyro.omega, "gyro")
+    camera = OrientationStream(camera.t + 10.0 - 5.0, camera.R, "camera")  # overlap kept, clocks 5 s apart
+    r = calibrate(camera, late, **_fast())
+    reasons = _reasons(r)
+    assert r.verdict.level == "fail" and reasons["offset_at_bound"].level == "fail"
+    assert "raise max_offset" in reasons["offset_at_bound"].message
+
+
+def test_a_large_clock_offset_inside_the_search_is_found(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, GyroStream(gyro.t + 0.5, gyro.omega, "gyro"), max_offset=0.8, **_fast())
+    assert r.verdict.level == "ok" and abs(r.time_offset_s - 0.5) < 2e-3 and r.reference_error_deg < 0.1
+
+
+def test_gyro_from_an_unrelated_segment_fails_on_the_correlation(rig):
+    camera, _, _ = rig
+    _, other, _ = _rig(phase=2.0)
+    r = calibrate(camera, other, **_fast())
+    assert r.verdict.level == "fail" and _reasons(r)["offset_correlation"].measured < 0.5
+
+
+@pytest.mark.parametrize("order, name", [([1, 2, 3, 0], "(x, y, z, w) order read as (w, x, y, z)"),
+                                         ([3, 0, 1, 2], "(w, x, y, z) order read as (x, y, z, w)")])
+def test_camera_quaternion_order_is_named(rig, order, name):
+    camera, gyro, _ = rig
+    r = calibrate(_q_reordered(camera, order), gyro, **_fast())
+    mistake = _reasons(r)["input_mistake"]
+    assert r.verdict.level == "fail" and "camera file holds quaternions in" in mistake.message
+    assert mistake.measured < 0.05  # undone, the residual collapses
+
+
+def test_sensor_quaternion_order_is_named(rig):
+    camera, _, sensor = rig
+    r = calibrate(camera, _q_reordered(sensor, [1, 2, 3, 0]), **_fast())
+    mistake = _reasons(r)["input_mistake"]
+    assert r.verdict.level == "fail" and "sensor file holds quaternions in" in mistake.message
+
+
+def test_camera_from_world_poses_are_named(rig):
+    camera, gyro, _ = rig
+    inverted = OrientationStream(camera.t, np.swapaxes(camera.R, -1, -2), "camera")
+    r = calibrate(inverted, gyro, **_fast())
+    assert r.verdict.level == "fail" and "camera_from_world poses" in _reasons(r)["input_mistake"].message
+
+
+def test_sensor_from_world_poses_are_named(rig):
+    camera, _, sensor = rig
+    r = calibrate(camera, OrientationStream(sensor.t, np.swapaxes(sensor.R, -1, -2), "s"), **_fast())
+    assert r.verdict.level == "fail" and "sensor_from_world poses" in _reasons(r)["input_mistake"].message
+
+
+def test_gyro_in_deg_per_s_is_named(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, GyroStream(gyro.t, np.degrees(gyro.omega), "gyro"), **_fast())
+    assert r.verdict.level == "fail" and "deg/s read as rad/s" in _reasons(r)["input_mistake"].message
+
+
+def test_accelerometer_columns_read_as_gyro_fail(rig):
+    camera, gyro, _ = rig
+    acc = np.array([0.1, -0.2, 9.81]) + 0.05 * np.sin(gyro.t)[:, None]
+    r = calibrate(camera, GyroStream(gyro.t, acc, "acc as gyro"), **_fast())
+    assert r.verdict.level == "fail" and "offset_correlation" in _reasons(r)
+
+
+def test_slow_gyro_fails_on_its_rate(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, GyroStream(gyro.t[::100], gyro.omega[::100], "2 Hz"), **_fast())
+    reasons = _reasons(r)
+    assert r.verdict.level == "fail" and reasons["gyro_samples_per_interval"].level == "fail"
+    assert reasons["gyro_rate_hz"].measured == pytest.approx(2.0, rel=0.01)
+
+
+def test_pairs_across_a_gyro_gap_are_dropped_and_said(rig):
+    camera, gyro, _ = rig
+    keep = (gyro.t < 20.0) | (gyro.t > 35.0)
+    r = calibrate(camera, GyroStream(gyro.t[keep], gyro.omega[keep], "gap"), **_fast())
+    gap = _reasons(r)["gap_share_dropped"]
+    assert gap.level == "warning" and "pairs spanned a gap" in gap.message
+    assert r.reference_error_deg < 0.05  # the answer is right: the pairs across the gap are gone
+    assert r.n_pairs < 0.8 * calibrate(camera, gyro, n_bootstrap=0).n_pairs
+
+
+def test_pairs_ending_in_an_orientation_gap_are_dropped(rig):
+    camera, _, sensor = rig
+    keep = (sensor.t < 20.0) | (sensor.t > 30.0)
+    r = calibrate(camera, OrientationStream(sensor.t[keep], sensor.R[keep], "gap"), **_fast())
+    assert _reasons(r)["gap_share_dropped"].level == "warning" and r.reference_error_deg < 0.05
+
+
+def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera.between(10.0, 12.5), gyro, **_fast())
+    reasons = _reasons(r)
+    assert math.isnan(r.bootstrap_ci95_deg) and r.to_dict()["bootstrap_ci95_deg"] is None
+    assert reasons["blocks"].level == "fail" and reasons["blocks"].measured < 3  # measured 1.55
+    assert (reasons["overlap_intervals"].level == "warning"
+            and reasons["overlap_intervals"].measured == pytest.approx(2.5))
+
+
+def test_nearly_single_axis_motion_warns_with_its_spread():
+    t = np.arange(0.0, 60.0, 0.05)
+    w = np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1)
+    Q = so3.exp_map(w)
+    camera, sensor = OrientationStream(t, Q, "c"), OrientationStream(t, Q @ R0, "s")
+    r = calibrate(camera, sensor, n_bootstrap=20)
+    assert _reasons(r)["axis_spread_deg"].level == "warning" and r.verdict.level != "ok"
+
+
+@pytest.mark.filterwarnings("ignore::replication.core.solvers.ConvergenceWarning")
+def test_sqp_away_from_the_certified_optimum_fails(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, gyro, method="sqp", max_iterations=2, **_fast(n_bootstrap=0))
+    assert r.verdict.level == "fail" and any("LocalMinimumWarning" in x for x in r.warnings)
+
+
+def test_static_pose_sets_get_a_verdict_and_name_their_pairs(rig):
+    camera, _, sensor = rig
+    C, S = np.swapaxes(camera.R[::60], -1, -2), np.swapaxes(sensor.at(camera.t[::60]), -1, -2)
+    r = calibrate_poses(C, S, reference=R0, n_bootstrap=20)
+    assert r.verdict.level == "ok" and r.reference_error_deg < 1e-10  # noise-free: measured 6e-14
+    assert "pairs of static poses" in r.summary() and "nan" not in r.summary()
+
+
+# ------------------------------------------------------------------------------------------- time units
+
+@pytest.mark.parametrize("side, factor", [("sensor", 1e3), ("camera", 1e3), ("sensor", 1e9)])
+def test_time_unit_mistakes_on_absolute_clocks_are_named(rig, side, factor):
+    camera, gyro, _ = rig
+    epoch = 1.5e9  # absolute clocks: a file in another unit does not even overlap
+    camera = OrientationStream(camera.t + epoch, camera.R, "camera")
+    gyro = GyroStream(gyro.t + epoch, gyro.omega, "gyro")
+    if side == "sensor":
+        gyro = GyroStream(gyro.t * factor, gyro.omega / factor, "gyro")
+    else:
+        camera = OrientationStream(camera.t * factor, camera.R, "camera")
+    with pytest.raises(ValueError, match=f"the {side} file's time stamps are likely in another unit"):
+        calibrate(camera, gyro, n_bootstrap=0)
+
+
+def test_time_unit_mistake_on_relative_clocks_fails_naming_it(rig):
+    camera, _, sensor = rig
+    slow = OrientationStream(sensor.t * 1e3, sensor.R, "sensor in ms")  # overlaps the camera's 0..60 s
+    r = calibrate(camera, slow, n_bootstrap=0)
+    assert r.verdict.level == "fail" and "the sensor file's time stamps are likely" in _reasons(r)["time_unit"].message
+
+
+def test_lab_recording_with_times_in_ms_is_refused(lab_dir):
+    path = lab_dir / "dynamic_imu.csv"
+    lines = path.read_text().splitlines()
+    out = [lines[0]] + [",".join([f"{1e3 * float(x.split(',')[0]):.3f}"] + x.split(",")[1:]) for x in lines[1:]]
+    path.write_text("\n".join(out) + "\n")
+    with pytest.raises(DataFileError, match="look like ms") as err:
+        lab.load_lab(lab_dir)
+    assert err.value.column == "t"
+
+
+# ------------------------------------------------------------------------------------------- bad parameters
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"interval": 0.0}, "interval must be > 0"),
+    ({"interval": -1.0}, "interval must be > 0"),
+    ({"interval": float("nan")}, "interval must be a finite number"),
+    ({"interval": "1"}, "interval must be a finite number"),
+    ({"stride": 0}, "stride must be >= 1"),
+    ({"stride": 1.5}, "stride must be a finite integer"),
+    ({"n_bootstrap": -1}, "n_bootstrap must be >= 0"),
+    ({"n_bootstrap": 2.5}, "n_bootstrap must be a finite integer"),
+    ({"max_offset": 0.0}, "max_offset must be > 0"),
+    ({"max_offset": float("inf")}, "max_offset must be a finite number"),
+    ({"seed": -3}, "seed must be >= 0"),
+    ({"method": "nope"}, "unknown solver 'nope'"),
+    ({"reference": np.eye(4)}, "4x4 transform; pass its rotation block"),
+    ({"reference": 2 * np.eye(3)}, "reference is not a rotation matrix"),
+    ({"reference": np.eye(2)}, "reference must be a 3x3 rotation"),
+])
+def test_bad_parameters_are_refused_before_any_work(rig, kwargs, message, monkeypatch):
+    camera, gyro, _ = rig
+    import replication.rig.calibration as cal
+
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(ValueError, match=message):
+        calibrate(camera, gyro, **kwargs)
+
+
+@pytest.mark.parametrize("camera, sensor", [("not a stream", "gyro"), ("camera", np.zeros((10, 3)))])
+def test_streams_of_the_wrong_type_are_refused(rig, camera, sensor):
+    streams = {"camera": rig[0], "gyro": rig[1]}
+    with pytest.raises(ValueError, match="camera must be an OrientationStream"):
+        calibrate(streams.get(camera, camera) if isinstance(camera, str) else camera,
+                  streams.get(sensor, sensor) if isinstance(sensor, str) else sensor)
+
+
+# ------------------------------------------------------------------------------------------- the verdict itself
+
+def test_judge_levels_and_thresholds():
+    good = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1,
+                    axis_spread_deg=10.0, offset_s=0.0, offset_correlation=0.99, max_offset_s=0.2,
+                    offset_resolution_s=5e-4, blocks=100, overlap_s=100.0, interval_s=1.0)
+    assert judge(good).level == "ok" and judge(good).reasons == ()
+    import dataclasses
+
+    warn = judge(dataclasses.replace(good, offset_correlation=0.8))
+    assert warn.level == "warning" and warn.reasons[0].threshold == 0.9
+    fail = judge(dataclasses.replace(good, bootstrap_deg=7.0, warnings=("AccuracyWarning",)))
+    assert fail.level == "fail" and {r.check for r in fail.reasons} == {"bootstrap_deg", "solver_warning"}
+
+
+def test_report_is_strict_json_and_valid_against_the_schema(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera.between(10.0, 11.6), gyro, n_bootstrap=0)  # NaN bootstrap, a fail verdict
+    text = json.dumps(r.to_dict(), allow_nan=False)  # raises on NaN / inf
+    report = json.loads(text)
+    jsonschema.validate(report, SCHEMA)
+    assert report["verdict"]["level"] == "fail" and report["package"]["name"] == "replication"
+    assert "sensor sample stamped t + d" in report["time_offset_convention"]
+    assert report["parameters"]["n_bootstrap"] == 0 and report["inputs"]["sensor"]["kind"] == "GyroStream"
+
+
+def test_diagnostic_figure_has_every_panel(rig, tmp_path):
+    camera, gyro, _ = rig
+    r = calibrate(camera, gyro, n_bootstrap=20)
+    fig = r.plot(tmp_path / "r.png")
+    titles = [ax.get_title() for ax in fig.axes]
+    for key in ("(a) angular speed", "(b) clock offset", "(c) per-pair residual", "(e) bootstrap", "(f) verdict"):
+        assert any(t.startswith(key) for t in titles), titles
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------------------------------- the command line
+
+
+
+@pytest.fixture(scope="module")
+def rig_files(rig, tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    camera, gyro, _ = rig
+    shifted = OrientationStream(camera.t + 1e3, camera.R, "c")  # EuRoC-like absolute times
+    write_tum_trajectory(d / "cam.txt", shifted)
+    write_euroc_imu(d / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
+    write_euroc_imu(d / "imu_deg.csv", GyroStream(gyro.t + 1e3, np.degrees(gyro.omega) / 10, "g"))  # slow deg/s
+    return d
+
+
+def _cli(*args):
+    return main(["calibrate", *map(str, args), "--bootstrap", "20", "--quiet"])
+
+
+def test_cli_ok_writes_a_valid_report_and_figure(rig_files, tmp_path):
+    out, fig = tmp_path / "new" / "deeper" / "r.json", tmp_path / "new" / "r.png"
+    assert _cli("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu.csv", "--sensor-kind", "gyro",
+                "--out", out, "--plot", fig, "--stride", 2, "--seed", 3) == 0
+    report = json.loads(out.read_text())
+    jsonschema.validate(report, SCHEMA)
+    assert report["files"]["camera"]["sha256"] and report["parameters"]["stride"] == 2
+    assert report["parameters"]["seed"] == 3 and fig.stat().st_size > 1000
+
+
+def test_cli_fail_exits_3_unless_accepted(rig_files, tmp_path, capsys):
+    args = ("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu_deg.csv", "--sensor-kind", "gyro")
+    assert _cli(*args, "--out", tmp_path / "r.json") == EXIT_FAIL
+    captured = capsys.readouterr()
+    assert "verdict: FAIL" in captured.out and "exit code 3" in captured.err
+    assert json.loads((tmp_path / "r.json").read_text())["verdict"]["level"] == "fail"  # the report is still written
+    assert _cli(*args, "--accept") == 0
+
+
+@pytest.mark.parametrize("extra, message", [
+    (("--interval", "0"), "must be > 0"),
+    (("--interval", "nan"), "not finite"),
+    (("--stride", "0"), "must be >= 1"),
+    (("--stride", "1.5"), "not an integer"),
+    (("--bootstrap", "-1"), "must be >= 0"),
+    (("--max-offset", "-0.1"), "must be > 0"),
+    (("--seed", "x"), "not an integer"),
+])
+def test_cli_bad_numbers_exit_2_naming_the_option(rig_files, extra, message, capsys):
+    with pytest.raises(SystemExit, match="^2$"):  # a usage error
+        main(["calibrate", "--camera", str(rig_files / "cam.txt"), "--sensor", str(rig_files / "imu.csv"), *extra])
+    stderr = capsys.readouterr().err
+    assert extra[0] in stderr and message in stderr
+
+
+@pytest.mark.parametrize("case", ["directory", "under a file", "unknown method", "csv time unit", "empty",
+                                  "trailing slash"])
+def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_files, tmp_path, case, capsys,
+                                                                          monkeypatch):
+    import replication.rig.calibration as cal
+
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    extra = {"directory": ("--out", tmp_path), "under a file": ("--out", blocker / "r.json"),
+             "unknown method": ("--method", "nope"), "csv time unit": ("--sensor-time-unit", "ms"),
+             "empty": ("--out", ""), "trailing slash": ("--out", str(tmp_path / "newdir") + "/")}[case]
+    sensor_kind = ("--sensor-kind", "gyro")
+    assert _cli("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu.csv", *sensor_kind, *extra) == 2
+    assert "error:" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*.part")) and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+
+
+# ------------------------------------------------------------------------------------------- the campaign's cases
+
+def test_inverted_pose_sets_are_named(rig):
+    camera, _, sensor = rig
+    C, S = np.swapaxes(camera.R[::40], -1, -2), np.swapaxes(sensor.at(camera.t[::40]), -1, -2)
+    noise = so3.exp_map(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
+    C = noise @ C  # a little camera noise, as on a real robot set
+    for name, c, s in (("camera poses inverted", np.swapaxes(C, -1, -2), S),
+                       ("robot poses inverted", C, np.swapaxes(S, -1, -2))):
+        r = calibrate_poses(c, s, n_bootstrap=0)
+        assert r.verdict.level == "fail" and name in _reasons(r)["input_mistake"].message, name
+    assert calibrate_poses(C, S, n_bootstrap=0, reference=R0).verdict.level == "ok"
+    # both inverted is a consistent problem for another unknown (the world-to-world rotation): the rotations alone
+    # cannot show it; a reference does
+    both = calibrate_poses(np.swapaxes(C, -1, -2), np.swapaxes(S, -1, -2), n_bootstrap=0, reference=R0)
+    assert both.verdict.level == "fail" and "reference_error_deg" in _reasons(both)
+
+
+def test_a_gyro_with_permuted_axes_fails_against_the_reference(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, GyroStream(gyro.t, gyro.omega[:, [1, 2, 0]], "gyro"), **_fast())
+    reason = _reasons(r)["reference_error_deg"]
+    assert r.verdict.level == "fail" and "axes permuted" in reason.message and reason.measured > 100
+
+
+def test_too_few_pairs_fail_even_without_a_bootstrap(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, gyro, stride=300, n_bootstrap=0)
+    assert r.n_pairs < 10 and _reasons(r)["n_pairs"].level == "fail"
+
+
+def test_the_camera_stream_as_sensor_is_refused(rig):
+    camera, _, _ = rig
+    with pytest.raises(ValueError, match="the sensor stream is the camera stream itself"):
+        calibrate(camera, OrientationStream(camera.t, camera.R, "copy"))
+
+
+def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
+    """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
+    recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
+    from replication.core.so3 import exp_map
+    from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
+
+    camera, _, _ = rig
+    t, R = camera.t, camera.R
+    with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's "
+                                         rf"{len(t) - 1} samples are camera"):
+        calibrate(camera, OrientationStream(t[1:], R[1:], "copy"))
+    turn = exp_map(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
+    with pytest.raises(ValueError, match="the sensor stream is the camera stream itself, or a copy of it"):
+        calibrate(camera, OrientationStream(t + 0.9 * SAME_SAMPLE_TIME_S, R @ turn, "copy"))
+    # just beyond either tolerance, or half of the samples only: not a copy (the calibration runs)
+    assert _same_stream(camera, OrientationStream(t, R @ exp_map(np.array([0.0, 0.0, 1.1 * SAME_SAMPLE_ANGLE_RAD])),
+                                                  "s")) is None
+    assert _same_stream(camera, OrientationStream(t + 1.1 * SAME_SAMPLE_TIME_S, R, "s")) is None
+    n = len(t)
+    half = np.r_[R[: n // 2], R[n // 2:] @ exp_map(np.array([0.0, 0.01, 0.0]))]
+    assert _same_stream(camera, OrientationStream(t, half, "s")) is not None  # exactly half coincide
+    assert _same_stream(camera, OrientationStream(t, np.r_[half[: n // 2 - 1], half[n // 2 - 1:] @
+                                                           exp_map(np.array([0.0, 0.01, 0.0]))], "s")) is None
+
+
+def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
+    camera, gyro, _ = rig
+    import replication.rig.solve_and_judge as est
+
+    def refuse(*a, **k):
+        raise ValueError("degenerate motion: a resample")
+
+    monkeypatch.setattr(est, "bootstrap_replicates", refuse)
+    r = calibrate(camera, gyro, n_bootstrap=20)
+    assert math.isnan(r.bootstrap_ci95_deg) and "degenerate motion" in _reasons(r)["bootstrap_failed"].message
+
+
+@pytest.mark.parametrize("side, unit", [("sensor", 1e-3), ("camera", 1e3)])
+def test_the_time_unit_reason_blames_the_implausible_stream(rig, side, unit):
+    camera, _, sensor = rig
+    if side == "sensor":  # a CSV in ms read as ns: its span shrinks to a millisecond or so
+        sensor = OrientationStream(sensor.t * unit, sensor.R, "s")
+    else:
+        camera = OrientationStream(camera.t * unit, camera.R, "c")
+    with pytest.raises(ValueError, match=f"the {side} file's time stamps are likely in another unit"):
+        calibrate(camera, sensor, n_bootstrap=0)
+
+
+def test_unknown_or_refused_solver_options_are_named_before_the_work(rig, monkeypatch):
+    camera, gyro, _ = rig
+    import replication.rig.calibration as cal
+
+    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
+    with pytest.raises(ValueError, match=r"does not take the option\(s\) \['foo'\]"):
+        calibrate(camera, gyro, foo=1)
+    with pytest.raises(ValueError, match="refuses the option"):
+        calibrate(camera, gyro, method="sqp", max_iterations=-1)
+
+
+def test_an_offset_kept_in_is_said(rig):
+    camera, gyro, _ = rig
+    r = calibrate(camera, GyroStream(gyro.t + 0.1, gyro.omega, "gyro"), correct_offset=False, n_bootstrap=0)
+    assert _reasons(r)["offset_left_ms"].measured == pytest.approx(100.0, abs=2.0)
+
+
+# ------------------------------------------------------------------------------------------- real recordings
+
+needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
+
+
+@needs_real
+def test_cli_robot_pose_sets_calibrate(tmp_path):
+    d = data_root() / "tabb_rwhe_ds1"
+    out = tmp_path / "tabb.json"
+    assert _cli("--poses", "--camera", d / "cali.txt", "--sensor", d / "robot_cali.txt", "--reference",
+                d / "transformations.txt", "--out", out) == 0
+    report = json.loads(out.read_text())
+    jsonschema.validate(report, SCHEMA)
+    assert report["reference_error_deg"] < 1.0 and report["interval_s"] is None
+    assert report["inputs"]["camera"]["kind"] == "static poses"
+
+
+@needs_real
+def test_cli_euroc_with_repeated_lines(tmp_path):
+    d = data_root() / "euroc_mh01_orbslam3"
+    out = tmp_path / "euroc.json"
+    args = ("--camera", d / "orbslam3_mono_cam0_traj_runB.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
+            "--reference", d / "euroc_cam0_sensor.yaml", "--out", out)
+    assert _cli(*args) == 2  # repeated lines are an error unless dropped
+    assert _cli(*args, "--drop-repeated") == 0
+    assert json.loads(out.read_text())["reference_error_deg"] < 0.5
+
+
+@needs_real
+@pytest.mark.filterwarnings("ignore::replication.core.solvers.ConvergenceWarning")
+def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsys):
+    d = data_root() / "tumvi_room1_orbslam3mono"
+    code = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",
+                "gyro", "--method", "sqp", "--bootstrap", "0", "--no-gyro-bias")  # the rates as recorded: SQP's trap
+    out = capsys.readouterr().out
+    assert code == EXIT_FAIL and "away from the certified optimum of eq. (8)" in out
+    assert "use the default method chordal_optimal" in out and "LocalMinimumWarning" not in out.split("R0 (")[0]
+
+
+@needs_real
+def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_warning(tmp_path, capsys):
+    """Issue 35.3: README's former example. The verdict says why the iteration hit its cap (sigma_2 / sigma_1 of K
+    0.9975 > 0.9863 at axis spread 3.2 deg) and what to do; the class stays in the report's warnings."""
+    d = data_root() / "euroc_mh01_orbslam3"
+    out = tmp_path / "euroc.json"
+    code = _cli("--camera", d / "orbslam3_mono_cam0_traj_runA.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
+                "--method", "two_step_left", "--bootstrap", "0", "--out", out)
+    text = capsys.readouterr().out
+    verdict = text.split("R0 (")[0]
+    assert code == 0 and "IterationCapWarning" not in verdict
+    assert "sigma_2 / sigma_1 of K 0.997" in verdict and "> 0.9863" in verdict and "camera axis spread 3.2" in verdict
+    assert "use the default method chordal_optimal" in verdict
+    report = json.loads(out.read_text())
+    assert any(w.startswith("IterationCapWarning") for w in report["warnings"])
+    (reason,) = [r for r in report["verdict"]["reasons"] if r["check"] == "solver_warning"]
+    assert reason["measured"] > reason["threshold"] == pytest.approx(0.98627, abs=1e-5)
+
+
+
+# ------------------------------------------------------------------- one door for every solver answer (issue 33, 1)
+
+@pytest.fixture
+def door_solver(monkeypatch):
+    """``make(answer) -> name``: registers a solver whose core returns ``answer(R, call)`` (``R`` the certified
+    minimiser, ``call`` 0 for the calibration's own solve, then 1, 2, ... for each later call: the replicates)."""
+    from replication.core.solvers import _registry, register, solver_info
+
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    core = solver_info("chordal_optimal").core
+
+    def make(answer):
+        calls = []
+
+        def bad(motions):
+            calls.append(1)
+            return answer(core(motions), len(calls) - 1)
+
+        name = f"door_test_{len(_registry._REGISTRY)}"
+        register(name, reference="test: a solver bad on some calls")(bad)
+        return name
+
+    return make
+
+
+def _poses(rig, step=60):
+    camera, _, sensor = rig
+    return np.swapaxes(camera.R[::step], -1, -2), np.swapaxes(sensor.at(camera.t[::step]), -1, -2)
+
+
+def _nan_like(R):
+    return np.full_like(R, np.nan)
+
+
+RAW_MESSAGES = ("Non-positive determinant", "R_est contains", "SVD did not converge")
+
+
+def test_a_solver_returning_2R_on_replicates_is_refused_naming_it_at_every_door(rig, door_solver):
+    C, S = _poses(rig)
+    camera, gyro, _ = rig
+    name = door_solver(lambda R, call: R if call == 0 else 2 * R)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a matrix that is not a rotation on bootstrap "
+                                         r"replicate 0 at batch index \(\): .*det R = 8"):
+        calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
+    name = door_solver(lambda R, call: R if call == 0 else 2 * R)  # streams: the replicates come batched
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a matrix that is not a rotation on bootstrap "
+                                         r"replicates 0\.\.29 at batch index \(0,\)"):
+        calibrate(camera, gyro, method=name, **_fast(diagnose=False))
+
+
+@pytest.mark.parametrize("what, answer, words", [
+    ("reflection", lambda R: -R, r"returned a reflection \(det -1\)"),
+    ("nan", _nan_like, r"declared a failure \(NaN\)"),
+])
+@pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
+def test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius(
+        rig, door_solver, what, answer, words, bad_calls, counted):
+    """No bad replicate: a radius and no such reason; one bad replicate of 20 (the boundary) already fails."""
+    name, r, reason = _bad_replicates(rig, door_solver, lambda R, call: answer(R), bad_calls, counted)
+    if reason is not None:
+        assert re.search(rf"solver '{name}' {words} on {counted} of 20 bootstrap replicates", reason.message)
+        assert r.to_dict()["bootstrap_ci95_deg"] is None
+
+
+def _bad_replicates(rig, door_solver, answer, bad_calls, counted):
+    """A pose-set calibration with a solver giving ``answer(R, call)`` on the calls ``bad_calls`` (the first call is
+    the calibration's own solve): without bad calls a radius and no reason; else a ``bootstrap_answers`` fail counting
+    them, and no radius. Returns the solver's name, the result and the reason (None without bad calls)."""
+    C, S = _poses(rig)
+    name = door_solver(lambda R, call: answer(R, call) if call in bad_calls else R)
+    r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
+    reasons = _reasons(r)
+    if not counted:
+        assert "bootstrap_answers" not in reasons and math.isfinite(r.bootstrap_ci95_deg)
+        return name, r, None
+    reason = reasons["bootstrap_answers"]
+    assert reason.level == "fail" and r.verdict.level == "fail" and reason.measured == counted
+    assert not math.isfinite(r.bootstrap_ci95_deg) and r.diagnostics["bootstrap_rotvec_deg"].size == 0
+    return name, r, reason
+
+
+@pytest.mark.parametrize("answer, words", [(lambda R: -R, r"returned a reflection \(det -1\)"),
+                                           (_nan_like, r"declared a failure \(returned NaN\)")])
+def test_a_solver_whose_own_answer_is_no_rotation_is_refused_naming_it(rig, door_solver, answer, words):
+    C, S = _poses(rig)
+    camera, gyro, _ = rig
+    for run in (lambda name: calibrate_poses(C, S, method=name, n_bootstrap=20),
+                lambda name: calibrate(camera, gyro, method=name, **_fast())):
+        name = door_solver(lambda R, call: answer(R))
+        with pytest.warns(Warning), pytest.raises(ValueError) as err:
+            run(name)
+        assert re.search(rf"solver '{name}' {words} on these \d+ pairs: no rotation", str(err.value))
+        assert not any(raw in str(err.value) for raw in RAW_MESSAGES)
+
+
+def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solver):
+    import replication.rig.solve_and_judge as est
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    motions = prepare_motions(*pose_pairs(C, S))
+    name = door_solver(lambda R, call: -R if call == 2 else R)
+    sets = est.block_indices(np.random.default_rng(0), motions.J, 1, 4)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned a reflection \(det -1\) on 1 of 4 bootstrap"):
+        est.bootstrap_replicates(motions, name, {}, [s for s in sets])
+    R, failed, reflection, unfit = est.bootstrap_replicates(motions, name, {}, [s for s in sets], masks=True)
+    assert not reflection.any() and not failed.any()  # calls 4-7: the bad one (call 2) was in the first run
+
+
+@pytest.mark.parametrize("factor, unit", [(1e9, "nanoseconds"), (1e6, "microseconds"), (1e3, "milliseconds")])
+def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(rig, factor, unit):
+    camera, gyro, _ = rig
+    t0 = 1000.0  # absolute stamps, as a recording has: the camera's in another unit
+    late = OrientationStream((camera.t + t0) * factor, camera.R, "c")
+    gyro = GyroStream(gyro.t + t0, gyro.omega, "g")
+    about = re.escape(f"{factor:.0e}")
+    with pytest.raises(ValueError, match=rf"a factor of about {about}: the camera file's time stamps are likely in "
+                                         rf"another unit than they were read in \({unit} read as seconds\)"):
+        calibrate(late, gyro, n_bootstrap=0)
+    early = OrientationStream(camera.t + t0, camera.R, "c")  # and the other way round: the gyro's in seconds / unit
+    slow = GyroStream((gyro.t + t0) / factor, gyro.omega * factor, "g")
+    with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* \(seconds read as {unit}\)"):
+        calibrate(early, slow, n_bootstrap=0)
+
+
+# ------------------------------------------------------------- replicates that are rotations but no solutions (33.1)
+
+def _random_rotation(R, call):
+    return so3.random_rotations(np.random.default_rng(call), 1)[0] if R.ndim == 2 else so3.random_rotations(
+        np.random.default_rng(call), R.shape[0])
+
+
+@pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
+def test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_radius(rig, door_solver, bad_calls,
+                                                                                    counted):
+    """Right on the calibration's own solve, random rotations on some replicates (rotations, so the registry's
+    checks pass them): without one, a radius; one of 20 (the boundary) already fails, naming the solver."""
+    name, r, reason = _bad_replicates(rig, door_solver, _random_rotation, bad_calls, counted)
+    if reason is None:
+        return
+    assert re.search(rf"solver '{name}' returned an answer that is no solution of its resample on {counted} of 20 "
+                     r"bootstrap replicates \(worst: root-mean-square pair residual [\d.]+ deg", reason.message)
+    assert "not a solution on resamples" in reason.message and "np." not in reason.message
+
+
+def test_batched_replicates_that_are_no_solutions_fail_naming_the_solver(rig, door_solver):
+    camera, gyro, _ = rig
+    name = door_solver(lambda R, call: _random_rotation(R, call) if call == 1 else R)
+    r = calibrate(camera, gyro, method=name, **_fast(diagnose=False))
+    reason = _reasons(r)["bootstrap_answers"]
+    assert reason.level == "fail" and reason.measured == 30 and f"solver '{name}'" in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg)
+
+
+def _rms(residual_deg):
+    """Cost (8) of the pairs as an angle: the angle whose chordal distance is their root-mean-square one."""
+    return float(np.degrees(2 * np.arcsin(np.sqrt(np.mean(np.sin(np.radians(residual_deg) / 2) ** 2)))))
+
+
+def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solution(rig):
+    """A resample that draws an outlying station several times pulls the least-squares answer off the other
+    stations (their median residual grows 6-fold here): it is still the resample's optimum, and not blamed."""
+    C, S = _poses(rig)
+    rng = np.random.default_rng(2)
+    C = C @ so3.exp_map(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
+    k = rng.choice(len(C), 1)
+    C[k] = C[k] @ so3.exp_map(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
+    r = calibrate_poses(C, S, n_bootstrap=200, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(r) and math.isfinite(r.bootstrap_ci95_deg)
+
+
+@pytest.mark.parametrize("side", [-1, 1])
+def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs(rig, side):
+    """The boundary: a replicate turned from the answer by just less / more than the angle at which its root-mean-square
+    residual reaches REPLICATE_FIT_FACTOR times the answer's on the same pairs (noisy poses) is a solution / is not."""
+    import replication.rig.solve_and_judge as est
+    from replication.core.handeye import pair_residual_deg
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    C = C @ so3.exp_map(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    motions = prepare_motions(*pose_pairs(C, S))
+    R = calibrate_poses(C, S, n_bootstrap=0, diagnose=False).R
+    sets = [np.arange(0, motions.J, 2)]  # a resample: every other pair
+    base = _rms(pair_residual_deg(R, motions.A[sets[0]], motions.B[sets[0]]))
+    threshold = est.REPLICATE_FIT_FACTOR * base + est.REPLICATE_FIT_FLOOR_DEG
+
+    def turned(angle_deg):
+        return so3.exp_map(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
+
+    def own(angle_deg):
+        return _rms(pair_residual_deg(turned(angle_deg), motions.A[sets[0]], motions.B[sets[0]]))
+
+    lo, hi = 0.0, 90.0  # bisection for the angle where the replicate's median reaches the threshold
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if own(mid) < threshold else (lo, mid)
+    angle = hi * (1 + side * 1e-3)
+    flags, (mine, full) = est.unfit_replicates(motions, turned(angle)[None], sets, R)
+    assert full[0] == pytest.approx(base) and mine[0] == pytest.approx(own(angle))
+    assert bool(mine[0] > threshold) is (side > 0) and bool(flags[0]) is (side > 0)
+
+
+def test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solver(rig, door_solver):
+    import replication.rig.solve_and_judge as est
+    from replication.core.motions import prepare_motions
+    from replication.rig.poses import pose_pairs
+
+    C, S = _poses(rig)
+    motions = prepare_motions(*pose_pairs(C, S))
+    sets = [s for s in est.block_indices(np.random.default_rng(0), motions.J, 1, 4)]
+    # calls 0-3: the replicates (call 2 the third), then one solve on all the pairs for the check
+    name = door_solver(lambda R, call: _random_rotation(R, call) if call == 2 else R)
+    with pytest.raises(ValueError, match=rf"solver '{name}' returned an answer that is no solution of its resample "
+                                         r"on 1 of 4 bootstrap replicates"):
+        est.bootstrap_replicates(motions, name, {}, sets)
+    name = door_solver(lambda R, call: R)
+    R_boot, failed, reflection, unfit = est.bootstrap_replicates(motions, name, {}, sets, masks=True)
+    assert not (failed.any() or reflection.any() or unfit.any()) and R_boot.shape == (4, 3, 3)
+
+
+def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it(rig, door_solver):
+    """A solver that ignores its input (its first answer cached) would give a radius of zero: it fails, named; the
+    same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
+    as they should be) name nothing."""
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    name = door_solver(lambda R, call: first.setdefault("R", R) if R.ndim == 2 else np.broadcast_to(
+        first.setdefault("R", R[0]), R.shape).copy())
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    reason = _reasons(r)["bootstrap_answers"]
+    assert reason.level == "fail" and f"solver '{name}' returned the answer on all the pairs, unchanged" in (
+        reason.message) and "on every one of the 20 bootstrap replicates" in reason.message
+    assert not math.isfinite(r.bootstrap_ci95_deg)
+    honest = calibrate_poses(noisy, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(honest) and honest.bootstrap_ci95_deg > 0
+    exact = calibrate_poses(C, S, n_bootstrap=20, diagnose=False)
+    assert "bootstrap_answers" not in _reasons(exact) and math.isfinite(exact.bootstrap_ci95_deg)
+
+
+@pytest.mark.parametrize("turn, frozen", [(0.5, True), (2.0, False)])
+def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
+    """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned unchanged, or not."""
+    import replication.rig.solve_and_judge as est
+
+    C, S = _poses(rig)
+    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    first = {}
+    step = so3.exp_map(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
+    name = door_solver(lambda R, call: first.setdefault("R", R) if call == 0 else step @ first["R"])
+    r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
+    assert ("bootstrap_answers" in _reasons(r)) is frozen
+
+# ----------------------------------------------------------------------------------------------------
+# The batch verdict's new words: pose sets judged by station (bootstrap over stations, per-station residuals, an
+# outlying station named), every radius saying what it covers, the offset's sign in words, ties among input mistakes
+# named together in a fixed order, and each new threshold at its boundary.
+
+
+def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
+    """Static stations of a robot and a camera rigidly linked by R0 (``C_k = R0 S_k``, both ``body_from_world``), each
+    station's two attitudes with independent noise (``bad``: one station's camera attitude turned by ``bad_deg``)."""
+    R0 = so3.random_rotations(rng, ())
+    W = so3.random_rotations(rng, ())  # the target's frame in the robot base's
+    S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
+    C = R0 @ S @ W
+    sd = np.radians(station_noise_deg) / np.sqrt(3)
+    C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ C
+    S = so3.exp_map(rng.normal(0, sd, (N, 3))) @ S
+    if bad is not None:
+        C[bad] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
+    return R0, C, S
+
+
+
+
+def test_pose_sets_resample_stations_not_pairs(rng):
+    R0, C, S = _stations(rng)
+    r = calibrate_poses(C, S, n_bootstrap=100, seed=1)
+    assert r.bootstrap_resamples == "stations"
+    pairs = calibrate_poses(C, S, n_bootstrap=100, seed=1, pairs="consecutive")
+    assert pairs.bootstrap_resamples == "pairs in moving blocks of 2"
+    # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations' information
+    import replication.rig.solve_and_judge as est
+
+    J = r.n_pairs
+    by_pairs = est.block_indices(np.random.default_rng(1), J, 1, 100)
+    motions = __import__("replication.core.motions", fromlist=["prepare_motions"]).prepare_motions(
+        *__import__("replication.rig.poses", fromlist=["pose_pairs"]).pose_pairs(C, S))
+    R_boot = est.bootstrap_replicates(motions, "chordal_optimal", {}, by_pairs, progress=False)
+    naive = float(np.percentile(so3.angle_between_deg(R_boot, r.R), 95))
+    assert r.bootstrap_ci95_deg > 2.5 * naive
+
+
+def test_station_bootstrap_covers_the_error_about_95_percent(rng):
+    """40 problems: the error within the station radius in most (the 95 % level, 40 draws: at least 32)."""
+    hits = 0
+    for _ in range(40):
+        R0, C, S = _stations(rng, N=20)
+        r = calibrate_poses(C, S, n_bootstrap=100, seed=2)
+        hits += float(so3.angle_between_deg(r.R, R0)) <= r.bootstrap_ci95_deg
+    assert hits >= 32, hits
+
+
+def test_an_outlying_station_is_named_with_its_index(rng):
+    R0, C, S = _stations(rng, bad=7)
+    r = calibrate_poses(C, S, n_bootstrap=0)
+    reason = _reasons(r)["pose_outliers"]
+    assert reason.level == "warning" and "7 (" in reason.message and reason.threshold == THRESHOLDS[
+        "pose_residual_ratio"][0]
+    assert len(r.pose_residual_median_deg) == 30 and int(np.argmax(r.pose_residual_median_deg)) == 7
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["pose_residual_median_deg"][7] == pytest.approx(max(report["pose_residual_median_deg"]))
+    clean = calibrate_poses(*_stations(rng)[1:], n_bootstrap=0)
+    assert "pose_outliers" not in _reasons(clean)
+
+
+@pytest.mark.parametrize("ratio, flagged", [(2.99, False), (3.01, True)])
+def test_outlying_station_threshold_boundary(ratio, flagged):
+    medians = np.full(20, 0.4)
+    medians[3] = ratio * 0.4
+    e = Evidence(n_pairs=190, residual_median_deg=0.4, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0, pose_residual_medians_deg=tuple(medians))
+    assert ("pose_outliers" in {r.check for r in judge(e).reasons}) is flagged
+
+
+@pytest.mark.parametrize("motion, level", [(1.01, None), (0.99, "warning"), (0.51, "warning"), (0.49, "fail")])
+def test_motion_median_threshold_boundaries(motion, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.001, motion_median_deg=motion, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0)
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("motion_median_deg") == level
+
+
+@pytest.mark.parametrize("excitation, level", [(1.01, None), (0.99, "warning")])
+def test_excitation_threshold_boundary(excitation, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 excitation_deg=excitation, radius_kind="curvature")
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("excitation_deg") == level
+
+
+def test_every_radius_says_what_it_covers(rng):
+    R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.05)
+    r = calibrate(camera, gyro, n_bootstrap=30)
+    assert RADIUS_COVERS in r.summary() and r.bootstrap_covers == RADIUS_COVERS
+    assert r.bootstrap_resamples.startswith("pairs in moving blocks of")
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["bootstrap_covers"] == RADIUS_COVERS and "not in it" in report["bootstrap_covers"]
+
+
+@pytest.mark.parametrize("offset, words", [
+    (0.0123, "+12.3 ms: the sensor sample stamped t + 12.3 ms matches the camera sample stamped t (sensor clock ahead "
+             "of the camera's by 12.3 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift)"),
+    (-0.0123, "-12.3 ms: the sensor sample stamped t - 12.3 ms matches the camera sample stamped t (sensor clock "
+              "behind the camera's by 12.3 ms; Kalibr's timeshift_cam_imu, t_imu = t_cam + shift)"),
+])
+def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
+    """The summary states the sign right for both signs (it printed 'ahead' whatever the sign)."""
+    assert offset_in_words(offset) == words
+    R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.02)
+    from replication.rig.streams import GyroStream
+
+    # the rates as recorded (bias-free): the bias model moves the offset within its noise, here by 0.01 ms
+    r = calibrate(camera, GyroStream(gyro.t + offset, gyro.omega, "gyro"), n_bootstrap=20, gyro_bias=False)
+    line = next(x for x in r.summary().splitlines() if x.startswith("time offset"))
+    side = "ahead of" if offset > 0 else "behind"
+    assert f"sensor clock {side} the camera's by 12.30 ms" in line and "95 % interval" in line
+    lo, hi = r.time_offset_ci95_s
+    assert lo <= offset <= hi and hi - lo < 2e-3
+
+
+def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
+    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever is smaller."""
+    R = np.eye(3)
+    a, b = (0, 0.2 + 1e-15, "first", R, 0.9), (3, 0.2, "second", R, 0.9)
+    one = _one_finding([a, b], 1.0, lambda f: f[2], None)[1]
+    two = _one_finding([b, a], 1.0, lambda f: f[2], None)[1]
+    flipped = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 + 1e-15, "second", R, 0.9)], 1.0, lambda f: f[2],
+                           None)[1]
+    assert one == two and "first, or second: the data cannot tell which; a reference can" in one
+    assert flipped.split(";")[0] == one.split(";")[0]
+    outside = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 * TIE_SHARE * 1.01, "second", R, 0.9)], 1.0,
+                           lambda f: f[2], None)[1]
+    assert "second" not in outside
+
+
+def test_a_reference_tells_tied_hypotheses_apart():
+    R_right = so3.exp_map(np.radians([10.0, 0.0, 0.0]))
+    fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
+    message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
+    assert message.startswith("likely input mistake: second; the reference tells them apart")
+
+
+def test_hypotheses_are_listed_once_each():
+    assert len(set(HYPOTHESES)) == len(HYPOTHESES)
+
+
+def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
+    R0, C, S = _stations(rng)
+    r = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0)
+    message = _reasons(r)["input_mistake"].message
+    # both fit equally: named together (the branch this test is about was conditional; it always holds here),
+    # camera first, and the reference decides
+    assert "camera poses inverted" in message and "robot poses inverted" in message and "cannot tell" in message
+    assert message.index("camera poses") < message.index("robot poses")
+    decided = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0, reference=R0)
+    assert "robot poses inverted" not in _reasons(decided)["input_mistake"].message.split(";")[0]
+
+
+def test_judge_tolerates_missing_residuals():
+    e = dataclasses.replace(Evidence(n_pairs=12, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None),
+                            radius_kind="curvature")
+    # nothing to judge but the count of pairs: no error, and only that warning
+    assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
+
+
+# ----------------------------------------------------------------------------------------- a change inside a recording
+
+def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
+    from replication.rig.changepoint import remounted
+
+    R0, camera, gyro, _ = rig_streams(90.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
+    step = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+    r = calibrate(camera, remounted(gyro, 45.0, step), n_bootstrap=20)
+    reason = _reasons(r)["remount_deg"]
+    assert r.verdict.level == "fail" and reason.level == "fail" and "after 45" in reason.message
+    assert "R0 before (" in reason.message and "after (" in reason.message
+    c = r.change_test
+    assert c["significant"] and abs(c["split_time_s"] - 45.0) < 1.0 and c["angle_deg"] == pytest.approx(2.0, abs=0.05)
+    assert so3.angle_between_deg(np.array(c["R0_before"]), R0) < 0.05
+    assert so3.angle_between_deg(np.array(c["R0_after"]), R0 @ step) < 0.05
+    jsonschema.validate(r.to_dict(), SCHEMA)
+    clean = calibrate(camera, gyro, n_bootstrap=20)
+    assert "remount_deg" not in _reasons(clean) and clean.change_test["run"] and not clean.change_test["significant"]
+
+
+def test_a_short_recording_says_why_the_change_test_did_not_run(rng):
+    R0, camera, gyro, _ = rig_streams(15.0, rng=rng, camera_noise_deg=0.05)
+    r = calibrate(camera, gyro, n_bootstrap=0)
+    assert not r.change_test["run"] and r.change_test["note"].startswith("not run: ")
+    assert "change test: not run" in r.summary()
+
+
+class _Change:
+    significant, split_time, n_before, n_after, p_value, difference_radius_deg = True, 10.0, 500, 500, 1e-6, 0.05
+    level = 0.01
+    R_before = R_after = np.eye(3)
+
+    def __init__(self, angle_deg, significant=True):
+        self.angle_deg, self.significant = angle_deg, significant
+
+
+@pytest.mark.parametrize("angle, significant, level", [
+    (0.49, True, None), (0.51, True, "warning"), (0.74, True, "warning"), (0.76, True, "fail"), (5.0, False, None)])
+def test_remount_threshold_boundaries(angle, significant, level):
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(angle, significant))
+    assert {r.check: r.level for r in judge(e).reasons}.get("remount_deg") == level
+
+
+@pytest.mark.parametrize("fit, reported", [(0.29, True), (0.31, False)])
+def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, reported):
+    """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount (the residual
+    reasons say what it is); the bound is residual_to_motion's fail bound."""
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(2.0), change_sides_fit=fit)
+    assert ("remount_deg" in {r.check for r in judge(e).reasons}) is reported
+    assert THRESHOLDS["residual_to_motion"][1] == 0.3
+
+
+def test_an_input_mistake_is_not_called_a_remount(rng):
+    R0, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05)
+    q = so3.as_quaternion(camera.R)[:, [1, 2, 3, 0]]
+    from replication.rig.streams import OrientationStream
+
+    r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
+    assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
+    assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
+
+
+# ------------------------------------------------------------------------------------------------ handedness
+
+def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40.0):
+    """A camera turning about its x and y axes (and ``out_of_plane`` rad/s about z), a gyro on the same body."""
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    rng = np.random.default_rng(seed)
+    R0 = RIG_R0
+    dt = 2e-3
+    t = np.arange(-1.0, seconds + 1.0, dt)
+    w = np.stack([0.7 * np.sin(0.9 * t), 0.6 * np.sin(1.3 * t + 1.0), out_of_plane * np.sin(0.5 * t + 2.0)], -1)
+    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.exp_map(w[:-1] * dt))])
+    k = np.arange(int(1.0 / dt), int((seconds + 1.0) / dt), 25)  # the camera at 20 Hz
+    camera = OrientationStream(t[k], C[k] @ so3.exp_map(rng.normal(0, np.radians(0.1) / np.sqrt(3), (len(k), 3))),
+                               "camera")
+    Q = C[::2] @ R0  # the gyro at 250 Hz
+    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
+    omega += rng.normal(0, np.radians(0.2), omega.shape)
+    return R0, camera, GyroStream(t[::2][:-1] + dt, omega, "gyro")
+
+
+def test_rates_in_one_plane_cannot_show_a_flipped_gyro_axis_and_the_verdict_says_so():
+    """Red team: a gyro with one axis's sign flipped and rates in one plane gave ok, radius 0.02 deg, R0 126 deg off.
+    The flipped gyro is exactly a right-handed one mounted otherwise; both now warn, naming the unturned axis."""
+    from replication.rig.streams import GyroStream
+
+    R0, camera, gyro = _rig_from_body_rates(0.0)
+    normal = R0.T @ np.array([0.0, 0.0, 1.0])  # the camera's z axis in the sensor frame
+    for g, n in ((gyro, normal), (GyroStream(gyro.t, gyro.omega * [1.0, 1.0, -1.0], "gyro"), normal * [1, 1, -1])):
+        r = calibrate(camera, g, n_bootstrap=0)
+        reason = _reasons(r)["mirror_fit_ratio"]
+        assert r.verdict.level == "warning" and reason.level == "warning" and reason.measured < 1.5
+        assert reason.threshold == THRESHOLDS["mirror_fit_ratio"][0]
+        assert "one axis's sign flipped (a left-handed frame" in reason.message
+        assert abs(np.dot(r.diagnostics["mirror_normal"], n)) > 0.99  # in the gyro's frame
+
+
+def test_rates_about_a_third_axis_tell_the_flip_and_leave_no_such_warning():
+    R0, camera, gyro = _rig_from_body_rates(0.3)
+    r = calibrate(camera, gyro, n_bootstrap=0)
+    assert "mirror_fit_ratio" not in _reasons(r) and r.diagnostics["mirror_fit_ratio"] > 10
+    assert so3.angle_between_deg(r.R, R0) < 0.2
+
+
+def test_the_mirror_ratio_threshold_at_its_boundary():
+    bound = THRESHOLDS["mirror_fit_ratio"][0]
+    kw = dict(n_pairs=100, residual_median_deg=0.1, motion_median_deg=20.0, bootstrap_deg=0.05)
+    below = judge(Evidence(**kw, mirror_fit_ratio=bound * (1 - 1e-9), mirror_normal=(0.0, 0.0, 1.0)))
+    assert [(x.check, x.level) for x in below.reasons] == [("mirror_fit_ratio", "warning")]
+    assert "[0.0, 0.0, 1.0], sensor frame" in below.reasons[0].message
+    assert judge(Evidence(**kw, mirror_fit_ratio=bound)).reasons == ()
+
+
+def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_are_said():
+    """Red team: a 5 deg re-mount at 55 s of 60 s gave ok (the splits left 15 % on each side)."""
+    from replication.rig.calibration import CHANGE_MIN_SHARE
+    from replication.rig.changepoint import remounted
+
+    R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(3), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
+    turn = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    r = calibrate(camera, remounted(gyro, 55.0, turn), n_bootstrap=0)
+    reason = _reasons(r)["remount_deg"]
+    assert reason.level == "fail" and 54.0 <= r.change_test["split_time_s"] <= 56.0
+    # the last split leaves 5 % of the pairs and 5 blocks (of 1 s) after it: later than 0.15's 51 s
+    assert 60.0 * (1 - 0.15) < r.change_test["splits_to_s"] <= 60.0 * (1 - CHANGE_MIN_SHARE)
+    assert "a change outside cannot be told" in r.summary()
+
+
+# ---------------------------------------------------------------------- no clock, no offset (issue 33, point 6)
+
+def test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed(rng):
+    R0, C, S = _stations(rng, N=12)
+    r = calibrate_poses(C, S, n_bootstrap=20)
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["time_offset_s"] is None and report["time_offset_correlation"] is None
+    assert report["time_offset_applied"] is False and "time offset" not in r.summary()
+    assert "null for static poses" in SCHEMA["properties"]["time_offset_s"]["description"]
+    # the schema still refuses what is neither a number nor null
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**report, "time_offset_s": "0.0"}, SCHEMA)
+
+
+def test_a_stream_report_keeps_its_measured_clock_offset(rng):
+    _, camera, gyro, _ = rig_streams(30.0, rng=rng, camera_noise_deg=0.05)
+    report = calibrate(camera, gyro, n_bootstrap=0).to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert isinstance(report["time_offset_s"], float)
+
+
+# -------------------------------------------------------------------- stations counted once (issue 33, point 2)
+
+def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
+    """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the same radius (it
+    was 0.68 -> 0.44 deg, ok, nothing said)."""
+    R0, C, S = _stations(rng, N=10)
+    once = calibrate_poses(C, S, n_bootstrap=100, seed=3)
+    twice = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), n_bootstrap=100, seed=3)
+    assert twice.bootstrap_ci95_deg == pytest.approx(once.bootstrap_ci95_deg, rel=1e-9)
+    assert so3.angle_between_deg(twice.R, once.R) < 1e-9
+    assert once.station_repeats is None and "repeated_stations" not in _reasons(once)
+    assert once.bootstrap_resamples == "stations"
+    assert twice.station_repeats == {"stations": 20, "distinct": 10, "groups": [[k, k + 10] for k in range(10)]}
+    assert twice.bootstrap_resamples == "distinct stations (repeats as one)"
+    reason = _reasons(twice)["repeated_stations"]
+    assert reason.level == "warning" and reason.measured == 10
+    assert reason.message.startswith("10 of the 20 stations repeat others (0-based, the same attitude on both sides")
+    assert "0 = 10; 1 = 11; 2 = 12; 3 = 13; 4 = 14; and 5 more groups" in reason.message
+    assert "counted once in the bootstrap (10 distinct stations)" in reason.message
+    report = twice.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["station_repeats"]["distinct"] == 10 and once.to_dict()["station_repeats"] is None
+
+
+def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
+    R0, C, S = _stations(rng, N=8, station_noise_deg=0.3)
+    sd = np.radians(0.3) / np.sqrt(3)
+    C3 = np.concatenate([C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C])
+    S3 = np.concatenate([S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S])
+    r = calibrate_poses(C3, S3, n_bootstrap=50)
+    assert r.station_repeats["distinct"] == 8 and r.station_repeats["groups"][0] == [0, 8, 16]
+    consecutive = calibrate_poses(C3, S3, n_bootstrap=50, pairs="consecutive")  # repeats drawn as one there too
+    assert consecutive.bootstrap_resamples == "distinct stations (repeats as one)"
+
+
+@pytest.mark.parametrize("apart_deg, same", [(1.99, True), (2.01, False)])
+def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg, same):
+    """The boundary is min_motion_deg (2 deg by default): closer on both sides, a pair of them is noise, not motion,
+    and they are one station; a station apart on one side only is no repeat (a bad measurement, not the same pose)."""
+    from replication.rig.poses import repeated_stations
+
+    R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
+    turn = so3.exp_map(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
+    C2, S2 = np.concatenate([C, (R0 @ turn @ R0.T @ C[2])[None]]), np.concatenate([S, (turn @ S[2])[None]])
+    labels = repeated_stations(C2, S2, 2.0)
+    assert bool(labels[6] == 2) is same and list(labels[:6]) == list(range(6))
+    one_side = np.concatenate([C, C[2][None]]), np.concatenate([S, (turn @ S[2])[None]])
+    if not same:
+        assert repeated_stations(*one_side, 2.0)[6] == 6
+    r = calibrate_poses(C2, S2, n_bootstrap=20)
+    assert (r.station_repeats is not None) is same
+
+
+@pytest.mark.parametrize("step_deg", [1.5, 1.0])
+def test_a_chain_of_close_stations_is_not_one_station(step_deg):
+    """Each station step_deg from the next (under the 2 deg of a repeat), 30 of them spanning tens of degrees: no group
+    may hold two stations further apart than 2 deg (a red-team case: a linked chain was read as one station)."""
+    from replication.rig.poses import repeated_stations
+
+    axis = np.array([0.0, 0.6, 0.8])
+    S = so3.exp_map(np.radians(step_deg) * np.arange(30)[:, None] * axis)
+    labels = repeated_stations(S, S, 2.0)
+    for g in np.unique(labels):
+        members = S[labels == g]
+        assert so3.rotation_angle_deg(members[-1] @ members[0].T) <= 2.0 + 1e-9
+    assert len(np.unique(labels)) >= 30 * step_deg / 3.0
+
+
+def test_a_station_joins_a_group_only_if_it_repeats_every_member():
+    from replication.rig.poses import repeated_stations
+
+    axis = np.array([1.0, 0.0, 0.0])
+    S = so3.exp_map(np.radians([0.0, 1.5, 3.0])[:, None] * axis)  # 0-1 and 1-2 within 2 deg, 0-2 not
+    assert repeated_stations(S, S, 2.0).tolist() == [0, 0, 2]
+
+
+# ------------------------------------------------------------------ name the culprit (issue 33, point 5)
+
+def _bad_stations(bad, N=20, seed=5, bad_deg=3.0):
+    rng = np.random.default_rng(seed)
+    R0, C, S = _stations(rng, N=N)
+    for b in bad:
+        C[b] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
+    return C, S
+
+
+def _blamed(result):
+    reason = _reasons(result).get("pose_outliers")
+    if reason is None:
+        return set()
+    named = reason.message.split("):", 1)[1].split(">")[0]
+    return {int(part.split("(")[0]) for part in named.split(",")}
+
+
+@pytest.mark.parametrize("bad_deg", [3.0, 6.0])
+@pytest.mark.parametrize("bad", [[7], [7, 8], [7, 9], [3, 12]], ids=["one", "two-adjacent", "two-one-apart", "apart"])
+def test_with_consecutive_pairs_only_the_bad_stations_are_blamed(bad, bad_deg):
+    """Their neighbours share a bad pair each; their own residual does not. The pairs' median (the rule before) named
+    a neighbour in 7 of these 8 cases (and nothing for two adjacent stations 3 deg off)."""
+    C, S = _bad_stations(bad, bad_deg=bad_deg)
+    r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)
+    assert _blamed(r) == set(bad)
+    assert "(0-based index, its own residual)" in _reasons(r)["pose_outliers"].message
+
+
+def test_with_consecutive_pairs_a_clean_set_blames_no_station():
+    C, S = _bad_stations([])
+    assert _blamed(calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)) == set()
+
+
+def test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_its_neighbours():
+    from replication.rig.poses import own_residuals_deg, pose_pairs
+    from replication.rig.solve_and_judge import per_station_median
+
+    C, S = _bad_stations([7], bad_deg=6.0)
+    r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)
+    own = own_residuals_deg(C, S, r.R)
+    assert _blamed(r) == {7}
+    assert 3.0 < own[7] < 7.0 and np.max(np.delete(own, 7)) < 3 * np.median(own) < own[7]
+    A, B, i, j = pose_pairs(C, S, pairs="consecutive", stations=True)
+    from replication.core.handeye import pair_residual_deg
+
+    medians = per_station_median(pair_residual_deg(r.R, A, B), (i, j, len(C)))
+    assert max(medians[6], medians[8]) > 3 * np.median(medians)  # the old rule blamed a neighbour
+
+
+def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
+    R0, C, S = _stations(rng, N=10)
+    r = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), min_motion_deg=0.0, n_bootstrap=20)
+    assert r.station_repeats["distinct"] == 10 and "repeated_stations" in _reasons(r)
+
+# ----------------------------------------------------------------------------------------------------
+# Two references (issue 35.4): ``calibrate(reference=<two>)`` and ``calibrate --reference A --reference B`` report
+# the error to each, their disagreement (the reference floor) and which reading applies; one reference works as
+# before.
+
+
+SCHEMA_TR = json.loads((Path(__file__).resolve().parents[2] / "docs" / "calibration_report.schema.json").read_text())
+EPS = 1e-9
+
+
+def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
+    return R @ so3.exp_map(np.radians(deg) * np.asarray(axis))
+
+
+@pytest.fixture(scope="module")
+def rig_tr():
+    R0, camera, gyro, _ = rig_streams(40.0, rng=np.random.default_rng(35), camera_noise_deg=0.02)
+    return R0, camera, gyro
+
+
+@pytest.mark.parametrize("errors, floor, reading", [
+    ((0.169, 0.234), 0.343, "agreement, not accuracy: both errors (0.169, 0.234 deg)"),  # EuRoC MH01, measured
+    ((0.3, 0.3), 0.3, "agreement, not accuracy"),                      # at the floor: within it
+    ((0.3 + EPS, 0.1), 0.3, "closer to reference 2: its error (0.100 deg) is within"),  # one just above
+    ((0.1, 0.3 + EPS), 0.3, "closer to reference 1"),
+    ((0.3 + EPS, 0.3 + EPS), 0.3, "a difference beyond the floor: both errors"),
+])
+def test_the_reading_of_two_references_at_the_floor(errors, floor, reading):
+    text = reference_reading(errors, floor)
+    assert text.startswith(reading)
+    assert f"the references' own disagreement {floor:.3f} deg (the reference floor)" in text
+
+
+@pytest.mark.parametrize("errors, floor, radius, reading", [
+    ((0.0, 10.0), 10.0, 0.1, "closer to reference 1: its error (0.000 deg) is the smaller, by more than R0's"),
+    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # red team: was "agreement, not accuracy"
+    ((0.05, 0.05), 0.0, 0.1, "agreement within R0's radius"),           # the same reference twice: was "beyond"
+    ((0.1, 0.1), 0.0, 0.1, "agreement within R0's radius"),             # at the radius: within it
+    ((0.1 + EPS, 0.1 + EPS), 0.0, 0.1, "a difference beyond the floor"),
+    ((0.169, 0.234), 0.343, 0.09, "agreement, not accuracy"),           # EuRoC: 0.065 apart, within the radius
+    ((0.169, 0.234), 0.343, 0.064, "closer to reference 1"),            # ... and just beyond a smaller radius
+    ((0.2, 0.4), 0.3, 0.5, "agreement within R0's radius"),
+    ((0.2, 0.55), 0.35, 0.5, "not resolved: the errors (0.200, 0.550 deg) differ by no more than"),
+])
+def test_the_reading_weighs_the_difference_of_the_errors_against_r0s_radius(errors, floor, radius, reading):
+    assert reference_reading(errors, floor, radius).startswith(reading)
+
+
+def test_two_references_in_the_result_the_report_and_the_summary(rig_tr):
+    R0, camera, gyro = rig_tr
+    refs = np.stack([_turned(R0, 0.15), _turned(R0, -0.15)])  # 0.3 deg apart, the estimate between them
+    r = calibrate(camera, gyro, n_bootstrap=20, reference=refs)
+    e1, e2 = r.reference_errors_deg
+    assert r.reference_disagreement_deg == pytest.approx(0.3, abs=1e-9)
+    assert r.reference_error_deg == e1 and max(e1, e2) < 0.3  # the first stays the single error
+    assert r.reference_reading.startswith("agreement, not accuracy")
+    report = json.loads(json.dumps(r.to_dict(), allow_nan=False))
+    jsonschema.validate(report, SCHEMA_TR)
+    assert report["reference_errors_deg"] == [e1, e2] and report["reference_disagreement_deg"] == pytest.approx(0.3)
+    assert report["reference_reading"] == r.reference_reading
+    assert np.allclose(report["inputs"]["reference_camera_from_sensor"], refs[0], atol=1e-12)
+    assert np.allclose(report["inputs"]["second_reference_camera_from_sensor"], refs[1], atol=1e-12)
+    lines = r.summary().split("\n")
+    assert f"angle to reference 1: {e1:.3f} deg, to reference 2: {e2:.3f} deg; the references disagree by 0.300 deg " \
+           "(the reference floor)" in lines
+    assert any(line.startswith("reading: agreement, not accuracy") for line in lines)
+    assert not any(line.startswith("angle to the reference:") for line in lines)
+
+
+def test_one_reference_works_as_before(rig_tr):
+    R0, camera, gyro = rig_tr
+    r = calibrate(camera, gyro, n_bootstrap=0, reference=_turned(R0, 0.15))
+    assert r.reference_errors_deg is None and r.reference_disagreement_deg is None and r.reference_reading is None
+    report = r.to_dict()
+    jsonschema.validate(json.loads(json.dumps(report)), SCHEMA_TR)
+    assert report["reference_errors_deg"] is None and "second_reference_camera_from_sensor" not in report["inputs"]
+    assert f"angle to the reference: {r.reference_error_deg:.3f} deg" in r.summary().split("\n")
+    assert np.allclose(report["inputs"]["reference_camera_from_sensor"], _turned(R0, 0.15), atol=1e-12)
+
+
+@pytest.mark.parametrize("second_deg, level", [(0.9, None), (1.1, "warning"), (5.1, "fail")])
+def test_the_second_reference_is_judged_as_the_first(rig_tr, second_deg, level):
+    R0, camera, gyro = rig_tr
+    r = calibrate(camera, gyro, n_bootstrap=0, reference=np.stack([R0, _turned(R0, second_deg, (0.0, 0.6, 0.8))]))
+    reasons = {x.check: x for x in r.verdict.reasons}
+    assert "reference_error_deg" not in reasons
+    if level is None:
+        assert "second_reference_error_deg" not in reasons
+        return
+    reason = reasons["second_reference_error_deg"]
+    assert reason.level == level and reason.message.startswith("angle to the second reference ")
+    assert r.reference_reading.startswith("closer to reference 1")
+
+
+def test_two_references_for_static_poses_and_bad_shapes(rig_tr):
+    R0, camera, _ = rig_tr
+    C = np.swapaxes(camera.R[::40], -1, -2)
+    S = np.swapaxes(camera.R[::40] @ R0, -1, -2)
+    r = calibrate_poses(C, S, n_bootstrap=0, reference=np.stack([_turned(R0, 0.1), _turned(R0, -0.1)]))
+    assert r.reference_disagreement_deg == pytest.approx(0.2) and len(r.reference_errors_deg) == 2
+    with pytest.raises(ValueError, match=r"got shape \(3, 3, 3\) \(two references, e.g. two published"):
+        calibrate_poses(C, S, n_bootstrap=0, reference=np.stack([R0] * 3))
+
+
+def _camchain(path, R):
+    T = np.eye(4)
+    T[:3, :3] = R
+    path.write_text("cam0:\n  T_cam_imu:\n" + "".join(f"  - {row.tolist()}\n" for row in T))
+    return path
+
+
+
+
+def test_cli_takes_reference_twice_not_three_times(rig_tr, tmp_path, capsys):
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    R0, camera, gyro = rig_tr
+    write_tum_trajectory(tmp_path / "cam.txt", OrientationStream(camera.t + 1e3, camera.R, "c"))
+    write_euroc_imu(tmp_path / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
+    a, b = _camchain(tmp_path / "a.yaml", _turned(R0, 0.15)), _camchain(tmp_path / "b.yaml", _turned(R0, -0.15))
+    base = ["calibrate", "--camera", tmp_path / "cam.txt", "--sensor", tmp_path / "imu.csv", "--sensor-kind", "gyro",
+            "--bootstrap", "0", "--quiet"]
+    out, fig = tmp_path / "r.json", tmp_path / "r.png"
+    assert main([str(x) for x in base + ["--reference", a, "--reference", b, "--out", out, "--plot", fig]]) == 0
+    text = capsys.readouterr().out
+    assert "angle to reference 1: " in text and "the references disagree by 0.300 deg (the reference floor)" in text
+    assert "reading: agreement, not accuracy" in text
+    report = json.loads(out.read_text())
+    jsonschema.validate(report, SCHEMA_TR)
+    assert report["files"]["reference"]["sha256"] != report["files"]["reference2"]["sha256"]
+    assert report["files"]["reference2"]["camera_entry"] == "cam0"
+    assert report["reference_disagreement_deg"] == pytest.approx(0.3, abs=1e-6) and fig.stat().st_size > 1000
+    assert main([str(x) for x in base + ["--reference", a, "--out", out]]) == 0  # once: as before
+    report = json.loads(out.read_text())
+    assert "reference2" not in report["files"] and report["reference_errors_deg"] is None
+    assert "angle to the reference: " in capsys.readouterr().out
+    assert main([str(x) for x in base + ["--reference", a, "--reference", b, "--reference", a]]) == 2
+    assert "--reference given 3 times: at most two (two published calibrations)" in capsys.readouterr().err
+    assert main([str(x) for x in base + ["--reference", a, "--reference", tmp_path / "missing.yaml"]]) == 2
+    assert "--reference (the second)" in capsys.readouterr().err
+
+
+def test_figure_states_both_references_and_the_reading(rig_tr):
+    import matplotlib.pyplot as plt
+
+    R0, camera, gyro = rig_tr
+    r = calibrate(camera, gyro, n_bootstrap=0, reference=np.stack([_turned(R0, 0.15), _turned(R0, -0.15)]))
+    fig = r.plot(reference_name="a.yaml and b.yaml")
+    text = " ".join(" ".join(t.get_text() for ax in fig.axes for t in ax.texts).split())
+    assert "reference 1 (a.yaml): quaternion" in text and "reference 2 (b.yaml): quaternion" in text
+    assert f"angle between R0 and it: {r.reference_errors_deg[1]:.3f} deg" in text
+    assert "reading: agreement, not accuracy" in text
+    plt.close(fig)
