@@ -147,3 +147,22 @@ def test_the_model_intervals_use_the_critical_value():
     assert (hi - lo) / 2 == pytest.approx(1e6 * m.critical * sd[7], rel=1e-9)
     assert np.allclose(m.bias_ci95_rad_s[:, 1] - m.bias_rad_s, m.critical * sd[3:6])
     assert m.report()["sensor_model"]["interval_critical_value"] == pytest.approx(m.critical)
+
+
+@pytest.mark.parametrize("factor, held", [(1.15, False), (1.25, True)])
+def test_a_scale_beyond_any_gyro_s_error_is_held_at_1_and_said(factor, held):
+    _, camera, gyro = _scaled([factor, 1.0, 1.0], seed=7)
+    m = sm.estimate_sensor_model(camera, gyro)
+    assert (m.scale_note is not None) == held and bool(m.scale_resolved.any()) != held
+    if held:
+        assert np.all(m.scale == 1.0) and "no gyro's scale error (units?" in m.scale_note
+        assert m.report()["gyro_scale_ci95"] == [None, None, None]
+    else:
+        assert abs(m.scale[0] - factor) < 2e-3 and m.report()["sensor_model"]["scale_note"] is None
+
+
+def test_a_gyro_in_deg_per_s_is_not_taken_for_a_scale():
+    _, camera, gyro = _scaled([1.0, 1.0, 1.0], seed=8)
+    r = calibrate(camera, GyroStream(gyro.t, np.degrees(gyro.omega), "gyro"), n_bootstrap=0)
+    assert r.verdict.level == "fail" and "deg/s read as rad/s" in r.summary()
+    assert not any(x.check == "gyro_scale" for x in r.verdict.reasons)

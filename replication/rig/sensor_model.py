@@ -51,7 +51,7 @@ from .gyro_model import _Z95, N_PARAMETERS, _gauss_newton, _linearise, _pairs, _
 from .streams import GyroStream, OrientationStream
 
 __all__ = ["SensorModel", "estimate_sensor_model", "rest_periods", "BIAS_CHANGE_LEVEL", "MIN_CORRELATION",
-           "MAX_FIT_RATIO", "INTERVAL_INFLATION", "SCALE_RESOLUTION"]
+           "MAX_FIT_RATIO", "INTERVAL_INFLATION", "SCALE_RESOLUTION", "MAX_SCALE_ERROR"]
 
 #: The level of the test of the two halves' biases (chi-square, 3 degrees of freedom).
 BIAS_CHANGE_LEVEL = 0.01
@@ -76,6 +76,10 @@ INTERVAL_INFLATION = 1.2
 #: An axis's scale is estimated where its 95 % interval's half-width is at most this (the motion turns about the
 #: axis enough); elsewhere it is held at 1 and the report says so (``scale_resolved``).
 SCALE_RESOLUTION = 0.01
+#: A fitted scale further than this from 1 on any axis is no scale error (a MEMS gyro's is within a few per cent;
+#: 57.3 is deg/s read as rad/s): every scale is then held at 1, so that the units' mistake stays visible (the
+#: model's pairs fit no rig and the calibration's diagnosis names the units) and the report says why.
+MAX_SCALE_ERROR = 0.2
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,6 +121,8 @@ class SensorModel:
         How far ``R0`` moves (deg, first order) were the scale left at 1.
     critical : float
         The critical value of the 95 % intervals.
+    scale_note : str or None
+        Why every scale was held at 1 (a fitted scale beyond :data:`MAX_SCALE_ERROR`), None otherwise.
     n_pairs, iterations : int
     span_s : float
         The pairs' span (s, camera time).
@@ -149,6 +155,7 @@ class SensorModel:
     scale_resolved: np.ndarray = field(default_factory=lambda: np.zeros(3, bool))
     scale_R0_deg: float = 0.0
     critical: float = _Z95
+    scale_note: str | None = None
 
     @property
     def bias_changes(self) -> bool:
@@ -190,6 +197,7 @@ class SensorModel:
                 "fit_ratio": float(self.fit_ratio),
                 "scale_resolved": [bool(v) for v in self.scale_resolved], "scale_R0_deg": float(self.scale_R0_deg),
                 "scale_resolution": SCALE_RESOLUTION, "interval_critical_value": float(self.critical),
+                "scale_note": self.scale_note,
             },
         }
 
@@ -295,10 +303,14 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     sigma = np.zeros(3)
     (X, b, d, kappa, sigma), r, jac, wts, its = _gauss_newton(R_start, b0, d0, 0.0, A, ti, tk, t_mid, gyro.t,
                                                               gyro.omega, cols, sigma=sigma)
-    resolved = np.zeros(3, bool)
+    resolved, implausible = np.zeros(3, bool), None
     if scale:  # an axis the motion barely turns about does not resolve its scale: held at 1, and said
         full_sd = INTERVAL_INFLATION * np.sqrt(np.maximum(np.diag(_sandwich(r, jac, wts, lags, cols))[8:], 0.0))
         resolved = z * full_sd <= SCALE_RESOLUTION
+        if np.any(np.abs(np.expm1(sigma)) > MAX_SCALE_ERROR):  # no scale error: held at 1, from the start
+            implausible = np.exp(sigma)
+            resolved[:] = False
+            X, b, d, kappa = R_start, b0, d0, 0.0
         if not resolved.all():
             cols = np.concatenate([np.arange(8), 8 + np.flatnonzero(resolved)])
             (X, b, d, kappa, sigma), r, jac, wts, more = _gauss_newton(
@@ -334,4 +346,7 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
         fit_ratio=float(np.median(np.linalg.norm(r, axis=-1)) / max(np.median(np.linalg.norm(log_map(A), axis=-1)),
                                                                     1e-12)),
         scale=np.exp(sigma), scale_ci95=scale_ci, scale_resolved=resolved,
-        scale_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 5:8] @ sigma))), critical=float(z))
+        scale_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 5:8] @ sigma))), critical=float(z),
+        scale_note=None if implausible is None else (
+            "a scale of [" + ", ".join(f"{v:.3g}" for v in implausible) + f"] fitted, more than {MAX_SCALE_ERROR:g} "
+            "off 1: no gyro's scale error (units? deg/s read as rad/s is 57.3): every scale held at 1"))
