@@ -180,3 +180,16 @@ def test_a_gyro_in_deg_per_s_is_not_taken_for_a_scale():
     r = calibrate(camera, GyroStream(gyro.t, np.degrees(gyro.omega), "gyro"), n_bootstrap=0)
     assert r.verdict.level == "fail" and "deg/s read as rad/s" in r.summary()
     assert not any(x.check == "gyro_scale" for x in r.verdict.reasons)
+
+
+def test_the_resolution_rule_at_its_boundary(monkeypatch):
+    """An axis's scale is estimated up to a 95 % half-width of SCALE_RESOLUTION, held at 1 just beyond it."""
+    _, camera, gyro = _scaled([1.0, 1.0, 1.0], seed=10, seconds=15.0)
+    m = sm.estimate_sensor_model(camera, gyro)
+    half = np.log(m.scale_ci95[:, 1] / m.scale_ci95[:, 0]) / 2  # the intervals are exp(sigma +- t sd)
+    worst = int(np.argmax(half))
+    monkeypatch.setattr(sm, "SCALE_RESOLUTION", 1.01 * half[worst])
+    assert sm.estimate_sensor_model(camera, gyro).scale_resolved.all()
+    monkeypatch.setattr(sm, "SCALE_RESOLUTION", 0.99 * half[worst])
+    held = sm.estimate_sensor_model(camera, gyro)
+    assert not held.scale_resolved[worst] and held.scale[worst] == 1.0 and np.isnan(held.scale_ci95[worst]).all()
