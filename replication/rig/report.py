@@ -79,7 +79,8 @@ def _scale_lines(model) -> list:
     axes = ", ".join(f"{s:.4f} [{ci[0]:.4f}, {ci[1]:.4f}]" if ci is not None else "1 (held: not resolved)"
                      for s, ci in zip(model["gyro_scale"], model["gyro_scale_ci95"]))
     note = model["sensor_model"].get("scale_note")
-    return [f"gyro scale (x, y, z) with 95 % intervals: {axes}" + (f" ({note})" if note else "")]
+    applied = "removed" if model["sensor_model"]["bias_applied"] else "measured, not removed"
+    return [f"gyro scale (x, y, z) with 95 % intervals: {axes} ({applied}" + (f"; {note})" if note else ")")]
 
 
 def _segment_lines(s) -> list:
