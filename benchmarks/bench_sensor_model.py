@@ -10,11 +10,16 @@ gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), ove
   often the drift (0 here) is resolved, and R0's error with and without the bias model (``calibrate``);
 * drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's drift reason fires;
 * time: ``calibrate`` with and without the model on the same input (median of the runs of the first set);
+* scale (``--scale-runs``): the x axis reading 5 %, 1 % and 0 % high (60 s): the verdict, the ``gyro_scale`` reason,
+  R0's error and how far R0 would move with the scale left at 1 (seeds ``[SEED, 10 + set, run]``);
+* drift coverage (``--coverage-runs``): no drift, 15, 40 and 60 s: how often the drift's 95 % interval excludes 0
+  (nominal 0.05; seeds ``[SEED, 20 + set, run]``);
 * real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned into rates with the
   issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in the shared data), against the
   monocular ORB-SLAM3 camera: R0 with and without the model against both published calibrations.
 
-Usage: python benchmarks/bench_sensor_model.py [--runs 200] [--seed 3400] [--real]
+Usage: python benchmarks/bench_sensor_model.py [--runs 200] [--seed 3400] [--real] [--scale-runs 30]
+[--coverage-runs 150]
 """
 import argparse
 import time
@@ -106,6 +111,38 @@ def drift_set(runs, seed):
               f"{_wilson(reason, runs)}")
 
 
+def scale_set(runs, seed):
+    for j, error in enumerate((0.05, 0.01, 0.0)):
+        ok = named = 0
+        errors, left = [], []
+        for k in range(runs):
+            rng = np.random.default_rng([seed, 10 + j, k])
+            R0, camera, gyro = biased_rig(seconds=60.0, offset=rng.uniform(-0.02, 0.02), camera_noise_deg=0.05,
+                                          gyro_noise_deg_s=0.2, rng=rng, phase=rng.uniform(0, 6))
+            omega = gyro.omega * [1.0 + error, 1.0, 1.0] + rng.uniform(-0.1, 0.1, 3)
+            r = calibrate(camera, GyroStream(gyro.t, omega, "gyro"), n_bootstrap=50, diagnose=False)
+            ok += r.verdict.level == "ok"
+            named += any(x.check == "gyro_scale" for x in r.verdict.reasons)
+            errors.append(float(angle_between_deg(r.R, R0)))
+            left.append(r.sensor_model["sensor_model"]["scale_R0_deg"])
+        print(f"scale {error:.0%} high on x, {runs} runs (seeds [{seed}, {10 + j}, k]): ok {_wilson(ok, runs)}; the "
+              f"gyro_scale reason {_wilson(named, runs)}; R0 error median {np.median(errors):.3f} deg, max "
+              f"{np.max(errors):.3f}; left at 1 R0 would move {np.min(left):.3f}-{np.max(left):.3f} deg")
+
+
+def coverage_set(runs, seed):
+    for j, seconds in enumerate((15.0, 40.0, 60.0)):
+        excluded = 0
+        for k in range(runs):
+            rng = np.random.default_rng([seed, 20 + j, k])
+            _, camera, gyro = biased_rig(seconds, bias=rng.uniform(-0.1, 0.1, 3), offset=rng.uniform(-0.02, 0.02),
+                                         camera_noise_deg=0.05, gyro_noise_deg_s=0.2, rng=rng,
+                                         phase=rng.uniform(0, 6))
+            excluded += int(estimate_sensor_model(camera, gyro).drift_resolved)
+        print(f"no drift, {seconds:.0f} s, {runs} runs (seeds [{seed}, {20 + j}, k]): the drift's interval excludes 0 "
+              f"in {_wilson(excluded, runs)} (nominal 0.05)")
+
+
 def real():
     from replication.rig import realdata
 
@@ -145,12 +182,20 @@ def main():
     parser.add_argument("--calibrate-runs", type=int, default=20)
     parser.add_argument("--drift-runs", type=int, default=50)
     parser.add_argument("--real", action="store_true")
+    parser.add_argument("--scale-runs", type=int, default=0)
+    parser.add_argument("--coverage-runs", type=int, default=0)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     if args.real:
         real()
-    bias_set(args.runs, args.seed, args.calibrate_runs)
-    drift_set(args.drift_runs, args.seed)
+    if args.scale_runs:
+        scale_set(args.scale_runs, args.seed)
+    if args.coverage_runs:
+        coverage_set(args.coverage_runs, args.seed)
+    if args.runs:
+        bias_set(args.runs, args.seed, args.calibrate_runs)
+    if args.drift_runs:
+        drift_set(args.drift_runs, args.seed)
 
 
 if __name__ == "__main__":

@@ -45,7 +45,8 @@ def json_safe(value):
     return value
 
 
-_SENSOR_KEYS = ("gyro_bias_rad_s", "gyro_bias_ci95_rad_s", "clock_drift_ppm", "clock_drift_ci95_ppm", "sensor_model")
+_SENSOR_KEYS = ("gyro_bias_rad_s", "gyro_bias_ci95_rad_s", "clock_drift_ppm", "clock_drift_ci95_ppm", "gyro_scale",
+                "gyro_scale_ci95", "sensor_model")
 
 
 def _sensor_fields(model) -> dict:
@@ -68,7 +69,18 @@ def _sensor_lines(model) -> list:
     return [f"gyro bias (x, y, z), deg/s with 95 % intervals: {axes} "
             f"({'removed' if details['bias_applied'] else 'measured, not removed'})",
             f"clock drift: {model['clock_drift_ppm']:+.1f} ppm, 95 % interval [{lo:+.1f}, {hi:+.1f}] ppm"
-            + ("" if details["drift_resolved"] else " (not resolved: it includes 0)")]
+            + ("" if details["drift_resolved"] else " (not resolved: it includes 0)")] + _scale_lines(model)
+
+
+def _scale_lines(model) -> list:
+    """The summary's line on the gyro's scale per axis (held at 1 where the motion does not resolve it)."""
+    if model.get("gyro_scale") is None:
+        return []
+    axes = ", ".join(f"{s:.4f} [{ci[0]:.4f}, {ci[1]:.4f}]" if ci is not None else "1 (held: not resolved)"
+                     for s, ci in zip(model["gyro_scale"], model["gyro_scale_ci95"]))
+    note = model["sensor_model"].get("scale_note")
+    applied = "removed" if model["sensor_model"]["bias_applied"] else "measured, not removed"
+    return [f"gyro scale (x, y, z) with 95 % intervals: {axes} ({applied}" + (f"; {note})" if note else ")")]
 
 
 def _segment_lines(s) -> list:

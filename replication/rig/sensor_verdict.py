@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .sensor_model import _Z95, BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
+from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
 
@@ -29,13 +29,20 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #:   moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real recordings, where
 #:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 13 and 20 > 11.3, but
 #:   0.006 deg on TUM-VI room1 and 0.0002 deg on EuRoC MH01 with a synthetic constant bias); 0.05 deg is 8 times
-#:   the larger and a seventh of EuRoC's reference floor (0.343 deg).
+#:   the larger and a seventh of EuRoC's reference floor (0.343 deg);
+#: * ``gyro_scale_error``: where an axis's scale is resolved and its interval excludes 1, ``|s - 1|`` (the largest
+#:   axis), above: the gyro's scale factor is off (its intrinsics), which the model removes but a reader of the raw
+#:   rates (a VIO with scale 1) does not. Left at 1, a 1 % error on the x axis moves R0 by 0.13-0.25 deg on 30
+#:   synthetic rigs (``scale_R0_deg``, first order; seeds 60000-60029 of the red team's 60 s generator), below
+#:   EuRoC's reference floor (0.343 deg), and a 2 % error by twice that (0.27-0.49 deg), beyond it on some; a 5 % error
+#:   by 0.67-1.20 deg: a scale more than 1 % off is one the calibration had to remove to stay within the floor.
 SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
     "clock_drift_share": (0.005, None),
     "offset_disagreement_share": (0.005, None),
     "gyro_bias_change_R0_deg": (0.05, None),
+    "gyro_scale_error": (0.01, None),
 }
 
 
@@ -47,7 +54,8 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
       carry it (warning, fail), named as a gyro bias with what to do;
     * the bias of the two halves differs beyond their noise (warning: it drifts, with temperature);
     * the clock drift resolved (its interval excludes 0) and half its change over the recording large against the
-      pairing interval (warning).
+      pairing interval (warning);
+    * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound (warning).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
     """
@@ -100,7 +108,28 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    return out
+    scale_reason = _scale_reason(model)
+    return out + ([scale_reason] if scale_reason else [])
+
+
+def _scale_reason(model):
+    """A warning where a resolved axis's scale departs from 1 beyond its interval and by more than the bound
+    (:data:`SENSOR_THRESHOLDS` ``gyro_scale_error``), naming the axes, their scales and what it did to ``R0``."""
+    from .quality import Reason
+
+    bound = SENSOR_THRESHOLDS["gyro_scale_error"][0]
+    lo, hi = model.scale_ci95[:, 0], model.scale_ci95[:, 1]
+    off = model.scale_resolved & ((lo > 1.0) | (hi < 1.0)) & (np.abs(model.scale - 1.0) > bound)
+    if not off.any():
+        return None
+    axes = ", ".join(f"{'xyz'[i]} {model.scale[i]:.4f} [{lo[i]:.4f}, {hi[i]:.4f}]" for i in np.flatnonzero(off))
+    worst = float(np.max(np.abs(model.scale[off] - 1.0)))
+    what = "removed from the rates" if model.applied else "measured, not removed"
+    return Reason("gyro_scale", "warning", worst, bound,
+                  f"gyro scale error: axis {axes} (95 % intervals) reads {100 * worst:.3g} % off 1 > "
+                  f"{100 * bound:g} %; {what}: left at 1 it moves R0 by about {model.scale_R0_deg:.2g} deg; the "
+                  f"gyro's scale factors (its intrinsics, e.g. Kalibr's or OpenVINS's T_g) are off: whatever reads "
+                  f"its raw rates with scale 1 inherits the error")
 
 
 def model_or_note(camera, gyro, interval, max_offset):
@@ -133,8 +162,8 @@ def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval,
             note = str(err)
     if model is None:
         fields = {"gyro_bias_rad_s": None, "gyro_bias_ci95_rad_s": None, "clock_drift_ppm": None,
-                  "clock_drift_ci95_ppm": None, "sensor_model": {"bias_applied": False, "note": note or
-                                                                 "gyro bias model off (gyro_bias=False)"}}
+                  "clock_drift_ci95_ppm": None, "gyro_scale": None, "gyro_scale_ci95": None,
+                  "sensor_model": {"bias_applied": False, "note": note or "gyro bias model off (gyro_bias=False)"}}
         result = dataclasses.replace(result, sensor_model=fields)
         if note and not off:
             result = with_reasons(result, [Reason("gyro_bias_not_estimated", "warning", None, None,
@@ -156,7 +185,7 @@ def _offsets_disagree(model, result, interval):
     if not model.fit_ratio <= MAX_FIT_RATIO or not result.time_offset_applied or model.covariance is None:
         return None
     gap = abs(model.offset_mid_s - result.time_offset_s)
-    noise = _Z95 * math.sqrt(max(model.covariance[6, 6], 0.0))
+    noise = model.critical * math.sqrt(max(model.covariance[6, 6], 0.0))
     bound = SENSOR_THRESHOLDS["offset_disagreement_share"][0]
     if gap <= noise or gap / interval <= bound:
         return None

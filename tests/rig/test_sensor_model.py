@@ -248,12 +248,12 @@ def _steady_turn(seed=2):
 
 def test_an_offset_the_pairs_refuse_is_named():
     """The speeds' correlation puts the offset 7.5 ms off on a steady turn (R0 0.23 deg off, ok before); the pairs
-    put it within 0.6 ms of the truth (0)."""
+    put it within 1 ms of the truth (0; 0.6 ms with the gyro's scale estimated, its standard deviation 0.45 ms)."""
     R0, camera, gyro = _steady_turn()
     r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
     reason = {x.check: x for x in r.verdict.reasons}["offset_disagreement"]
     assert r.verdict.level == "warning" and "the pairs fit best with the clock offset at" in reason.message
-    assert abs(r.sensor_model["sensor_model"]["offset_mid_s"]) < 6e-4 and abs(r.time_offset_s) > 5e-3
+    assert abs(r.sensor_model["sensor_model"]["offset_mid_s"]) < 1e-3 and abs(r.time_offset_s) > 5e-3
 
 
 def test_offset_disagreement_at_its_boundary(biased):
