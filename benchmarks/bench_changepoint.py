@@ -39,7 +39,7 @@ from replication.study.live_study import REMOUNT_AXIS
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 #: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per 200 Hz sample),
 #: gyro bias (rad/s, constant)).
 CONFIGS = [(60, 0.02, 0.002, 0.0), (60, 0.1, 0.005, 0.0), (60, 0.0, 0.005, 0.0), (60, 0.3, 0.02, 0.005),
@@ -82,17 +82,17 @@ def rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias_rad_s
     def world_from_camera(t):
         w = np.stack([0.9 * np.sin(0.7 * t + phase[0]), 0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
                       0.7 * np.cos(0.3 * t + phase[2])], axis=-1)
-        return so3.exp_map(w)
+        return so3.matrix_from_rotation_vector(w)
 
     t_cam = np.arange(0.0, seconds, 0.05)
-    noise = so3.exp_map(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
+    noise = so3.matrix_from_rotation_vector(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
     if drift_deg:
         steps = rng.normal(0.0, np.radians(drift_deg) * np.sqrt(0.05 / 10.0), (len(t_cam), 3))
-        noise = so3.exp_map(np.cumsum(steps, axis=0)) @ noise
+        noise = so3.matrix_from_rotation_vector(np.cumsum(steps, axis=0)) @ noise
     camera = OrientationStream(t_cam, world_from_camera(t_cam) @ noise, "camera")
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     omega += rng.normal(0.0, gyro_rad_s, omega.shape) + bias_rad_s * rng.normal(size=3) / np.sqrt(3.0)
     gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
     if remount is not None:
@@ -152,7 +152,7 @@ def drift(seeds, workers: int):
 
 def _power_run(args):
     seed, config, size = args
-    R = so3.exp_map(np.radians(size) * REMOUNT_AXIS / np.linalg.norm(REMOUNT_AXIS))
+    R = so3.matrix_from_rotation_vector(np.radians(size) * REMOUNT_AXIS / np.linalg.norm(REMOUNT_AXIS))
     t_r = config[0] * (1 / 3 + seed % 3 / 6)  # at 1/3, 1/2 or 2/3
     A, B, t, block = rig_pairs(*rig(seed, *config, remount=(t_r, R)))
     r = two_segment_test(A, B, t, block=block)
@@ -237,7 +237,7 @@ def remount_study(recordings, sizes=(0.5, 1.0, 2.0, 5.0), when=(1 / 3, 1 / 2, 2 
             rows = []
             for share in when:
                 for axis in axes:
-                    R = so3.exp_map(np.radians(size) * axis / np.linalg.norm(axis))
+                    R = so3.matrix_from_rotation_vector(np.radians(size) * axis / np.linalg.norm(axis))
                     t_r = camera.t[0] + share * span
                     _, A, B, t, block = calibrated(camera, remounted(sensor, t_r, R), n_bootstrap=0, diagnose=False)
                     c = two_segment_test(A, B, t, block=block)

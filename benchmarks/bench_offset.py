@@ -71,20 +71,21 @@ def injection(name, camera, shifted, shifts):
           f"({1e3 * min(widths):.3f}-{1e3 * max(widths):.3f})")
 
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def noisy_rig(offset, camera_noise_deg, gyro_noise, rng, seconds=30.0):
     """The rig of ``tests/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
     (200 Hz, noise in rad/s per sample) whose clock reads ``offset`` s ahead."""
     def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
+        return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                         0.7 * np.cos(0.3 * t)], -1))
 
     t_cam, t_imu = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
-    camera = world_from_camera(t_cam) @ so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg),
+    camera = world_from_camera(t_cam) @ so3.matrix_from_rotation_vector(rng.normal(scale=np.radians(camera_noise_deg),
                                                                size=(len(t_cam), 3)))
     Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(scale=gyro_noise,
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(scale=gyro_noise,
                                                                                     size=(len(t_imu) - 1, 3))
     return (OrientationStream(t_cam, camera, "camera"),
             integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro")))
@@ -117,12 +118,14 @@ def coverage(runs, camera_noise_deg, gyro_noise, *, seconds=30.0, block_s=1.0, s
 def periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0):
     """A single-axis oscillation at ``freq_hz`` (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
     ``aperiodic`` times the rig's three-axis motion."""
-    axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
+    axis = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
-        slow = so3.exp_map(aperiodic * np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+        slow = so3.matrix_from_rotation_vector(aperiodic * np.stack([0.9 * np.sin(0.7 * t),
+                                                                     0.8 * np.sin(0.45 * t + 1.0),
                                                  0.7 * np.cos(0.3 * t)], -1))
-        return slow @ axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], -1)) @ axis.T
+        return slow @ axis @ so3.matrix_from_rotation_vector(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t,
+                                                                       0 * t], -1)) @ axis.T
 
     t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
     return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),

@@ -39,7 +39,8 @@ def lost_rig(seed: int, wander_deg: float = WANDER_DEG, lost_s: float = LOST_S, 
     steps = rng.normal(0.0, np.radians(wander_deg) * np.sqrt(0.05 / 10.0), (len(t), 3)) * (t < lost_s)[:, None]
     path = np.cumsum(steps, axis=0)
     path -= np.minimum(t / lost_s, 1.0)[:, None] * path[-1]  # a bridge: the frame is found again at lost_s
-    walk = so3.exp_map(path)  # the camera frame wanders: world_from_camera' = world_from_camera W(t)
+    # the camera frame wanders: world_from_camera' = world_from_camera W(t)
+    walk = so3.matrix_from_rotation_vector(path)
     return OrientationStream(t, camera.world_from_body @ walk, "camera (lost for a stretch)"), gyro
 
 

@@ -22,13 +22,13 @@ import warnings
 
 import numpy as np
 
-from replication.core.so3 import angle_between_deg, exp_map, log_map
+from replication.core.so3 import angle_between_deg, matrix_from_rotation_vector, rotation_vector_from_matrix
 from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_model import estimate_sensor_model
 from replication.rig.streams import GyroStream, OrientationStream
 
-R0_TRUE = exp_map(np.radians([40.0, -70.0, 125.0]))
+R0_TRUE = matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_s=0.0, camera_noise_deg=0.0,
@@ -42,15 +42,16 @@ def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_
         env = (s * s * (3 - 2 * s))[:, None]
         w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase),
                       0.7 * np.cos(0.3 * t + phase)], axis=-1)
-        return exp_map(env * w)
+        return matrix_from_rotation_vector(env * w)
 
     t_cam = np.arange(0.0, seconds, 0.05)
     C = world_from_camera(t_cam)
     if camera_noise_deg:
-        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
+        C = C @ matrix_from_rotation_vector(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam),
+                                                                                                          3)))
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = world_from_camera(t_imu) @ R0_TRUE
-    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + np.asarray(bias, float)
+    omega = rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + np.asarray(bias, float)
     if gyro_noise_deg_s:
         omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
     t = 0.5 * (t_imu[1:] + t_imu[:-1])
@@ -133,7 +134,7 @@ def real():
     cases["TUM-VI room1, raw gyro"] = (cam, gyro, refs)
     cam = realdata.load_tum_trajectory(euroc / "orbslam3_mono_cam0_traj_runA.txt")
     gt = realdata.load_tum_trajectory(euroc / "gt_body_MH_01_easy_tum.txt")
-    w = log_map(np.swapaxes(gt.R[:-1], -1, -2) @ gt.R[1:]) / np.diff(gt.t)[:, None]
+    w = rotation_vector_from_matrix(np.swapaxes(gt.R[:-1], -1, -2) @ gt.R[1:]) / np.diff(gt.t)[:, None]
     w = w + np.array([-0.001, 0.020, 0.079]) + np.random.default_rng(34).normal(0, 1.7e-4 * np.sqrt(200), w.shape)
     refs = (realdata.load_reference(euroc / "euroc_cam0_sensor.yaml"),
             realdata.load_reference(euroc / "basalt_euroc_eucm_calib.json"))

@@ -97,12 +97,12 @@ def reproduce(args: argparse.Namespace) -> int:
             times[path.name] = execute_notebook(path)
     for name, seconds in times.items():
         print(f"{name}: {seconds:.1f} s")
-    from .study.ledger import collect, to_markdown
+    from .study.ledger import collect, markdown_from_ledger
 
     ledger = collect(complete=not args.only)
     (results / "tables").mkdir(parents=True, exist_ok=True)
     write_atomic(results / "tables" / "claims.csv", ledger.to_csv(index=False))
-    write_atomic(results / "tables" / "claims.md", to_markdown(ledger))
+    write_atomic(results / "tables" / "claims.md", markdown_from_ledger(ledger))
     print(f"claims ledger: {ledger['claim'].nunique()} claims, verdicts "
           + ", ".join(f"{v}: {n}" for v, n in ledger.drop_duplicates("claim")["verdict"].value_counts().items()))
     print(f"results written to {results}")
@@ -113,7 +113,7 @@ def claims_command(args: argparse.Namespace) -> int:
     """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
     file or README refused, or more than one of ``--check``, ``--readme``, ``--summary`` given: the message on
     stderr)."""
-    from .study.ledger import collect, to_markdown, to_summary, update_readme
+    from .study.ledger import collect, markdown_from_ledger, summary_from_ledger, update_readme
 
     given = [flag for flag in ("--check", "--readme", "--summary") if getattr(args, flag[2:])]
     if len(given) > 1:  # each is one action: refused before any work rather than one of them silently ignored
@@ -136,12 +136,12 @@ def claims_command(args: argparse.Namespace) -> int:
             print("README's claims table updated")
             return 0
         if args.summary:
-            print(to_summary(ledger), end="")
+            print(summary_from_ledger(ledger), end="")
             return 0
     except (ValueError, OSError) as err:  # DataFileError is a ValueError; DataFileNotFound both
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print(to_markdown(ledger))
+    print(markdown_from_ledger(ledger))
     return 0
 
 

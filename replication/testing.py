@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from .core.checks import check_matrices
-from .core.so3 import angle_between_deg, as_quaternion
+from .core.so3 import angle_between_deg, quaternion_from_matrix
 
 __all__ = ["assert_rotations_close", "write_tum_trajectory", "write_euroc_imu"]
 
@@ -31,7 +31,7 @@ def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> Non
 def write_tum_trajectory(path, stream) -> None:
     """Write an orientation stream (``t`` in s, ``R`` world_from_body) as a TUM trajectory (zero positions, quaternion
     x y z w), as ``calibrate --camera`` reads it."""
-    q = as_quaternion(stream.R)
+    q = quaternion_from_matrix(stream.R)
     rows = np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]])
     np.savetxt(path, rows, fmt="%.9f")
 

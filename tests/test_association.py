@@ -17,11 +17,12 @@ from replication.rig.association import OffsetEstimate, estimate_time_offset, of
 from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
+    return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                     0.7 * np.cos(0.3 * t)], axis=-1))
 
 
 def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0):
@@ -30,11 +31,11 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
     on the gyro's rates (rad/s per sample), from ``seed``."""
     rng = np.random.default_rng(seed)
     t_cam = np.arange(0.0, seconds, 0.05)
-    noise = so3.exp_map(rng.normal(scale=np.radians(camera_noise_deg), size=(len(t_cam), 3)))
+    noise = so3.matrix_from_rotation_vector(rng.normal(scale=np.radians(camera_noise_deg), size=(len(t_cam), 3)))
     camera = OrientationStream(t_cam, _world_from_camera(t_cam) @ noise, "camera")
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = _world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     omega = omega + rng.normal(scale=gyro_noise, size=omega.shape)
     return camera, integrate_gyro(GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
 
@@ -42,12 +43,13 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
 def _periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0, offset=0.0):
     """A single-axis sinusoidal oscillation (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
     ``aperiodic`` times the rig's three-axis motion; the sensor's clock reads ``offset`` s ahead."""
-    axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
+    axis = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
         slow = _world_from_camera(t) if aperiodic else np.eye(3)
-        slow = so3.exp_map(aperiodic * so3.log_map(slow)) if aperiodic else slow
-        return slow @ axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], -1)) @ axis.T
+        slow = so3.matrix_from_rotation_vector(aperiodic * so3.rotation_vector_from_matrix(slow)) if aperiodic else slow
+        return slow @ axis @ so3.matrix_from_rotation_vector(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t,
+                                                                       0 * t], -1)) @ axis.T
 
     t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
     return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),
@@ -268,7 +270,7 @@ def test_euroc_off_grid_shifts_come_back_within_0_01_ms():
 def test_the_offset_search_names_stamps_in_different_units():
     """The message the online front end used to show ("overlap 1000000000000.000..1060.793 s") names the units."""
     t = np.arange(1000.0, 1060.8, 0.05)
-    Q = so3.exp_map(np.stack([np.sin(t), np.cos(0.7 * t), 0.1 * t], axis=-1))
+    Q = so3.matrix_from_rotation_vector(np.stack([np.sin(t), np.cos(0.7 * t), 0.1 * t], axis=-1))
     with pytest.raises(ValueError, match=r"overlap in fewer than 10 camera samples \(overlap .*\); the camera stream "
                                          r"spans 6.075e\+10 s and the sensor stream 60.75 s, a factor of about 1e\+09: "
                                          r"the camera file's .* \(nanoseconds read as seconds\)"):

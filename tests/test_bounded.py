@@ -24,7 +24,7 @@ def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
     A = so3.random_rotations(rng, J)
-    B = so3.exp_map(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
+    B = so3.matrix_from_rotation_vector(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
     return R0, A, corrupt_pairs(B, share, rng)[0]  # the same draws as notebook 06's outlier sweep
 
 
@@ -37,7 +37,7 @@ def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_
     idx = np.array(list(combinations(range(J), 2)))
     if len(idx) > max_hypotheses:
         idx = idx[np.sort(np.random.default_rng(seed).choice(len(idx), size=max_hypotheses, replace=False))]
-    alpha, beta = so3.log_map(A), so3.log_map(B)
+    alpha, beta = so3.rotation_vector_from_matrix(A), so3.rotation_vector_from_matrix(B)
     R_h = so3.nearest_rotation(np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :]))
     r = pair_residual_deg(R_h, A[..., None, :, :, :], B[..., None, :, :, :])
     best = np.argmin(np.sum(np.minimum(r, threshold_deg) ** 2, axis=-1), axis=-1)
@@ -150,12 +150,13 @@ def _streams(seconds=30.0, offset=0.0123):
     R0 = so3.random_rotations(rng, ())
 
     def attitude(t):
-        return so3.exp_map(np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t), np.sin(0.45 * t + 1.0),
+        return so3.matrix_from_rotation_vector(np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t),
+                                                         np.sin(0.45 * t + 1.0),
                                      np.cos(0.3 * t) + 0.1 * np.sin(4.1 * t)], axis=-1))
 
     tc, tg = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
     Q = attitude(np.concatenate([tg[:1] - 0.005, tg, tg[-1:] + 0.005]) - offset) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) / 0.01
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) / 0.01
     return OrientationStream(tc, attitude(tc), "camera"), integrate_gyro(GyroStream(tg, omega, "gyro"))
 
 

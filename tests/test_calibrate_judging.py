@@ -29,10 +29,10 @@ def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
     S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
     C = R0 @ S @ W
     sd = np.radians(station_noise_deg) / np.sqrt(3)
-    C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ C
-    S = so3.exp_map(rng.normal(0, sd, (N, 3))) @ S
+    C = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ C
+    S = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ S
     if bad is not None:
-        C[bad] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
+        C[bad] = so3.matrix_from_rotation_vector(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
     return R0, C, S
 
 
@@ -154,7 +154,7 @@ def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
 
 
 def test_a_reference_tells_tied_hypotheses_apart():
-    R_right = so3.exp_map(np.radians([10.0, 0.0, 0.0]))
+    R_right = so3.matrix_from_rotation_vector(np.radians([10.0, 0.0, 0.0]))
     fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
     message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
     assert message.startswith("likely input mistake: second; the reference tells them apart")
@@ -189,7 +189,7 @@ def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(r
     from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(90.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
-    step = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+    step = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
     r = calibrate(camera, remounted(gyro, 45.0, step), n_bootstrap=20)
     reason = _reasons(r)["remount_deg"]
     assert r.verdict.level == "fail" and reason.level == "fail" and "after 45" in reason.message
@@ -239,10 +239,10 @@ def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, r
 
 def test_an_input_mistake_is_not_called_a_remount(rng):
     R0, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05)
-    q = so3.as_quaternion(camera.R)[:, [1, 2, 3, 0]]
+    q = so3.quaternion_from_matrix(camera.R)[:, [1, 2, 3, 0]]
     from replication.rig.streams import OrientationStream
 
-    r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
+    r = calibrate(OrientationStream(camera.t, so3.matrix_from_quaternion(q), "camera"), gyro, n_bootstrap=0)
     assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
     assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
 
@@ -254,16 +254,17 @@ def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40
     from replication.rig.streams import GyroStream, OrientationStream
 
     rng = np.random.default_rng(seed)
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
     dt = 2e-3
     t = np.arange(-1.0, seconds + 1.0, dt)
     w = np.stack([0.7 * np.sin(0.9 * t), 0.6 * np.sin(1.3 * t + 1.0), out_of_plane * np.sin(0.5 * t + 2.0)], -1)
-    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.exp_map(w[:-1] * dt))])
+    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.matrix_from_rotation_vector(w[:-1] * dt))])
     k = np.arange(int(1.0 / dt), int((seconds + 1.0) / dt), 25)  # the camera at 20 Hz
-    camera = OrientationStream(t[k], C[k] @ so3.exp_map(rng.normal(0, np.radians(0.1) / np.sqrt(3), (len(k), 3))),
+    camera = OrientationStream(t[k], C[k] @ so3.matrix_from_rotation_vector(rng.normal(0, np.radians(0.1) / np.sqrt(3),
+                                                                                       (len(k), 3))),
                                "camera")
     Q = C[::2] @ R0  # the gyro at 250 Hz
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
     omega += rng.normal(0, np.radians(0.2), omega.shape)
     return R0, camera, GyroStream(t[::2][:-1] + dt, omega, "gyro")
 
@@ -306,7 +307,8 @@ def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_
     from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(3), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
-    turn = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    turn = so3.matrix_from_rotation_vector(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5,
+                                                                                                           0.81]))
     r = calibrate(camera, remounted(gyro, 55.0, turn), n_bootstrap=0)
     reason = _reasons(r)["remount_deg"]
     assert reason.level == "fail" and 54.0 <= r.change_test["split_time_s"] <= 56.0
@@ -364,8 +366,10 @@ def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
 def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
     R0, C, S = _stations(rng, N=8, station_noise_deg=0.3)
     sd = np.radians(0.3) / np.sqrt(3)
-    C3 = np.concatenate([C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C])
-    S3 = np.concatenate([S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S])
+    C3 = np.concatenate([C, so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ C,
+                         so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ C])
+    S3 = np.concatenate([S, so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ S,
+                         so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ S])
     r = calibrate_poses(C3, S3, n_bootstrap=50)
     assert r.station_repeats["distinct"] == 8 and r.station_repeats["groups"][0] == [0, 8, 16]
     consecutive = calibrate_poses(C3, S3, n_bootstrap=50, pairs="consecutive")  # repeats drawn as one there too
@@ -379,7 +383,7 @@ def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg
     from replication.rig.poses import repeated_stations
 
     R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
-    turn = so3.exp_map(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
+    turn = so3.matrix_from_rotation_vector(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
     C2, S2 = np.concatenate([C, (R0 @ turn @ R0.T @ C[2])[None]]), np.concatenate([S, (turn @ S[2])[None]])
     labels = repeated_stations(C2, S2, 2.0)
     assert bool(labels[6] == 2) is same and list(labels[:6]) == list(range(6))
@@ -397,7 +401,7 @@ def test_a_chain_of_close_stations_is_not_one_station(step_deg):
     from replication.rig.poses import repeated_stations
 
     axis = np.array([0.0, 0.6, 0.8])
-    S = so3.exp_map(np.radians(step_deg) * np.arange(30)[:, None] * axis)
+    S = so3.matrix_from_rotation_vector(np.radians(step_deg) * np.arange(30)[:, None] * axis)
     labels = repeated_stations(S, S, 2.0)
     for g in np.unique(labels):
         members = S[labels == g]
@@ -409,7 +413,8 @@ def test_a_station_joins_a_group_only_if_it_repeats_every_member():
     from replication.rig.poses import repeated_stations
 
     axis = np.array([1.0, 0.0, 0.0])
-    S = so3.exp_map(np.radians([0.0, 1.5, 3.0])[:, None] * axis)  # 0-1 and 1-2 within 2 deg, 0-2 not
+    # 0-1 and 1-2 within 2 deg, 0-2 not
+    S = so3.matrix_from_rotation_vector(np.radians([0.0, 1.5, 3.0])[:, None] * axis)
     assert repeated_stations(S, S, 2.0).tolist() == [0, 0, 2]
 
 
@@ -419,7 +424,7 @@ def _bad_stations(bad, N=20, seed=5, bad_deg=3.0):
     rng = np.random.default_rng(seed)
     R0, C, S = _stations(rng, N=N)
     for b in bad:
-        C[b] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
+        C[b] = so3.matrix_from_rotation_vector(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
     return C, S
 
 

@@ -26,13 +26,13 @@ from replication.testing import write_euroc_imu, write_tum_trajectory
 
 SCHEMA = json.loads((__import__("pathlib").Path(__file__).resolve().parent.parent / "docs"
                      / "calibration_report.schema.json").read_text())
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def _world_from_camera(t, phase=0.0):
     w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase), 0.7 * np.cos(0.3 * t + phase)],
                  axis=-1)
-    return so3.exp_map(w)
+    return so3.matrix_from_rotation_vector(w)
 
 
 def _rig(seconds=60.0, phase=0.0):
@@ -41,7 +41,7 @@ def _rig(seconds=60.0, phase=0.0):
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = _world_from_camera(t_imu, phase) @ R0  # world_from_sensor: v_cam = R0 v_sensor
     rel = np.swapaxes(Q[:-1], -1, -2) @ Q[1:]
-    omega = so3.log_map(rel) / 0.005  # body rates over each step, stamped at its midpoint
+    omega = so3.rotation_vector_from_matrix(rel) / 0.005  # body rates over each step, stamped at its midpoint
     gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
     sensor = OrientationStream(t_imu[::2], Q[::2], "sensor")
     return camera, gyro, sensor
@@ -53,8 +53,8 @@ def rig():
 
 
 def _q_reordered(stream, order):
-    q = so3.as_quaternion(stream.world_from_body)[:, order]
-    return OrientationStream(stream.t, so3.quaternion_to_matrix(q), stream.source)
+    q = so3.quaternion_from_matrix(stream.world_from_body)[:, order]
+    return OrientationStream(stream.t, so3.matrix_from_quaternion(q), stream.source)
 
 
 def _fast(**kw):
@@ -179,7 +179,7 @@ def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
 def test_nearly_single_axis_motion_warns_with_its_spread():
     t = np.arange(0.0, 60.0, 0.05)
     w = np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1)
-    Q = so3.exp_map(w)
+    Q = so3.matrix_from_rotation_vector(w)
     camera, sensor = OrientationStream(t, Q, "c"), OrientationStream(t, Q @ R0, "s")
     r = calibrate(camera, sensor, n_bootstrap=20)
     assert _reasons(r)["axis_spread_deg"].level == "warning" and r.verdict.level != "ok"
@@ -382,7 +382,7 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
 def test_inverted_pose_sets_are_named(rig):
     camera, _, sensor = rig
     C, S = np.swapaxes(camera.R[::40], -1, -2), np.swapaxes(sensor.at(camera.t[::40]), -1, -2)
-    noise = so3.exp_map(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
+    noise = so3.matrix_from_rotation_vector(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
     C = noise @ C  # a little camera noise, as on a real robot set
     for name, c, s in (("camera poses inverted", np.swapaxes(C, -1, -2), S),
                        ("robot poses inverted", C, np.swapaxes(S, -1, -2))):
@@ -417,7 +417,7 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
     """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
     recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
-    from replication.core.so3 import exp_map
+    from replication.core.so3 import matrix_from_rotation_vector
     from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
 
     camera, _, _ = rig
@@ -425,18 +425,21 @@ def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig)
     with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's "
                                          rf"{len(t) - 1} samples are camera"):
         calibrate(camera, OrientationStream(t[1:], R[1:], "copy"))
-    turn = exp_map(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
+    turn = matrix_from_rotation_vector(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
     with pytest.raises(ValueError, match="the sensor stream is the camera stream itself, or a copy of it"):
         calibrate(camera, OrientationStream(t + 0.9 * SAME_SAMPLE_TIME_S, R @ turn, "copy"))
     # just beyond either tolerance, or half of the samples only: not a copy (the calibration runs)
-    assert _same_stream(camera, OrientationStream(t, R @ exp_map(np.array([0.0, 0.0, 1.1 * SAME_SAMPLE_ANGLE_RAD])),
+    assert _same_stream(camera,
+                        OrientationStream(t, R @ matrix_from_rotation_vector(np.array([0.0, 0.0,
+                                                                                       1.1 * SAME_SAMPLE_ANGLE_RAD])),
                                                   "s")) is None
     assert _same_stream(camera, OrientationStream(t + 1.1 * SAME_SAMPLE_TIME_S, R, "s")) is None
     n = len(t)
-    half = np.r_[R[: n // 2], R[n // 2:] @ exp_map(np.array([0.0, 0.01, 0.0]))]
+    half = np.r_[R[: n // 2], R[n // 2:] @ matrix_from_rotation_vector(np.array([0.0, 0.01, 0.0]))]
     assert _same_stream(camera, OrientationStream(t, half, "s")) is not None  # exactly half coincide
     assert _same_stream(camera, OrientationStream(t, np.r_[half[: n // 2 - 1], half[n // 2 - 1:] @
-                                                           exp_map(np.array([0.0, 0.01, 0.0]))], "s")) is None
+                                                           matrix_from_rotation_vector(np.array([0.0, 0.01,
+                                                                                                 0.0]))], "s")) is None
 
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
@@ -703,9 +706,9 @@ def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solutio
     stations (their median residual grows 6-fold here): it is still the resample's optimum, and not blamed."""
     C, S = _poses(rig)
     rng = np.random.default_rng(2)
-    C = C @ so3.exp_map(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
+    C = C @ so3.matrix_from_rotation_vector(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
     k = rng.choice(len(C), 1)
-    C[k] = C[k] @ so3.exp_map(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
+    C[k] = C[k] @ so3.matrix_from_rotation_vector(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
     r = calibrate_poses(C, S, n_bootstrap=200, diagnose=False)
     assert "bootstrap_answers" not in _reasons(r) and math.isfinite(r.bootstrap_ci95_deg)
 
@@ -720,7 +723,7 @@ def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_p
     from replication.rig.poses import pose_pairs
 
     C, S = _poses(rig)
-    C = C @ so3.exp_map(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    C = C @ so3.matrix_from_rotation_vector(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
     motions = prepare_motions(*pose_pairs(C, S))
     R = calibrate_poses(C, S, n_bootstrap=0, diagnose=False).R
     sets = [np.arange(0, motions.J, 2)]  # a resample: every other pair
@@ -728,7 +731,7 @@ def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_p
     threshold = est.REPLICATE_FIT_FACTOR * base + est.REPLICATE_FIT_FLOOR_DEG
 
     def turned(angle_deg):
-        return so3.exp_map(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
+        return so3.matrix_from_rotation_vector(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
 
     def own(angle_deg):
         return _rms(pair_residual_deg(turned(angle_deg), motions.A[sets[0]], motions.B[sets[0]]))
@@ -766,7 +769,8 @@ def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_
     same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
     as they should be) name nothing."""
     C, S = _poses(rig)
-    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    noisy = C @ so3.matrix_from_rotation_vector(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C),
+                                                                                                             3)))
     first = {}
     name = door_solver(lambda R, call: first.setdefault("R", R) if R.ndim == 2 else np.broadcast_to(
         first.setdefault("R", R[0]), R.shape).copy())
@@ -787,9 +791,10 @@ def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
     import replication.rig.estimate as est
 
     C, S = _poses(rig)
-    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    noisy = C @ so3.matrix_from_rotation_vector(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C),
+                                                                                                             3)))
     first = {}
-    step = so3.exp_map(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
+    step = so3.matrix_from_rotation_vector(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
     name = door_solver(lambda R, call: first.setdefault("R", R) if call == 0 else step @ first["R"])
     r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
     assert ("bootstrap_answers" in _reasons(r)) is frozen

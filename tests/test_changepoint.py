@@ -31,8 +31,9 @@ from replication.testing import assert_rotations_close
 
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
-STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))  # a 2 deg re-mount about a generic axis
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
+# a 2 deg re-mount about a generic axis
+STEP = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
 BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
 
@@ -43,15 +44,18 @@ def _rig(seed, seconds=60.0, cam_deg=0.05, gyro_rad_s=0.005, remount=None):
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
 
     def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t + phase[0]), 0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
+        return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t + phase[0]),
+                                                         0.8 * np.sin(0.45 * t + 1.0 + phase[1]),
                                      0.7 * np.cos(0.3 * t + phase[2])], axis=-1))
 
     t_cam = np.arange(0.0, seconds, 0.05)
-    camera = OrientationStream(t_cam, world_from_camera(t_cam) @ so3.exp_map(
+    camera = OrientationStream(t_cam, world_from_camera(t_cam) @ so3.matrix_from_rotation_vector(
         rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3))), "camera")
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(0.0, gyro_rad_s, (len(t_imu) - 1, 3))
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + rng.normal(0.0, gyro_rad_s,
+                                                                                                      (len(t_imu) - 1,
+                                                                                                       3))
     gyro = GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro")
     return camera, gyro if remount is None else remounted(gyro, *remount)
 
@@ -182,7 +186,7 @@ def test_bad_pairs_and_times_are_refused(pairs):
 
 def test_motions_about_one_axis_are_refused():
     rng = np.random.default_rng(6)
-    A = so3.exp_map(rng.uniform(0.2, 1.0, (1000, 1)) * np.array([0.0, 0.0, 1.0]))
+    A = so3.matrix_from_rotation_vector(rng.uniform(0.2, 1.0, (1000, 1)) * np.array([0.0, 0.0, 1.0]))
     with pytest.raises(ValueError, match="degenerate motion on one side"):
         two_segment_test(A, R0.T @ A @ R0, 0.05 * np.arange(1000), block=1)
 

@@ -168,10 +168,11 @@ def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
     from replication.core import so3
 
     t = np.arange(0.0, 30.0, 0.05)
-    Q = so3.exp_map(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1))
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    Q = so3.matrix_from_rotation_vector(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)],
+                                                 axis=-1))
+    R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
     for name, R in [("cam.txt", Q), ("sensor.txt", Q @ R0)]:
-        q = so3.as_quaternion(R)
+        q = so3.quaternion_from_matrix(R)
         np.savetxt(tmp_path / name, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     out = _run("calibrate", "--camera", tmp_path / "cam.txt", "--sensor", tmp_path / "sensor.txt", "--bootstrap", 20)
     assert out.returncode == 0, out.stderr

@@ -41,7 +41,7 @@ def rig():
 
 
 def _tum_bytes(camera) -> bytes:
-    q = so3.as_quaternion(camera.R)
+    q = so3.quaternion_from_matrix(camera.R)
     rows = np.column_stack([camera.t + T0, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]])
     return "".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows).encode()
 

@@ -27,12 +27,13 @@ from replication.rig.streams import GyroStream, OrientationStream
 from replication.rig.vioformats import format_number, read_vio_file
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
-R_TRUE = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R_TRUE = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 FILE_FORMATS = ("kalibr", "openvins", "basalt", "orbslam3")
 
 
 def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
+    return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                     0.7 * np.cos(0.3 * t)], axis=-1))
 
 
 def _rig(offset, seconds=30.0):
@@ -40,7 +41,7 @@ def _rig(offset, seconds=30.0):
     t_cam = np.arange(0.0, seconds, 0.05)
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = _world_from_camera(t_imu) @ R_TRUE
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     return (OrientationStream(t_cam, _world_from_camera(t_cam), "camera"),
             GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]) + offset, omega, "gyro"))
 
@@ -272,7 +273,7 @@ def test_basalt_keeps_the_files_quaternion_hemisphere(tmp_path):
     base = tmp_path / "calib.json"
     pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": -1.0}
     base.write_text(json.dumps({"value0": {"T_imu_cam": [pose, pose], "cam_time_offset_ns": 7}}, indent=4))
-    R = so3.exp_map(np.radians([0.0, 0.0, 1.0]))
+    R = so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 1.0]))
     with pytest.warns(ExportWarning, match="one camera only"):
         out = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1",
                                             whole_rig=False).text)
@@ -467,7 +468,8 @@ def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_pat
         bases.append(d / "camchain.yaml")
     if camera == "cam0":
         bases.append(_orbslam3_inertial(folder, tmp_path))
-    R = so3.exp_map(np.radians([0.3, -0.2, 0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
+    R = so3.matrix_from_rotation_vector(np.radians([0.3, -0.2,
+                                                    0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
     for base in bases:
         before = read_vio_file(base)
         with warnings.catch_warnings():
@@ -517,7 +519,7 @@ def test_a_two_camera_file_stays_a_rig(tmp_path, folder, name, camera):
     exactly; one camera only moves the stereo rotation by the whole correction, and warns with that angle."""
     base = data_root() / folder / name
     before = read_vio_file(base)
-    R = so3.exp_map(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
+    R = so3.matrix_from_rotation_vector(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
     correction = so3.angle_between_deg(R, before.camera_from_sensor(camera))
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExportWarning)
@@ -582,10 +584,10 @@ def test_the_floor_table_reads_within_beyond_and_one_reference():
 
     from replication.study.real_study import reference_floor_table
 
-    ref_a, ref_b = np.eye(3), so3.exp_map(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
+    ref_a, ref_b = np.eye(3), so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
 
     def at(deg):  # an estimate turned about x, off both references' z-axis disagreement
-        return SimpleNamespace(R=so3.exp_map(np.radians([deg, 0.0, 0.15])))
+        return SimpleNamespace(R=so3.matrix_from_rotation_vector(np.radians([deg, 0.0, 0.15])))
 
     results = {("inside", "m"): at(0.25), ("outside", "m"): at(0.27), ("robot", "m"): at(0.0)}
     table = reference_floor_table(results, {"inside": "rig", "outside": "rig", "robot": "arm"},

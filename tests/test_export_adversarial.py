@@ -19,7 +19,7 @@ from replication.rig.export import ExportWarning, export_calibration, export_com
 from replication.rig.realdata import data_root, load_reference, real_data_available
 from replication.rig.vioformats import read_vio_file
 
-R = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 REAL = data_root() if real_data_available() else Path("/nonexistent")
 BASALT = REAL / "euroc_mh01_orbslam3" / "basalt_euroc_ds_calib.json"
 CAMCHAIN = REAL / "tumvi_room1_orbslam3mono" / "camchain.yaml"
@@ -43,7 +43,7 @@ def _export(tmp_path, text, to, name="base.yaml", report=None, **kw):
 
 
 def _angle(A, B):
-    return np.degrees(np.linalg.norm(so3.log_map(np.asarray(A) @ np.asarray(B).T)))
+    return np.degrees(np.linalg.norm(so3.rotation_vector_from_matrix(np.asarray(A) @ np.asarray(B).T)))
 
 
 # ------------------------------------------------------------------ silent wrong numbers

@@ -21,7 +21,7 @@ from replication.study.figures import METHOD_STYLE, live_figure, method_style, s
 from replication.testing import write_euroc_imu, write_tum_trajectory
 
 matplotlib.use("Agg")
-R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def _drawn(ax) -> int:
@@ -130,7 +130,8 @@ def test_live_figure_labels_its_target_lines_and_names_each_recording():
 # ----------------------------------------------------------------------------------------- the calibration figure
 
 def _world_from_camera(t):
-    return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1))
+    return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                     0.7 * np.cos(0.3 * t)], axis=-1))
 
 
 @pytest.fixture(scope="module")
@@ -139,7 +140,7 @@ def rig():
     camera = OrientationStream(t_cam, _world_from_camera(t_cam), "camera")
     t_imu = np.arange(-1.0, 31.0, 0.005)
     Q = _world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     return camera, GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega, "gyro"), OrientationStream(t_imu, Q, "sensor")
 
 

@@ -14,18 +14,18 @@ from replication.rig.quality import THRESHOLDS
 from replication.rig.streams import GyroStream, OrientationStream
 
 #: A camera-IMU rotation far from the identity (a camera's reference).
-R_CAM = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+R_CAM = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 FAIL = THRESHOLDS["reference_error_deg"][1]
 Z = np.array([0.0, 0.0, 1.0])
 
 
 def _turn(deg, axis=Z):
-    return so3.exp_map(np.radians(deg) * np.asarray(axis))
+    return so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis))
 
 
 def _world_from_imu(t):
     w = np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], axis=-1)
-    return so3.exp_map(w)
+    return so3.matrix_from_rotation_vector(w)
 
 
 @pytest.fixture(scope="module")
@@ -34,7 +34,7 @@ def imu():
     t = np.arange(0.0, 40.0, 0.05)
     t_imu = np.arange(-1.0, 41.0, 0.005)
     Q = _world_from_imu(t_imu)
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     return OrientationStream(t, _world_from_imu(t), "imu pose"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega,
                                                                             "gyro")
 

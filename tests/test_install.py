@@ -74,17 +74,18 @@ def test_the_core_dependencies_leave_out_the_notebook_stack():
 def rig(tmp_path_factory):
     """30 s of a camera (TUM, 20 Hz) and a rigidly attached gyro (EuRoC imu0 CSV, 200 Hz)."""
     d = tmp_path_factory.mktemp("light")
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
     def world_from_camera(t):
-        return so3.exp_map(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0), 0.7 * np.cos(0.3 * t)], -1))
+        return so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+                                                         0.7 * np.cos(0.3 * t)], -1))
 
     t = np.arange(0.0, 30.0, 0.05)
-    q = so3.as_quaternion(world_from_camera(t))
+    q = so3.quaternion_from_matrix(world_from_camera(t))
     np.savetxt(d / "cam.txt", np.column_stack([t + 1e3, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     t_imu = np.arange(-1.0, 31.0, 0.005)
     Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     t_mid = 0.5 * (t_imu[1:] + t_imu[:-1]) + 1e3
     np.savetxt(d / "imu.csv", np.column_stack([np.round(t_mid * 1e9), omega, np.tile([0, 0, 9.81], (len(t_mid), 1))]),
                fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,wx,wy,wz,ax,ay,az")

@@ -67,7 +67,7 @@ def test_ecompass_on_arrays_is_ahrs_ecompass(small_recording):
 
 def test_projection_and_its_jacobian_are_opencvs():
     rng = np.random.default_rng(0)
-    C = so3.exp_map(rng.normal(size=(4, 3)) * 0.3)
+    C = so3.matrix_from_rotation_vector(rng.normal(size=(4, 3)) * 0.3)
     t = np.tile([0.1, -0.1, 2.0], (4, 1))
     K = np.array([[450.0, 0, 320], [0, 452.0, 240], [0, 0, 1]])
     dist = np.array([-0.25, 0.08, 0.001, -0.001, 0.01])
@@ -78,8 +78,8 @@ def test_projection_and_its_jacobian_are_opencvs():
     h, numeric = 1e-6, np.empty_like(J)
     for k in range(6):
         d = h * np.eye(6)[k]
-        plus = fastchain._project(lab.WAND_POINTS, so3.exp_map(d[:3]) @ C, t + d[3:], K, dist)
-        minus = fastchain._project(lab.WAND_POINTS, so3.exp_map(-d[:3]) @ C, t - d[3:], K, dist)
+        plus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(d[:3]) @ C, t + d[3:], K, dist)
+        minus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(-d[:3]) @ C, t - d[3:], K, dist)
         numeric[:, k] = np.swapaxes((plus - minus) / (2 * h), -1, -2)
     assert np.abs(J - numeric).max() < 1e-6 * np.abs(J).max()
 

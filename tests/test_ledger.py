@@ -329,7 +329,7 @@ def test_readme_table_is_written_between_the_markers(tmp_path, collected):
     readme.write_text(f"head\n{S}{E} tail\n", encoding="utf-8")
     assert not ledger.update_readme(collected, readme, check=True)
     assert ledger.update_readme(collected, readme)
-    assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.to_summary(collected)}{E} tail\n"
+    assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.summary_from_ledger(collected)}{E} tail\n"
     assert ledger.update_readme(collected, readme, check=True)
 
 

@@ -119,7 +119,7 @@ def test_the_usual_mistakes_are_named_online_and_never_ready(rig, mistake, check
 def test_cli_online_writes_its_results_into_the_report_and_figure(tmp_path, rig, capsys):
     R0, camera, gyro, _ = rig
     cam_file, imu_file = tmp_path / "cam.txt", tmp_path / "imu.csv"
-    q = so3.as_quaternion(camera.R)
+    q = so3.quaternion_from_matrix(camera.R)
     np.savetxt(cam_file, np.column_stack([camera.t + 1e3, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]]),
                fmt="%.9f")
     late = gyro.t + 1e3 + 2.0  # a 2 s clock offset: only found with --max-offset
@@ -146,7 +146,7 @@ def test_cli_online_on_a_short_recording_writes_the_report(tmp_path, rig):
     R0, camera, gyro, _ = rig
     cam = camera.between(0.0, 15.0)
     cam_file, imu_file, out = tmp_path / "cam.txt", tmp_path / "imu.csv", tmp_path / "r.json"
-    q = so3.as_quaternion(cam.R)
+    q = so3.quaternion_from_matrix(cam.R)
     np.savetxt(cam_file, np.column_stack([cam.t + 1e3, np.zeros((len(cam.t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     keep = gyro.t < 16.0
     np.savetxt(imu_file, np.column_stack([np.round((gyro.t[keep] + 1e3) * 1e9), gyro.omega[keep],

@@ -19,15 +19,16 @@ from replication.rig.changepoint import (
 )
 from replication.rig.streams import GyroStream, OrientationStream
 
-R0 = so3.exp_map(np.array([0.3, 0.2, -0.6]))
+R0 = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, -0.6]))
 
 
 def _pairs(J, rng, noise_deg=0.2, change_at=None, change_deg=0.0):
     A = so3.random_rotations(rng, J)
     R = np.broadcast_to(R0, (J, 3, 3)).copy()
     if change_at is not None:
-        R[change_at:] = R0 @ so3.exp_map(np.radians(change_deg) * np.array([0.0, 0.0, 1.0]))
-    B = np.swapaxes(R, -1, -2) @ A @ R @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((J, 3)))
+        R[change_at:] = R0 @ so3.matrix_from_rotation_vector(np.radians(change_deg) * np.array([0.0, 0.0, 1.0]))
+    B = np.swapaxes(R, -1,
+                    -2) @ A @ R @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
     return A, B, np.arange(J, dtype=float)
 
 
@@ -125,7 +126,7 @@ def test_threshold_and_p_value_agree():
 def test_single_axis_motion_on_one_side_is_refused():
     rng = np.random.default_rng(3)
     A, B, t = _pairs(60, rng)
-    A[:30] = so3.exp_map(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
+    A[:30] = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
     B[:30] = R0.T @ A[:30] @ R0
     with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split: the sensor turns about one axis"):
         two_segment_test(A, B, t)
@@ -144,7 +145,7 @@ def test_the_summary_sentence():
 
 def test_remounted_changes_the_samples_from_exactly_the_time_on():
     t = np.arange(6) * 0.5
-    R = so3.exp_map(np.array([0.0, 0.0, 0.5]))
+    R = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, 0.5]))
     w = np.tile([1.0, 2.0, 3.0], (6, 1))
     g = remounted(GyroStream(t, w, "g"), 1.0, R)
     assert np.array_equal(g.omega[:2], w[:2]) and np.allclose(g.omega[2:], (R.T @ w[2:].T).T)
@@ -202,7 +203,7 @@ def test_the_tail_is_quiet_at_zero_and_at_tiny_statistics():
 def test_the_degenerate_side_message():
     rng = np.random.default_rng(3)
     A, B, t = _pairs(60, rng)
-    A[:30] = so3.exp_map(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
+    A[:30] = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
     B[:30] = R0.T @ A[:30] @ R0
     with pytest.raises(ValueError) as err:
         two_segment_test(A, B, t)
@@ -217,7 +218,7 @@ def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
     J, delta = 80, 3e-6
     axes = np.stack([delta * (-1.0) ** np.arange(J), np.zeros(J), np.ones(J)], axis=1)
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
-    B = so3.exp_map(rng.uniform(0.3, 1.0, J)[:, None] * axes)
+    B = so3.matrix_from_rotation_vector(rng.uniform(0.3, 1.0, J)[:, None] * axes)
     with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split"):
         two_segment_test(B, B.copy(), np.arange(J) * 0.5)
 

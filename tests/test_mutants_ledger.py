@@ -143,10 +143,10 @@ def test_collect_without_notebooks_reads_the_projects_own():
     assert len(set(got["notebook"])) > 1
 
 
-def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path):
+def test_markdown_from_ledger_table_escapes_pipes_and_newlines(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     got.loc[0, "evidence"] = "two\nlines"
-    md = ledger.to_markdown(got).splitlines()
+    md = ledger.markdown_from_ledger(got).splitlines()
     assert md[:2] == ["| claim | the paper | verdict | evidence | uncertainty | where measured |",
                       "|---|---|---|---|---|---|"]
     assert md[2] == ("| `zeta` | the last id alphabetically comes first (Sec. 1) | holds | two lines | u | "
@@ -155,19 +155,19 @@ def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path
                      "s; [notebook 01, § S](notebooks/01_a.ipynb#s) |")
     assert md[4] == ("| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | "
                      "s; [notebook 02, § S](notebooks/02_b.ipynb#s) |")
-    assert len(md) == 5 and ledger.to_markdown(got).endswith(" |\n")
+    assert len(md) == 5 and ledger.markdown_from_ledger(got).endswith(" |\n")
 
 
-def test_to_summary_gives_the_counts_and_one_compact_row_per_claim(two_notebooks, claims_path):
+def test_summary_from_ledger_gives_the_counts_and_one_compact_row_per_claim(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     got.loc[0, "statement"] = "two\nlines"
-    md = ledger.to_summary(got).splitlines()
+    md = ledger.summary_from_ledger(got).splitlines()
     assert md[:4] == ["**3 claims: 2 hold, 1 hold only if, 0 fail, 0 undecidable from the text.**", "",
                       "| claim | the paper says | verdict | measured in |", "|---|---|---|---|"]
     assert md[4] == "| `zeta` | two lines | holds | [01, § S](notebooks/01_a.ipynb#s) |"
     assert md[5] == "| `alpha` | a \\| pipe in the statement | holds | [01, § S](notebooks/01_a.ipynb#s) |"
     assert md[6] == "| `mid` | a third claim | holds only if | [02, § S](notebooks/02_b.ipynb#s) |"
-    assert len(md) == 7 and ledger.to_summary(got).endswith(" |\n")
+    assert len(md) == 7 and ledger.summary_from_ledger(got).endswith(" |\n")
     assert ledger.verdict_counts(got) == {"holds": 2, "fails": 0, "holds only if": 1, "undecidable from the text": 0}
 
 
@@ -191,7 +191,7 @@ def test_update_readme_writes_between_the_markers_and_checks(tmp_path, two_noteb
     assert ledger.update_readme(got, readme, check=True) is False
     assert "old table" in readme.read_text()  # check only: nothing written
     assert ledger.update_readme(got, readme) is True
-    assert readme.read_text(encoding="utf-8") == (f"# head\n{ledger.README_START}\n{ledger.to_summary(got)}"
+    assert readme.read_text(encoding="utf-8") == (f"# head\n{ledger.README_START}\n{ledger.summary_from_ledger(got)}"
                                                   f"{ledger.README_END}\ntail\n")
     assert ledger.update_readme(got, readme, check=True) is True
     before = readme.stat().st_mtime_ns

@@ -13,7 +13,7 @@ from replication.core.stats import radius_deg
 from replication.rig.online import MIN_EXCITATION_DEG, MIN_PAIRS, NOISE_FLOOR_DEG, OnlineCalibrator
 from replication.rig.online_events import DUPLICATE_DEG
 
-R0 = so3.exp_map(np.array([0.4, -0.2, 0.9]))
+R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.2, 0.9]))
 
 
 def test_defaults():
@@ -105,11 +105,11 @@ def test_the_start_rotation():
 
 
 def _pairs(n, rng, noise_deg=0.0, axes=None):
-    A = so3.random_rotations(rng, n) if axes is None else so3.exp_map(
+    A = so3.random_rotations(rng, n) if axes is None else so3.matrix_from_rotation_vector(
         np.radians(rng.uniform(20, 60, n))[:, None] * np.asarray(axes, float)[rng.integers(0, len(axes), n)])
     B = R0.T @ A @ R0
     if noise_deg:
-        B = B @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((n, 3)))
+        B = B @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((n, 3)))
     return A, B
 
 
@@ -193,7 +193,7 @@ def test_pairs_are_refused_unless_two_rotations():
 def test_outliers_decided_online_count_as_dropped_once_and_the_refinement_schedule_resumes():
     rng = np.random.default_rng(7)
     A, B = _pairs(180, rng, 0.2)
-    B[125:130] = B[125:130] @ so3.exp_map(np.radians(20.0) * np.array([1.0, 0.0, 0.0]))
+    B[125:130] = B[125:130] @ so3.matrix_from_rotation_vector(np.radians(20.0) * np.array([1.0, 0.0, 0.0]))
     c = OnlineCalibrator()
     kinds = [s.event for s in c.update_many(A, B)]
     assert "outliers" in kinds and c.alarms == []
@@ -209,7 +209,7 @@ def test_outliers_decided_online_count_as_dropped_once_and_the_refinement_schedu
 def test_a_remount_online_starts_over_from_the_new_estimate():
     rng = np.random.default_rng(8)
     A, B = _pairs(260, rng, 0.2)
-    turn = so3.exp_map(np.radians(6.0) * np.array([0.0, 1.0, 0.0]))
+    turn = so3.matrix_from_rotation_vector(np.radians(6.0) * np.array([0.0, 1.0, 0.0]))
     B[150:] = turn.T @ B[150:] @ turn  # R0 becomes R0 turn from pair 150 on
     c = OnlineCalibrator()
     states = c.update_many(A, B)
@@ -226,8 +226,8 @@ def _small_noisy_pairs(n, rng, noise_deg):
     """Motions of 4-8 deg about random axes, sensor motions with ``noise_deg`` per axis."""
     axes = rng.standard_normal((n, 3))
     axes /= np.linalg.norm(axes, axis=1)[:, None]
-    A = so3.exp_map(np.radians(rng.uniform(4, 8, n))[:, None] * axes)
-    return A, R0.T @ A @ R0 @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((n, 3)))
+    A = so3.matrix_from_rotation_vector(np.radians(rng.uniform(4, 8, n))[:, None] * axes)
+    return A, R0.T @ A @ R0 @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((n, 3)))
 
 
 def test_the_online_verdict_judges_what_the_estimator_measured_and_the_front_ends_context():
@@ -295,7 +295,7 @@ def test_status_thresholds_are_strict_where_the_rule_says_below():
 
 def test_status_names_the_unexcited_axis_to_three_decimals():
     axis = np.array([1.0, 2.0, 3.0]) / math.sqrt(14.0)
-    B = so3.exp_map(np.radians(np.linspace(20.0, 60.0, 12))[:, None] * axis)
+    B = so3.matrix_from_rotation_vector(np.radians(np.linspace(20.0, 60.0, 12))[:, None] * axis)
     A = R0 @ B @ R0.T
     c = OnlineCalibrator()
     c.update_many(A, B)
@@ -346,7 +346,7 @@ def test_the_radius_is_infinite_only_about_an_exactly_unexcited_axis_however_sma
     axes = np.tile([0.0, 0.0, 1.0], (10, 1))
     axes[:, :2] += 3e-6 * rng.standard_normal((10, 2))
     axes /= np.linalg.norm(axes, axis=1)[:, None]
-    B = so3.exp_map(np.radians(np.linspace(1.0, 3.0, 10))[:, None] * axes)
+    B = so3.matrix_from_rotation_vector(np.radians(np.linspace(1.0, 3.0, 10))[:, None] * axes)
     A = R0 @ B @ R0.T
     c = OnlineCalibrator()
     c.update_many(A, B)
@@ -402,7 +402,7 @@ def _outliers_after_the_start():
     """40 pairs; pairs 10-13 (just after the detector starts at pair 10) have a 2 deg error in the sensor motion."""
     rng = np.random.default_rng(11)
     A, B = _pairs(40, rng, 0.2)
-    B[10:14] = B[10:14] @ so3.exp_map(np.radians(2.0) * np.array([1.0, 0.0, 0.0]))
+    B[10:14] = B[10:14] @ so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([1.0, 0.0, 0.0]))
     return A, B
 
 
@@ -436,7 +436,7 @@ def test_after_a_large_remount_the_estimate_restarts_from_the_windows_own_estima
     # Newton from the estimate before a 170 deg re-mount would stop at another critical point of eq. (8)
     rng = np.random.default_rng(0)
     A, B = _pairs(60, rng, 0.2)
-    turn = so3.exp_map(np.radians(170.0) * np.array([0.0, 0.6, 0.8]))
+    turn = so3.matrix_from_rotation_vector(np.radians(170.0) * np.array([0.0, 0.6, 0.8]))
     B[30:] = turn.T @ B[30:] @ turn
     c = OnlineCalibrator()
     c.update_many(A, B)
@@ -448,7 +448,7 @@ def test_a_refinement_does_not_restart_the_cusum_building_up():
     # the noise triples from pair 27 on; the estimate is refined at pair 29 (its 30th) while the CUSUM rises
     rng = np.random.default_rng(12)
     A, B = _pairs(60, rng, 0.2)
-    B[27:] = B[27:] @ so3.exp_map(np.radians(0.6) * rng.standard_normal((33, 3)))
+    B[27:] = B[27:] @ so3.matrix_from_rotation_vector(np.radians(0.6) * rng.standard_normal((33, 3)))
     c = OnlineCalibrator()
     c.update_many(A, B)
     ev = c.events[0]
@@ -485,7 +485,7 @@ def test_the_motion_median_reads_the_last_recent_pairs_only():
     axes = rng.standard_normal((n_big + n_small, 3))
     axes /= np.linalg.norm(axes, axis=1)[:, None]
     angles = np.r_[np.full(n_big, 50.0), np.full(n_small, 10.0)] + rng.uniform(-1, 1, n_big + n_small)
-    A = so3.exp_map(np.radians(angles)[:, None] * axes)
+    A = so3.matrix_from_rotation_vector(np.radians(angles)[:, None] * axes)
     c = OnlineCalibrator()
     c.update_many(A, R0.T @ A @ R0)
     assert RECENT_PAIRS == 200 and c.n_total == 260

@@ -16,9 +16,9 @@ def _noisy_pairs(rng, J, R0, *, noise_deg=0.2, max_motion_deg=60.0):
     """Camera motions up to ``max_motion_deg``, sensor motions ``R0^T A R0``, Gaussian noise on both sides."""
     w = rng.normal(size=(J, 3))
     w *= (np.radians(max_motion_deg) * rng.uniform(0.3, 1.0, J) / np.linalg.norm(w, axis=1))[:, None]
-    A = so3.exp_map(w)
+    A = so3.matrix_from_rotation_vector(w)
     B = R0.T @ A @ R0
-    noise = lambda: so3.exp_map(rng.normal(size=(J, 3)) * np.radians(noise_deg) / np.sqrt(2 * 3))  # noqa: E731
+    noise = lambda: so3.matrix_from_rotation_vector(rng.normal(size=(J, 3)) * np.radians(noise_deg) / np.sqrt(2 * 3))  # noqa: E731
     return noise() @ A, noise() @ B
 
 
@@ -85,7 +85,7 @@ def test_radius_matches_the_gaussian_quantile():
 def test_a_remount_is_detected_within_a_few_pairs(rng, step_deg, max_delay):
     R0 = so3.random_rotations(rng, ())
     A1, B1 = _noisy_pairs(rng, 150, R0)
-    R1 = R0 @ so3.exp_map(np.radians(step_deg) * np.array([0.6, 0.0, 0.8]))  # the sensor re-mounted
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * np.array([0.6, 0.0, 0.8]))  # the sensor re-mounted
     A2, B2 = _noisy_pairs(rng, 150, R1)
     oc = OnlineCalibrator()
     oc.update_many(np.concatenate([A1, A2]), np.concatenate([B1, B2]))
@@ -129,14 +129,15 @@ def test_bad_settings_are_refused(kwargs, message):
 def _streams(seconds=60.0, phase=0.0):
     from replication.rig.streams import GyroStream, OrientationStream
 
-    R0 = so3.exp_map(np.radians([40.0, -70.0, 125.0]))
+    R0 = so3.matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
     t = np.arange(0.0, seconds, 0.05)
-    world = lambda t: so3.exp_map(np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0),  # noqa: E731
+    world = lambda t: so3.matrix_from_rotation_vector(np.stack([0.9 * np.sin(0.7 * t + phase),
+                                                                0.8 * np.sin(0.45 * t + 1.0),  # noqa: E731
                                             0.7 * np.cos(0.3 * t)], axis=-1))
     camera = OrientationStream(t, world(t), "camera")
     ti = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = world(ti) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     return R0, camera, GyroStream(0.5 * (ti[1:] + ti[:-1]), omega, "gyro"), OrientationStream(ti, Q, "sensor")
 
 
@@ -154,7 +155,7 @@ def test_live_replay_detects_a_synthetic_remount():
     from replication.rig.live import replay
 
     R0, camera, gyro, _ = _streams(120.0)
-    R = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+    R = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
     rows = replay(camera, gyro, OnlineCalibrator(), reference=R0, remount=(60.0, R))
     alarms = rows.loc[rows["alarm"], "t"]
     assert len(alarms) == 1 and 60.0 <= alarms.iloc[0] < 80.0
@@ -190,7 +191,7 @@ def test_cli_online_writes_the_track(tmp_path, capsys):
 
     R0, camera, gyro, _ = _streams()
     cam_file, imu_file = tmp_path / "cam.txt", tmp_path / "imu.csv"
-    q = so3.as_quaternion(camera.R)
+    q = so3.quaternion_from_matrix(camera.R)
     np.savetxt(cam_file, np.column_stack([camera.t + 1e3, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]]),
                fmt="%.9f")
     np.savetxt(imu_file, np.column_stack([np.round((gyro.t + 1e3) * 1e9), gyro.omega, np.zeros((len(gyro.t), 3))]),
@@ -237,9 +238,9 @@ def test_a_mounting_far_from_the_identity_is_found_like_the_batch_solver():
     rng = np.random.default_rng(3)
     for _ in range(30):
         axis = rng.standard_normal(3)
-        R0 = so3.exp_map(np.radians(rng.uniform(150, 180)) * axis / np.linalg.norm(axis))
+        R0 = so3.matrix_from_rotation_vector(np.radians(rng.uniform(150, 180)) * axis / np.linalg.norm(axis))
         A = so3.random_rotations(rng, 40)
-        B = R0.T @ A @ R0 @ so3.exp_map(np.radians(0.2) * rng.standard_normal((40, 3)))
+        B = R0.T @ A @ R0 @ so3.matrix_from_rotation_vector(np.radians(0.2) * rng.standard_normal((40, 3)))
         oc = OnlineCalibrator()
         oc.update_many(A, B)
         assert so3.angle_between_deg(oc.estimate(), solve("chordal_optimal", A, B)) < 1e-6

@@ -30,7 +30,7 @@ def _drifting(seed, n, total_deg, noise_deg=0.05):
     """``n`` pairs whose camera_from_sensor turns by ``total_deg`` about AXIS, uniformly over the stream."""
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
-    Rt = lambda j: R0 @ so3.exp_map(np.radians(total_deg * j / n) * AXIS)  # noqa: E731
+    Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(total_deg * j / n) * AXIS)  # noqa: E731
     A, B = zip(*[[x[0] for x in pair_stream(rng, 1, Rt(j), noise_deg=noise_deg)] for j in range(n)])
     return Rt, np.array(A), np.array(B)
 
@@ -81,8 +81,9 @@ def test_a_drift_too_fast_to_follow_is_said_and_not_ready():
 
 def test_two_remounts_in_different_directions_are_two_remounts(rng):
     R0 = so3.random_rotations(rng, ())
-    R1 = R0 @ so3.exp_map(np.radians(2.0) * AXIS)
-    R2 = R1 @ so3.exp_map(np.radians(2.0) * np.array([0.0, 1.0, 0.0]))  # perpendicular to the first step
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(2.0) * AXIS)
+    # perpendicular to the first step
+    R2 = R1 @ so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.0, 1.0, 0.0]))
     parts = [pair_stream(rng, 250, R, noise_deg=0.2) for R in (R0, R1, R2)]
     oc = OnlineCalibrator()
     oc.update_many(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
@@ -95,7 +96,8 @@ def test_a_wandering_camera_frame_live_is_one_drift_with_its_rate_in_deg_per_s()
     R0, camera, gyro, _ = rig_streams(seconds, rng=np.random.default_rng(44), camera_noise_deg=0.05,
                                       gyro_noise_deg_s=0.05)
     phi = np.radians(total) * camera.t / seconds
-    C = camera.world_from_body @ R0 @ so3.exp_map(-np.outer(phi, AXIS)) @ R0.T  # camera_from_sensor R0 exp(phi AXIS)
+    # camera_from_sensor R0 exp(phi AXIS)
+    C = camera.world_from_body @ R0 @ so3.matrix_from_rotation_vector(-np.outer(phi, AXIS)) @ R0.T
     rows = replay(OrientationStream(camera.t, C, "camera"), gyro, OnlineCalibrator(), diagnose=False)
     events = rows.attrs["summary"]["events"]
     assert [e["kind"] for e in events] == ["drift"] and int(rows["alarm"].sum()) == 1
@@ -113,9 +115,9 @@ def _event(pair, R_before, R_after):
 def _steps(first_deg, second_deg, cos, gap=100):
     """A re-mount by ``first_deg`` about x at pair 100, then one by ``second_deg`` whose axis makes ``cos`` with x."""
     R = np.eye(3)
-    R1 = so3.exp_map(np.radians(first_deg) * np.array([1.0, 0.0, 0.0]))
+    R1 = so3.matrix_from_rotation_vector(np.radians(first_deg) * np.array([1.0, 0.0, 0.0]))
     axis = np.array([cos, math.sqrt(max(0.0, 1.0 - cos * cos)), 0.0])
-    R2 = R1 @ so3.exp_map(np.radians(second_deg) * axis)
+    R2 = R1 @ so3.matrix_from_rotation_vector(np.radians(second_deg) * axis)
     first = _event(100, R, R1)
     return (100, R1, first), _event(100 + gap, R1, R2)
 
@@ -171,7 +173,7 @@ def _cubic(seed, n=1800, total_deg=6.0, noise_deg=0.1):
     """A drift that speeds up: ``total_deg (j / n)^3`` about AXIS (rate at the end ``3 total_deg / n``)."""
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
-    Rt = lambda j: R0 @ so3.exp_map(np.radians(total_deg * (j / n) ** 3) * AXIS)  # noqa: E731
+    Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(total_deg * (j / n) ** 3) * AXIS)  # noqa: E731
     A, B = zip(*[[x[0] for x in pair_stream(rng, 1, Rt(j), noise_deg=noise_deg)] for j in range(n)])
     return Rt, np.array(A), np.array(B)
 
@@ -197,7 +199,7 @@ def test_a_drift_that_stops_is_said_and_full_memory_returns():
     1, the effective pairs growing again."""
     rng = np.random.default_rng([72, 0])
     R0 = so3.random_rotations(rng, ())
-    Rt = lambda j: R0 @ so3.exp_map(np.radians(2.0 * min(j, 1200) / 1200) * AXIS)  # noqa: E731
+    Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(2.0 * min(j, 1200) / 1200) * AXIS)  # noqa: E731
     A, B = zip(*[[x[0] for x in pair_stream(rng, 1, Rt(j), noise_deg=0.05)] for j in range(3000)])
     oc = OnlineCalibrator()
     states = oc.update_many(np.array(A), np.array(B))
@@ -220,7 +222,7 @@ def _tracked(moved_deg, span=400, rate=0.001, sd_deg=0.02):
     axis = AXIS / np.linalg.norm(AXIS)
     lam = 0.99
     lag = math.radians(drift_lag_deg(rate, lam, 10))
-    R = so3.exp_map(np.radians(moved_deg) * axis)
+    R = so3.matrix_from_rotation_vector(np.radians(moved_deg) * axis)
     cal = SimpleNamespace(n_total=1000 + span, _R=R, forgetting=lam, _drift_rate=rate, _drift_axis=axis,
                           _cov=np.eye(3) * math.radians(sd_deg) ** 2 + lag ** 2 * np.outer(axis, axis),
                           refine_every=10, target_deg=0.5, min_pairs=10, _fgt=1.0)
@@ -263,13 +265,17 @@ def test_the_direction_so_far_ends_at_the_estimate_not_at_the_last_window():
     cosine of 0.57 with the next step's: two re-mounts, two restarts); the estimate before the new event holds many:
     the movement so far ends there. Here the window was 60 deg off the drift's axis, the estimate on it."""
     x = np.array([1.0, 0.0, 0.0])
-    noisy = so3.exp_map(np.radians(0.3) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the window: cosine 0.5 with x
+    # the window: cosine 0.5 with x
+    noisy = so3.matrix_from_rotation_vector(np.radians(0.3) * np.array([0.5, math.sqrt(0.75), 0.0]))
     first = _event(100, np.eye(3), noisy)
-    now = so3.exp_map(np.radians(0.6) * x)      # the estimate before the next event: along x
-    event = _event(700, now, now @ so3.exp_map(np.radians(0.3) * x))
+    now = so3.matrix_from_rotation_vector(np.radians(0.6) * x)      # the estimate before the next event: along x
+    event = _event(700, now, now @ so3.matrix_from_rotation_vector(np.radians(0.3) * x))
     assert recognise_drift((100, noisy, first), event, None) is not None
-    off = so3.exp_map(np.radians(0.6) * np.array([0.5, math.sqrt(0.75), 0.0]))  # the estimate itself off the step
-    assert recognise_drift((100, noisy, first), _event(700, off, off @ so3.exp_map(np.radians(0.3) * x)), None) is None
+    # the estimate itself off the step
+    off = so3.matrix_from_rotation_vector(np.radians(0.6) * np.array([0.5, math.sqrt(0.75), 0.0]))
+    assert recognise_drift((100, noisy, first), _event(700, off,
+                                                       off @ so3.matrix_from_rotation_vector(np.radians(0.3) * x)),
+                           None) is None
 
 
 def test_the_report_schema_names_every_kind():

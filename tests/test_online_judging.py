@@ -76,9 +76,11 @@ def test_near_duplicates_at_the_tolerance(rng, R0, share, repeat):
     """A pair within duplicate_deg (elementwise) of an earlier one is a repeat; just outside, a new pair."""
     A, B = pair_stream(rng, 1, R0, motion_deg=(30.0, 40.0))
     tol = math.radians(DUPLICATE_DEG)
-    small = so3.exp_map(np.array([0.0, 0.0, 1.0]))  # a unit rotation vector: scale it to the elementwise change
-    step = share * tol / np.abs(B[0] @ so3.exp_map(1e-6 * np.array([0.0, 0.0, 1.0])) - B[0]).max() * 1e-6
-    B2 = B[0] @ so3.exp_map(step * so3.log_map(small))
+    # a unit rotation vector: scale it to the elementwise change
+    small = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, 1.0]))
+    step = share * tol / np.abs(B[0] @ so3.matrix_from_rotation_vector(1e-6 * np.array([0.0, 0.0,
+                                                                                        1.0])) - B[0]).max() * 1e-6
+    B2 = B[0] @ so3.matrix_from_rotation_vector(step * so3.rotation_vector_from_matrix(small))
     assert np.isclose(np.abs(B2 - B[0]).max(), share * tol, rtol=1e-3)
     f = RepeatFilter()
     assert not f.seen(A[0].ravel().tolist(), B[0].ravel().tolist())
@@ -90,12 +92,12 @@ def test_exact_repeats_only_with_zero_tolerance(rng, R0):
     f = RepeatFilter(0.0)
     fa, fb = A[0].ravel().tolist(), B[0].ravel().tolist()
     assert not f.seen(fa, fb) and f.seen(fa, fb)
-    assert not f.seen(fa, (B[0] @ so3.exp_map(np.array([0.0, 0.0, 1e-9]))).ravel().tolist())
+    assert not f.seen(fa, (B[0] @ so3.matrix_from_rotation_vector(np.array([0.0, 0.0, 1e-9]))).ravel().tolist())
 
 
 @pytest.mark.parametrize("angle, small", [(0.9 * SMALL_MOTION_DEG, True), (1.1 * SMALL_MOTION_DEG, False)])
 def test_a_rig_at_rest_is_not_a_repeat(angle, small):
-    A = so3.exp_map(np.radians(angle) * np.array([1.0, 0.0, 0.0]))
+    A = so3.matrix_from_rotation_vector(np.radians(angle) * np.array([1.0, 0.0, 0.0]))
     f = RepeatFilter()
     flat = A.ravel().tolist()
     assert not f.seen(flat, flat)
@@ -126,8 +128,8 @@ def test_determined_at_the_excitation_threshold(excitation, determined):
     for _ in range(100):  # the scale c of phi_k = c u_k that gives the target
         c = 0.5 * (lo + hi)
         lo, hi = (c, hi) if np.sum(4 * np.sin(c * u / 2) ** 2) < target else (lo, c)
-    A = np.concatenate([so3.exp_map(np.outer(np.radians(np.linspace(20, 40, n_z)), [0, 0, 1])),
-                        so3.exp_map(np.outer(c * u, [1, 0, 0]))])
+    A = np.concatenate([so3.matrix_from_rotation_vector(np.outer(np.radians(np.linspace(20, 40, n_z)), [0, 0, 1])),
+                        so3.matrix_from_rotation_vector(np.outer(c * u, [1, 0, 0]))])
     oc, _ = _feed(A, A.copy())  # R0 = I, noise-free
     oc.estimate()
     assert oc.excitation_deg == pytest.approx(excitation, rel=1e-6)
@@ -187,7 +189,7 @@ def test_every_parameter_is_validated_by_name(kwargs, message):
 # ------------------------------------------------------------------------------------------------ events told apart
 
 def _two_mountings(rng, R0, step_deg, n1=200, n2=200, noise_deg=0.2):
-    R1 = R0 @ so3.exp_map(np.radians(step_deg) * np.array([0.6, 0.0, 0.8]))
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * np.array([0.6, 0.0, 0.8]))
     A1, B1 = pair_stream(rng, n1, R0, noise_deg=noise_deg)
     A2, B2 = pair_stream(rng, n2, R1, noise_deg=noise_deg)
     return R1, np.concatenate([A1, A2]), np.concatenate([B1, B2])
@@ -260,7 +262,7 @@ def test_the_reference_level_stops_following_once_a_change_builds_up(rng, R0):
     a, b = pair_stream(rng, 1, R0)
     for start, follows in ((oc.cusum_h / 3 + 5.0, False), (0.0, True)):
         det.cusum, level = start, det.level
-        oc.update(a[0] @ so3.exp_map(np.radians([0.5, 0.0, 0.0])), b[0])  # an in-between residual
+        oc.update(a[0] @ so3.matrix_from_rotation_vector(np.radians([0.5, 0.0, 0.0])), b[0])  # an in-between residual
         assert bool(det.level != level) == follows
         a, b = pair_stream(rng, 1, R0)
 
@@ -275,7 +277,7 @@ def test_ready_is_withdrawn_at_the_second_gross_misfit_and_said(rng, R0):
     A, B = pair_stream(rng, 300, R0)
     oc, _ = _feed(A, B)
     assert oc.ready and oc.unresolved_end() is None
-    R1 = R0 @ so3.exp_map(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
     A2, B2 = pair_stream(rng, MISFITS_WITHDRAW_READY, R1)
     oc.update(A2[0], B2[0])
     assert oc.ready and oc.unresolved_end() is None and not oc.alarms
@@ -289,7 +291,7 @@ def test_ready_is_withdrawn_at_the_second_gross_misfit_and_said(rng, R0):
 
 def test_an_alarm_being_confirmed_at_the_end_is_an_undecided_end(rng, R0):
     A, B = pair_stream(rng, 300, R0)
-    R1 = R0 @ so3.exp_map(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(5.0) * np.array([0.6, 0.0, 0.8]))
     A2, B2 = pair_stream(rng, 8, R1)
     oc, _ = _feed(np.concatenate([A, A2]), np.concatenate([B, B2]))
     assert oc.checking and not oc.ready
@@ -304,7 +306,8 @@ def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned(
     from replication.study.simulation import rig_streams
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(900), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
-    R = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    R = so3.matrix_from_rotation_vector(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5,
+                                                                                                        0.81]))
     late = replay(camera, gyro, OnlineCalibrator(target_deg=0.5), reference=R0, remount=(57.0, R)).attrs["summary"]
     assert not late["ready"] and late["verdict"]["level"] == "warning" and not late["events"]
     assert [r["check"] for r in late["verdict"]["reasons"]] == ["end_undecided"]
@@ -322,7 +325,7 @@ def test_near_copies_of_pairs_are_counted_once_and_the_radius_covers_the_error()
         rng = np.random.default_rng([5, seed])
         R0 = so3.random_rotations(rng, ())
         A, B = pair_stream(rng, 15, R0, noise_deg=0.3)
-        jitter = lambda M: so3.exp_map(rng.normal(0, 1e-4, (len(M), 3))) @ M  # noqa: E731
+        jitter = lambda M: so3.matrix_from_rotation_vector(rng.normal(0, 1e-4, (len(M), 3))) @ M  # noqa: E731
         oc, _ = _feed(jitter(np.repeat(A, 8, axis=0)), jitter(np.repeat(B, 8, axis=0)))
         oc.estimate()
         assert oc.n_pairs <= 16 and oc.duplicates >= 104

@@ -26,7 +26,7 @@ AXIS = np.array([0.6, 0.0, 0.8])
 def _remounted(seed, step_deg, noise_deg, before=200, after=100):
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
-    R1 = R0 @ so3.exp_map(np.radians(step_deg) * AXIS)
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * AXIS)
     A1, B1 = pair_stream(rng, before, R0, noise_deg=noise_deg)
     A2, B2 = pair_stream(rng, after, R1, noise_deg=noise_deg)
     return R1, (A1, B1), (A2, B2)
@@ -102,7 +102,7 @@ def test_clean_streams_keep_ready():
 
 def _guard_pairs(rng, n, offset_deg=1.0, noise_deg=0.2):
     R = so3.random_rotations(rng, ())
-    A, B = pair_stream(rng, n, R @ so3.exp_map(np.radians(offset_deg) * AXIS), noise_deg=noise_deg)
+    A, B = pair_stream(rng, n, R @ so3.matrix_from_rotation_vector(np.radians(offset_deg) * AXIS), noise_deg=noise_deg)
     return R, A, B
 
 
@@ -217,8 +217,8 @@ def _excited(excitation_deg, n_z=20, n_x=20):
     for _ in range(100):
         c = 0.5 * (lo + hi)
         lo, hi = (c, hi) if np.sum(4 * np.sin(c * u / 2) ** 2) < target else (lo, c)
-    return np.concatenate([so3.exp_map(np.outer(np.radians(np.linspace(20, 40, n_z)), [0, 0, 1])),
-                           so3.exp_map(np.outer(c * u, [1, 0, 0]))])
+    return np.concatenate([so3.matrix_from_rotation_vector(np.outer(np.radians(np.linspace(20, 40, n_z)), [0, 0, 1])),
+                           so3.matrix_from_rotation_vector(np.outer(c * u, [1, 0, 0]))])
 
 
 @pytest.mark.parametrize("excitation, ready", [(0.5, False), (0.75, False), (0.98, False), (1.02, True)])

@@ -114,7 +114,7 @@ def test_calibrate_recovers_R0_and_the_clock_offset(rng):
     report = res.to_dict()
     json.dumps(report)
     assert report["euler_zyx_deg"].keys() == {"yaw", "pitch", "roll"}
-    np.testing.assert_allclose(so3.quaternion_to_matrix(res.quaternion_wxyz), res.R, atol=1e-12)
+    np.testing.assert_allclose(so3.matrix_from_quaternion(res.quaternion_wxyz), res.R, atol=1e-12)
 
 
 def test_calibrate_poses_recovers_R0(rng):

@@ -32,7 +32,7 @@ from replication.rig.segments import (  # noqa: E402
 from replication.rig.streams import integrate_gyro  # noqa: E402
 
 WARN, FAIL = THRESHOLDS["remount_deg"]
-STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+STEP = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
 
 
 def _cal(camera, sensor, **kw):

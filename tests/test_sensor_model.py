@@ -8,7 +8,7 @@ import jsonschema
 import numpy as np
 import pytest
 
-from replication.core.so3 import angle_between_deg, exp_map
+from replication.core.so3 import angle_between_deg, matrix_from_rotation_vector
 from replication.rig import sensor_model as sm
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_verdict import SENSOR_THRESHOLDS, sensor_reasons
@@ -73,7 +73,7 @@ def test_the_bias_jacobian_matches_finite_differences(biased):
     for col, h in ((3, 1e-6), (5, 1e-6), (6, 1e-6), (7, 1e-7), (0, 1e-6)):
         step = np.zeros(8)
         step[col] = h
-        y = [x[0] @ exp_map(step[:3]), x[1] + step[3:6], x[2] + step[6], x[3] + step[7]]
+        y = [x[0] @ matrix_from_rotation_vector(step[:3]), x[1] + step[3:6], x[2] + step[6], x[3] + step[7]]
         numeric = (sm._linearise(*y, *args)[0] - r0) / h
         scale = np.abs(jac[:, :, col]).max()
         assert np.abs(numeric - jac[:, :, col]).max() < 0.02 * scale + 1e-9, col
@@ -211,12 +211,12 @@ def test_a_model_that_does_not_fit_gives_no_reasons(biased):
 
 
 def test_a_model_that_fits_no_rig_is_not_applied(biased):
-    from replication.core.so3 import as_quaternion, quaternion_to_matrix
+    from replication.core.so3 import matrix_from_quaternion, quaternion_from_matrix
     from replication.rig.streams import OrientationStream
 
     _, camera, gyro, _ = biased
-    q = as_quaternion(camera.world_from_body)[:, [1, 2, 3, 0]]  # quaternions read in the wrong order
-    wrong = OrientationStream(camera.t, quaternion_to_matrix(q), "camera")
+    q = quaternion_from_matrix(camera.world_from_body)[:, [1, 2, 3, 0]]  # quaternions read in the wrong order
+    wrong = OrientationStream(camera.t, matrix_from_quaternion(q), "camera")
     r = calibrate(wrong, gyro, n_bootstrap=0, diagnose=False)
     assert r.sensor_model["sensor_model"]["bias_applied"] is False and r.sensor_model["gyro_bias_rad_s"] is None
     (reason,) = [x for x in r.verdict.reasons if x.check == "gyro_bias_not_estimated"]
@@ -237,13 +237,15 @@ def _steady_turn(seed=2):
     R0, rng = bench.R0_TRUE, np.random.default_rng(seed)
 
     def world_from_camera(t):
-        rock = exp_map(np.stack([0.5 * np.sin(0.7 * t), 0.4 * np.sin(0.45 * t + 1), 0 * t], -1))
-        return exp_map(np.stack([0 * t, 0 * t, 0.35 * t], -1)) @ rock
+        rock = matrix_from_rotation_vector(np.stack([0.5 * np.sin(0.7 * t), 0.4 * np.sin(0.45 * t + 1), 0 * t], -1))
+        return matrix_from_rotation_vector(np.stack([0 * t, 0 * t, 0.35 * t], -1)) @ rock
 
     t_cam, t_imu = np.arange(0, 40, 0.05), np.arange(-1, 41, 0.005)
-    C = world_from_camera(t_cam) @ exp_map(rng.normal(0, np.radians(0.05) / np.sqrt(3), (len(t_cam), 3)))
+    C = world_from_camera(t_cam) @ matrix_from_rotation_vector(rng.normal(0, np.radians(0.05) / np.sqrt(3), (len(t_cam),
+                                                                                                             3)))
     Q = world_from_camera(t_imu) @ R0
-    w = bench.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005 + BIAS + rng.normal(0, np.radians(0.2),
+    w = bench.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1,
+                                                      -2) @ Q[1:]) / 0.005 + BIAS + rng.normal(0, np.radians(0.2),
                                                                                          (len(t_imu) - 1, 3))
     return R0, bench.OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), w, "gyro")
 

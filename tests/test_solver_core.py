@@ -73,7 +73,7 @@ def _solve_recording(method, A, B, **options):
 
 
 def _rvec_error(R, X):
-    return float(np.linalg.norm(so3.log_map(R) - so3.log_map(X)))
+    return float(np.linalg.norm(so3.rotation_vector_from_matrix(R) - so3.rotation_vector_from_matrix(X)))
 
 
 # ----------------------------------------------------------------------------------------- OpenCV protocol

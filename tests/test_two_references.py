@@ -23,7 +23,7 @@ EPS = 1e-9
 
 
 def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
-    return R @ so3.exp_map(np.radians(deg) * np.asarray(axis))
+    return R @ so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis))
 
 
 @pytest.fixture(scope="module")

@@ -43,7 +43,14 @@ import numpy as np
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import pair_residual_deg
 from ..core.motions import prepare_motions
-from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map, rotation_angle_deg, yaw_pitch_roll_deg
+from ..core.so3 import (
+    angle_between_deg,
+    matrix_from_rotation_vector,
+    quaternion_from_matrix,
+    rotation_angle_deg,
+    rotation_vector_from_matrix,
+    yaw_pitch_roll_deg_from_matrix,
+)
 from ..core.solvers import ReplicationWarning, SolverAnswerError, checked_core, solve, solver_info
 from .quality import Evidence, Reason, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
@@ -130,7 +137,7 @@ def check_options(method, options):
     called once with them on a tiny exact problem."""
     if not options:
         return
-    A = exp_map(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
+    A = matrix_from_rotation_vector(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
@@ -373,7 +380,7 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
         else:
             if bad_replicates is None:  # never a radius from non-rotations
                 ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
-                boot = np.degrees(log_map(R_boot @ R.T))
+                boot = np.degrees(rotation_vector_from_matrix(R_boot @ R.T))
     motion = float(np.median(rotation_angle_deg(A)))
     station_medians = None if stations is None else (per_station_median(res, stations) if station_residual is None
                                                      else station_residual(R))
@@ -398,8 +405,8 @@ def solve_pairs(A, B, *, method, interval, block, n_bootstrap, seed, reference, 
     diagnostics.update(extra_diagnostics or {})
     return CalibrationResult(
         R=R,
-        quaternion_wxyz=as_quaternion(R),
-        euler_zyx_deg=yaw_pitch_roll_deg(R),
+        quaternion_wxyz=quaternion_from_matrix(R),
+        euler_zyx_deg=yaw_pitch_roll_deg_from_matrix(R),
         method=method,
         interval_s=interval,
         n_pairs=int(J),

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.so3 import cumulative_product, exp_map, log_map
+from ..core.so3 import cumulative_product, matrix_from_rotation_vector, rotation_vector_from_matrix
 from .streams import GyroStream, OrientationStream
 
 __all__ = ["SensorModel", "estimate_sensor_model", "rest_periods", "BIAS_CHANGE_LEVEL", "MIN_CORRELATION",
@@ -185,7 +185,7 @@ def _integrate(t, w, b):
     the steps' rates."""
     dt = np.diff(t)
     rates = 0.5 * (w[:-1] + w[1:]) - b
-    Q = np.concatenate([np.eye(3)[None], cumulative_product(exp_map(rates * dt[:, None]))])
+    Q = np.concatenate([np.eye(3)[None], cumulative_product(matrix_from_rotation_vector(rates * dt[:, None]))])
     S = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(Q[1:] * dt[:, None, None], axis=0)])
     return Q, S, rates
 
@@ -195,7 +195,8 @@ def _at(times, t, Q, S, rates):
     samples, i.e. their slerp), ``S`` linearly, the step's rate."""
     n = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
     h = times - t[n]
-    return (Q[n] @ exp_map(rates[n] * h[:, None]), S[n] + (S[n + 1] - S[n]) * (h / (t[n + 1] - t[n]))[:, None, None],
+    return (Q[n] @ matrix_from_rotation_vector(rates[n] * h[:, None]),
+            S[n] + (S[n + 1] - S[n]) * (h / (t[n + 1] - t[n]))[:, None, None],
             rates[n])
 
 
@@ -230,7 +231,7 @@ def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g):
     Delta = np.swapaxes(Qi, -1, -2) @ Qk
     Jb = -np.swapaxes(Qk, -1, -2) @ (Sk - Si)
     M = X.T @ A @ X
-    r = log_map(Delta @ M)
+    r = rotation_vector_from_matrix(Delta @ M)
     Mt = np.swapaxes(M, -1, -2)
     wi_in_k = np.einsum("jba,jb->ja", Delta, wi)  # Delta^T omega_i
     jac = np.empty((len(A), 3, 8))
@@ -271,7 +272,7 @@ def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8
         X, b, d, k = p
         full = np.zeros(8)
         full[cols] = step
-        return [X @ exp_map(full[:3]), b + full[3:6], d + full[6], k + full[7]]
+        return [X @ matrix_from_rotation_vector(full[:3]), b + full[3:6], d + full[6], k + full[7]]
 
     r, jac = _linearise(*params, A, ti, tk, t_mid, t_g, w_g)
     done = 0
@@ -401,5 +402,5 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
         span_s=float(tk[-1] - ti[0]), applied=applied, covariance=cov,
         bias_R0_deg=float(np.degrees(np.linalg.norm(sensitivity @ b))),
         change_R0_deg=float(np.degrees(np.linalg.norm(sensitivity @ (0.5 * diff)))),
-        fit_ratio=float(np.median(np.linalg.norm(r, axis=-1)) / max(np.median(np.linalg.norm(log_map(A), axis=-1)),
-                                                                    1e-12)))
+        fit_ratio=float(np.median(np.linalg.norm(r, axis=-1))
+                        / max(np.median(np.linalg.norm(rotation_vector_from_matrix(A), axis=-1)), 1e-12)))

@@ -17,7 +17,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._jitter import jitter
-from ..core.so3 import exp_map, log_map, noise_rotations, random_rotations, sample_ball
+from ..core.so3 import (
+    matrix_from_rotation_vector,
+    noise_rotations,
+    random_rotations,
+    rotation_vector_from_matrix,
+    sample_ball,
+)
 from .paper import r0_camera_from_sensor
 
 __all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg",
@@ -166,7 +172,7 @@ def _opencv_pose(rng: np.random.Generator, lo_deg: float, hi_deg: float) -> np.n
     # generatePose: axis components uniform in [-1, 1] (not normalised), angle uniform with a random sign
     axis = rng.uniform(-1.0, 1.0, 3)
     theta = rng.uniform(np.radians(lo_deg), np.radians(hi_deg)) * np.sign(rng.uniform(-1.0, 1.0))
-    return exp_map(theta * axis)
+    return matrix_from_rotation_vector(theta * axis)
 
 
 def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool = False) -> OpenCVProtocolProblem:
@@ -192,8 +198,8 @@ def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool 
         g = _opencv_pose(rng, 5.0, 45.0)
         c = X.T @ g.T @ R_target2base  # T_target2cam = T_cam2gripper^-1 T_gripper2base^-1 T_target2base
         if noise:
-            c = exp_map(log_map(c) + rng.normal(0.0, 0.002, 3))
-            g = exp_map(log_map(g) + rng.normal(0.0, 0.001, 3))
+            c = matrix_from_rotation_vector(rotation_vector_from_matrix(c) + rng.normal(0.0, 0.002, 3))
+            g = matrix_from_rotation_vector(rotation_vector_from_matrix(g) + rng.normal(0.0, 0.001, 3))
         Rg.append(g)
         Rc.append(c)
     Rg, Rc = jitter(np.array(Rg)), jitter(np.array(Rc))
@@ -216,7 +222,8 @@ MATCHED_START_AXIS = (0.0, 0.6, 0.8)
 def matched_start() -> np.ndarray:
     """The matched setting's start: the paper's ``R0`` turned by 150 deg about a fixed axis (see
     :data:`MATCHED_MOTIONS_DEG`)."""
-    return r0_camera_from_sensor() @ exp_map(np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS))
+    turn = matrix_from_rotation_vector(np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS))
+    return r0_camera_from_sensor() @ turn
 
 
 def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | None = None,
@@ -243,22 +250,24 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
     """
     from ..rig.streams import GyroStream, OrientationStream
 
-    R0 = exp_map(np.radians([40.0, -70.0, 125.0])) if R0 is None else np.asarray(R0, dtype=float)
+    R0 = matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0])) if R0 is None else np.asarray(R0, dtype=float)
     if (camera_noise_deg or gyro_noise_deg_s) and not isinstance(rng, np.random.Generator):
         raise ValueError("noise needs rng, a numpy.random.Generator")
 
     def world_from_camera(t):
         w = np.stack([0.9 * np.sin(0.7 * t + phase), 0.8 * np.sin(0.45 * t + 1.0 + phase),
                       0.7 * np.cos(0.3 * t + phase)], axis=-1)
-        return exp_map(w)
+        return matrix_from_rotation_vector(w)
 
     t_cam = np.arange(0.0, seconds, 0.05)
     C = world_from_camera(t_cam)
     if camera_noise_deg:
-        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
+        C = C @ matrix_from_rotation_vector(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam),
+                                                                                                          3)))
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = world_from_camera(t_imu) @ R0  # world_from_sensor
-    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005  # body rates over each step, at its midpoint
+    # body rates over each step, at its midpoint
+    omega = rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     if gyro_noise_deg_s:
         omega = omega + rng.normal(0.0, np.radians(gyro_noise_deg_s), omega.shape)
     C, omega, Q = jitter(C), jitter(omega), jitter(Q)
