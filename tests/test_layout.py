@@ -246,3 +246,55 @@ def test_the_private_import_finder_sees_names_and_modules():
 def test_notebooks_import_no_private_name(path):
     found = {i: names for i, src in _code_cells(path) if (names := private_imports(src))}
     assert not found, f"{path.name} imports private names (cell index: names): {found}"
+
+
+#: The naming rule for conversions (docs/conventions.md, "Names of conversions"): ``<to>_from_<from>``. A module-level
+#: public function named like another rule's conversion is refused; the exceptions, with their reason:
+NOT_CONVERSIONS = {
+    "nearest_rotation_up_to_sign": "'up to sign' qualifies the projection; nothing is converted",
+    "match_to_table1": "a verb: it matches a stopped SQP to Table I's rows",
+}
+OTHER_RULES = r"^(as|to|from)_|_to_"
+
+
+def conversion_name_violations(source: str) -> list:
+    """Module-level public functions of ``source`` named against the rule (``as_*``, ``to_*``, ``from_*``,
+    ``*_to_*``), the listed exceptions aside; methods (``to_dict``) and private helpers are not looked at."""
+    import re
+
+    return [node.name for node in ast.parse(source).body
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and not node.name.startswith("_")
+            and re.search(OTHER_RULES, node.name) and node.name not in NOT_CONVERSIONS]
+
+
+def test_the_naming_rule_finder_sees_each_other_rule_and_spares_the_rest():
+    source = ("def as_quaternion(R): ...\ndef to_markdown(x): ...\ndef from_euler(s, a): ...\n"
+              "def chordal_to_angle_deg(d): ...\ndef quaternion_from_matrix(R): ...\ndef _as_array(x): ...\n"
+              "def nearest_rotation_up_to_sign(M): ...\ndef world_from_body(t): ...\ndef total(x): ...\n"
+              "class Result:\n    def to_dict(self): ...\n")
+    assert conversion_name_violations(source) == ["as_quaternion", "to_markdown", "from_euler", "chordal_to_angle_deg"]
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_conversions_are_named_to_from_from(module):
+    found = conversion_name_violations(MODULES[module].read_text(encoding="utf-8"))
+    assert not found, (f"{module}: {found} break the naming rule <to>_from_<from> (docs/conventions.md); rename them, "
+                       "or list a name that converts nothing in NOT_CONVERSIONS with its reason")
+
+
+def test_the_exceptions_to_the_naming_rule_still_exist():
+    defined = set().union(*(_defined_names(ast.parse(p.read_text(encoding="utf-8"))) for p in MODULES.values()))
+    assert set(NOT_CONVERSIONS) <= defined, set(NOT_CONVERSIONS) - defined
+
+
+def test_the_old_conversion_names_are_gone_and_the_conventions_page_names_the_new():
+    from replication.core import so3
+    from replication.study import ledger
+
+    old = ["log_map", "exp_map", "as_quaternion", "quaternion_to_matrix", "yaw_pitch_roll_deg", "from_euler",
+           "chordal_to_angle_deg"]
+    assert not [n for n in old if hasattr(so3, n)] and not hasattr(ledger, "to_markdown")
+    assert not hasattr(ledger, "to_summary")
+    page = (ROOT / "docs" / "conventions.md").read_text(encoding="utf-8")
+    converters = [n for n in so3.__all__ if "_from_" in n] + ["markdown_from_ledger", "summary_from_ledger"]
+    assert len(converters) == 10 and not [n for n in converters if f"`{n}`" not in page and f".{n}`" not in page]
