@@ -298,3 +298,39 @@ def test_the_old_conversion_names_are_gone_and_the_conventions_page_names_the_ne
     page = (ROOT / "docs" / "conventions.md").read_text(encoding="utf-8")
     converters = [n for n in so3.__all__ if "_from_" in n] + ["markdown_from_ledger", "summary_from_ledger"]
     assert len(converters) == 10 and not [n for n in converters if f"`{n}`" not in page and f".{n}`" not in page]
+
+
+#: Backticked words of docs/layout.md's tables that are not names in the code, with their reason.
+LAYOUT_WORDS_NOT_IN_CODE = {
+    "InitialEXRotation": "VINS-Mono's class, which rig/vins_rule.py ports",
+    "ahrs": "the third-party package of the lab's filters",
+    "warning": "a verdict level, a string",
+}
+
+
+def _names_in_code() -> set:
+    names = set()
+    for path in MODULES.values():
+        names.update({path.stem, *path.relative_to(ROOT).parent.parts})
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names.update({getattr(node, key) for key in ("name", "id", "attr", "arg")
+                          if isinstance(getattr(node, key, None), str)})
+    return names
+
+
+def layout_words_not_in_code(page: str, names: set) -> list:
+    """Backticked identifiers in the page's table rows that the code does not have; the paper's own symbols may
+    follow a code name in ``(the paper's ...)``."""
+    import re
+
+    rows = [re.sub(r"\(the paper's [^)]*\)", "", line) for line in page.splitlines() if line.startswith("|")]
+    words = {w for row in rows for w in re.findall(r"`([A-Za-z_]\w*)`", row)}
+    return sorted(w for w in words if w not in names and w not in LAYOUT_WORDS_NOT_IN_CODE)
+
+
+def test_the_layout_page_names_what_the_code_has():
+    names = _names_in_code()
+    assert layout_words_not_in_code("| | `handeye.py` | `H1`, `v2h` |", names) == ["H1"]
+    assert layout_words_not_in_code("| | `handeye.py` | `stack_H1` (the paper's `H1`) |", names) == []
+    page = (ROOT / "docs" / "layout.md").read_text(encoding="utf-8")
+    assert not layout_words_not_in_code(page, names), "docs/layout.md names what the code does not have"
