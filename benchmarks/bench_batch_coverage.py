@@ -52,8 +52,8 @@ def stations(runs, N, noise_deg, seed):
         S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
         C = R0 @ S @ W
         sd = np.radians(noise_deg) / np.sqrt(3)
-        C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ C
-        S = so3.exp_map(rng.normal(0, sd, (N, 3))) @ S
+        C = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ C
+        S = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ S
         r = calibrate_poses(C, S, n_bootstrap=100, seed=k)
         err = float(so3.angle_between_deg(r.R, R0))
         station_hits.append(err <= r.bootstrap_ci95_deg)

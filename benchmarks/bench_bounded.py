@@ -30,7 +30,7 @@ def robust_problem(J: int, *, outliers: float = 0.3, noise_deg: float = 0.5, see
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
     A = so3.random_rotations(rng, J)
-    B = so3.exp_map(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
+    B = so3.matrix_from_rotation_vector(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
     return R0, A, corrupt_pairs(B, outliers, rng)[0]  # the same draws as notebook 06's outlier sweep
 
 
@@ -50,12 +50,13 @@ def tumvi_like(seconds: float = 140.0, camera_hz: float = 20.0, gyro_hz: float =
     def attitude(t):
         w = np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t), np.sin(0.45 * t + 1.0) + 0.15 * np.cos(2.3 * t),
                       np.cos(0.3 * t) + 0.1 * np.sin(4.1 * t)], axis=-1)
-        return so3.exp_map(w)
+        return so3.matrix_from_rotation_vector(w)
 
     tc = np.arange(0.0, seconds, 1.0 / camera_hz)
     tg = np.arange(-1.0, seconds + 1.0, 1.0 / gyro_hz)
     Q = attitude(np.concatenate([tg[:1] - 1 / gyro_hz, tg, tg[-1:] + 1 / gyro_hz]) - offset) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) * (0.5 * gyro_hz)  # body rate at tg (central)
+    # body rate at tg (central)
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) * (0.5 * gyro_hz)
     return R0, OrientationStream(tc, attitude(tc), "camera"), integrate_gyro(GyroStream(tg, omega, "gyro"))
 
 

@@ -34,7 +34,7 @@ def main(n: int = 160, base: int = 40000):
             found = dict.fromkeys(SHARES, 0)
             for k in range(20):
                 secs, cam, gyro_noise, bias = CONFIGS[(k % 2) + 1]
-                remount = (when * secs, so3.exp_map(np.radians(deg) * axis))
+                remount = (when * secs, so3.matrix_from_rotation_vector(np.radians(deg) * axis))
                 A, B, t, block = rig_pairs(*rig(base + 5000 + k, secs, cam, gyro_noise, bias, remount=remount))
                 for share in SHARES:
                     found[share] += two_segment_test(A, B, t, block=block, min_share=share).significant

@@ -116,7 +116,7 @@ def drift(seeds, workers: int):
 
 def _power_run(args):
     seed, config, size = args
-    R = so3.exp_map(np.radians(size) * REMOUNT_AXIS / np.linalg.norm(REMOUNT_AXIS))
+    R = so3.matrix_from_rotation_vector(np.radians(size) * REMOUNT_AXIS / np.linalg.norm(REMOUNT_AXIS))
     t_r = config[0] * (1 / 3 + seed % 3 / 6)  # at 1/3, 1/2 or 2/3
     A, B, t, block = rig_pairs(*rig(seed, *config, remount=(t_r, R)))
     r = two_segment_test(A, B, t, block=block)
@@ -201,7 +201,7 @@ def remount_study(recordings, sizes=(0.5, 1.0, 2.0, 5.0), when=(1 / 3, 1 / 2, 2 
             rows = []
             for share in when:
                 for axis in axes:
-                    R = so3.exp_map(np.radians(size) * axis / np.linalg.norm(axis))
+                    R = so3.matrix_from_rotation_vector(np.radians(size) * axis / np.linalg.norm(axis))
                     t_r = camera.t[0] + share * span
                     _, A, B, t, block = calibrated(camera, remounted(sensor, t_r, R), n_bootstrap=0, diagnose=False)
                     c = two_segment_test(A, B, t, block=block)

@@ -34,24 +34,22 @@ from bench_changepoint import rig, wilson
 from replication.rig.calibration import calibrate
 from replication.rig.clock import STEP_LR
 from replication.rig.streams import GyroStream, OrientationStream
+from replication.testing import camera_clock_jumped, clock_drifting, clock_stepped
 
 STEPS_MS = (5, 10, 20, 30, 50)
 SECONDS, AT = 60.0, 30.0
 
 
 def lost(gyro: GyroStream, at: float, n: int) -> GyroStream:
-    """The gyro loses ``n`` samples at ``at`` and stamps on evenly: its clock steps by ``-n`` intervals, unseen."""
-    i = int(np.searchsorted(gyro.t, at))
-    omega = np.concatenate([gyro.omega[:i], gyro.omega[i + n:]])
-    return GyroStream(gyro.t[:len(omega)], omega, gyro.source)
+    return clock_stepped(gyro, at, n)
 
 
 def drifting(gyro: GyroStream, ppm: float, mid: float = AT) -> GyroStream:
-    return GyroStream(gyro.t + ppm * 1e-6 * (gyro.t - mid), gyro.omega, gyro.source)
+    return clock_drifting(gyro, ppm, mid)
 
 
 def camera_jump(camera: OrientationStream, at: float, size: float) -> OrientationStream:
-    return OrientationStream(np.where(camera.t >= at, camera.t + size, camera.t), camera.world_from_body, "camera")
+    return camera_clock_jumped(camera, at, size)
 
 
 def case(name: str, seed: int):

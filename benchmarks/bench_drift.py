@@ -26,13 +26,13 @@ SECONDS, TOTAL_DEG, AXIS = 600.0, 2.0, np.array([0.6, 0.0, 0.8])
 def run(noise, rng):
     R0, camera, gyro, _ = rig_streams(SECONDS, rng=rng, camera_noise_deg=noise[0], gyro_noise_deg_s=noise[1])
     phi = np.radians(TOTAL_DEG) * camera.t / SECONDS
-    C = camera.world_from_body @ R0 @ so3.exp_map(-np.outer(phi, AXIS)) @ R0.T
+    C = camera.world_from_body @ R0 @ so3.matrix_from_rotation_vector(-np.outer(phi, AXIS)) @ R0.T
     oc = OnlineCalibrator()
     rows = replay(OrientationStream(camera.t, C, "camera"), gyro, oc, diagnose=False)
-    truth = [R0 @ so3.exp_map(np.radians(TOTAL_DEG) * t / SECONDS * AXIS) for t in rows["t"]]
+    truth = [R0 @ so3.matrix_from_rotation_vector(np.radians(TOTAL_DEG) * t / SECONDS * AXIS) for t in rows["t"]]
     q = rows[["qw", "qx", "qy", "qz"]].to_numpy()
     wrong = sum(1 for k, ready in enumerate(rows["ready"]) if ready
-                and so3.angle_between_deg(so3.quaternion_to_matrix(q[k]), truth[k]) > 0.5)
+                and so3.angle_between_deg(so3.matrix_from_quaternion(q[k]), truth[k]) > 0.5)
     events = rows.attrs["summary"]["events"]
     rate = next((e["rate_deg_s"] for e in events if e["kind"] == "drift"), None)
     return [e["kind"] for e in events], int(rows["alarm"].sum()), rate, float(rows["ready"].mean()), wrong

@@ -258,7 +258,7 @@ def compare_with(base, reps, n, n_single):
 GROUPS = {
     "kernels.py": "kernels (polar, eigvalsh3, solve3, rotation test)",
     "_linalg.py": "numpy.linalg (LAPACK: 9x9 SVD/eigh of K, 4x4 eigh, fallbacks)",
-    "so3.py": "so3 (log_map, quaternions, SciPy conversions)",
+    "so3.py": "so3 (rotation_vector_from_matrix, quaternions, SciPy conversions)",
     "checks.py": "validation (checks.py)",
 }
 

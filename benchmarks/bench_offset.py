@@ -111,12 +111,14 @@ def coverage(runs, camera_noise_deg, gyro_noise, *, seconds=30.0, block_s=1.0, s
 def periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0):
     """A single-axis oscillation at ``freq_hz`` (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
     ``aperiodic`` times the rig's three-axis motion."""
-    axis = so3.exp_map(np.array([0.3, 0.2, 0.1]))
+    axis = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
-        slow = so3.exp_map(aperiodic * np.stack([0.9 * np.sin(0.7 * t), 0.8 * np.sin(0.45 * t + 1.0),
+        slow = so3.matrix_from_rotation_vector(aperiodic * np.stack([0.9 * np.sin(0.7 * t),
+                                                                     0.8 * np.sin(0.45 * t + 1.0),
                                                  0.7 * np.cos(0.3 * t)], -1))
-        return slow @ axis @ so3.exp_map(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t, 0 * t], -1)) @ axis.T
+        return slow @ axis @ so3.matrix_from_rotation_vector(np.stack([0.6 * np.sin(2 * np.pi * freq_hz * t), 0 * t,
+                                                                       0 * t], -1)) @ axis.T
 
     t_cam, t_sensor = np.arange(0.0, seconds, 0.05), np.arange(-3.0, seconds + 3.0, 0.01)
     return (OrientationStream(t_cam, world_from_camera(t_cam), "camera"),

@@ -42,7 +42,7 @@ def wrong_pairs(step_deg, noise_deg, rng) -> tuple[int, int]:
     """``(pairs ready while wrong after the re-mount, pairs not ready after the first ready one before it)``; a step
     of 0: no change (every not-ready pair after the first ready one is a false withdrawal)."""
     R0 = so3.random_rotations(rng, ())
-    R1 = R0 @ so3.exp_map(np.radians(step_deg) * _axis(rng))
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * _axis(rng))
     A1, B1 = pair_stream(rng, BEFORE, R0, noise_deg=noise_deg)
     A2, B2 = pair_stream(rng, AFTER, R1, noise_deg=noise_deg)
     states = OnlineCalibrator(target_deg=TARGET_DEG).update_many(np.concatenate([A1, A2]), np.concatenate([B1, B2]))
@@ -57,7 +57,7 @@ def wrong_pairs(step_deg, noise_deg, rng) -> tuple[int, int]:
 def wrong_seconds(step_deg, noise, rng) -> tuple[float, float]:
     """As :func:`wrong_pairs` on a live replay, in seconds."""
     R0, camera, gyro, _ = rig_streams(150.0, rng=rng, camera_noise_deg=noise[0], gyro_noise_deg_s=noise[1])
-    R = so3.exp_map(np.radians(step_deg) * _axis(rng))
+    R = so3.matrix_from_rotation_vector(np.radians(step_deg) * _axis(rng))
     rows = replay(camera, gyro, OnlineCalibrator(target_deg=TARGET_DEG), reference=R0,
                   remount=(70.0, R) if step_deg else None, diagnose=False)
     t = rows["t"].to_numpy()

@@ -27,7 +27,7 @@ import warnings
 
 import numpy as np
 
-from replication.core.so3 import angle_between_deg, log_map
+from replication.core.so3 import angle_between_deg, rotation_vector_from_matrix
 from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
 from replication.rig.sensor_model import estimate_sensor_model
@@ -156,7 +156,7 @@ def real():
     cases["TUM-VI room1, raw gyro"] = (cam, gyro, refs)
     cam = realdata.load_tum_trajectory(euroc / "orbslam3_mono_cam0_traj_runA.txt")
     gt = realdata.load_tum_trajectory(euroc / "gt_body_MH_01_easy_tum.txt")
-    w = log_map(np.swapaxes(gt.R[:-1], -1, -2) @ gt.R[1:]) / np.diff(gt.t)[:, None]
+    w = rotation_vector_from_matrix(np.swapaxes(gt.R[:-1], -1, -2) @ gt.R[1:]) / np.diff(gt.t)[:, None]
     w = w + np.array([-0.001, 0.020, 0.079]) + np.random.default_rng(34).normal(0, 1.7e-4 * np.sqrt(200), w.shape)
     refs = (realdata.load_reference(euroc / "euroc_cam0_sensor.yaml"),
             realdata.load_reference(euroc / "basalt_euroc_eucm_calib.json"))

@@ -21,8 +21,8 @@ def _stations(rng, N, noise_deg=0.3):
     R0, W = so3.random_rotations(rng, ()), so3.random_rotations(rng, ())
     S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
     sd = np.radians(noise_deg) / np.sqrt(3)
-    C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ (R0 @ S @ W)
-    return R0, C, so3.exp_map(rng.normal(0, sd, (N, 3))) @ S, sd
+    C = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ (R0 @ S @ W)
+    return R0, C, so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ S, sd
 
 
 def main(first, last, N, r, mode, old=False):
@@ -35,8 +35,10 @@ def main(first, last, N, r, mode, old=False):
         if mode == "identical":
             C, S = np.tile(C, (r, 1, 1)), np.tile(S, (r, 1, 1))
         else:
-            C = np.concatenate([C] + [so3.exp_map(rng.normal(0, sd, (N, 3))) @ C for _ in range(r - 1)])
-            S = np.concatenate([S] + [so3.exp_map(rng.normal(0, sd, (N, 3))) @ S for _ in range(r - 1)])
+            C = np.concatenate([C] + [so3.matrix_from_rotation_vector(rng.normal(0, sd,
+                                                                                 (N, 3))) @ C for _ in range(r - 1)])
+            S = np.concatenate([S] + [so3.matrix_from_rotation_vector(rng.normal(0, sd,
+                                                                                 (N, 3))) @ S for _ in range(r - 1)])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = poses.calibrate_poses(C, S, n_bootstrap=200, seed=seed, diagnose=False)

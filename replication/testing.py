@@ -7,14 +7,20 @@ import numpy as np
 
 from ._jitter import jitter
 from .core.checks import check_matrices
-from .core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
+from .core.so3 import (
+    angle_between_deg,
+    matrix_from_rotation_vector,
+    quaternion_from_matrix,
+    rotation_vector_from_matrix,
+)
 
 __all__ = ["RIG_R0", "rig_motion", "rig_streams", "noisy_rig", "rig_pairs", "camera_lost", "clock_jumped",
-           "samples_lost", "assert_rotations_close", "write_tum_trajectory", "write_euroc_imu"]
+           "samples_lost", "clock_stepped", "clock_drifting", "camera_clock_jumped", "assert_rotations_close",
+           "write_tum_trajectory", "write_euroc_imu"]
 
 #: The synthetic rig's ``camera_from_sensor``: 40, -70, 125 deg as a rotation vector's components (a generic mounting,
 #: about 150 deg).
-RIG_R0 = exp_map(np.radians([40.0, -70.0, 125.0]))
+RIG_R0 = matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def rig_motion(t, phase=0.0, rest_s: float = 0.0):
@@ -30,7 +36,7 @@ def rig_motion(t, phase=0.0, rest_s: float = 0.0):
     if rest_s:
         s = np.clip((t - rest_s) / 2.0, 0.0, 1.0)
         w = (s * s * (3 - 2 * s))[..., None] * w
-    return exp_map(w)
+    return matrix_from_rotation_vector(w)
 
 
 def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | None = None,
@@ -83,12 +89,14 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
     t_cam = np.arange(0.0, seconds, 0.05)
     C = rig_motion(t_cam, phase, rest_s)
     if callable(camera_noise_deg):
-        C = C @ exp_map(camera_noise_deg((len(t_cam), 3)))
+        C = C @ matrix_from_rotation_vector(camera_noise_deg((len(t_cam), 3)))
     elif camera_noise_deg:
-        C = C @ exp_map(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam), 3)))
+        C = C @ matrix_from_rotation_vector(rng.normal(0.0, np.radians(camera_noise_deg) / np.sqrt(3.0), (len(t_cam),
+                                                                                                          3)))
     t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
     Q = rig_motion(t_imu, phase, rest_s) @ R0  # world_from_sensor
-    omega = log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005  # body rates over each step, at its midpoint
+    # body rates over each step, at its midpoint
+    omega = rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     if bias is not None:
         omega = omega + np.asarray(bias, dtype=float)
     if callable(gyro_noise_deg_s):
@@ -122,10 +130,10 @@ def noisy_rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias
     rng = np.random.default_rng(seed)
     phase = rng.uniform(0.0, 2.0 * np.pi, 3)
     t_cam = np.arange(0.0, seconds, 0.05)
-    noise = exp_map(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
+    noise = matrix_from_rotation_vector(rng.normal(0.0, np.radians(cam_deg), (len(t_cam), 3)))
     if drift_deg:
         steps = rng.normal(0.0, np.radians(drift_deg) * np.sqrt(0.05 / 10.0), (len(t_cam), 3))
-        noise = exp_map(np.cumsum(steps, axis=0)) @ noise
+        noise = matrix_from_rotation_vector(np.cumsum(steps, axis=0)) @ noise
     camera = OrientationStream(t_cam, rig_motion(t_cam, phase) @ noise, "camera")  # a wander is no rotation vector
     _, _, gyro, _ = rig_streams(
         seconds, phase=phase, remount=remount,
@@ -154,7 +162,7 @@ def camera_lost(camera, rng: np.random.Generator, wander_deg: float, lost_s: flo
     steps = rng.normal(0.0, np.radians(wander_deg) * np.sqrt(0.05 / 10.0), (len(t), 3)) * (t < lost_s)[:, None]
     path = np.cumsum(steps, axis=0)
     path -= np.minimum(t / lost_s, 1.0)[:, None] * path[-1]  # a bridge: the frame is found again at lost_s
-    walk = exp_map(path)  # the camera frame wanders: world_from_camera' = world_from_camera W(t)
+    walk = matrix_from_rotation_vector(path)  # the camera frame wanders: world_from_camera' = world_from_camera W(t)
     return OrientationStream(t, camera.world_from_body @ walk, "camera (lost for a stretch)")
 
 
@@ -174,6 +182,30 @@ def samples_lost(gyro, at: float, count: int):
     keep = np.ones(len(gyro.t), bool)
     keep[k:k + count] = False
     return GyroStream(gyro.t[keep], gyro.omega[keep], gyro.source)
+
+
+def clock_stepped(gyro, at: float, count: int):
+    """``gyro`` losing ``count`` samples at ``at`` while its stamps run on evenly: its clock steps back by ``count``
+    sample intervals there, with no skip in the stamps to show it."""
+    from .rig.streams import GyroStream
+
+    i = int(np.searchsorted(gyro.t, at))
+    omega = np.concatenate([gyro.omega[:i], gyro.omega[i + count:]])
+    return GyroStream(gyro.t[:len(omega)], omega, gyro.source)
+
+
+def clock_drifting(gyro, ppm: float, mid: float):
+    """``gyro`` whose clock runs ``ppm`` parts per million fast, agreeing with the camera's at ``mid`` (s)."""
+    from .rig.streams import GyroStream
+
+    return GyroStream(gyro.t + ppm * 1e-6 * (gyro.t - mid), gyro.omega, gyro.source)
+
+
+def camera_clock_jumped(camera, at: float, size: float):
+    """``camera`` whose clock jumps ahead by ``size`` s at ``at`` (a skip in its stamps)."""
+    from .rig.streams import OrientationStream
+
+    return OrientationStream(np.where(camera.t >= at, camera.t + size, camera.t), camera.world_from_body, "camera")
 
 
 def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> None:
@@ -198,7 +230,7 @@ def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> Non
 def write_tum_trajectory(path, stream) -> None:
     """Write an orientation stream (``t`` in s, ``R`` world_from_body) as a TUM trajectory (zero positions, quaternion
     x y z w), as ``calibrate --camera`` reads it."""
-    q = as_quaternion(stream.R)
+    q = quaternion_from_matrix(stream.R)
     rows = np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]])
     np.savetxt(path, rows, fmt="%.9f")
 

@@ -78,11 +78,11 @@ def rig(tmp_path_factory):
     R0, world_from_camera = RIG_R0, rig_motion
 
     t = np.arange(0.0, 30.0, 0.05)
-    q = so3.as_quaternion(world_from_camera(t))
+    q = so3.quaternion_from_matrix(world_from_camera(t))
     np.savetxt(d / "cam.txt", np.column_stack([t + 1e3, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     t_imu = np.arange(-1.0, 31.0, 0.005)
     Q = world_from_camera(t_imu) @ R0
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     t_mid = 0.5 * (t_imu[1:] + t_imu[:-1]) + 1e3
     np.savetxt(d / "imu.csv", np.column_stack([np.round(t_mid * 1e9), omega, np.tile([0, 0, 9.81], (len(t_mid), 1))]),
                fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,wx,wy,wz,ax,ay,az")

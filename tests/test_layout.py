@@ -324,7 +324,7 @@ def misnamed_test_file(path: Path) -> str | None:
         return None
     folder = path.parent.relative_to(TESTS).as_posix()
     name = path.stem.removeprefix("test_")
-    if folder in ("core", "rig", "study", "."):
+    if folder in ("cli", "core", "rig", "study", "."):
         units = unit_names("hall" if folder == "." else folder)
         return None if name in units else f"{rel}: no module or public class {name!r} in {folder} ({sorted(units)})"
     if folder == "scripts":
@@ -363,3 +363,92 @@ def test_the_portability_files_share_out_every_notebook_once():
     parts = [p.stem.removeprefix("test_portability_").split("_") for p in files]
     assert len(parts) == 2  # one per xdist worker (scripts/test runs two, --dist loadfile)
     assert sorted(sum(parts, [])) == [p.name[:2] for p in NOTEBOOKS]
+
+
+#: The naming rule for conversions (docs/conventions.md, "Names of conversions"): ``<to>_from_<from>``. A module-level
+#: public function named like another rule's conversion is refused; the exceptions, with their reason:
+NOT_CONVERSIONS = {
+    "nearest_rotation_up_to_sign": "'up to sign' qualifies the projection; nothing is converted",
+    "match_to_table1": "a verb: it matches a stopped SQP to Table I's rows",
+    "cost_to_zero": "a claim's id (the paper's cost goes to zero): its record, not a conversion",
+}
+OTHER_RULES = r"^(as|to|from)_|_to_"
+
+
+def conversion_name_violations(source: str) -> list:
+    """Module-level public functions of ``source`` named against the rule (``as_*``, ``to_*``, ``from_*``,
+    ``*_to_*``), the listed exceptions aside; methods (``to_dict``) and private helpers are not looked at."""
+    import re
+
+    return [node.name for node in ast.parse(source).body
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and not node.name.startswith("_")
+            and re.search(OTHER_RULES, node.name) and node.name not in NOT_CONVERSIONS]
+
+
+def test_the_naming_rule_finder_sees_each_other_rule_and_spares_the_rest():
+    source = ("def as_array(R): ...\ndef to_text(x): ...\ndef from_degrees(s, a): ...\n"
+              "def distance_to_angle(d): ...\ndef quaternion_from_matrix(R): ...\ndef _as_array(x): ...\n"
+              "def nearest_rotation_up_to_sign(M): ...\ndef world_from_body(t): ...\ndef total(x): ...\n"
+              "class Result:\n    def to_dict(self): ...\n")
+    assert conversion_name_violations(source) == ["as_array", "to_text", "from_degrees", "distance_to_angle"]
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_conversions_are_named_to_from_from(module):
+    found = conversion_name_violations(MODULES[module].read_text(encoding="utf-8"))
+    assert not found, (f"{module}: {found} break the naming rule <to>_from_<from> (docs/conventions.md); rename them, "
+                       "or list a name that converts nothing in NOT_CONVERSIONS with its reason")
+
+
+def test_the_exceptions_to_the_naming_rule_still_exist():
+    defined = set().union(*(_defined_names(ast.parse(p.read_text(encoding="utf-8"))) for p in MODULES.values()))
+    assert set(NOT_CONVERSIONS) <= defined, set(NOT_CONVERSIONS) - defined
+
+
+def test_the_old_conversion_names_are_gone_and_the_conventions_page_names_the_new():
+    from replication.core import so3
+    from replication.study import ledger
+
+    old_so3 = ["log_map", "exp_map", "as_quaternion", "quaternion_to_matrix"]  # (old names on purpose)
+    old_so3 += ["yaw_pitch_roll_deg", "from_euler", "chordal_to_angle_deg"]  # (old names on purpose)
+    old_ledger = ["to_markdown", "to_summary"]  # (old names on purpose)
+    assert not [n for n in old_so3 if hasattr(so3, n)] and not [n for n in old_ledger if hasattr(ledger, n)]
+    page = (ROOT / "docs" / "conventions.md").read_text(encoding="utf-8")
+    converters = [n for n in so3.__all__ if "_from_" in n] + ["markdown_from_ledger", "summary_from_ledger"]
+    assert len(converters) == 10 and not [n for n in converters if f"`{n}`" not in page and f".{n}`" not in page]
+
+
+#: Backticked words of docs/layout.md's tables that are not names in the code, with their reason.
+LAYOUT_WORDS_NOT_IN_CODE = {
+    "InitialEXRotation": "VINS-Mono's class, which study/vins_rule.py ports",
+    "ahrs": "the third-party package of the lab's filters",
+    "warning": "a verdict level, a string",
+}
+
+
+def _names_in_code() -> set:
+    names = set()
+    for path in MODULES.values():
+        names.update({path.stem, *path.relative_to(ROOT).parent.parts})
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names.update({getattr(node, key) for key in ("name", "id", "attr", "arg")
+                          if isinstance(getattr(node, key, None), str)})
+    return names
+
+
+def layout_words_not_in_code(page: str, names: set) -> list:
+    """Backticked identifiers in the page's table rows that the code does not have; the paper's own symbols may
+    follow a code name in ``(the paper's ...)``."""
+    import re
+
+    rows = [re.sub(r"\(the paper's [^)]*\)", "", line) for line in page.splitlines() if line.startswith("|")]
+    words = {w for row in rows for w in re.findall(r"`([A-Za-z_]\w*)`", row)}
+    return sorted(w for w in words if w not in names and w not in LAYOUT_WORDS_NOT_IN_CODE)
+
+
+def test_the_layout_page_names_what_the_code_has():
+    names = _names_in_code()
+    assert layout_words_not_in_code("| | `handeye.py` | `H1`, `v2h` |", names) == ["H1"]
+    assert layout_words_not_in_code("| | `handeye.py` | `stack_H1` (the paper's `H1`) |", names) == []
+    page = (ROOT / "docs" / "layout.md").read_text(encoding="utf-8")
+    assert not layout_words_not_in_code(page, names), "docs/layout.md names what the code does not have"

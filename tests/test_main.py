@@ -78,7 +78,7 @@ def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
     assert (tmp_path / "a" / "static_imu.csv").read_text() != (tmp_path / "b" / "static_imu.csv").read_text()
 
 
-# ------------------------------------------------------------------- a rig user's command line (issue 24, part 4)
+# ------------------------------------------------------------------- a rig user's command line
 
 def _run(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", "replication", *map(str, args)], capture_output=True, text=True,
@@ -185,10 +185,11 @@ def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
     from replication.core import so3
 
     t = np.arange(0.0, 30.0, 0.05)
-    Q = so3.exp_map(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1))
+    Q = so3.matrix_from_rotation_vector(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)],
+                                                 axis=-1))
     from replication.testing import RIG_R0 as R0
     for name, R in [("cam.txt", Q), ("sensor.txt", Q @ R0)]:
-        q = so3.as_quaternion(R)
+        q = so3.quaternion_from_matrix(R)
         np.savetxt(tmp_path / name, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     out = _run("calibrate", "--camera", tmp_path / "cam.txt", "--sensor", tmp_path / "sensor.txt", "--bootstrap", 20)
     assert out.returncode == 0, out.stderr
@@ -247,7 +248,7 @@ def rig():
 
 
 def _tum_bytes(camera) -> bytes:
-    q = so3.as_quaternion(camera.R)
+    q = so3.quaternion_from_matrix(camera.R)
     rows = np.column_stack([camera.t + T0, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]])
     return "".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows).encode()
 

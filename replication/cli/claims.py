@@ -23,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
     """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
     file or README refused, or more than one of ``--check``, ``--readme``, ``--summary`` given: the message on
     stderr)."""
-    from ..study.ledger import collect, to_markdown, to_summary, update_readme
+    from ..study.ledger import collect, markdown_from_ledger, summary_from_ledger, update_readme
 
     given = [flag for flag in ("--check", "--readme", "--summary") if getattr(args, flag[2:])]
     if len(given) > 1:  # each is one action: refused before any work rather than one of them silently ignored
@@ -46,10 +46,10 @@ def run(args: argparse.Namespace) -> int:
             print("README's claims table updated")
             return 0
         if args.summary:
-            print(to_summary(ledger), end="")
+            print(summary_from_ledger(ledger), end="")
             return 0
     except (ValueError, OSError) as err:  # DataFileError is a ValueError; DataFileNotFound both
         print(f"error: {err}", file=sys.stderr)
         return 2
-    print(to_markdown(ledger))
+    print(markdown_from_ledger(ledger))
     return 0

@@ -94,12 +94,12 @@ def run(args: argparse.Namespace) -> int:
             times[path.name] = execute_notebook(path)
     for name, seconds in times.items():
         print(f"{name}: {seconds:.1f} s")
-    from ..study.ledger import collect, to_markdown
+    from ..study.ledger import collect, markdown_from_ledger
 
     ledger = collect(complete=not args.only)
     (results / "tables").mkdir(parents=True, exist_ok=True)
     write_atomic(results / "tables" / "claims.csv", ledger.to_csv(index=False))
-    write_atomic(results / "tables" / "claims.md", to_markdown(ledger))
+    write_atomic(results / "tables" / "claims.md", markdown_from_ledger(ledger))
     print(f"claims ledger: {ledger['claim'].nunique()} claims, verdicts "
           + ", ".join(f"{v}: {n}" for v, n in ledger.drop_duplicates("claim")["verdict"].value_counts().items()))
     print(f"results written to {results}")

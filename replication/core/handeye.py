@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .checks import check_matrices, check_rotation_matrices
-from .so3 import chordal_to_angle_deg
+from .so3 import angle_deg_from_chordal
 
 __all__ = [
     "check_motion_pairs",
@@ -280,7 +280,7 @@ def pair_residual_deg(R, A, B) -> np.ndarray:
     numpy.ndarray, shape (..., J)
     """
     diff = _pair_differences(R, A, B)
-    return chordal_to_angle_deg(np.sqrt(np.einsum("...ab,...ab->...", diff, diff)))
+    return angle_deg_from_chordal(np.sqrt(np.einsum("...ab,...ab->...", diff, diff)))
 
 
 def handeye_cost_kron(R, K, n_motions: int) -> np.ndarray:

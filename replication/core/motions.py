@@ -16,7 +16,7 @@ import numpy as np
 from .checks import _first_index
 from .handeye import check_motion_pairs, kronecker_operator
 from .kernels import eigvalsh3, top_eigenvector3
-from .so3 import log_map
+from .so3 import rotation_vector_from_matrix
 
 __all__ = ["MotionObservability", "motion_observability", "check_observable", "Motions", "prepare_motions"]
 
@@ -218,7 +218,8 @@ class Motions:
     @property
     def rotation_vectors(self):
         """``(log A, log B)``: the rotation vectors of the camera and sensor motions (radians), (..., J, 3) each."""
-        return self._cached("rotation_vectors", lambda: (log_map(self.A), log_map(self.B)))
+        return self._cached("rotation_vectors", lambda: (rotation_vector_from_matrix(self.A),
+                                                         rotation_vector_from_matrix(self.B)))
 
     def _spreads(self):
         return self._cached("spreads", lambda: tuple(_axis_spread_deg(w) for w in self.rotation_vectors))

@@ -1,6 +1,8 @@
 """Rotation-matrix helpers: validation, projection onto SO(3), noise, sampling, error metrics, conversions.
 
-Every conversion of the package (rotation vectors, quaternions, Euler angles, slerp) lives here.
+Every conversion of the package (rotation vectors, quaternions, Euler angles, slerp) lives here, named
+``<to>_from_<from>`` (``quaternion_from_matrix``, ``matrix_from_quaternion``): the naming rule of
+``docs/conventions.md``.
 Conventions (frames in names, batching, degrees vs radians, the paper's symbols): ``docs/conventions.md``.
 
 Reference: Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment
@@ -25,17 +27,18 @@ __all__ = [
     "random_rotations",
     "frobenius_error",
     "angle_between_deg",
-    "chordal_to_angle_deg",
+    "angle_deg_from_chordal",
     "nearest_rotation_up_to_sign",
     "rotation_angle_deg",
     "orthonormality_residual",
-    "log_map",
-    "exp_map",
-    "as_quaternion",
+    # conversions, <to>_from_<from>
+    "rotation_vector_from_matrix",
+    "matrix_from_rotation_vector",
+    "quaternion_from_matrix",
+    "matrix_from_quaternion",
     "quaternion_from_rotation_vector",
-    "quaternion_to_matrix",
-    "yaw_pitch_roll_deg",
-    "from_euler",
+    "yaw_pitch_roll_deg_from_matrix",
+    "matrix_from_euler",
     "slerp",
     "slerp_interpolator",
     "cumulative_product",
@@ -248,7 +251,7 @@ def rotation_angle_deg(R) -> np.ndarray:
     return np.degrees(ang).reshape(R.shape[:-2])
 
 
-def chordal_to_angle_deg(distance) -> np.ndarray:
+def angle_deg_from_chordal(distance) -> np.ndarray:
     """Rotation angle in degrees from a chordal distance: ``2 arcsin(min(1, d / (2 sqrt 2)))``.
 
     Inverts ``||R1 - R2||_F = 2 sqrt(2) sin(theta / 2)`` (see :func:`frobenius_error`);
@@ -280,8 +283,8 @@ def _batched(func, X, tail_in, tail_out):
     return out.reshape(lead + tail_out)
 
 
-def log_map(R) -> np.ndarray:
-    """Rotation vectors ``w`` (radians, ``|w| <= pi``) with ``R = exp([w]x)``, batched.
+def rotation_vector_from_matrix(R) -> np.ndarray:
+    """Rotation vectors ``w`` (radians, ``|w| <= pi``) with ``R = exp([w]x)`` (the log map of SO(3)), batched.
 
     Elementwise NumPy (no per-matrix call): ``theta = atan2(|v|, (tr R - 1) / 2)`` with
     ``v = vee(R - R^T) / 2 = sin(theta) n``; beyond 120 deg the axis comes from the
@@ -323,8 +326,9 @@ def log_map(R) -> np.ndarray:
     return w
 
 
-def exp_map(w) -> np.ndarray:
-    """Rotation matrices ``exp([w]x)`` from rotation vectors (radians), batched: (..., 3) -> (..., 3, 3).
+def matrix_from_rotation_vector(w) -> np.ndarray:
+    """Rotation matrices ``exp([w]x)`` (the exp map of SO(3)) from rotation vectors (radians), batched:
+    (..., 3) -> (..., 3, 3).
 
     Rodrigues' formula ``I + sin(t)/t [w]x + (1 - cos(t))/t^2 [w]x^2`` (``t = |w|``), elementwise,
     with Taylor terms for ``t < 1e-4``.
@@ -342,19 +346,20 @@ def exp_map(w) -> np.ndarray:
     return np.eye(3) + a[..., None, None] * W + b[..., None, None] * (W @ W)
 
 
-def as_quaternion(R) -> np.ndarray:
+def quaternion_from_matrix(R) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)``, scalar first, with ``w >= 0``, batched: (..., 3, 3) -> (..., 4).
 
     ``R`` rotates by ``theta`` about the unit axis ``n`` and
-    ``q = (cos(theta/2), sin(theta/2) n)``, from :func:`log_map` (elementwise). ``w >= 0``
-    because ``theta <= 180`` deg; the sign is ambiguous only at ``theta = 180`` deg.
+    ``q = (cos(theta/2), sin(theta/2) n)``, from :func:`rotation_vector_from_matrix` (elementwise).
+    ``w >= 0`` because ``theta <= 180`` deg; the sign is ambiguous only at ``theta = 180`` deg.
     """
-    return quaternion_from_rotation_vector(log_map(R))
+    return quaternion_from_rotation_vector(rotation_vector_from_matrix(R))
 
 
 def quaternion_from_rotation_vector(w) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)``, scalar first, from rotation vectors ``|w| <= pi`` (radians), batched:
-    (..., 3) -> (..., 4); ``as_quaternion(R) = quaternion_from_rotation_vector(log_map(R))``."""
+    (..., 3) -> (..., 4); ``quaternion_from_matrix(R)`` is
+    ``quaternion_from_rotation_vector(rotation_vector_from_matrix(R))``."""
     w = np.asarray(w, dtype=float)
     theta = np.sqrt(np.einsum("...i,...i->...", w, w))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -362,13 +367,13 @@ def quaternion_from_rotation_vector(w) -> np.ndarray:
     return np.concatenate([np.cos(0.5 * theta)[..., None], k[..., None] * w], axis=-1)
 
 
-def quaternion_to_matrix(q) -> np.ndarray:
+def matrix_from_quaternion(q) -> np.ndarray:
     """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first), batched."""
     q = np.asarray(q, dtype=float)
     return _batched(lambda v: _scipy_rotation().from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))
 
 
-def yaw_pitch_roll_deg(R) -> np.ndarray:
+def yaw_pitch_roll_deg_from_matrix(R) -> np.ndarray:
     """Yaw, pitch, roll (degrees, in that order) with ``R = Rz(yaw) Ry(pitch) Rx(roll)``, batched:
     (..., 3, 3) -> (..., 3).
 
@@ -380,7 +385,7 @@ def yaw_pitch_roll_deg(R) -> np.ndarray:
     return _batched(lambda m: _scipy_rotation().from_matrix(m).as_euler("ZYX", degrees=True), R, (3, 3), (3,))
 
 
-def from_euler(seq: str, angles, *, degrees: bool = False) -> np.ndarray:
+def matrix_from_euler(seq: str, angles, *, degrees: bool = False) -> np.ndarray:
     """Rotation matrices from Euler angles in SciPy's ``seq`` (upper case: intrinsic), batched:
     (..., len(seq)) -> (..., 3, 3)."""
     angles = np.asarray(angles, dtype=float)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core.checks import check_number
 from ..core.handeye import relative_rotations
-from ..core.so3 import log_map
+from ..core.so3 import rotation_vector_from_matrix
 from .streams import GyroStream, OrientationStream, integrate_gyro, time_unit_mismatch
 
 __all__ = ["OffsetEstimate", "estimate_time_offset", "offset_analysis", "offset_in_words", "motion_pairs",
@@ -19,14 +19,14 @@ __all__ = ["OffsetEstimate", "estimate_time_offset", "offset_analysis", "offset_
 def _speed(Q, times) -> np.ndarray:
     """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading axes."""
     rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
-    return np.linalg.norm(log_map(rel), axis=-1) / np.diff(times)
+    return np.linalg.norm(rotation_vector_from_matrix(rel), axis=-1) / np.diff(times)
 
 
 #: Most interpolated sensor samples (candidate offsets x camera times) the offset search holds at once. One
-#: sample costs about 150 bytes at the peak (the slerped rotation, the relative rotations, ``log_map``'s
-#: temporaries; measured: 169 MB for 401 offsets x 2800 times), so a block takes ~80 MB whatever
-#: ``max_offset`` is. The default search (``max_offset`` 0.2 s, 41 offsets) fits in one block up to 12 700
-#: camera times (10.6 min at 20 Hz).
+#: sample costs about 150 bytes at the peak (the slerped rotation, the relative rotations,
+#: ``rotation_vector_from_matrix``'s temporaries; measured: 169 MB for 401 offsets x 2800 times), so a block
+#: takes ~80 MB whatever ``max_offset`` is. The default search (``max_offset`` 0.2 s, 41 offsets) fits in one
+#: block up to 12 700 camera times (10.6 min at 20 Hz).
 OFFSET_BLOCK_SAMPLES = 2 ** 19
 
 

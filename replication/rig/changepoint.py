@@ -10,7 +10,7 @@ import numpy as np
 
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import check_motion_pairs
-from ..core.so3 import angle_between_deg, log_map
+from ..core.so3 import angle_between_deg, rotation_vector_from_matrix
 from ..core.solvers.certificate import chordal_newton, relaxed_rotation
 from ..core.stats import radius_deg
 from .streams import GyroStream, OrientationStream
@@ -153,7 +153,8 @@ def _fit(S, SB, n):
 
 def _long_run(A, B, R, m: int):
     """``sum_j sum_{|l| <= m} u_j u_{j+l}^T`` over one side, ``u_j = (I - B_j)^T r_j`` at ``R`` (3x3)."""
-    r = log_map(R.T @ A @ R @ np.swapaxes(B, -1, -2))  # residual rotation vectors: R^T A_j R B_j^T = exp([r_j]x)
+    # residual rotation vectors: R^T A_j R B_j^T = exp([r_j]x)
+    r = rotation_vector_from_matrix(R.T @ A @ R @ np.swapaxes(B, -1, -2))
     u = np.einsum("jba,jb->ja", _EYE - B, r)
     c = np.concatenate([np.zeros((1, 3)), np.cumsum(u, axis=0)])
     j = np.arange(len(u))
@@ -254,7 +255,7 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
     Ra, ca, s2a, Ga = _fit(PK[J] - PK[ks], PB[J] - PB[ks], na)
     Cb = (s2b / 3.0)[:, None, None] * np.linalg.inv(Gb)
     Ca = (s2a / 3.0)[:, None, None] * np.linalg.inv(Ga)
-    d = log_map(np.swapaxes(Rb, -1, -2) @ Ra)
+    d = rotation_vector_from_matrix(np.swapaxes(Rb, -1, -2) @ Ra)
     W = np.einsum("ka,ka->k", d, np.linalg.solve(Cb + Ca, d[..., None])[..., 0])
     # the split: least squares (Bai 1994) over the pairs on either side; the block spanning the split is left out
     # at every split alike (it straddles the change), so the sums compare the same number of pairs

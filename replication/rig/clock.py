@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.so3 import log_map
+from ..core.so3 import rotation_vector_from_matrix
 from .segments import SEGMENT_S
 from .streams import OrientationStream
 
@@ -220,7 +220,7 @@ def _residuals(Ai, sensor, ti, tk, d, R):
     """``r_j = log(B_j^T R^T A_j R)`` of the pairs ``(ti, tk)`` with the sensor at ``t + d`` (``Ai``: ``R^T A_j R``)."""
     Qi, Qk = sensor.at(ti + d), sensor.at(tk + d)
     B = np.swapaxes(Qk, -1, -2) @ Qi
-    return log_map(np.swapaxes(B, -1, -2) @ Ai)
+    return rotation_vector_from_matrix(np.swapaxes(B, -1, -2) @ Ai)
 
 
 def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):

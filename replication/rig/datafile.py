@@ -376,11 +376,11 @@ def unit_quaternion_rotations(path, q_wxyz, lines, tol: float = QUATERNION_NORM_
     A norm off 1 by more than ``tol`` raises :class:`DataFileError` at its line (a wrong column order or
     unit); the others are normalised.
     """
-    from ..core.so3 import quaternion_to_matrix
+    from ..core.so3 import matrix_from_quaternion
 
     norm = np.linalg.norm(q_wxyz, axis=-1)
     bad = np.flatnonzero(np.abs(norm - 1.0) > tol)
     if bad.size:
         fail(path, f"quaternion norm {norm[bad[0]]:.6g} is not 1 (tolerance {tol:g}); "
              "wrong column order or units?", line=lines[bad[0]])
-    return quaternion_to_matrix(q_wxyz / norm[:, None])
+    return matrix_from_quaternion(q_wxyz / norm[:, None])

@@ -6,7 +6,7 @@ import warnings
 
 import numpy as np
 
-from ..core.so3 import angle_between_deg, as_quaternion, quaternion_to_matrix
+from ..core.so3 import angle_between_deg, matrix_from_quaternion, quaternion_from_matrix
 from .quality import THRESHOLDS, Reason
 from .streams import GyroStream, OrientationStream
 
@@ -61,8 +61,8 @@ POSE_HYPOTHESES = (
 
 
 def _reordered(stream: OrientationStream, order) -> OrientationStream:
-    q = as_quaternion(stream.world_from_body)[:, order]
-    return OrientationStream(stream.t, quaternion_to_matrix(q), stream.source)
+    q = quaternion_from_matrix(stream.world_from_body)[:, order]
+    return OrientationStream(stream.t, matrix_from_quaternion(q), stream.source)
 
 
 def _inverted(stream: OrientationStream) -> OrientationStream:

@@ -8,7 +8,7 @@ import textwrap
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ..core.so3 import as_quaternion, yaw_pitch_roll_deg
+from ..core.so3 import quaternion_from_matrix, yaw_pitch_roll_deg_from_matrix
 from .quality import THRESHOLDS
 
 __all__ = ["calibration_figure", "headline", "offset_zoom_ms"]
@@ -64,7 +64,7 @@ def headline(result, *, name: str | None = None, reference_name: str | None = No
 def _reference_line(said: str, ref, error_deg: float) -> str:
     if ref is not None:
         ref = np.asarray(ref, dtype=float)
-        said += ": " + _rotation_text(as_quaternion(ref), yaw_pitch_roll_deg(ref))
+        said += ": " + _rotation_text(quaternion_from_matrix(ref), yaw_pitch_roll_deg_from_matrix(ref))
     return f"{said}; angle between R0 and it: {error_deg:.3f} deg"
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.so3 import cumulative_product, exp_map, log_map
+from ..core.so3 import cumulative_product, matrix_from_rotation_vector, rotation_vector_from_matrix
 
 __all__ = ["critical_value", "N_PARAMETERS"]
 
@@ -39,7 +39,7 @@ def _integrate(t, w, b, sigma):
     ``U_n = sum_{s<n} Q_{s+1} diag(w_s) dt_s`` (the scale's) and the steps' rates ``w_s``."""
     dt = np.diff(t)
     rates = (0.5 * (w[:-1] + w[1:]) - b) * np.exp(-sigma)
-    Q = np.concatenate([np.eye(3)[None], cumulative_product(exp_map(rates * dt[:, None]))])
+    Q = np.concatenate([np.eye(3)[None], cumulative_product(matrix_from_rotation_vector(rates * dt[:, None]))])
     Qdt = Q[1:] * dt[:, None, None]
     zero = np.zeros((1, 3, 3))
     S = np.concatenate([zero, np.cumsum(Qdt, axis=0)])
@@ -53,7 +53,8 @@ def _at(times, t, Q, S, U, rates):
     n = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
     h = times - t[n]
     f = (h / (t[n + 1] - t[n]))[:, None, None]
-    return Q[n] @ exp_map(rates[n] * h[:, None]), S[n] + (S[n + 1] - S[n]) * f, U[n] + (U[n + 1] - U[n]) * f, rates[n]
+    Qh = Q[n] @ matrix_from_rotation_vector(rates[n] * h[:, None])
+    return Qh, S[n] + (S[n + 1] - S[n]) * f, U[n] + (U[n + 1] - U[n]) * f, rates[n]
 
 
 def _pairs(camera, t_gyro, interval, offset, max_offset):
@@ -89,7 +90,7 @@ def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None):
     Delta = np.swapaxes(Qi, -1, -2) @ Qk
     QkT = np.swapaxes(Qk, -1, -2)
     M = X.T @ A @ X
-    r = log_map(Delta @ M)
+    r = rotation_vector_from_matrix(Delta @ M)
     Mt = np.swapaxes(M, -1, -2)
     wi_in_k = np.einsum("jba,jb->ja", Delta, wi)  # Delta^T omega_i
     jac = np.empty((len(A), 3, N_PARAMETERS))
@@ -155,7 +156,7 @@ def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8
         X, b, d, k, s = p
         full = np.zeros(N_PARAMETERS)
         full[cols] = step
-        return [X @ exp_map(full[:3]), b + full[3:6], d + full[6], k + full[7], s + full[8:]]
+        return [X @ matrix_from_rotation_vector(full[:3]), b + full[3:6], d + full[6], k + full[7], s + full[8:]]
 
     def linearise(p):
         return _linearise(*p[:4], A, ti, tk, t_mid, t_g, w_g, p[4])

@@ -13,8 +13,8 @@ from collections import deque
 import numpy as np
 
 from .._extras import require
+from ..core import so3
 from ..core.checks import check_number, check_rotation_matrices
-from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map
 from .online import OnlineCalibrator
 from .online_bias import exp3, hold_raw, start_rig_bias
 from .quality import Verdict
@@ -277,7 +277,7 @@ class LiveRig:
         if self._gyro_dt and t1 - t0 > self.GAP_FACTOR * self._gyro_dt:
             return "gap"
         s = (t - t0) / (t1 - t0)
-        return Q0 @ exp_map(s * log_map(Q0.T @ Q1))
+        return Q0 @ so3.matrix_from_rotation_vector(s * so3.rotation_vector_from_matrix(Q0.T @ Q1))
 
     def _drain(self) -> None:
         if self.offset is None:
@@ -429,7 +429,7 @@ class LiveRig:
             "repeated_pairs": int(cal.duplicates), "pairs_dropped_outliers": int(cal.pairs_dropped),
             "pairs_dropped_at_gaps": int(self.pairs_dropped),
             "R0_camera_from_sensor": np.round(cal.R, 12).tolist() if estimated else None,
-            "quaternion_wxyz": np.round(as_quaternion(cal.R), 12).tolist() if estimated else None,
+            "quaternion_wxyz": np.round(so3.quaternion_from_matrix(cal.R), 12).tolist() if estimated else None,
             "radius_deg": cal.radius, "radius_level": cal.level, "radius_covers": RADIUS_COVERS,
             "excitation_deg": status["excitation_deg"], "effective_pairs": status["effective_pairs"],
             "clock_offset_s": self.offset, "clock_offset_given": self.offset_given,
@@ -481,14 +481,14 @@ def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.
     rows = []
     for t_end, t_seen, state in rig.events:
         known = state.estimated
-        q = as_quaternion(state.R) if known else np.full(4, np.nan)
+        q = so3.quaternion_from_matrix(state.R) if known else np.full(4, np.nan)
         row = {"t": t_end, "t_seen": t_seen, "n_pairs": state.n_pairs,
                "radius_deg": state.radius_deg if known and math.isfinite(state.radius_deg) else np.nan,
                "ready": state.ready, "alarm": state.alarm, "event": state.event or "", "determined": state.determined,
                "checking": state.checking, "qw": q[0], "qx": q[1], "qy": q[2], "qz": q[3]}
         if reference is not None:
             ref = reference if remount is None or t_end < remount[0] else reference @ R_re
-            row["error_deg"] = float(angle_between_deg(state.R, ref)) if known else np.nan
+            row["error_deg"] = float(so3.angle_between_deg(state.R, ref)) if known else np.nan
         rows.append(row)
     columns = ["t", "t_seen", "n_pairs", "radius_deg", "ready", "alarm", "event", "determined", "checking", "qw", "qx",
                "qy", "qz"] + (["error_deg"] if reference is not None else [])

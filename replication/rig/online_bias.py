@@ -32,7 +32,7 @@ BIAS_STEP_RAD_S = 1e-3
 
 def exp3(x: float, y: float, z: float) -> np.ndarray:
     """``exp([w]x)`` of one rotation vector (Rodrigues' formula in plain Python: the per-sample hot path of a live gyro;
-    :func:`replication.core.so3.exp_map` is the batched form, equal to rounding)."""
+    :func:`replication.core.so3.matrix_from_rotation_vector` is the batched form, equal to rounding)."""
     t2 = x * x + y * y + z * z
     if t2 < 1e-16:  # second order: sin(t)/t and (1 - cos t)/t^2 to within 1e-24
         a, b = 1.0 - t2 / 6.0, 0.5 - t2 / 24.0
@@ -63,7 +63,7 @@ def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95) -
     """The radius (deg, at ``level``) of ``R0``'s uncertainty that the bias's own uncertainty leaves: ``S C_b S^T``
     with ``C_b`` the bias's covariance (``model.covariance[3:6, 3:6]``) and ``S`` the chordal minimiser's rotation per
     unit bias on the window's pairs (finite differences of :data:`BIAS_STEP_RAD_S` per axis)."""
-    from ..core.so3 import log_map
+    from ..core.so3 import rotation_vector_from_matrix
     from ..core.solvers.optimal import chordal_optimal
     from ..core.stats import radius_deg
     from .association import motion_pairs
@@ -76,7 +76,8 @@ def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95) -
 
     b = np.asarray(model.bias_rad_s, dtype=float)
     R = solved(b)
-    S = np.stack([log_map(R.T @ solved(b + BIAS_STEP_RAD_S * e)) / BIAS_STEP_RAD_S for e in np.eye(3)], axis=-1)
+    S = np.stack([rotation_vector_from_matrix(R.T @ solved(b + BIAS_STEP_RAD_S * e)) / BIAS_STEP_RAD_S
+                  for e in np.eye(3)], axis=-1)
     cov = S @ model.covariance[3:6, 3:6] @ S.T
     return radius_deg(cov, level) if np.all(np.isfinite(cov)) else math.inf
 

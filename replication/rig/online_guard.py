@@ -305,9 +305,9 @@ DRIFT_LAG_SHARE = 0.25
 
 def drift_step(R_before, R_after) -> np.ndarray:
     """The rotation vector ``w`` (rad, sensor frame) with ``R_after = R_before exp([w]x)``."""
-    from ..core.so3 import log_map
+    from ..core.so3 import rotation_vector_from_matrix
 
-    return log_map(np.swapaxes(R_before, -1, -2) @ R_after)
+    return rotation_vector_from_matrix(np.swapaxes(R_before, -1, -2) @ R_after)
 
 
 def recognise_drift(last, event, following: float | None):

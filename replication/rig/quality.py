@@ -150,9 +150,9 @@ def _below(check, value, name, unit, why):
 
 
 def _quaternion(R) -> str:
-    from ..core.so3 import as_quaternion
+    from ..core.so3 import quaternion_from_matrix
 
-    return "(" + ", ".join(f"{v:.4f}" for v in as_quaternion(R)) + ")"
+    return "(" + ", ".join(f"{v:.4f}" for v in quaternion_from_matrix(R)) + ")"
 
 
 def _outlying_poses(medians, kind="median residual of its pairs"):

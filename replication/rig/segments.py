@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats as _st
 
-from ..core.so3 import angle_between_deg, exp_map, log_map
+from ..core.so3 import angle_between_deg, matrix_from_rotation_vector, rotation_vector_from_matrix
 from ..core.stats import radius_deg
 from .changepoint import S2_FLOOR, _fit, _long_run
 
@@ -170,9 +170,9 @@ def _mean(R, W, start, iterations: int = 20):
     Rb = start
     H = W.sum(axis=0)
     for _ in range(iterations):
-        d = log_map(Rb.T @ R)
+        d = rotation_vector_from_matrix(Rb.T @ R)
         step = np.linalg.solve(H, np.einsum("iab,ib->a", W, d))
-        Rb = Rb @ exp_map(step)
+        Rb = Rb @ matrix_from_rotation_vector(step)
         if np.linalg.norm(step) < 1e-12:
             break
     return Rb, np.linalg.inv(H)
@@ -180,7 +180,7 @@ def _mean(R, W, start, iterations: int = 20):
 
 def _against(Ri, Ci, Rr, Cr) -> tuple[float, float]:
     """A segment against the others' mean ``Rr``, covariance ``Cr``: ``d^T (C_i + C_r)^{-1} d / 3`` and the angle."""
-    di = log_map(Rr.T @ Ri)
+    di = rotation_vector_from_matrix(Rr.T @ Ri)
     return float(di @ np.linalg.solve(Ci + Cr, di)) / 3.0, float(angle_between_deg(Ri, Rr))
 
 
@@ -189,7 +189,7 @@ def _homogeneity(R, C, nu):
     S = len(R)
     W = np.linalg.inv(C)
     Rb, Cb = _mean(R, W, R[int(np.argmin(np.trace(C, axis1=1, axis2=2)))])
-    d = log_map(Rb.T @ R)
+    d = rotation_vector_from_matrix(Rb.T @ R)
     dof = 3 * (S - 1)
     F = float(np.einsum("ia,iab,ib->", d, W, d)) / dof
     z, ang = np.empty(S), np.empty(S)

@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.so3 import log_map
+from ..core.so3 import rotation_vector_from_matrix
 from .gyro_model import (
     _Z95,
     N_PARAMETERS,
@@ -357,8 +357,8 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
         span_s=float(tk[-1] - ti[0]), applied=applied, covariance=cov,
         bias_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, :3] @ b))),
         change_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, :3] @ (0.5 * diff)))),
-        fit_ratio=float(np.median(np.linalg.norm(r, axis=-1)) / max(np.median(np.linalg.norm(log_map(A), axis=-1)),
-                                                                    1e-12)),
+        fit_ratio=float(np.median(np.linalg.norm(r, axis=-1))
+                        / max(np.median(np.linalg.norm(rotation_vector_from_matrix(A), axis=-1)), 1e-12)),
         scale=np.exp(sigma), scale_ci95=scale_ci, scale_resolved=resolved,
         scale_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 5:8] @ sigma))), critical=float(z),
         scale_note=None if implausible is None else (

@@ -42,10 +42,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..core import so3
 from ..core.checks import check_number, check_rotation_matrices
 from ..core.handeye import pair_residual_deg
 from ..core.motions import prepare_motions
-from ..core.so3 import angle_between_deg, as_quaternion, exp_map, log_map, rotation_angle_deg, yaw_pitch_roll_deg
 from ..core.solvers import ReplicationWarning, SolverAnswerError, checked_core, solve, solver_info
 from .quality import Evidence, Reason, Verdict, judge
 from .report import RADIUS_COVERS, CalibrationResult
@@ -133,7 +133,7 @@ def check_options(method, options):
     called once with them on a tiny exact problem."""
     if not options:
         return
-    A = exp_map(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
+    A = so3.matrix_from_rotation_vector(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
@@ -288,7 +288,7 @@ def _frozen(R_boot, R, skip, fit) -> bool:
     usable = ~np.asarray(skip, dtype=bool)
     if usable.sum() < 2 or not np.nanmax(fit[1][usable]) > REPLICATE_FIT_FLOOR_DEG:
         return False
-    return bool(np.all(angle_between_deg(R_boot[usable], R) <= FROZEN_DEG))
+    return bool(np.all(so3.angle_between_deg(R_boot[usable], R) <= FROZEN_DEG))
 
 
 def _bad_replicates(method, failed, reflection, unfit=None, fit=None, frozen=False):
@@ -413,9 +413,9 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
             boot_failed = str(err).split(":")[0]
         else:
             if bad_replicates is None:  # never a radius from non-rotations
-                ci = float(np.percentile(angle_between_deg(R_boot, R), 95))
-                boot = np.degrees(log_map(R_boot @ R.T))
-    motion = float(np.median(rotation_angle_deg(A)))
+                ci = float(np.percentile(so3.angle_between_deg(R_boot, R), 95))
+                boot = np.degrees(so3.rotation_vector_from_matrix(R_boot @ R.T))
+    motion = float(np.median(so3.rotation_angle_deg(A)))
     station_medians = None if stations is None else (per_station_median(res, stations) if station_residual is None
                                                      else station_residual(R))
     verdict = judge(Evidence(n_pairs=J, residual_median_deg=float(np.median(res)), motion_median_deg=motion,
@@ -424,7 +424,8 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
                              warnings=tuple(w.category.__name__ for w in ours),
                              spectral_ratio=float(sol.observability.spectral_ratio), method=method,
                              blocks=units if n_bootstrap else None, bootstrap_failed=boot_failed,
-                             reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
+                             reference_error_deg=(None if reference is None
+                                                  else float(so3.angle_between_deg(R, reference))),
                              pose_residual_medians_deg=None if station_medians is None else tuple(station_medians),
                              pose_residual_kind=("its own residual" if station_residual else
                                                  "median residual of its pairs"),
@@ -439,8 +440,8 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
     diagnostics.update(extra_diagnostics or {})
     return CalibrationResult(
         R=R,
-        quaternion_wxyz=as_quaternion(R),
-        euler_zyx_deg=yaw_pitch_roll_deg(R),
+        quaternion_wxyz=so3.quaternion_from_matrix(R),
+        euler_zyx_deg=so3.yaw_pitch_roll_deg_from_matrix(R),
         method=method,
         interval_s=interval,
         n_pairs=int(J),
@@ -455,7 +456,7 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
                       "max": float(res.max())},
         bootstrap_ci95_deg=ci,
         observability=sol.observability,
-        reference_error_deg=None if reference is None else float(angle_between_deg(R, reference)),
+        reference_error_deg=None if reference is None else float(so3.angle_between_deg(R, reference)),
         **_two_references(R, references, ci),
         verdict=verdict,
         warnings=tuple(f"{w.category.__name__}: {w.message}" for w in ours),
@@ -474,8 +475,8 @@ def _two_references(R, references, radius_deg: float = float("nan")) -> dict:
     95 % radius, :func:`reference_reading`)."""
     if references is None:
         return {}
-    errors = tuple(float(angle_between_deg(R, ref)) for ref in references)
-    disagreement = float(angle_between_deg(references[0], references[1]))
+    errors = tuple(float(so3.angle_between_deg(R, ref)) for ref in references)
+    disagreement = float(so3.angle_between_deg(references[0], references[1]))
     return {"reference_errors_deg": errors, "reference_disagreement_deg": disagreement,
             "reference_reading": reference_reading(errors, disagreement, radius_deg)}
 
@@ -485,7 +486,7 @@ def _second_reason(R, references):
     if references is None:
         return None
     found = judge(Evidence(n_pairs=10 ** 6, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None,
-                           reference_error_deg=float(angle_between_deg(R, references[1])))).reasons
+                           reference_error_deg=float(so3.angle_between_deg(R, references[1])))).reasons
     return next((dataclasses.replace(r, check="second_reference_error_deg",
                                      message=r.message.replace("the given reference", "the second reference"))
                  for r in found if r.check == "reference_error_deg"), None)

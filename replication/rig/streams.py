@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.checks import check_rotation_matrices
-from ..core.so3 import cumulative_product, exp_map, slerp_interpolator
+from ..core.so3 import cumulative_product, matrix_from_rotation_vector, slerp_interpolator
 
 __all__ = ["OrientationStream", "GyroStream", "integrate_gyro", "time_unit_mismatch", "PLAUSIBLE_SPAN_S"]
 
@@ -110,7 +110,7 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     (:mod:`replication.rig.sensor_model`; ``gyro_bias=False`` keeps the rates as recorded).
     """
     dt = np.diff(gyro.t)
-    steps = exp_map(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
+    steps = matrix_from_rotation_vector(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
     Q = np.concatenate([np.eye(3)[None], cumulative_product(steps)])
     return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")
 

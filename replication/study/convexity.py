@@ -21,7 +21,7 @@ import pandas as pd
 
 from ..core.checks import check_rotation_matrices
 from ..core.handeye import handeye_cost, kronecker_operator, vec
-from ..core.so3 import angle_between_deg, exp_map, skew
+from ..core.so3 import angle_between_deg, matrix_from_rotation_vector, skew
 from ..core.solvers import WEAK_GAP_FACTOR, ReplicationWarning, chordal_optimal, two_step
 from ..core.solvers.certificate import chordal_newton
 from ..core.stats import ROUNDING_RUNS, declared_bound, share_range, wilson_interval
@@ -285,7 +285,8 @@ def basin_sensitivity(A, B, starts, *, scale: float, rng: np.random.Generator, r
     for _ in range(int(repeats)):
         w = rng.normal(size=starts.shape[:-2] + (3,))
         w *= scale / np.linalg.norm(w, axis=-1, keepdims=True)
-        changed.append(int(np.sum(newton_from_starts(A, B, starts @ exp_map(w))["non-global"].to_numpy() != base)))
+        moved = newton_from_starts(A, B, starts @ matrix_from_rotation_vector(w))["non-global"].to_numpy()
+        changed.append(int(np.sum(moved != base)))
     return max(changed)
 
 

@@ -12,7 +12,7 @@ record edited by hand into another well-formed verdict reads back as that verdic
 (``bash scripts/test`` re-executes every notebook and compares each stored output, claim records included, with
 the new one), and ``claims --check`` says so. ``python -m replication reproduce`` writes it to
 ``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it, ``claims --summary``
-prints the compact table (:func:`to_summary`) that ``claims --readme`` writes into README; the book
+prints the compact table (:func:`summary_from_ledger`) that ``claims --readme`` writes into README; the book
 (``bash scripts/docs``) gives the full ledger from the same records.
 
 Verdicts (:data:`VERDICTS`): ``holds``, ``fails``, ``holds only if`` (the condition says what must hold) and
@@ -41,8 +41,8 @@ from ..rig.datafile import DataFileError, fail, read_text
 from .paper import data_dir, load_claim_table
 
 __all__ = ["VERDICTS", "HOLDS_ONLY_IF", "CLAIM_MIME", "ClaimRecord", "check_record", "record", "check_evidence",
-           "heading_anchor", "notebook_headings", "collect", "to_markdown", "verdict_counts", "counts_in_words",
-           "first_clause", "to_summary", "update_readme"]
+           "heading_anchor", "notebook_headings", "collect", "markdown_from_ledger", "verdict_counts",
+           "counts_in_words", "first_clause", "summary_from_ledger", "update_readme"]
 
 #: The verdict that needs a condition.
 HOLDS_ONLY_IF = "holds only if"
@@ -281,7 +281,7 @@ def _verdict_text(row) -> str:
     return f"{HOLDS_ONLY_IF} {row.condition}" if row.verdict == HOLDS_ONLY_IF else row.verdict
 
 
-def to_markdown(ledger: pd.DataFrame) -> str:
+def markdown_from_ledger(ledger: pd.DataFrame) -> str:
     """A compact Markdown table: claim, where, verdict, evidence, uncertainty, where measured (the setting and a
     link to the notebook section)."""
     lines = ["| claim | the paper | verdict | evidence | uncertainty | where measured |", "|---|---|---|---|---|---|"]
@@ -339,7 +339,7 @@ def _cell(text: str) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
-def to_summary(ledger: pd.DataFrame) -> str:
+def summary_from_ledger(ledger: pd.DataFrame) -> str:
     """The compact ledger (README, ``claims --summary``): the counts (:func:`counts_in_words`), then one row per
     claim: its id, what the paper says, the verdict (the condition is in the full ledger) and a link to the
     notebook section where it is measured."""
@@ -375,7 +375,7 @@ def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
 
 
 def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
-    """Write the compact ledger (:func:`to_summary`) between the README's claims markers, and the counts
+    """Write the compact ledger (:func:`summary_from_ledger`) between the README's claims markers, and the counts
     (:func:`counts_in_words`) between each pair of inline counts markers (:data:`COUNTS`) on one line; ``check``:
     only say whether it is current.
 
@@ -390,7 +390,7 @@ def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> 
     readme = Path(readme) if readme else PROJECT_ROOT / "README.md"
     text = read_text(readme, "the README with the claims table")
     head, tail = _readme_parts(readme, text)
-    new = f"{head}{README_START}\n{to_summary(ledger)}{README_END}{tail}"
+    new = f"{head}{README_START}\n{summary_from_ledger(ledger)}{README_END}{tail}"
     counts = f"<!-- counts:start -->{counts_in_words(ledger)}<!-- counts:end -->"
     new = COUNTS.sub(lambda _: counts, new)
     if check:

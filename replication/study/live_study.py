@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from ..core.so3 import angle_between_deg, exp_map, random_rotations
+from ..core.so3 import angle_between_deg, matrix_from_rotation_vector, random_rotations
 from ..core.stats import mean_se, poisson_upper, wilson_interval
 from ..rig.live import replay
 from ..rig.online import MIN_PAIRS, OnlineCalibrator
@@ -36,12 +36,12 @@ def pair_stream(rng: np.random.Generator, n: int, R0, *, noise_deg: float = 0.2,
     """
     w = rng.normal(size=(n, 3)) if axis is None else np.tile(np.asarray(axis, dtype=float), (n, 1))
     w *= (np.radians(rng.uniform(*motion_deg, n)) / np.linalg.norm(w, axis=1))[:, None]
-    A = exp_map(w)
+    A = matrix_from_rotation_vector(w)
     B = np.swapaxes(R0, -1, -2) @ A @ R0
     if noise_deg:
         sd = np.radians(noise_deg) / np.sqrt(6.0)
-        A = exp_map(rng.normal(0.0, sd, (n, 3))) @ A
-        B = exp_map(rng.normal(0.0, sd, (n, 3))) @ B
+        A = matrix_from_rotation_vector(rng.normal(0.0, sd, (n, 3))) @ A
+        B = matrix_from_rotation_vector(rng.normal(0.0, sd, (n, 3))) @ B
     return A, B
 
 
@@ -132,8 +132,8 @@ def _degenerate_cases(rng, R0, n):
     A, B = pair_stream(rng, 2, R0)
     good_A, good_B = pair_stream(rng, 30, R0)
     w = np.radians(30.0) * np.array([0.2, 0.5, 0.8]) / np.linalg.norm([0.2, 0.5, 0.8])
-    const = exp_map(np.tile(w, (n, 1)))
-    noise = lambda: exp_map(rng.normal(0.0, np.radians(0.2) / np.sqrt(6.0), (n, 3)))  # noqa: E731
+    const = matrix_from_rotation_vector(np.tile(w, (n, 1)))
+    noise = lambda: matrix_from_rotation_vector(rng.normal(0.0, np.radians(0.2) / np.sqrt(6.0), (n, 3)))  # noqa: E731
     return {
         "one axis, noise-free": pair_stream(rng, n, R0, noise_deg=0.0, axis=[0.3, 0.4, 0.5]),
         "one axis, noisy": pair_stream(rng, n, R0, axis=[0.3, 0.4, 0.5]),
@@ -190,7 +190,8 @@ def online_mistakes(*, seed: int, seconds: float = 90.0, target_deg: float = 0.5
     R0, camera, gyro, sensor = rig_streams(seconds, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
     inv = lambda s: OrientationStream(s.t, np.swapaxes(s.world_from_body, -1, -2), s.source)  # noqa: E731
     rest_t = np.arange(0.0, seconds, 0.05)
-    rest = OrientationStream(rest_t, exp_map(rng.normal(0.0, np.radians(0.02), (len(rest_t), 3))), "camera at rest")
+    rest = OrientationStream(rest_t, matrix_from_rotation_vector(rng.normal(0.0, np.radians(0.02), (len(rest_t), 3))),
+                             "camera at rest")
     rest_gyro = GyroStream(gyro.t, rng.normal(0.0, np.radians(0.05), gyro.omega.shape), "gyro at rest")
     cases = {
         "as recorded": (camera, gyro),
@@ -289,7 +290,7 @@ def detection_study(steps_deg, settings: dict, *, n_placements: int, seed: int, 
             for _ in range(n_placements):
                 R0 = random_rotations(rng, ())
                 axis = rng.normal(size=3)
-                R1 = R0 @ exp_map(np.radians(step) * axis / np.linalg.norm(axis))
+                R1 = R0 @ matrix_from_rotation_vector(np.radians(step) * axis / np.linalg.norm(axis))
                 A1, B1 = pair_stream(rng, before, R0, **kwargs)
                 A2, B2 = pair_stream(rng, after, R1, **kwargs)
                 oc = OnlineCalibrator()
@@ -399,7 +400,7 @@ def remount_study(recordings: dict, *, steps_deg, when=(1 / 3, 1 / 2, 2 / 3), ax
             for share in when:
                 for axis in axes:
                     t_re = share * span
-                    R = exp_map(np.radians(step) * np.asarray(axis) / np.linalg.norm(axis))
+                    R = matrix_from_rotation_vector(np.radians(step) * np.asarray(axis) / np.linalg.norm(axis))
                     tr, _ = live_run(camera, sensor, reference, interval=interval, vins_rule=False,
                                      remount=(camera.t[0] + t_re, R))
                     remounts = tr.loc[tr["event"] == "remount", "t_seen"]

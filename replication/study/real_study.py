@@ -182,14 +182,14 @@ def usual_mistakes(camera, gyro, reference, *, seed: int, n_bootstrap: int = 50)
     ``(x, y, z, w)``); the camera poses inverted (``camera_from_world``); the gyro in deg/s read as rad/s; the
     sensor clock 10 s off (beyond the default offset search of 0.2 s).
     """
-    from ..core.so3 import as_quaternion, quaternion_to_matrix
+    from ..core.so3 import matrix_from_quaternion, quaternion_from_matrix
     from ..rig.streams import GyroStream, OrientationStream
 
-    q = as_quaternion(camera.world_from_body)
+    q = quaternion_from_matrix(camera.world_from_body)
     cases = {
         "as recorded": (camera, gyro),
         "camera quaternions (w, x, y, z) read as (x, y, z, w)":
-            (OrientationStream(camera.t, quaternion_to_matrix(q[:, [3, 0, 1, 2]]), camera.source), gyro),
+            (OrientationStream(camera.t, matrix_from_quaternion(q[:, [3, 0, 1, 2]]), camera.source), gyro),
         "camera poses inverted (camera_from_world)":
             (OrientationStream(camera.t, np.swapaxes(camera.world_from_body, -1, -2), camera.source), gyro),
         "gyro in deg/s read as rad/s": (camera, GyroStream(gyro.t, np.degrees(gyro.omega), gyro.source)),

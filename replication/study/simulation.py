@@ -17,7 +17,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .._jitter import jitter
-from ..core.so3 import exp_map, log_map, noise_rotations, random_rotations, sample_ball
+from ..core.so3 import (
+    matrix_from_rotation_vector,
+    noise_rotations,
+    random_rotations,
+    rotation_vector_from_matrix,
+    sample_ball,
+)
 from .paper import r0_camera_from_sensor
 
 __all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_for_angle_deg",
@@ -166,7 +172,7 @@ def _opencv_pose(rng: np.random.Generator, lo_deg: float, hi_deg: float) -> np.n
     # generatePose: axis components uniform in [-1, 1] (not normalised), angle uniform with a random sign
     axis = rng.uniform(-1.0, 1.0, 3)
     theta = rng.uniform(np.radians(lo_deg), np.radians(hi_deg)) * np.sign(rng.uniform(-1.0, 1.0))
-    return exp_map(theta * axis)
+    return matrix_from_rotation_vector(theta * axis)
 
 
 def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool = False) -> OpenCVProtocolProblem:
@@ -192,8 +198,8 @@ def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool 
         g = _opencv_pose(rng, 5.0, 45.0)
         c = X.T @ g.T @ R_target2base  # T_target2cam = T_cam2gripper^-1 T_gripper2base^-1 T_target2base
         if noise:
-            c = exp_map(log_map(c) + rng.normal(0.0, 0.002, 3))
-            g = exp_map(log_map(g) + rng.normal(0.0, 0.001, 3))
+            c = matrix_from_rotation_vector(rotation_vector_from_matrix(c) + rng.normal(0.0, 0.002, 3))
+            g = matrix_from_rotation_vector(rotation_vector_from_matrix(g) + rng.normal(0.0, 0.001, 3))
         Rg.append(g)
         Rc.append(c)
     Rg, Rc = jitter(np.array(Rg)), jitter(np.array(Rc))
@@ -216,4 +222,5 @@ MATCHED_START_AXIS = (0.0, 0.6, 0.8)
 def matched_start() -> np.ndarray:
     """The matched setting's start: the paper's ``R0`` turned by 150 deg about a fixed axis (see
     :data:`MATCHED_MOTIONS_DEG`)."""
-    return r0_camera_from_sensor() @ exp_map(np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS))
+    turn = np.radians(MATCHED_START_DEG) * np.asarray(MATCHED_START_AXIS)
+    return r0_camera_from_sensor() @ matrix_from_rotation_vector(turn)

@@ -8,8 +8,8 @@ reference frame and at each time. :func:`projection_statistics` re-projects a la
 ``R0`` (the true one included) and any reference frame, which separates the two by intervention:
 project with the true ``R0`` (no calibration error left), move the reference frame, switch error sources off.
 Roll, pitch and yaw are the intrinsic ``z-y'-x''`` angles of a relative rotation,
-``Delta R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`replication.core.so3.yaw_pitch_roll_deg`), listed roll first as in
-Table II. The lab over many seeds is :func:`replication.study.lab.seed_study`.
+``Delta R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`replication.core.so3.yaw_pitch_roll_deg_from_matrix`), listed roll
+first as in Table II. The lab over many seeds is :func:`replication.study.lab.seed_study`.
 """
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ import pandas as pd
 
 from ..core.checks import check_rotation_matrices
 from ..core.handeye import relative_rotations
-from ..core.so3 import rotation_angle_deg, yaw_pitch_roll_deg
+from ..core.so3 import rotation_angle_deg, yaw_pitch_roll_deg_from_matrix
 from .paper import TABLE2_ANGLES, TABLE2_METHODS, load_table2
 
 if TYPE_CHECKING:  # the lab's chain computes Table II with this module; no import cycle at run time
@@ -75,7 +75,8 @@ def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0)
     ref = int(np.argmin(np.abs(t - t[0] - reference_time)))
     dC = relative_rotations(C, reference=ref)
     dI = relative_rotations(Q, reference=ref, convention="world_from_body")
-    return attitude_statistics(yaw_pitch_roll_deg(R0 @ dI @ R0.T)[..., ::-1], yaw_pitch_roll_deg(dC)[..., ::-1])
+    return attitude_statistics(yaw_pitch_roll_deg_from_matrix(R0 @ dI @ R0.T)[..., ::-1],
+                               yaw_pitch_roll_deg_from_matrix(dC)[..., ::-1])
 
 
 def reference_frame_dependence(result: LabResult, estimates: dict, times) -> pd.DataFrame:

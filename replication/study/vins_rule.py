@@ -63,7 +63,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.checks import check_rotation_matrices
-from ..core.so3 import angle_between_deg, as_quaternion, quaternion_to_matrix, skew
+from ..core.so3 import angle_between_deg, matrix_from_quaternion, quaternion_from_matrix, skew
 
 __all__ = ["VinsExRotation"]
 
@@ -73,9 +73,9 @@ def _eigen_quaternion_xyzw(M: np.ndarray) -> np.ndarray:
 
     Eigen (``quaternionbase_assign_impl``): if ``trace > 0`` then ``w = sqrt(trace + 1) / 2 > 0``; otherwise
     ``i`` = index of the largest diagonal entry (ties to the lower index) and coefficient ``i`` is positive.
-    Magnitudes come from :func:`replication.core.so3.as_quaternion` (``w >= 0``); only the sign is Eigen's.
+    Magnitudes come from :func:`replication.core.so3.quaternion_from_matrix` (``w >= 0``); only the sign is Eigen's.
     """
-    q = as_quaternion(M)  # (w, x, y, z), w >= 0
+    q = quaternion_from_matrix(M)  # (w, x, y, z), w >= 0
     if np.trace(M) <= 0.0:
         i = 0
         if M[1, 1] > M[0, 0]:
@@ -227,7 +227,7 @@ class VinsExRotation:
         if len(null) >= 2:
             x = null.T @ (null @ np.array([0.0, 0.0, 0.0, 1.0]))
             x = x / np.linalg.norm(x) if np.linalg.norm(x) > 1e-12 else Vt[3]
-        X = quaternion_to_matrix(np.array([x[3], x[0], x[1], x[2]]))  # L54: Quaterniond estimated_R(x);
+        X = matrix_from_quaternion(np.array([x[3], x[0], x[1], x[2]]))  # L54: Quaterniond estimated_R(x);
         self._ric = X.T  # L55: ric = estimated_R.toRotationMatrix().inverse();
         self.singular_values = s
         self.weights = weights

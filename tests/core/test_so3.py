@@ -138,19 +138,20 @@ def test_assert_rotations_close_names_the_worst_index():
     from replication.testing import assert_rotations_close
 
     R = np.broadcast_to(np.eye(3), (2, 3, 3, 3)).copy()
-    R[1, 2] = so3.exp_map(np.radians([0.0, 0.0, 0.5]))
-    R[0, 1] = so3.exp_map(np.radians([0.0, 0.2, 0.0]))
+    R[1, 2] = so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 0.5]))
+    R[0, 1] = so3.matrix_from_rotation_vector(np.radians([0.0, 0.2, 0.0]))
     assert_rotations_close(R, np.eye(3), 0.6)
     with pytest.raises(AssertionError, match=r"by 0\.5 deg at index \(1, 2\) \(> 0\.1 deg; 2 of 6 off\)"):
         assert_rotations_close(R, np.eye(3), 0.1)
 
 
 def test_yaw_pitch_roll_order_is_in_the_name():
-    R = so3.from_euler("ZYX", [30.0, -20.0, 10.0], degrees=True)
-    np.testing.assert_allclose(so3.yaw_pitch_roll_deg(R), [30.0, -20.0, 10.0])
-    np.testing.assert_allclose(R, so3.from_euler("z", [30.0], degrees=True) @ so3.from_euler("y", [-20.0], degrees=True)
-                               @ so3.from_euler("x", [10.0], degrees=True))
-    assert so3.yaw_pitch_roll_deg(np.broadcast_to(R, (4, 5, 3, 3))).shape == (4, 5, 3)
+    R = so3.matrix_from_euler("ZYX", [30.0, -20.0, 10.0], degrees=True)
+    np.testing.assert_allclose(so3.yaw_pitch_roll_deg_from_matrix(R), [30.0, -20.0, 10.0])
+    np.testing.assert_allclose(R, so3.matrix_from_euler("z", [30.0], degrees=True) @ so3.matrix_from_euler("y", [-20.0],
+                                                                                                           degrees=True)
+                               @ so3.matrix_from_euler("x", [10.0], degrees=True))
+    assert so3.yaw_pitch_roll_deg_from_matrix(np.broadcast_to(R, (4, 5, 3, 3))).shape == (4, 5, 3)
 
 
 # ----------------------------------------------------------------------------------------- conversions, round trips
@@ -178,40 +179,42 @@ def _rotvecs(rng, band, shape=(400,)):
 
 
 @pytest.mark.parametrize("band", list(BANDS))
-def test_exp_map_is_rodrigues(rng, band):
+def test_matrix_from_rotation_vector_is_rodrigues(rng, band):
     from scipy.spatial.transform import Rotation
 
     w = _rotvecs(rng, band)
-    np.testing.assert_allclose(so3.exp_map(w), Rotation.from_rotvec(w).as_matrix(), rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.matrix_from_rotation_vector(w), Rotation.from_rotvec(w).as_matrix(), rtol=0,
+                               atol=ABS)
 
 
 @pytest.mark.parametrize("band", list(BANDS))
-def test_log_map_inverts_exp_map(rng, band):
+def test_rotation_vector_from_matrix_inverts_matrix_from_rotation_vector(rng, band):
     w = _rotvecs(rng, band)
     theta = np.linalg.norm(w, axis=-1)
-    back = so3.log_map(so3.exp_map(w))
+    back = so3.rotation_vector_from_matrix(so3.matrix_from_rotation_vector(w))
     err = np.linalg.norm(back - w, axis=-1)
     assert np.all(err <= np.maximum(ABS * (theta >= 1e-6), REL * theta)), err.max()  # near 0: relative to the angle
     assert np.all(np.linalg.norm(back, axis=-1) <= np.pi)
-    np.testing.assert_allclose(np.radians(so3.rotation_angle_deg(so3.exp_map(w))), theta, rtol=REL, atol=0)
+    np.testing.assert_allclose(np.radians(so3.rotation_angle_deg(so3.matrix_from_rotation_vector(w))), theta, rtol=REL,
+                               atol=0)
 
 
-def test_log_map_at_a_half_turn_is_either_sign(rng):
+def test_rotation_vector_from_matrix_at_a_half_turn_is_either_sign(rng):
     """At exactly pi, ``w`` and ``-w`` are one rotation: ``log`` may return either, but exp(log R) is R."""
     w = _rotvecs(rng, "generic", (50,))
     w *= np.pi / np.linalg.norm(w, axis=-1, keepdims=True)
     w = np.concatenate([w, np.pi * np.eye(3), -np.pi * np.eye(3)])
-    R = so3.exp_map(w)
-    back = so3.log_map(R)
+    R = so3.matrix_from_rotation_vector(w)
+    back = so3.rotation_vector_from_matrix(R)
     err = np.minimum(np.linalg.norm(back - w, axis=-1), np.linalg.norm(back + w, axis=-1))
     assert err.max() <= ABS
-    np.testing.assert_allclose(so3.exp_map(back), R, rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.matrix_from_rotation_vector(back), R, rtol=0, atol=ABS)
 
 
 @pytest.mark.parametrize("band", list(BANDS))
-def test_exp_map_inverts_log_map(rng, band):
-    R = so3.exp_map(_rotvecs(rng, band))
-    np.testing.assert_allclose(so3.exp_map(so3.log_map(R)), R, rtol=0, atol=ABS)
+def test_matrix_from_rotation_vector_inverts_rotation_vector_from_matrix(rng, band):
+    R = so3.matrix_from_rotation_vector(_rotvecs(rng, band))
+    np.testing.assert_allclose(so3.matrix_from_rotation_vector(so3.rotation_vector_from_matrix(R)), R, rtol=0, atol=ABS)
 
 
 @pytest.mark.parametrize("band", list(BANDS))
@@ -219,67 +222,70 @@ def test_quaternion_round_trips_and_sign(rng, band):
     from scipy.spatial.transform import Rotation
 
     w = _rotvecs(rng, band)
-    R = so3.exp_map(w)
-    q = so3.as_quaternion(R)
+    R = so3.matrix_from_rotation_vector(w)
+    q = so3.quaternion_from_matrix(R)
     assert q.shape == (400, 4) and np.all(q[:, 0] >= 0)  # scalar first, w >= 0
     np.testing.assert_allclose(np.linalg.norm(q, axis=-1), 1.0, rtol=0, atol=ABS)
     reference = Rotation.from_rotvec(w).as_quat(scalar_first=True)  # SciPy's, with w >= 0 too
     reference *= np.where(reference[:, :1] < 0, -1.0, 1.0)
     np.testing.assert_allclose(q, reference, rtol=0, atol=ABS)
-    np.testing.assert_allclose(so3.quaternion_to_matrix(q), R, rtol=0, atol=ABS)
-    np.testing.assert_allclose(so3.quaternion_to_matrix(-q), R, rtol=0, atol=ABS)  # q and -q: one rotation
-    np.testing.assert_allclose(so3.quaternion_to_matrix(3.0 * q), R, rtol=0, atol=ABS)  # normalised first
+    np.testing.assert_allclose(so3.matrix_from_quaternion(q), R, rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.matrix_from_quaternion(-q), R, rtol=0, atol=ABS)  # q and -q: one rotation
+    np.testing.assert_allclose(so3.matrix_from_quaternion(3.0 * q), R, rtol=0, atol=ABS)  # normalised first
 
 
 def test_quaternion_order_is_scalar_first():
     """A quarter-turn about z is (cos 45, 0, 0, sin 45); read scalar-last it would be another rotation."""
-    R = so3.exp_map(np.array([0.0, 0.0, np.pi / 2]))
-    np.testing.assert_allclose(so3.as_quaternion(R), [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)], atol=ABS)
-    np.testing.assert_allclose(so3.quaternion_to_matrix([0.0, 1.0, 0.0, 0.0]), np.diag([1.0, -1.0, -1.0]), atol=ABS)
-    scalar_last = so3.quaternion_to_matrix([0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)])  # (x, y, z, w) read as (w, x, y, z)
+    R = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, np.pi / 2]))
+    np.testing.assert_allclose(so3.quaternion_from_matrix(R), [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)], atol=ABS)
+    np.testing.assert_allclose(so3.matrix_from_quaternion([0.0, 1.0, 0.0, 0.0]), np.diag([1.0, -1.0, -1.0]), atol=ABS)
+    # (x, y, z, w) read as (w, x, y, z)
+    scalar_last = so3.matrix_from_quaternion([0.0, 0.0, np.sqrt(0.5), np.sqrt(0.5)])
     assert so3.angle_between_deg(scalar_last, R) > 90
 
 
 def test_the_quaternion_of_a_half_turn_has_w_zero(rng):
     axis = np.array([2.0, -1.0, 2.0]) / 3.0
-    q = so3.as_quaternion(so3.exp_map(np.pi * axis))
+    q = so3.quaternion_from_matrix(so3.matrix_from_rotation_vector(np.pi * axis))
     assert abs(q[0]) <= ABS and np.allclose(np.abs(q[1:]), np.abs(axis), atol=ABS)
 
 
 def test_yaw_pitch_roll_round_trips(rng):
     n = 400
     ypr = np.column_stack([rng.uniform(-180, 180, n), rng.uniform(-89.9, 89.9, n), rng.uniform(-180, 180, n)])
-    R = so3.from_euler("ZYX", ypr, degrees=True)
+    R = so3.matrix_from_euler("ZYX", ypr, degrees=True)
     # measured: 4e-13 deg (the angles of a rotation 0.1 deg from gimbal lock are ill-conditioned); bound 1e-10 deg
-    np.testing.assert_allclose(so3.yaw_pitch_roll_deg(R), ypr, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(so3.yaw_pitch_roll_deg_from_matrix(R), ypr, rtol=0, atol=1e-10)
     # any rotation, gimbal lock included: the angles give the rotation back
-    R = np.concatenate([so3.random_rotations(rng, n), so3.from_euler("ZYX", [[10.0, 90.0, 0.0], [0.0, -90.0, 5.0]],
+    R = np.concatenate([so3.random_rotations(rng, n), so3.matrix_from_euler("ZYX", [[10.0, 90.0, 0.0], [0.0, -90.0,
+                                                                                                        5.0]],
                                                                         degrees=True)])
     with pytest.warns(UserWarning, match="Gimbal lock detected"):  # SciPy's, for the last two
-        angles = so3.yaw_pitch_roll_deg(R)
+        angles = so3.yaw_pitch_roll_deg_from_matrix(R)
     assert np.all(np.abs(angles[:, 1]) <= 90.0) and np.all(np.abs(angles[:, [0, 2]]) <= 180.0)
-    np.testing.assert_allclose(so3.from_euler("ZYX", angles, degrees=True), R, rtol=0, atol=ABS)
+    np.testing.assert_allclose(so3.matrix_from_euler("ZYX", angles, degrees=True), R, rtol=0, atol=ABS)
 
 
 @pytest.mark.parametrize("shape", [(), (5,), (2, 3, 4), (0,), (3, 0)])
 def test_conversions_keep_batch_shapes(rng, shape):
     w = _rotvecs(rng, "generic", shape) if np.prod(shape) else np.zeros(shape + (3,))
-    R = so3.exp_map(w)
-    assert R.shape == shape + (3, 3) and so3.log_map(R).shape == shape + (3,)
-    q = so3.as_quaternion(R)
-    assert q.shape == shape + (4,) and so3.quaternion_to_matrix(q).shape == shape + (3, 3)
-    assert so3.yaw_pitch_roll_deg(R).shape == shape + (3,) and so3.rotation_angle_deg(R).shape == shape
+    R = so3.matrix_from_rotation_vector(w)
+    assert R.shape == shape + (3, 3) and so3.rotation_vector_from_matrix(R).shape == shape + (3,)
+    q = so3.quaternion_from_matrix(R)
+    assert q.shape == shape + (4,) and so3.matrix_from_quaternion(q).shape == shape + (3, 3)
+    assert so3.yaw_pitch_roll_deg_from_matrix(R).shape == shape + (3,) and so3.rotation_angle_deg(R).shape == shape
     if np.prod(shape):  # batched equals one at a time
         flat_w, flat_R = w.reshape(-1, 3), R.reshape(-1, 3, 3)
         for k in (0, len(flat_w) - 1):
-            np.testing.assert_array_equal(so3.exp_map(flat_w[k]), flat_R[k])
-            np.testing.assert_array_equal(so3.log_map(flat_R[k]), so3.log_map(R).reshape(-1, 3)[k])
-            np.testing.assert_array_equal(so3.as_quaternion(flat_R[k]), q.reshape(-1, 4)[k])
+            np.testing.assert_array_equal(so3.matrix_from_rotation_vector(flat_w[k]), flat_R[k])
+            np.testing.assert_array_equal(so3.rotation_vector_from_matrix(flat_R[k]),
+                                          so3.rotation_vector_from_matrix(R).reshape(-1, 3)[k])
+            np.testing.assert_array_equal(so3.quaternion_from_matrix(flat_R[k]), q.reshape(-1, 4)[k])
 
 
-def test_log_map_half_turns_with_signed_zero_entries_give_no_negative_zero():
+def test_rotation_vector_from_matrix_half_turns_with_signed_zero_entries_give_no_negative_zero():
     """Beyond 120 deg the axis is a column of (R + R^T)/2 - c I; its off-diagonal entries are x - c * 0 (c < 0), which
     turns an entry of -0.0 into 0.0: the rotation vector of diag(1, -1, -1) written with -0.0 is (pi, 0, 0)."""
     R = np.array([[1.0, -0.0, -0.0], [-0.0, -1.0, -0.0], [-0.0, -0.0, -1.0]])
-    w = so3.log_map(R)
+    w = so3.rotation_vector_from_matrix(R)
     assert np.array_equal(w, [np.pi, 0.0, 0.0]) and not np.signbit(w).any()

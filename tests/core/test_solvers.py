@@ -1,4 +1,4 @@
-"""The solver core (issue 11): validated once, converged by default, globally certified, never silently wrong.
+"""The solver core: validated once, converged by default, globally certified, never silently wrong.
 
 * OpenCV's own hand-eye test protocol (``test_calibration_hand_eye.cpp``) ported and run on every
   registered solver with default options: each answer meets OpenCV's threshold or comes with a
@@ -77,7 +77,7 @@ def _solve_recording(method, A, B, **options):
 
 
 def _rvec_error(R, X):
-    return float(np.linalg.norm(so3.log_map(R) - so3.log_map(X)))
+    return float(np.linalg.norm(so3.rotation_vector_from_matrix(R) - so3.rotation_vector_from_matrix(X)))
 
 
 # ----------------------------------------------------------------------------------------- OpenCV protocol

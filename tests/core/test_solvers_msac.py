@@ -22,7 +22,7 @@ def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
     A = so3.random_rotations(rng, J)
-    B = so3.exp_map(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
+    B = so3.matrix_from_rotation_vector(rng.normal(size=(J, 3)) * np.radians(noise_deg)) @ (R0.T @ A @ R0)
     return R0, A, corrupt_pairs(B, share, rng)[0]  # the same draws as notebook 06's outlier sweep
 
 
@@ -35,7 +35,7 @@ def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_
     idx = np.array(list(combinations(range(J), 2)))
     if len(idx) > max_hypotheses:
         idx = idx[np.sort(np.random.default_rng(seed).choice(len(idx), size=max_hypotheses, replace=False))]
-    alpha, beta = so3.log_map(A), so3.log_map(B)
+    alpha, beta = so3.rotation_vector_from_matrix(A), so3.rotation_vector_from_matrix(B)
     R_h = so3.nearest_rotation(np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :]))
     r = pair_residual_deg(R_h, A[..., None, :, :, :], B[..., None, :, :, :])
     best = np.argmin(np.sum(np.minimum(r, threshold_deg) ** 2, axis=-1), axis=-1)

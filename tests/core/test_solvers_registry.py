@@ -1,3 +1,4 @@
+import inspect
 import math
 import uuid
 import warnings
@@ -6,11 +7,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from replication.core import checks, so3
+from replication.core import checks, so3, solvers
 from replication.core.handeye import handeye_cost, relative_rotations
 from replication.core.motions import Motions, prepare_motions
+from replication.core.so3 import random_rotations
 from replication.core.solvers import AccuracyWarning, _registry, available, certificate, register, solve, solver_info
 from replication.core.solvers._warnings import ConvergenceWarning, LocalMinimumWarning
+from replication.core.solvers.certificate import relaxed_rotation
 from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
 
@@ -198,7 +201,7 @@ def test_motions_accept_an_atol_in_range(problem, atol):
         Motions(2 * A, B, atol=atol)
 
 
-# ------------------------------------------------------------------ the same checks for every re-solve (issue 33, 1)
+# ------------------------------------------------------------------ the same checks for every re-solve
 
 @pytest.mark.parametrize("answer, match", [
     (lambda X: 2 * X, r"returned a matrix that is not a rotation on replicates at batch index \(0,\): .*det R = 8"),
@@ -227,21 +230,21 @@ def test_checked_core_returns_the_masks_of_non_rotations(bad_core, two_noisy):
     assert np.array_equal(R, X) and not failed.any() and not reflection.any()
 
 
-# ------------------------------------------------ one axis plus a single turn: every solver warns (issue 33, 7)
+# ------------------------------------------------ one axis plus a single turn: every solver warns
 
 def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn_deg=0.0):
     """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one before it
     ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
-    R0 = so3.exp_map(np.array([0.4, -0.3, 0.8]))
+    R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.3, 0.8]))
     w = np.zeros((J, 3))
     w[:, 2] = np.radians(rng.uniform(10.0, 40.0, J))
     w[-1] = np.radians([turn_deg, 0.0, 0.0])
     if second_turn_deg:
         w[-2] = np.radians([0.0, second_turn_deg, 0.0])
-    B = so3.exp_map(w)
+    B = so3.matrix_from_rotation_vector(w)
     sd = np.radians(noise_deg) / np.sqrt(3)
-    A = so3.exp_map(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
-    return R0, A, so3.exp_map(rng.normal(0, sd, (J, 3))) @ B
+    A = so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
+    return R0, A, so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ B
 
 
 @pytest.mark.parametrize("method", sorted(available()))
@@ -305,12 +308,12 @@ def _motions(batch=(), noise_deg=0.0, seed=7):
     A = so3.random_rotations(rng, batch + (J,))
     B = np.swapaxes(R0, -1, -2)[..., None, :, :] @ A @ R0[..., None, :, :]
     if noise_deg:
-        B = B @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal(B.shape[:-2] + (3,)))
+        B = B @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal(B.shape[:-2] + (3,)))
     return prepare_motions(A, B)
 
 
 def _rotated(R, deg, axis=(0.0, 0.0, 1.0)):
-    return R @ so3.exp_map(np.radians(deg) * np.asarray(axis, float) / np.linalg.norm(axis))
+    return R @ so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis, float) / np.linalg.norm(axis))
 
 
 def _warned(fn, *args, **kwargs):
@@ -429,7 +432,8 @@ def test_local_check_skips_failures_and_reflections():
 
 
 def _geodesic(R_from, R_to, t):
-    return R_from @ so3.exp_map(t * so3.log_map(np.swapaxes(R_from, -1, -2) @ R_to))
+    return R_from @ so3.matrix_from_rotation_vector(t * so3.rotation_vector_from_matrix(np.swapaxes(R_from, -1,
+                                                                                                    -2) @ R_to))
 
 
 def _gross_case():
@@ -751,3 +755,71 @@ def test_degenerate_motion_is_refused(method, rng):
     A = Rotation.from_rotvec(np.outer(np.linspace(0.2, 1.5, 10), [0.0, 0.6, 0.8])).as_matrix()
     with pytest.raises(ValueError, match="degenerate motion"):
         solve(method, A, R0.T @ A @ R0, **_start_options(method, R0))
+
+
+# ----------------------------------------------------------------------------------------------------
+# One solver shape: the registered doors show what they take; the registry's flags; solve_pairs' arguments.
+
+
+EXPORTED_DOORS = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "robust"]
+
+
+def _problem(seed=0, J=8):
+    rng = np.random.default_rng(seed)
+    R0 = random_rotations(rng, ())
+    A = random_rotations(rng, J)
+    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
+
+
+@pytest.mark.parametrize("name", EXPORTED_DOORS)
+def test_a_registered_door_shows_the_doors_signature_not_the_cores(name):
+    door = getattr(solvers, name)
+    params = inspect.signature(door).parameters
+    assert list(params)[:4] == ["A", "B", "full_output", "warn_axis_spread_deg"]
+    assert "motions" not in params
+    assert params["B"].default is None and params["full_output"].default is False
+    core_options = list(inspect.signature(_registry.solver_info(name).core).parameters)[1:]
+    assert list(params)[4:] == core_options  # the core's own options, keyword-only, with their defaults
+    assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in list(params.values())[2:])
+
+
+def test_the_signature_binds_what_the_door_accepts_and_refuses_what_it_does_not():
+    R0, A, B = _problem()
+    sig = inspect.signature(solvers.robust)
+    sig.bind(A, B, threshold_deg=3.0, seed=1, full_output=True)  # what a caller may write
+    with pytest.raises(TypeError):
+        sig.bind(A, B, threshold=3.0)  # a misspelt option: the signature says no, as the call does
+    with pytest.raises(TypeError):
+        solvers.robust(A, B, threshold=3.0)
+    np.testing.assert_array_equal(solvers.robust(A, B, threshold_deg=3.0), solve("robust", A, B, threshold_deg=3.0))
+
+
+def test_a_newly_registered_door_shows_its_options(monkeypatch):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+
+    def core(motions, gain=2.0, *, steps: int = 3):
+        return np.broadcast_to(np.eye(3), motions.batch_shape + (3, 3)).copy()
+
+    door = register("shape_test_solver", reference="test")(core)
+    params = inspect.signature(door).parameters
+    assert list(params) == ["A", "B", "full_output", "warn_axis_spread_deg", "gain", "steps"]
+    assert params["gain"].kind is inspect.Parameter.KEYWORD_ONLY and params["gain"].default == 2.0
+    assert door.__doc__ == core.__doc__ and door.core is core
+    assert "shape_test_solver" in available()
+
+
+def test_relaxed_start_is_a_flag_of_the_solvers_that_read_the_relaxed_solution():
+    flagged = {name for name in available() if _registry.solver_info(name).relaxed_start}
+    assert flagged == {"andreff", "chordal_optimal"}
+    assert not hasattr(_registry, "RELAXED_START")  # one place says it: the solver's registration
+
+
+@pytest.mark.parametrize("relaxed_start", [False, True])
+def test_solve_decomposes_sym_k_once_for_a_relaxed_start_solver(monkeypatch, relaxed_start):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    name = f"relaxed_{relaxed_start}"
+    register(name, reference="test", relaxed_start=relaxed_start)(lambda motions: relaxed_rotation(motions.K))
+    m = Motions(*_problem(1)[1:])
+    solve(name, m)
+    # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the same array)
+    assert (m.sym_eigvals is m.sym_eigh[0]) is relaxed_start

@@ -46,8 +46,8 @@ def rig():
 
 
 def _q_reordered(stream, order):
-    q = so3.as_quaternion(stream.world_from_body)[:, order]
-    return OrientationStream(stream.t, so3.quaternion_to_matrix(q), stream.source)
+    q = so3.quaternion_from_matrix(stream.world_from_body)[:, order]
+    return OrientationStream(stream.t, so3.matrix_from_quaternion(q), stream.source)
 
 
 def _fast(**kw):
@@ -172,7 +172,7 @@ def test_a_short_overlap_has_no_bootstrap_radius_and_fails(rig):
 def test_nearly_single_axis_motion_warns_with_its_spread():
     t = np.arange(0.0, 60.0, 0.05)
     w = np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)], axis=-1)
-    Q = so3.exp_map(w)
+    Q = so3.matrix_from_rotation_vector(w)
     camera, sensor = OrientationStream(t, Q, "c"), OrientationStream(t, Q @ R0, "s")
     r = calibrate(camera, sensor, n_bootstrap=20)
     assert _reasons(r)["axis_spread_deg"].level == "warning" and r.verdict.level != "ok"
@@ -375,7 +375,7 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
 def test_inverted_pose_sets_are_named(rig):
     camera, _, sensor = rig
     C, S = np.swapaxes(camera.R[::40], -1, -2), np.swapaxes(sensor.at(camera.t[::40]), -1, -2)
-    noise = so3.exp_map(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
+    noise = so3.matrix_from_rotation_vector(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
     C = noise @ C  # a little camera noise, as on a real robot set
     for name, c, s in (("camera poses inverted", np.swapaxes(C, -1, -2), S),
                        ("robot poses inverted", C, np.swapaxes(S, -1, -2))):
@@ -410,7 +410,7 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
     """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
     recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
-    from replication.core.so3 import exp_map
+    from replication.core.so3 import matrix_from_rotation_vector
     from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
 
     camera, _, _ = rig
@@ -418,18 +418,21 @@ def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig)
     with pytest.raises(ValueError, match=rf"a copy of it: {len(t) - 1} of the sensor's "
                                          rf"{len(t) - 1} samples are camera"):
         calibrate(camera, OrientationStream(t[1:], R[1:], "copy"))
-    turn = exp_map(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
+    turn = matrix_from_rotation_vector(np.array([0.0, 0.0, 0.9 * SAME_SAMPLE_ANGLE_RAD]))
     with pytest.raises(ValueError, match="the sensor stream is the camera stream itself, or a copy of it"):
         calibrate(camera, OrientationStream(t + 0.9 * SAME_SAMPLE_TIME_S, R @ turn, "copy"))
     # just beyond either tolerance, or half of the samples only: not a copy (the calibration runs)
-    assert _same_stream(camera, OrientationStream(t, R @ exp_map(np.array([0.0, 0.0, 1.1 * SAME_SAMPLE_ANGLE_RAD])),
+    assert _same_stream(camera,
+                        OrientationStream(t, R @ matrix_from_rotation_vector(np.array([0.0, 0.0,
+                                                                                       1.1 * SAME_SAMPLE_ANGLE_RAD])),
                                                   "s")) is None
     assert _same_stream(camera, OrientationStream(t + 1.1 * SAME_SAMPLE_TIME_S, R, "s")) is None
     n = len(t)
-    half = np.r_[R[: n // 2], R[n // 2:] @ exp_map(np.array([0.0, 0.01, 0.0]))]
+    half = np.r_[R[: n // 2], R[n // 2:] @ matrix_from_rotation_vector(np.array([0.0, 0.01, 0.0]))]
     assert _same_stream(camera, OrientationStream(t, half, "s")) is not None  # exactly half coincide
     assert _same_stream(camera, OrientationStream(t, np.r_[half[: n // 2 - 1], half[n // 2 - 1:] @
-                                                           exp_map(np.array([0.0, 0.01, 0.0]))], "s")) is None
+                                                           matrix_from_rotation_vector(np.array([0.0, 0.01,
+                                                                                                 0.0]))], "s")) is None
 
 
 def test_a_degenerate_bootstrap_resample_is_a_reason_not_an_error(rig, monkeypatch):
@@ -531,7 +534,7 @@ def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_wa
 
 
 
-# ------------------------------------------------------------------- one door for every solver answer (issue 33, 1)
+# ------------------------------------------------------------------- one door for every solver answer
 
 @pytest.fixture
 def door_solver(monkeypatch):
@@ -696,9 +699,9 @@ def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solutio
     stations (their median residual grows 6-fold here): it is still the resample's optimum, and not blamed."""
     C, S = _poses(rig)
     rng = np.random.default_rng(2)
-    C = C @ so3.exp_map(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
+    C = C @ so3.matrix_from_rotation_vector(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
     k = rng.choice(len(C), 1)
-    C[k] = C[k] @ so3.exp_map(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
+    C[k] = C[k] @ so3.matrix_from_rotation_vector(np.radians(30.0) * so3.random_rotations(rng, 1)[:, 0])
     r = calibrate_poses(C, S, n_bootstrap=200, diagnose=False)
     assert "bootstrap_answers" not in _reasons(r) and math.isfinite(r.bootstrap_ci95_deg)
 
@@ -713,7 +716,7 @@ def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_p
     from replication.rig.poses import pose_pairs
 
     C, S = _poses(rig)
-    C = C @ so3.exp_map(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    C = C @ so3.matrix_from_rotation_vector(np.random.default_rng(1).normal(scale=np.radians(0.3), size=(len(C), 3)))
     motions = prepare_motions(*pose_pairs(C, S))
     R = calibrate_poses(C, S, n_bootstrap=0, diagnose=False).R
     sets = [np.arange(0, motions.J, 2)]  # a resample: every other pair
@@ -721,7 +724,7 @@ def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_p
     threshold = est.REPLICATE_FIT_FACTOR * base + est.REPLICATE_FIT_FLOOR_DEG
 
     def turned(angle_deg):
-        return so3.exp_map(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
+        return so3.matrix_from_rotation_vector(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ R
 
     def own(angle_deg):
         return _rms(pair_residual_deg(turned(angle_deg), motions.A[sets[0]], motions.B[sets[0]]))
@@ -759,7 +762,8 @@ def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_
     same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
     as they should be) name nothing."""
     C, S = _poses(rig)
-    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    noisy = C @ so3.matrix_from_rotation_vector(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C),
+                                                                                                             3)))
     first = {}
     name = door_solver(lambda R, call: first.setdefault("R", R) if R.ndim == 2 else np.broadcast_to(
         first.setdefault("R", R[0]), R.shape).copy())
@@ -780,9 +784,10 @@ def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
     import replication.rig.solve_and_judge as est
 
     C, S = _poses(rig)
-    noisy = C @ so3.exp_map(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C), 3)))
+    noisy = C @ so3.matrix_from_rotation_vector(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C),
+                                                                                                             3)))
     first = {}
-    step = so3.exp_map(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
+    step = so3.matrix_from_rotation_vector(np.radians(turn * est.FROZEN_DEG) * np.array([0.0, 0.0, 1.0]))
     name = door_solver(lambda R, call: first.setdefault("R", R) if call == 0 else step @ first["R"])
     r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
     assert ("bootstrap_answers" in _reasons(r)) is frozen
@@ -801,10 +806,10 @@ def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
     S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
     C = R0 @ S @ W
     sd = np.radians(station_noise_deg) / np.sqrt(3)
-    C = so3.exp_map(rng.normal(0, sd, (N, 3))) @ C
-    S = so3.exp_map(rng.normal(0, sd, (N, 3))) @ S
+    C = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ C
+    S = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ S
     if bad is not None:
-        C[bad] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
+        C[bad] = so3.matrix_from_rotation_vector(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
     return R0, C, S
 
 
@@ -924,7 +929,7 @@ def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
 
 
 def test_a_reference_tells_tied_hypotheses_apart():
-    R_right = so3.exp_map(np.radians([10.0, 0.0, 0.0]))
+    R_right = so3.matrix_from_rotation_vector(np.radians([10.0, 0.0, 0.0]))
     fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
     message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
     assert message.startswith("likely input mistake: second; the reference tells them apart")
@@ -959,7 +964,7 @@ def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(r
     from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(90.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
-    step = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+    step = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
     r = calibrate(camera, remounted(gyro, 45.0, step), n_bootstrap=20)
     reason = _reasons(r)["remount_deg"]
     assert r.verdict.level == "fail" and reason.level == "fail" and "after 45" in reason.message
@@ -1009,10 +1014,10 @@ def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, r
 
 def test_an_input_mistake_is_not_called_a_remount(rng):
     R0, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05)
-    q = so3.as_quaternion(camera.R)[:, [1, 2, 3, 0]]
+    q = so3.quaternion_from_matrix(camera.R)[:, [1, 2, 3, 0]]
     from replication.rig.streams import OrientationStream
 
-    r = calibrate(OrientationStream(camera.t, so3.quaternion_to_matrix(q), "camera"), gyro, n_bootstrap=0)
+    r = calibrate(OrientationStream(camera.t, so3.matrix_from_quaternion(q), "camera"), gyro, n_bootstrap=0)
     assert r.verdict.level == "fail" and "input_mistake" in _reasons(r) and "remount_deg" not in _reasons(r)
     assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
 
@@ -1028,12 +1033,13 @@ def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40
     dt = 2e-3
     t = np.arange(-1.0, seconds + 1.0, dt)
     w = np.stack([0.7 * np.sin(0.9 * t), 0.6 * np.sin(1.3 * t + 1.0), out_of_plane * np.sin(0.5 * t + 2.0)], -1)
-    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.exp_map(w[:-1] * dt))])
+    C = np.concatenate([np.eye(3)[None], so3.cumulative_product(so3.matrix_from_rotation_vector(w[:-1] * dt))])
     k = np.arange(int(1.0 / dt), int((seconds + 1.0) / dt), 25)  # the camera at 20 Hz
-    camera = OrientationStream(t[k], C[k] @ so3.exp_map(rng.normal(0, np.radians(0.1) / np.sqrt(3), (len(k), 3))),
+    camera = OrientationStream(t[k], C[k] @ so3.matrix_from_rotation_vector(rng.normal(0, np.radians(0.1) / np.sqrt(3),
+                                                                                       (len(k), 3))),
                                "camera")
     Q = C[::2] @ R0  # the gyro at 250 Hz
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / (2 * dt)
     omega += rng.normal(0, np.radians(0.2), omega.shape)
     return R0, camera, GyroStream(t[::2][:-1] + dt, omega, "gyro")
 
@@ -1076,7 +1082,8 @@ def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_
     from replication.rig.changepoint import remounted
 
     R0, camera, gyro, _ = rig_streams(60, rng=np.random.default_rng(3), camera_noise_deg=0.1, gyro_noise_deg_s=0.2)
-    turn = so3.exp_map(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5, 0.81]))
+    turn = so3.matrix_from_rotation_vector(np.radians(5.0) * np.array([0.3, -0.5, 0.81]) / np.linalg.norm([0.3, -0.5,
+                                                                                                           0.81]))
     r = calibrate(camera, remounted(gyro, 55.0, turn), n_bootstrap=0)
     reason = _reasons(r)["remount_deg"]
     assert reason.level == "fail" and 54.0 <= r.change_test["split_time_s"] <= 56.0
@@ -1085,7 +1092,7 @@ def test_a_remount_in_the_last_tenth_of_a_recording_fails_and_the_tested_splits_
     assert "a change outside cannot be told" in r.summary()
 
 
-# ---------------------------------------------------------------------- no clock, no offset (issue 33, point 6)
+# ---------------------------------------------------------------------- no clock, no offset
 
 def test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed(rng):
     R0, C, S = _stations(rng, N=12)
@@ -1107,7 +1114,7 @@ def test_a_stream_report_keeps_its_measured_clock_offset(rng):
     assert isinstance(report["time_offset_s"], float)
 
 
-# -------------------------------------------------------------------- stations counted once (issue 33, point 2)
+# -------------------------------------------------------------------- stations counted once
 
 def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
     """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the same radius (it
@@ -1134,8 +1141,10 @@ def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
 def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
     R0, C, S = _stations(rng, N=8, station_noise_deg=0.3)
     sd = np.radians(0.3) / np.sqrt(3)
-    C3 = np.concatenate([C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C, so3.exp_map(rng.normal(0, sd, (8, 3))) @ C])
-    S3 = np.concatenate([S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S, so3.exp_map(rng.normal(0, sd, (8, 3))) @ S])
+    C3 = np.concatenate([C, so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ C,
+                         so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ C])
+    S3 = np.concatenate([S, so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ S,
+                         so3.matrix_from_rotation_vector(rng.normal(0, sd, (8, 3))) @ S])
     r = calibrate_poses(C3, S3, n_bootstrap=50)
     assert r.station_repeats["distinct"] == 8 and r.station_repeats["groups"][0] == [0, 8, 16]
     consecutive = calibrate_poses(C3, S3, n_bootstrap=50, pairs="consecutive")  # repeats drawn as one there too
@@ -1149,7 +1158,7 @@ def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg
     from replication.rig.poses import repeated_stations
 
     R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
-    turn = so3.exp_map(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
+    turn = so3.matrix_from_rotation_vector(np.radians(apart_deg) * np.array([0.0, 0.6, 0.8]))
     C2, S2 = np.concatenate([C, (R0 @ turn @ R0.T @ C[2])[None]]), np.concatenate([S, (turn @ S[2])[None]])
     labels = repeated_stations(C2, S2, 2.0)
     assert bool(labels[6] == 2) is same and list(labels[:6]) == list(range(6))
@@ -1163,11 +1172,11 @@ def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg
 @pytest.mark.parametrize("step_deg", [1.5, 1.0])
 def test_a_chain_of_close_stations_is_not_one_station(step_deg):
     """Each station step_deg from the next (under the 2 deg of a repeat), 30 of them spanning tens of degrees: no group
-    may hold two stations further apart than 2 deg (a red-team case: a linked chain was read as one station)."""
+    may hold two stations further apart than 2 deg (a case once found: a linked chain was read as one station)."""
     from replication.rig.poses import repeated_stations
 
     axis = np.array([0.0, 0.6, 0.8])
-    S = so3.exp_map(np.radians(step_deg) * np.arange(30)[:, None] * axis)
+    S = so3.matrix_from_rotation_vector(np.radians(step_deg) * np.arange(30)[:, None] * axis)
     labels = repeated_stations(S, S, 2.0)
     for g in np.unique(labels):
         members = S[labels == g]
@@ -1179,17 +1188,18 @@ def test_a_station_joins_a_group_only_if_it_repeats_every_member():
     from replication.rig.poses import repeated_stations
 
     axis = np.array([1.0, 0.0, 0.0])
-    S = so3.exp_map(np.radians([0.0, 1.5, 3.0])[:, None] * axis)  # 0-1 and 1-2 within 2 deg, 0-2 not
+    # 0-1 and 1-2 within 2 deg, 0-2 not
+    S = so3.matrix_from_rotation_vector(np.radians([0.0, 1.5, 3.0])[:, None] * axis)
     assert repeated_stations(S, S, 2.0).tolist() == [0, 0, 2]
 
 
-# ------------------------------------------------------------------ name the culprit (issue 33, point 5)
+# ------------------------------------------------------------------ name the culprit
 
 def _bad_stations(bad, N=20, seed=5, bad_deg=3.0):
     rng = np.random.default_rng(seed)
     R0, C, S = _stations(rng, N=N)
     for b in bad:
-        C[b] = so3.exp_map(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
+        C[b] = so3.matrix_from_rotation_vector(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[b]
     return C, S
 
 
@@ -1239,7 +1249,7 @@ def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
     assert r.station_repeats["distinct"] == 10 and "repeated_stations" in _reasons(r)
 
 # ----------------------------------------------------------------------------------------------------
-# Two references (issue 35.4): ``calibrate(reference=<two>)`` and ``calibrate --reference A --reference B`` report
+# Two references: ``calibrate(reference=<two>)`` and ``calibrate --reference A --reference B`` report
 # the error to each, their disagreement (the reference floor) and which reading applies; one reference works as
 # before.
 
@@ -1249,7 +1259,7 @@ EPS = 1e-9
 
 
 def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
-    return R @ so3.exp_map(np.radians(deg) * np.asarray(axis))
+    return R @ so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis))
 
 
 @pytest.fixture(scope="module")
@@ -1273,7 +1283,7 @@ def test_the_reading_of_two_references_at_the_floor(errors, floor, reading):
 
 @pytest.mark.parametrize("errors, floor, radius, reading", [
     ((0.0, 10.0), 10.0, 0.1, "closer to reference 1: its error (0.000 deg) is the smaller, by more than R0's"),
-    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # red team: was "agreement, not accuracy"
+    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # was "agreement, not accuracy"
     ((0.05, 0.05), 0.0, 0.1, "agreement within R0's radius"),           # the same reference twice: was "beyond"
     ((0.1, 0.1), 0.0, 0.1, "agreement within R0's radius"),             # at the radius: within it
     ((0.1 + EPS, 0.1 + EPS), 0.0, 0.1, "a difference beyond the floor"),

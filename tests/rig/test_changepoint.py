@@ -40,7 +40,8 @@ from replication.testing import RIG_R0, assert_rotations_close, noisy_rig
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
 R0 = RIG_R0
-STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))  # a 2 deg re-mount about a generic axis
+# a 2 deg re-mount about a generic axis
+STEP = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
 BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
 
@@ -176,7 +177,7 @@ def test_bad_pairs_and_times_are_refused(pairs):
 
 def test_motions_about_one_axis_are_refused():
     rng = np.random.default_rng(6)
-    A = so3.exp_map(rng.uniform(0.2, 1.0, (1000, 1)) * np.array([0.0, 0.0, 1.0]))
+    A = so3.matrix_from_rotation_vector(rng.uniform(0.2, 1.0, (1000, 1)) * np.array([0.0, 0.0, 1.0]))
     with pytest.raises(ValueError, match="degenerate motion on one side"):
         two_segment_test(A, R0.T @ A @ R0, 0.05 * np.arange(1000), block=1)
 
@@ -246,15 +247,16 @@ def test_a_2_deg_remount_in_tumvi_is_found():
 # tests.
 
 
-R0_MC = so3.exp_map(np.array([0.3, 0.2, -0.6]))
+R0_MC = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, -0.6]))
 
 
 def _pairs_mc(J, rng, noise_deg=0.2, change_at=None, change_deg=0.0):
     A = so3.random_rotations(rng, J)
     R = np.broadcast_to(R0_MC, (J, 3, 3)).copy()
     if change_at is not None:
-        R[change_at:] = R0_MC @ so3.exp_map(np.radians(change_deg) * np.array([0.0, 0.0, 1.0]))
-    B = np.swapaxes(R, -1, -2) @ A @ R @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((J, 3)))
+        R[change_at:] = R0_MC @ so3.matrix_from_rotation_vector(np.radians(change_deg) * np.array([0.0, 0.0, 1.0]))
+    B = np.swapaxes(R, -1,
+                    -2) @ A @ R @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
     return A, B, np.arange(J, dtype=float)
 
 
@@ -352,7 +354,7 @@ def test_threshold_and_p_value_agree():
 def test_single_axis_motion_on_one_side_is_refused():
     rng = np.random.default_rng(3)
     A, B, t = _pairs_mc(60, rng)
-    A[:30] = so3.exp_map(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
+    A[:30] = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
     B[:30] = R0_MC.T @ A[:30] @ R0_MC
     with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split: the sensor turns about one axis"):
         two_segment_test(A, B, t)
@@ -371,7 +373,7 @@ def test_the_summary_sentence():
 
 def test_remounted_changes_the_samples_from_exactly_the_time_on():
     t = np.arange(6) * 0.5
-    R = so3.exp_map(np.array([0.0, 0.0, 0.5]))
+    R = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, 0.5]))
     w = np.tile([1.0, 2.0, 3.0], (6, 1))
     g = remounted(GyroStream(t, w, "g"), 1.0, R)
     assert np.array_equal(g.omega[:2], w[:2]) and np.allclose(g.omega[2:], (R.T @ w[2:].T).T)
@@ -429,7 +431,7 @@ def test_the_tail_is_quiet_at_zero_and_at_tiny_statistics():
 def test_the_degenerate_side_message():
     rng = np.random.default_rng(3)
     A, B, t = _pairs_mc(60, rng)
-    A[:30] = so3.exp_map(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
+    A[:30] = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
     B[:30] = R0_MC.T @ A[:30] @ R0_MC
     with pytest.raises(ValueError) as err:
         two_segment_test(A, B, t)
@@ -444,7 +446,7 @@ def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
     J, delta = 80, 3e-6
     axes = np.stack([delta * (-1.0) ** np.arange(J), np.zeros(J), np.ones(J)], axis=1)
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
-    B = so3.exp_map(rng.uniform(0.3, 1.0, J)[:, None] * axes)
+    B = so3.matrix_from_rotation_vector(rng.uniform(0.3, 1.0, J)[:, None] * axes)
     with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split"):
         two_segment_test(B, B.copy(), np.arange(J) * 0.5)
 

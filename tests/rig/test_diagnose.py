@@ -1,4 +1,4 @@
-"""Input mistakes that only a reference shows (issue 34 point 5): the IMU's own trajectory given as the camera file,
+"""Input mistakes that only a reference shows: the IMU's own trajectory given as the camera file,
 and the camera and sensor files swapped, named where the reference check would otherwise blame permuted gyro axes
 or a reference for another rig; at the bounds of :data:`replication.rig.diagnose.IMU_AS_CAMERA_DEG`."""
 import warnings
@@ -30,7 +30,7 @@ Z = np.array([0.0, 0.0, 1.0])
 
 
 def _turn(deg, axis=Z):
-    return so3.exp_map(np.radians(deg) * np.asarray(axis))
+    return so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis))
 
 
 _world_from_imu = rig_motion  # the synthetic rig's motion, here the IMU's
@@ -42,7 +42,7 @@ def imu():
     t = np.arange(0.0, 40.0, 0.05)
     t_imu = np.arange(-1.0, 41.0, 0.005)
     Q = _world_from_imu(t_imu)
-    omega = so3.log_map(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     return OrientationStream(t, _world_from_imu(t), "imu pose"), GyroStream(0.5 * (t_imu[1:] + t_imu[:-1]), omega,
                                                                             "gyro")
 
@@ -161,7 +161,7 @@ def _run_md(sensor, fake, reference=None):
 
 
 def _q(stream):
-    return so3.as_quaternion(stream.world_from_body)
+    return so3.quaternion_from_matrix(stream.world_from_body)
 
 
 def test_each_hypothesis_is_undone_on_orientation_streams():
@@ -174,15 +174,15 @@ def test_each_hypothesis_is_undone_on_orientation_streams():
         assert camera.source == "cam" and sensor.source == "ori"
     cams = [c for c, _, _ in fake.calls]
     sens = [s for _, s, _ in fake.calls]
-    assert np.allclose(_q(cams[0]), so3.as_quaternion(so3.quaternion_to_matrix(_q(CAM)[:, [1, 2, 3, 0]])))
-    assert np.allclose(_q(cams[1]), so3.as_quaternion(so3.quaternion_to_matrix(_q(CAM)[:, [3, 0, 1, 2]])))
+    assert np.allclose(_q(cams[0]), so3.quaternion_from_matrix(so3.matrix_from_quaternion(_q(CAM)[:, [1, 2, 3, 0]])))
+    assert np.allclose(_q(cams[1]), so3.quaternion_from_matrix(so3.matrix_from_quaternion(_q(CAM)[:, [3, 0, 1, 2]])))
     assert np.allclose(cams[2].world_from_body, np.swapaxes(CAM.world_from_body, -1, -2))
     for k in (0, 1, 2):
         assert sens[k] is ORI
     for k in (3, 4, 5):
         assert cams[k] is CAM
-    assert np.allclose(_q(sens[3]), so3.as_quaternion(so3.quaternion_to_matrix(_q(ORI)[:, [1, 2, 3, 0]])))
-    assert np.allclose(_q(sens[4]), so3.as_quaternion(so3.quaternion_to_matrix(_q(ORI)[:, [3, 0, 1, 2]])))
+    assert np.allclose(_q(sens[3]), so3.quaternion_from_matrix(so3.matrix_from_quaternion(_q(ORI)[:, [1, 2, 3, 0]])))
+    assert np.allclose(_q(sens[4]), so3.quaternion_from_matrix(so3.matrix_from_quaternion(_q(ORI)[:, [3, 0, 1, 2]])))
     assert np.allclose(sens[5].world_from_body, np.swapaxes(ORI.world_from_body, -1, -2))
     assert np.allclose(cams[6].world_from_body, np.swapaxes(CAM.world_from_body, -1, -2))
     assert np.allclose(sens[6].world_from_body, np.swapaxes(ORI.world_from_body, -1, -2))
@@ -248,9 +248,9 @@ def test_ties_within_the_share_plus_the_atol_are_named_together_in_the_fixed_ord
 def test_a_reference_tells_tied_hypotheses_apart_at_the_fail_bound():
     bound = THRESHOLDS["reference_error_deg"][1]
     ref = np.eye(3)
-    at = so3.exp_map(np.array([0.0, 0.0, np.radians(bound)]))
-    beyond = so3.exp_map(np.array([0.0, 0.0, np.radians(bound * 1.001)]))
-    far = so3.exp_map(np.array([0.0, np.radians(90.0), 0.0]))
+    at = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, np.radians(bound)]))
+    beyond = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, np.radians(bound * 1.001)]))
+    far = so3.matrix_from_rotation_vector(np.array([0.0, np.radians(90.0), 0.0]))
     # two tied: the one at exactly the bound agrees with the reference, the far one does not
     (r,) = _run_md(ORI, FakeCalibrate({0: 0.5, 3: 0.5}, R={0: far, 3: at}), reference=ref)
     assert r.message.startswith("likely input mistake: the sensor file holds quaternions in (w, x, y, z) order read "

@@ -211,7 +211,7 @@ def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
     export = export_calibration(_report(d=None), "kalibr", base=base)
     assert read_vio_file(_written(tmp_path, export, "n.yaml")).time_offset_s() == -0.5
     assert "cam0.timeshift_cam_imu" not in export.changed and any("left as it was" in n for n in export.notes)
-    # issue 33: a static-pose report written before time_offset_s became null carries 0.0: not a measurement either
+    # a static-pose report written before time_offset_s became null carries 0.0: not a measurement either
     for d in (0.0, 0.0042, None):
         report = {**_report(d=d), "inputs": {"sensor": {"kind": "static poses", "samples": 10}}}
         export = export_calibration(report, "kalibr", base=base)
@@ -272,7 +272,7 @@ def test_basalt_keeps_the_files_quaternion_hemisphere(tmp_path):
     base = tmp_path / "calib.json"
     pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": -1.0}
     base.write_text(json.dumps({"value0": {"T_imu_cam": [pose, pose], "cam_time_offset_ns": 7}}, indent=4))
-    R = so3.exp_map(np.radians([0.0, 0.0, 1.0]))
+    R = so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 1.0]))
     with pytest.warns(ExportWarning, match="one camera only"):
         out = json.loads(export_calibration(_report(R=R, d=-2.5e-3), "basalt", base=base, camera="cam1",
                                             whole_rig=False).text)
@@ -467,7 +467,8 @@ def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_pat
         bases.append(d / "camchain.yaml")
     if camera == "cam0":
         bases.append(_orbslam3_inertial(folder, tmp_path))
-    R = so3.exp_map(np.radians([0.3, -0.2, 0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
+    R = so3.matrix_from_rotation_vector(np.radians([0.3, -0.2,
+                                                    0.5])) @ read_vio_file(bases[0]).camera_from_sensor(camera)
     for base in bases:
         before = read_vio_file(base)
         with warnings.catch_warnings():
@@ -517,7 +518,7 @@ def test_a_two_camera_file_stays_a_rig(tmp_path, folder, name, camera):
     exactly; one camera only moves the stereo rotation by the whole correction, and warns with that angle."""
     base = data_root() / folder / name
     before = read_vio_file(base)
-    R = so3.exp_map(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
+    R = so3.matrix_from_rotation_vector(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
     correction = so3.angle_between_deg(R, before.camera_from_sensor(camera))
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExportWarning)
@@ -582,10 +583,10 @@ def test_the_floor_table_reads_within_beyond_and_one_reference():
 
     from replication.study.real_study import reference_floor_table
 
-    ref_a, ref_b = np.eye(3), so3.exp_map(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
+    ref_a, ref_b = np.eye(3), so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
 
     def at(deg):  # an estimate turned about x, off both references' z-axis disagreement
-        return SimpleNamespace(R=so3.exp_map(np.radians([deg, 0.0, 0.15])))
+        return SimpleNamespace(R=so3.matrix_from_rotation_vector(np.radians([deg, 0.0, 0.15])))
 
     results = {("inside", "m"): at(0.25), ("outside", "m"): at(0.27), ("robot", "m"): at(0.0)}
     table = reference_floor_table(results, {"inside": "rig", "outside": "rig", "robot": "arm"},
@@ -720,7 +721,7 @@ def _export_ea(tmp_path, text, to, name="base.yaml", report=None, **kw):
 
 
 def _angle(A, B):
-    return np.degrees(np.linalg.norm(so3.log_map(np.asarray(A) @ np.asarray(B).T)))
+    return np.degrees(np.linalg.norm(so3.rotation_vector_from_matrix(np.asarray(A) @ np.asarray(B).T)))
 
 
 # ------------------------------------------------------------------ silent wrong numbers

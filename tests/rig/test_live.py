@@ -121,7 +121,7 @@ def test_the_usual_mistakes_are_named_online_and_never_ready(rig, mistake, check
 def test_cli_online_writes_its_results_into_the_report_and_figure(tmp_path, rig, capsys):
     R0, camera, gyro, _ = rig
     cam_file, imu_file = tmp_path / "cam.txt", tmp_path / "imu.csv"
-    q = so3.as_quaternion(camera.R)
+    q = so3.quaternion_from_matrix(camera.R)
     np.savetxt(cam_file, np.column_stack([camera.t + 1e3, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]]),
                fmt="%.9f")
     late = gyro.t + 1e3 + 2.0  # a 2 s clock offset: only found with --max-offset
@@ -148,7 +148,7 @@ def test_cli_online_on_a_short_recording_writes_the_report(tmp_path, rig):
     R0, camera, gyro, _ = rig
     cam = camera.between(0.0, 15.0)
     cam_file, imu_file, out = tmp_path / "cam.txt", tmp_path / "imu.csv", tmp_path / "r.json"
-    q = so3.as_quaternion(cam.R)
+    q = so3.quaternion_from_matrix(cam.R)
     np.savetxt(cam_file, np.column_stack([cam.t + 1e3, np.zeros((len(cam.t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
     keep = gyro.t < 16.0
     np.savetxt(imu_file, np.column_stack([np.round((gyro.t[keep] + 1e3) * 1e9), gyro.omega[keep],
@@ -167,13 +167,13 @@ def test_cli_online_on_a_short_recording_writes_the_report(tmp_path, rig):
 # (scripts/mutation) found these unguarded by the fast tests.
 
 
-R0 = so3.exp_map(np.array([0.3, -0.5, 0.8]))
+R0 = so3.matrix_from_rotation_vector(np.array([0.3, -0.5, 0.8]))
 W = np.array([0.2, 0.9, -0.4])  # rad/s, a constant rate about a fixed axis: slerp between samples is exact
 DT_CAM, DT_SEN = 1 / 32, 1 / 128  # binary fractions: time stamps and differences are exact
 
 
 def _C(t):
-    return so3.exp_map(W * t)  # world_from_camera
+    return so3.matrix_from_rotation_vector(W * t)  # world_from_camera
 
 
 def _feed(rig, t_end, offset=0.0, sensor_skip=()):
@@ -252,7 +252,7 @@ def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_ba
     w0, w1 = np.array([0.1, 0.2, 0.3]), np.array([0.5, -0.1, 0.1])
     rig.add_gyro(1.0, w0)
     rig.add_gyro(1.5, w1)
-    assert np.allclose(rig._gyro[-1][1], so3.exp_map(0.5 * (w0 + w1) * 0.5), rtol=0, atol=1e-15)
+    assert np.allclose(rig._gyro[-1][1], so3.matrix_from_rotation_vector(0.5 * (w0 + w1) * 0.5), rtol=0, atol=1e-15)
     assert rig._gyro_dt == 0.5
     rig.add_gyro(1.75, [0, 0, 0])
     assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
@@ -350,7 +350,8 @@ def test_used_offset_and_the_evidence():
 @pytest.mark.parametrize("t0", [0.0, 100.0])
 def test_the_offset_is_estimated_once_both_streams_span_the_window(t0):
     rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1)
-    motion = lambda t: so3.exp_map(np.array([math.sin(3 * t), math.cos(2 * t), 0.5 * math.sin(5 * t)]))  # noqa: E731
+    motion = lambda t: so3.matrix_from_rotation_vector(np.array([math.sin(3 * t), math.cos(2 * t),
+                                                                 0.5 * math.sin(5 * t)]))  # noqa: E731
     for k in range(int(2.0 / DT_SEN)):  # just short of the window on the sensor side
         rig.add_orientation(t0 + k * DT_SEN, motion(k * DT_SEN) @ R0)
         if k % 4 == 0:
@@ -378,7 +379,8 @@ def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
 
 
 def _motion(t):
-    return so3.exp_map(np.array([math.sin(1.3 * t), math.cos(0.7 * t), 0.8 * math.sin(0.5 * t + 1.0)]))
+    return so3.matrix_from_rotation_vector(np.array([math.sin(1.3 * t), math.cos(0.7 * t),
+                                                     0.8 * math.sin(0.5 * t + 1.0)]))
 
 
 def _streams(t_end=20.0, t0=100.0):
@@ -405,7 +407,7 @@ def test_replay_rows_and_summary_of_a_clean_rig():
     last = out.iloc[-1]
     assert last["ready"] and last["determined"] and not last["checking"] and last["error_deg"] < 0.2
     assert 0 < last["radius_deg"] < 2.0  # known: the radius, under the target
-    q = so3.as_quaternion(cal.R)
+    q = so3.quaternion_from_matrix(cal.R)
     assert [last["qw"], last["qx"], last["qy"], last["qz"]] == pytest.approx(list(q))
     assert out.attrs["offset_s"] == 0.0 and out.attrs["pairs_dropped"] == 0 and out.attrs["alarms"] == []
     s = out.attrs["summary"]
@@ -428,7 +430,7 @@ def test_replay_rows_and_summary_of_a_clean_rig():
 def test_replay_with_an_estimated_offset_and_a_remount():
     cam, sen = _streams(36.0)
     cal = OnlineCalibrator(target_deg=2.0)
-    R_re = so3.exp_map(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
+    R_re = so3.matrix_from_rotation_vector(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
     out = replay(cam, sen, cal, interval=0.25, offset=None, offset_window=8.0, max_offset=0.1, reference=R0,
                  remount=(118.0, R_re))
     s = out.attrs["summary"]
@@ -616,12 +618,12 @@ def test_integrating_a_very_slow_rotation_stays_exact():
     w = np.array([3e-6, -4e-6, 5e-6])  # rad/s: steps of 7e-9 rad, under the second-order branch
     for k in range(201):
         rig.add_gyro(k * 1e-3, w)
-    assert np.allclose(rig._gyro[-1][1], so3.exp_map(w * 0.2), rtol=0, atol=1e-13)
+    assert np.allclose(rig._gyro[-1][1], so3.matrix_from_rotation_vector(w * 0.2), rtol=0, atol=1e-13)
     rig, _ = _rig()
     w = np.array([10.0, -4.0, 6.0])  # steps of 0.6 rad: Rodrigues, not the second-order branch
     rig.add_gyro(0.0, w)
     rig.add_gyro(0.05, w)
-    assert np.allclose(rig._gyro[-1][1], so3.exp_map(w * 0.05), rtol=0, atol=1e-15)
+    assert np.allclose(rig._gyro[-1][1], so3.matrix_from_rotation_vector(w * 0.05), rtol=0, atol=1e-15)
 
 
 # ------------------------------------------------------------------ camera input, finish
@@ -742,7 +744,7 @@ def test_replay_before_any_estimate_has_nan_numbers():
 
 def test_replay_remounts_from_the_remount_time_inclusive():
     cam, sen = _streams(1.6)
-    R_re = so3.exp_map(np.array([0.0, 0.0, math.pi / 2]))
+    R_re = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, math.pi / 2]))
     pairs = []
     t_re = 100.0 + 35 * DT_CAM  # the end of pair 4 (the first estimate, at min_pairs), a sensor sample time
     out = replay(cam, sen, OnlineCalibrator(min_pairs=4), interval=0.25, offset=0.0, reference=R0,
@@ -761,7 +763,7 @@ def test_replay_remounts_a_gyro_by_its_rates():
     ts = np.arange(-1.0, 4.0, DT_SEN)
     cam = OrientationStream(t, np.array([_C(x) for x in t]), "cam")
     gyro = GyroStream(ts, np.tile(R0.T @ W, (len(ts), 1)), "gyro")  # world_from_sensor = C R0: body rate R0^T W
-    R_re = so3.exp_map(np.array([0.0, 0.0, math.pi / 2]))
+    R_re = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, math.pi / 2]))
     pairs = []
     replay(cam, gyro, OnlineCalibrator(), interval=0.25, offset=0.0, remount=(1.0, R_re),
            on_pair=lambda t, A, B: pairs.append((t, A, B)))
@@ -777,7 +779,7 @@ def _gyro_in_deg_per_s(seconds=5.0):
     """Camera poses at 8 Hz and a 32 Hz gyro of the same motion whose rates are in deg/s (read as rad/s)."""
     tc, ts = np.arange(0.0, seconds, 1 / 8), np.arange(-0.5, seconds + 0.5, 1 / 32)
     S = np.array([_motion(t) @ R0 for t in ts])
-    w = so3.log_map(np.swapaxes(S[:-1], -1, -2) @ S[1:]) * 32
+    w = so3.rotation_vector_from_matrix(np.swapaxes(S[:-1], -1, -2) @ S[1:]) * 32
     return (OrientationStream(tc, np.array([_motion(t) for t in tc]), "cam"),
             GyroStream(ts[:-1] + 1 / 64, np.degrees(w), "gyro"))
 
@@ -803,7 +805,8 @@ def test_the_pair_times_kept_for_the_events_are_bounded():
     cal = OnlineCalibrator(confirm_pairs=5)  # keeps at most 4 x 5 + 256 = 276 pair times, then forgets the older half
     rig = LiveRig(cal, interval=0.125, offset=0.0, diagnose=False)
     t = np.arange(-2, 555) / 8
-    C = so3.exp_map(np.stack([np.sin(1.3 * t), np.cos(0.7 * t), 0.8 * np.sin(0.5 * t + 1.0)], axis=1))
+    C = so3.matrix_from_rotation_vector(np.stack([np.sin(1.3 * t), np.cos(0.7 * t), 0.8 * np.sin(0.5 * t + 1.0)],
+                                                 axis=1))
     S = C @ R0
     for k in range(len(t)):  # camera poses at 8 Hz from t = 0 form pairs (0, 1), (2, 3), ...; the sensor at 4 Hz
         if k % 2 == 0:
@@ -819,11 +822,11 @@ def test_the_pair_times_kept_for_the_events_are_bounded():
 def test_an_event_of_pairs_the_rig_did_not_form_has_no_times():
     rng = np.random.default_rng(5)
     cal = OnlineCalibrator(confirm_pairs=5)
-    R_re = so3.exp_map(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
+    R_re = so3.matrix_from_rotation_vector(np.radians(10.0) * np.array([0.0, 1.0, 0.0]))
     for j in range(60):  # pairs given to the calibrator directly, a re-mount half-way
         R = R0 if j < 30 else R0 @ R_re
-        A = so3.exp_map(rng.normal(size=3) * 0.5)
-        cal.update(A, so3.exp_map(rng.normal(size=3) * math.radians(0.1)) @ R.T @ A @ R)
+        A = so3.matrix_from_rotation_vector(rng.normal(size=3) * 0.5)
+        cal.update(A, so3.matrix_from_rotation_vector(rng.normal(size=3) * math.radians(0.1)) @ R.T @ A @ R)
     assert [e.kind for e in cal.events] == ["remount"]
     ev = LiveRig(cal, offset=0.0, diagnose=False).summary()["events"][0]
     assert ev["kind"] == "remount" and math.isnan(ev["t_s"]) and math.isnan(ev["pair_end_s"])
@@ -834,7 +837,7 @@ def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
     # sample times whose step 1 -> T2 is exactly GAP_FACTOR x the running typical step (0.99 x 1 + 0.01 x step) in
     # floating point, and T2 -> T3 leaves the typical step there (found by search over the last bits)
     T2, T3 = 6.2105263157894735, 7.252631578947368
-    slow = lambda t: so3.exp_map(0.1 * W * t)  # noqa: E731  (0.52 rad over the long step: slerp stays exact)
+    slow = lambda t: so3.matrix_from_rotation_vector(0.1 * W * t)  # noqa: E731  (0.52 rad over the long step: slerp stays exact)
     for (t0, t1), samples in (((1.5, 2.5), (0.0, 1.0, T2)),   # both poses bracketed by the long step
                               ((0.5, 7.0), (0.0, 1.0, T2, T3))):  # the long step inside the pair
         rig, pairs = _rig(interval=t1 - t0)

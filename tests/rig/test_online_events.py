@@ -31,7 +31,7 @@ def _flat(R):
 
 def _rot(deg, axis=(0.3, -0.5, 0.8)):
     axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    return so3.exp_map(np.radians(deg) * axis)
+    return so3.matrix_from_rotation_vector(np.radians(deg) * axis)
 
 
 def test_a_repeat_is_within_the_tolerance_elementwise_on_both_motions():
@@ -60,10 +60,10 @@ def test_neighbouring_cells_are_searched_near_an_edge():
         for edge_side in (-1, 1):
             w = np.full(3, 5.3 * cell)
             w[axis] = 7 * cell + edge_side * 0.2 * tol  # just inside one cell
-            B1 = so3.exp_map(w)
+            B1 = so3.matrix_from_rotation_vector(w)
             w2 = w.copy()
             w2[axis] = 7 * cell - edge_side * 0.2 * tol  # just across the edge
-            B2 = so3.exp_map(w2)
+            B2 = so3.matrix_from_rotation_vector(w2)
             A = _rot(30.0)
             f = RepeatFilter()
             assert f.seen(_flat(A), _flat(B1)) is False
@@ -156,7 +156,7 @@ def _old_estimate(noise_deg, sd_deg):
 def _window(R, n, noise_deg, rng, shift=None):
     A = so3.random_rotations(rng, n)
     B = np.swapaxes(R, -1, -2) @ A @ R
-    B = B @ so3.exp_map(np.radians(noise_deg) * rng.standard_normal((n, 3)))
+    B = B @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((n, 3)))
     if shift is not None:
         B = np.swapaxes(shift, -1, -2) @ B @ shift
     return A, B
@@ -398,7 +398,7 @@ def test_excitation_of_a_window():
     G_ref = 2 * 12 * np.eye(3) - B.sum(0) - B.sum(0).T
     assert np.allclose(G, G_ref)
     assert deg == pytest.approx(math.degrees(math.sqrt(np.linalg.eigvalsh(G_ref)[0] / 12)))
-    Bz = so3.exp_map(np.radians(rng.uniform(10, 40, 8))[:, None] * np.array([0.0, 0.0, 1.0]))
+    Bz = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 40, 8))[:, None] * np.array([0.0, 0.0, 1.0]))
     assert _excitation_deg(Bz)[0] == pytest.approx(0.0, abs=1e-5)
 
 
@@ -431,7 +431,7 @@ def test_solve_window_gives_no_covariance_without_enough_pairs_or_excitation():
     exc = _excitation_deg(B)[0]
     assert solve_window(A, B, min_excitation_deg=exc * 1.0001, s2_floor=1e-12, d2_floor=1e-12)[2] is None
     assert solve_window(A, B, min_excitation_deg=exc * 0.9999, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
-    Az = so3.exp_map(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
+    Az = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
     Rz, keep, cov = solve_window(Az, R.T @ Az @ R, min_excitation_deg=1.0, s2_floor=1e-12, d2_floor=1e-12)
     assert cov is None and np.array_equal(Rz, np.eye(3)) and keep.all() and keep.shape == (12,)
 
@@ -465,7 +465,7 @@ def _mostly_gross_window():
     rng = np.random.default_rng(40)
     R_old = _rot(30.0)
     A, B = _window(R_old, 21, 0.2, rng)
-    B[:11] = B[:11] @ so3.exp_map(np.radians(30.0) * rng.standard_normal((11, 3)) / math.sqrt(3))
+    B[:11] = B[:11] @ so3.matrix_from_rotation_vector(np.radians(30.0) * rng.standard_normal((11, 3)) / math.sqrt(3))
     return R_old, A, B
 
 
@@ -484,7 +484,7 @@ def test_classify_mostly_gross_pairs_among_fitting_ones_are_outliers_up_to_a_med
 def test_classify_a_window_that_does_not_determine_r0_is_judged_at_the_old_estimate():
     rng = np.random.default_rng(41)
     R_old = _rot(30.0)
-    Az = so3.exp_map(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
+    Az = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 40, 12))[:, None] * np.array([0.0, 0.0, 1.0]))
     info = _classify_m(R_old, Az, R_old.T @ Az @ R_old, 3 * math.radians(0.2) ** 2)
     assert np.array_equal(info["R_new"], R_old) and info["angle_deg"] == 0.0 and info["threshold_deg"] == math.inf
     assert info["kind"] == "outliers" and info["undecided"] is False
@@ -597,7 +597,7 @@ def test_drift_test_takes_the_windows_noise_as_its_mean_square_residual_over_n_m
     u /= np.linalg.norm(u, axis=1)[:, None]
     B = np.concatenate([Bh, Bh])
     rho = np.concatenate([theta * u, -theta * u])
-    A = R @ so3.exp_map(rho) @ B @ R.T
+    A = R @ so3.matrix_from_rotation_vector(rho) @ B @ R.T
     cov = np.eye(3) * np.radians(0.01) ** 2
     alarm, angle, thr = drift_test(R, cov, 1e-12, A, B, min_excitation_deg=1.0)
     G = 2 * n * np.eye(3) - B.sum(0) - B.sum(0).T
@@ -608,7 +608,7 @@ def test_drift_test_takes_the_windows_noise_as_its_mean_square_residual_over_n_m
 
 def test_drift_test_no_alarm_when_the_window_agrees_exactly_at_zero_noise():
     R = np.eye(3)
-    quarter = [so3.exp_map(0.5 * math.pi * np.eye(3)[k]) for k in range(3)]
+    quarter = [so3.matrix_from_rotation_vector(0.5 * math.pi * np.eye(3)[k]) for k in range(3)]
     B = np.round(np.stack(quarter + [q.T for q in quarter]))  # exact quarter turns: B B^T = I to the bit
     alarm, angle, thr = drift_test(R, np.zeros((3, 3)), 0.0, B.copy(), B, min_excitation_deg=1.0)
     assert (alarm, angle, thr) == (False, 0.0, 0.0)
@@ -660,7 +660,9 @@ def _gross_window(n, n_gross):
     rng = np.random.default_rng(46)
     A, B = _window(_rot(30.0), n, 0.2, rng)
     axes = rng.standard_normal((n_gross, 3))
-    B[:n_gross] = B[:n_gross] @ so3.exp_map(np.radians(40.0) * axes / np.linalg.norm(axes, axis=1)[:, None])
+    B[:n_gross] = B[:n_gross] @ so3.matrix_from_rotation_vector(np.radians(40.0) * axes / np.linalg.norm(axes,
+                                                                                                         axis=1)[:,
+                                                                                                                 None])
     return A, B
 
 

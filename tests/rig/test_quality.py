@@ -272,7 +272,7 @@ def test_the_verdict_is_the_worst_reason():
 
 @pytest.mark.parametrize("poses", [False, True])
 def test_the_remedies_are_for_static_poses_or_for_streams(poses):
-    """Static pose sets are told to add stations, streams to record longer (a red-team case: a pose set was told to
+    """Static pose sets are told to add stations, streams to record longer (a case once found: a pose set was told to
     use a shorter interval)."""
     e = dataclasses.replace(GOOD, n_pairs=2, blocks=1.0, pose_residual_medians_deg=(0.1, 0.1, 0.1) if poses else None)
     reasons = {r.check: r.message for r in judge(e).reasons}

@@ -120,7 +120,7 @@ def test_calibrate_recovers_R0_and_the_clock_offset(rng):
     report = res.to_dict()
     json.dumps(report)
     assert report["euler_zyx_deg"].keys() == {"yaw", "pitch", "roll"}
-    np.testing.assert_allclose(so3.quaternion_to_matrix(res.quaternion_wxyz), res.R, atol=1e-12)
+    np.testing.assert_allclose(so3.matrix_from_quaternion(res.quaternion_wxyz), res.R, atol=1e-12)
 
 
 def test_calibrate_poses_recovers_R0(rng):
@@ -183,7 +183,7 @@ def test_cli_help_explains_the_formats():
     assert out.returncode == 0 and "t tx ty tz qx qy qz qw" in out.stdout and "T_cam_imu" in out.stdout
 
 # ----------------------------------------------------------------------------------------------------
-# Dataset files as shipped (issue 34 point 4): EuRoC's 17-column ground truth, time stamps repeated with another
+# Dataset files as shipped: EuRoC's 17-column ground truth, time stamps repeated with another
 # pose (refused naming the option that reads them, or kept first / last / averaged and counted), messages with plain
 # numbers (never numpy's ``np.float64(...)``).
 
@@ -198,11 +198,11 @@ NUMPY_REPR = re.compile(r"np\.(float|int|bool|str)|array\(")
 
 
 def _rotations(n, step_deg=1.0):
-    return so3.exp_map(np.radians(step_deg) * np.outer(np.arange(n), [0.3, -0.5, 0.8]))
+    return so3.matrix_from_rotation_vector(np.radians(step_deg) * np.outer(np.arange(n), [0.3, -0.5, 0.8]))
 
 
 def _gt_rows(n=6, columns=17, t0=1403636580838555648, step=5_000_000):
-    q = so3.as_quaternion(_rotations(n))
+    q = so3.quaternion_from_matrix(_rotations(n))
     rows = []
     for k in range(n):
         extra = [0.1 * k, -0.2, 0.8, -0.003172, 0.021267, 0.078502, -0.025266, 0.136696, 0.075593][:columns - 8]
@@ -256,8 +256,8 @@ def _repeated(tmp_path, angle_deg, *, verbatim=False, name="rep.csv"):
     rows = _gt_rows()
     twin = list(rows[2])
     if not verbatim:
-        R = so3.exp_map(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ _rotations(6)[2]
-        twin[4:8] = so3.as_quaternion(R)
+        R = so3.matrix_from_rotation_vector(np.radians(angle_deg) * np.array([0.0, 0.0, 1.0])) @ _rotations(6)[2]
+        twin[4:8] = so3.quaternion_from_matrix(R)
     return _write(tmp_path / name, GT_HEADER, rows[:3] + [twin] + rows[3:]), rows
 
 
@@ -338,13 +338,14 @@ def _cli_files(tmp_path, angle_deg):
     time stamp repeated with a pose ``angle_deg`` away."""
     t = 1403636580.0 + np.arange(0.0, 40.0, 0.05)
     R = rig_motion(t)  # the synthetic rig's motion
-    q = so3.as_quaternion(R)
+    q = so3.quaternion_from_matrix(R)
     cam = tmp_path / "cam.txt"
     np.savetxt(cam, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
-    Q = R @ so3.exp_map(np.array([0.3, -0.2, 0.5]))  # world_from_sensor
-    rows = [[int(round(tk * 1e9)), 0.0, 0.0, 0.0, *qk, *([0.0] * 9)] for tk, qk in zip(t, so3.as_quaternion(Q))]
+    Q = R @ so3.matrix_from_rotation_vector(np.array([0.3, -0.2, 0.5]))  # world_from_sensor
+    rows = [[int(round(tk * 1e9)), 0.0, 0.0, 0.0, *qk, *([0.0] * 9)] for tk, qk in zip(t,
+                                                                                       so3.quaternion_from_matrix(Q))]
     twin = list(rows[100])
-    twin[4:8] = so3.as_quaternion(so3.exp_map(np.radians([0.0, 0.0, angle_deg])) @ Q[100])
+    twin[4:8] = so3.quaternion_from_matrix(so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, angle_deg])) @ Q[100])
     gt = _write(tmp_path / "data.csv", GT_HEADER, rows[:101] + [twin] + rows[101:])
     return cam, gt
 
@@ -399,8 +400,9 @@ def test_refusals_of_time_stamps_carry_no_numpy_reprs():
 
 def _rig_streams():
     t = np.arange(0.0, 20.0, 0.05)
-    R = so3.exp_map(np.stack([np.sin(t), np.cos(0.7 * t), 0.3 * t], axis=-1))
-    return OrientationStream(t, R, "c"), OrientationStream(t, R @ so3.exp_map(np.array([0.1, 0.2, 0.3])), "s")
+    R = so3.matrix_from_rotation_vector(np.stack([np.sin(t), np.cos(0.7 * t), 0.3 * t], axis=-1))
+    return OrientationStream(t, R, "c"), OrientationStream(t, R @ so3.matrix_from_rotation_vector(np.array([0.1, 0.2,
+                                                                                                            0.3])), "s")
 
 
 def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():

@@ -21,12 +21,12 @@ from replication.rig.segments import (
     reasons,
     segment_test,
 )
-from replication.rig.streams import integrate_gyro
+from replication.rig.streams import OrientationStream, integrate_gyro
 from replication.testing import RIG_R0 as R0
 from replication.testing import camera_lost, clock_jumped, noisy_rig, rig_pairs, samples_lost
 
 WARN, FAIL = THRESHOLDS["remount_deg"]
-STEP = so3.exp_map(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
+STEP = so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([0.6, 0.0, 0.8]))
 
 
 def _cal(camera, sensor, **kw):
@@ -174,3 +174,29 @@ def test_the_consistent_part_fails_when_much_is_left_out_and_it_disagrees_beyond
     assert r.measured == pytest.approx(share) and r.threshold == pytest.approx(MAX_LEFT_OUT_SHARE)
     assert "majority" in r.message and f"{angle:.2f} deg" in r.message
     assert ("calibrate each on its own" in r.message) == (level == "fail")
+
+
+# ----------------------------------------------------------------------------------------------------
+# The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump of the camera's
+
+
+def test_use_consistent_keeping_a_wrong_majority_says_which_seconds_and_by_how_much_not_that_it_is_right():
+    from replication.core import so3
+
+    camera, gyro = noisy_rig(8200, 90.0, 0.05, 0.005)
+    off = so3.matrix_from_rotation_vector(np.radians([1.5, 0.0, 0.0]))
+    wrong = np.where((camera.t >= 25.0)[:, None, None], camera.world_from_body @ off, camera.world_from_body)
+    r = _cal(OrientationStream(camera.t, wrong, "camera"), gyro, use="consistent")
+    assert so3.angle_between_deg(r.R, R0) > 1.2  # the wrong majority (72 % of the recording) was kept
+    (why,) = [x for x in r.verdict.reasons if x.check == "segments_consistent_part"]
+    assert why.level == "warning" and why.measured < 1 / 3
+    used = r.segments["use"]
+    kept, left = used["kept_spans_s"], used["left_out_spans_s"]
+    assert kept[0][0] < 30.0 and kept[-1][1] > 80.0 and left[0][0] == pytest.approx(0.0, abs=0.1)
+    assert f"left out: {left[0][0]:.1f}-{left[0][1]:.1f} s" in why.message
+    moves = used["R0_moves_deg_if_left_out_part_is_right"]
+    assert moves == pytest.approx(1.5, abs=0.3)  # the claim: R0's error if the part left out is the right one
+    assert f"R0 moves by {moves:.2f} deg" in why.message and "not known to be the right one" in why.message
+    text = " ".join(x.message for x in r.verdict.reasons) + " ".join(r.summary().splitlines())
+    assert "is the right one" not in text.replace("if the part left out is the well-tracked one", "")
+    assert "not known to be right" in r.summary()

@@ -51,7 +51,7 @@ def test_compare_takes_one_problem_other_pairs_per_method_and_ignores_named_warn
     assert table.loc["park_martin", "n_pairs"] == 5
     # nearly single-axis motions: the data set's ObservabilityWarning is listed unless ignored
     axis = np.array([1.0, 0.0, 0.0]) + 1e-4 * rng.normal(size=(8, 3))
-    A1 = so3.exp_map(axis * np.linspace(0.2, 1.0, 8)[:, None])
+    A1 = so3.matrix_from_rotation_vector(axis * np.linspace(0.2, 1.0, 8)[:, None])
     B1 = R0.T @ A1 @ R0
     assert "ObservabilityWarning" in compare(A1, B1, R0, methods=["chordal_optimal"])["warnings"].iloc[0]
     quiet = compare(A1, B1, R0, methods=["chordal_optimal"], ignore_warnings=(ObservabilityWarning,))
@@ -123,7 +123,7 @@ def synthetic_rig():
     R0 = so3.random_rotations(rng, ())
     t = np.arange(0.0, 40.0, 0.05)
     w = np.stack([np.sin(0.7 * t), np.sin(0.45 * t + 1.0), np.cos(0.3 * t)], axis=-1)
-    world_from_camera = so3.exp_map(w)
+    world_from_camera = so3.matrix_from_rotation_vector(w)
     camera = OrientationStream(t, world_from_camera, "camera")
     sensor = OrientationStream(t, world_from_camera @ R0, "sensor")  # world_from_sensor = world_from_camera R0
     return R0, camera, sensor

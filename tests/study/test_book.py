@@ -34,7 +34,7 @@ def collected():
 # ---- the compact ledger (README, claims --summary) ----------------------------------------------------------------
 
 def test_summary_gives_the_counts_and_one_row_per_claim(collected):
-    summary = ledger.to_summary(collected)
+    summary = ledger.summary_from_ledger(collected)
     per_claim = collected.drop_duplicates("claim")
     counts = {v: int((per_claim["verdict"] == v).sum()) for v in ledger.VERDICTS}
     assert summary.splitlines()[0] == (
@@ -56,7 +56,7 @@ def test_cli_claims_summary_prints_the_compact_table(collected, capsys):
     from replication.cli import main
 
     assert main(["claims", "--summary"]) == 0
-    assert capsys.readouterr().out == ledger.to_summary(collected)
+    assert capsys.readouterr().out == ledger.summary_from_ledger(collected)
 
 
 def test_readme_holds_the_compact_table_and_is_short():

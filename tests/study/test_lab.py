@@ -1,4 +1,4 @@
-"""The simulated lab (issue 4): generator, the PnP / ecompass / Madgwick chain, Table II
+"""The simulated lab: generator, the PnP / ecompass / Madgwick chain, Table II
 statistics, the committed recordings, and the loader's rejection of malformed files."""
 import dataclasses
 import json
@@ -53,7 +53,7 @@ def test_ecompass_gives_body_from_world_and_madgwick_a_world_from_body_stream():
     # Madgwick on a noise-free constant-rate rotation about the sensor's x axis
     rate, n = np.deg2rad(20.0), 400
     t = np.arange(n) / 100.0
-    Q = so3.exp_map(np.outer(rate * t, [1.0, 0, 0]))  # world_from_sensor
+    Q = so3.matrix_from_rotation_vector(np.outer(rate * t, [1.0, 0, 0]))  # world_from_sensor
     acc = np.einsum("nji,j->ni", Q, lab.GRAVITY * up)
     mag = np.einsum("nji,j->ni", Q, b)
     imu = pd.DataFrame(np.hstack([t[:, None], acc, np.tile([rate, 0, 0], (n, 1)), mag]),

@@ -3,6 +3,7 @@ chain (each against the original), the all-sample calibration, the interventions
 findings with their intervals, and each check of the lab's claims (:mod:`replication.study.lab.claims`) raising
 just past its threshold (on the fresh seeds too) and not just before it."""
 import dataclasses
+import re
 
 import cv2
 import numpy as np
@@ -15,6 +16,7 @@ from replication.core.stats import wilson_interval
 from replication.study import lab
 from replication.study.lab import chain, claims, count_text, fastchain, seed_findings, seed_range, sqp_shares
 from replication.study.lab.recording import marker_pixels
+from replication.study.lab.seed_sets import LAB_SETTING, found_setting
 
 SQP_RUNS = ["100 iterations", "1000 iterations", "cost (8) / 2J"]
 #: Notebook 05's declared bounds of SQP's failure shares.
@@ -67,7 +69,7 @@ def test_ecompass_on_arrays_is_ahrs_ecompass(small_recording):
 
 def test_projection_and_its_jacobian_are_opencvs():
     rng = np.random.default_rng(0)
-    C = so3.exp_map(rng.normal(size=(4, 3)) * 0.3)
+    C = so3.matrix_from_rotation_vector(rng.normal(size=(4, 3)) * 0.3)
     t = np.tile([0.1, -0.1, 2.0], (4, 1))
     K = np.array([[450.0, 0, 320], [0, 452.0, 240], [0, 0, 1]])
     dist = np.array([-0.25, 0.08, 0.001, -0.001, 0.01])
@@ -78,8 +80,8 @@ def test_projection_and_its_jacobian_are_opencvs():
     h, numeric = 1e-6, np.empty_like(J)
     for k in range(6):
         d = h * np.eye(6)[k]
-        plus = fastchain._project(lab.WAND_POINTS, so3.exp_map(d[:3]) @ C, t + d[3:], K, dist)
-        minus = fastchain._project(lab.WAND_POINTS, so3.exp_map(-d[:3]) @ C, t - d[3:], K, dist)
+        plus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(d[:3]) @ C, t + d[3:], K, dist)
+        minus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(-d[:3]) @ C, t - d[3:], K, dist)
         numeric[:, k] = np.swapaxes((plus - minus) / (2 * h), -1, -2)
     assert np.abs(J - numeric).max() < 1e-6 * np.abs(J).max()
 
@@ -451,7 +453,7 @@ def test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin(mea
 
 
 # ----------------------------------------------------------------------------- the calibration errors' share of the
-# pitch bias: resolved to 0.1 deg (issue 36), many seeds, the words follow the intervals
+# pitch bias: resolved to 0.1 deg, many seeds, the words follow the intervals
 
 def test_pitch_bias_intervention_is_the_seed_studys():
     part = "magnetometer calibration errors"
@@ -506,3 +508,45 @@ def test_the_pitch_share_in_words_follows_the_intervals(means, words):
     measures = {r["claim"]: r for r in lab_claims(**inputs)}["table2_measures_calibration"]
     assert words in measures["evidence"]
     assert "seeds 900001-900120, confirmed on fresh seeds 910001-910120" in measures["setting"]
+
+
+# ----------------------------------------------------------------------------------------------------
+# Claims where their evidence is: one small function per claim, taking only its numbers, called
+
+
+def test_the_lab_claims_on_the_first_seeds_need_no_fresh_ones():
+    study = lab_study(range(1, 21))
+    rec = claims.table2_rms(study, lab_study(range(1, 4))["rms_ours_right"])
+    assert rec["setting"] == found_setting(study) == f"{LAB_SETTING}; seeds 1-20 (and the committed draw, seed " \
+                                                     "20130501)"
+    assert rec["section"] == "Sensitivity to the magnetometer noise" and "(20 seeds)" in rec["evidence"]
+
+
+def test_a_lab_claim_names_the_fresh_set_where_its_check_fails():
+    fresh = lab_study(range(21, 41))
+    fresh.loc[fresh.index[-6:], "rms_sensor_frame"] = 0.0   # calibration no longer reduces the RMS in 6 of 20
+    with pytest.raises(ValueError, match=r"^claim 'table2_reduction': .*most seeds of fresh seeds 21-40"):
+        claims.table2_reduction(lab_study(range(1, 21)), fresh)
+    fresh.loc[fresh.index[-6], "rms_sensor_frame"] = 24.0   # 5 of 20: still most
+    assert claims.table2_reduction(lab_study(range(1, 21)), fresh)["verdict"] == "holds"
+
+
+@pytest.mark.parametrize("fresh_seeds, shared", [(range(21, 41), None), (range(20, 40), "20"),
+                                                 (range(1, 21), "1, 2, 3, 4, 5 ...")])
+def test_the_fresh_seeds_of_a_lab_claim_must_be_disjoint_from_the_first(fresh_seeds, shared):
+    study, fresh = lab_study(range(1, 21)), lab_study(fresh_seeds)
+    if shared is None:
+        assert claims.fig6_accuracy(study, fresh)["verdict"] == "holds only if"
+    else:
+        with pytest.raises(ValueError, match=rf"^the seed study: the fresh seeds repeat .*\({re.escape(shared)}\); "
+                                             "a finding is confirmed only on seeds disjoint"):
+            claims.fig6_accuracy(study, fresh)
+
+
+def test_the_pitch_intervention_is_confirmed_on_disjoint_seeds():
+    inputs = lab_claims_inputs()
+    kw = dict(pitch_true=-4.09, true_r0_pitch=inputs["frames"].loc["true R0", "pitch mean"])
+    first, again = inputs["pitch_cal"]
+    assert claims.table2_measures_calibration(inputs["study"], inputs["fresh"], pitch_cal=(first, again), **kw)
+    with pytest.raises(ValueError, match="^the pitch-bias intervention: the fresh seeds repeat 120 of"):
+        claims.table2_measures_calibration(inputs["study"], inputs["fresh"], pitch_cal=(first, first), **kw)

@@ -1,4 +1,5 @@
 """The claims ledger: every checkable claim of the paper has a verdict, evidence and uncertainty, and README agrees."""
+import ast
 import json
 import os
 import re
@@ -330,7 +331,7 @@ def test_readme_table_is_written_between_the_markers(tmp_path, collected):
     readme.write_text(f"head\n{S}{E} tail\n", encoding="utf-8")
     assert not ledger.update_readme(collected, readme, check=True)
     assert ledger.update_readme(collected, readme)
-    assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.to_summary(collected)}{E} tail\n"
+    assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.summary_from_ledger(collected)}{E} tail\n"
     assert ledger.update_readme(collected, readme, check=True)
 
 
@@ -460,7 +461,7 @@ def test_the_repository_ledger_passes_check():
 
 
 def test_a_reader_that_stops_early_ends_the_output_quietly():
-    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback (red team), exit 141 (SIGPIPE's). The
+    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback, exit 141 (SIGPIPE's). The
     output (1 MB) is larger than a pipe's buffer, so the pipe does break; without the wrapper it prints a traceback."""
     script = ("import sys, replication.cli as m\n"
               "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
@@ -635,10 +636,10 @@ def test_collect_without_notebooks_reads_the_projects_own():
     assert len(set(got["notebook"])) > 1
 
 
-def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path):
+def test_markdown_from_ledger_table_escapes_pipes_and_newlines(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     got.loc[0, "evidence"] = "two\nlines"
-    md = ledger.to_markdown(got).splitlines()
+    md = ledger.markdown_from_ledger(got).splitlines()
     assert md[:2] == ["| claim | the paper | verdict | evidence | uncertainty | where measured |",
                       "|---|---|---|---|---|---|"]
     assert md[2] == ("| `zeta` | the last id alphabetically comes first (Sec. 1) | holds | two lines | u | "
@@ -647,19 +648,19 @@ def test_to_markdown_table_escapes_pipes_and_newlines(two_notebooks, claims_path
                      "s; [notebook 01, § S](notebooks/01_a.ipynb#s) |")
     assert md[4] == ("| `mid` | a third claim (Table 1) | holds only if J >= 3 | m | u | "
                      "s; [notebook 02, § S](notebooks/02_b.ipynb#s) |")
-    assert len(md) == 5 and ledger.to_markdown(got).endswith(" |\n")
+    assert len(md) == 5 and ledger.markdown_from_ledger(got).endswith(" |\n")
 
 
-def test_to_summary_gives_the_counts_and_one_compact_row_per_claim(two_notebooks, claims_path):
+def test_summary_from_ledger_gives_the_counts_and_one_compact_row_per_claim(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     got.loc[0, "statement"] = "two\nlines"
-    md = ledger.to_summary(got).splitlines()
+    md = ledger.summary_from_ledger(got).splitlines()
     assert md[:4] == ["**3 claims: 2 hold, 1 hold only if, 0 fail, 0 undecidable from the text.**", "",
                       "| claim | the paper says | verdict | measured in |", "|---|---|---|---|"]
     assert md[4] == "| `zeta` | two lines | holds | [01, § S](notebooks/01_a.ipynb#s) |"
     assert md[5] == "| `alpha` | a \\| pipe in the statement | holds | [01, § S](notebooks/01_a.ipynb#s) |"
     assert md[6] == "| `mid` | a third claim | holds only if | [02, § S](notebooks/02_b.ipynb#s) |"
-    assert len(md) == 7 and ledger.to_summary(got).endswith(" |\n")
+    assert len(md) == 7 and ledger.summary_from_ledger(got).endswith(" |\n")
     assert ledger.verdict_counts(got) == {"holds": 2, "fails": 0, "holds only if": 1, "undecidable from the text": 0}
 
 
@@ -683,7 +684,7 @@ def test_update_readme_writes_between_the_markers_and_checks(tmp_path, two_noteb
     assert ledger.update_readme(got, readme, check=True) is False
     assert "old table" in readme.read_text()  # check only: nothing written
     assert ledger.update_readme(got, readme) is True
-    assert readme.read_text(encoding="utf-8") == (f"# head\n{ledger.README_START}\n{ledger.to_summary(got)}"
+    assert readme.read_text(encoding="utf-8") == (f"# head\n{ledger.README_START}\n{ledger.summary_from_ledger(got)}"
                                                   f"{ledger.README_END}\ntail\n")
     assert ledger.update_readme(got, readme, check=True) is True
     before = readme.stat().st_mtime_ns
@@ -722,3 +723,90 @@ def test_notebook_headings_reads_every_level_from_markdown_cells_only():
                     {"cell_type": "code", "source": "# a comment"},
                     {"cell_type": "markdown", "source": "####### seven is not a heading\n## Two"}]}
     assert ledger.notebook_headings(nb) == ["One", "Six", "Two"]
+
+
+# ----------------------------------------------------------------------------------------------------
+# Claims where their evidence is: one small function per claim, taking only its numbers, called
+
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+CLAIM_MODULES = ["replication/study/lab/claims.py", "replication/study/lab/seed_sets.py",
+                 "replication/study/table1/claims.py", "replication/study/table1/sqp_claims.py",
+                 "replication/study/table1/cell_claims.py", "replication/study/fig5/claims.py",
+                 "replication/study/convexity.py"]
+
+
+MAX_LINES, MAX_PARAMS = 62, 8
+
+
+CLAIM_MIME = "application/vnd.replication.claim+json"
+
+
+def oversized(source: str, max_lines: int = MAX_LINES, max_params: int = MAX_PARAMS) -> list:
+    """``(name, lines, parameters)`` of every function of ``source`` longer than ``max_lines`` or with more than
+    ``max_params`` parameters."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            params = len(a.posonlyargs) + len(a.args) + len(a.kwonlyargs) + bool(a.vararg) + bool(a.kwarg)
+            lines = node.end_lineno - node.lineno + 1
+            if lines > max_lines or params > max_params:
+                found.append((node.name, lines, params))
+    return found
+
+
+def _function(lines: int, params: int) -> str:
+    args = ", ".join(f"a{k}" for k in range(params))
+    return f"def f({args}):\n" + "    x = 1\n" * (lines - 2) + "    return x\n"
+
+
+def test_the_size_rule_sees_a_function_just_past_either_limit():
+    assert oversized(_function(MAX_LINES, MAX_PARAMS)) == []
+    assert oversized(_function(MAX_LINES + 1, MAX_PARAMS)) == [("f", MAX_LINES + 1, MAX_PARAMS)]
+    assert oversized(_function(MAX_LINES, MAX_PARAMS + 1)) == [("f", MAX_LINES, MAX_PARAMS + 1)]
+    assert oversized("def g(a, *, b, **kw):\n    pass\n", max_params=2) == [("g", 2, 3)]
+
+
+@pytest.mark.parametrize("path", CLAIM_MODULES)
+def test_no_claim_builder_over_60_lines_or_8_parameters(path):
+    assert oversized((ROOT / path).read_text(encoding="utf-8")) == [], path
+
+
+def records_away_from_their_function(nb: dict) -> list:
+    """``(cell, claim)`` of every stored record whose cell does not call a function named for its claim (``<claim>(``
+    or ``<claim>_record(``): a record built elsewhere, in a builder of several claims, and only recorded here."""
+    away = []
+    for index, cell in enumerate(nb["cells"]):
+        source = "".join(cell.get("source", ""))
+        for out in cell.get("outputs", []):
+            rec = out.get("data", {}).get(CLAIM_MIME)
+            if rec and not re.search(rf"\b{re.escape(rec['claim'])}(_record)?\(", source):
+                away.append((index, rec["claim"]))
+    return away
+
+
+def _notebook_with(source: str, claims: list) -> dict:
+    outputs = [{"output_type": "display_data", "data": {CLAIM_MIME: {"claim": c}}} for c in claims]
+    return {"cells": [{"cell_type": "code", "source": source, "outputs": outputs}]}
+
+
+def test_the_cell_rule_sees_a_record_built_by_a_builder():
+    assert records_away_from_their_function(_notebook_with(
+        "ledger.record(**claims.lab_averaging(study, fresh))", ["lab_averaging"])) == []
+    assert records_away_from_their_function(_notebook_with(
+        "ledger.record(**either_minimises_record(a, b))", ["either_minimises"])) == []
+    assert records_away_from_their_function(_notebook_with(
+        "for rec in lab_claims(study, fresh):\n    ledger.record(**rec)", ["lab_averaging", "fig6_accuracy"])) == [
+        (0, "lab_averaging"), (0, "fig6_accuracy")]
+    assert records_away_from_their_function(_notebook_with(   # a name that only starts like the claim's
+        "ledger.record(**lab_averaging_all(study))", ["lab_averaging"])) == [(0, "lab_averaging")]
+
+
+@pytest.mark.parametrize("name", ["03_table1_monte_carlo", "05_table2_experiment"])
+def test_each_record_is_made_in_the_cell_that_calls_its_claims_function(name):
+    nb = json.loads((ROOT / "notebooks" / f"{name}.ipynb").read_text(encoding="utf-8"))
+    assert records_away_from_their_function(nb) == []
+    assert sum(CLAIM_MIME in o.get("data", {}) for c in nb["cells"] for o in c.get("outputs", [])) >= 10

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.core.so3 import exp_map
+from replication.core.so3 import matrix_from_rotation_vector
 from replication.core.solvers import chordal_optimal
 from replication.core.stats import share_range
 from replication.study import paper
@@ -261,7 +261,7 @@ def test_sqp_failures_and_other_minimum():
     # fake SQP answers: stopped early on a rotation 120 deg from the minimiser (another minimum); the same at the
     # limit; the same but its last raw iterate off SO(3); and at the minimiser
     R0 = sim.R0[0]
-    far = R0 @ exp_map(np.array([0.0, 0.0, np.deg2rad(120.0)]))
+    far = R0 @ matrix_from_rotation_vector(np.array([0.0, 0.0, np.deg2rad(120.0)]))
     R = np.stack([far, far, far, R0])
     last = R.copy()
     last[2] = 2.0 * far
@@ -356,7 +356,7 @@ def test_diverting_table_with_fake_runs():
     # the projected iterates read against R0 = I: run 0's projected error only falls, run 1's rises at iteration 3
     proj_err = np.array([[1.0, 0.5, 0.4, 0.01], [1.0, 0.5, 0.6, 0.7]])
     angles = 2 * np.arcsin(proj_err / (2 * np.sqrt(2)))
-    projected = exp_map(angles[..., None] * np.array([0.0, 0.0, 1.0]))
+    projected = matrix_from_rotation_vector(angles[..., None] * np.array([0.0, 0.0, 1.0]))
     scale_runs = {("s", "as printed"): (SimpleNamespace(iterates=iterates, cost=cost, projected=projected), err)}
     settings = {"s": (SimpleNamespace(R0=np.broadcast_to(np.eye(3), (2, 3, 3))), {"ours_right": err[::-1]},
                       {"ours_right": cost[::-1]})}

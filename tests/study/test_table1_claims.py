@@ -24,6 +24,7 @@ from replication.study.table1 import (
     SECTION5_SETTINGS,
     SECTIONS,
     Z_AGREE,
+    Runs,
     bracket_ci,
     fresh_seed_counts,
     iterate_errors,
@@ -813,7 +814,7 @@ def test_the_early_iterations_are_undecidable_and_say_what_they_depend_on():
     assert f"{FAR}" not in early["evidence"]  # the settings are named by their parts, not by section 5's labels
 
 
-# ---- issue 36: SQP's failures at two caps, the two-step iterates against the certified minimum -------------------
+# ---- SQP's failures at two caps, the two-step iterates against the certified minimum -------------------
 
 def test_sqp_cap_shares_reads_one_run_at_each_cap():
     from replication.study.table1 import sqp_cap_shares
@@ -864,3 +865,23 @@ def test_minimum_study_and_the_either_minimises_record():
     for found in ({"defaults": (999, 1000, 1000)}, {"defaults": (1000, 999, 1000)}):
         with pytest.raises(ValueError, match="^claim 'either_minimises'.*costs less than both R\\^r and R\\^l"):
             either_minimises_record(found, fresh, section="s", setting="t")
+
+
+# ----------------------------------------------------------------------------------------------------
+# Claims where their evidence is: one small function per claim, taking only its numbers, called
+
+
+def test_runs_refuse_a_confirmation_on_the_seeds_it_confirms():
+    with pytest.raises(ValueError, match="two different root seeds"):
+        Runs(n_runs=1000, n_slow=300, n_grid=300, seeds=(1000, 1000), reference=_reference())
+    runs = Runs(n_runs=1000, n_slow=300, n_grid=300, seeds=(1000, 21000), reference=_reference())
+    with pytest.raises(ValueError, match="confirmed on root seed 21000, one of the seeds they were found on"):
+        runs.setting(_confirm())                      # its root seed is 21000
+    assert "fresh root seed 21001" in runs.setting({**_confirm(), "seed": 21001})
+
+
+def test_runs_name_the_seeds_and_the_confirmation_in_the_setting():
+    runs = Runs(n_runs=1000, n_slow=300, n_grid=300, seeds=(1000, 11000), reference=_reference())
+    setting = runs.setting(_confirm())
+    assert setting.startswith("1000 runs each: our defaults") and "fresh root seed 11000" in setting
+    assert "finite-difference and capped (300 runs); the counts confirmed on fresh root seed 21000" in setting

@@ -31,7 +31,7 @@ from ..checks import check_init
 from ..handeye import unvec, vec
 from ..kernels import eigvalsh3, solve3
 from ..motions import Motions
-from ..so3 import exp_map, nearest_rotation_up_to_sign, skew
+from ..so3 import matrix_from_rotation_vector, nearest_rotation_up_to_sign, skew
 from ._sdp import relaxation, upper_bound
 from ._warnings import CertificateWarning
 from .result import Solution
@@ -99,7 +99,7 @@ def chordal_newton(K, init, *, max_iterations: int = 30, gradient_tol: float = 1
         w = solve3(Hn + shift, grad)
         step = np.ones(w.shape[:-1])
         for _ in range(30):  # backtracking: accept a step only if g does not decrease
-            R_new = R @ exp_map(w * step[..., None])
+            R_new = R @ matrix_from_rotation_vector(w * step[..., None])
             g_new, grad_new, hess_new = _derivatives(M, R_new)
             ok = g_new >= g - 1e-15 * np.abs(g)
             if ok.all():

@@ -22,10 +22,10 @@ import numpy as np
 
 from ..kernels import bottom_eigenvector4, solve3
 from ..so3 import (
-    exp_map,
+    matrix_from_quaternion,
+    matrix_from_rotation_vector,
     nearest_rotation,
     quaternion_from_rotation_vector,
-    quaternion_to_matrix,
     skew,
 )
 from ._registry import register
@@ -111,12 +111,12 @@ def horaud_dornaika(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    a, b = (quaternion_from_rotation_vector(w) for w in motions.rotation_vectors)  # as_quaternion(A), (B)
+    a, b = (quaternion_from_rotation_vector(w) for w in motions.rotation_vectors)  # quaternion_from_matrix(A), (B)
     C = _multiplication_matrix(a, "left") - _multiplication_matrix(b, "right")
     # eqs. (33)-(39): a_j * x - x * b_j = C_j x
     S = np.einsum("...jki,...jkl->...il", C, C)  # eq. (40): sum_j C_j^T C_j
     x = bottom_eigenvector4(S)  # eq. (41): eigenvector of the smallest eigenvalue
-    return quaternion_to_matrix(x)
+    return matrix_from_quaternion(x)
 
 
 @register(
@@ -187,7 +187,7 @@ def tsai_lenz(motions):
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    # Tsai eq. (12): P = 2 sin(theta/2) n, the vector part of as_quaternion(A) (and B) times 2
+    # Tsai eq. (12): P = 2 sin(theta/2) n, the vector part of quaternion_from_matrix(A) (and B) times 2
     Pa, Pb = (2.0 * quaternion_from_rotation_vector(w)[..., 1:] for w in motions.rotation_vectors)
     S = skew(Pa + Pb)  # eq. (12): skew(P_a + P_b) p' = P_b - P_a
     d = Pb - Pa
@@ -198,4 +198,4 @@ def tsai_lenz(motions):
     # eqs. (13)-(14): P_X = 2 p' / sqrt(1 + |p'|^2), i.e. theta_X = 2 atan|p'| about p'/|p'|
     with np.errstate(invalid="ignore", divide="ignore"):
         axis = np.where(norm > 0, p / np.where(norm > 0, norm, 1.0), 0.0)
-    return exp_map(axis * 2.0 * np.arctan(norm))
+    return matrix_from_rotation_vector(axis * 2.0 * np.arctan(norm))

@@ -54,7 +54,7 @@ from ..checks import check_init, det3
 from ..handeye import handeye_cost_kron, unvec, vec
 from ..kernels import eigvalsh3
 from ..motions import MotionObservability, Motions, prepare_motions
-from ..so3 import chordal_to_angle_deg, frobenius_error
+from ..so3 import angle_deg_from_chordal, frobenius_error
 from ._registry import register, warn_if_weak
 from ._warnings import AccuracyWarning, ConvergenceWarning, IterationCapWarning
 from .limit import REPEATED_TOL, _check_unique_limit, _check_variant, _fixed_point, _project
@@ -134,7 +134,7 @@ class TwoStepResult:
             frobenius_error(self.R_right, self.fixed_point_right),
             frobenius_error(self.R_left, self.fixed_point_left),
         )
-        return chordal_to_angle_deg(dist)
+        return angle_deg_from_chordal(dist)
 
 
 def _history(m: Motions, init: np.ndarray, iterations: int, variant: str, keep: bool = True):

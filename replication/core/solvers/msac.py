@@ -23,7 +23,7 @@ from itertools import combinations
 import numpy as np
 
 from ..handeye import kronecker_operator, pair_residual_deg
-from ..so3 import chordal_to_angle_deg, log_map, nearest_rotation
+from ..so3 import angle_deg_from_chordal, nearest_rotation, rotation_vector_from_matrix
 from ._registry import register
 from .certificate import chordal_newton
 
@@ -133,7 +133,7 @@ def _scores_blocked(R_h, A, B, threshold_deg: float) -> np.ndarray:
             for j in range(0, J, js):
                 Z = (A[n, j:j + js].reshape(-1, 9, 1) * B[n, j:j + js].reshape(-1, 1, 9)).reshape(-1, 81)
                 d2 = 6.0 - 2.0 * (Z @ K_t)  # term j of eq. (8): ||A_j R - R B_j||_F^2, (js, hs)
-                r = chordal_to_angle_deg(np.sqrt(np.maximum(d2, 0.0)))
+                r = angle_deg_from_chordal(np.sqrt(np.maximum(d2, 0.0)))
                 score[n, k:k + hs] += np.sum(np.minimum(r, threshold_deg) ** 2, axis=0)  # MSAC
     return score
 
@@ -193,7 +193,7 @@ def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, se
     A, B, J = motions.A, motions.B, motions.J
     lead = A.shape[:-3]
     idx = _hypotheses(J, int(max_hypotheses), seed)  # (H, 2)
-    alpha, beta = log_map(A), log_map(B)  # Park & Martin: alpha_j = R0 beta_j
+    alpha, beta = rotation_vector_from_matrix(A), rotation_vector_from_matrix(B)  # Park & Martin: alpha_j = R0 beta_j
     M = np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :])
     R_h = nearest_rotation(M)  # (..., H, 3, 3): one hypothesis per sample
     flat = (-1, J, 3, 3)

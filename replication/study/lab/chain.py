@@ -10,7 +10,13 @@ import numpy as np
 import pandas as pd
 
 from ...core.handeye import relative_rotations
-from ...core.so3 import angle_between_deg, log_map, nearest_rotation, quaternion_to_matrix, yaw_pitch_roll_deg
+from ...core.so3 import (
+    angle_between_deg,
+    matrix_from_quaternion,
+    nearest_rotation,
+    rotation_vector_from_matrix,
+    yaw_pitch_roll_deg_from_matrix,
+)
 from ...core.solvers import ReplicationWarning, solve
 from ...rig.streams import OrientationStream
 from ..table2 import attitude_statistics
@@ -131,7 +137,7 @@ def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float, *, madgwick: 
         q = madgwick_marg(gyr, acc, mag, rate_hz)
     else:
         raise ValueError(f"madgwick must be 'ahrs' or 'transcribed', got {madgwick!r}")
-    return OrientationStream(imu["t"].to_numpy(), quaternion_to_matrix(q), "Madgwick")
+    return OrientationStream(imu["t"].to_numpy(), matrix_from_quaternion(q), "Madgwick")
 
 
 def _chordal_mean(R):
@@ -297,9 +303,9 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS, *, fast: bo
     truth = recording.truth.get("camera_from_sensor")
     rows = []
     for name, R in estimates.items():
-        rpy = yaw_pitch_roll_deg(R)[..., ::-1]
+        rpy = yaw_pitch_roll_deg_from_matrix(R)[..., ::-1]
         ref = truth if truth is not None else r0[name]
-        dev = np.degrees(log_map(R @ ref.T))                           # deviation, camera axes
+        dev = np.degrees(rotation_vector_from_matrix(R @ ref.T))                           # deviation, camera axes
         for i, k in enumerate(sets):
             row = {"set": k, "method": name, "roll_deg": rpy[i, 0], "pitch_deg": rpy[i, 1], "yaw_deg": rpy[i, 2],
                    "dev_x_deg": dev[i, 0], "dev_y_deg": dev[i, 1], "dev_z_deg": dev[i, 2],
@@ -327,9 +333,11 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS, *, fast: bo
     world_from_sensor = sensor.at(t_cam)
     dC = relative_rotations(C, reference=0)
     dI = relative_rotations(world_from_sensor, reference=0, convention="world_from_body")
-    traces = {"camera": yaw_pitch_roll_deg(dC)[..., ::-1], "sensor_frame": yaw_pitch_roll_deg(dI)[..., ::-1]}
+    traces = {"camera": yaw_pitch_roll_deg_from_matrix(dC)[..., ::-1],
+              "sensor_frame": yaw_pitch_roll_deg_from_matrix(dI)[..., ::-1]}
     for name, R in r0.items():
-        traces[name] = yaw_pitch_roll_deg(R @ dI @ R.T)[..., ::-1]     # the paper's R0 Delta R_i R0^T (roll first)
+        # the paper's R0 Delta R_i R0^T (roll first)
+        traces[name] = yaw_pitch_roll_deg_from_matrix(R @ dI @ R.T)[..., ::-1]
     tables = {name: attitude_statistics(tr, traces["camera"]) for name, tr in traces.items() if name != "camera"}
     order = list(solvers) + ["sensor_frame"]
     rows = pd.MultiIndex.from_product([["roll", "pitch", "yaw"], order], names=["angle", "method"])

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ...core.so3 import exp_map
+from ...core.so3 import matrix_from_rotation_vector
 
 __all__ = ["refine_camera_orientations", "ecompass_attitudes", "madgwick_marg"]
 
@@ -96,7 +96,7 @@ def _gauss_newton_pnp(uv, X, K, dist, C, t, iterations):
         proj, J = _project(X, C, t, K, dist, jacobian=True)
         r, J = np.swapaxes(proj - uv, -1, -2).reshape(len(uv), -1, 1), J.reshape(len(uv), 6, -1)   # (u.., v..)
         step = -np.linalg.solve(J @ np.swapaxes(J, -1, -2), J @ r)[..., 0]
-        C, t = exp_map(step[:, :3]) @ C, t + step[:, 3:]
+        C, t = matrix_from_rotation_vector(step[:, :3]) @ C, t + step[:, 3:]
     rms = np.sqrt(np.mean(np.sum((_project(X, C, t, K, dist) - uv) ** 2, axis=-1), axis=-1))
     if not (rms <= 5.0).all():
         m = int(np.argmax(~(rms <= 5.0)))

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pandas as pd
 
-from ...core.so3 import exp_map, from_euler, log_map
+from ...core.so3 import matrix_from_euler, matrix_from_rotation_vector, rotation_vector_from_matrix
 from .recording import IMU_COLUMNS, UNITS, LabRecording, _marker_columns
 from .settings import GRAVITY, NOMINAL_CAMERA_FROM_SENSOR, WAND_POINTS, LabSettings
 
@@ -16,7 +16,7 @@ __all__ = ["simulate_lab"]
 def _small_rotations(rng, sigma_deg, size):
     """Rotations with rotation vectors ~ N(0, sigma^2 I) (degrees), shape size + (3, 3)."""
     rotvec = rng.normal(0.0, 1.0, size + (3,)) * np.deg2rad(sigma_deg)
-    return exp_map(rotvec)
+    return matrix_from_rotation_vector(rotvec)
 
 
 def _sensor_error_matrix(rng, scale_error, misalignment_deg):
@@ -35,7 +35,7 @@ def _look_at(position, target, roll_deg):
     x = x / np.linalg.norm(x, axis=-1, keepdims=True)
     y = np.cross(z, x)
     C = np.stack([x, y, z], axis=-2)
-    return from_euler("z", np.reshape(roll_deg, (-1, 1)), degrees=True).reshape(C.shape) @ C
+    return matrix_from_euler("z", np.reshape(roll_deg, (-1, 1)), degrees=True).reshape(C.shape) @ C
 
 
 def _project(settings, C, position, rng, n_frames):
@@ -183,7 +183,7 @@ def simulate_lab(settings: LabSettings = LabSettings()) -> LabRecording:
     def camera_from_wand(t):
         angles = amp * np.sin(2 * np.pi * np.asarray(t)[:, None] / period)
         # body-fixed pan (camera y), tilt (camera x), roll (camera z): world_from_camera = C0^T Ry Rx Rz
-        motion = from_euler("YXZ", angles)
+        motion = matrix_from_euler("YXZ", angles)
         return np.swapaxes(C0.T @ motion, -1, -2)
 
     def sensor_position(t):
@@ -193,7 +193,7 @@ def simulate_lab(settings: LabSettings = LabSettings()) -> LabRecording:
     I_dyn = r0.T @ camera_from_wand(t_imu)
     Ip, Im = r0.T @ camera_from_wand(t_imu + h), r0.T @ camera_from_wand(t_imu - h)
     # body rate from world_from_sensor Q = I^T: Q(t+h) = Q(t-h) exp([w] 2h)
-    rate = log_map(Im @ np.swapaxes(Ip, -1, -2)) / (2 * h)
+    rate = rotation_vector_from_matrix(Im @ np.swapaxes(Ip, -1, -2)) / (2 * h)
     accel = (sensor_position(t_imu + h) - 2 * sensor_position(t_imu) + sensor_position(t_imu - h)) / h**2
     f = np.einsum("nij,nj->ni", I_dyn, accel + GRAVITY * up)
     b = _world_field(s, rng_field)

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ...core.so3 import angle_between_deg, exp_map
+from ...core.so3 import angle_between_deg, matrix_from_rotation_vector
 from ...core.solvers import ReplicationWarning, solve, sqp
 from ...core.stats import ROUNDING_RUNS, declared_bound, mean_se, wilson_interval
 from ..table2 import projection_statistics
@@ -167,7 +167,7 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
         error = result.r0["ours_right"] @ result.truth.T
         row["rms_reversed_ours_right"] = float(projection_statistics(result, error.T @ result.truth)["rms_deg"].mean())
         for angle in turned_deg:
-            turned = [result.truth @ exp_map(np.radians(float(angle)) * axis) for axis in np.eye(3)]
+            turned = [result.truth @ matrix_from_rotation_vector(np.radians(float(angle)) * axis) for axis in np.eye(3)]
             row[f"rms_turned_{angle:g}"] = float(np.mean([projection_statistics(result, R)["rms_deg"].mean()
                                                           for R in turned]))
         motions = static_motions(recording) if sqp_runs else {}

@@ -3,7 +3,12 @@ import numpy as np
 import pytest
 
 from replication.core.handeye import relative_rotations
-from replication.core.so3 import angle_between_deg, exp_map, quaternion_to_matrix, random_rotations
+from replication.core.so3 import (
+    angle_between_deg,
+    matrix_from_quaternion,
+    matrix_from_rotation_vector,
+    random_rotations,
+)
 from replication.study.vins_rule import VinsExRotation, _eigen_quaternion_xyzw
 from replication.testing import assert_rotations_close
 
@@ -13,7 +18,7 @@ def _three_axis_pairs(rng, R0, n_pairs, step_deg=20.0):
     w = rng.normal(size=(n_pairs, 3))
     w *= np.radians(step_deg) / np.linalg.norm(w, axis=1, keepdims=True)
     I = [random_rotations(rng, ())]
-    for d in exp_map(w):
+    for d in matrix_from_rotation_vector(w):
         I.append(d @ I[-1])  # sensor attitude (body_from_world) after a body-frame increment
     I = np.array(I)
     C = R0 @ I  # eq. (1)
@@ -92,7 +97,7 @@ def test_single_axis_motion_never_declares_success(rng):
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
     angles = np.radians(rng.uniform(5.0, 25.0, size=30)) * rng.choice([-1.0, 1.0], size=30)
-    B = exp_map(angles[:, None] * axis)
+    B = matrix_from_rotation_vector(angles[:, None] * axis)
     A = R0 @ B @ R0.T
     rule, returned, svs = _run(A, B)
     assert not returned.any() and not rule.ready and rule.ready_at is None
@@ -105,11 +110,11 @@ def test_single_axis_motion_never_declares_success(rng):
 def test_huber_downweights_one_gross_outlier(rng):
     R0 = random_rotations(rng, ())
     A, B, _, _ = _three_axis_pairs(rng, R0, 30)
-    A = A @ exp_map(rng.normal(scale=np.radians(0.05), size=(30, 3)))  # small camera noise
+    A = A @ matrix_from_rotation_vector(rng.normal(scale=np.radians(0.05), size=(30, 3)))  # small camera noise
     # The outlier: 90 deg camera and sensor motions about unrelated axes (same angle, so the scalar parts
     # of the quaternions agree and the pair biases the null vector instead of adding an isotropic term).
-    A_out = R0 @ exp_map(np.radians(90.0) * np.array([0.0, 1.0, 0.0])) @ R0.T
-    B_out = exp_map(np.radians(90.0) * np.array([1.0, 0.0, 0.0]))
+    A_out = R0 @ matrix_from_rotation_vector(np.radians(90.0) * np.array([0.0, 1.0, 0.0])) @ R0.T
+    B_out = matrix_from_rotation_vector(np.radians(90.0) * np.array([1.0, 0.0, 0.0]))
     A_all = np.concatenate([A[:15], A_out[None], A[15:]])
     B_all = np.concatenate([B[:15], B_out[None], B[15:]])
     rule, _, _ = _run(A_all, B_all)
@@ -150,14 +155,14 @@ def test_bad_parameters_raise_value_error(kw, message):
 
 def test_eigen_quaternion_sign():
     # trace > 0: w > 0.
-    R = exp_map(np.radians(60.0) * np.array([0.0, 0.0, -1.0]))
+    R = matrix_from_rotation_vector(np.radians(60.0) * np.array([0.0, 0.0, -1.0]))
     q = _eigen_quaternion_xyzw(R)
     assert q[3] > 0
     # trace <= 0 (170 deg about -x): Eigen makes the largest-diagonal coefficient (x) positive, so w < 0.
-    R = exp_map(np.radians(170.0) * np.array([-1.0, 0.0, 0.0]))
+    R = matrix_from_rotation_vector(np.radians(170.0) * np.array([-1.0, 0.0, 0.0]))
     q = _eigen_quaternion_xyzw(R)
     assert q[0] > 0 and q[3] < 0
-    np.testing.assert_allclose(quaternion_to_matrix(np.r_[q[3], q[:3]]), R, atol=1e-12)
+    np.testing.assert_allclose(matrix_from_quaternion(np.r_[q[3], q[:3]]), R, atol=1e-12)
 
 
 def test_huber_weight_fixed_when_pair_arrives(rng):
@@ -180,13 +185,13 @@ def test_repeated_smallest_singular_value_is_resolved_without_rounding():
     rng = np.random.default_rng(11)
     R0 = random_rotations(rng, ())
     A = random_rotations(rng, 15)
-    B = exp_map(rng.normal(size=(15, 3)) * np.radians(0.3)) @ (R0.T @ A @ R0)
+    B = matrix_from_rotation_vector(rng.normal(size=(15, 3)) * np.radians(0.3)) @ (R0.T @ A @ R0)
     runs = []
     for eps in (0.0, 1e-12):
         v = VinsExRotation()
         estimates = []
         for a, b in zip(A, B):
-            v.update(exp_map(rng.normal(size=3) * eps) @ a, b)
+            v.update(matrix_from_rotation_vector(rng.normal(size=3) * eps) @ a, b)
             estimates.append(v.R)
         runs.append(np.array(estimates))
     assert angle_between_deg(runs[0], runs[1]).max() < 1e-8  # measured 5.4e-10 deg

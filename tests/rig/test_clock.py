@@ -1,22 +1,24 @@
 """The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump of the camera's
 clock are named clock_jump with their time, size and clock (not a drift); a drift and a clean rig are not; the
 decision at its thresholds; the sensor re-stamped for the segment test (a drift or a step removed). Rigs:
-benchmarks/bench_clock.py's (bench_changepoint's rig, 60 s, a gyro bias)."""
-import sys
+``replication.testing``'s noisy rig (60 s, a gyro bias) and its clock edits."""
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from replication.rig import clock
+from replication.rig.calibration import calibrate
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
+from replication.testing import RIG_R0 as R0
+from replication.testing import camera_clock_jumped as camera_jump
+from replication.testing import clock_drifting
+from replication.testing import clock_stepped as lost
+from replication.testing import noisy_rig as rig
 
-from bench_changepoint import R0, rig  # noqa: E402
-from bench_clock import camera_jump, drifting, lost  # noqa: E402
 
-from replication.rig import clock  # noqa: E402
-from replication.rig.calibration import calibrate  # noqa: E402
-from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro  # noqa: E402
+def drifting(gyro, ppm):
+    return clock_drifting(gyro, ppm, 30.0)
 
 
 def _rig(seed, bias=0.0):
@@ -125,28 +127,6 @@ def test_a_drift_is_removed_before_the_segment_test(monkeypatch):
     assert "clock_drift" in checks and "segments_disagree" not in checks
     monkeypatch.setattr(clock, "corrected_sensor", lambda *a, **k: None)  # the drift left in: the segments disagree
     assert "segments_disagree" in {x.check for x in _cal(camera, gyro).verdict.reasons}
-
-
-def test_use_consistent_keeping_a_wrong_majority_says_which_seconds_and_by_how_much_not_that_it_is_right():
-    from replication.core import so3
-
-    camera, gyro = rig(8200, 90.0, 0.05, 0.005)
-    off = so3.exp_map(np.radians([1.5, 0.0, 0.0]))
-    wrong = np.where((camera.t >= 25.0)[:, None, None], camera.world_from_body @ off, camera.world_from_body)
-    r = _cal(OrientationStream(camera.t, wrong, "camera"), gyro, use="consistent")
-    assert so3.angle_between_deg(r.R, R0) > 1.2  # the wrong majority (72 % of the recording) was kept
-    (why,) = [x for x in r.verdict.reasons if x.check == "segments_consistent_part"]
-    assert why.level == "warning" and why.measured < 1 / 3
-    used = r.segments["use"]
-    kept, left = used["kept_spans_s"], used["left_out_spans_s"]
-    assert kept[0][0] < 30.0 and kept[-1][1] > 80.0 and left[0][0] == pytest.approx(0.0, abs=0.1)
-    assert f"left out: {left[0][0]:.1f}-{left[0][1]:.1f} s" in why.message
-    moves = used["R0_moves_deg_if_left_out_part_is_right"]
-    assert moves == pytest.approx(1.5, abs=0.3)  # the claim: R0's error if the part left out is the right one
-    assert f"R0 moves by {moves:.2f} deg" in why.message and "not known to be the right one" in why.message
-    text = " ".join(x.message for x in r.verdict.reasons) + " ".join(r.summary().splitlines())
-    assert "is the right one" not in text.replace("if the part left out is the well-tracked one", "")
-    assert "not known to be right" in r.summary()
 
 
 def test_a_window_without_pairs_is_left_out_not_the_profile():

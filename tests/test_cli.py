@@ -9,6 +9,8 @@ from pathlib import Path
 from replication.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
 COMMANDS = {"reproduce": "reproduce", "calibrate": "calibrate", "export": "export", "generate-lab": "lab",
             "claims": "claims", "fetch-data": "fetch"}
 

@@ -1,83 +1,13 @@
-"""New tests of branch online-bias: the drift's end on the estimates' centroids (point 2) and the live gyro bias
-(point 1). The lead folds them into the units' files."""
-import math
+"""The live rig's gyro bias (``rig/online_bias.py``): estimated with R0 on the first window, removed, published with
+its interval, and ``ready`` withheld when it cannot be removed."""
 from collections import deque
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from replication.core import so3
 from replication.rig.online import OnlineCalibrator
-from replication.rig.online_events import OnlineEvent
-from replication.rig.online_guard import TRACK_APART, TRACK_Z, drift_lag_deg, track_drift
-from replication.study.live_study import pair_stream
 
-AXIS = np.array([0.6, -0.48, 0.64])
-
-
-def _drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
-    rng = np.random.default_rng([seed, 7])
-    R0 = so3.random_rotations(rng, ())
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    A, B = pair_stream(rng, n_before, R0, noise_deg=noise_deg)
-    more = [pair_stream(rng, 1, R0 @ so3.exp_map(np.radians(rate_deg * (k + 1)) * axis), noise_deg=noise_deg)
-            for k in range(n_drift)]
-    return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
-
-
-def test_a_steady_drift_is_not_said_to_end():
-    """0.002 deg per pair for 1500 pairs at 0.3 deg of pair noise (seed 20000 of the red team's reproducer said
-    ``drift_end`` 220 pairs after the drift was recognised): followed, never ended."""
-    A, B = _drift_pairs(20000)
-    cal = OnlineCalibrator()
-    cal.update_many(A, B)
-    kinds = [e.kind for e in cal.events]
-    assert "drift" in kinds and "drift_end" not in kinds
-
-
-def test_the_centroid_is_the_weighted_mean_pair_index():
-    A, B = _drift_pairs(1, n_before=40, n_drift=0)
-    cal = OnlineCalibrator()
-    cal.update_many(A[:33], B[:33])
-    cal.K  # noqa: B018  (flushes the buffer)
-    assert cal.centroid == pytest.approx(16.0)
-    lam = OnlineCalibrator(forgetting=0.9)
-    lam.update_many(A[:40], B[:40])
-    lam.K  # noqa: B018
-    w = 0.9 ** np.arange(39, -1, -1.0)
-    assert lam.centroid == pytest.approx(float(w @ np.arange(40) / w.sum()))
-
-
-def _tracked(moved_deg, sd_deg, span=400, rate=0.001):
-    """A calibrator-like record following a drift at ``rate``; its estimate moved ``moved_deg`` along the drift's
-    axis over ``span`` pairs of centroid, its noise ``sd_deg`` along the axis."""
-    axis = AXIS / np.linalg.norm(AXIS)
-    lam = 0.99
-    lag = math.radians(drift_lag_deg(rate, lam, 10))
-    cov = np.eye(3) * math.radians(sd_deg) ** 2 + lag ** 2 * np.outer(axis, axis)
-    cal = SimpleNamespace(n_total=1000 + span, centroid=1000.0 + span, _R=so3.exp_map(np.radians(moved_deg) * axis),
-                          forgetting=lam, _drift_rate=rate, _drift_axis=axis, _cov=cov, refine_every=10,
-                          target_deg=0.5, min_pairs=10, _fgt=1.0, _last_step=None)
-    cal.events = [OnlineEvent("drift", 900, 900, "cusum", 500, 25, 0.4, 0.3, 1.0, 1.0, 0, np.eye(3), np.eye(3),
-                              "the frame drifts", rate)]
-    cal._track = deque([(1000.0, np.eye(3), cal._cov)])
-    return cal, track_drift(cal)
-
-
-@pytest.mark.parametrize("factor, ended", [(1.01, False), (0.99, True)])
-def test_an_end_waits_until_none_and_the_rate_are_far_enough_apart(factor, ended):
-    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at least
-    TRACK_APART x Z standard errors of the two estimates' difference; below that the track waits (no new rate)."""
-    assert TRACK_APART == 3.0
-    se = 0.4 / (TRACK_APART * TRACK_Z) * factor
-    cal, kind = _tracked(0.0, sd_deg=se / math.sqrt(2))
-    assert (kind == "drift_end") is ended and (cal._drift_rate is None) is ended
-    assert len(cal._track) == (1 if ended else 2)
-
-
-# ------------------------------------------------------------------------------------------------ the live gyro bias
 BIAS = np.array([0.06, -0.08, 0.04])
 
 

@@ -1,0 +1,64 @@
+"""``chordal_optimal`` (``core/solvers/optimal.py``): the same answer type as ``solve(full_output=True)``, and every
+answer says how its lower bound was certified."""
+import numpy as np
+import pytest
+
+from replication.core import solvers
+from replication.core.so3 import random_rotations
+from replication.core.solvers import solve
+
+
+def _problem(seed=0, J=8):
+    rng = np.random.default_rng(seed)
+    R0 = random_rotations(rng, ())
+    A = random_rotations(rng, J)
+    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
+
+
+def _noisy_pairs(seed=2, J=30, noise_deg=0.2):
+    from replication.core.so3 import matrix_from_rotation_vector
+
+    rng = np.random.default_rng(seed)
+    R0, A, B = _problem(seed, J)
+    B = B @ matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
+    return R0, A, B
+
+
+
+
+def test_chordal_optimal_returns_the_same_type_as_solve_full_output():
+    from replication.core.solvers import Solution, chordal_optimal
+
+    R0, A, B = _noisy_pairs(5, J=12)
+    best = chordal_optimal(A, B)
+    sol = solve("chordal_optimal", A, B, full_output=True)
+    assert type(best) is Solution and type(sol) is Solution
+    assert best.method == sol.method == "chordal_optimal"
+    np.testing.assert_array_equal(best.R, sol.R)  # the same computation: bitwise
+    np.testing.assert_array_equal(best.lower_bound, sol.lower_bound)
+    assert best.certificate == sol.certificate == "lagrangian" and bool(best.global_optimum)
+    assert best.local_minimum and best.iterations >= 1 and best.gradient_norm < 1e-8
+    assert sol.iterations is None and sol.local_minimum is None  # solve does not say how a Newton run ended
+    assert not hasattr(solvers, "ChordalResult")
+
+
+@pytest.mark.parametrize("method", ["park_martin", "sqp", "two_step_left"])
+def test_every_full_output_says_how_its_lower_bound_was_certified(method):
+    from replication.core.motions import motion_observability
+
+    R0, A, B = _noisy_pairs(6, J=12)
+    sol = solve(method, A, B, full_output=True, **({"init": R0} if method == "sqp" else {}))
+    assert sol.method == method and sol.certificate == "lagrangian" and not sol.sdp_used
+    expected = motion_observability(A, B)  # computed when read, the same numbers
+    assert sol.observability.spectral_ratio == expected.spectral_ratio
+    np.testing.assert_array_equal(sol.observability.kron_singular_values, expected.kron_singular_values)
+    assert sol.duality_gap >= 0 and sol.cost >= sol.lower_bound
+
+
+def test_an_uncertified_newton_run_says_so():
+    from replication.core.solvers import chordal_optimal
+
+    R0, A, B = _noisy_pairs(7, J=12)
+    bare = chordal_optimal(A, B, certify=False)
+    assert bare.certificate == "none" and bare.sdp_used and not bare.global_optimum
+    assert np.isnan(bare.lower_bound) and np.isnan(bare.duality_gap)
