@@ -1,17 +1,5 @@
-"""``python -m replication calibrate``: the command line of :func:`replication.rig.calibration.calibrate`.
-
-Every parameter is checked when the command line is parsed (its name in the message); the paths before any work:
-every output (``--out``, ``--plot``, ``--track``) against every input (``--camera``, ``--sensor``, ``--reference``)
-and every other output, as files after resolving links (and hard links), the inputs (a regular file or a pipe,
-readable), the outputs (folders created, a directory or an unwritable place refused) and the figure's format (its
-extension). A pipe is read once, at the start, and the report records it as such with the SHA-256 of what was read;
-a regular input is hashed at the start too. The report, track and figure are written atomically. Exit codes: 0
-(verdict ``ok`` or ``warning``), 2 (bad input, or a file-system error: the path and the reason named, nothing
-computed or nothing written; ``--online`` without pandas: the extra to install named),
-:data:`replication.rig.quality.EXIT_FAIL` (verdict ``fail``; 0 with ``--accept``). A CSV with the other kind's
-number of columns (an IMU file read as orientations, or the reverse) is said to look like that kind, naming
-``--sensor-kind``. ``--help`` lists every option's default and the registered solvers.
-"""
+"""``python -m replication calibrate``: the command line of :func:`replication.rig.calibration.calibrate`. Theory and
+measured numbers: ``docs/reading.md``, section ``replication.cli.calibrate``."""
 from __future__ import annotations
 
 import argparse

@@ -1,38 +1,5 @@
 """The clocks: the offset between the camera's and the sensor's clock along the recording, and its jumps (issue 34).
-
-**Jumps at a gap.** A sensor clock that jumps ahead leaves a gap in its stamps. :func:`clock_segments` estimates
-the clock offset on either side of each candidate gap (:func:`jump_candidates`); where the two differ by what the
-stamps skipped, beyond :data:`JUMP_MIN_S` and :data:`JUMP_Z` standard errors of their bootstrap intervals, it is a
-jump at that gap, named with its time and size.
-
-**Steps without a gap, and the camera's clock.** A clock can step without a skip in its stamps (a gyro that loses
-samples and stamps on evenly) and the camera's clock can jump (a skip in the camera's stamps). The stamps do not
-show the first, and the second is not in the sensor's stamps: :func:`offset_profile` measures the offset from the
-data, per window of :data:`PROFILE_WINDOW_S` seconds of 1 s pairs. With ``R0`` known, the residual of a pair
-``r_j = log(B_j^T R0^T A_j R0)`` changes with the offset ``d`` applied to the sensor by ``g_j = d r_j / d d``
-(a finite difference of the sensor's interpolated orientations); each window's offset is Gauss-Newton on its pairs
-(three steps), its standard error the Newey-West (Bartlett, lags up to two pairing intervals) variance of the scores
-``g_j . r_j`` over ``(sum g_j . g_j)^2``. Three models are fitted to the windows' offsets by weighted least squares:
-*one offset*, *a drift* (a ramp) and *a step* (two offsets, the step at a window boundary, or inside a window left
-out as the transition). Their chi-squares are divided by the step model's excess scatter
-``max(1, chi2_step / (W - 4))`` (the windows' offsets of smooth motion scatter beyond their standard errors); a step
-is named (a ``clock_jump``, ``fail``) where it fits better than both others by more than :data:`STEP_LR` and is
-larger than :data:`JUMP_MIN_S`. Its time is the split of the pairs about the chosen boundary that fits the two
-offsets best (to within two pairing intervals) or, where a clock's stamps skip there, the skip; which clock stepped
-is told by the skip (camera or sensor); without a skip it cannot be told. A drift is then not named (it was the
-step). The threshold and the detection rates: ``benchmarks/bench_clock.py`` (a 10 ms step in a minute: 40 of 40;
-5 ms: about half; fewer windows, fewer found: 10 ms in 17 of 40 recordings of 40 s). A step not found leaves the
-verdict as before (the sensor model may name it a drift).
-
-**What is done with them.** ``calibrate`` does not correct ``R0`` for a step: the step's time is known to two
-pairing intervals only where no stamp skip marks it, and the pairs around it are wrong (samples lost or a camera frame
-skipped), so the verdict is a ``fail`` naming the step (calibrate each part on its own, or mend the stamps). The
-change and segment tests, which would otherwise read a clock effect as a change of ``R0``, run on the sensor
-re-stamped by :func:`corrected_sensor`: a found step (the sensor's stamps after it shifted back, a gap cut over its
-uncertain time) or else a resolved drift of the sensor model removed.
-
-Conventions: ``docs/conventions.md``.
-"""
+Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.clock``."""
 from __future__ import annotations
 
 import math

@@ -1,20 +1,5 @@
-"""Put a calibration into the user's own VIO configuration: Kalibr, OpenVINS, Basalt, ORB-SLAM3, ROS 2.
-
-``python -m replication export REPORT.json --to kalibr|openvins|basalt|orbslam3|ros2 [--base FILE] --out FILE``
-(:func:`export_calibration` from Python). The output is a copy of the user's own file (``--base``) in which only the
-rotations and the clock offset (in that tool's field and sign) are changed; translation, intrinsics, comments and
-every other field are kept as written (:mod:`replication.rig.vioformats`). A file with several cameras stays a rig:
-the correction of the calibrated camera's ``R0`` is carried to the others, so every camera-camera transform is
-unchanged (``--one-camera`` edits one camera only, and warns how far the rig moves). No tool loads a file holding
-only an extrinsic, so without ``--base`` a file target is refused, naming what the tool's loader needs
-(:data:`NEEDS_BASE`). ``ros2`` gives a ``static_transform_publisher`` command (REP-103; quaternion x y z w) whose
-zero translation is marked as not estimated (:class:`TranslationNotEstimatedWarning`). Each tool's convention, and
-where in its source or documentation it is stated: ``docs/conventions.md`` ("Other tools' files").
-
-The report says how far it can be trusted, and the export keeps saying it: a ``fail`` verdict is refused unless
-forced, a ``warning`` verdict is carried over as :class:`ExportWarning`, and so is a clock offset that was measured
-against an orientation stream rather than the IMU's gyro.
-"""
+"""Put a calibration into the user's own VIO configuration: Kalibr, OpenVINS, Basalt, ORB-SLAM3, ROS 2. Theory and
+measured numbers: ``docs/reading.md``, section ``replication.rig.export``."""
 from __future__ import annotations
 
 import json

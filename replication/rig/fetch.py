@@ -1,20 +1,5 @@
-"""The real recordings notebook 07 and the tests read: manifest, checksums, download from their public origins.
-
-``data/real_data_manifest.csv`` lists every file the project reads from the real-data folder
-(:func:`replication.rig.realdata.data_root`): its folder and name, size, SHA-256, the public
-repository, commit and path it comes from, its licence and what to cite. :func:`fetch` downloads
-the files to a folder of the reader's choice and verifies them; :func:`verify` checks a folder
-that is already there. From the shell::
-
-    python -m replication fetch-data DEST          # download and verify, then
-    export REPLICATION_REAL_DATA=DEST              # point the notebooks and tests at it
-
-A file is fetched from ``https://raw.githubusercontent.com/<repository>/<commit>/<path>``; where
-that returns a Git LFS pointer instead of the content, from GitHub's LFS media host. ``--mirror``
-takes the files from a local copy laid out like ``DEST`` instead (a colleague's folder, or the
-shared data folder), with the same checksums. A file is written under a temporary name and renamed
-only after its size and SHA-256 match: never half-written.
-"""
+"""The real recordings notebook 07 and the tests read: manifest, checksums, download from their public origins. Theory
+and measured numbers: ``docs/reading.md``, section ``replication.rig.fetch``."""
 from __future__ import annotations
 
 import csv

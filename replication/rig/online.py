@@ -1,56 +1,6 @@
 """Online alignment: the paper's two-step iteration as a live estimator that says when the motion so far determines
-``R0``, how far off it may be, and what changed when its residuals jump.
-
-The paper's operator is a running mean, ``K = (1/J) sum_j B_j kron A_j`` (eqs. (14)-(15) in ``vec`` form), so each
-new pair costs O(1): :class:`OnlineCalibrator` keeps the running sums of ``B_j kron A_j`` and of ``2I - B_j - B_j^T``
-(optionally with exponential forgetting), takes warm-started two-step steps (eqs. (14)-(17)) until the motion
-determines ``R0``, and publishes the minimiser of eq. (8) (Newton from the two-step iterate or the last minimiser,
-:func:`replication.core.solvers.certificate.chordal_newton`) at ``min_pairs`` pairs, then every ``refine_every`` pairs
-or every tenth of the pairs so far, whichever is more: fed the same pairs, it equals the batch ``chordal_optimal``.
-
-**When the motion determines R0.** Near the minimiser, perturbing ``R`` to ``R exp([w]x)`` changes pair ``j``'s
-residual rotation vector by about ``(I - B_j^T) w``, so the information about ``w`` is ``G = sum_j w_j (2I - B_j -
-B_j^T)``; for a motion of angle ``theta`` about axis ``n``, ``2I - B - B^T = 4 sin^2(theta / 2) (I - n n^T)``: a
-motion says nothing about rotations about its own axis. The *excitation* is ``sqrt(lambda_min(G) / sum w)`` in
-degrees, the RMS rotation about axes perpendicular to the least-excited direction (its eigenvector, named while it is
-too small). The motion so far *determines* ``R0`` when
-
-* the excitation is at least :data:`MIN_EXCITATION_DEG` (single-axis motion, a rig turning at constant speed, or a
-  rig at rest never get there: about the shared axis the data say nothing, whatever they say about the noise), and
-* the effective number of distinct pairs, ``(sum w)^2 / sum w^2`` over the pairs added, is at least ``min_pairs``.
-  A pair that repeats an earlier one (camera and sensor motions within :data:`DUPLICATE_DEG` elementwise, or a tenth
-  of the pairs' noise once known, at most 5 times that: a stalled stream, a recording fed twice, copies with a tiny
-  jitter) adds no information and shares the earlier pair's noise: counted (:attr:`OnlineCalibrator.duplicates`), not
-  added (:class:`replication.rig.online_events.RepeatFilter`; motions at rest are never repeats).
-
-**The radius.** With independent, isotropic pair residuals of mean square ``s^2`` (``s^2 / 3`` per axis),
-``cov(w) = (s^2 / 3) G^{-1}`` (with forgetting, the weighted form ``G^{-1} G_2 G^{-1}``). ``s^2`` comes from the cost
-(8) itself: ``||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2) ~ 2 theta_j^2``, so ``s^2 = (cost / sum w) n_eff /
-(2 (n_eff - 3))``, and it never goes below :data:`NOISE_FLOOR_DEG` squared: data that fit exactly (noise-free, or
-repeated) cannot claim a radius below what a real sensor's noise allows. The radius at level ``p`` is the ``p``
-quantile of ``|w|`` (Welch-Satterthwaite: ``|w|^2 ~ a chi^2_nu`` over the eigenvalues of ``cov``). Pairs must not
-overlap in time (:class:`replication.rig.live.LiveRig` forms pairs that share no pose).
-
-**Ready** means: the motion determines ``R0`` (above), the radius is below ``target_deg``, no change is being
-confirmed, fewer than :data:`MISFITS_WITHDRAW_READY` recent pairs misfit grossly, the recent pairs (a run of high
-residuals, the last 20, 80, 160 or 320) do not agree on a rotation the radius does not allow
-(:class:`replication.rig.online_guard.MisfitGuard`: a re-mount smaller than the noise, before the detector decides;
-the published radius then includes their angle), and the verdict is not ``fail`` (the batch checks and thresholds).
-
-**What the radius cannot see.** It measures the estimator's own noise. An error that every pair shares (a SLAM
-trajectory that disagrees with the sensor in a consistent way, a clock offset left in, a gyro scale error, the
-reference's own error) leaves small residuals and a small radius: ``ready`` is then declared while the estimate is
-farther off than the target. Notebook 08 shows this on EuRoC MH01.
-
-**Changes, confirmed and told apart** (:mod:`replication.rig.online_events`): once the motion determines ``R0``, a CUSUM
-on the pair residuals and a drift test raise alarms; the pairs after an alarm are solved on their own and the event
-is a ``remount`` (the estimator starts over), a ``noise_change``, ``outliers`` (kept out) or ``new_information``; a
-second re-mount that continues the first is a ``drift`` (followed with forgetting, its rate measured again on the
-estimate's track), and a drift followed that stops is a ``drift_end`` (:mod:`replication.rig.online_guard`).
-
-Notation and frames: ``docs/conventions.md`` (``A`` camera motions, ``B`` sensor motions, ``R0 =
-camera_from_sensor``).
-"""
+``R0``, how far off it may be, and what changed when its residuals jump. Theory and measured numbers:
+``docs/judging.md``, section ``replication.rig.online``."""
 from __future__ import annotations
 
 import math

@@ -1,21 +1,8 @@
 """Causes the online estimator names, as the batch verdict does (issue 33, point 7): a rig turning at constant speed
 (:func:`constant_speed`), time stamps of the two streams in different units (:func:`time_unit_by_rate`), and a clock
 offset beyond the search (:func:`offset_beyond_search`). Each returns a :class:`replication.rig.quality.Reason`
-(``fail``) with its measured number, or None.
-
-* **Constant speed.** A rig turning at a constant angular velocity gives the same motion in every pair: about the
-  shared axis the data say nothing (the motion does not determine ``R0``), and the angular speed never varies, so no
-  clock offset can be measured (the correlation of speeds is noise). Named when the motion does not determine ``R0``
-  and the recent camera motions' angles agree within :data:`CONSTANT_SPEED_SPREAD` of their median (median absolute
-  deviation), the median above :data:`CONSTANT_SPEED_MIN_DEG` (a rig at rest is named by its own check).
-* **Units.** A gyro samples at 50-2000 Hz and a camera (or a keyframe trajectory) at 0.1-100 Hz, so the ratio of
-  their sample intervals lies in :data:`PLAUSIBLE_INTERVAL_RATIO`; a ratio 1e3, 1e6 or 1e9 times outside it is one
-  stream's stamps read in another unit (ms, us or ns as s). This works while the streams arrive, before any overlap
-  is known; :meth:`replication.rig.live.LiveRig.verdict` also compares the streams' spans, as the batch does.
-* **Offset beyond the search.** When the verdict fails, the clock offset is searched again on the first
-  ``offset_window`` seconds over a range :data:`WIDE_SEARCH_SHARE` of that window; an offset beyond ``max_offset``
-  whose correlation is at least :data:`WIDE_CORRELATION` and :data:`WIDE_GAIN` above the one found is named.
-"""
+(``fail``) with its measured number, or None. Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.online_causes``."""
 from __future__ import annotations
 
 import math

@@ -1,32 +1,7 @@
 """What the online estimator decides about pairs that do not fit its running picture: a pair that repeats an earlier
 one (:class:`RepeatFilter`), and an alarm of its change detector (:class:`OnlineEvent`, with the window solves
-behind it: the pairs after an alarm solved on their own and compared with the estimate).
-
-:class:`replication.rig.online.OnlineCalibrator` raises an alarm from its CUSUM on the pair residuals, or from its
-drift test (the last ``drift_pairs`` pairs solved on their own, every half of that); it then holds the next pairs in a
-confirmation window and :func:`classify` names the event:
-
-* ``remount``: the window's own estimate (:func:`solve_window`: a consensus, then the minimiser of (8) over the pairs
-  that agree with it) differs from the current one by more than the :data:`CONFIRM_LEVEL` quantile of their
-  combined error (the two estimates' covariances added; the window's noise taken as at least the estimate's own),
-  those pairs do not fit the current estimate at its noise level (``3 sum d^2 / (2 s^2)`` above the
-  :data:`FIT_LEVEL` quantile of ``chi^2_{3n}``, ``s^2`` the estimate's mean square residual angle), and the window fits
-  its own estimate at no more than ``cap`` times the old level (median ``d^2 / m``): the pairs after the alarm agree on
-  a new ``R0``;
-* ``outliers``: no new ``R0``, and the window's pairs either fit the current estimate at the old level or are gross
-  outliers (``d^2 / m > cap``), or most of them fit it (median ``d^2 / m`` at most :data:`NOISE_Z`): the alarm
-  came from a few pairs (a burst, or scattered outliers), which stay out of the estimate;
-* ``noise_change``: no new ``R0``, but the window's residuals at its own best fit are above the old level (median of
-  ``d^2 / m`` above :data:`NOISE_Z`): the noise level changed, and the reference level follows;
-* ``new_information``: the window fits an estimate within the current radius better than the current estimate
-  (typically the first well-excited pairs after weak motion): the pairs are added.
-
-Where the window's angle to the estimate is below the re-mount threshold but above half of it, the decision waits
-for ``confirm_pairs`` more pairs (up to ``max_confirm_pairs``): a small re-mount needs more pairs to show.
-
-Notation (``d_j^2 = ||A_j R - R B_j||_F^2 = 8 sin^2(theta_j / 2)``, ``m`` the detector's reference level) and frames:
-``docs/conventions.md`` and :mod:`replication.rig.online`.
-"""
+behind it: the pairs after an alarm solved on their own and compared with the estimate). Theory and measured
+numbers: ``docs/judging.md``, section ``replication.rig.online_events``."""
 from __future__ import annotations
 
 import math

@@ -1,27 +1,7 @@
 """What keeps the online estimator's ``ready`` right between its decisions: the recent pairs tested against the
 estimate and its radius (:func:`misfit_test`, :class:`MisfitGuard`), and a frame that drifts told from a re-mount
-(:func:`recognise_drift`).
-
-**Ready means still right.** The change detector (:mod:`replication.rig.online_events`) confirms a change only after
-its CUSUM passes its threshold and a confirmation window agrees: for a re-mount of 1 deg at 0.2 deg of noise that is
-10-20 pairs, during which the estimate is 1 deg off. :class:`MisfitGuard` withdraws ``ready`` as soon as the pairs since
-the CUSUM last stood at 0 (the suspected change) agree on a rotation that the estimate's radius does not allow: one
-Gauss-Newton step from the estimate on those pairs alone gives their own rotation ``w`` with covariance ``C_w = (s^2 /
-3) G_w^{-1}``; with the estimate's covariance ``C`` (the one behind its radius), ``w^T (C_w + C)^{-1} w`` is about
-``chi^2_3`` while the estimate still holds, and ``ready`` is withdrawn above its :data:`GUARD_LEVEL` quantile. Cheap:
-the statistic is at most the window's ``sum 3 |r_j|^2 / s^2 <= sum 1.5 d_j^2 / s^2`` (``|r_j| = sin theta_j``, ``d_j^2
-= 4 (1 - cos theta_j)``), so the step is solved only when that running sum exceeds the threshold.
-
-**One event per cause.** A frame that drifts (a camera mount that creeps) looks to the change detector like a
-re-mount every few hundred pairs: each time the pairs after an alarm agree on a new rotation. The first is taken for
-a re-mount (the estimator starts over once); a second one soon after, small and in the same direction
-(:func:`recognise_drift`), is the same cause: the two become one ``drift`` event with its rate, the estimator does not
-start over again but follows (:func:`follow_forgetting`: exponential forgetting whose lag behind the drift is a
-quarter of the target), and its radius includes that lag (:func:`drift_lag_deg`), so ``ready`` says whether it can
-follow within the target; later steps of the same drift update the rate, in the same event.
-
-Notation: :mod:`replication.rig.online` (``d_j^2``, ``s^2``, ``G``) and ``docs/conventions.md``.
-"""
+(:func:`recognise_drift`). Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.online_guard``."""
 from __future__ import annotations
 
 import math

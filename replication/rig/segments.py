@@ -1,40 +1,5 @@
-"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time and the segments that disagree.
-
-:func:`segment_test` cuts the motion pairs of a calibration into segments of about :data:`SEGMENT_S` seconds and
-fits ``R0`` on each (eq. (8) over its pairs, as :mod:`replication.rig.changepoint` fits each side of a split);
-pairs that reach into the next segment are left out, so that segments share no pose.
-
-**Each segment's radius.** As in the change test: ``C_i = phi (s^2 / 3) G_i^{-1}`` with ``G_i = sum_j (2 I - B_j -
-B_j^T)`` over its pairs, ``s^2`` the mean square residual angle of the segments' pairs about their own segment's
-estimate, pooled (a segment that disagrees does not inflate it; floored at
-:data:`replication.rig.changepoint.S2_FLOOR`), and ``phi`` the inflation for overlapping pairs, measured once, about
-the estimate of all the segments' pairs together (the long-run variance of the pair scores over the model's, never
-below 1; about each segment's own estimate its scores sum to zero, which hides about half of it).
-
-**The test.** The segments' weighted mean ``R_bar`` (Gauss-Newton on ``Q = sum_i d_i^T C_i^{-1} d_i``,
-``d_i = log(R_bar^T R_i)``); ``Q / (3 (S - 1))`` against Fisher's F with ``(3 (S - 1), n_eff)`` degrees of freedom
-(``n_eff = (J - block) / (2 block + 1)`` independent stretches) at ``level``. Each segment against the rest:
-``z_i = d_i^T (C_i + C_rest)^{-1} d_i`` over F(3, n_eff) at ``level / S``: a segment *disagrees* where significant;
-the verdict is then at best a ``warning``, a ``fail`` beyond ``remount_deg``'s fail bound (as the change test).
-
-**Two radii.** The pairs-only radius (``calibrate``'s bootstrap, or ``phi (sum_i C_i^{-1})^{-1}``) covers the
-pairs' own noise, not an error every pair of a segment shares (a wandering SLAM frame, a re-mount). The
-*between-segment* radius is that of the segments' scatter about their mean: the pairs' covariance of the mean scaled
-by the segments' excess scatter ``max(1, Q / (3 (S - 1)))`` (Birge's ratio, weighted): it covers what the pairs of a
-segment share, at the price of a wider radius where the segments disagree.
-
-**The consistent part.** The segment that disagrees most is left out and the rest tested again, until none
-disagrees; what is left (at least half of the segments) is the consistent part (``calibrate(use="consistent")``
-fits on its pairs only and reports the seconds used and why). It is the majority, which the pairs cannot show to be
-right: left out beyond :data:`MAX_LEFT_OUT_SHARE` of the recording (and beyond the fail bound) it is a ``fail``.
-
-**Interval.** ``calibrate`` runs this test (and the change test) on pairs at :data:`ANALYSIS_INTERVAL_S` whatever
-its ``interval``: whether the recording agrees with itself is a property of the data, not of the pairs' interval.
-
-**Clock jumps**: :mod:`replication.rig.clock`.
-
-Conventions: ``docs/conventions.md``.
-"""
+"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time and the segments that disagree. Theory and
+measured numbers: ``docs/judging.md``, section ``replication.rig.segments``."""
 from __future__ import annotations
 
 import math

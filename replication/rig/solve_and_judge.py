@@ -1,36 +1,6 @@
 """The common end of :func:`replication.rig.calibration.calibrate` (streams) and
-:func:`replication.rig.poses.calibrate_poses` (static pose sets): solve the pairs, their residuals, a bootstrap radius,
-the verdict.
-
-The bootstrap resamples what is independent in the data:
-
-* streams: pairs start at every camera time and overlap, so neighbouring pairs share noise; a moving-block
-  bootstrap resamples blocks of pairs spanning one pairing interval;
-* static pose sets (every pair ``(i, j)`` of ``N`` stations): each station's measurement error is in every pair
-  that uses it, so the bootstrap resamples *stations* (with replacement) and keeps every pair between two drawn
-  stations (a pair drawn ``m_i m_j`` times); resampling the pairs themselves treats ``N (N - 1) / 2`` pairs as
-  independent and understates the radius several-fold (measured on Tabb DS1: 0.05 deg by pairs, 0.34 deg by
-  stations, against 0.545 deg to the published reference). With consecutive pairs only, blocks of two pairs (the
-  pairs that share a station) are resampled. Stations that repeat others (the same attitude on both sides,
-  :func:`replication.rig.poses.repeated_stations`) are drawn together, as one (either pairing). 8 stations each
-  given three times (``benchmarks/bench_station_repeats.py``, seeds 0-199): counted apart, the radius covered the
-  error in 99 of 200 runs (re-measured with fresh noise: 123), every verdict ``ok``; drawn as one, 179 of the 183
-  runs that have a radius (17 have none: a resample of few distinct stations is degenerate, and the verdict says
-  so; re-measured: 199 of 200); on fresh seeds 1000-1199, 172 of 178 (re-measured 192 of 200).
-
-Every solver answer used here passes the registry's checks (:func:`replication.core.solvers.checked_core`): a
-replicate that is no rotation is refused naming the solver, or, a reflection or a declared failure, fails the verdict
-naming it; no radius is computed from non-rotations. A replicate must also be a solution of its resample
-(:func:`unfit_replicates`): its pairs' root-mean-square residual (cost (8) as an angle) may not exceed
-:data:`REPLICATE_FIT_FACTOR` times that of the answer on all pairs, on the same pairs (plus
-:data:`REPLICATE_FIT_FLOOR_DEG`); a solver right on the first call and wrong on the replicates fails the verdict naming
-it, with no radius. The cost, not a median: a resample that draws an outlying station several times pulls its
-least-squares answer off the others, whose median residual then grows several-fold (measured: 6-12 times) although
-the answer is the resample's optimum; its cost never exceeds the full answer's there.
-
-Every radius covers the pairs' own noise only (:data:`RADIUS_COVERS`): errors that every pair shares are not in
-it. Conventions: ``docs/conventions.md``.
-"""
+:func:`replication.rig.poses.calibrate_poses` (static pose sets): solve the pairs, their residuals, a bootstrap
+radius, the verdict. Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.solve_and_judge``."""
 from __future__ import annotations
 
 import dataclasses

@@ -1,31 +1,5 @@
-"""The claims ledger: every checkable statement of the paper, its verdict, the evidence and its uncertainty.
-
-``data/paper/claims.csv`` lists the claims (id, the statement, where the paper makes it, the paper's number
-if it gives one). A notebook that checks a claim calls :func:`record` in the cell that computes the evidence;
-the record is displayed (a readable line) and stored in the executed notebook as a
-``application/vnd.replication.claim+json`` output. :func:`collect` reads the records back from the notebooks
-(no re-execution), adds the notebook and cell each came from and the anchor of the section it names, checks every
-record's form again (a stored output
-edited into nonsense is refused), and refuses a ledger in which any claim lacks a verdict, evidence or
-uncertainty, or has more than one record. It does not show that a stored record is what its cell computes: a
-record edited by hand into another well-formed verdict reads back as that verdict. That is checked by strict nbval
-(``bash scripts/test`` re-executes every notebook and compares each stored output, claim records included, with
-the new one), and ``claims --check`` says so. ``python -m replication reproduce`` writes it to
-``results/tables/claims.csv`` and ``.md``; ``python -m replication claims`` prints it, ``claims --summary``
-prints the compact table (:func:`summary_from_ledger`) that ``claims --readme`` writes into README; the book
-(``bash scripts/docs``) gives the full ledger from the same records.
-
-Verdicts (:data:`VERDICTS`): ``holds``, ``fails``, ``holds only if`` (the condition says what must hold) and
-``undecidable from the text`` (the paper does not give what the verdict depends on).
-
-The rules, checked by :func:`record` in the notebook and again by :func:`collect` (:func:`check_record`): the
-claim is an id of ``data/paper/claims.csv``; the verdict is one of :data:`VERDICTS`; evidence, uncertainty,
-setting and section are non-blank text, and (:func:`collect`) the section is a heading of the record's notebook,
-where the evidence is measured (the README links to its anchor, :func:`heading_anchor`); a condition goes with,
-and only with, ``holds only if``; and (:func:`collect`) one record per claim across all notebooks: a second record
-of a claim is refused even when it repeats the first word for word, because the README table gives one row, one
-source cell, per claim, and two copies of the evidence would drift apart the first time one cell changes.
-"""
+"""The claims ledger: every checkable statement of the paper, its verdict, the evidence and its uncertainty. Theory and
+measured numbers: ``docs/studies.md``, section ``replication.study.ledger``."""
 from __future__ import annotations
 
 import difflib

@@ -1,27 +1,5 @@
-"""Rotation-only hand-eye solvers for ``A X = X B`` behind one entry point.
-
->>> from replication.core.solvers import available, solve
->>> {"two_step_right", "two_step_left", "sqp", "chordal_optimal", "park_martin"} <= set(available())
-True
-
-Every solver has one public door that validates once (:func:`solve`, or the exported
-function of the same name) and a private core that receives a validated
-:class:`replication.core.motions.Motions`. Add a baseline with :func:`register`::
-
-    @register("my_method", reference="Author, Title, Year", min_motions=2)
-    def my_method(motions, **options):
-        A, B = motions.A, motions.B  # validated (..., J, 3, 3) arrays; motions.K is cached
-        return R0_estimate  # (..., 3, 3)
-
-``my_method(A, B)`` then validates like ``solve("my_method", A, B)``.
-
-Modules (no function shares a module's name): :mod:`.iteration` (the paper's two-step
-iteration, :func:`two_step`), :mod:`.slsqp` (the paper's SQP comparison, :func:`sqp`),
-:mod:`.classic` (Park & Martin, Horaud & Dornaika, Andreff, Tsai & Lenz), :mod:`.optimal`
-(the certified global minimiser of eq. (8)), :mod:`.msac` (outlier pairs, :func:`robust`),
-:mod:`.opencv` (``cv2.calibrateHandEye``).
-Warnings (:mod:`._warnings`) name the measured cause whenever an answer may be wrong.
-"""
+"""Rotation-only hand-eye solvers for ``A X = X B`` behind one entry point. Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.__init__``."""
 from ..handeye import pair_residual_deg
 from ..motions import Motions, prepare_motions
 from ._registry import (

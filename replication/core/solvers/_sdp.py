@@ -1,29 +1,5 @@
-"""Convex (semidefinite) relaxation of eq. (8) over SO(3), solved by Clarabel: a global lower bound.
-
-Eq. (8) on SO(3) is ``f(R) = 2 J (3 - g(R))`` with ``g(R) = vec(R)^T M vec(R)``,
-``M = (K + K^T) / 2``. With ``y = [vec(R); h]`` (``h = 1``, the homogenising variable)
-the problem ``max g`` is a quadratically constrained quadratic programme in ``y``; its
-Shor relaxation replaces ``y y^T`` by a positive semidefinite ``Z`` (10 x 10):
-
-    min  tr(Q Z)    s.t.  tr(A_k Z) = b_k (k = 1..22),  Z >= 0,   Q = -[[M, 0], [0, 0]],
-
-with the constraints of Giamou et al., "Certifiably Globally Optimal Extrinsic
-Calibration from Per-Sensor Egomotion", IEEE RA-L 4(2), 2019 (Sec. IV; code
-``utiasSTARS/certifiable-calibration``), written for ``vec`` column-major
-(``c_i`` the columns, ``r_a`` the rows of ``R``):
-
-* ``h^2 = 1`` (1);
-* ``R^T R = I``: ``c_i . c_j = delta_ij`` (6);
-* ``R R^T = I``: ``r_a . r_b = delta_ab`` (6, redundant for rotations, not for the relaxation);
-* handedness ``c_i x c_j = h c_k`` for cyclic ``(i, j, k)`` (9).
-
-Weak duality gives the certificate: for multipliers ``lambda`` with
-``S = Q - sum_k lambda_k A_k``, every rotation (``tr(y y^T) = 4``) satisfies
-``-g(R) = tr(Q y y^T) >= lambda . b + 4 min(0, lambda_min(S))``. We recompute ``S``
-and its smallest eigenvalue from Clarabel's dual variables ourselves, so the bound is
-rigorous whatever the solver's tolerances. When the relaxation is tight, ``Z`` has
-rank one and its top eigenvector is ``y`` of the global minimiser.
-"""
+"""Convex (semidefinite) relaxation of eq. (8) over SO(3), solved by Clarabel: a global lower bound. Theory and
+measured numbers: ``docs/methods.md``, section ``replication.core.solvers._sdp``."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,26 +1,5 @@
-"""The global minimiser of the paper's cost (8) over SO(3) and its certificate of global optimality: the maths.
-
-The registry (:mod:`._registry`) checks every solver's answer against this certificate, and the registered
-solver :func:`replication.core.solvers.chordal_optimal` (:mod:`.optimal`) is its public door; this module imports
-neither, so the arrows run one way. The relaxed start (:func:`relaxed_rotation`, Andreff's solution) lives here
-for the same reason.
-
-The paper's eq. (8) is ``f(R) = sum_j ||A_j R - R B_j||_F^2``. On SO(3) it equals
-``2 J (3 - g(R))`` with ``g(R) = vec(R)^T M vec(R)`` and ``M = (K + K^T)/2``, ``K``
-the 9x9 operator of :func:`replication.core.handeye.kronecker_operator`. Neither the
-two-step iteration (top singular vector of ``K``, projected) nor the relaxed
-solution of :func:`replication.core.solvers.classic.andreff` (top eigenvector of
-``M``, projected) minimises ``f`` on SO(3) once there is noise. This module
-does: Riemannian Newton on SO(3) from the relaxed solution, with a
-first- and second-order optimality certificate.
-
-Derivation (``R(w) = R exp([w]x)``, ``P = R^T unvec(M vec(R))``):
-
-* gradient of ``g``: ``2 vee(P - P^T)``, ``vee`` the inverse of ``[.]x``;
-* Hessian of ``g``: ``2 D^T M D + 2 (sym(P) - tr(P) I)`` with
-  ``D = [vec(R [e_1]x), vec(R [e_2]x), vec(R [e_3]x)]``;
-* ``f``'s gradient and Hessian are ``-2J`` times these.
-"""
+"""The global minimiser of the paper's cost (8) over SO(3) and its certificate of global optimality: the maths. Theory
+and measured numbers: ``docs/methods.md``, section ``replication.core.solvers.certificate``."""
 from __future__ import annotations
 
 import warnings

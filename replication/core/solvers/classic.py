@@ -1,21 +1,5 @@
-"""Classic closed-form solvers of the rotation part of hand-eye calibration ``A X = X B``.
-
-Conventions (``docs/conventions.md``): ``A[..., j] = Delta R_{c,j}``
-are camera relative rotations, ``B[..., j] = Delta R_{i,j}`` the sensor's, and
-``X = R0 = camera_from_sensor`` solves ``A_j X = X B_j`` (the paper's eq. (7)).
-In the robotics literature's names, ``A`` plays the gripper/hand motion and
-``B`` the camera/eye motion. Each solver is exported as its public door
-``solver(A, B)`` (validates, like :func:`replication.core.solvers.solve`); its core,
-written below, receives validated :class:`~replication.core.motions.Motions` and returns
-``(..., 3, 3)`` rotations (det +1), batched without Python loops.
-
-Relations used below (all follow from ``A_j = X B_j X^T``):
-
-* the rotation vectors satisfy ``alpha_j = X beta_j``, ``alpha = log(A)``,
-  ``beta = log(B)`` (same angle, rotated axis);
-* the unit quaternions satisfy ``a_j * x = x * b_j``;
-* with column-major ``vec``, ``(B_j kron A_j) vec(X) = vec(A_j X B_j^T) = vec(X)``.
-"""
+"""Classic closed-form solvers of the rotation part of hand-eye calibration ``A X = X B``. Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.classic``."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,48 +1,5 @@
-"""The paper's two-step iteration (Sec. II-B, eqs. (11)-(19)).
-
-Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment Calibration".
-
-With ``H1`` (eq. (11)) the camera rotations stacked vertically and ``H2``
-(eq. (12)) the sensor rotations side by side, the iteration is
-
-* eq. (14): ``R^r_n = V2H(H1 R^l_{n-1}) H2^+``
-* eq. (15): ``R^l_n = H1^+ H2V(R^r_n H2)``
-
-followed by the SVD projection of eqs. (16)-(17). Because every block is a
-rotation, ``H2^+ = H2^T / J`` and ``H1^+ = H1^T / J``; eq. (14) is then the
-linear map ``T(X) = (1/J) sum_j A_j X B_j^T`` and eq. (15) its adjoint ``T*``.
-In ``vec`` form ``T`` is the 9x9 matrix ``K`` of
-:func:`replication.core.handeye.kronecker_operator`, and one full iteration
-``R^l_{n-1} -> R^l_n`` is one power-method step with ``K^T K``.
-
-What that implies (demonstrated in ``notebooks/01_derivation_check.ipynb``):
-
-* the raw iterates converge to ``c * v1`` (and ``R^r`` to ``c * sigma_1 * u1``),
-  with ``v1``/``u1`` the top right/left singular vectors of ``K`` and
-  ``c = <R^l_0, v1>``; noise-free ``v1 = u1 = vec(R0)/sqrt(3)``;
-* if ``c < 0`` the raw iterate tends to ``-|c| R0``, whose SVD projection is
-  not ``R0`` (Theorem 1 fails); ``variant="corrected"`` multiplies the raw
-  iterate by ``sign(det)`` before projecting, which removes the failure;
-* the error components shrink by ``(sigma_2 / sigma_1)^2`` per iteration;
-* the limit is unique only if ``sigma_1 > sigma_2``. With ``J = 2`` pairs ``sigma_1`` is
-  *triple*, whatever the motions: ``K^T K v = v`` for every ``v = vec(R0 Y)`` with ``Y`` in
-  ``span{I, c c^T, [c]x}``, ``c`` the axis of ``B_1^T B_2``, so the iteration converges to
-  ``R0 Rot(c, phi)`` with ``phi`` set by the start. The two-step method therefore needs
-  ``J >= 3`` pairs whose relative motions ``B_1^T B_j`` do not all share an axis, more than
-  the classical condition (two non-parallel motions) that :func:`~replication.core.solvers.chordal_optimal`
-  or :func:`~replication.core.solvers.park_martin` need.
-
-Two ways to run it:
-
-* ``iterations=N`` (the paper's protocol, notebooks 01-04): exactly ``N`` iterations, every
-  iterate recorded, a :class:`ConvergenceWarning` if the last one is not at the fixed point;
-* ``iterations="auto"`` (the default of :func:`two_step` and of ``solve("two_step_*")``):
-  iterate until the projected estimate is at the iteration's limit (within ``tol``); where
-  that would take more than ``cap`` iterations (``sigma_2 / sigma_1`` of ``K`` close to 1, or
-  a start orthogonal to the limit), finish from the closed-form limit (the top singular vectors of ``K``) and
-  say so with an :class:`IterationCapWarning` naming the measured cause. A repeated top
-  singular value (no unique limit; always with ``J = 2``) raises ``ValueError``.
-"""
+"""The paper's two-step iteration (Sec. II-B, eqs. (11)-(19)). Theory and measured numbers: ``docs/methods.md``,
+section ``replication.core.solvers.iteration``."""
 from __future__ import annotations
 
 import warnings

@@ -1,21 +1,5 @@
-"""Robust estimation of ``R0`` when some motion pairs are outliers.
-
-An outlier pair is one whose camera and sensor rotations do not describe the
-same motion (a mismatched time stamp, a PnP flip, a magnetic disturbance). The
-least-squares solvers spread its error over the estimate; :func:`robust`
-finds a consensus first and then down-weights what disagrees with it.
-
-Method: MSAC hypothesise-and-verify (Torr & Zisserman 2000) over minimal
-samples of two pairs (Park & Martin's solution of two pairs is exact for
-noise-free, non-parallel motions), then iteratively re-weighted least squares
-with the Cauchy weight on the exact minimiser of the weighted eq. (8)
-(:func:`replication.core.solvers.certificate.chordal_newton`).
-
-Cost: memory ``O(J + H)`` and time ``O(H J)`` for ``H`` hypotheses (``max_hypotheses``), at any ``J``:
-the ``J (J - 1) / 2`` two-pair samples are enumerated only up to :data:`MAX_ENUMERATED_PAIRS`, above it
-they are drawn without building the list, and the hypotheses are scored in blocks of at most
-:data:`SCORE_BLOCK` residuals. Measured figures: ``benchmarks/bench_bounded.py``.
-"""
+"""Robust estimation of ``R0`` when some motion pairs are outliers. Theory and measured numbers: ``docs/methods.md``,
+section ``replication.core.solvers.msac``."""
 from __future__ import annotations
 
 from itertools import combinations

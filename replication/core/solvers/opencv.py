@@ -1,39 +1,5 @@
-"""OpenCV's ``cv2.calibrateHandEye`` as rotation-only solvers of ``A X = X B``.
-
-``cv2.calibrateHandEye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method)``
-takes *absolute* poses ``Hg_i`` (gripper to base) and ``Hc_i`` (target to
-camera) and forms, for every pair ``i < j`` of poses (OpenCV's
-``calibration_handeye.cpp``), ``Hg_ij = Hg_j^{-1} Hg_i`` and
-``Hc_ij = Hc_j Hc_i^{-1}``; it then solves ``Hg_ij X = X Hc_ij`` with
-``X = cam2gripper``. Our ``A`` (camera motion) takes the place of ``Hg_ij`` and
-our ``B`` (sensor motion) that of ``Hc_ij``, so ``X = R0 = camera_from_sensor``.
-
-Frame conventions of the wrapper: from ``J`` relative pairs we build a chain of
-``J + 1`` poses, ``Hg_0 = Hc_0 = I``, ``Hg_{k+1} = Hg_k A_k^T`` and
-``Hc_{k+1} = B_k Hc_k``, so that the consecutive pairs OpenCV forms are exactly
-``(A_k, B_k)``; translations are zero. OpenCV also uses every non-consecutive
-pair ``(i, j)`` (products of our motions): noise-free the solution is the same,
-with noise OpenCV weights the data differently from the other solvers here.
-
-Unusable for rotation-only data (they estimate rotation and translation
-together, and zero translations leave them without a solution):
-
-* ``CALIB_HAND_EYE_ANDREFF`` — the homogeneous 12-unknown system's null vector
-  has a zero translation scale; OpenCV raises "determinant(R) is null";
-* ``CALIB_HAND_EYE_DANIILIDIS`` — the dual parts of the dual quaternions are
-  zero and the SVD step returns NaN.
-
-With made-up non-zero translations both return a wrong rotation (the
-translations are then inconsistent with the rotations); see
-``tests/core/test_solvers.py``. They are not registered.
-
-Cost: the ``N (N - 1) / 2`` pose pairs make one ``cv2.calibrateHandEye`` call grow as ``N^2`` (measured,
-OpenCV 4.14, 2 cores: ``CALIB_HAND_EYE_PARK`` 0.13 s at 200 poses, 0.51 s at 400, 2.0 s at 800, 8.2 s at
-1600; Tsai about half, Horaud three quarters of that), and so does its memory (process peak 126 MB at
-400 poses, 491 MB at 1600). The wrappers therefore refuse more than
-:data:`MAX_PAIRS` motion pairs per problem with a ``ValueError`` naming the alternatives, unless the caller
-raises the limit (``max_pairs=``) knowingly.
-"""
+"""OpenCV's ``cv2.calibrateHandEye`` as rotation-only solvers of ``A X = X B``. Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.opencv``."""
 from __future__ import annotations
 
 import numpy as np

@@ -1,38 +1,5 @@
-"""SQP baseline: problem (8)-(10) solved by SciPy's SLSQP, with per-iteration history.
-
-The paper compares its iteration with "the SQP algorithm [30]" on the
-constrained problem (8)-(10) but does not say which implementation, start,
-gradients or tolerances it used. Our choices:
-
-* variables: the 9 entries of ``R`` (``vec``, column-major), as in (8)-(10);
-* objective: eq. (8), evaluated exactly as ``2J(||R||^2 - vec(R)^T K vec(R))``
-  (:func:`replication.core.handeye.handeye_cost_kron`), with its analytic gradient
-  ``2J(2x - (K + K^T) x)`` (``gradient="analytic"``) or SciPy's two-point finite differences of the
-  objective and the constraints (``gradient="finite-difference"``): about 10 more cost evaluations per
-  iteration, as the paper says of its SQP ("more than 10 times within an iteration");
-* constraints (default ``"orthonormal"``): eq. (9) ``R R^T = U`` as its 6
-  independent entries, analytic Jacobian; eq. (10) ``det R = 1`` is kept by
-  starting in SO(3) (its connected component). ``constraints="paper"`` adds
-  eq. (10) literally; but at a rotation the gradient of eq. (10), the cofactor
-  matrix ``= R``, lies in the span of those of eq. (9) (``sum_a d(RR^T)_aa/dR = 2R``),
-  so the 7 constraints are linearly dependent (LICQ fails) and SLSQP stalls
-  (notebook 03 measures how often);
-* start: the same ``init`` as the two-step method (identity by default);
-* SciPy's ``method="SLSQP"`` with ``ftol`` and ``maxiter`` exposed; one SLSQP
-  major iteration is one "iteration" of the history.
-
-The paper's SQP is not identified. :data:`SQP_VARIANTS` names the settings the notebooks bracket it with:
-``"analytic"`` (analytic gradients, converged: the default), ``"finite-difference"`` (the paper's evaluation
-count, converged) and ``"capped"`` (finite differences, SciPy's default ``ftol = 1e-6`` and at most 30
-iterations: an SQP run to a budget, the paper's "at least 30 iterations", rather than to convergence) and
-``"per-pair cost"`` (analytic gradients, the objective divided by ``2J``: SLSQP is not scale-invariant, and
-how the paper scaled its cost is not stated).
-
-The iterates are *not* projected: SQP iterates need not be feasible, and their
-``||R - R0||_F`` can exceed ``2 sqrt 2`` (the largest distance between two
-rotations). ``SQPResult.projected`` holds their projections for comparison.
-SciPy's SLSQP solves one problem per call; batches are looped in Python.
-"""
+"""SQP baseline: problem (8)-(10) solved by SciPy's SLSQP, with per-iteration history. Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.slsqp``."""
 from __future__ import annotations
 
 import warnings
