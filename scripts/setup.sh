@@ -15,3 +15,4 @@ if "$PY" -m pip show --quiet replication >/dev/null 2>&1; then
 fi
 "$PY" -m pip install --quiet --disable-pip-version-check -c "$ROOT/requirements.lock" -e "$ROOT[study,test,notebooks,docs]"
 export PY
+echo "setup done: $PY (replication and its pinned dependencies installed)" >&2
