@@ -1,9 +1,10 @@
 """Test-session set-up.
 
 * Notebooks run under nbval write results/ into a temporary folder.
-* Under pytest-xdist, ``scripts/test`` runs two workers with ``--dist loadfile``: every cell of a notebook goes
-  to the same worker, in order, so one kernel runs the notebook from top to bottom. (``loadgroup`` with
-  ``xdist_group`` marks does not group with pytest 9, whose node ids xdist 3.8 cannot suffix.)
+* Under pytest-xdist, ``scripts/test`` runs two workers with ``--dist loadfile``: every cell of a
+  notebook goes to the same worker, in order, so one kernel runs the notebook from top to bottom.
+  (``loadgroup`` with ``xdist_group`` marks does not group with pytest 9, whose node ids xdist 3.8
+  cannot suffix.)
 * Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
   reason, when the real-data folder (``$REPLICATION_REAL_DATA`` or ``../shared/data/real``)
   is absent.
@@ -23,9 +24,10 @@ def pytest_collection_modifyitems(config, items):
     from replication.cli.reproduce import needs_real_data
     from replication.rig.realdata import data_root, real_data_available
 
-    # the longest files first (the portability re-run, then the notebooks), so that two xdist workers finish together
-    # (in collection order the portability re-run started last and ran alone for minutes); the order within a file
-    # is kept (a stable sort), and nothing depends on the order between files
+    # the longest files first (the portability re-run, then the notebooks), so that two xdist
+    # workers finish together (in collection order the portability re-run started last and ran alone
+    # for minutes); the order within a file is kept (a stable sort), and nothing depends on the
+    # order between files
     items.sort(key=lambda item: 0 if item.get_closest_marker("portability") else 1 if item.path.suffix == ".ipynb"
                else 2)
     if real_data_available():

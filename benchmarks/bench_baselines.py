@@ -1,12 +1,12 @@
 """Calibrations per second of every registered solver, one problem per call and batched, J = 20.
 
-Usage: python benchmarks/bench_baselines.py [--runs 2000]
-Prints a table (absolute figures and the ratio to one bare ``cv2.calibrateHandEye`` call, Tsai, 21 poses,
-measured in the same run); nothing is asserted (figures go to environment.md). Each figure is the best of a
-few repeats, through ``solve()`` with default options (validation, observability diagnostics, the two-step
-method run to its limit, the global certificate of ``chordal_optimal``, SQP's check against it).
-Targets, batched vs the bare cv2 call: closed forms >= 20x, ``chordal_optimal`` with its global
-certificate >= 4x, ``two_step`` (auto) >= 4x.
+Usage: python benchmarks/bench_baselines.py [--runs 2000] Prints a table (absolute figures and the
+ratio to one bare ``cv2.calibrateHandEye`` call, Tsai, 21 poses, measured in the same run); nothing
+is asserted (figures go to environment.md). Each figure is the best of a few repeats, through
+``solve()`` with default options (validation, observability diagnostics, the two-step method run to
+its limit, the global certificate of ``chordal_optimal``, SQP's check against it). Targets, batched
+vs the bare cv2 call: closed forms >= 20x, ``chordal_optimal`` with its global certificate >= 4x,
+``two_step`` (auto) >= 4x.
 """
 import argparse
 import warnings
@@ -24,7 +24,8 @@ LOOPED = {"sqp": 100, "opencv_tsai": 500, "opencv_park": 500, "opencv_horaud": 5
 
 
 def bare_cv2_call(A, B):
-    """Seconds per ``cv2.calibrateHandEye`` (Tsai) call on the 21 poses whose consecutive motions are (A, B)."""
+    """Seconds per ``cv2.calibrateHandEye`` (Tsai) call on the 21 poses whose consecutive motions
+    are (A, B)."""
     Hg, Hc = [np.eye(3)], [np.eye(3)]
     for a, b in zip(A, B):
         Hg.append(Hg[-1] @ a.T)

@@ -1,13 +1,15 @@
-"""Coverage of the batch radii in simulation, where R0 is known: the share of runs whose error is within the stated
-95 % bootstrap radius, with its Wilson 95 % interval (the runs are independent).
+"""Coverage of the batch radii in simulation, where R0 is known: the share of runs whose error is
+within the stated 95 % bootstrap radius, with its Wilson 95 % interval (the runs are independent).
 
-* streams (``calibrate``): a synthetic rig (``replication.testing.rig_streams``: camera at 20 Hz, gyro at 200 Hz, smooth
-  three-axis motion) with Gaussian noise on every camera orientation and every gyro sample; the moving-block
-  bootstrap over the pairs (blocks of one pairing interval);
-* static pose sets (``calibrate_poses``): stations with independent noise on both attitudes; the station bootstrap
-  (every pair between two drawn stations), against resampling the pairs one by one (what it replaced).
+* streams (``calibrate``): a synthetic rig (``replication.testing.rig_streams``: camera at 20 Hz,
+  gyro at 200 Hz, smooth three-axis motion) with Gaussian noise on every camera orientation and
+  every gyro sample; the moving-block bootstrap over the pairs (blocks of one pairing interval);
+* static pose sets (``calibrate_poses``): stations with independent noise on both attitudes; the
+  station bootstrap (every pair between two drawn stations), against resampling the pairs one by one
+  (what it replaced).
 
-Run: python benchmarks/bench_batch_coverage.py [runs]   (about 10 minutes at the default 100 runs per setting)
+Run: python benchmarks/bench_batch_coverage.py [runs]   (about 10 minutes at the default 100 runs
+per setting)
 """
 import sys
 import time

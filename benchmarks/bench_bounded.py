@@ -1,15 +1,16 @@
-"""Time and peak memory of the three costs bounded by the "calibrate that judges its own answer" issue.
+"""Time and peak memory of the three costs bounded by the "calibrate that judges its own answer"
+issue.
 
 * ``robust`` (MSAC + IRLS) through its public door at J = 1e4, 1e5, 1e6 pairs (30 % outliers);
 * one ``cv2.calibrateHandEye`` call against the number of poses N (the wrappers refuse more than
   ``replication.core.solvers.opencv.MAX_PAIRS`` pairs);
-* ``estimate_time_offset`` at ``max_offset`` 0.2, 2 and 30 s on a synthetic stream of TUM-VI room1's size
-  (2800 camera poses at 20 Hz, a 200 Hz gyro integrated).
+* ``estimate_time_offset`` at ``max_offset`` 0.2, 2 and 30 s on a synthetic stream of TUM-VI room1's
+  size (2800 camera poses at 20 Hz, a 200 Hz gyro integrated).
 
-Usage: python benchmarks/bench_bounded.py [--quick]
-Every figure comes from a fresh subprocess: ``peak`` is tracemalloc's peak during the call (NumPy
-allocations included, inputs excluded), ``maxrss`` the process's resident-set high-water mark (inputs,
-interpreter and libraries included). Nothing is asserted.
+Usage: python benchmarks/bench_bounded.py [--quick] Every figure comes from a fresh subprocess:
+``peak`` is tracemalloc's peak during the call (NumPy allocations included, inputs excluded),
+``maxrss`` the process's resident-set high-water mark (inputs, interpreter and libraries included).
+Nothing is asserted.
 """
 import argparse
 import json
@@ -23,7 +24,8 @@ METHODS = ("CALIB_HAND_EYE_TSAI", "CALIB_HAND_EYE_PARK", "CALIB_HAND_EYE_HORAUD"
 
 
 def robust_problem(J: int, *, outliers: float = 0.3, noise_deg: float = 0.5, seed: int = 0):
-    """``(R0, A, B)``: Haar camera motions, sensor motions ``R0^T A R0`` with noise, a share replaced at random."""
+    """``(R0, A, B)``: Haar camera motions, sensor motions ``R0^T A R0`` with noise, a share
+    replaced at random."""
     from replication.core import so3
     from replication.study.baselines import corrupt_pairs
 
@@ -36,11 +38,12 @@ def robust_problem(J: int, *, outliers: float = 0.3, noise_deg: float = 0.5, see
 
 def tumvi_like(seconds: float = 140.0, camera_hz: float = 20.0, gyro_hz: float = 200.0, offset: float = 0.0123,
                seed: int = 5):
-    """``(R0, camera, sensor)``: camera stream and integrated gyro of one rig, sensor clock late by ``offset``.
+    """``(R0, camera, sensor)``: camera stream and integrated gyro of one rig, sensor clock late by
+    ``offset``.
 
-    The attitude follows smooth sines as in ``tests/study/test_baselines.py::synthetic_rig`` plus faster terms; the
-    gyro's body rates are central differences of the sensor attitude, integrated by
-    :func:`replication.rig.streams.integrate_gyro`.
+    The attitude follows smooth sines as in ``tests/study/test_baselines.py::synthetic_rig`` plus
+    faster terms; the gyro's body rates are central differences of the sensor attitude, integrated
+    by :func:`replication.rig.streams.integrate_gyro`.
     """
     from replication.core import so3
     from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
@@ -100,7 +103,8 @@ def one(kind: str, value: float) -> dict:
 
 
 def opencv_times(N: int) -> dict:
-    """Seconds of one ``cv2.calibrateHandEye`` call on a chain of N poses, per method, and the process's maxrss."""
+    """Seconds of one ``cv2.calibrateHandEye`` call on a chain of N poses, per method, and the
+    process's maxrss."""
     import resource
 
     import cv2

@@ -1,4 +1,5 @@
-"""Wall time of ``replication.calibrate`` on the full TUM-VI room1 recording (raw gyro), bootstrap included.
+"""Wall time of ``replication.calibrate`` on the full TUM-VI room1 recording (raw gyro), bootstrap
+included.
 
 Usage: python benchmarks/bench_calibrate.py [--data PATH] [--bootstrap 200]
 Target: <= 2 s per calibration on the 2-core machine (loading the files not counted; printed apart).

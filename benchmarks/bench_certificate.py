@@ -1,10 +1,11 @@
-"""How often chordal_optimal certifies the global minimum of eq. (8), and what the certificate costs.
+"""How often chordal_optimal certifies the global minimum of eq. (8), and what the certificate
+costs.
 
-Usage: python benchmarks/bench_certificate.py [--runs 1000]
-For the paper's noise and for 20-40 % outlier pairs (J = 3, 5, 10, 20), prints the share certified globally,
-the share the fast Lagrangian dual settles, the share that needed the semidefinite relaxation (Clarabel), and
-the time per problem with and without the certificate. Nothing is asserted (figures go to environment.md).
-Goal: 100 % certified, fallback included.
+Usage: python benchmarks/bench_certificate.py [--runs 1000] For the paper's noise and for 20-40 %
+outlier pairs (J = 3, 5, 10, 20), prints the share certified globally, the share the fast Lagrangian
+dual settles, the share that needed the semidefinite relaxation (Clarabel), and the time per problem
+with and without the certificate. Nothing is asserted (figures go to environment.md). Goal: 100 %
+certified, fallback included.
 """
 import argparse
 import time

@@ -1,11 +1,14 @@
-"""The batch change test near the ends of a recording: the share of pairs its splits leave on each side.
+"""The batch change test near the ends of a recording: the share of pairs its splits leave on each
+side.
 
 ``calibrate`` runs :func:`replication.rig.changepoint.two_segment_test` with ``min_share =
-replication.rig.calibration.CHANGE_MIN_SHARE`` (0.05). This compares it with the test's default 0.15 on
-``bench_changepoint.py``'s rigs: false alarms without a change (N rigs from seed BASE, over its 8 settings), and
-2 and 5 deg re-mounts at 92 % and 95 % of 60 s rigs (20 each). Run twice with disjoint seeds.
+replication.rig.calibration.CHANGE_MIN_SHARE`` (0.05). This compares it with the test's default 0.15
+on ``bench_changepoint.py``'s rigs: false alarms without a change (N rigs from seed BASE, over its 8
+settings), and 2 and 5 deg re-mounts at 92 % and 95 % of 60 s rigs (20 each). Run twice with
+disjoint seeds.
 
-Run: python benchmarks/bench_change_ends.py [N] [BASE]      (defaults 160 40000; the fresh set: 160 60000)
+Run: python benchmarks/bench_change_ends.py [N] [BASE]      (defaults 160 40000; the fresh set: 160
+60000)
 """
 import sys
 import warnings

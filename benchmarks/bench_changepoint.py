@@ -1,14 +1,18 @@
-"""The batch change test (replication.rig.changepoint.two_segment_test): its threshold, false alarms, re-mounts, cost.
+"""The batch change test (replication.rig.changepoint.two_segment_test): its threshold, false
+alarms, re-mounts, cost.
 
 1. the tail approximation of the threshold against simulated 3-dimensional Brownian bridges;
-2. false alarms without a change on synthetic rigs (a camera at 20 Hz and a gyro at 200 Hz on one rigid body, 60
-   or 135 s of smooth three-axis motion as in tests/rig/test_calibration.py, noise on the camera orientations and
-   the gyro at several levels), on one seed set and again on a disjoint one, with Wilson 95 % intervals; what a
-   slowly wandering camera frame does (not a change, and not white noise); re-mounts on the rigs;
-3. the real recordings as recorded (pairs as calibrate forms them: its clock offset, interval 1 s, its block);
-4. synthetic re-mounts inside the real recordings (at 1/3, 1/2, 2/3 of the recording, about two axes, 0.5-5 deg):
-   detections, the split time's error, each side's angle to its mounting (the recording's own calibration before,
-   that times the re-mount after), and the verdict the proposed sizes give;
+2. false alarms without a change on synthetic rigs (a camera at 20 Hz and a gyro at 200 Hz on one
+   rigid body, 60 or 135 s of smooth three-axis motion as in tests/rig/test_calibration.py, noise on
+   the camera orientations and the gyro at several levels), on one seed set and again on a disjoint
+   one, with Wilson 95 % intervals; what a slowly wandering camera frame does (not a change, and not
+   white noise); re-mounts on the rigs;
+3. the real recordings as recorded (pairs as calibrate forms them: its clock offset, interval 1 s,
+   its block);
+4. synthetic re-mounts inside the real recordings (at 1/3, 1/2, 2/3 of the recording, about two
+   axes, 0.5-5 deg): detections, the split time's error, each side's angle to its mounting (the
+   recording's own calibration before, that times the re-mount after), and the verdict the proposed
+   sizes give;
 5. the run time of the test on TUM-VI's 2700 pairs next to calibrate's.
 
 Run: python benchmarks/bench_changepoint.py [--quick] [--workers N]
@@ -42,8 +46,8 @@ from replication.testing import noisy_rig as rig
 WARNING_DEG, FAIL_DEG = THRESHOLDS["remount_deg"]
 
 R0 = RIG_R0
-#: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per 200 Hz sample),
-#: gyro bias (rad/s, constant)).
+#: In-control rigs: (seconds, camera orientation noise (deg, white per frame), gyro noise (rad/s per
+#: 200 Hz sample), gyro bias (rad/s, constant)).
 CONFIGS = [(60, 0.02, 0.002, 0.0), (60, 0.1, 0.005, 0.0), (60, 0.0, 0.005, 0.0), (60, 0.3, 0.02, 0.005),
            (135, 0.02, 0.002, 0.0), (135, 0.1, 0.005, 0.0), (135, 0.0, 0.005, 0.0), (135, 0.3, 0.02, 0.005)]
 
@@ -54,8 +58,8 @@ def wilson(k: int, n: int) -> str:
 
 
 def bridge_check(n_bridges: int = 50_000, n_steps: int = 1000, seed: int = 0, share: float = 0.15):
-    """Quantiles of sup |B|^2 / (lam (1 - lam)) over [share, 1 - share] from simulated bridges, beside the
-    approximation."""
+    """Quantiles of sup |B|^2 / (lam (1 - lam)) over [share, 1 - share] from simulated bridges,
+    beside the approximation."""
     rng = np.random.default_rng(seed)
     lam = np.arange(1, n_steps + 1) / n_steps
     sel = (lam >= share) & (lam <= 1 - share)

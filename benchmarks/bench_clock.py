@@ -1,29 +1,34 @@
-"""The clock's offset profile inside calibrate (replication.rig.clock): steps of the clock named as steps, drifts
-and clean rigs not, and what the segment test says on drifting rigs (issue 34).
+"""The clock's offset profile inside calibrate (replication.rig.clock): steps of the clock named as
+steps, drifts and clean rigs not, and what the segment test says on drifting rigs (issue 34).
 
-Rigs: bench_changepoint's (camera 20 Hz at 0.05 deg, gyro 200 Hz at 0.005 rad/s, smooth three-axis motion), 60 s,
-a gyro bias of 0.05 rad/s (the sensor model removes it), with one of:
+Rigs: bench_changepoint's (camera 20 Hz at 0.05 deg, gyro 200 Hz at 0.005 rad/s, smooth three-axis
+motion), 60 s, a gyro bias of 0.05 rad/s (the sensor model removes it), with one of:
 
-* a step of the clock without a skip in the stamps: the gyro loses ``n`` samples at 30 s and stamps on evenly
-  (STEPS_MS = 5 n ms at 200 Hz);
-* a jump of the camera's clock: its stamps from 30 s on read 50 ms later (a skip in the camera's stamps);
+* a step of the clock without a skip in the stamps: the gyro loses ``n`` samples at 30 s and stamps
+  on evenly (STEPS_MS = 5 n ms at 200 Hz);
+* a jump of the camera's clock: its stamps from 30 s on read 50 ms later (a skip in the camera's
+  stamps);
 * nothing (clean), or a drift of the sensor clock of 50 or 200 ppm (its stamps ``t + k (t - 30)``).
 
-Per case: the share of rigs with a ``clock_jump`` reason (Wilson 95 %), the found step's time and size errors, the
-share with a ``clock_drift`` reason and with ``segments_disagree``; the profile's ratios (the step's scaled
-chi-square gain over a ramp and over one offset) are printed so that clock.STEP_LR can be set on them.
+Per case: the share of rigs with a ``clock_jump`` reason (Wilson 95 %), the found step's time and
+size errors, the share with a ``clock_drift`` reason and with ``segments_disagree``; the profile's
+ratios (the step's scaled chi-square gain over a ramp and over one offset) are printed so that
+clock.STEP_LR can be set on them.
 
-Measured (fresh seeds 90000-90039, STEP_LR = 40, set on seeds 0-39; Wilson 95 %): clock_jump on clean rigs 0/40
-[0, 0.09], on 50 ppm 0/40, on 200 ppm 0/40 (120 rigs: 0/120 [0, 0.031]); steps of 5 ms 20/40 [0.35, 0.65], of 10,
-20, 30 and 50 ms 40/40 [0.91, 1] each, a 50 ms camera jump 40/40 (named the camera's); the step's time within its
-stated resolution in every one found (5 ms: up to 1.9 s off, 2 s stated; 10 ms and more: up to 0.9 s), its size
-within 1.5 ms (camera: 2.1 ms). segments_disagree: 200 ppm 0/40 (raw, before: 12/40 [0.18, 0.45]), a 30 ms step
-0/40 (raw: 13/40 [0.20, 0.48]), clean 2/40 [0.01, 0.17] (the segment test's own false alarms, unchanged).
-Shorter recordings make fewer windows: a 10 ms step half-way was found in 27/40 [0.52, 0.80] rigs of 32 s and 17/40
-[0.29, 0.58] of 40 s, with no false step in 40 clean and 40 50 ppm rigs of each length (seeds 95000-95039).
+Measured (fresh seeds 90000-90039, STEP_LR = 40, set on seeds 0-39; Wilson 95 %): clock_jump on
+clean rigs 0/40 [0, 0.09], on 50 ppm 0/40, on 200 ppm 0/40 (120 rigs: 0/120 [0, 0.031]); steps of 5
+ms 20/40 [0.35, 0.65], of 10, 20, 30 and 50 ms 40/40 [0.91, 1] each, a 50 ms camera jump 40/40
+(named the camera's); the step's time within its stated resolution in every one found (5 ms: up to
+1.9 s off, 2 s stated; 10 ms and more: up to 0.9 s), its size within 1.5 ms (camera: 2.1 ms).
+segments_disagree: 200 ppm 0/40 (raw, before: 12/40 [0.18, 0.45]), a 30 ms step 0/40 (raw: 13/40
+[0.20, 0.48]), clean 2/40 [0.01, 0.17] (the segment test's own false alarms, unchanged). Shorter
+recordings make fewer windows: a 10 ms step half-way was found in 27/40 [0.52, 0.80] rigs of 32 s
+and 17/40 [0.29, 0.58] of 40 s, with no false step in 40 clean and 40 50 ppm rigs of each length
+(seeds 95000-95039).
 
-Run: python benchmarks/bench_clock.py [N] [BASE] [cases] [raw]   (tuning seeds: 40 0; fresh: 40 90000; ``raw``: the
-change and segment tests on the sensor as recorded, clock.corrected_sensor off, as before issue 34's point 2)
+Run: python benchmarks/bench_clock.py [N] [BASE] [cases] [raw]   (tuning seeds: 40 0; fresh: 40
+90000; ``raw``: the change and segment tests on the sensor as recorded, clock.corrected_sensor off,
+as before issue 34's point 2)
 """
 import sys
 import warnings

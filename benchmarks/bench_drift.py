@@ -1,11 +1,12 @@
 """A camera frame that wanders: events, restarts and ``ready`` of the online estimator.
 
-A live replay (:func:`replication.rig.live.replay`, 1 s pairs) of a synthetic 600 s rig whose camera_from_sensor turns
-by 2 deg about a fixed axis, uniformly over the recording, at three noise levels (camera / gyro 0.05 deg / 0.05 deg/s,
-0.02 / 0.02, 0.01 / 0.01), over ``--runs`` seeded runs each (seeds ``[SEED, noise index, run]``). Prints, per level,
-the runs whose events are exactly one ``drift`` (Wilson 95 % interval), the most restarts in a run, the median
-estimated rate against the true one, the median share of pairs ready, and the pairs ready while more than the target
-(0.5 deg) off.
+A live replay (:func:`replication.rig.live.replay`, 1 s pairs) of a synthetic 600 s rig whose
+camera_from_sensor turns by 2 deg about a fixed axis, uniformly over the recording, at three noise
+levels (camera / gyro 0.05 deg / 0.05 deg/s, 0.02 / 0.02, 0.01 / 0.01), over ``--runs`` seeded runs
+each (seeds ``[SEED, noise index, run]``). Prints, per level, the runs whose events are exactly one
+``drift`` (Wilson 95 % interval), the most restarts in a run, the median estimated rate against the
+true one, the median share of pairs ready, and the pairs ready while more than the target (0.5 deg)
+off.
 
 Usage: python benchmarks/bench_drift.py [--runs 20] [--seed 404]
 """

@@ -1,8 +1,9 @@
 """The package face: import time of each layer in a fresh interpreter, and what it loads.
 
-``import replication.core.so3`` should load NumPy only (SciPy's rotations on first use); the loaders and the lab's
-recording I/O must not load the solvers or SciPy's optimiser. Each figure is the median wall time of the import
-over ``REPEATS`` fresh interpreters; a bare ``import numpy`` is printed first (most modules pay it).
+``import replication.core.so3`` should load NumPy only (SciPy's rotations on first use); the loaders
+and the lab's recording I/O must not load the solvers or SciPy's optimiser. Each figure is the
+median wall time of the import over ``REPEATS`` fresh interpreters; a bare ``import numpy`` is
+printed first (most modules pay it).
 
 Run: python benchmarks/bench_import.py
 """

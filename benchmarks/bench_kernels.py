@@ -1,15 +1,19 @@
-"""The batched small-matrix kernels: each kernel against the LAPACK call it replaces, every solver against
-one ``cv2.calibrateHandEye`` call before and after, the paper's 1000 x 50 history, and where the time goes.
+"""The batched small-matrix kernels: each kernel against the LAPACK call it replaces, every solver
+against one ``cv2.calibrateHandEye`` call before and after, the paper's 1000 x 50 history, and where
+the time goes.
 
-Usage: python benchmarks/bench_kernels.py [--reps 7] [--runs 2000] [--single-calls 50] [--parts kernels solvers ...]
-       python benchmarks/bench_kernels.py --compare-with /tmp/base  (every ratio, base commit and this tree alternating;
-       the issue 38 table: ``git archive <base> | tar -x -C /tmp/base`` first)
-"Before" is the same code inside :func:`replication.core.kernels.lapack_reference` (one LAPACK call per matrix, as
-before the kernels); "after" the default. Every figure is the median over ``--reps`` interleaved repetitions (before,
-after, the cv2 call, in turn), with the range (min-max) beside it; ratios are taken within a repetition. Nothing is
-asserted (figures go to environment.md). Targets: each kernel >= 10x the LAPACK call on the same batch;
-closed forms >= 40x one cv2 call batched; chordal_optimal (certified) >= 30x; two_step (auto) >= 15x; the 1000 x 50
-history <= 0.1 cv2 calls per problem.
+Usage: python benchmarks/bench_kernels.py [--reps 7] [--runs 2000] [--single-calls 50] [--parts
+kernels solvers ...]
+       python benchmarks/bench_kernels.py --compare-with /tmp/base  (every ratio, base commit and
+       this tree alternating; the issue 38 table: ``git archive <base> | tar -x -C /tmp/base``
+       first)
+"Before" is the same code inside :func:`replication.core.kernels.lapack_reference` (one LAPACK call
+per matrix, as before the kernels); "after" the default. Every figure is the median over ``--reps``
+interleaved repetitions (before, after, the cv2 call, in turn), with the range (min-max) beside it;
+ratios are taken within a repetition. Nothing is asserted (figures go to environment.md). Targets:
+each kernel >= 10x the LAPACK call on the same batch; closed forms >= 40x one cv2 call batched;
+chordal_optimal (certified) >= 30x; two_step (auto) >= 15x; the 1000 x 50 history <= 0.1 cv2 calls
+per problem.
 """
 import argparse
 import cProfile
@@ -39,7 +43,8 @@ def _seconds(fn):
 
 
 def _old_rotation_test(R):
-    """The rotation test before the fused pass: finiteness, ``||R^T R - I||_F``, ``det R`` in three passes."""
+    """The rotation test before the fused pass: finiteness, ``||R^T R - I||_F``, ``det R`` in three
+    passes."""
     R = check_matrices(R, "R")
     E = np.swapaxes(R, -1, -2) @ R - np.eye(3)
     return np.maximum(np.sqrt(np.einsum("...ab,...ab->...", E, E)), np.abs(det3(R) - 1.0))
@@ -103,7 +108,8 @@ def kernel_table(rng, reps, sim):
 
 
 def lapack_9x9_table(sim, reps):
-    """What the 9x9 decompositions of K that stay with LAPACK cost per problem, against one cv2 call."""
+    """What the 9x9 decompositions of K that stay with LAPACK cost per problem, against one cv2
+    call."""
     from replication.core.motions import prepare_motions
 
     K = prepare_motions(sim.A, sim.B).K
@@ -127,7 +133,8 @@ def lapack_9x9_table(sim, reps):
 
 
 def solver_table(sim, reps, n_single):
-    """Every solver's ratio to one cv2 call, single and batched, before and after; the 1000 x 50 history."""
+    """Every solver's ratio to one cv2 call, single and batched, before and after; the 1000 x 50
+    history."""
     from replication.core.kernels import lapack_reference
 
     A, B = sim.A, sim.B
@@ -175,8 +182,9 @@ def solver_table(sim, reps, n_single):
 
 
 def _best(fn, clock, reps=7):
-    """Smallest time of ``reps`` calls of ``fn`` on ``clock`` (``time.perf_counter``: wall; ``time.process_time``:
-    this process's CPU time, which other jobs on a shared machine disturb far less)."""
+    """Smallest time of ``reps`` calls of ``fn`` on ``clock`` (``time.perf_counter``: wall;
+    ``time.process_time``: this process's CPU time, which other jobs on a shared machine disturb far
+    less)."""
     times = []
     for _ in range(reps):
         start = clock()
@@ -186,7 +194,8 @@ def _best(fn, clock, reps=7):
 
 
 def _cv2_call(sim, clock):
-    """Seconds per bare ``cv2.calibrateHandEye`` (Tsai) call, best of 5 blocks of 100 (as ``bare_cv2_call``)."""
+    """Seconds per bare ``cv2.calibrateHandEye`` (Tsai) call, best of 5 blocks of 100 (as
+    ``bare_cv2_call``)."""
     import cv2
 
     Hg, Hc = [np.eye(3)], [np.eye(3)]
@@ -199,9 +208,10 @@ def _cv2_call(sim, clock):
 
 
 def ratios_once(n, n_single, reps=7):
-    """One process on the code importable now: per solver the ratio to one cv2 call, batched and single, each time
-    the best of ``reps`` calls, on the wall clock and on CPU time; the history's cv2 calls per problem; the load.
-    Only APIs older than the kernels are used, so a base commit runs it."""
+    """One process on the code importable now: per solver the ratio to one cv2 call, batched and
+    single, each time the best of ``reps`` calls, on the wall clock and on CPU time; the history's
+    cv2 calls per problem; the load. Only APIs older than the kernels are used, so a base commit
+    runs it."""
     sim, hist = simulate(0, n), simulate(0, 1000)
     for name in SOLVERS:  # warm-up: first-call imports and caches out of the timings
         solve(name, sim.A[:300], sim.B[:300])
@@ -220,10 +230,11 @@ def ratios_once(n, n_single, reps=7):
 
 
 def compare_with(base, reps, n, n_single):
-    """Ratios of the code at ``base`` (e.g. ``git archive 3ece4a3 | tar -x -C /tmp/base``) and of this tree in one
-    run: ``reps`` processes each, alternating base / this tree; in each process every figure is the best of 7 calls.
-    Prints, per solver, the best ratio over the processes and the median (min-max), on the wall clock and on CPU
-    time, the speed-up of this tree's best time over the base's, and the load average seen by each process."""
+    """Ratios of the code at ``base`` (e.g. ``git archive 3ece4a3 | tar -x -C /tmp/base``) and of
+    this tree in one run: ``reps`` processes each, alternating base / this tree; in each process
+    every figure is the best of 7 calls. Prints, per solver, the best ratio over the processes and
+    the median (min-max), on the wall clock and on CPU time, the speed-up of this tree's best time
+    over the base's, and the load average seen by each process."""
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     runs = {"base": [], "this tree": []}
     for _ in range(reps):

@@ -27,7 +27,8 @@ if __name__ == "__main__":
         _, t_write = timed(lambda: write_lab(rec, tmp))
         loaded, t_load = timed(lambda: load_lab(tmp))
         _, t_run = timed(lambda: run_lab(loaded))
-        # a copy of the notebook, its results in the temporary folder (the committed files stay untouched)
+        # a copy of the notebook, its results in the temporary folder (the committed files stay
+        # untouched)
         nb = Path(shutil.copy(ROOT / "notebooks" / "05_table2_experiment.ipynb", tmp))
         os.environ["REPLICATION_RESULTS_DIR"] = str(Path(tmp) / "results")
         t_nb = execute_notebook(nb)

@@ -1,18 +1,22 @@
-"""The clock-offset estimate: sub-grid accuracy, the bootstrap interval's width and coverage, peak margins, run time.
+"""The clock-offset estimate: sub-grid accuracy, the bootstrap interval's width and coverage, peak
+margins, run time.
 
-* TUM-VI room1 (ORB-SLAM3 mono camera, raw gyro integrated) and EuRoC MH01 run A (ORB-SLAM3 mono camera, ground
-  truth): the gyro's (ground truth's) time stamps are shifted by off-grid offsets (the issue's five and a dozen
-  uniform in +-20 ms); the error of each is ``estimate(shifted) - estimate(unshifted) - shift``, before (the
-  0.5 ms fine grid's maximum, the computation of before) and after (the refined offset), with the 95 % interval
-  of :func:`replication.rig.association.offset_analysis` on each shifted stream;
-* coverage of that interval over synthetic rigs (the rig of ``tests/rig/test_association.py``, 30 s) with independent
-  noise on the camera's poses and the gyro, each with an injected off-grid offset: the share of intervals holding
-  it, with a Wilson 95 % interval on the share;
-* the peak margin on the recordings and on a periodic motion, at the default search (+-0.2 s) and a wider one;
-* the run time of ``offset_analysis`` (200 replicates), ``estimate_time_offset`` and the search of before.
+* TUM-VI room1 (ORB-SLAM3 mono camera, raw gyro integrated) and EuRoC MH01 run A (ORB-SLAM3 mono
+  camera, ground truth): the gyro's (ground truth's) time stamps are shifted by off-grid offsets
+  (the issue's five and a dozen uniform in +-20 ms); the error of each is ``estimate(shifted) -
+  estimate(unshifted) - shift``, before (the 0.5 ms fine grid's maximum, the computation of before)
+  and after (the refined offset), with the 95 % interval of
+  :func:`replication.rig.association.offset_analysis` on each shifted stream;
+* coverage of that interval over synthetic rigs (the rig of ``tests/rig/test_association.py``, 30 s)
+  with independent noise on the camera's poses and the gyro, each with an injected off-grid offset:
+  the share of intervals holding it, with a Wilson 95 % interval on the share;
+* the peak margin on the recordings and on a periodic motion, at the default search (+-0.2 s) and a
+  wider one;
+* the run time of ``offset_analysis`` (200 replicates), ``estimate_time_offset`` and the search of
+  before.
 
-Usage: python benchmarks/bench_offset.py [--quick] [--margins]   (needs the real recordings; prints figures, asserts
-nothing; --margins: only the peak margins)
+Usage: python benchmarks/bench_offset.py [--quick] [--margins]   (needs the real recordings; prints
+figures, asserts nothing; --margins: only the peak margins)
 """
 import argparse
 import time
@@ -30,7 +34,8 @@ ISSUE_MS = (0.13, 0.37, 1.71, 2.29, -3.43)
 
 
 def old_search(camera, sensor, max_offset=0.2, resolution=0.5e-3):
-    """The search of before (10 ms grid, then the ``resolution`` grid; its maximum), for timing and 'before'."""
+    """The search of before (10 ms grid, then the ``resolution`` grid; its maximum), for timing and
+    'before'."""
     t, cam = association._overlap(camera, sensor, max_offset)
     coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
     best = coarse[np.argmax(association._correlations(cam, sensor, t, coarse))]
@@ -76,8 +81,8 @@ R0 = RIG_R0
 
 
 def noisy_rig(offset, camera_noise_deg, gyro_noise, rng, seconds=30.0):
-    """The rig of ``tests/rig/test_association.py``: camera poses (20 Hz, noise in deg per axis) and the integrated gyro
-    (200 Hz, noise in rad/s per sample) whose clock reads ``offset`` s ahead."""
+    """The rig of ``tests/rig/test_association.py``: camera poses (20 Hz, noise in deg per axis) and
+    the integrated gyro (200 Hz, noise in rad/s per sample) whose clock reads ``offset`` s ahead."""
     _, camera, gyro, _ = rig_streams(seconds, offset=offset,
                                      camera_noise_deg=lambda n: rng.normal(scale=np.radians(camera_noise_deg), size=n),
                                      gyro_noise_deg_s=lambda n: rng.normal(scale=gyro_noise, size=n))
@@ -109,8 +114,8 @@ def coverage(runs, camera_noise_deg, gyro_noise, *, seconds=30.0, block_s=1.0, s
 
 
 def periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0):
-    """A single-axis oscillation at ``freq_hz`` (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
-    ``aperiodic`` times the rig's three-axis motion."""
+    """A single-axis oscillation at ``freq_hz`` (the angular speed repeats every ``1 / (2 freq_hz)``
+    s), times ``aperiodic`` times the rig's three-axis motion."""
     axis = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):

@@ -1,9 +1,11 @@
-"""The online estimator: per-pair update cost, replay rate, and memory against the recording's length.
+"""The online estimator: per-pair update cost, replay rate, and memory against the recording's
+length.
 
-Targets: mean cost of a single-pair ``update()`` <= 50 us over 20 000 pairs (>= 20 000 pairs/s single-threaded; issue
-38, point 2), best of ``--runs`` runs (the machine is shared: the load average is printed; the CPU time of the process
-is printed beside the wall time); memory bounded whatever the length (the running sums are O(1); the repeat filter
-remembers at most ``online_events.DUPLICATE_MEMORY`` distinct pairs, about 0.3 kB each).
+Targets: mean cost of a single-pair ``update()`` <= 50 us over 20 000 pairs (>= 20 000 pairs/s
+single-threaded; issue 38, point 2), best of ``--runs`` runs (the machine is shared: the load
+average is printed; the CPU time of the process is printed beside the wall time); memory bounded
+whatever the length (the running sums are O(1); the repeat filter remembers at most
+``online_events.DUPLICATE_MEMORY`` distinct pairs, about 0.3 kB each).
 
 Run: OPENBLAS_NUM_THREADS=1 python benchmarks/bench_online.py [--runs 5] [--memory]
 """
@@ -19,7 +21,8 @@ from replication.study.simulation import simulate
 
 
 def mean_update_us(n: int = 20000, runs: int = 5, seed: int = 1) -> tuple[float, float]:
-    """Best over ``runs`` of the mean wall and CPU time (us) of ``n`` single-pair ``update()`` calls."""
+    """Best over ``runs`` of the mean wall and CPU time (us) of ``n`` single-pair ``update()``
+    calls."""
     sim = simulate(seed, 1, n_motions=n)
     A, B = sim.A[0], sim.B[0]
     OnlineCalibrator().update_many(A[:2000], B[:2000])  # warm-up: every code path once

@@ -1,19 +1,23 @@
-"""How long the online estimator stays ``ready`` while wrong after a re-mount, and how often it withdraws ``ready``
-without any change.
+"""How long the online estimator stays ``ready`` while wrong after a re-mount, and how often it
+withdraws ``ready`` without any change.
 
-Wrong means farther from the current mounting than the target (0.5 deg). Re-mounts of 0.5, 1 and 2 deg about a random
-axis, at two noise levels, over ``--runs`` seeded runs each, seeds ``[SEED, set-up, noise index, step index, run]``
-for runs ``--first`` .. ``--first + --runs - 1`` (tune on one range, confirm on a disjoint one):
+Wrong means farther from the current mounting than the target (0.5 deg). Re-mounts of 0.5, 1 and 2
+deg about a random axis, at two noise levels, over ``--runs`` seeded runs each, seeds ``[SEED,
+set-up, noise index, step index, run]`` for runs ``--first`` .. ``--first + --runs - 1`` (tune on
+one range, confirm on a disjoint one):
 
-* pairs: 600 independent pairs of :func:`replication.study.live_study.pair_stream` (pair residual RMS 0.3 or 1 deg,
-  motions of 5-60 deg), then 1200 after the re-mount (a case of 1800 was reported); counted in pairs;
-* seconds (``--live``): a live replay (:func:`replication.rig.live.replay`, 1 s pairs, camera 20 Hz, gyro 200 Hz) of
-  a 150 s synthetic rig re-mounted at 70 s (camera / gyro noise 0.3 deg / 0.3 deg/s or 1 deg / 1 deg/s); counted in
-  seconds (the pairs' time spans while ready and wrong);
-* no change: the same streams without the re-mount; a false withdrawal is a pair not ready after the first ready one.
+* pairs: 600 independent pairs of :func:`replication.study.live_study.pair_stream` (pair residual
+  RMS 0.3 or 1 deg, motions of 5-60 deg), then 1200 after the re-mount (a case of 1800 was
+  reported); counted in pairs;
+* seconds (``--live``): a live replay (:func:`replication.rig.live.replay`, 1 s pairs, camera 20 Hz,
+  gyro 200 Hz) of a 150 s synthetic rig re-mounted at 70 s (camera / gyro noise 0.3 deg / 0.3 deg/s
+  or 1 deg / 1 deg/s); counted in seconds (the pairs' time spans while ready and wrong);
+* no change: the same streams without the re-mount; a false withdrawal is a pair not ready after the
+  first ready one.
 
-Prints the median and 90th percentile over the runs and the share of runs with any (Wilson 95 % interval).
-Usage: python benchmarks/bench_ready_after_remount.py [--runs 50] [--first 0] [--seed 33] [--live]
+Prints the median and 90th percentile over the runs and the share of runs with any (Wilson 95 %
+interval). Usage: python benchmarks/bench_ready_after_remount.py [--runs 50] [--first 0] [--seed 33]
+[--live]
 """
 import argparse
 
@@ -39,8 +43,9 @@ def _axis(rng):
 
 
 def wrong_pairs(step_deg, noise_deg, rng) -> tuple[int, int]:
-    """``(pairs ready while wrong after the re-mount, pairs not ready after the first ready one before it)``; a step
-    of 0: no change (every not-ready pair after the first ready one is a false withdrawal)."""
+    """``(pairs ready while wrong after the re-mount, pairs not ready after the first ready one
+    before it)``; a step of 0: no change (every not-ready pair after the first ready one is a false
+    withdrawal)."""
     R0 = so3.random_rotations(rng, ())
     R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * _axis(rng))
     A1, B1 = pair_stream(rng, BEFORE, R0, noise_deg=noise_deg)

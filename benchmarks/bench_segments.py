@@ -1,20 +1,24 @@
-"""The segment test (replication.rig.segments) inside calibrate: one verdict at every interval, false alarms, clock
-jumps, cost.
+"""The segment test (replication.rig.segments) inside calibrate: one verdict at every interval,
+false alarms, clock jumps, cost.
 
-1. lost tracking: a synthetic rig (bench_changepoint's: camera 20 Hz, gyro 200 Hz, smooth three-axis motion) whose
-   camera frame wanders for a stretch (a random walk of WANDER_DEG per 10 s about each camera axis during the
-   first LOST_S seconds, back to the true frame at LOST_S and still afterwards: a SLAM frame lost and re-found,
-   its R0 off by a varying rotation then), calibrated at intervals 0.5, 1 and 2 s: the
-   share of seeds with the same verdict at the three intervals (Wilson 95 %), the verdicts, the share where a
-   segment is named, the angle to the true R0 with ``use="consistent"``;
-2. false alarms: rigs without a wander (bench_changepoint's CONFIGS without a gyro bias): the share where a segment
-   is named as disagreeing (a verdict reason), and where the segments' omnibus test is significant;
-3. clock jumps of several sizes half-way (JUMPS_MS), and none with samples lost (a gap, the clock unchanged):
-   detection and false alarms (replication.rig.clock.clock_segments as calibrate calls it);
+1. lost tracking: a synthetic rig (bench_changepoint's: camera 20 Hz, gyro 200 Hz, smooth three-axis
+   motion) whose camera frame wanders for a stretch (a random walk of WANDER_DEG per 10 s about each
+   camera axis during the first LOST_S seconds, back to the true frame at LOST_S and still
+   afterwards: a SLAM frame lost and re-found, its R0 off by a varying rotation then), calibrated at
+   intervals 0.5, 1 and 2 s: the share of seeds with the same verdict at the three intervals (Wilson
+   95 %), the verdicts, the share where a segment is named, the angle to the true R0 with
+   ``use="consistent"``;
+2. false alarms: rigs without a wander (bench_changepoint's CONFIGS without a gyro bias): the share
+   where a segment is named as disagreeing (a verdict reason), and where the segments' omnibus test
+   is significant;
+3. clock jumps of several sizes half-way (JUMPS_MS), and none with samples lost (a gap, the clock
+   unchanged): detection and false alarms (replication.rig.clock.clock_segments as calibrate calls
+   it);
 4. time: calibrate against the segment test alone.
 
-Run: python benchmarks/bench_segments.py [N] [BASE]     (tuning seeds: 40 0; fresh: 40 50000)
-Runs against whatever ``replication`` is importable (PYTHONPATH=/path/to/another/checkout for today's calibrate).
+Run: python benchmarks/bench_segments.py [N] [BASE]     (tuning seeds: 40 0; fresh: 40 50000) Runs
+against whatever ``replication`` is importable (PYTHONPATH=/path/to/another/checkout for today's
+calibrate).
 """
 import sys
 import time
@@ -34,7 +38,8 @@ INTERVALS = (0.5, 1.0, 2.0)
 
 
 def lost_rig(seed: int, wander_deg: float = WANDER_DEG, lost_s: float = LOST_S, seconds: float = SECONDS):
-    """bench_changepoint's rig (camera 0.05 deg, gyro 0.005 rad/s) whose camera frame wanders during [0, lost_s)."""
+    """bench_changepoint's rig (camera 0.05 deg, gyro 0.005 rad/s) whose camera frame wanders during
+    [0, lost_s)."""
     camera, gyro = rig(seed, seconds, 0.05, 0.005)
     return camera_lost(camera, np.random.default_rng(10 ** 6 + seed), wander_deg, lost_s), gyro
 

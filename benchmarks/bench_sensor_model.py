@@ -1,22 +1,27 @@
 """A raw gyro's bias and the clock's drift estimated with R0.
 
-Synthetic rigs (:func:`biased_rig`: the smooth three-axis motion of ``rig_streams``, 40 s, camera noise 0.05 deg,
-gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), over ``--runs`` seeded runs per set
-(seeds ``[SEED, set, run]``):
+Synthetic rigs (:func:`biased_rig`: the smooth three-axis motion of ``rig_streams``, 40 s, camera
+noise 0.05 deg, gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), over
+``--runs`` seeded runs per set (seeds ``[SEED, set, run]``):
 
-* bias: each axis drawn in +-0.1 rad/s, half the runs with a 3 s rest at the start; the bias error per axis (median and
-  95th percentile of its absolute value), how often each axis's 95 % interval holds the truth (3 axes per run; Wilson
-  95 % interval), how often the halves' test fires (false alarms: the bias is constant) and the reason with it, how
-  often the drift (0 here) is resolved, and R0's error with and without the bias model (``calibrate``);
-* drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's drift reason fires;
-* time: ``calibrate`` with and without the model on the same input (median of the runs of the first set);
-* scale (``--scale-runs``): the x axis reading 5 %, 1 % and 0 % high (60 s): the verdict, the ``gyro_scale`` reason,
-  R0's error and how far R0 would move with the scale left at 1 (seeds ``[SEED, 10 + set, run]``);
-* drift coverage (``--coverage-runs``): no drift, 15, 40 and 60 s: how often the drift's 95 % interval excludes 0
-  (nominal 0.05; seeds ``[SEED, 20 + set, run]``);
-* real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned into rates with the
-  issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in the shared data), against the
-  monocular ORB-SLAM3 camera: R0 with and without the model against both published calibrations.
+* bias: each axis drawn in +-0.1 rad/s, half the runs with a 3 s rest at the start; the bias error
+  per axis (median and 95th percentile of its absolute value), how often each axis's 95 % interval
+  holds the truth (3 axes per run; Wilson 95 % interval), how often the halves' test fires (false
+  alarms: the bias is constant) and the reason with it, how often the drift (0 here) is resolved,
+  and R0's error with and without the bias model (``calibrate``);
+* drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's
+  drift reason fires;
+* time: ``calibrate`` with and without the model on the same input (median of the runs of the first
+  set);
+* scale (``--scale-runs``): the x axis reading 5 %, 1 % and 0 % high (60 s): the verdict, the
+  ``gyro_scale`` reason, R0's error and how far R0 would move with the scale left at 1 (seeds
+  ``[SEED, 10 + set, run]``);
+* drift coverage (``--coverage-runs``): no drift, 15, 40 and 60 s: how often the drift's 95 %
+  interval excludes 0 (nominal 0.05; seeds ``[SEED, 20 + set, run]``);
+* real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned
+  into rates with the issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in
+  the shared data), against the monocular ORB-SLAM3 camera: R0 with and without the model against
+  both published calibrations.
 
 Usage: python benchmarks/bench_sensor_model.py [--runs 200] [--seed 3400] [--real] [--scale-runs 30]
 [--coverage-runs 150]
@@ -39,9 +44,10 @@ R0_TRUE = RIG_R0
 
 def biased_rig(seconds=40.0, *, bias=(0.0, 0.0, 0.0), offset=0.0, ppm=0.0, rest_s=0.0, camera_noise_deg=0.0,
                gyro_noise_deg_s=0.0, rng=None, phase=0.0):
-    """``(R0, camera, gyro)``: a camera at 20 Hz and a gyro at 200 Hz (one second beyond it on both sides) reading
-    ``omega + bias`` (rad/s), stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``; the rig rests for ``rest_s``
-    seconds, then starts moving over 2 s (the motion of :func:`replication.testing.rig_streams`)."""
+    """``(R0, camera, gyro)``: a camera at 20 Hz and a gyro at 200 Hz (one second beyond it on both
+    sides) reading ``omega + bias`` (rad/s), stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``;
+    the rig rests for ``rest_s`` seconds, then starts moving over 2 s (the motion of
+    :func:`replication.testing.rig_streams`)."""
 
     R0, camera, gyro, _ = rig_streams(seconds, rng=rng, camera_noise_deg=camera_noise_deg,
                                       gyro_noise_deg_s=gyro_noise_deg_s, phase=phase, offset=offset, bias=bias, ppm=ppm,

@@ -1,13 +1,13 @@
 """Per-calibration cost of the two-step method (single and batched) and of SQP, on the same data.
 
-Usage: python benchmarks/bench_solvers.py [--runs 1000] [--iterations 50]
-Prints absolute times and ratios; nothing is asserted (figures go to environment.md).
-The paper (Sec. III-A): two-step "less than 0.05 second", SQP "about 2 seconds" per calibration: a ratio over
-40 that depends on what is compared, which the paper does not say. Modes of the two-step method: the paper's
-protocol *instrumented* (a fixed count, every iterate projected and costed, as Fig. 3-4 need; target for
-1000 x 50: <= 0.25 s), *lean* (the same count, only the final estimate projected) and the default
-``iterations="auto"`` (run to the limit); SQP in each variant of ``SQP_VARIANTS`` (analytic gradients,
-finite differences, capped). The last block prints every SQP / two-step ratio.
+Usage: python benchmarks/bench_solvers.py [--runs 1000] [--iterations 50] Prints absolute times and
+ratios; nothing is asserted (figures go to environment.md). The paper (Sec. III-A): two-step "less
+than 0.05 second", SQP "about 2 seconds" per calibration: a ratio over 40 that depends on what is
+compared, which the paper does not say. Modes of the two-step method: the paper's protocol
+*instrumented* (a fixed count, every iterate projected and costed, as Fig. 3-4 need; target for 1000
+x 50: <= 0.25 s), *lean* (the same count, only the final estimate projected) and the default
+``iterations="auto"`` (run to the limit); SQP in each variant of ``SQP_VARIANTS`` (analytic
+gradients, finite differences, capped). The last block prints every SQP / two-step ratio.
 """
 import argparse
 import warnings

@@ -1,11 +1,11 @@
-"""Coverage of the station radius on static pose sets whose stations repeat: ``N`` distinct
-stations each given ``r`` times, either identical copies or re-measured with fresh noise, the share of runs whose
-error is within the stated 95 % radius with its Wilson 95 % interval; runs without a radius (a resample refused:
-the verdict says so) are counted apart. ``--old`` counts every station as distinct (the bootstrap before the
-repeats were drawn as one).
+"""Coverage of the station radius on static pose sets whose stations repeat: ``N`` distinct stations
+each given ``r`` times, either identical copies or re-measured with fresh noise, the share of runs
+whose error is within the stated 95 % radius with its Wilson 95 % interval; runs without a radius (a
+resample refused: the verdict says so) are counted apart. ``--old`` counts every station as distinct
+(the bootstrap before the repeats were drawn as one).
 
-Run: python benchmarks/bench_station_repeats.py FIRST_SEED LAST_SEED N r identical|remeasured [--old]
-(0.5 s per run at N = 8, r = 3; found on seeds 0-199, confirmed on 1000-1199.)
+Run: python benchmarks/bench_station_repeats.py FIRST_SEED LAST_SEED N r identical|remeasured
+[--old] (0.5 s per run at N = 8, r = 3; found on seeds 0-199, confirmed on 1000-1199.)
 """
 import sys
 import warnings

@@ -1,5 +1,6 @@
-"""Sphinx configuration of the book (``bash scripts/docs``): the executed notebooks as stored (never re-executed), the
-claims ledger, the guides, the API reference and the report schema; warnings are errors (scripts/book.py)."""
+"""Sphinx configuration of the book (``bash scripts/docs``): the executed notebooks as stored (never
+re-executed), the claims ledger, the guides, the API reference and the report schema; warnings are
+errors (scripts/book.py)."""
 import sys
 from pathlib import Path
 
@@ -12,12 +13,14 @@ copyright = "the replication project"
 extensions = ["myst_nb", "sphinx.ext.autodoc", "sphinx.ext.napoleon"]
 exclude_patterns = ["_build", "**.ipynb_checkpoints"]
 
-# the notebooks are rendered from their stored outputs; a notebook with an error output fails the build
+# the notebooks are rendered from their stored outputs; a notebook with an error output fails the
+# build
 nb_execution_mode = "off"
 nb_execution_raise_on_error = True
-# the claim records' own output type (application/vnd.replication.claim+json, read by `claims`) is shown as the
-# text/plain line stored beside it; MyST-NB parses every type of a bundle before choosing one and warns about a type
-# it has no renderer for: that warning only (the notebooks hold no other unknown type: tests/study/test_book.py checks)
+# the claim records' own output type (application/vnd.replication.claim+json, read by `claims`) is
+# shown as the text/plain line stored beside it; MyST-NB parses every type of a bundle before
+# choosing one and warns about a type it has no renderer for: that warning only (the notebooks hold
+# no other unknown type: tests/study/test_book.py checks)
 nb_mime_priority_overrides = [("html", "application/vnd.replication.claim+json", None)]
 suppress_warnings = ["mystnb.unknown_mime_type"]
 myst_heading_anchors = 6

@@ -1,10 +1,11 @@
-"""Replication suite for Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment Calibration".
+"""Replication suite for Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment
+Calibration".
 
-Three rooms (the book's "Layout", ``docs/layout.md``): :mod:`replication.core` (rotations, the hand-eye operator,
-the solvers), :mod:`replication.rig` (calibrating a real rig: streams, loaders, ``calibrate``, its verdict, report
-and online estimator) and :mod:`replication.study` (the paper's replication, one support module per notebook). The
-public names below are the package's API; each is loaded on first use, so ``import replication`` stays light.
-Conventions: ``docs/conventions.md``.
+Three rooms (the book's "Layout", ``docs/layout.md``): :mod:`replication.core` (rotations, the
+hand-eye operator, the solvers), :mod:`replication.rig` (calibrating a real rig: streams, loaders,
+``calibrate``, its verdict, report and online estimator) and :mod:`replication.study` (the paper's
+replication, one support module per notebook). The public names below are the package's API; each is
+loaded on first use, so ``import replication`` stays light. Conventions: ``docs/conventions.md``.
 
 >>> from replication import calibrate, solve
 >>> callable(calibrate) and callable(solve)

@@ -1,11 +1,13 @@
-"""Files written and read by the command line: atomic writes, figure formats, and the checks made before any work.
+"""Files written and read by the command line: atomic writes, figure formats, and the checks made
+before any work.
 
-Every output of this package is written whole or not at all (:func:`write_atomic`), under a temporary name that
-never replaces an existing file. Before a command does any work it checks its paths: every output against every
-input and every other output (:func:`check_clashes`: the same file after resolving links, or a hard link), each
-input (:func:`check_input`: a regular file or a pipe, readable), each output (:func:`prepare_output`,
-:func:`prepare_folder`: folders created, writable). Their problems are ``ValueError`` s whose message names the
-option, the path and the operating system's reason.
+Every output of this package is written whole or not at all (:func:`write_atomic`), under a
+temporary name that never replaces an existing file. Before a command does any work it checks its
+paths: every output against every input and every other output (:func:`check_clashes`: the same file
+after resolving links, or a hard link), each input (:func:`check_input`: a regular file or a pipe,
+readable), each output (:func:`prepare_output`, :func:`prepare_folder`: folders created, writable).
+Their problems are ``ValueError`` s whose message names the option, the path and the operating
+system's reason.
 """
 from __future__ import annotations
 
@@ -17,23 +19,28 @@ from pathlib import Path
 __all__ = ["PROJECT_ROOT", "write_atomic", "png_bytes", "figure_bytes", "figure_format", "FIGURE_FORMATS", "os_reason",
            "same_file", "check_clashes", "check_not_standard_stream", "check_input", "prepare_output", "prepare_folder"]
 
-#: The project folder (the one holding ``replication/``, ``data/`` and ``notebooks/``): every default path starts here.
+#: The project folder (the one holding ``replication/``, ``data/`` and ``notebooks/``): every
+#: default path starts here.
 PROJECT_ROOT = Path(__file__).resolve().parent.parent
 
-#: Figure formats :func:`figure_bytes` writes, by file extension (matplotlib's ``savefig(format=...)``).
+#: Figure formats :func:`figure_bytes` writes, by file extension (matplotlib's
+#: ``savefig(format=...)``).
 FIGURE_FORMATS = ("png", "pdf", "svg")
-#: Metadata left out of each format (a creation date or a software version would make the bytes vary).
+#: Metadata left out of each format (a creation date or a software version would make the bytes
+#: vary).
 _NO_METADATA = {"png": {"Software": None}, "pdf": {"Creator": None, "Producer": None, "CreationDate": None},
                 "svg": {"Creator": None, "Date": None}}
 
 
 def os_reason(err: OSError) -> str:
-    """The operating system's reason for ``err`` ("Permission denied", "No space left on device", ...)."""
+    """The operating system's reason for ``err`` ("Permission denied", "No space left on device",
+    ...)."""
     return err.strerror or str(err)
 
 
 def _temporary_sibling(path: Path):
-    """Create an empty file next to ``path`` under a fresh name (never an existing file); ``(name, fd)``."""
+    """Create an empty file next to ``path`` under a fresh name (never an existing file); ``(name,
+    fd)``."""
     for _ in range(100):
         tmp = path.with_name(f"{path.name}.{secrets.token_hex(4)}.part")
         try:
@@ -46,9 +53,10 @@ def _temporary_sibling(path: Path):
 def write_atomic(path, data: bytes | str) -> None:
     """Write ``data`` (``str`` as UTF-8) to ``path`` through a temporary file and an atomic rename.
 
-    A reader never sees a half-written file, and an interrupted write leaves the old file (or none) in place. The
-    temporary file has a fresh name (``<name>.<random>.part``, created exclusively): it never overwrites another
-    file. Raises ``OSError`` (the folder is not writable, the disk is full, ...) with nothing left behind.
+    A reader never sees a half-written file, and an interrupted write leaves the old file (or none)
+    in place. The temporary file has a fresh name (``<name>.<random>.part``, created exclusively):
+    it never overwrites another file. Raises ``OSError`` (the folder is not writable, the disk is
+    full, ...) with nothing left behind.
     """
     path = Path(path)
     if isinstance(data, str):
@@ -66,8 +74,8 @@ def write_atomic(path, data: bytes | str) -> None:
 
 
 def figure_format(path) -> str:
-    """The figure format named by ``path``'s extension (``png``, ``pdf``, ``svg``, any case); a ``ValueError``
-    naming the supported ones otherwise."""
+    """The figure format named by ``path``'s extension (``png``, ``pdf``, ``svg``, any case); a
+    ``ValueError`` naming the supported ones otherwise."""
     suffix = Path(path).suffix.lower().lstrip(".")
     if suffix not in FIGURE_FORMATS:
         raise ValueError(f"{path}: unknown figure format {('.' + suffix) if suffix else '(no extension)'}; "
@@ -76,8 +84,8 @@ def figure_format(path) -> str:
 
 
 def figure_bytes(fig, fmt: str = "png", dpi=None) -> bytes:
-    """A matplotlib figure in ``fmt`` (:data:`FIGURE_FORMATS`), cropped to its content, without a software tag or
-    creation date."""
+    """A matplotlib figure in ``fmt`` (:data:`FIGURE_FORMATS`), cropped to its content, without a
+    software tag or creation date."""
     import io
 
     if fmt not in FIGURE_FORMATS:
@@ -89,15 +97,17 @@ def figure_bytes(fig, fmt: str = "png", dpi=None) -> bytes:
 
 
 def png_bytes(fig, dpi=None) -> bytes:
-    """A matplotlib figure as PNG bytes, cropped to its content, without the (version-dependent) software tag."""
+    """A matplotlib figure as PNG bytes, cropped to its content, without the (version-dependent)
+    software tag."""
     return figure_bytes(fig, "png", dpi)
 
 
-# ----------------------------------------------------------------------------- checks before any work
+# ----------------------------------------------------------------------------- checks before any
+# work
 
 def same_file(a, b) -> bool:
-    """Whether two paths name one file: equal after resolving links (``os.path.realpath``), or, where both exist,
-    the same inode (``os.path.samefile``: hard links)."""
+    """Whether two paths name one file: equal after resolving links (``os.path.realpath``), or,
+    where both exist, the same inode (``os.path.samefile``: hard links)."""
     try:
         if os.path.realpath(a) == os.path.realpath(b):
             return True
@@ -110,10 +120,11 @@ def same_file(a, b) -> bool:
 
 
 def check_clashes(outputs: dict, inputs: dict) -> None:
-    """Refuse an output that is one of the inputs or another output (``{option: path}``; ``None`` paths skipped).
+    """Refuse an output that is one of the inputs or another output (``{option: path}``; ``None``
+    paths skipped).
 
-    Raises ``ValueError``: ``"--out is the --camera input file: cam.txt"``, ``"--plot and --out are the same file:
-    r.json"``.
+    Raises ``ValueError``: ``"--out is the --camera input file: cam.txt"``, ``"--plot and --out are
+    the same file: r.json"``.
     """
     outs = [(k, v) for k, v in outputs.items() if v is not None]
     ins = [(k, v) for k, v in inputs.items() if v is not None]
@@ -139,8 +150,8 @@ def check_clashes(outputs: dict, inputs: dict) -> None:
 
 
 def check_not_standard_stream(path, what: str) -> None:
-    """Refuse an output that is this process's standard output or error (``/dev/stdout`` redirected to a file):
-    replacing it would drop what the command prints."""
+    """Refuse an output that is this process's standard output or error (``/dev/stdout`` redirected
+    to a file): replacing it would drop what the command prints."""
     try:
         st = os.stat(path)
     except (OSError, ValueError):
@@ -155,10 +166,11 @@ def check_not_standard_stream(path, what: str) -> None:
 
 
 def check_input(path, what: str) -> str:
-    """Check an input before any work: ``"file"`` (a regular, readable file) or ``"pipe"`` (a FIFO: read it once).
+    """Check an input before any work: ``"file"`` (a regular, readable file) or ``"pipe"`` (a FIFO:
+    read it once).
 
-    Raises ``ValueError`` naming ``what`` (the option), the path and the reason: missing, a directory, another
-    special file (a device or a socket), unreadable.
+    Raises ``ValueError`` naming ``what`` (the option), the path and the reason: missing, a
+    directory, another special file (a device or a socket), unreadable.
     """
     try:
         st = os.stat(path)
@@ -193,7 +205,8 @@ def _resolved(path, what: str) -> Path:
 
 
 def _probe(folder: Path, what: str, shown) -> None:
-    """Create and remove an empty file in ``folder``: a ``ValueError`` with the reason if that fails."""
+    """Create and remove an empty file in ``folder``: a ``ValueError`` with the reason if that
+    fails."""
     try:
         tmp, fd = _temporary_sibling(folder / ".write-probe")
         os.close(fd)
@@ -203,11 +216,13 @@ def _probe(folder: Path, what: str, shown) -> None:
 
 
 def prepare_output(path, what: str) -> Path:
-    """Check an output file before any work: create its folders and check that a file can be written there.
+    """Check an output file before any work: create its folders and check that a file can be written
+    there.
 
-    Refused (``ValueError`` naming ``what``, the path and the reason): an empty path, a name ending in a slash, a
-    directory, an existing file that is not a regular file (a pipe or a device), this process's standard output or
-    error, a folder that cannot be created or written. Returns the resolved path.
+    Refused (``ValueError`` naming ``what``, the path and the reason): an empty path, a name ending
+    in a slash, a directory, an existing file that is not a regular file (a pipe or a device), this
+    process's standard output or error, a folder that cannot be created or written. Returns the
+    resolved path.
     """
     text = str(path)
     if text.strip() and text.endswith(("/", os.sep)):
@@ -234,10 +249,11 @@ def prepare_output(path, what: str) -> Path:
 
 
 def prepare_folder(path, what: str) -> Path:
-    """Check an output folder before any work: create it (and its parents) and check that it can be written in.
+    """Check an output folder before any work: create it (and its parents) and check that it can be
+    written in.
 
-    Refused (``ValueError`` naming ``what``, the path and the reason): an empty path, an existing file, a folder
-    that cannot be created or written. Returns the resolved path.
+    Refused (``ValueError`` naming ``what``, the path and the reason): an empty path, an existing
+    file, a folder that cannot be created or written. Returns the resolved path.
     """
     resolved = _resolved(path, what)
     try:

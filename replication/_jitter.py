@@ -1,5 +1,5 @@
-"""Last-bit jitter of every generated and loaded input, for the portability re-runs. Theory and measured numbers:
-``docs/reading.md``, section ``replication._jitter``."""
+"""Last-bit jitter of every generated and loaded input, for the portability re-runs. Theory and
+measured numbers: ``docs/reading.md``, section ``replication._jitter``."""
 import json
 import os
 import zlib
@@ -11,16 +11,17 @@ DEFAULT_SCALE = 1e-15
 MARGIN_ENV = "REPLICATION_MARGIN_SCALE"
 GUARD_LOG_ENV = "REPLICATION_GUARD_LOG"
 _ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-#: numpy's SIMD dispatch limited to AVX2 (an AVX-512 machine computes as one without it), or to the SSE4.2 baseline.
+#: numpy's SIMD dispatch limited to AVX2 (an AVX-512 machine computes as one without it), or to the
+#: SSE4.2 baseline.
 AVX2 = "X86_V4 AVX512_ICL AVX512_SPR"
 SSE42 = "X86_V3 " + AVX2
-#: The machines the stored notebook outputs must hold on, as environments: last-bit jitter of the inputs (each
-#: variant its own draw), numpy's dispatch limited, OpenBLAS forced to another CPU's kernels, one thread. ``margin``
-#: jitters at 1e-13 (100 times the last-bit jitter, a few hundred units in the last place: an output it moves sits
-#: near a rounding edge; 1e-11 broke the notebooks' 1e-12 checks of exact identities) and doubles every
-#: guard's margin (:func:`margin_scale`: what passes there has room for a machine's spread). The README's test
-#: command re-runs the notebooks under ``avx2`` (``tests/notebooks/test_portability_*.py``); ``scripts/spread.py``
-#: under all.
+#: The machines the stored notebook outputs must hold on, as environments: last-bit jitter of the
+#: inputs (each variant its own draw), numpy's dispatch limited, OpenBLAS forced to another CPU's
+#: kernels, one thread. ``margin`` jitters at 1e-13 (100 times the last-bit jitter, a few hundred
+#: units in the last place: an output it moves sits near a rounding edge; 1e-11 broke the notebooks'
+#: 1e-12 checks of exact identities) and doubles every guard's margin (:func:`margin_scale`: what
+#: passes there has room for a machine's spread). The README's test command re-runs the notebooks
+#: under ``avx2`` (``tests/notebooks/test_portability_*.py``); ``scripts/spread.py`` under all.
 VARIANTS = {
     "jitter": {ENV: "1"},
     "avx2": {ENV: "2", "NPY_DISABLE_CPU_FEATURES": AVX2, "OPENBLAS_CORETYPE": "Haswell", **_ONE_THREAD},
@@ -28,15 +29,17 @@ VARIANTS = {
     "skylakex": {ENV: "4", "OPENBLAS_CORETYPE": "SkylakeX"},
     "margin": {ENV: "5:1e-13", MARGIN_ENV: "2", "NPY_DISABLE_CPU_FEATURES": AVX2, "OPENBLAS_CORETYPE": "Zen"},
 }
-#: The variants that model another machine (the spread); ``margin`` measures the distance to a rounding edge.
+#: The variants that model another machine (the spread); ``margin`` measures the distance to a
+#: rounding edge.
 LAST_BIT = ("jitter", "avx2", "sse42", "skylakex")
 
 
 def margin_scale() -> float:
-    """The factor (``REPLICATION_MARGIN_SCALE``, default 1) by which every guard of a rounding edge multiplies its
-    margin (:func:`replication.core.stats.declared_bound`, ``bracket``, ``share_range``). ``scripts/spread.py`` runs
-    one variant at 2: an output that passes there sits at least twice its margin inside its bound, so a machine that
-    moves it by less than the margin prints the same text and passes the guard at 1."""
+    """The factor (``REPLICATION_MARGIN_SCALE``, default 1) by which every guard of a rounding edge
+    multiplies its margin (:func:`replication.core.stats.declared_bound`, ``bracket``,
+    ``share_range``). ``scripts/spread.py`` runs one variant at 2: an output that passes there sits
+    at least twice its margin inside its bound, so a machine that moves it by less than the margin
+    prints the same text and passes the guard at 1."""
     text = os.environ.get(MARGIN_ENV, "").strip()
     try:
         scale = float(text) if text else 1.0
@@ -48,9 +51,10 @@ def margin_scale() -> float:
 
 
 def guard_failed(record: dict) -> bool:
-    """Whether a guard of a rounding edge that does not hold should raise: yes, unless ``REPLICATION_GUARD_LOG`` names
-    a file, to which the record (what, value, bound, margin) is then appended as a JSON line, so that one run of a
-    notebook lists every guard that does not hold (``scripts/spread.py`` reads them)."""
+    """Whether a guard of a rounding edge that does not hold should raise: yes, unless
+    ``REPLICATION_GUARD_LOG`` names a file, to which the record (what, value, bound, margin) is then
+    appended as a JSON line, so that one run of a notebook lists every guard that does not hold
+    (``scripts/spread.py`` reads them)."""
     path = os.environ.get(GUARD_LOG_ENV, "").strip()
     if not path:
         return True
@@ -82,10 +86,11 @@ def jitter_setting(value: str | None = None) -> tuple[int, float] | None:
 
 
 def jitter(x, setting: tuple[int, float] | None = None):
-    """``x`` with every float entry moved by a relative ``scale * u``, ``|u| <= 1``; ``x`` itself when jitter is off.
+    """``x`` with every float entry moved by a relative ``scale * u``, ``|u| <= 1``; ``x`` itself
+    when jitter is off.
 
-    Integer, boolean and non-array inputs are returned unchanged. ``setting``: ``(seed, scale)``, by default read from
-    ``REPLICATION_JITTER`` on every call.
+    Integer, boolean and non-array inputs are returned unchanged. ``setting``: ``(seed, scale)``, by
+    default read from ``REPLICATION_JITTER`` on every call.
     """
     setting = jitter_setting() if setting is None else setting
     if setting is None or not isinstance(x, np.ndarray) or not np.issubdtype(x.dtype, np.floating) or x.size == 0:

@@ -1,6 +1,6 @@
-"""Testing helpers shared by the test suite, the benchmarks and the online studies (and usable in a user's own
-tests): the synthetic rig (:func:`rig_streams`, its mounting :data:`RIG_R0`), a rotation comparison that names the
-worst index, and the writers of the file formats ``calibrate`` reads."""
+"""Testing helpers shared by the test suite, the benchmarks and the online studies (and usable in a
+user's own tests): the synthetic rig (:func:`rig_streams`, its mounting :data:`RIG_R0`), a rotation
+comparison that names the worst index, and the writers of the file formats ``calibrate`` reads."""
 from __future__ import annotations
 
 import numpy as np
@@ -18,17 +18,17 @@ __all__ = ["RIG_R0", "rig_motion", "rig_streams", "noisy_rig", "rig_pairs", "cam
            "samples_lost", "clock_stepped", "clock_drifting", "camera_clock_jumped", "assert_rotations_close",
            "write_tum_trajectory", "write_euroc_imu"]
 
-#: The synthetic rig's ``camera_from_sensor``: 40, -70, 125 deg as a rotation vector's components (a generic mounting,
-#: about 150 deg).
+#: The synthetic rig's ``camera_from_sensor``: 40, -70, 125 deg as a rotation vector's components (a
+#: generic mounting, about 150 deg).
 RIG_R0 = matrix_from_rotation_vector(np.radians([40.0, -70.0, 125.0]))
 
 
 def rig_motion(t, phase=0.0, rest_s: float = 0.0):
-    """The synthetic rig's ``world_from_camera`` at times ``t`` (s): smooth turns about all three axes, rotation-vector
-    components ``0.9 sin(0.7 t + p0)``, ``0.8 sin(0.45 t + 1 + p1)``, ``0.7 cos(0.3 t + p2)`` (angles up to 0.9 rad,
-    periods of 9-21 s); ``phase`` (a number or one per component) shifts the motion (another trajectory). With
-    ``rest_s``, the rig rests until ``rest_s`` and starts moving over the next 2 s (a smoothstep on the rotation
-    vector)."""
+    """The synthetic rig's ``world_from_camera`` at times ``t`` (s): smooth turns about all three
+    axes, rotation-vector components ``0.9 sin(0.7 t + p0)``, ``0.8 sin(0.45 t + 1 + p1)``, ``0.7
+    cos(0.3 t + p2)`` (angles up to 0.9 rad, periods of 9-21 s); ``phase`` (a number or one per
+    component) shifts the motion (another trajectory). With ``rest_s``, the rig rests until
+    ``rest_s`` and starts moving over the next 2 s (a smoothstep on the rotation vector)."""
     t = np.asarray(t, dtype=float)
     p = np.broadcast_to(np.asarray(phase, dtype=float), (3,))
     w = np.stack([0.9 * np.sin(0.7 * t + p[0]), 0.8 * np.sin(0.45 * t + 1.0 + p[1]), 0.7 * np.cos(0.3 * t + p[2])],
@@ -42,8 +42,9 @@ def rig_motion(t, phase=0.0, rest_s: float = 0.0):
 def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | None = None,
                 camera_noise_deg=0.0, gyro_noise_deg_s=0.0, phase=0.0, offset: float = 0.0,
                 sensor_step: int = 2, remount=None, bias=None, ppm: float = 0.0, rest_s: float = 0.0):
-    """A synthetic rig's streams: a camera at 20 Hz and, rigidly attached (``v_cam = R0 v_sensor``), a gyro at
-    200 Hz and an orientation sensor at ``200 / sensor_step`` Hz, moving as :func:`rig_motion`.
+    """A synthetic rig's streams: a camera at 20 Hz and, rigidly attached (``v_cam = R0 v_sensor``),
+    a gyro at 200 Hz and an orientation sensor at ``200 / sensor_step`` Hz, moving as
+    :func:`rig_motion`.
 
     Parameters
     ----------
@@ -52,28 +53,31 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
     R0 : (3, 3), optional
         ``camera_from_sensor`` (default :data:`RIG_R0`).
     rng : numpy.random.Generator, optional
-        Needed for noise: isotropic Gaussian rotation-vector noise of RMS ``camera_noise_deg`` on each camera
-        orientation (drawn first), and white noise of RMS ``gyro_noise_deg_s`` (deg/s, per axis) on each gyro sample.
+        Needed for noise: isotropic Gaussian rotation-vector noise of RMS ``camera_noise_deg`` on
+        each camera orientation (drawn first), and white noise of RMS ``gyro_noise_deg_s`` (deg/s,
+        per axis) on each gyro sample.
     camera_noise_deg, gyro_noise_deg_s : float or callable
-        A callable is a caller's own draws: called with a shape ``(n, 3)``, camera first, it returns the rotation
-        vectors (rad) applied on the right of each camera orientation, or the rates (rad/s) added to each gyro sample.
+        A callable is a caller's own draws: called with a shape ``(n, 3)``, camera first, it returns
+        the rotation vectors (rad) applied on the right of each camera orientation, or the rates
+        (rad/s) added to each gyro sample.
     phase : float or (3,)
         Shifts the motion (:func:`rig_motion`).
     offset : float
-        The sensor's clock reads ``offset`` s ahead of the camera's: the gyro and orientation samples of camera time
-        ``t`` are stamped ``t + offset``.
+        The sensor's clock reads ``offset`` s ahead of the camera's: the gyro and orientation
+        samples of camera time ``t`` are stamped ``t + offset``.
     sensor_step : int
         The orientation sensor keeps every ``sensor_step``-th sample of the 200 Hz grid.
     bias : (3,), optional
         A constant gyro bias (rad/s) added to every rate (before the noise).
     ppm : float
-        The gyro's clock runs fast by ``ppm`` parts per million about the middle of the recording: its sample of
-        camera time ``t`` is stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``.
+        The gyro's clock runs fast by ``ppm`` parts per million about the middle of the recording:
+        its sample of camera time ``t`` is stamped ``t + offset + ppm 1e-6 (t - seconds / 2)``.
     rest_s : float
         The rig rests until ``rest_s`` (s), then starts moving over 2 s (:func:`rig_motion`).
     remount : (float, (3, 3)), optional
-        ``(time, R)``: the sensor is re-mounted ``R`` further from ``time`` (s, on the sensor's clock) on
-        (:func:`replication.rig.changepoint.remounted`, applied to the gyro and the orientation sensor).
+        ``(time, R)``: the sensor is re-mounted ``R`` further from ``time`` (s, on the sensor's
+        clock) on (:func:`replication.rig.changepoint.remounted`, applied to the gyro and the
+        orientation sensor).
 
     Returns
     -------
@@ -118,13 +122,14 @@ def rig_streams(seconds: float = 60.0, *, R0=None, rng: np.random.Generator | No
 
 def noisy_rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias_rad_s: float = 0.0, remount=None,
               drift_deg: float = 0.0):
-    """``(camera, gyro)`` of :func:`rig_streams` as the change and segment tests draw it from ``seed``: the motion's
-    phases uniform per component, then noise of ``cam_deg`` (deg) per axis on each camera orientation and
-    ``gyro_rad_s`` (rad/s) per axis on each gyro sample, and a constant gyro bias of ``bias_rad_s`` (rad/s) in a random
-    direction.
+    """``(camera, gyro)`` of :func:`rig_streams` as the change and segment tests draw it from
+    ``seed``: the motion's phases uniform per component, then noise of ``cam_deg`` (deg) per axis on
+    each camera orientation and ``gyro_rad_s`` (rad/s) per axis on each gyro sample, and a constant
+    gyro bias of ``bias_rad_s`` (rad/s) in a random direction.
 
-    ``drift_deg``: the camera frame also wanders (a random walk of ``drift_deg`` per 10 s per axis, as a SLAM
-    trajectory's error may); ``remount = (t, R)``: the gyro is re-mounted ``R`` further at ``t``."""
+    ``drift_deg``: the camera frame also wanders (a random walk of ``drift_deg`` per 10 s per axis,
+    as a SLAM trajectory's error may); ``remount = (t, R)``: the gyro is re-mounted ``R`` further at
+    ``t``."""
     from .rig.streams import OrientationStream
 
     rng = np.random.default_rng(seed)
@@ -142,8 +147,8 @@ def noisy_rig(seed: int, seconds: float, cam_deg: float, gyro_rad_s: float, bias
 
 
 def rig_pairs(camera, gyro, interval: float = 1.0):
-    """``(A, B, t, block)``: pairs as ``calibrate`` forms them (the gyro integrated, the clock offset estimated and
-    removed; no gaps) and the camera frames per interval."""
+    """``(A, B, t, block)``: pairs as ``calibrate`` forms them (the gyro integrated, the clock
+    offset estimated and removed; no gaps) and the camera frames per interval."""
     from .rig.association import estimate_time_offset, motion_pairs
     from .rig.streams import integrate_gyro
 
@@ -154,8 +159,9 @@ def rig_pairs(camera, gyro, interval: float = 1.0):
 
 
 def camera_lost(camera, rng: np.random.Generator, wander_deg: float, lost_s: float):
-    """``camera`` whose frame wanders during ``[0, lost_s)``: a random walk of ``wander_deg`` per 10 s about each
-    camera axis, bridged back to the true frame at ``lost_s`` (a SLAM frame lost and re-found)."""
+    """``camera`` whose frame wanders during ``[0, lost_s)``: a random walk of ``wander_deg`` per 10
+    s about each camera axis, bridged back to the true frame at ``lost_s`` (a SLAM frame lost and
+    re-found)."""
     from .rig.streams import OrientationStream
 
     t = camera.t
@@ -167,7 +173,8 @@ def camera_lost(camera, rng: np.random.Generator, wander_deg: float, lost_s: flo
 
 
 def clock_jumped(gyro, at: float, size: float):
-    """``gyro`` whose clock jumps ahead by ``size`` s at ``at`` (its stamps from then on read ``size`` later)."""
+    """``gyro`` whose clock jumps ahead by ``size`` s at ``at`` (its stamps from then on read
+    ``size`` later)."""
     from .rig.streams import GyroStream
 
     t = np.where(gyro.t >= at, gyro.t + size, gyro.t)
@@ -175,7 +182,8 @@ def clock_jumped(gyro, at: float, size: float):
 
 
 def samples_lost(gyro, at: float, count: int):
-    """``gyro`` with ``count`` samples lost from ``at`` on (a gap in the stamps, the clock unchanged)."""
+    """``gyro`` with ``count`` samples lost from ``at`` on (a gap in the stamps, the clock
+    unchanged)."""
     from .rig.streams import GyroStream
 
     k = np.searchsorted(gyro.t, at)
@@ -185,8 +193,8 @@ def samples_lost(gyro, at: float, count: int):
 
 
 def clock_stepped(gyro, at: float, count: int):
-    """``gyro`` losing ``count`` samples at ``at`` while its stamps run on evenly: its clock steps back by ``count``
-    sample intervals there, with no skip in the stamps to show it."""
+    """``gyro`` losing ``count`` samples at ``at`` while its stamps run on evenly: its clock steps
+    back by ``count`` sample intervals there, with no skip in the stamps to show it."""
     from .rig.streams import GyroStream
 
     i = int(np.searchsorted(gyro.t, at))
@@ -195,7 +203,8 @@ def clock_stepped(gyro, at: float, count: int):
 
 
 def clock_drifting(gyro, ppm: float, mid: float):
-    """``gyro`` whose clock runs ``ppm`` parts per million fast, agreeing with the camera's at ``mid`` (s)."""
+    """``gyro`` whose clock runs ``ppm`` parts per million fast, agreeing with the camera's at
+    ``mid`` (s)."""
     from .rig.streams import GyroStream
 
     return GyroStream(gyro.t + ppm * 1e-6 * (gyro.t - mid), gyro.omega, gyro.source)
@@ -228,15 +237,15 @@ def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> Non
 
 
 def write_tum_trajectory(path, stream) -> None:
-    """Write an orientation stream (``t`` in s, ``R`` world_from_body) as a TUM trajectory (zero positions, quaternion
-    x y z w), as ``calibrate --camera`` reads it."""
+    """Write an orientation stream (``t`` in s, ``R`` world_from_body) as a TUM trajectory (zero
+    positions, quaternion x y z w), as ``calibrate --camera`` reads it."""
     q = quaternion_from_matrix(stream.R)
     rows = np.column_stack([stream.t, np.zeros((len(stream.t), 3)), q[:, 1:], q[:, :1]])
     np.savetxt(path, rows, fmt="%.9f")
 
 
 def write_euroc_imu(path, gyro) -> None:
-    """Write a gyro stream (``t`` in s, ``omega`` in rad/s) as an EuRoC ``imu0/data.csv`` (ns stamps, a constant
-    accelerometer), as ``calibrate --sensor ... --sensor-kind gyro`` reads it."""
+    """Write a gyro stream (``t`` in s, ``omega`` in rad/s) as an EuRoC ``imu0/data.csv`` (ns
+    stamps, a constant accelerometer), as ``calibrate --sensor ... --sensor-kind gyro`` reads it."""
     rows = np.column_stack([np.round(gyro.t * 1e9), gyro.omega, np.tile([0.0, 0.0, 9.81], (len(gyro.t), 1))])
     np.savetxt(path, rows, fmt=["%d"] + ["%.9f"] * 6, delimiter=",", header="timestamp,w,w,w,a,a,a")

@@ -1,6 +1,7 @@
-"""Build the book (``bash scripts/docs``): stage its source in docs/_build/source (replication.study.book.stage:
-the pages of docs/, the generated blocks, the executed notebooks as stored) and render it with Sphinx and MyST-NB
-into docs/_build/html, warnings as errors. Exit status: Sphinx's (0 built); 2 when the source cannot be staged."""
+"""Build the book (``bash scripts/docs``): stage its source in docs/_build/source
+(replication.study.book.stage: the pages of docs/, the generated blocks, the executed notebooks as
+stored) and render it with Sphinx and MyST-NB into docs/_build/html, warnings as errors. Exit
+status: Sphinx's (0 built); 2 when the source cannot be staged."""
 import sys
 from pathlib import Path
 

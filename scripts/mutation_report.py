@@ -1,10 +1,12 @@
-"""Score of a mutmut run (``scripts/mutation``) per judging module and overall, and its surviving mutants.
+"""Score of a mutmut run (``scripts/mutation``) per judging module and overall, and its surviving
+mutants.
 
-Reads ``mutants/**/*.meta`` (mutmut 3's results) and prints, for the mutants that ``scripts/mutation`` runs
-(:data:`TARGETS`), one row per module: killed / tested, with timeouts, suspicious and untested mutants counted
-separately, then every survivor as ``module:line  - original / + mutant``. Survivors listed in
-``docs/mutation_survivors.md`` as equivalent are marked ``[equivalent]`` and the score is given both over all
-mutants and over the non-equivalent ones. Run with the mutation venv's python from the project root.
+Reads ``mutants/**/*.meta`` (mutmut 3's results) and prints, for the mutants that
+``scripts/mutation`` runs (:data:`TARGETS`), one row per module: killed / tested, with timeouts,
+suspicious and untested mutants counted separately, then every survivor as ``module:line  - original
+/ + mutant``. Survivors listed in ``docs/mutation_survivors.md`` as equivalent are marked
+``[equivalent]`` and the score is given both over all mutants and over the non-equivalent ones. Run
+with the mutation venv's python from the project root.
 """
 from __future__ import annotations
 
@@ -18,8 +20,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-#: The mutants scripts/mutation runs: every function of the judging modules; in _registry.py and checks.py only the
-#: answer checks and the atol / rotation checks.
+#: The mutants scripts/mutation runs: every function of the judging modules; in _registry.py and
+#: checks.py only the answer checks and the atol / rotation checks.
 TARGETS = [
     "replication.rig.quality.*", "replication.rig.diagnose.*", "replication.rig.online.*",
     "replication.rig.online_events.*", "replication.rig.live.*", "replication.study.ledger.*",
@@ -43,7 +45,8 @@ def targeted(key: str) -> bool:
 
 
 def equivalent_ids() -> set[str]:
-    """Mutant ids declared equivalent in docs/mutation_survivors.md (the first column of its tables)."""
+    """Mutant ids declared equivalent in docs/mutation_survivors.md (the first column of its
+    tables)."""
     doc = ROOT / "docs" / "mutation_survivors.md"
     if not doc.exists():
         return set()
@@ -91,7 +94,8 @@ def describe(key: str, path: Path, source: str) -> tuple[int, str, str]:
 
 
 def rerun_names() -> list[str]:
-    """The target mutants of the last run that were not killed (survivors, untested, timeouts, suspicious, not run)."""
+    """The target mutants of the last run that were not killed (survivors, untested, timeouts,
+    suspicious, not run)."""
     names = []
     for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
         for key, code in json.loads(meta.read_text())["exit_code_by_key"].items():
@@ -133,7 +137,8 @@ def main() -> int:
         total.update(counts[module])
     for module, c in sorted(counts.items()) + [("OVERALL", total)]:
         n = sum(c.values())
-        # killed over everything run (timeouts, suspicious, no tests count against it); non-eq: equivalents left out
+        # killed over everything run (timeouts, suspicious, no tests count against it); non-eq:
+        # equivalents left out
         score = c["killed"] / n if n else float("nan")
         nonequiv = c["killed"] / (n - c["equivalent"]) if n > c["equivalent"] else float("nan")
         print(f"{module:36} {n:>6} " + " ".join(f"{c[k]:>11}" for k in cols) + f" {score:>7.1%} {nonequiv:>7.1%}")

@@ -1,31 +1,35 @@
-"""Which stored notebook outputs can another machine's rounding change? Re-execute, compare, report per number.
+"""Which stored notebook outputs can another machine's rounding change? Re-execute, compare, report
+per number.
 
-Every numbered notebook (or those named) is executed once per *variant* of the machine: its inputs jittered at the
-last bits (``REPLICATION_JITTER``, ``replication/_jitter.py``), numpy's SIMD dispatch limited
-(``NPY_DISABLE_CPU_FEATURES``: AVX2 or the SSE4.2 baseline on an AVX-512 machine), OpenBLAS forced to another CPU's
-kernels (``OPENBLAS_CORETYPE``) with one thread, and a *margin* variant whose jitter is 1e-13 (100 times the
-last-bit one). Every output strict nbval compares (text, HTML, streams, the ledger's records; not images, not cells
-marked ``NBVAL_IGNORE_OUTPUT``) is split into its numbers and the text between them, and compared with the stored
-one, number by number.
+Every numbered notebook (or those named) is executed once per *variant* of the machine: its inputs
+jittered at the last bits (``REPLICATION_JITTER``, ``replication/_jitter.py``), numpy's SIMD
+dispatch limited (``NPY_DISABLE_CPU_FEATURES``: AVX2 or the SSE4.2 baseline on an AVX-512 machine),
+OpenBLAS forced to another CPU's kernels (``OPENBLAS_CORETYPE``) with one thread, and a *margin*
+variant whose jitter is 1e-13 (100 times the last-bit one). Every output strict nbval compares
+(text, HTML, streams, the ledger's records; not images, not cells marked ``NBVAL_IGNORE_OUTPUT``) is
+split into its numbers and the text between them, and compared with the stored one, number by
+number.
 
-For each stored number the report gives its *spread*: the values it takes over the last-bit variants (a stored
-number must not move: spread 0 at its printed precision), and its *margin*: a printed number does not carry its
-unrounded value, so its distance to the nearest rounding edge is measured as the relative input jitter it withstands
-(unchanged under the 1e-13 variant: a hundred times what a processor's rounding does to the inputs). Outputs of
-chaotic quantities go through a guard (``declared_bound``, ``bracket``, ``share_range`` of
-``replication.core.stats``) that checks the value's distance to its bound's or bracket's edges in its own units; the
-``margin`` variant doubles every guard's margin and logs, instead of raising, each guard that does not hold there,
-with its distance. A number that moves in any variant, or a guard that does not hold at twice its margin, is
+For each stored number the report gives its *spread*: the values it takes over the last-bit variants
+(a stored number must not move: spread 0 at its printed precision), and its *margin*: a printed
+number does not carry its unrounded value, so its distance to the nearest rounding edge is measured
+as the relative input jitter it withstands (unchanged under the 1e-13 variant: a hundred times what
+a processor's rounding does to the inputs). Outputs of chaotic quantities go through a guard
+(``declared_bound``, ``bracket``, ``share_range`` of ``replication.core.stats``) that checks the
+value's distance to its bound's or bracket's edges in its own units; the ``margin`` variant doubles
+every guard's margin and logs, instead of raising, each guard that does not hold there, with its
+distance. A number that moves in any variant, or a guard that does not hold at twice its margin, is
 *fragile*; the exit status is 1 if any is.
 
 Usage (``bash scripts/spread ARGS`` runs it in the project's venv)::
 
-    .venv/bin/python scripts/spread.py                       # every notebook, every variant (about 45 min, 2 cores)
-    .venv/bin/python scripts/spread.py --notebooks 02 04 --variants avx2 margin
-    .venv/bin/python scripts/spread.py --reuse --all          # report again from the executed copies, every number
+    .venv/bin/python scripts/spread.py                       # every notebook, every variant (about
+    45 min, 2 cores) .venv/bin/python scripts/spread.py --notebooks 02 04 --variants avx2 margin
+    .venv/bin/python scripts/spread.py --reuse --all          # report again from the executed
+    copies, every number
 
-Executed copies are kept in ``.spread/<variant>/`` (``--reuse`` reads them instead of executing); ``--json FILE``
-writes the per-number table.
+Executed copies are kept in ``.spread/<variant>/`` (``--reuse`` reads them instead of executing);
+``--json FILE`` writes the per-number table.
 """
 from __future__ import annotations
 
@@ -57,7 +61,8 @@ def sanitizers():
 
 
 def compared_texts(nb: dict) -> dict:
-    """``{(cell, key): text}``: every output strict nbval compares, sanitised; ``cell`` counts code cells from 1."""
+    """``{(cell, key): text}``: every output strict nbval compares, sanitised; ``cell`` counts code
+    cells from 1."""
     subs = sanitizers()
     out = {}
     cells = [c for c in nb["cells"] if c["cell_type"] == "code"]
@@ -88,13 +93,14 @@ def compared_texts(nb: dict) -> dict:
 
 
 def split_numbers(text: str):
-    """``(words, numbers)``: the text with each number replaced by ``#`` and runs of blanks by one (a table's columns
-    move when one of its numbers widens), and the numbers as printed."""
+    """``(words, numbers)``: the text with each number replaced by ``#`` and runs of blanks by one
+    (a table's columns move when one of its numbers widens), and the numbers as printed."""
     return re.sub(r"[ \t]+", " ", NUMBER.sub("#", text)), NUMBER.findall(text)
 
 
 def execute(notebook: Path, variant: str, *, timeout: int = 2400) -> float:
-    """Execute ``notebook`` under ``variant`` into ``.spread/<variant>/``; return the wall time in s."""
+    """Execute ``notebook`` under ``variant`` into ``.spread/<variant>/``; return the wall time in
+    s."""
     dest = CACHE / variant / notebook.name
     dest.parent.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **VARIANTS[variant], "MPLBACKEND": "Agg",
@@ -119,8 +125,9 @@ def guard_log(variant: str, notebook: Path) -> Path:
 
 
 def guard_rows(notebook: Path, variants) -> list[dict]:
-    """The guards of rounding edges (``declared_bound``, ``bracket``, ``share_range``) that did not hold under the
-    doubled margin: each value's distance to its edge, in its own units, against the margin."""
+    """The guards of rounding edges (``declared_bound``, ``bracket``, ``share_range``) that did not
+    hold under the doubled margin: each value's distance to its edge, in its own units, against the
+    margin."""
     rows = []
     for v in variants:
         path = guard_log(v, notebook)

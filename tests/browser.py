@@ -1,10 +1,12 @@
-"""A real browser for the book's test: headless Chromium driven over the DevTools protocol (websocket-client).
+"""A real browser for the book's test: headless Chromium driven over the DevTools protocol
+(websocket-client).
 
-:func:`find_chromium` finds the executable (``REPLICATION_CHROMIUM``, else ``chromium`` on the path); :class:`Chromium`
-starts it with a fresh profile and the flags a machine without network needs; :func:`serve` serves a folder on
-loopback; :meth:`Chromium.check_page` loads a page and returns every problem a reader would meet: a console error or
-uncaught exception (a resource that fails to load is logged as one), an image that did not load (``naturalWidth``
-0), a local link whose page is missing or whose ``#anchor`` names no element of that page.
+:func:`find_chromium` finds the executable (``REPLICATION_CHROMIUM``, else ``chromium`` on the
+path); :class:`Chromium` starts it with a fresh profile and the flags a machine without network
+needs; :func:`serve` serves a folder on loopback; :meth:`Chromium.check_page` loads a page and
+returns every problem a reader would meet: a console error or uncaught exception (a resource that
+fails to load is logged as one), an image that did not load (``naturalWidth`` 0), a local link whose
+page is missing or whose ``#anchor`` names no element of that page.
 """
 from __future__ import annotations
 
@@ -31,8 +33,8 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-ne
 
 
 def find_chromium() -> str | None:
-    """The Chromium executable: ``REPLICATION_CHROMIUM`` (an executable path or name), else ``chromium`` or
-    ``chromium-browser`` on the path; ``None`` if there is none."""
+    """The Chromium executable: ``REPLICATION_CHROMIUM`` (an executable path or name), else
+    ``chromium`` or ``chromium-browser`` on the path; ``None`` if there is none."""
     given = os.environ.get("REPLICATION_CHROMIUM")
     if given:
         return shutil.which(given)
@@ -46,7 +48,8 @@ class _Quiet(http.server.SimpleHTTPRequestHandler):
 
 @contextlib.contextmanager
 def serve(folder):
-    """Serve ``folder`` on 127.0.0.1 (a free port) in a thread; yields the base URL, ending in ``/``."""
+    """Serve ``folder`` on 127.0.0.1 (a free port) in a thread; yields the base URL, ending in
+    ``/``."""
     handler = functools.partial(_Quiet, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
@@ -70,8 +73,8 @@ class _Ids(HTMLParser):
 
 
 class Chromium:
-    """Headless Chromium with a fresh profile, driven over the DevTools protocol; a context manager that ends the
-    process it started."""
+    """Headless Chromium with a fresh profile, driven over the DevTools protocol; a context manager
+    that ends the process it started."""
 
     def __init__(self, executable: str, *, timeout: float = 30.0):
         self.executable, self.timeout = executable, timeout
@@ -152,8 +155,9 @@ class Chromium:
         return self._pages[page_url]
 
     def check_page(self, url: str, *, settle: float = 0.3) -> tuple[list[str], list[str]]:
-        """Load ``url``; return ``(problems, local pages it links to)``. Problems: console errors and uncaught
-        exceptions, images that did not load, local links to a missing page or a missing ``#anchor``."""
+        """Load ``url``; return ``(problems, local pages it links to)``. Problems: console errors
+        and uncaught exceptions, images that did not load, local links to a missing page or a
+        missing ``#anchor``."""
         self._events.clear()
         self.send("Page.navigate", url=url)
         self._wait_for("Page.loadEventFired")

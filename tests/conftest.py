@@ -21,13 +21,15 @@ def problem(rng):
     return R0, A, R0.T @ A @ R0
 
 
-#: A small simulated lab (2 data sets of 4 poses, a 4 s dynamic trial) for the loader and chain tests.
+#: A small simulated lab (2 data sets of 4 poses, a 4 s dynamic trial) for the loader and chain
+#: tests.
 SMALL_LAB = dataclasses.replace(LabSettings(), n_sets=2, poses_per_set=(4, 4), dynamic_seconds=4.0)
 
 
 @pytest.fixture(scope="session")
 def lab_recording(tmp_path_factory):
-    """A folder written by ``write_lab`` from :data:`SMALL_LAB` (shared: do not modify, use ``lab_dir``)."""
+    """A folder written by ``write_lab`` from :data:`SMALL_LAB` (shared: do not modify, use
+    ``lab_dir``)."""
     from replication.study.lab import simulate_lab, write_lab
 
     return write_lab(simulate_lab(SMALL_LAB), tmp_path_factory.mktemp("lab") / "rec")

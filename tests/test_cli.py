@@ -1,5 +1,5 @@
-"""The command line in its own room (``replication/cli``): one module per command with ``add_parser`` and ``run``,
-``__main__`` only the entry."""
+"""The command line in its own room (``replication/cli``): one module per command with
+``add_parser`` and ``run``, ``__main__`` only the entry."""
 import argparse
 import importlib
 import subprocess
@@ -31,7 +31,8 @@ def test_each_command_has_its_module_with_a_parser_and_a_run_function():
 
 
 def test_the_top_parser_dispatches_each_command_to_its_module(monkeypatch):
-    """``main`` runs the ``run`` of the command's own module: a stand-in ``run`` is what it returns."""
+    """``main`` runs the ``run`` of the command's own module: a stand-in ``run`` is what it
+    returns."""
     argv = {"reproduce": ["reproduce"], "calibrate": ["calibrate", "--camera", "c", "--sensor", "s"],
             "export": ["export", "r.json", "--to", "ros2"], "generate-lab": ["generate-lab"], "claims": ["claims"],
             "fetch-data": ["fetch-data", "dest"]}

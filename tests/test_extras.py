@@ -1,9 +1,10 @@
-"""A calibrate-only install: the core dependencies leave out the notebook stack, and ``calibrate`` and ``--version``
-run without it.
+"""A calibrate-only install: the core dependencies leave out the notebook stack, and ``calibrate``
+and ``--version`` run without it.
 
-A fresh virtual environment per test run would take minutes; instead the core list is read from pyproject.toml, and
-the command line runs in a subprocess whose imports of the optional packages fail as if they were not installed (a
-meta-path finder placed first). environment.md records the check in a real fresh venv.
+A fresh virtual environment per test run would take minutes; instead the core list is read from
+pyproject.toml, and the command line runs in a subprocess whose imports of the optional packages
+fail as if they were not installed (a meta-path finder placed first). environment.md records the
+check in a real fresh venv.
 """
 import re
 import subprocess
@@ -32,8 +33,8 @@ def _names(requirements):
 
 
 def _blocked_run(args, blocked=NOTEBOOK_STACK, cwd=None):
-    """``python -m replication *args`` in a subprocess where importing any of ``blocked`` (or a submodule) raises
-    ``ModuleNotFoundError``, as if not installed."""
+    """``python -m replication *args`` in a subprocess where importing any of ``blocked`` (or a
+    submodule) raises ``ModuleNotFoundError``, as if not installed."""
     code = textwrap.dedent(f"""
         import runpy, sys
         BLOCKED = {sorted(blocked)!r}
@@ -90,8 +91,8 @@ def rig(tmp_path_factory):
 
 
 def test_the_blocker_blocks():
-    """The control: with the blocker, importing pandas fails; without it, it works (else the next test proves
-    nothing)."""
+    """The control: with the blocker, importing pandas fails; without it, it works (else the next
+    test proves nothing)."""
     out = _blocked_run(["--version"], blocked=["replication"])
     assert out.returncode != 0 and "blocked by the test" in out.stderr
     assert _blocked_run(["--version"], blocked=[]).returncode == 0
@@ -136,12 +137,14 @@ def test_require_names_the_extra():
     assert isinstance(info.value, ImportError) and info.value.name == "no_such_module_x"
 
 
-# ------------------------------------------------------------------------------------ the distribution and a wheel
+# ------------------------------------------------------------------------------------ the
+# distribution and a wheel
 
 def test_the_distribution_is_not_pypis_unrelated_replication_and_ships_what_commands_cite():
-    """Issue 35: ``replication`` on PyPI is another project; the name is checked free with ``pip index versions
-    camimu-replication`` (nothing found, 2026-12-04). The files commands read or cite outside the package are
-    copied into a wheel by setup.py, included in an sdist by MANIFEST.in, and listed once in _extras.SHIPPED."""
+    """Issue 35: ``replication`` on PyPI is another project; the name is checked free with ``pip
+    index versions camimu-replication`` (nothing found, 2026-12-04). The files commands read or cite
+    outside the package are copied into a wheel by setup.py, included in an sdist by MANIFEST.in,
+    and listed once in _extras.SHIPPED."""
     from replication._extras import DISTRIBUTION, SHIPPED, shipped
 
     assert PYPROJECT["name"] == DISTRIBUTION == "camimu-replication"
@@ -157,9 +160,10 @@ def test_the_distribution_is_not_pypis_unrelated_replication_and_ships_what_comm
 
 
 def test_a_wheel_in_a_fresh_venv_runs_calibrate_export_and_fetch_data(rig, tmp_path):
-    """Issue 35: build the wheel, install it with the lock in a new virtual environment, and run the commands from a
-    folder outside the clone: every help text, a calibration, its export and fetch-data's manifest, with no file
-    missing. About 50 s (most of it pip installing the core's wheels); skipped if pip cannot reach them."""
+    """Issue 35: build the wheel, install it with the lock in a new virtual environment, and run the
+    commands from a folder outside the clone: every help text, a calibration, its export and
+    fetch-data's manifest, with no file missing. About 50 s (most of it pip installing the core's
+    wheels); skipped if pip cannot reach them."""
     d, R0 = rig
     wheels, venv = tmp_path / "whl", tmp_path / "venv"
     built = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "-w", wheels, ROOT],

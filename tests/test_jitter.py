@@ -1,4 +1,5 @@
-"""replication._jitter: last-bit jitter of every generated and loaded input (REPLICATION_JITTER), off by default."""
+"""replication._jitter: last-bit jitter of every generated and loaded input (REPLICATION_JITTER),
+off by default."""
 import dataclasses
 
 import numpy as np

@@ -1,10 +1,11 @@
 """The house rules of the package layout (README, "Layout").
 
-Three rooms, the command line's room and a hall: ``replication/core`` (the maths and the solvers), ``replication/rig``
-(calibrating a real rig), ``replication/study`` (the paper's replication), ``replication/cli`` (the commands, on the top
-floor), and the package face, ``__main__``, the atomic writer and the testing helpers. Arrows run cli -> study -> rig ->
-core only, at module level and inside functions; only ``__main__`` imports cli, and only cli imports argparse; no import
-cycle anywhere; every name has one home; notebooks call public names in short cells.
+Three rooms, the command line's room and a hall: ``replication/core`` (the maths and the solvers),
+``replication/rig`` (calibrating a real rig), ``replication/study`` (the paper's replication),
+``replication/cli`` (the commands, on the top floor), and the package face, ``__main__``, the atomic
+writer and the testing helpers. Arrows run cli -> study -> rig -> core only, at module level and
+inside functions; only ``__main__`` imports cli, and only cli imports argparse; no import cycle
+anywhere; every name has one home; notebooks call public names in short cells.
 """
 import ast
 import importlib
@@ -26,11 +27,11 @@ NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 #: The packages (only they have submodules a name could shadow), the top one included.
 PACKAGES = ["replication"] + sorted(m.name for m in pkgutil.walk_packages(replication.__path__, "replication.")
                                     if m.ispkg)
-#: Rank of each room: a module imports only from its own room or a lower one. The three leaves of the hall (the atomic
-#: writer, the version and the optional packages) import nothing of the package and serve every room; the testing
-#: helpers (the synthetic rig) stand with rig, whose streams they build, so that the online studies use the same rig
-#: as the tests; the rest of the hall and the command line are on top, and ``__main__`` (the entry that runs the
-#: command line) above them.
+#: Rank of each room: a module imports only from its own room or a lower one. The three leaves of
+#: the hall (the atomic writer, the version and the optional packages) import nothing of the package
+#: and serve every room; the testing helpers (the synthetic rig) stand with rig, whose streams they
+#: build, so that the online studies use the same rig as the tests; the rest of the hall and the
+#: command line are on top, and ``__main__`` (the entry that runs the command line) above them.
 ROOMS = {"_io": 0, "_version": 0, "_extras": 0, "_jitter": 0, "core": 1, "rig": 2, "testing": 2, "study": 3,
          "__init__": 4, "cli": 4, "__main__": 5}
 MAX_TOP_LEVEL_MODULES = 8
@@ -61,8 +62,9 @@ def _type_checking_lines(tree) -> set:
 
 
 def imports_of(module: str):
-    """``(line, target)`` for every import of a package module in ``module``, at any depth (functions included) and
-    of every name that is itself a module (``from . import so3``); ``if TYPE_CHECKING:`` blocks left out."""
+    """``(line, target)`` for every import of a package module in ``module``, at any depth
+    (functions included) and of every name that is itself a module (``from . import so3``); ``if
+    TYPE_CHECKING:`` blocks left out."""
     path = MODULES[module]
     tree = ast.parse(path.read_text(encoding="utf-8"))
     skip = _type_checking_lines(tree)
@@ -149,7 +151,8 @@ def test_arrows_run_study_rig_core_only(module):
 
 @pytest.mark.parametrize("module", sorted(m for m in MODULES if _room(m) != "cli"))
 def test_only_the_entry_imports_the_command_line(module):
-    """The command line imports the library, never the reverse: outside ``replication/cli`` only ``__main__`` may."""
+    """The command line imports the library, never the reverse: outside ``replication/cli`` only
+    ``__main__`` may."""
     if module == "replication.__main__":
         assert any(_room(target) == "cli" for _, target in imports_of(module)), "__main__ does not run replication.cli"
         return
@@ -158,7 +161,8 @@ def test_only_the_entry_imports_the_command_line(module):
 
 
 def argparse_lines(source: str) -> list:
-    """The lines of ``source`` importing argparse (``import argparse``, ``from argparse import ...``), at any depth."""
+    """The lines of ``source`` importing argparse (``import argparse``, ``from argparse import
+    ...``), at any depth."""
     found = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import) and any(a.name.split(".")[0] == "argparse" for a in node.names):
@@ -180,8 +184,8 @@ def test_library_modules_are_free_of_argparse(module):
 
 
 def find_cycle(graph: dict):
-    """One import cycle of ``graph`` (module -> set of modules) as a list that starts and ends at the same module,
-    or None."""
+    """One import cycle of ``graph`` (module -> set of modules) as a list that starts and ends at
+    the same module, or None."""
     state, stack = {}, []
 
     def visit(node):
@@ -210,7 +214,8 @@ def test_the_cycle_finder_finds_a_cycle_inside_a_function_and_none_in_a_chain():
 
 def test_no_import_cycle_even_inside_functions():
     graph = {m: {t for _, t in imports_of(m) if t != m} for m in MODULES}
-    # a package's face imports its modules; a module importing its own package's face is the cycle this finds
+    # a package's face imports its modules; a module importing its own package's face is the cycle
+    # this finds
     assert find_cycle(graph) is None, " -> ".join(find_cycle(graph))
 
 
@@ -227,8 +232,8 @@ def _defined_names(tree) -> set:
 
 @pytest.mark.parametrize("module", sorted(m for m, p in MODULES.items() if p.name != "__init__.py"))
 def test_every_public_name_has_one_home(module):
-    """A module (not a package's face) exports only what it defines, and has no module ``__getattr__``: no alias of
-    a name that lives elsewhere."""
+    """A module (not a package's face) exports only what it defines, and has no module
+    ``__getattr__``: no alias of a name that lives elsewhere."""
     tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
     defined = _defined_names(tree)
     assert "__getattr__" not in defined, f"{module} answers names it does not define (__getattr__)"
@@ -283,7 +288,8 @@ def test_notebooks_import_no_private_name(path):
     assert not found, f"{path.name} imports private names (cell index: names): {found}"
 
 
-# ------------------------------------------------------------------------------------------------- the tests' homes
+# -------------------------------------------------------------------------------------------------
+# the tests' homes
 TESTS = ROOT / "tests"
 #: Test files named for no module, each with what it tests instead.
 TESTS_OF_NO_MODULE = {"tests/test_layout.py": "the package's layout as a whole"}
@@ -294,9 +300,10 @@ def _snake(name: str) -> str:
 
 
 def unit_names(room: str) -> set:
-    """The names a test file of ``room`` may take: each module's path below the room, its parts joined by ``_``
-    without their leading underscores (``core/solvers/_registry.py``: ``solvers_registry``; a package: its own
-    name), and each public class of the room in snake case (``OnlineCalibrator``: ``online_calibrator``)."""
+    """The names a test file of ``room`` may take: each module's path below the room, its parts
+    joined by ``_`` without their leading underscores (``core/solvers/_registry.py``:
+    ``solvers_registry``; a package: its own name), and each public class of the room in snake case
+    (``OnlineCalibrator``: ``online_calibrator``)."""
     names = set()
     for module, path in MODULES.items():
         parts = module.split(".")
@@ -315,10 +322,11 @@ def unit_names(room: str) -> set:
 
 
 def misnamed_test_file(path: Path) -> str | None:
-    """Why a test file's name names nothing it could test, or None: ``tests/<room>/test_<unit>.py`` for the rooms
-    core, rig and study (:func:`unit_names`), ``tests/test_<module>.py`` for the hall's modules,
-    ``tests/scripts/test_<script>.py`` for ``scripts/<script>.py``, and in ``tests/notebooks/`` the nbval sanitiser
-    (``test_sanitize.py``) and the portability re-runs named by the notebooks they re-run."""
+    """Why a test file's name names nothing it could test, or None: ``tests/<room>/test_<unit>.py``
+    for the rooms core, rig and study (:func:`unit_names`), ``tests/test_<module>.py`` for the
+    hall's modules, ``tests/scripts/test_<script>.py`` for ``scripts/<script>.py``, and in
+    ``tests/notebooks/`` the nbval sanitiser (``test_sanitize.py``) and the portability re-runs
+    named by the notebooks they re-run."""
     rel = path.relative_to(ROOT).as_posix()
     if rel in TESTS_OF_NO_MODULE:
         return None
@@ -365,8 +373,9 @@ def test_the_portability_files_share_out_every_notebook_once():
     assert sorted(sum(parts, [])) == [p.name[:2] for p in NOTEBOOKS]
 
 
-#: The naming rule for conversions (docs/conventions.md, "Names of conversions"): ``<to>_from_<from>``. A module-level
-#: public function named like another rule's conversion is refused; the exceptions, with their reason:
+#: The naming rule for conversions (docs/conventions.md, "Names of conversions"):
+#: ``<to>_from_<from>``. A module-level public function named like another rule's conversion is
+#: refused; the exceptions, with their reason:
 NOT_CONVERSIONS = {
     "nearest_rotation_up_to_sign": "'up to sign' qualifies the projection; nothing is converted",
     "match_to_table1": "a verb: it matches a stopped SQP to Table I's rows",
@@ -376,8 +385,9 @@ OTHER_RULES = r"^(as|to|from)_|_to_"
 
 
 def conversion_name_violations(source: str) -> list:
-    """Module-level public functions of ``source`` named against the rule (``as_*``, ``to_*``, ``from_*``,
-    ``*_to_*``), the listed exceptions aside; methods (``to_dict``) and private helpers are not looked at."""
+    """Module-level public functions of ``source`` named against the rule (``as_*``, ``to_*``,
+    ``from_*``, ``*_to_*``), the listed exceptions aside; methods (``to_dict``) and private helpers
+    are not looked at."""
     import re
 
     return [node.name for node in ast.parse(source).body
@@ -437,8 +447,8 @@ def _names_in_code() -> set:
 
 
 def layout_words_not_in_code(page: str, names: set) -> list:
-    """Backticked identifiers in the page's table rows that the code does not have; the paper's own symbols may
-    follow a code name in ``(the paper's ...)``."""
+    """Backticked identifiers in the page's table rows that the code does not have; the paper's own
+    symbols may follow a code name in ``(the paper's ...)``."""
     import re
 
     rows = [re.sub(r"\(the paper's [^)]*\)", "", line) for line in page.splitlines() if line.startswith("|")]

@@ -66,7 +66,8 @@ def test_reproduce_skips_notebooks_that_need_absent_real_data(tmp_path):
 
 
 def test_generate_lab_writes_a_loadable_recording(tmp_path, capsys):
-    """(That the committed data/lab equal the generator's output is tests/study/test_lab.py's check.)"""
+    """(That the committed data/lab equal the generator's output is tests/study/test_lab.py's
+    check.)"""
     from replication.cli import main
     from replication.study.lab import load_lab
 
@@ -118,14 +119,16 @@ def test_calibrate_help_shows_every_default_the_solvers_the_formats_and_an_examp
     assert len(options) == 25  # all but --camera and --sensor (required: no default)
     for action in options:
         assert "default" in formatter._get_help_string(action), action.option_strings
-    # an option without a default whose help does not say so gets no "(default: None)": its help must say it
+    # an option without a default whose help does not say so gets no "(default: None)": its help
+    # must say it
     bare = cal.add_argument("--x-none", help="no default said")
     assert formatter._get_help_string(bare) == "no default said"
 
 
 def _imu_like_csv(path, n_columns, rows=4):
-    """``rows`` lines of ``n_columns`` comma-separated numbers after a ``#`` header (EuRoC / TUM-VI style): time in
-    ns, then zeros with a unit quaternion where an orientation line (8 columns) has it."""
+    """``rows`` lines of ``n_columns`` comma-separated numbers after a ``#`` header (EuRoC / TUM-VI
+    style): time in ns, then zeros with a unit quaternion where an orientation line (8 columns) has
+    it."""
     import numpy as np
 
     body = np.zeros((rows, n_columns - 1))
@@ -162,7 +165,8 @@ def test_a_sensor_file_of_the_other_kind_names_the_option(tmp_path, capsys, kind
 
 
 def test_the_files_of_the_hints_are_what_they_are_said_to_look_like(tmp_path):
-    """The control of the hints: the 7-column file loads as a gyro, the 8-column one as orientations."""
+    """The control of the hints: the 7-column file loads as a gyro, the 8-column one as
+    orientations."""
     from replication.rig.realdata import load_stream
 
     assert load_stream(_imu_like_csv(tmp_path / "imu.csv", 7), "gyro").omega.shape == (4, 3)
@@ -179,7 +183,8 @@ def test_an_imu_file_given_as_the_camera_says_where_it_goes(tmp_path, capsys):
 
 
 def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
-    """Nearly single-axis motion: the solver's ObservabilityWarning, as ``warning: <Class>: <message>``."""
+    """Nearly single-axis motion: the solver's ObservabilityWarning, as ``warning: <Class>:
+    <message>``."""
     import numpy as np
 
     from replication.core import so3
@@ -226,14 +231,15 @@ def test_the_warning_formatter_is_installed_only_while_a_command_runs(tmp_path):
             "replication.cli.calibrate; print(warnings.showwarning is before)")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout == "True\n"
 
-# ----------------------------------------------------------------------------------------------------
-# The command line never destroys its inputs or one output with another, reads a pipe once, and ends every
-# file-system problem in a clear message with exit code 2, never a traceback.
+# --------------------------------------------------------------------------------------------------
+# The command line never destroys its inputs or one output with another, reads a pipe once, and ends
+# every file-system problem in a clear message with exit code 2, never a traceback.
 #
-# Each refused run is checked for its exit code, its message on standard error, no work done (the calibration,
-# the downloads or the notebooks replaced by a failure) and its inputs byte-identical afterwards. The synthetic rig
-# (:func:`replication.testing.rig_streams`) is written as a TUM trajectory and an EuRoC IMU CSV on Unix-like absolute
-# times (1.52e9 s), the scale at which the old overlap message printed ``1.52053e+09..1.52053e+09``.
+# Each refused run is checked for its exit code, its message on standard error, no work done (the
+# calibration, the downloads or the notebooks replaced by a failure) and its inputs byte-identical
+# afterwards. The synthetic rig (:func:`replication.testing.rig_streams`) is written as a TUM
+# trajectory and an EuRoC IMU CSV on Unix-like absolute times (1.52e9 s), the scale at which the old
+# overlap message printed ``1.52053e+09..1.52053e+09``.
 
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -282,7 +288,8 @@ def files(tmp_path, rig_bytes):
 
 
 def _snapshot(folder: Path) -> dict:
-    """Every file under ``folder`` (links followed) and the SHA-256 of its bytes; folders as ``None``."""
+    """Every file under ``folder`` (links followed) and the SHA-256 of its bytes; folders as
+    ``None``."""
     return {str(p.relative_to(folder)): (hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None)
             for p in sorted(folder.rglob("*"))}
 
@@ -302,7 +309,8 @@ def _calibrate(files, *extra):
                  "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", *map(str, extra)])
 
 
-# ------------------------------------------------------------------------------------------- outputs vs inputs
+# -------------------------------------------------------------------------------------------
+# outputs vs inputs
 
 def _link(files, kind):
     link = files / f"{kind}-link.txt"
@@ -345,8 +353,8 @@ def test_an_output_that_is_an_input_or_another_output_is_refused_before_any_work
 
 
 def test_an_outputs_temporary_name_never_touches_an_input(files, rig_bytes, capsys):
-    """An output writes through a temporary sibling: it must not be an existing file (here the camera input,
-    named like the report's old temporary name ``r.json.part``)."""
+    """An output writes through a temporary sibling: it must not be an existing file (here the
+    camera input, named like the report's old temporary name ``r.json.part``)."""
     camera = files / "r.json.part"
     (files / "cam.txt").rename(camera)
     code = main(["calibrate", "--camera", str(camera), "--sensor", str(files / "imu.csv"), "--sensor-kind", "gyro",
@@ -389,10 +397,12 @@ def test_the_api_plot_honours_the_extension_or_refuses_before_drawing(rig, tmp_p
     assert not (tmp_path / "f.jpeg").exists()
 
 
-# ------------------------------------------------------------------------------------------- pipes and special files
+# ------------------------------------------------------------------------------------------- pipes
+# and special files
 
 class _Feeder:
-    """Write ``data`` into the FIFO ``path`` once, from a thread (a writer blocks until the reader opens)."""
+    """Write ``data`` into the FIFO ``path`` once, from a thread (a writer blocks until the reader
+    opens)."""
 
     def __init__(self, path, data):
         self.thread = threading.Thread(target=self._feed, args=(path, data), daemon=True)
@@ -408,8 +418,8 @@ class _Feeder:
 
 
 def _run_reading_a_fifo(fifo, args, timeout=120.0):
-    """``main(args)`` in a thread; if it is still waiting on the FIFO after ``timeout`` (it opened the pipe a second
-    time), release it with an empty write and fail."""
+    """``main(args)`` in a thread; if it is still waiting on the FIFO after ``timeout`` (it opened
+    the pipe a second time), release it with an empty write and fail."""
     box = {}
     runner = threading.Thread(target=lambda: box.update(code=main(args)), daemon=True)
     runner.start()
@@ -453,8 +463,9 @@ def test_a_malformed_fifo_input_is_refused_naming_the_pipe_with_no_output(files,
 
 
 def test_dev_stdin_as_a_pipe_calibrates_and_is_recorded(files, tmp_path, rig_bytes):
-    """The campaign's case: ``--camera <(cat traj.txt)`` ran the whole calibration, then failed hashing the pipe's
-    path again (FileNotFoundError, no report). Through ``/dev/stdin`` in a fresh process."""
+    """The campaign's case: ``--camera <(cat traj.txt)`` ran the whole calibration, then failed
+    hashing the pipe's path again (FileNotFoundError, no report). Through ``/dev/stdin`` in a fresh
+    process."""
     out = tmp_path / "r.json"
     run = subprocess.run([sys.executable, "-m", "replication", "calibrate", "--camera", "/dev/stdin", "--sensor",
                           str(files / "imu.csv"), "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", "--out",
@@ -479,8 +490,8 @@ def test_the_same_pipe_twice_is_refused(files, tmp_path, rig_bytes, no_work, cap
 
 @pytest.mark.parametrize("target", ["/dev/stdout", os.devnull])
 def test_an_output_onto_standard_output_or_a_device_is_refused(files, tmp_path, target):
-    """``--out /dev/stdout`` with standard output redirected to a file would replace that file (and what was
-    printed to it); a device is no file to replace. Both are refused before any work."""
+    """``--out /dev/stdout`` with standard output redirected to a file would replace that file (and
+    what was printed to it); a device is no file to replace. Both are refused before any work."""
     log = tmp_path / "stdout.txt"
     log.write_bytes(b"earlier output\n")
     with open(log, "ab") as stdout:
@@ -534,11 +545,13 @@ def test_an_output_onto_a_pipe_is_refused(files, no_work, capsys):
         os.close(write)
 
 
-# ------------------------------------------------------------------------------------------- file-system errors
+# -------------------------------------------------------------------------------------------
+# file-system errors
 
 @pytest.fixture
 def locked(tmp_path):
-    """A folder this user cannot write in (skipped where permissions are not enforced: root), restored afterwards."""
+    """A folder this user cannot write in (skipped where permissions are not enforced: root),
+    restored afterwards."""
     folder = tmp_path / "locked"
     folder.mkdir()
     folder.chmod(0o500)
@@ -564,7 +577,8 @@ def _disk_full(*args, **kwargs):
 
 @pytest.mark.parametrize("option, name", [("--out", "r.json"), ("--plot", "f.pdf"), ("--track", "t.csv")])
 def test_a_disk_error_while_writing_an_output_is_a_message(files, tmp_path, option, name, monkeypatch, capsys):
-    """The write itself fails (a full disk), after the checks passed: exit 2 naming the output and the reason."""
+    """The write itself fails (a full disk), after the checks passed: exit 2 naming the output and
+    the reason."""
     import replication.cli.calibrate as cli
 
     monkeypatch.setattr(cli, "write_atomic", _disk_full)
@@ -578,13 +592,15 @@ def test_a_disk_error_while_writing_an_output_is_a_message(files, tmp_path, opti
 
 
 def test_a_read_only_folder_refuses_the_write_and_leaves_nothing(locked):
-    """:func:`replication._io.write_atomic` in a folder it cannot write: an ``OSError``, no file, no temporary."""
+    """:func:`replication._io.write_atomic` in a folder it cannot write: an ``OSError``, no file, no
+    temporary."""
     with pytest.raises(PermissionError, match="Permission denied"):
         _io.write_atomic(locked / "r.json", "{}")
     assert not list(locked.iterdir())
 
 
-# ------------------------------------------------------------------------------------------- fetch-data
+# -------------------------------------------------------------------------------------------
+# fetch-data
 
 @pytest.fixture
 def one_entry(monkeypatch):
@@ -640,7 +656,8 @@ def test_fetch_data_refuses_its_mirror_as_destination(tmp_path, one_entry, capsy
     assert (mirror / "f" / "a.txt").read_bytes() == b"a stale copy"
 
 
-# ------------------------------------------------------------------------------------------- reproduce
+# -------------------------------------------------------------------------------------------
+# reproduce
 
 @pytest.fixture
 def notebook_folder(tmp_path, monkeypatch):
@@ -670,7 +687,8 @@ def test_reproduce_refuses_a_results_folder_that_clashes_or_cannot_be_made(noteb
     assert _snapshot(notebook_folder) == before
 
 
-# ------------------------------------------------------------------------------------------- the overlap message
+# ------------------------------------------------------------------------------------------- the
+# overlap message
 
 def test_a_max_offset_beyond_the_overlap_is_named_with_durations(rig):
     _, camera, gyro, _ = rig
@@ -717,8 +735,8 @@ def test_the_overlap_error_survives_pickling_and_renaming():
 
 
 def test_a_pipe_keeps_its_names_extension_for_the_loaders(files, tmp_path, rig, rig_bytes, capsys):
-    """The loaders recognise formats by the name's extension (a reference ``.yaml`` is a Kalibr camchain): the
-    pipe's temporary copy keeps it."""
+    """The loaders recognise formats by the name's extension (a reference ``.yaml`` is a Kalibr
+    camchain): the pipe's temporary copy keeps it."""
     fifo = tmp_path / "camchain-pipe.yaml"
     os.mkfifo(fifo)
     _Feeder(fifo, rig_bytes["camchain.yaml"])

@@ -1,4 +1,5 @@
-"""The testing helpers (:mod:`replication.testing`): the one synthetic rig, its options and its draws."""
+"""The testing helpers (:mod:`replication.testing`): the one synthetic rig, its options and its
+draws."""
 import numpy as np
 import pytest
 
@@ -86,7 +87,8 @@ def test_noise_without_a_generator_is_refused(kw):
 def test_a_bias_a_fast_clock_and_a_rest_are_what_they_say():
     _, camera0, gyro0, _ = rig_streams(20.0)
     _, camera, gyro, _ = rig_streams(20.0, bias=(0.1, -0.1, 0.07), ppm=100.0, offset=0.01, rest_s=3.0)
-    # the clock: offset plus 100 ppm about the middle (10 s): 1 ms late at the end, 1 ms early at the start
+    # the clock: offset plus 100 ppm about the middle (10 s): 1 ms late at the end, 1 ms early at
+    # the start
     np.testing.assert_allclose(gyro.t - gyro0.t, 0.01 + 1e-4 * (gyro0.t - 10.0), atol=1e-12)
     # the rest: no motion before 3 s, full motion from 5 s on; the bias: every rate moved by it
     still = gyro0.t < 3.0

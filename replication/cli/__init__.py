@@ -1,6 +1,7 @@
-"""The command line, ``python -m replication <command>``: one module per command, each with ``add_parser(sub)`` (its
-options, help and defaults) and ``run(args) -> int`` (its exit code); :func:`main` builds the top parser from them and
-runs the command with one-line warnings. Nothing of the library imports this room; it imports the library.
+"""The command line, ``python -m replication <command>``: one module per command, each with
+``add_parser(sub)`` (its options, help and defaults) and ``run(args) -> int`` (its exit code);
+:func:`main` builds the top parser from them and runs the command with one-line warnings. Nothing of
+the library imports this room; it imports the library.
 """
 from __future__ import annotations
 
@@ -24,8 +25,9 @@ DESCRIPTION = """Command line.
 
 
 def _one_line_warnings():
-    """A ``warnings.showwarning`` for the command line: each warning once (by class and text), on one line of standard
-    error as ``warning: <Class>: <message>``, without the file, line and source line Python prints by default."""
+    """A ``warnings.showwarning`` for the command line: each warning once (by class and text), on
+    one line of standard error as ``warning: <Class>: <message>``, without the file, line and source
+    line Python prints by default."""
     seen = set()
 
     def show(message, category, filename, lineno, file=None, line=None):
@@ -37,8 +39,9 @@ def _one_line_warnings():
 
 
 def _run(args: argparse.Namespace) -> int:
-    """Run a parsed command with the command line's warnings (:func:`_one_line_warnings`, restored after); an optional
-    package that is missing ends it with exit 2 and the extra to install (:mod:`replication._extras`)."""
+    """Run a parsed command with the command line's warnings (:func:`_one_line_warnings`, restored
+    after); an optional package that is missing ends it with exit 2 and the extra to install
+    (:mod:`replication._extras`)."""
     from .._extras import OPTIONAL, MissingExtra, missing_message
 
     with warnings.catch_warnings():
@@ -68,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def main_closing_pipes():
-    """``main`` for the command line: a reader that stops early (``| head``) ends the output quietly, exit 141."""
+    """``main`` for the command line: a reader that stops early (``| head``) ends the output
+    quietly, exit 141."""
     try:
         code = main()
         sys.stdout.flush()

@@ -1,5 +1,6 @@
-"""``python -m replication calibrate``: the command line of :func:`replication.rig.calibration.calibrate`. Theory and
-measured numbers: ``docs/reading.md``, section ``replication.cli.calibrate``."""
+"""``python -m replication calibrate``: the command line of
+:func:`replication.rig.calibration.calibrate`. Theory and measured numbers: ``docs/reading.md``,
+section ``replication.cli.calibrate``."""
 from __future__ import annotations
 
 import argparse
@@ -62,10 +63,10 @@ CALIBRATE_EXAMPLES = """Examples:
 """
 
 class _HelpFormatter(argparse.RawDescriptionHelpFormatter):
-    """``calibrate --help``: the description and epilog as written, the registered solvers listed in place of
-    ``{solvers}`` (looked up when the help is shown, so other commands do not import the solvers), and each option's
-    default after its help (an option whose default is None says in its help what happens without it; a flag is
-    off by default)."""
+    """``calibrate --help``: the description and epilog as written, the registered solvers listed in
+    place of ``{solvers}`` (looked up when the help is shown, so other commands do not import the
+    solvers), and each option's default after its help (an option whose default is None says in its
+    help what happens without it; a flag is off by default)."""
 
     def _fill_text(self, text, width, indent):
         if "{solvers}" in text:
@@ -103,7 +104,8 @@ def _number(kind, *, minimum=None, strict=True):
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    """The ``calibrate`` sub-command: every option of ``calibrate`` is declared here, in one place."""
+    """The ``calibrate`` sub-command: every option of ``calibrate`` is declared here, in one
+    place."""
     cal = sub.add_parser("calibrate", help="calibrate a real rig and judge the answer", description=CALIBRATE_HELP,
                          epilog=CALIBRATE_EXAMPLES, formatter_class=_HelpFormatter)
     cal.add_argument("--camera", required=True, help="camera trajectory (world<-camera), or camera poses (--poses)")
@@ -164,8 +166,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def _online(args, camera, sensor, reference, result):
-    """Replay the streams through the online estimator with the batch options (interval, stride, clock offset
-    search and whether to apply it); print what it found; return the result with the online summary and track."""
+    """Replay the streams through the online estimator with the batch options (interval, stride,
+    clock offset search and whether to apply it); print what it found; return the result with the
+    online summary and track."""
 
     from ..rig.live import replay
     from ..rig.online import OnlineCalibrator
@@ -204,8 +207,8 @@ def _error(text) -> int:
 
 
 def _write(path, data, what: str) -> bool:
-    """Write an output atomically; False (the path and the reason said on standard error) if the file system
-    refuses."""
+    """Write an output atomically; False (the path and the reason said on standard error) if the
+    file system refuses."""
     try:
         write_atomic(path, data)
     except OSError as err:

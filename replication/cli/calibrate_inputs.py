@@ -1,6 +1,7 @@
-"""The inputs of ``python -m replication calibrate``: every path checked before any work (:func:`check_paths`),
-each input read once (a pipe into a temporary copy, every file hashed) and loaded (:func:`load_all`), a CSV of the
-other kind named as such, each file's time unit (:func:`time_unit`)."""
+"""The inputs of ``python -m replication calibrate``: every path checked before any work
+(:func:`check_paths`), each input read once (a pipe into a temporary copy, every file hashed) and
+loaded (:func:`load_all`), a CSV of the other kind named as such, each file's time unit
+(:func:`time_unit`)."""
 from __future__ import annotations
 
 import contextlib
@@ -21,7 +22,8 @@ _SHOWN = {"--reference2": "--reference (the second)"}
 
 
 def split_references(args) -> None:
-    """``--reference`` given at most twice: ``args.reference`` the first (or None), ``args.reference2`` the second."""
+    """``--reference`` given at most twice: ``args.reference`` the first (or None),
+    ``args.reference2`` the second."""
     given = args.reference if isinstance(args.reference, list) else [args.reference] if args.reference else []
     if len(given) > 2:
         raise ValueError(f"--reference given {len(given)} times: at most two (two published calibrations)")
@@ -32,8 +34,9 @@ OUTPUTS = (("--out", "out"), ("--plot", "plot"), ("--track", "track"))
 def check_paths(args) -> dict:
     """Every path before any work; ``{option: "file" | "pipe"}`` of the inputs given.
 
-    Inputs exist and are regular files or pipes (a pipe is given once); no output is an input or another output;
-    the figure's extension is a known format; each output's folder is created and writable.
+    Inputs exist and are regular files or pipes (a pipe is given once); no output is an input or
+    another output; the figure's extension is a known format; each output's folder is created and
+    writable.
     """
     inputs = {option: getattr(args, attr) for option, attr in INPUTS}
     kinds = {option: check_input(path, _SHOWN.get(option, option)) for option, path in inputs.items()
@@ -57,9 +60,9 @@ def check_paths(args) -> dict:
 def _read_inputs(args, kinds: dict):
     """Read every input once: ``(paths to load from, report entries, {copy: shown name})``.
 
-    A regular file is loaded from its path and hashed now; a pipe is read whole into a temporary copy (its name's
-    extension kept: the loaders recognise formats by it) that the loaders read, and its entry records the pipe, the
-    bytes and the SHA-256 of what was read, no path to read again.
+    A regular file is loaded from its path and hashed now; a pipe is read whole into a temporary
+    copy (its name's extension kept: the loaders recognise formats by it) that the loaders read, and
+    its entry records the pipe, the bytes and the SHA-256 of what was read, no path to read again.
     """
     from ..rig.fetch import sha256_of
 
@@ -88,7 +91,8 @@ def _read_inputs(args, kinds: dict):
 
 
 def _named(stream, copies: dict, given):
-    """``stream`` with its source the name given on the command line where it was loaded from a pipe's copy."""
+    """``stream`` with its source the name given on the command line where it was loaded from a
+    pipe's copy."""
     if str(stream.source) in copies:
         return dataclasses.replace(stream, source=str(given))
     return stream
@@ -114,9 +118,9 @@ def _load(args, paths):
 
 
 def _stream(path, option: str, kind: str, **options):
-    """:func:`~replication.rig.realdata.load_stream`; a CSV whose lines have the other kind's number of columns (7: an
-    IMU stream read as orientations; 8: orientations read as a gyro) is said to look like that kind, naming the
-    option to give."""
+    """:func:`~replication.rig.realdata.load_stream`; a CSV whose lines have the other kind's number
+    of columns (7: an IMU stream read as orientations; 8: orientations read as a gyro) is said to
+    look like that kind, naming the option to give."""
     from ..rig.datafile import ColumnCountError
     from ..rig.realdata import EUROC_IMU_COLUMNS, EUROC_POSE_COLUMNS, load_stream
 
@@ -138,7 +142,8 @@ def _stream(path, option: str, kind: str, **options):
 
 
 def time_unit(args, side: str) -> str:
-    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM files), else auto."""
+    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM
+    files), else auto."""
     own = getattr(args, f"{side}_time_unit")
     if own is not None:
         return own
@@ -148,8 +153,8 @@ def time_unit(args, side: str) -> str:
 
 
 def load_all(args, kinds):
-    """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors about a pipe's
-    copy name the pipe as given."""
+    """Read the inputs once and load them: ``(camera, sensor, reference, report entries)``; errors
+    about a pipe's copy name the pipe as given."""
     from ..rig.realdata import load_reference
 
     with _read_inputs(args, kinds) as (paths, files, copies):

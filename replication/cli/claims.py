@@ -1,5 +1,5 @@
-"""``python -m replication claims``: the claims ledger collected from the executed notebooks, printed, checked
-against README's table or written into it (:mod:`replication.study.ledger`)."""
+"""``python -m replication claims``: the claims ledger collected from the executed notebooks,
+printed, checked against README's table or written into it (:mod:`replication.study.ledger`)."""
 from __future__ import annotations
 
 import argparse
@@ -20,9 +20,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a notebook, the claims
-    file or README refused, or more than one of ``--check``, ``--readme``, ``--summary`` given: the message on
-    stderr)."""
+    """Exit 0 (done, or README current), 1 (``--check``: README out of date), 2 (a record, a
+    notebook, the claims file or README refused, or more than one of ``--check``, ``--readme``,
+    ``--summary`` given: the message on stderr)."""
     from ..study.ledger import collect, markdown_from_ledger, summary_from_ledger, update_readme
 
     given = [flag for flag in ("--check", "--readme", "--summary") if getattr(args, flag[2:])]

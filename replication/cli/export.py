@@ -1,8 +1,9 @@
-"""``python -m replication export``: the command line of :func:`replication.rig.export.export_calibration`.
+"""``python -m replication export``: the command line of
+:func:`replication.rig.export.export_calibration`.
 
-The report is checked and read before anything is written (a pipe once); the output goes to ``--out`` atomically, or
-to standard output; what was changed, added and noted is said on standard error. Exit codes: 0 written, 2 refused
-(the reason named).
+The report is checked and read before anything is written (a pipe once); the output goes to
+``--out`` atomically, or to standard output; what was changed, added and noted is said on standard
+error. Exit codes: 0 written, 2 refused (the reason named).
 """
 from __future__ import annotations
 
@@ -57,8 +58,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 (written), 2 (refused: the reason on standard error); warnings reach the terminal through the command
-    line's one-line formatter (:mod:`replication.cli`)."""
+    """Exit 0 (written), 2 (refused: the reason on standard error); warnings reach the terminal
+    through the command line's one-line formatter (:mod:`replication.cli`)."""
     try:
         inputs = {"REPORT": args.report, "--base": args.base}
         kinds = {k: check_input(v, k) for k, v in inputs.items() if v is not None}

@@ -37,8 +37,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    """``python -m replication fetch-data``: exit 0 if every file is present and verified, else 1 (no network
-    included), 2 for bad arguments or an unwritable DEST."""
+    """``python -m replication fetch-data``: exit 0 if every file is present and verified, else 1
+    (no network included), 2 for bad arguments or an unwritable DEST."""
     try:
         entries = rig_fetch.load_manifest()
         if args.only:

@@ -1,4 +1,5 @@
-"""``python -m replication generate-lab``: write the simulated lab's recordings (:mod:`replication.study.lab`)."""
+"""``python -m replication generate-lab``: write the simulated lab's recordings
+(:mod:`replication.study.lab`)."""
 from __future__ import annotations
 
 import argparse

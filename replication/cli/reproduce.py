@@ -1,6 +1,6 @@
-"""``python -m replication reproduce``: re-execute every numbered notebook in order and write ``results/`` (the
-tables, the figures and the claims ledger); a notebook that needs the real recordings is skipped, saying why, when
-they are absent."""
+"""``python -m replication reproduce``: re-execute every numbered notebook in order and write
+``results/`` (the tables, the figures and the claims ledger); a notebook that needs the real
+recordings is skipped, saying why, when they are absent."""
 from __future__ import annotations
 
 import argparse
@@ -53,8 +53,8 @@ def needs_real_data(path: Path) -> bool:
 
 
 def _check_results(results, folder, paths) -> Path:
-    """The results folder, before any notebook runs: not the notebooks' folder nor a notebook, and created and
-    writable (``ValueError`` naming the path and the reason otherwise)."""
+    """The results folder, before any notebook runs: not the notebooks' folder nor a notebook, and
+    created and writable (``ValueError`` naming the path and the reason otherwise)."""
     from .._io import check_clashes, prepare_folder, same_file
 
     if same_file(results, folder):
@@ -65,7 +65,8 @@ def _check_results(results, folder, paths) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 (every notebook run, the ledger written), 2 (the results folder refused: the reason on stderr)."""
+    """Exit 0 (every notebook run, the ledger written), 2 (the results folder refused: the reason on
+    stderr)."""
     from tqdm import tqdm
 
     from ..rig.realdata import data_root, real_data_available

@@ -18,21 +18,24 @@ __all__ = ["ROTATION_ATOL", "MAX_ROTATION_ATOL", "det3", "check_matrices", "chec
 
 #: Default tolerance on ``||R^T R - I||_F`` and ``|det R - 1|`` for accepting a rotation.
 ROTATION_ATOL = 1e-6
-#: Largest ``atol`` a rotation test accepts. The loosest in the package is 1e-4 (loaders of files that print 4-6
-#: digits); above 1e-2 a "rotation" may be scaled or sheared by half a percent, a third of the paper's noise per
-#: motion (``||v|| < 0.02``, chordal distance up to 0.028), and the algebra of eq. (8) that every solver relies on
-#: (``||A_j R||_F = ||R||_F``, ``||K||_2 <= 1``) no longer holds: such matrices are not rotation data.
+#: Largest ``atol`` a rotation test accepts. The loosest in the package is 1e-4 (loaders of files
+#: that print 4-6 digits); above 1e-2 a "rotation" may be scaled or sheared by half a percent, a
+#: third of the paper's noise per motion (``||v|| < 0.02``, chordal distance up to 0.028), and the
+#: algebra of eq. (8) that every solver relies on (``||A_j R||_F = ||R||_F``, ``||K||_2 <= 1``) no
+#: longer holds: such matrices are not rotation data.
 MAX_ROTATION_ATOL = 1e-2
 
 
 def _first_index(mask: np.ndarray) -> tuple:
-    """Index (over the leading dimensions) of the first True entry of ``mask`` (``()`` for a scalar)."""
+    """Index (over the leading dimensions) of the first True entry of ``mask`` (``()`` for a
+    scalar)."""
     mask = np.asarray(mask)
     return tuple(int(i) for i in np.argwhere(mask)[0]) if mask.ndim else ()
 
 
 def det3(M) -> np.ndarray:
-    """Determinants of 3x3 matrices, batched: (..., 3, 3) -> (...), as the triple product of the rows.
+    """Determinants of 3x3 matrices, batched: (..., 3, 3) -> (...), as the triple product of the
+    rows.
 
     Elementwise (no LAPACK call per matrix), so much faster than ``numpy.linalg.det`` on large
     batches of 3x3 matrices; same value to rounding.
@@ -108,7 +111,8 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
             fast = np.asarray(R, dtype=float)
         except (TypeError, ValueError):
             fast = None
-        # one fused pass (orthonormality, det, finiteness: NaN fails it); the detailed checks below only on failure
+        # one fused pass (orthonormality, det, finiteness: NaN fails it); the detailed checks below
+        # only on failure
         if fast is not None and fast.ndim >= 2 and fast.shape[-2:] == (3, 3) and np.all(
                 rotation_violation(fast) <= atol):
             return fast
@@ -134,8 +138,8 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
 
 
 def check_atol(atol, name: str = "atol"):
-    """``atol`` of a rotation test, or ``ValueError`` naming ``name`` unless it is a finite number in
-    ``(0, MAX_ROTATION_ATOL]``."""
+    """``atol`` of a rotation test, or ``ValueError`` naming ``name`` unless it is a finite number
+    in ``(0, MAX_ROTATION_ATOL]``."""
     check_number(name, atol, minimum=0)
     if atol > MAX_ROTATION_ATOL:
         raise ValueError(f"{name} must be <= {MAX_ROTATION_ATOL:g} (MAX_ROTATION_ATOL: looser matrices are not "
@@ -144,7 +148,8 @@ def check_atol(atol, name: str = "atol"):
 
 
 def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
-    """A start rotation for a batch of problems: ``None`` means the identity; broadcast to ``batch_shape``.
+    """A start rotation for a batch of problems: ``None`` means the identity; broadcast to
+    ``batch_shape``.
 
     Raises
     ------
@@ -164,13 +169,14 @@ def check_init(init, batch_shape: tuple, name: str = "init") -> np.ndarray:
 
 
 def _plain(value):
-    """``value`` for a message: a NumPy scalar as the Python one (``-1.0``, never ``np.float64(-1.0)``)."""
+    """``value`` for a message: a NumPy scalar as the Python one (``-1.0``, never
+    ``np.float64(-1.0)``)."""
     return value.item() if isinstance(value, np.generic) else value
 
 
 def check_number(name: str, value, *, minimum=None, integer: bool = False, strict: bool = True):
-    """``value``, or ``ValueError`` naming ``name`` unless it is a finite number (an integer if asked) above
-    ``minimum`` (``>=`` if not ``strict``). Booleans are refused."""
+    """``value``, or ``ValueError`` naming ``name`` unless it is a finite number (an integer if
+    asked) above ``minimum`` (``>=`` if not ``strict``). Booleans are refused."""
     ok_type = (isinstance(value, (int, np.integer)) if integer
                else isinstance(value, (int, float, np.integer, np.floating)))
     if isinstance(value, bool) or not ok_type or not math.isfinite(float(value)):
@@ -181,8 +187,9 @@ def check_number(name: str, value, *, minimum=None, integer: bool = False, stric
 
 
 def check_range(name: str, value, *, low: float, high: float, low_open: bool = True, high_open: bool = False) -> float:
-    """``float(value)``, or ``ValueError`` naming ``name`` unless it is a finite number in the interval from ``low`` to
-    ``high`` (open or closed at each end as asked). Booleans are refused."""
+    """``float(value)``, or ``ValueError`` naming ``name`` unless it is a finite number in the
+    interval from ``low`` to ``high`` (open or closed at each end as asked). Booleans are
+    refused."""
     check_number(name, value)
     if (value <= low if low_open else value < low) or (value >= high if high_open else value > high):
         raise ValueError(f"{name} must be in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}, "
@@ -191,9 +198,10 @@ def check_range(name: str, value, *, low: float, high: float, low_open: bool = T
 
 
 def check_rotation_flat(name: str, flat, atol: float = ROTATION_ATOL) -> None:
-    """The checks of :func:`check_rotation_matrices` on one rotation given as a row-major list of 9 floats, in plain
-    Python (a per-sample hot path: :class:`replication.rig.online.OnlineCalibrator`); the largest entry of ``R^T R - I``
-    against ``atol``."""
+    """The checks of :func:`check_rotation_matrices` on one rotation given as a row-major list of 9
+    floats, in plain Python (a per-sample hot path:
+    :class:`replication.rig.online.OnlineCalibrator`); the largest entry of ``R^T R - I`` against
+    ``atol``."""
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = flat
     if atol != ROTATION_ATOL:
         check_atol(atol)

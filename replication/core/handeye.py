@@ -228,7 +228,8 @@ def kronecker_operator(A, B, weights=None) -> np.ndarray:
     else:
         w = np.asarray(weights, dtype=float)
         w = w / w.sum(axis=-1, keepdims=True)
-    # sum_j w_j B_j[a, b] A_j[c, d] as one (9 x J) @ (J x 9) product per problem, no (J, 9, 9) intermediate
+    # sum_j w_j B_j[a, b] A_j[c, d] as one (9 x J) @ (J x 9) product per problem, no (J, 9, 9)
+    # intermediate
     S = np.swapaxes((B * w[..., None, None]).reshape(lead + (J, 9)), -1, -2) @ A.reshape(lead + (J, 9))
     # (B kron A)[(a, c), (b, d)] = B[a, b] A[c, d]
     return np.swapaxes(S.reshape(lead + (3, 3, 3, 3)), -3, -2).reshape(lead + (9, 9))
@@ -259,7 +260,8 @@ def handeye_cost(R, A, B) -> np.ndarray:
 
 
 def _pair_differences(R, A, B) -> np.ndarray:
-    """``A_j R - R B_j`` for every pair, shape (..., J, 3, 3); ``R`` broadcast as in :func:`handeye_cost`."""
+    """``A_j R - R B_j`` for every pair, shape (..., J, 3, 3); ``R`` broadcast as in
+    :func:`handeye_cost`."""
     Rj = np.asarray(R, dtype=float)[..., None, :, :]
     return np.asarray(A, dtype=float) @ Rj - Rj @ np.asarray(B, dtype=float)
 

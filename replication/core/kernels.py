@@ -1,5 +1,5 @@
-"""Batched small-matrix kernels: elementwise NumPy over the batch instead of one LAPACK call per 3x3 matrix. Theory and
-measured numbers: ``docs/methods.md``, section ``replication.core.kernels``."""
+"""Batched small-matrix kernels: elementwise NumPy over the batch instead of one LAPACK call per 3x3
+matrix. Theory and measured numbers: ``docs/methods.md``, section ``replication.core.kernels``."""
 from __future__ import annotations
 
 import contextlib
@@ -10,28 +10,36 @@ __all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "TOP3_SAFE", "
            "polar_factor", "eigvalsh3", "top_eigenvector3", "solve3", "bottom_eigenvector4", "rotation_violation",
            "lapack_reference"]
 
-#: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which :func:`polar_factor` hands a
-#: matrix to LAPACK: the polar factor's condition number is ``sigma_max / (sigma_2 + sigma_3)``, so at the bound the
-#: Newton iterate and LAPACK's SVD still agree to about 1e-13, and rank-deficient matrices (whose nearest orthogonal
-#: matrix is not unique) never enter the iteration.
+#: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which
+#: :func:`polar_factor` hands a matrix to LAPACK: the polar factor's condition number is ``sigma_max
+#: / (sigma_2 + sigma_3)``, so at the bound the Newton iterate and LAPACK's SVD still agree to about
+#: 1e-13, and rank-deficient matrices (whose nearest orthogonal matrix is not unique) never enter
+#: the iteration.
 POLAR_SAFE = 1e-3
-#: ``1 - |r|`` (``r`` the normalised determinant of the trigonometric solution) below which :func:`eigvalsh3` hands a
-#: matrix to LAPACK: two eigenvalues are then within a few thousandths of the spread, where ``arccos`` loses digits.
+#: ``1 - |r|`` (``r`` the normalised determinant of the trigonometric solution) below which
+#: :func:`eigvalsh3` hands a matrix to LAPACK: two eigenvalues are then within a few thousandths of
+#: the spread, where ``arccos`` loses digits.
 EIG3_SAFE = 1e-4
-#: ``|det A| / ||A||_F^3`` below which :func:`solve3` hands a system to LAPACK (condition number above about 1e3).
+#: ``|det A| / ||A||_F^3`` below which :func:`solve3` hands a system to LAPACK (condition number
+#: above about 1e3).
 SOLVE3_SAFE = 1e-3
-#: Bound on ``sin`` of the angle between :func:`bottom_eigenvector4`'s answer and the eigenvector (its residual over
-#: the gap to the other eigenvalues) above which the matrix goes to LAPACK: about a gap below 0.4 % of ``||S||``.
+#: Bound on ``sin`` of the angle between :func:`bottom_eigenvector4`'s answer and the eigenvector
+#: (its residual over the gap to the other eigenvalues) above which the matrix goes to LAPACK: about
+#: a gap below 0.4 % of ``||S||``.
 EIG4_SAFE = 1e-13
-#: Batches of fewer matrices go to LAPACK whole in :func:`polar_factor` and :func:`eigvalsh3`: below it the kernels'
-#: fixed Python cost exceeds LAPACK's per-matrix cost (crossover measured at 32-64 matrices on the loaded 2-core EPYC).
+#: Batches of fewer matrices go to LAPACK whole in :func:`polar_factor` and :func:`eigvalsh3`: below
+#: it the kernels' fixed Python cost exceeds LAPACK's per-matrix cost (crossover measured at 32-64
+#: matrices on the loaded 2-core EPYC).
 MIN_BATCH = 64
-#: The same for :func:`solve3` and :func:`bottom_eigenvector4`, whose LAPACK calls cost less per matrix (crossover
-#: measured at 256-512 systems for ``solve``; 4x4 ``eigh`` wins at every size unless ``lambda_1 << lambda_2``).
+#: The same for :func:`solve3` and :func:`bottom_eigenvector4`, whose LAPACK calls cost less per
+#: matrix (crossover measured at 256-512 systems for ``solve``; 4x4 ``eigh`` wins at every size
+#: unless ``lambda_1 << lambda_2``).
 MIN_BATCH_LARGE = 256
-#: Newton iterations of :func:`polar_factor` at most; converged entries stop changing, the rest go to LAPACK.
+#: Newton iterations of :func:`polar_factor` at most; converged entries stop changing, the rest go
+#: to LAPACK.
 _POLAR_MAX_ITERATIONS = 16
-#: A Newton step below this (Frobenius) ends the iteration: the next one would change the factor by about its square.
+#: A Newton step below this (Frobenius) ends the iteration: the next one would change the factor by
+#: about its square.
 _POLAR_LAST_STEP = 1e-9
 
 #: Matrices per block of the iterative kernel: small enough that its temporaries stay in cache.
@@ -42,7 +50,8 @@ _FORCE_LAPACK = [False]
 
 @contextlib.contextmanager
 def lapack_reference():
-    """Inside this block every kernel takes the LAPACK path (the behaviour before the kernels; for benchmarks)."""
+    """Inside this block every kernel takes the LAPACK path (the behaviour before the kernels; for
+    benchmarks)."""
     previous = _FORCE_LAPACK[0]
     _FORCE_LAPACK[0] = True
     try:
@@ -60,22 +69,25 @@ def _use_kernel(n: int, method: str, minimum: int = MIN_BATCH) -> bool:
 
 
 def _entries(M: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) -> (9, n): row-major entries as nine contiguous arrays over the flattened batch."""
+    """(..., 3, 3) -> (9, n): row-major entries as nine contiguous arrays over the flattened
+    batch."""
     return np.ascontiguousarray(M.reshape(-1, 9).T)
 
 
-#: Row-major cofactor ``k`` of a 3x3 matrix is ``x[_P1[k]] x[_P2[k]] - x[_P3[k]] x[_P4[k]]`` (its entries ``x``).
+#: Row-major cofactor ``k`` of a 3x3 matrix is ``x[_P1[k]] x[_P2[k]] - x[_P3[k]] x[_P4[k]]`` (its
+#: entries ``x``).
 _P1, _P2 = np.array([4, 5, 3, 2, 0, 1, 1, 2, 0]), np.array([8, 6, 7, 7, 8, 6, 5, 3, 4])
 _P3, _P4 = np.array([5, 3, 4, 1, 2, 0, 2, 0, 1]), np.array([7, 8, 6, 8, 6, 7, 4, 5, 3])
 
 
 def _cofactors(x, rows: int = 9):
-    """Cofactor matrix (9, n) and determinant (n) of the matrices whose row-major entries are ``x`` (9, n).
+    """Cofactor matrix (9, n) and determinant (n) of the matrices whose row-major entries are ``x``
+    (9, n).
 
-    Nine cofactors in seven NumPy passes over (9, n) (four gathers, two products, a difference) rather than 27 over
-    (n,) and a stack; each entry is still ``p q - r s`` in that order, and the determinant ``(a C_0 + b C_1) + c C_2``,
-    so the result is the same to the last bit. ``rows=3``: the first three cofactors only (enough for the
-    determinant)."""
+    Nine cofactors in seven NumPy passes over (9, n) (four gathers, two products, a difference)
+    rather than 27 over (n,) and a stack; each entry is still ``p q - r s`` in that order, and the
+    determinant ``(a C_0 + b C_1) + c C_2``, so the result is the same to the last bit. ``rows=3``:
+    the first three cofactors only (enough for the determinant)."""
     C = x[_P1[:rows]] * x[_P2[:rows]]
     C -= x[_P3[:rows]] * x[_P4[:rows]]
     t = x[:3] * C[:3]
@@ -83,7 +95,8 @@ def _cofactors(x, rows: int = 9):
 
 
 def _lapack_polar(M: np.ndarray, mode: str) -> np.ndarray:
-    """Today's SVD path of :func:`replication.core.so3.nearest_rotation` / ``nearest_rotation_up_to_sign``."""
+    """Today's SVD path of :func:`replication.core.so3.nearest_rotation` /
+    ``nearest_rotation_up_to_sign``."""
     U, s, At = np.linalg.svd(M)  # eq. (16): M = U Sigma A^T
     P = U @ At  # eq. (17)
     if mode == "orthogonal":
@@ -122,15 +135,15 @@ def polar_factor(M, mode: str = "rotation", *, method: str = "auto") -> np.ndarr
         ``"up_to_sign"``: ``sign(det M) U A^T``, the rotation nearest to ``M`` or ``-M``
         (see :func:`replication.core.so3.nearest_rotation_up_to_sign`).
     method : {"auto", "kernel", "lapack"}
-        ``"auto"``: the Newton kernel for batches of at least :data:`MIN_BATCH` matrices; ``"kernel"``: always;
-        ``"lapack"``: one SVD per matrix.
+        ``"auto"``: the Newton kernel for batches of at least :data:`MIN_BATCH` matrices;
+        ``"kernel"``: always; ``"lapack"``: one SVD per matrix.
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
-        The same as the SVD path to about 1e-13. Matrices with ``2 |det M| / ||M||_F^3 <= POLAR_SAFE``
-        (near rank deficiency), reflections in mode ``"rotation"`` and any entry the iteration did not settle
-        are computed by SVD.
+        The same as the SVD path to about 1e-13. Matrices with ``2 |det M| / ||M||_F^3 <=
+        POLAR_SAFE`` (near rank deficiency), reflections in mode ``"rotation"`` and any entry the
+        iteration did not settle are computed by SVD.
     """
     if mode not in ("rotation", "orthogonal", "up_to_sign"):
         raise ValueError(f"mode must be 'rotation', 'orthogonal' or 'up_to_sign', got {mode!r}")
@@ -169,9 +182,10 @@ def polar_factor(M, mode: str = "rotation", *, method: str = "auto") -> np.ndarr
 def _newton_polar(x: np.ndarray, det: np.ndarray):
     """Scaled Newton iteration for the orthogonal polar factor of nonsingular matrices ``x`` (9, n).
 
-    Returns the factor (9, n) and the mask of entries that settled. Determinant scaling
-    ``zeta = |det X|^{-1/3}`` while the step is large, then the plain iteration, whose error after a step of
-    size ``delta`` is about ``delta^2 / 2``: a step below :data:`_POLAR_LAST_STEP` leaves rounding only.
+    Returns the factor (9, n) and the mask of entries that settled. Determinant scaling ``zeta =
+    |det X|^{-1/3}`` while the step is large, then the plain iteration, whose error after a step of
+    size ``delta`` is about ``delta^2 / 2``: a step below :data:`_POLAR_LAST_STEP` leaves rounding
+    only.
     """
     X = x * (np.abs(det) ** (-1.0 / 3.0))  # |det| = 1: the first scaling
     step = np.full(X.shape[1], np.inf)
@@ -199,10 +213,10 @@ def eigvalsh3(S, *, method: str = "auto") -> np.ndarray:
     """Eigenvalues of symmetric 3x3 matrices in ascending order, batched: (..., 3, 3) -> (..., 3).
 
     The closed form of the characteristic cubic (``q = tr S / 3``, ``p = ||S - q I||_F / sqrt 6``,
-    ``r = det((S - q I) / p) / 2``, eigenvalues ``q + 2 p cos(arccos(r) / 3 + 2 pi k / 3)``); only the lower
-    triangle is read, as LAPACK's ``eigvalsh`` does. Matrices with two eigenvalues close together relative to
-    their spread (``1 - |r| < EIG3_SAFE``) go to LAPACK, so the result agrees with ``numpy.linalg.eigvalsh``
-    to about 1e-13 times ``||S||``.
+    ``r = det((S - q I) / p) / 2``, eigenvalues ``q + 2 p cos(arccos(r) / 3 + 2 pi k / 3)``); only
+    the lower triangle is read, as LAPACK's ``eigvalsh`` does. Matrices with two eigenvalues close
+    together relative to their spread (``1 - |r| < EIG3_SAFE``) go to LAPACK, so the result agrees
+    with ``numpy.linalg.eigvalsh`` to about 1e-13 times ``||S||``.
 
     Parameters
     ----------
@@ -235,19 +249,20 @@ def eigvalsh3(S, *, method: str = "auto") -> np.ndarray:
     return out.reshape(S.shape[:-1])
 
 
-#: Relative gap ``(lambda_3 - lambda_2) / lambda_3`` below which :func:`top_eigenvector3` hands a matrix to LAPACK:
-#: the cross-product eigenvector's error is about the eigenvalue's rounding over the gap (below 1e-12 above it).
+#: Relative gap ``(lambda_3 - lambda_2) / lambda_3`` below which :func:`top_eigenvector3` hands a
+#: matrix to LAPACK: the cross-product eigenvector's error is about the eigenvalue's rounding over
+#: the gap (below 1e-12 above it).
 TOP3_SAFE = 1e-2
 
 
 def top_eigenvector3(S, *, method: str = "auto") -> np.ndarray:
-    """Unit eigenvectors of the largest eigenvalue of symmetric positive semidefinite 3x3 matrices, batched:
-    (..., 3, 3) -> (..., 3), as ``numpy.linalg.eigh(S)[1][..., :, -1]`` up to sign.
+    """Unit eigenvectors of the largest eigenvalue of symmetric positive semidefinite 3x3 matrices,
+    batched: (..., 3, 3) -> (..., 3), as ``numpy.linalg.eigh(S)[1][..., :, -1]`` up to sign.
 
-    With ``lambda`` the largest eigenvalue (:func:`eigvalsh3`), the eigenvector is orthogonal to the rows of
-    ``S - lambda I``: the longest of the three cross products of two rows, normalised. Matrices whose two largest
-    eigenvalues are within :data:`TOP3_SAFE` of the largest (the direction then ill-determined), or with
-    ``lambda <= 0``, go to LAPACK.
+    With ``lambda`` the largest eigenvalue (:func:`eigvalsh3`), the eigenvector is orthogonal to the
+    rows of ``S - lambda I``: the longest of the three cross products of two rows, normalised.
+    Matrices whose two largest eigenvalues are within :data:`TOP3_SAFE` of the largest (the
+    direction then ill-determined), or with ``lambda <= 0``, go to LAPACK.
 
     Parameters
     ----------
@@ -285,8 +300,9 @@ def top_eigenvector3(S, *, method: str = "auto") -> np.ndarray:
 def solve3(A, b, *, method: str = "auto") -> np.ndarray:
     """Solutions ``x`` of ``A x = b`` for 3x3 systems, batched: (..., 3, 3), (..., 3) -> (..., 3).
 
-    Cramer's rule through the cofactors; systems with ``|det A| / ||A||_F^3 <= SOLVE3_SAFE`` (condition number above
-    about 1e3) go to ``numpy.linalg.solve``, so the result agrees with it to about 1e-13 relative.
+    Cramer's rule through the cofactors; systems with ``|det A| / ||A||_F^3 <= SOLVE3_SAFE``
+    (condition number above about 1e3) go to ``numpy.linalg.solve``, so the result agrees with it to
+    about 1e-13 relative.
     """
     A = np.asarray(A, dtype=float)
     b = np.asarray(b, dtype=float)
@@ -313,8 +329,8 @@ def solve3(A, b, *, method: str = "auto") -> np.ndarray:
 
 
 def _adjugate4(e):
-    """Adjugates of 4x4 matrices from their row-major entries ``e`` (16, n), as (16, n): by the 2x2 minors of the top
-    and the bottom row pairs (Laplace expansion)."""
+    """Adjugates of 4x4 matrices from their row-major entries ``e`` (16, n), as (16, n): by the 2x2
+    minors of the top and the bottom row pairs (Laplace expansion)."""
     m00, m01, m02, m03, m10, m11, m12, m13, m20, m21, m22, m23, m30, m31, m32, m33 = e
     s0, s1, s2 = m00 * m11 - m10 * m01, m00 * m12 - m10 * m02, m00 * m13 - m10 * m03
     s3, s4, s5 = m01 * m12 - m11 * m02, m01 * m13 - m11 * m03, m02 * m13 - m12 * m03
@@ -338,8 +354,9 @@ def _matvec4(e, x):
 
 
 def _bottom_eigenvector4_block(e):
-    """:func:`bottom_eigenvector4` on row-major entries ``e`` (16, n) of ``S / ||S||_F``: ``x`` (4, n) and the bound
-    ``||r|| / (mu - rho)`` on ``sin`` of its angle to the eigenvector (inf where ``mu <= rho``)."""
+    """:func:`bottom_eigenvector4` on row-major entries ``e`` (16, n) of ``S / ||S||_F``: ``x`` (4,
+    n) and the bound ``||r|| / (mu - rho)`` on ``sin`` of its angle to the eigenvector (inf where
+    ``mu <= rho``)."""
     adj = _adjugate4(e)
     k = np.argmax(adj[[0, 5, 10, 15]], axis=0)  # the largest diagonal entry's column
     x = adj.reshape(4, 4, -1)[:, k, np.arange(e.shape[1])]
@@ -360,20 +377,22 @@ def _bottom_eigenvector4_block(e):
 
 
 def bottom_eigenvector4(S, *, method: str = "auto") -> np.ndarray:
-    """Unit eigenvectors of the smallest eigenvalue of symmetric positive semidefinite 4x4 matrices, batched:
-    (..., 4, 4) -> (..., 4), as ``numpy.linalg.eigh(S)[1][..., :, 0]`` up to sign.
+    """Unit eigenvectors of the smallest eigenvalue of symmetric positive semidefinite 4x4 matrices,
+    batched: (..., 4, 4) -> (..., 4), as ``numpy.linalg.eigh(S)[1][..., :, 0]`` up to sign.
 
-    ``adj(S) = sum_i (prod_{j != i} lambda_j) v_i v_i^T`` is dominated by ``v_1`` when ``lambda_1`` is the
-    smallest: start from its largest column, three power steps with ``adj(S)``, then a check: with the Rayleigh
-    quotient ``rho``, the residual ``r = S x - rho x`` and ``mu`` the smallest eigenvalue of ``S`` on the complement
-    of ``x`` (the other three eigenvalues, to second order in ``r``), ``||r|| / (mu - rho)`` bounds ``sin`` of the
-    angle to the eigenvector. Where it exceeds :data:`EIG4_SAFE` (or ``mu <= rho``: ``x`` is not the bottom
-    eigenvector; or ``lambda_1 / lambda_2`` is too large for three steps) the matrix goes to LAPACK.
+    ``adj(S) = sum_i (prod_{j != i} lambda_j) v_i v_i^T`` is dominated by ``v_1`` when ``lambda_1``
+    is the smallest: start from its largest column, three power steps with ``adj(S)``, then a check:
+    with the Rayleigh quotient ``rho``, the residual ``r = S x - rho x`` and ``mu`` the smallest
+    eigenvalue of ``S`` on the complement of ``x`` (the other three eigenvalues, to second order in
+    ``r``), ``||r|| / (mu - rho)`` bounds ``sin`` of the angle to the eigenvector. Where it exceeds
+    :data:`EIG4_SAFE` (or ``mu <= rho``: ``x`` is not the bottom eigenvector; or ``lambda_1 /
+    lambda_2`` is too large for three steps) the matrix goes to LAPACK.
 
     Parameters
     ----------
     S : ndarray, shape (..., 4, 4)
-        Symmetric positive semidefinite matrices (only such; a matrix with a negative eigenvalue may go to LAPACK).
+        Symmetric positive semidefinite matrices (only such; a matrix with a negative eigenvalue may
+        go to LAPACK).
     method : {"auto", "kernel", "lapack"}
         As in :func:`polar_factor`.
     """
@@ -402,10 +421,11 @@ def bottom_eigenvector4(S, *, method: str = "auto") -> np.ndarray:
 
 
 def rotation_violation(R) -> np.ndarray:
-    """``max(||R^T R - I||_F, |det R - 1|)`` of each 3x3 matrix in one pass, batched: (..., 3, 3) -> (...).
+    """``max(||R^T R - I||_F, |det R - 1|)`` of each 3x3 matrix in one pass, batched: (..., 3, 3) ->
+    (...).
 
-    NaN (or inf) wherever the matrix holds NaN or inf, so ``violation <= atol`` is the whole rotation test of
-    :func:`~replication.core.checks.check_rotation_matrices`.
+    NaN (or inf) wherever the matrix holds NaN or inf, so ``violation <= atol`` is the whole
+    rotation test of :func:`~replication.core.checks.check_rotation_matrices`.
     """
     R = np.asarray(R, dtype=float)
     x = _entries(R)

@@ -1,11 +1,12 @@
 """Validated motion pairs (:class:`Motions`) and their observability, built once at the public door.
 
 Every solver's public door (:func:`replication.core.solvers.solve` and each exported solver
-function) turns ``(A, B)`` into a :class:`Motions` by :func:`prepare_motions`; private solver
-cores receive it and never validate again. The operator ``K`` of
-:func:`replication.core.handeye.kronecker_operator`, its decompositions (one ``eigh`` of ``K^T K`` for the
-singular values and the top singular vectors, one of ``sym(K)`` where a solver needs its eigenvectors) and
-:class:`MotionObservability` are computed on first use and cached. Notation and frames: ``docs/conventions.md``.
+function) turns ``(A, B)`` into a :class:`Motions` by :func:`prepare_motions`; private solver cores
+receive it and never validate again. The operator ``K`` of
+:func:`replication.core.handeye.kronecker_operator`, its decompositions (one ``eigh`` of ``K^T K``
+for the singular values and the top singular vectors, one of ``sym(K)`` where a solver needs its
+eigenvectors) and :class:`MotionObservability` are computed on first use and cached. Notation and
+frames: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -28,8 +29,8 @@ class MotionObservability:
     Attributes
     ----------
     kron_singular_values : ndarray, shape (..., 9)
-        Singular values of :func:`kronecker_operator`, descending (:attr:`Motions.singular_values`). Noise-free,
-        ``sigma_1 = 1``; the fixed point ``K vec(R0) = vec(R0)`` is unique iff the
+        Singular values of :func:`kronecker_operator`, descending (:attr:`Motions.singular_values`).
+        Noise-free, ``sigma_1 = 1``; the fixed point ``K vec(R0) = vec(R0)`` is unique iff the
         motions are not all about one axis.
     spectral_ratio : ndarray, shape (...)
         ``sigma_2 / sigma_1`` of ``K``. One two-step iteration is a power-method
@@ -74,7 +75,8 @@ class MotionObservability:
     inconsistency: np.ndarray
 
     def iterations_for(self, reduction: float = 1e-6) -> np.ndarray:
-        """Iterations for the projected two-step error to shrink by ``reduction`` (noise-free analysis).
+        """Iterations for the projected two-step error to shrink by ``reduction`` (noise-free
+        analysis).
 
         From ``two_step_rate``; ``inf`` where it is 1 (all motions about one axis). A diagnostic:
         :func:`replication.core.solvers.two_step` decides its iterations itself.
@@ -85,7 +87,8 @@ class MotionObservability:
 
 
 def _axis_spread_deg(w: np.ndarray):
-    """``(s_2, sqrt(s_1^2 + s_2^2 + s_3^2)) / sqrt(J)`` of the (..., J, 3) rotation vectors ``w``, degrees.
+    """``(s_2, sqrt(s_1^2 + s_2^2 + s_3^2)) / sqrt(J)`` of the (..., J, 3) rotation vectors ``w``,
+    degrees.
 
     The first is the axis spread of :class:`MotionObservability`, the second the RMS motion angle.
     """
@@ -96,17 +99,20 @@ def _axis_spread_deg(w: np.ndarray):
 
 
 def _largest_singular_value(M: np.ndarray) -> np.ndarray:
-    """``sigma_max`` of 3x3 matrices, ``sqrt(lambda_max(M^T M))`` (the spectral norm, without an SVD per matrix)."""
+    """``sigma_max`` of 3x3 matrices, ``sqrt(lambda_max(M^T M))`` (the spectral norm, without an SVD
+    per matrix)."""
     return np.sqrt(np.clip(eigvalsh3(np.swapaxes(M, -1, -2) @ M)[..., -1], 0.0, None))
 
 
-#: Below this, the gap between the two largest eigenvalues of ``sym(K)`` and the data's inconsistency both
-#: vanish to rounding: a second rotation solves eq. (7) exactly (see :meth:`Motions.require`).
+#: Below this, the gap between the two largest eigenvalues of ``sym(K)`` and the data's
+#: inconsistency both vanish to rounding: a second rotation solves eq. (7) exactly (see
+#: :meth:`Motions.require`).
 NONUNIQUE_TOL = 1e-10
 
 
 def _first_batch_index(mask):
-    """``(index, " at batch index (...)")`` of the first True of a batch mask (``((), "")`` for a scalar)."""
+    """``(index, " at batch index (...)")`` of the first True of a batch mask (``((), "")`` for a
+    scalar)."""
     idx = _first_index(mask)
     return idx, (f" at batch index {idx}" if idx else "")
 
@@ -126,9 +132,9 @@ class Motions:
     B : ndarray, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
 
-    ``Motions(A, B, atol=1e-6)``: ``atol`` is the tolerance of the rotation test of ``A`` and ``B``, a finite
-    number in ``(0, 1e-2]`` (:func:`replication.core.checks.check_rotation_matrices`; ``ValueError`` naming ``atol``
-    otherwise).
+    ``Motions(A, B, atol=1e-6)``: ``atol`` is the tolerance of the rotation test of ``A`` and ``B``,
+    a finite number in ``(0, 1e-2]`` (:func:`replication.core.checks.check_rotation_matrices`;
+    ``ValueError`` naming ``atol`` otherwise).
     """
 
     __slots__ = ("A", "B", "_cache")
@@ -137,7 +143,8 @@ class Motions:
         A, B = check_motion_pairs(A, B, min_motions=1, atol=atol)
         if A.size == 0:
             raise ValueError(f"A and B hold no problems (batch shape {A.shape[:-3]})")
-        # private, read-only copies: the caller's arrays may change later, the cached K must not go stale
+        # private, read-only copies: the caller's arrays may change later, the cached K must not go
+        # stale
         A, B = np.array(A, dtype=float), np.array(B, dtype=float)
         A.setflags(write=False)
         B.setflags(write=False)
@@ -153,7 +160,8 @@ class Motions:
 
     @classmethod
     def _trusted(cls, A: np.ndarray, B: np.ndarray) -> Motions:
-        """Wrap arrays that come from validated motions (a resample, a sub-batch) without re-validating."""
+        """Wrap arrays that come from validated motions (a resample, a sub-batch) without
+        re-validating."""
         m = object.__new__(cls)
         m._set(A, B)
         return m
@@ -183,13 +191,15 @@ class Motions:
 
     @property
     def svd(self):
-        """``(U, s, Vt)`` of ``K`` (descending singular values), batched (the full SVD; the solvers use
-        :attr:`singular_values` and :attr:`top_singular_vectors`, from one ``eigh`` of ``K^T K``)."""
+        """``(U, s, Vt)`` of ``K`` (descending singular values), batched (the full SVD; the solvers
+        use :attr:`singular_values` and :attr:`top_singular_vectors`, from one ``eigh`` of ``K^T
+        K``)."""
         return self._cached("svd", lambda: np.linalg.svd(self.K))
 
     def _gram_eigh(self):
-        """``eigh`` of ``K^T K``, eigenvalues descending (columns of the vectors in the same order): the one 9x9
-        decomposition behind :attr:`singular_values` and :attr:`top_singular_vectors` (half an SVD's cost)."""
+        """``eigh`` of ``K^T K``, eigenvalues descending (columns of the vectors in the same order):
+        the one 9x9 decomposition behind :attr:`singular_values` and :attr:`top_singular_vectors`
+        (half an SVD's cost)."""
         def compute():
             K = self.K
             w, V = np.linalg.eigh(np.swapaxes(K, -1, -2) @ K)
@@ -198,16 +208,18 @@ class Motions:
 
     @property
     def singular_values(self) -> np.ndarray:
-        """Singular values of ``K``, descending, shape (..., 9): ``sqrt`` of the eigenvalues of ``K^T K`` (within
-        about ``eps sigma_1^2 / sigma_k`` of the SVD's: relative rounding for the top ones, which decide
-        ``spectral_ratio``; an exact zero reads as up to about ``sqrt(eps) sigma_1``)."""
+        """Singular values of ``K``, descending, shape (..., 9): ``sqrt`` of the eigenvalues of
+        ``K^T K`` (within about ``eps sigma_1^2 / sigma_k`` of the SVD's: relative rounding for the
+        top ones, which decide ``spectral_ratio``; an exact zero reads as up to about ``sqrt(eps)
+        sigma_1``)."""
         return self._cached("singular_values", lambda: np.sqrt(np.clip(self._gram_eigh()[0], 0.0, None)))
 
     @property
     def top_singular_vectors(self):
-        """``(u1, sigma_1, v1)``: the top right singular vector ``v1`` of ``K`` (the top eigenvector of ``K^T K``),
-        ``sigma_1 = ||K v1||`` and ``u1 = K v1 / sigma_1``, so ``K v1 = sigma_1 u1`` (the pairing of the two-step
-        iteration's limits); each to about ``eps / (1 - sigma_2 / sigma_1)`` as from the SVD."""
+        """``(u1, sigma_1, v1)``: the top right singular vector ``v1`` of ``K`` (the top eigenvector
+        of ``K^T K``), ``sigma_1 = ||K v1||`` and ``u1 = K v1 / sigma_1``, so ``K v1 = sigma_1 u1``
+        (the pairing of the two-step iteration's limits); each to about ``eps / (1 - sigma_2 /
+        sigma_1)`` as from the SVD."""
         def compute():
             v1 = self._gram_eigh()[1][..., :, 0]
             Kv = np.einsum("...ab,...b->...a", self.K, v1)
@@ -217,7 +229,8 @@ class Motions:
 
     @property
     def rotation_vectors(self):
-        """``(log A, log B)``: the rotation vectors of the camera and sensor motions (radians), (..., J, 3) each."""
+        """``(log A, log B)``: the rotation vectors of the camera and sensor motions (radians),
+        (..., J, 3) each."""
         return self._cached("rotation_vectors", lambda: (rotation_vector_from_matrix(self.A),
                                                          rotation_vector_from_matrix(self.B)))
 
@@ -232,10 +245,11 @@ class Motions:
 
     @property
     def leave_one_out_spread_deg(self):
-        """``(spread, pair)``: the smaller of the camera and sensor axis spreads (as :attr:`axis_spread_deg`, RMS over
-        the ``J - 1`` other pairs) once the pair that turns most about axes other than the dominant one is left
-        out, and that pair's index (per problem; that of the side with the smaller spread). Far below the full
-        spread, the rotation about the dominant axis rests on that one pair. NaN where ``J < 3``."""
+        """``(spread, pair)``: the smaller of the camera and sensor axis spreads (as
+        :attr:`axis_spread_deg`, RMS over the ``J - 1`` other pairs) once the pair that turns most
+        about axes other than the dominant one is left out, and that pair's index (per problem; that
+        of the side with the smaller spread). Far below the full spread, the rotation about the
+        dominant axis rests on that one pair. NaN where ``J < 3``."""
         def compute():
             out = []
             for w in self.rotation_vectors:
@@ -268,10 +282,11 @@ class Motions:
 
     @property
     def sym_eigh(self):
-        """``(eigenvalues, eigenvectors)`` of ``sym(K)``, eigenvalues descending (vector columns in that order): the
-        relaxed start (:func:`replication.core.solvers.certificate.relaxed_rotation`) and, once computed,
-        :attr:`sym_eigvals` too, so a solver that needs both makes one decomposition (:func:`solve` asks for this
-        first for such solvers)."""
+        """``(eigenvalues, eigenvectors)`` of ``sym(K)``, eigenvalues descending (vector columns in
+        that order): the relaxed start
+        (:func:`replication.core.solvers.certificate.relaxed_rotation`) and, once computed,
+        :attr:`sym_eigvals` too, so a solver that needs both makes one decomposition (:func:`solve`
+        asks for this first for such solvers)."""
         def compute():
             w, V = np.linalg.eigh(self.sym)
             return w[..., ::-1], V[..., :, ::-1]
@@ -279,8 +294,9 @@ class Motions:
 
     @property
     def sym_eigvals(self) -> np.ndarray:
-        """Eigenvalues of ``sym(K) = (K + K^T) / 2``, descending, shape (..., 9): those of :attr:`sym_eigh` where it
-        was computed first, else ``eigvalsh`` (the two agree to rounding, about ``eps ||sym(K)||``)."""
+        """Eigenvalues of ``sym(K) = (K + K^T) / 2``, descending, shape (..., 9): those of
+        :attr:`sym_eigh` where it was computed first, else ``eigvalsh`` (the two agree to rounding,
+        about ``eps ||sym(K)||``)."""
         def compute():
             if "sym_eigh" in self._cache:
                 return self._cache["sym_eigh"][0]
@@ -303,7 +319,8 @@ class Motions:
 
     def require(self, *, min_motions: int = 2, observable: bool = True,
                 min_axis_spread_deg: float = 1e-6) -> Motions:
-        """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) ``R0`` is determined.
+        """Raise ``ValueError`` unless ``J >= min_motions`` and (if ``observable``) ``R0`` is
+        determined.
 
         Degenerate: on the camera or the sensor side every rotation axis is parallel (axis spread
         below ``min_axis_spread_deg``; see :func:`check_observable`), or, more generally, a second
@@ -363,7 +380,8 @@ def prepare_motions(A, B=None, *, min_motions: int = 2, require_observable: bool
         Degeneracy threshold (see :func:`check_observable`).
     _sym_vectors : bool
         For solvers that start from the relaxed solution: decompose ``sym(K)`` with its eigenvectors
-        (:attr:`Motions.sym_eigh`) before the checks, which then take its eigenvalues (one decomposition, not two).
+        (:attr:`Motions.sym_eigh`) before the checks, which then take its eigenvalues (one
+        decomposition, not two).
 
     Returns
     -------

@@ -1,9 +1,10 @@
-"""Rotation-matrix helpers: validation, projection onto SO(3), noise, sampling, error metrics, conversions.
+"""Rotation-matrix helpers: validation, projection onto SO(3), noise, sampling, error metrics,
+conversions.
 
-Every conversion of the package (rotation vectors, quaternions, Euler angles, slerp) lives here, named
-``<to>_from_<from>`` (``quaternion_from_matrix``, ``matrix_from_quaternion``): the naming rule of
-``docs/conventions.md``.
-Conventions (frames in names, batching, degrees vs radians, the paper's symbols): ``docs/conventions.md``.
+Every conversion of the package (rotation vectors, quaternions, Euler angles, slerp) lives here,
+named ``<to>_from_<from>`` (``quaternion_from_matrix``, ``matrix_from_quaternion``): the naming rule
+of ``docs/conventions.md``. Conventions (frames in names, batching, degrees vs radians, the paper's
+symbols): ``docs/conventions.md``.
 
 Reference: Z.-Q. Zhang, "Cameras and Inertial/Magnetic Sensor Units Alignment
 Calibration"; equation numbers below are the paper's.
@@ -67,8 +68,9 @@ def skew(v) -> np.ndarray:
 
 
 def canonical_axis(v) -> np.ndarray:
-    """An axis with the sign that makes its largest component positive: an eigenvector's sign is arbitrary (numpy's
-    AVX-512 and AVX2 paths returned opposite ones), an axis named in a message or a report must not be.
+    """An axis with the sign that makes its largest component positive: an eigenvector's sign is
+    arbitrary (numpy's AVX-512 and AVX2 paths returned opposite ones), an axis named in a message or
+    a report must not be.
 
     >>> canonical_axis([0.2, -0.9, 0.1]).tolist()
     [-0.2, 0.9, -0.1]
@@ -97,12 +99,13 @@ def nearest_rotation(M, *, enforce_det: bool = True) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (..., 3, 3)
-        Computed batched by :func:`replication.core.kernels.polar_factor` (Newton's iteration for the polar
-        factor; the SVD for nearly singular matrices, reflections with ``enforce_det`` and small batches): the SVD
-        path's answer to about 1e-13.
+        Computed batched by :func:`replication.core.kernels.polar_factor` (Newton's iteration for
+        the polar factor; the SVD for nearly singular matrices, reflections with ``enforce_det`` and
+        small batches): the SVD path's answer to about 1e-13.
     """
     M = check_matrices(M, "M")
-    # eqs. (16)-(17) as U A^T of the SVD M = U Sigma A^T, batched by replication.core.kernels (no SVD per matrix)
+    # eqs. (16)-(17) as U A^T of the SVD M = U Sigma A^T, batched by replication.core.kernels (no
+    # SVD per matrix)
     return polar_factor(M, "rotation" if enforce_det else "orthogonal")
 
 
@@ -269,7 +272,8 @@ def angle_between_deg(R_est, R_true) -> np.ndarray:
 
 
 def _scipy_rotation():
-    """SciPy's ``Rotation``, imported on first use: ``import replication.core.so3`` loads NumPy only."""
+    """SciPy's ``Rotation``, imported on first use: ``import replication.core.so3`` loads NumPy
+    only."""
     from scipy.spatial.transform import Rotation
 
     return Rotation
@@ -284,7 +288,8 @@ def _batched(func, X, tail_in, tail_out):
 
 
 def rotation_vector_from_matrix(R) -> np.ndarray:
-    """Rotation vectors ``w`` (radians, ``|w| <= pi``) with ``R = exp([w]x)`` (the log map of SO(3)), batched.
+    """Rotation vectors ``w`` (radians, ``|w| <= pi``) with ``R = exp([w]x)`` (the log map of
+    SO(3)), batched.
 
     Elementwise NumPy (no per-matrix call): ``theta = atan2(|v|, (tr R - 1) / 2)`` with
     ``v = vee(R - R^T) / 2 = sin(theta) n``; beyond 120 deg the axis comes from the
@@ -311,8 +316,8 @@ def rotation_vector_from_matrix(R) -> np.ndarray:
     w = v * ratio[..., None]
     far = c < -0.5
     if far.any():
-        # column k of S = (R + R^T) / 2 - c I, k the best-conditioned column of n n^T (its largest diagonal entry);
-        # only that column is formed, each entry by the same operations as in S
+        # column k of S = (R + R^T) / 2 - c I, k the best-conditioned column of n n^T (its largest
+        # diagonal entry); only that column is formed, each entry by the same operations as in S
         idx = np.flatnonzero(far)
         Rf, cf = R.reshape(-1, 3, 3)[idx], c.reshape(-1)[idx]
         d = np.einsum("nii->ni", Rf)
@@ -327,8 +332,8 @@ def rotation_vector_from_matrix(R) -> np.ndarray:
 
 
 def matrix_from_rotation_vector(w) -> np.ndarray:
-    """Rotation matrices ``exp([w]x)`` (the exp map of SO(3)) from rotation vectors (radians), batched:
-    (..., 3) -> (..., 3, 3).
+    """Rotation matrices ``exp([w]x)`` (the exp map of SO(3)) from rotation vectors (radians),
+    batched: (..., 3) -> (..., 3, 3).
 
     Rodrigues' formula ``I + sin(t)/t [w]x + (1 - cos(t))/t^2 [w]x^2`` (``t = |w|``), elementwise,
     with Taylor terms for ``t < 1e-4``.
@@ -347,7 +352,8 @@ def matrix_from_rotation_vector(w) -> np.ndarray:
 
 
 def quaternion_from_matrix(R) -> np.ndarray:
-    """Unit quaternions ``(w, x, y, z)``, scalar first, with ``w >= 0``, batched: (..., 3, 3) -> (..., 4).
+    """Unit quaternions ``(w, x, y, z)``, scalar first, with ``w >= 0``, batched: (..., 3, 3) ->
+    (..., 4).
 
     ``R`` rotates by ``theta`` about the unit axis ``n`` and
     ``q = (cos(theta/2), sin(theta/2) n)``, from :func:`rotation_vector_from_matrix` (elementwise).
@@ -357,8 +363,8 @@ def quaternion_from_matrix(R) -> np.ndarray:
 
 
 def quaternion_from_rotation_vector(w) -> np.ndarray:
-    """Unit quaternions ``(w, x, y, z)``, scalar first, from rotation vectors ``|w| <= pi`` (radians), batched:
-    (..., 3) -> (..., 4); ``quaternion_from_matrix(R)`` is
+    """Unit quaternions ``(w, x, y, z)``, scalar first, from rotation vectors ``|w| <= pi``
+    (radians), batched: (..., 3) -> (..., 4); ``quaternion_from_matrix(R)`` is
     ``quaternion_from_rotation_vector(rotation_vector_from_matrix(R))``."""
     w = np.asarray(w, dtype=float)
     theta = np.sqrt(np.einsum("...i,...i->...", w, w))
@@ -368,7 +374,8 @@ def quaternion_from_rotation_vector(w) -> np.ndarray:
 
 
 def matrix_from_quaternion(q) -> np.ndarray:
-    """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first), batched."""
+    """Rotation matrices from quaternions ``(w, x, y, z)``, scalar first (normalised first),
+    batched."""
     q = np.asarray(q, dtype=float)
     return _batched(lambda v: _scipy_rotation().from_quat(v, scalar_first=True).as_matrix(), q, (4,), (3, 3))
 
@@ -394,8 +401,8 @@ def matrix_from_euler(seq: str, angles, *, degrees: bool = False) -> np.ndarray:
 
 
 def slerp_interpolator(t, R):
-    """A function ``times -> rotations`` (..., 3, 3) interpolating ``R`` (sampled at increasing ``t``) along the
-    geodesic.
+    """A function ``times -> rotations`` (..., 3, 3) interpolating ``R`` (sampled at increasing
+    ``t``) along the geodesic.
 
     SciPy's ``Slerp``, built once: call the result as often as needed.
     """
@@ -406,12 +413,14 @@ def slerp_interpolator(t, R):
 
 
 def slerp(t, R, times) -> np.ndarray:
-    """Rotations ``R`` (sampled at increasing ``t``) interpolated at ``times`` (see :func:`slerp_interpolator`)."""
+    """Rotations ``R`` (sampled at increasing ``t``) interpolated at ``times`` (see
+    :func:`slerp_interpolator`)."""
     return slerp_interpolator(t, R)(times)
 
 
 def cumulative_product(R) -> np.ndarray:
-    """Running products ``P_k = R_0 R_1 ... R_k`` along axis -3, batched: (..., N, 3, 3) -> (..., N, 3, 3).
+    """Running products ``P_k = R_0 R_1 ... R_k`` along axis -3, batched: (..., N, 3, 3) -> (..., N,
+    3, 3).
 
     A log-depth prefix scan (Hillis & Steele): ``ceil(log2 N)`` batched matrix
     products instead of a Python loop over ``N``. Each ``P_k`` is the product of

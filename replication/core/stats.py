@@ -1,6 +1,8 @@
-"""Uncertainty of the verdicts: standard errors, paired bootstrap intervals, comparisons in standard errors.
+"""Uncertainty of the verdicts: standard errors, paired bootstrap intervals, comparisons in standard
+errors.
 
-Every interval takes an explicit :class:`numpy.random.Generator`, so a notebook's numbers are seeded.
+Every interval takes an explicit :class:`numpy.random.Generator`, so a notebook's numbers are
+seeded.
 """
 from __future__ import annotations
 
@@ -26,7 +28,8 @@ def mean_se(x, axis=0):
 
 
 def paired_ratio_ci(a, b, rng: np.random.Generator, *, n_boot: int = 2000, level: float = 0.95):
-    """``mean(a) / mean(b)`` and its percentile bootstrap interval, resampling the pairs ``(a_i, b_i)`` together.
+    """``mean(a) / mean(b)`` and its percentile bootstrap interval, resampling the pairs ``(a_i,
+    b_i)`` together.
 
     Parameters
     ----------
@@ -69,9 +72,10 @@ def format_ci(low, high, digits: int = 2) -> str:
 
 def _guard(value, low, high, margin, what, text, problem, *, at_zero=False):
     """Raise ``ValueError("<what> <value> <problem>")`` unless ``value`` lies ``margin`` (times
-    :func:`replication._jitter.margin_scale`) inside ``[low, high]`` (``None``: that side unbounded); a value exactly
-    at the margin passes. A zero margin checks nothing unless ``at_zero``. Under ``REPLICATION_GUARD_LOG`` a guard that
-    does not hold is logged instead (:func:`replication._jitter.guard_failed`)."""
+    :func:`replication._jitter.margin_scale`) inside ``[low, high]`` (``None``: that side
+    unbounded); a value exactly at the margin passes. A zero margin checks nothing unless
+    ``at_zero``. Under ``REPLICATION_GUARD_LOG`` a guard that does not hold is logged instead
+    (:func:`replication._jitter.guard_failed`)."""
     margin = float(margin) * margin_scale()
     lo, hi = -np.inf if low is None else low, np.inf if high is None else high
     tol = 1e-12 * max(1.0, abs(value))
@@ -87,9 +91,10 @@ _IN_BRACKET = ("is within {margin:g} of an edge of its bracket {text}: another m
 def bracket(value, width: float, *, margin: float = 0.0, what: str = "the value") -> str:
     """The ``width``-wide bracket that holds ``value`` (``bracket(13.86, 1) == "13-14"``).
 
-    For means whose last digits depend on rounding (counts of a solver that stops at an iteration limit from a
-    far start): a machine with other rounding moves the printed text only if the value crosses an edge, so the value
-    is checked to lie ``margin`` (its measured spread between machines) inside the bracket; ``ValueError`` otherwise.
+    For means whose last digits depend on rounding (counts of a solver that stops at an iteration
+    limit from a far start): a machine with other rounding moves the printed text only if the value
+    crosses an edge, so the value is checked to lie ``margin`` (its measured spread between
+    machines) inside the bracket; ``ValueError`` otherwise.
     """
     value, width = float(value), float(width)
     if not (np.isfinite(value) and width > 0):
@@ -100,23 +105,24 @@ def bracket(value, width: float, *, margin: float = 0.0, what: str = "the value"
     return text
 
 
-#: Runs by which a machine's rounding moves a count of runs whose outcome is chaotic (which far-start SLSQP runs fail,
-#: which basin a Newton start falls into): one or two runs between the machines tried (scripts/spread.py; the
-#: portability issue's machines). The guard of a share of such runs (:func:`share_range`'s ``margin``) is this many
-#: runs.
+#: Runs by which a machine's rounding moves a count of runs whose outcome is chaotic (which
+#: far-start SLSQP runs fail, which basin a Newton start falls into): one or two runs between the
+#: machines tried (scripts/spread.py; the portability issue's machines). The guard of a share of
+#: such runs (:func:`share_range`'s ``margin``) is this many runs.
 ROUNDING_RUNS = 2
 
 
 def declared_bound(value, low=None, high=None, *, margin, what: str = "the value", fmt: str = "g") -> str:
-    """A bound declared in advance for a quantity that rounding moves, as text, once ``value`` is checked to lie at
-    least ``margin`` inside it.
+    """A bound declared in advance for a quantity that rounding moves, as text, once ``value`` is
+    checked to lie at least ``margin`` inside it.
 
-    The text is made from the constants ``low`` and ``high`` only (``"600-700"``, ``"at most 0.4"``, ``"at least
-    13"``), never from ``value``: a machine whose rounding moves ``value`` by less than ``margin`` prints the same
-    text. ``margin`` is the measured machine-to-machine spread of ``value`` with room to spare (``scripts/spread.py``
-    measures it; ``docs/reproducing.md``, "What strict nbval compares"). For a quantity that is a chaotic function of
-    its inputs (runs stopped by an iteration limit, which runs end on which local minimum) this is the stable
-    statement about it; a bracket chosen from the value (:func:`bracket`) flips where the value sits near an edge.
+    The text is made from the constants ``low`` and ``high`` only (``"600-700"``, ``"at most 0.4"``,
+    ``"at least 13"``), never from ``value``: a machine whose rounding moves ``value`` by less than
+    ``margin`` prints the same text. ``margin`` is the measured machine-to-machine spread of
+    ``value`` with room to spare (``scripts/spread.py`` measures it; ``docs/reproducing.md``, "What
+    strict nbval compares"). For a quantity that is a chaotic function of its inputs (runs stopped
+    by an iteration limit, which runs end on which local minimum) this is the stable statement about
+    it; a bracket chosen from the value (:func:`bracket`) flips where the value sits near an edge.
 
     >>> declared_bound(13.6, 10, margin=1), declared_bound(0.27, high=0.4, margin=0.05)
     ('at least 10', 'at most 0.4')
@@ -142,12 +148,13 @@ def declared_bound(value, low=None, high=None, *, margin, what: str = "the value
 
 
 def share_range(p, step: float = 0.05, *, margin: float = 0.0, what: str = "the share") -> str:
-    """A share of runs as the ``step``-wide bracket that holds it (``"80-85 %"``), or ``"none"`` / ``"all"``.
+    """A share of runs as the ``step``-wide bracket that holds it (``"80-85 %"``), or ``"none"`` /
+    ``"all"``.
 
-    For counts of runs whose outcome depends on rounding (a solver stopped at an iteration limit): one run more
-    or less on another machine then moves the printed text only if it crosses a bracket's edge; ``margin`` (a share:
-    the runs a machine's rounding moves, divided by the runs) is the room the share must keep from both edges
-    (``ValueError`` otherwise).
+    For counts of runs whose outcome depends on rounding (a solver stopped at an iteration limit):
+    one run more or less on another machine then moves the printed text only if it crosses a
+    bracket's edge; ``margin`` (a share: the runs a machine's rounding moves, divided by the runs)
+    is the room the share must keep from both edges (``ValueError`` otherwise).
     """
     p = float(p)
     if not 0.0 <= p <= 1.0:
@@ -183,8 +190,8 @@ def wilson_interval(k, n, level: float = 0.95):
 
 
 def poisson_upper(k, exposure: float, level: float = 0.95) -> float:
-    """One-sided upper ``level`` bound on a rate from ``k`` events in ``exposure`` (exact: ``chi^2_{2(k+1)}``
-    quantile / 2; for ``k = 0`` at 95 % it is ``3.0 / exposure``)."""
+    """One-sided upper ``level`` bound on a rate from ``k`` events in ``exposure`` (exact:
+    ``chi^2_{2(k+1)}`` quantile / 2; for ``k = 0`` at 95 % it is ``3.0 / exposure``)."""
     from scipy.stats import chi2
 
     k = int(k)
@@ -196,9 +203,10 @@ def poisson_upper(k, exposure: float, level: float = 0.95) -> float:
 def radius_deg(cov, level: float = 0.95) -> float:
     """The ``level`` quantile of ``|w|`` (degrees) for ``w ~ N(0, cov)`` (radians).
 
-    ``|w|^2`` is a weighted sum of chi-square variables; Welch-Satterthwaite matches it with ``a chi^2_nu``
-    (``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the eigenvalues ``l`` of ``cov``), whose quantile
-    comes from the Wilson-Hilferty cube-root normal approximation (within 1 % for ``nu >= 1``).
+    ``|w|^2`` is a weighted sum of chi-square variables; Welch-Satterthwaite matches it with ``a
+    chi^2_nu`` (``a = sum l^2 / sum l``, ``nu = (sum l)^2 / sum l^2`` over the eigenvalues ``l`` of
+    ``cov``), whose quantile comes from the Wilson-Hilferty cube-root normal approximation (within 1
+    % for ``nu >= 1``).
     """
     lam = np.clip(np.linalg.eigvalsh(cov), 0.0, None)
     total, squares = float(lam.sum()), float((lam ** 2).sum())

@@ -1,5 +1,6 @@
-"""Was the sensor re-mounted during the recording? A batch test of one change of ``R0`` at an unknown time. Theory and
-measured numbers: ``docs/judging.md``, section ``replication.rig.changepoint``."""
+"""Was the sensor re-mounted during the recording? A batch test of one change of ``R0`` at an
+unknown time. Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.changepoint``."""
 from __future__ import annotations
 
 import math
@@ -17,15 +18,18 @@ from .streams import GyroStream, OrientationStream
 
 __all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS"]
 
-#: Fewest independent stretches (``(J - block) / (2 block + 1)``) the test needs: the inflation and the threshold
-#: rest on them.
+#: Fewest independent stretches (``(J - block) / (2 block + 1)``) the test needs: the inflation and
+#: the threshold rest on them.
 MIN_EFFECTIVE_BLOCKS = 10.0
-#: Newton iterations per side from the relaxed start (quadratic convergence; 2-3 are used on real recordings).
+#: Newton iterations per side from the relaxed start (quadratic convergence; 2-3 are used on real
+#: recordings).
 NEWTON_ITERATIONS = 8
-#: Floor of the mean square residual angle (rad^2): a residual of 0.01 deg, below any real sensor's noise, so
-#: that noise-free data is not judged by rounding (as :data:`replication.rig.online.D2_FLOOR`).
+#: Floor of the mean square residual angle (rad^2): a residual of 0.01 deg, below any real sensor's
+#: noise, so that noise-free data is not judged by rounding (as
+#: :data:`replication.rig.online.D2_FLOOR`).
 S2_FLOOR = math.radians(0.01) ** 2
-#: A side's ``G`` with its smallest eigenvalue below this share of its largest: motions about one axis only.
+#: A side's ``G`` with its smallest eigenvalue below this share of its largest: motions about one
+#: axis only.
 DEGENERATE_TOL = 1e-10
 _DOF = 3  # a rotation has three degrees of freedom
 _EYE = np.eye(3)
@@ -33,23 +37,25 @@ _EYE = np.eye(3)
 
 @dataclass(frozen=True)
 class ChangeTest:
-    """What :func:`two_segment_test` found: the best split and whether the two sides differ beyond their noise.
+    """What :func:`two_segment_test` found: the best split and whether the two sides differ beyond
+    their noise.
 
     Attributes
     ----------
     significant : bool
-        ``statistic > threshold``: the sides differ by more than their noise at false-alarm probability ``level``.
+        ``statistic > threshold``: the sides differ by more than their noise at false-alarm
+        probability ``level``.
     statistic, threshold : float
         ``max_k W_k`` and the threshold it is compared with (see the module notes).
     p_value : float
-        The false-alarm probability of a statistic this large (the approximation of the threshold, clipped to
-        [0, 1]).
+        The false-alarm probability of a statistic this large (the approximation of the threshold,
+        clipped to [0, 1]).
     level : float
         The false-alarm probability the threshold was set for.
     split_index : int
-        The least-squares split (module notes; ``statistic`` is the maximum over every split, not necessarily
-        this one's): index of the first pair of the ``after`` side (pairs ``split_index - block .. split_index - 1``
-        span the split and belong to neither side).
+        The least-squares split (module notes; ``statistic`` is the maximum over every split, not
+        necessarily this one's): index of the first pair of the ``after`` side (pairs ``split_index
+        - block .. split_index - 1`` span the split and belong to neither side).
     split_time : float
         Its start time ``t[split_index]`` (s): the estimated time of the change.
     R_before, R_after : ndarray (3, 3)
@@ -57,8 +63,8 @@ class ChangeTest:
     angle_deg : float
         The angle between them.
     difference_radius_deg : float
-        95 % radius of that angle's noise at this split (``phi (C_before + C_after)``; for a split chosen in
-        advance, the selected one's angle is larger).
+        95 % radius of that angle's noise at this split (``phi (C_before + C_after)``; for a split
+        chosen in advance, the selected one's angle is larger).
     n_before, n_after : int
         Pairs on each side.
     inflation : float
@@ -119,8 +125,8 @@ def _check(A, B, t, block, min_share, level):
 
 
 def _sides(J: int, block: int, min_share: float) -> np.ndarray:
-    """Candidate splits ``k`` (first pair after): every quarter ``block``, at least ``min_share`` of the pairs, 5
-    blocks and 10 pairs on each side. ``ValueError`` when there are too few pairs."""
+    """Candidate splits ``k`` (first pair after): every quarter ``block``, at least ``min_share`` of
+    the pairs, 5 blocks and 10 pairs on each side. ``ValueError`` when there are too few pairs."""
     n_eff = (J - block) / (2 * block + 1)
     n_min = max(math.ceil(min_share * J), 5 * block, 10)
     if n_eff < MIN_EFFECTIVE_BLOCKS:
@@ -134,9 +140,11 @@ def _sides(J: int, block: int, min_share: float) -> np.ndarray:
 
 
 def _fit(S, SB, n):
-    """Each side's minimiser of eq. (8), its cost, mean square residual angle and ``G``, from sums over its pairs.
+    """Each side's minimiser of eq. (8), its cost, mean square residual angle and ``G``, from sums
+    over its pairs.
 
-    ``S``: (m, 9, 9) sums of ``B_j kron A_j``; ``SB``: (m, 3, 3) sums of ``B_j``; ``n``: (m,) pair counts.
+    ``S``: (m, 9, 9) sums of ``B_j kron A_j``; ``SB``: (m, 3, 3) sums of ``B_j``; ``n``: (m,) pair
+    counts.
     """
     K = S / n[:, None, None]
     R, g = chordal_newton(K, relaxed_rotation(K), max_iterations=NEWTON_ITERATIONS)[:2]
@@ -152,7 +160,8 @@ def _fit(S, SB, n):
 
 
 def _long_run(A, B, R, m: int):
-    """``sum_j sum_{|l| <= m} u_j u_{j+l}^T`` over one side, ``u_j = (I - B_j)^T r_j`` at ``R`` (3x3)."""
+    """``sum_j sum_{|l| <= m} u_j u_{j+l}^T`` over one side, ``u_j = (I - B_j)^T r_j`` at ``R``
+    (3x3)."""
     # residual rotation vectors: R^T A_j R B_j^T = exp([r_j]x)
     r = rotation_vector_from_matrix(R.T @ A @ R @ np.swapaxes(B, -1, -2))
     u = np.einsum("jba,jb->ja", _EYE - B, r)
@@ -163,7 +172,8 @@ def _long_run(A, B, R, m: int):
 
 
 def _tail(c, lam1: float, lam2: float):
-    """P(sup over [lam1, lam2] of |B(lam)|^2 / (lam (1 - lam)) > c), B a 3-dim Brownian bridge, for large c."""
+    """P(sup over [lam1, lam2] of |B(lam)|^2 / (lam (1 - lam)) > c), B a 3-dim Brownian bridge, for
+    large c."""
     c = np.asarray(c, dtype=float)
     span = math.log(lam2 * (1.0 - lam1) / (lam1 * (1.0 - lam2)))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -172,13 +182,15 @@ def _tail(c, lam1: float, lam2: float):
     return np.where(c > _DOF, np.clip(value, 0.0, 1.0), 1.0)
 
 
-#: Nodes of the average over phi's sampling error: standard normal quantiles at the midpoints of 200 equal bins.
+#: Nodes of the average over phi's sampling error: standard normal quantiles at the midpoints of 200
+#: equal bins.
 _Z = np.array([statistics.NormalDist().inv_cdf((i + 0.5) / 200) for i in range(200)])
 
 
 def _false_alarm(c, n_eff: float, lam1: float, lam2: float):
-    """False-alarm probability of ``max_k W_k > c`` (module notes): the tail at the threshold the test puts on the
-    statistic against the true inflation, averaged over the sampling error of the measured one."""
+    """False-alarm probability of ``max_k W_k > c`` (module notes): the tail at the threshold the
+    test puts on the statistic against the true inflation, averaged over the sampling error of the
+    measured one."""
     nu = n_eff
     # chi2_nu / nu (Wilson-Hilferty)
     x = np.clip(1.0 - 2.0 / (9.0 * nu) + _Z * math.sqrt(2.0 / (9.0 * nu)), 0.0, None) ** 3
@@ -189,7 +201,8 @@ def _false_alarm(c, n_eff: float, lam1: float, lam2: float):
 
 
 def threshold(level: float, n_eff: float, lam1: float, lam2: float) -> float:
-    """The threshold on ``max_k W_k`` for false-alarm probability ``level`` (module notes), by bisection."""
+    """The threshold on ``max_k W_k`` for false-alarm probability ``level`` (module notes), by
+    bisection."""
     lo, hi = float(_DOF), 1e3
     if _false_alarm(hi, n_eff, lam1, lam2) > level:
         return math.inf
@@ -202,17 +215,20 @@ def threshold(level: float, n_eff: float, lam1: float, lam2: float) -> float:
 
 
 def p_value(statistic: float, n_eff: float, lam1: float, lam2: float) -> float:
-    """The false-alarm probability of a statistic at least ``statistic`` (the approximation of :func:`threshold`)."""
+    """The false-alarm probability of a statistic at least ``statistic`` (the approximation of
+    :func:`threshold`)."""
     return float(_false_alarm(statistic, n_eff, lam1, lam2))
 
 
 def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level: float = 0.01) -> ChangeTest:
-    """Test whether the pairs before and after some split time agree on ``R0`` (one re-mount at an unknown time).
+    """Test whether the pairs before and after some split time agree on ``R0`` (one re-mount at an
+    unknown time).
 
-    For every candidate split ``k`` (every ``max(1, block // 4)`` pairs, at least ``min_share`` of the pairs and 5
-    blocks on each side), each side's minimiser of the paper's eq. (8) and the statistic
-    ``W_k = d_k^T (C_before + C_after)^{-1} d_k / phi`` with ``d_k = log(R_before^T R_after)``; the test compares
-    ``max_k W_k`` with a threshold for false-alarm probability ``level`` (module notes). O(J) time and memory.
+    For every candidate split ``k`` (every ``max(1, block // 4)`` pairs, at least ``min_share`` of
+    the pairs and 5 blocks on each side), each side's minimiser of the paper's eq. (8) and the
+    statistic ``W_k = d_k^T (C_before + C_after)^{-1} d_k / phi`` with ``d_k = log(R_before^T
+    R_after)``; the test compares ``max_k W_k`` with a threshold for false-alarm probability
+    ``level`` (module notes). O(J) time and memory.
 
     Parameters
     ----------
@@ -222,13 +238,14 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
         The pairs' start times (s), non-decreasing (``result.diagnostics['pair_times']`` of
         :func:`~replication.rig.calibration.calibrate`).
     block : int
-        Pairs per interval: a pair overlaps the ``block - 1`` pairs after it and shares a pose with the one
-        ``block`` after (``interval`` times the camera rate over the stride, as ``calibrate`` computes it; 1 for
-        pairs that share nothing).
+        Pairs per interval: a pair overlaps the ``block - 1`` pairs after it and shares a pose with
+        the one ``block`` after (``interval`` times the camera rate over the stride, as
+        ``calibrate`` computes it; 1 for pairs that share nothing).
     min_share : float
         Fewest pairs on each side as a share of ``J``, in (0, 0.5).
     level : float
-        False-alarm probability of the test (the chance of ``significant`` without a change), in (0, 0.5).
+        False-alarm probability of the test (the chance of ``significant`` without a change), in (0,
+        0.5).
 
     Returns
     -------
@@ -237,9 +254,9 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
     Raises
     ------
     ValueError
-        A parameter out of range (named), ``A``, ``B`` not rotations of the same shape, ``t`` not one time per pair
-        in order, or too few pairs (fewer than :data:`MIN_EFFECTIVE_BLOCKS` independent stretches, or no split
-        leaving ``min_share`` and 5 blocks on each side).
+        A parameter out of range (named), ``A``, ``B`` not rotations of the same shape, ``t`` not
+        one time per pair in order, or too few pairs (fewer than :data:`MIN_EFFECTIVE_BLOCKS`
+        independent stretches, or no split leaving ``min_share`` and 5 blocks on each side).
     """
     A, B, t = _check(A, B, t, block, min_share, level)
     J, m = len(A), int(block)
@@ -257,8 +274,9 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
     Ca = (s2a / 3.0)[:, None, None] * np.linalg.inv(Ga)
     d = rotation_vector_from_matrix(np.swapaxes(Rb, -1, -2) @ Ra)
     W = np.einsum("ka,ka->k", d, np.linalg.solve(Cb + Ca, d[..., None])[..., 0])
-    # the split: least squares (Bai 1994) over the pairs on either side; the block spanning the split is left out
-    # at every split alike (it straddles the change), so the sums compare the same number of pairs
+    # the split: least squares (Bai 1994) over the pairs on either side; the block spanning the
+    # split is left out at every split alike (it straddles the change), so the sums compare the same
+    # number of pairs
     i = int(np.argmin(cb + ca))
     k = int(ks[i])
     # the inflation for overlapping pairs, on the two-segment fit at that split
@@ -281,11 +299,12 @@ def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level:
 
 
 def remounted(sensor, time: float, R):
-    """``sensor`` as if it had been mounted ``R`` further from ``time`` (s) on: a synthetic re-mount.
+    """``sensor`` as if it had been mounted ``R`` further from ``time`` (s) on: a synthetic
+    re-mount.
 
-    The sensor frame turns by ``R`` (sensor-frame vectors ``v`` become ``R^T v``): ``R0 = camera_from_sensor``
-    becomes ``R0 R``, a gyro's rates ``R^T omega`` and an orientation stream's ``world_from_sensor`` ``Q R``
-    (as :func:`replication.rig.live.replay`'s ``remount``).
+    The sensor frame turns by ``R`` (sensor-frame vectors ``v`` become ``R^T v``): ``R0 =
+    camera_from_sensor`` becomes ``R0 R``, a gyro's rates ``R^T omega`` and an orientation stream's
+    ``world_from_sensor`` ``Q R`` (as :func:`replication.rig.live.replay`'s ``remount``).
 
     Parameters
     ----------

@@ -1,5 +1,6 @@
-"""The clocks: the offset between the camera's and the sensor's clock along the recording, and its jumps (issue 34).
-Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.clock``."""
+"""The clocks: the offset between the camera's and the sensor's clock along the recording, and its
+jumps (issue 34). Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.clock``."""
 from __future__ import annotations
 
 import math
@@ -14,37 +15,39 @@ from .streams import OrientationStream
 __all__ = ["ClockJump", "clock_segments", "jump_candidates", "clock_report", "clock_reasons", "JUMP_MIN_S", "JUMP_Z",
            "OffsetProfile", "offset_profile", "corrected_sensor", "PROFILE_WINDOW_S", "STEP_LR"]
 
-#: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the two parts'
-#: offset intervals.
+#: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the
+#: two parts' offset intervals.
 JUMP_MIN_S = 2e-3
-#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap intervals): 1.96 named
-#: one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40 synthetic rigs, the bootstrap interval of a
-#: 20 s side of smooth motion missing its offset by 7 ms (benchmarks/bench_segments.py, seeds 0-39).
+#: The two sides' offsets must differ by this many standard errors (from their 95 % bootstrap
+#: intervals): 1.96 named one sample lost (5 ms of stamps skipped, no jump) a jump in 1 of 40
+#: synthetic rigs, the bootstrap interval of a 20 s side of smooth motion missing its offset by 7 ms
+#: (benchmarks/bench_segments.py, seeds 0-39).
 JUMP_Z = 3.0
-#: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5 ms at 200 Hz);
-#: the :data:`JUMP_CANDIDATES` longest are tested.
+#: A sensor interval longer than this many median intervals is a candidate clock jump (a jump of 2.5
+#: ms at 200 Hz); the :data:`JUMP_CANDIDATES` longest are tested.
 JUMP_GAP_FACTOR, JUMP_CANDIDATES = 1.5, 5
 #: Length of a window of the offset profile (s): 5 s of 1 s pairs at 20 Hz are 80 pairs.
 PROFILE_WINDOW_S = 5.0
-#: A step is named where its scaled chi-square is below both the ramp's and the one offset's by more than this. On
-#: bench_clock.py's tuning seeds 0-39 the least of the two gains reached 26.3 on clean rigs (95 % quantile 16.7) and
-#: 29.6 on 50 ppm drifts (200 ppm: below 0); a 5 ms step's median was 36.8, a 10 ms step's 5 % quantile 57.1. On
-#: fresh seeds 90000-90039: no false step in 120 clean and drifting rigs (maximum 30.0), 5 ms found in 20 of 40,
-#: 10-50 ms in 40 of 40 each (bench_clock.py's notes).
+#: A step is named where its scaled chi-square is below both the ramp's and the one offset's by more
+#: than this. On bench_clock.py's tuning seeds 0-39 the least of the two gains reached 26.3 on clean
+#: rigs (95 % quantile 16.7) and 29.6 on 50 ppm drifts (200 ppm: below 0); a 5 ms step's median was
+#: 36.8, a 10 ms step's 5 % quantile 57.1. On fresh seeds 90000-90039: no false step in 120 clean
+#: and drifting rigs (maximum 30.0), 5 ms found in 20 of 40, 10-50 ms in 40 of 40 each
+#: (bench_clock.py's notes).
 STEP_LR = 40.0
 #: Fewest windows the profile runs with (the step model has 4 parameters).
 PROFILE_MIN_WINDOWS = 6
 _H = 1e-3  # the offset's finite difference (s)
-#: A window's offset is searched within this of the one offset applied (s); a window whose offset leaves it (the
-#: streams show no common motion there) is left out of the profile and counted.
+#: A window's offset is searched within this of the one offset applied (s); a window whose offset
+#: leaves it (the streams show no common motion there) is left out of the profile and counted.
 PROFILE_REACH_S = 0.3
 
 @dataclass(frozen=True)
 class ClockJump:
-    """A jump of a clock: at ``time_s`` (s, on the camera's clock, to within ``time_resolution_s``) the offset of the
-    sensor's clock to the camera's changes by ``size_s``. ``clock``: ``"sensor"``, ``"camera"`` (the clock whose
-    stamps skip there) or ``"unknown"`` (no skip in either's stamps); ``found_by``: ``"gap"`` (:func:`clock_segments`)
-    or ``"profile"`` (:func:`offset_profile`)."""
+    """A jump of a clock: at ``time_s`` (s, on the camera's clock, to within ``time_resolution_s``)
+    the offset of the sensor's clock to the camera's changes by ``size_s``. ``clock``: ``"sensor"``,
+    ``"camera"`` (the clock whose stamps skip there) or ``"unknown"`` (no skip in either's stamps);
+    ``found_by``: ``"gap"`` (:func:`clock_segments`) or ``"profile"`` (:func:`offset_profile`)."""
 
     time_s: float
     size_s: float
@@ -62,9 +65,9 @@ class ClockJump:
 
 
 def jump_candidates(t, max_offset: float = math.inf) -> np.ndarray:
-    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`; a skip beyond
-    ``max_offset``, the offset search's bound, is no jump it could measure: samples lost), the
-    :data:`JUMP_CANDIDATES` longest, in time order."""
+    """``(start, end)`` of the sensor intervals that may hide a clock jump (:data:`JUMP_GAP_FACTOR`;
+    a skip beyond ``max_offset``, the offset search's bound, is no jump it could measure: samples
+    lost), the :data:`JUMP_CANDIDATES` longest, in time order."""
     dt = np.diff(t)
     step = np.median(dt)
     k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (dt - step <= max_offset))
@@ -76,20 +79,23 @@ def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_boot
                    offset_s: float | None = None, window_s: float = 2 * SEGMENT_S):
     """The clock offset on each side of the sensor stream's gaps, and the jumps among them.
 
-    A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in its stamps; a
-    gap where samples were lost leaves the offset as it was. On each side of a gap, the camera's samples within
-    ``window_s`` of it (up to the neighbouring gaps; at least :data:`SEGMENT_S`) get their own offset
-    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's ``offset_s`` the search
-    spans ``|offset_s|`` plus the largest skip plus 20 ms only, within ``max_offset``). Where the two differ by more
-    than :data:`JUMP_MIN_S` and by about what the stamps skipped (the gap less one median interval; within half of
-    it, or the bound plus :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
-    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)`` (``se`` = interval
-    width / 3.92) it is a jump at that gap, its size what the stamps skipped (the offsets of parts of smooth motion
-    may be off by several ms; the stamps are exact). A gap where samples were lost leaves the offset as it was: no
-    jump, however long.
+    A sensor clock that jumps ahead by ``size`` leaves a gap of ``size`` (plus a sample interval) in
+    its stamps; a gap where samples were lost leaves the offset as it was. On each side of a gap,
+    the camera's samples within ``window_s`` of it (up to the neighbouring gaps; at least
+    :data:`SEGMENT_S`) get their own offset
+    (:func:`replication.rig.association.estimate_time_offset`; given the whole recording's
+    ``offset_s`` the search spans ``|offset_s|`` plus the largest skip plus 20 ms only, within
+    ``max_offset``). Where the two differ by more than :data:`JUMP_MIN_S` and by about what the
+    stamps skipped (the gap less one median interval; within half of it, or the bound plus
+    :data:`JUMP_MIN_S`), their 95 % intervals (:func:`~replication.rig.association.
+    offset_analysis`, ``n_bootstrap`` replicates) decide: beyond ``JUMP_Z sqrt(se_1^2 + se_2^2)``
+    (``se`` = interval width / 3.92) it is a jump at that gap, its size what the stamps skipped (the
+    offsets of parts of smooth motion may be off by several ms; the stamps are exact). A gap where
+    samples were lost leaves the offset as it was: no jump, however long.
 
-    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``, ``ci95_s``: NaN
-    where no jump was in question, the bootstrap being run only there), a list of :class:`ClockJump`.
+    Returns ``(parts, jumps)``: one dict per gap side tested (``start_s``, ``end_s``, ``offset_s``,
+    ``ci95_s``: NaN where no jump was in question, the bootstrap being run only there), a list of
+    :class:`ClockJump`.
     """
     from .association import estimate_time_offset, offset_analysis
 
@@ -138,22 +144,25 @@ def clock_segments(camera, sensor, *, max_offset: float = 0.2, gaps=None, n_boot
 
 @dataclass(frozen=True)
 class OffsetProfile:
-    """The clock offset per window and the model chosen for it (:func:`offset_profile`; times on the camera's clock).
+    """The clock offset per window and the model chosen for it (:func:`offset_profile`; times on the
+    camera's clock).
 
     Attributes
     ----------
     t_s, offset_s, se_s : ndarray (W,)
-        Each window's centre, offset (s; the sensor sample stamped ``t + offset`` matches the camera sample stamped
-        ``t``) and its standard error.
+        Each window's centre, offset (s; the sensor sample stamped ``t + offset`` matches the camera
+        sample stamped ``t``) and its standard error.
     chi2 : dict
         The weighted chi-square of ``"one offset"``, ``"drift"`` and ``"step"``, unscaled.
     scale : float
-        The step model's excess scatter ``max(1, chi2_step / (W - 4))`` the likelihood ratios are divided by.
+        The step model's excess scatter ``max(1, chi2_step / (W - 4))`` the likelihood ratios are
+        divided by.
     ratio_drift, ratio_one : float
         The step's scaled chi-square improvement over the ramp and over one offset.
     choice : str
-        ``"step"`` where both ratios exceed :data:`STEP_LR` and the step exceeds :data:`JUMP_MIN_S`; else
-        ``"drift"`` where the ramp fits better than one offset by more than :data:`STEP_LR`; else ``"one offset"``.
+        ``"step"`` where both ratios exceed :data:`STEP_LR` and the step exceeds :data:`JUMP_MIN_S`;
+        else ``"drift"`` where the ramp fits better than one offset by more than :data:`STEP_LR`;
+        else ``"one offset"``.
     step : ClockJump or None
         The step (where chosen).
     drift_ppm : float
@@ -184,15 +193,17 @@ class OffsetProfile:
 
 
 def _residuals(Ai, sensor, ti, tk, d, R):
-    """``r_j = log(B_j^T R^T A_j R)`` of the pairs ``(ti, tk)`` with the sensor at ``t + d`` (``Ai``: ``R^T A_j R``)."""
+    """``r_j = log(B_j^T R^T A_j R)`` of the pairs ``(ti, tk)`` with the sensor at ``t + d``
+    (``Ai``: ``R^T A_j R``)."""
     Qi, Qk = sensor.at(ti + d), sensor.at(tk + d)
     B = np.swapaxes(Qk, -1, -2) @ Qi
     return rotation_vector_from_matrix(np.swapaxes(B, -1, -2) @ Ai)
 
 
 def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
-    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error; NaN where a
-    step leaves ``d +- bound`` (the streams do not show one motion there, or no motion)."""
+    """One window's offset (three Gauss-Newton steps from ``d``) and its Newey-West standard error;
+    NaN where a step leaves ``d +- bound`` (the streams do not show one motion there, or no
+    motion)."""
     d0 = d
     for _ in range(3):
         if not abs(d - d0) <= bound:
@@ -214,7 +225,8 @@ def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
 
 
 def _fits(t, d, w):
-    """The chi-squares of one offset, a ramp and the best step (and where: boundary ``b``, left-out window ``x``)."""
+    """The chi-squares of one offset, a ramp and the best step (and where: boundary ``b``, left-out
+    window ``x``)."""
     def mean_chi(k):
         if not k.any():
             return 0.0, 0.0
@@ -239,9 +251,9 @@ def _fits(t, d, w):
 
 
 def _split(Ai, sensor, ti, tk, m0, m1, R, m):
-    """The time of a step from offset ``m0`` to ``m1`` among the pairs ``(ti, tk)``: the split of least cost
-    ``sum |r_j(m0)|^2`` before, ``sum |r_j(m1)|^2`` after, the ``m`` pairs just before it (across it) at their
-    smaller cost; the first pair start after it."""
+    """The time of a step from offset ``m0`` to ``m1`` among the pairs ``(ti, tk)``: the split of
+    least cost ``sum |r_j(m0)|^2`` before, ``sum |r_j(m1)|^2`` after, the ``m`` pairs just before it
+    (across it) at their smaller cost; the first pair start after it."""
     c0 = np.sum(_residuals(Ai, sensor, ti, tk, m0, R) ** 2, axis=-1)
     c1 = np.sum(_residuals(Ai, sensor, ti, tk, m1, R) ** 2, axis=-1)
     P0, P1, Pm = (np.concatenate([[0.0], np.cumsum(c)]) for c in (c0, c1, np.minimum(c0, c1)))
@@ -252,8 +264,8 @@ def _split(Ai, sensor, ti, tk, m0, m1, R, m):
 
 
 def _skip(t, near, width):
-    """The largest stamp skip (``> JUMP_GAP_FACTOR`` median intervals) of ``t`` within ``width`` of ``near``, or
-    None: ``(time, skipped beyond one interval)``."""
+    """The largest stamp skip (``> JUMP_GAP_FACTOR`` median intervals) of ``t`` within ``width`` of
+    ``near``, or None: ``(time, skipped beyond one interval)``."""
     dt = np.diff(t)
     step = float(np.median(dt))
     k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (np.abs(t[:-1] - near) <= width))
@@ -265,12 +277,14 @@ def _skip(t, near, width):
 
 def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s: float = PROFILE_WINDOW_S,
                    sensor_stamps=None):
-    """The clock offset per window of ``window_s`` seconds and the model that fits it (module notes).
+    """The clock offset per window of ``window_s`` seconds and the model that fits it (module
+    notes).
 
-    ``sensor``: an OrientationStream (a gyro integrated), ``R``: ``R0``, ``offset``: the one offset applied (s);
-    ``sensor_stamps``: the sensor's own stamps where ``sensor`` was re-sampled (default ``sensor.t``). Returns an
-    :class:`OffsetProfile`, or None where the recording makes fewer than :data:`PROFILE_MIN_WINDOWS` windows with
-    at least three pairing intervals of pairs and motion (the others are left out).
+    ``sensor``: an OrientationStream (a gyro integrated), ``R``: ``R0``, ``offset``: the one offset
+    applied (s); ``sensor_stamps``: the sensor's own stamps where ``sensor`` was re-sampled (default
+    ``sensor.t``). Returns an :class:`OffsetProfile`, or None where the recording makes fewer than
+    :data:`PROFILE_MIN_WINDOWS` windows with at least three pairing intervals of pairs and motion
+    (the others are left out).
     """
     tc = camera.t
     dt = float(np.median(np.diff(tc)))
@@ -335,7 +349,8 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
 
 
 def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
-    """The jumps found at the sensor's gaps and the profile's step, once each (the gap's where both found one)."""
+    """The jumps found at the sensor's gaps and the profile's step, once each (the gap's where both
+    found one)."""
     out = list(jumps)
     if profile is not None and profile.step is not None:
         s = profile.step
@@ -345,11 +360,12 @@ def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
 
 
 def corrected_sensor(sensor: OrientationStream, offset: float, *, jumps=(), drift=None, interval: float = 1.0):
-    """``sensor`` re-stamped so that the one ``offset`` holds throughout: with jumps, its stamps before the first
-    shifted by ``offset`` less the offset there and after each further by the jump's size, the stamps within the
-    jump's time resolution plus ``interval`` of it cut (a gap, so that pairs across it are dropped); or, without
-    jumps, ``drift = (ppm, t_mid, offset_mid)`` removed (the sample stamped ``s`` restamped ``t + offset``,
-    ``t = (s - offset_mid + k t_mid) / (1 + k)``). None where there is nothing to correct."""
+    """``sensor`` re-stamped so that the one ``offset`` holds throughout: with jumps, its stamps
+    before the first shifted by ``offset`` less the offset there and after each further by the
+    jump's size, the stamps within the jump's time resolution plus ``interval`` of it cut (a gap, so
+    that pairs across it are dropped); or, without jumps, ``drift = (ppm, t_mid, offset_mid)``
+    removed (the sample stamped ``s`` restamped ``t + offset``, ``t = (s - offset_mid + k t_mid) /
+    (1 + k)``). None where there is nothing to correct."""
     t = sensor.t.astype(float).copy()
     keep = np.ones(len(t), bool)
     if jumps:
@@ -372,10 +388,11 @@ def corrected_sensor(sensor: OrientationStream, offset: float, *, jumps=(), drif
 
 def clock_analysis(camera, oriented, A, B, offset, model=None, *, max_offset: float = 0.2, seed: int = 0,
                    sensor_stamps=None):
-    """``calibrate``'s clock step: the jumps at the sensor's gaps (:func:`clock_segments`), the offset profile
-    (:func:`offset_profile`, ``R0`` from the sensor ``model`` or from the pairs ``A``, ``B``) and the sensor
-    re-stamped for the change and segment tests (:func:`corrected_sensor`: the jumps, or the model's drift where
-    resolved). Returns ``(parts, jumps, profile, corrected or None)``."""
+    """``calibrate``'s clock step: the jumps at the sensor's gaps (:func:`clock_segments`), the
+    offset profile (:func:`offset_profile`, ``R0`` from the sensor ``model`` or from the pairs
+    ``A``, ``B``) and the sensor re-stamped for the change and segment tests
+    (:func:`corrected_sensor`: the jumps, or the model's drift where resolved). Returns ``(parts,
+    jumps, profile, corrected or None)``."""
     from .changepoint import _fit
 
     parts, jumps = clock_segments(camera, oriented, max_offset=max_offset, seed=seed, offset_s=offset,
@@ -392,8 +409,8 @@ def clock_analysis(camera, oriented, A, B, offset, model=None, *, max_offset: fl
 
 
 def clock_report(parts, jumps, t0: float, profile=None) -> dict:
-    """The clock offset of each part between the sensor's gaps, the offset profile and the jumps, for the report
-    (times since ``t0``, on the sensor's clock for the parts)."""
+    """The clock offset of each part between the sensor's gaps, the offset profile and the jumps,
+    for the report (times since ``t0``, on the sensor's clock for the parts)."""
     return {"clock_offsets": [{**o, "start_s": o["start_s"] - t0, "end_s": o["end_s"] - t0} for o in parts],
             "clock_profile": None if profile is None else profile.to_dict(t0),
             "clock_jumps": [j.to_dict(t0) for j in jumps]}
@@ -413,7 +430,8 @@ def _where(j, t0):
 
 
 def clock_reasons(jumps, t0: float, offset_s: float) -> list:
-    """A ``fail`` reason per recording with clock jumps: the one offset removed is wrong for part of it."""
+    """A ``fail`` reason per recording with clock jumps: the one offset removed is wrong for part of
+    it."""
     from .quality import Reason
 
     if not jumps:

@@ -1,5 +1,5 @@
-"""Reading text data files, and the one error every loader raises about them. Theory and measured numbers:
-``docs/reading.md``, section ``replication.rig.datafile``."""
+"""Reading text data files, and the one error every loader raises about them. Theory and measured
+numbers: ``docs/reading.md``, section ``replication.rig.datafile``."""
 from __future__ import annotations
 
 import codecs
@@ -76,7 +76,8 @@ class DataFileError(ValueError):
 
 
 class DataFileNotFound(DataFileError, FileNotFoundError):
-    """The data file does not exist, or is a directory: both a :class:`DataFileError` and a ``FileNotFoundError``."""
+    """The data file does not exist, or is a directory: both a :class:`DataFileError` and a
+    ``FileNotFoundError``."""
 
     def __init__(self, path, message: str, line=None, column=None, column_name=None):
         super().__init__(path, message, line, column, column_name)
@@ -85,9 +86,9 @@ class DataFileNotFound(DataFileError, FileNotFoundError):
 
 
 class ColumnCountError(DataFileError):
-    """A data line with another number of columns than the format's: a :class:`DataFileError` that also carries the
-    numbers, so that a caller can say what the file looks like instead (``calibrate``: an IMU stream given as an
-    orientation stream, and the reverse).
+    """A data line with another number of columns than the format's: a :class:`DataFileError` that
+    also carries the numbers, so that a caller can say what the file looks like instead
+    (``calibrate``: an IMU stream given as an orientation stream, and the reverse).
 
     Attributes
     ----------
@@ -153,9 +154,9 @@ def read_text(path, what: str | None = None) -> str:
 
 
 def read_text_layout(path, what: str | None = None) -> tuple[str, str, bool]:
-    """:func:`read_text`, and how the file wrote its lines: ``(text, newline, bom)``, ``newline`` being
-    ``"\\r\\n"`` when every line ends so (else ``"\\n"``) and ``bom`` whether it starts with a UTF-8 byte-order
-    mark; for a writer that gives a file back as it found it."""
+    """:func:`read_text`, and how the file wrote its lines: ``(text, newline, bom)``, ``newline``
+    being ``"\\r\\n"`` when every line ends so (else ``"\\n"``) and ``bom`` whether it starts with a
+    UTF-8 byte-order mark; for a writer that gives a file back as it found it."""
     path = Path(path)
     if path.is_dir():
         raise DataFileNotFound(path, "is a directory, not a file")
@@ -185,7 +186,8 @@ def _decoded(path, data: bytes) -> str:
 
 
 def read_lines(path, what: str | None = None) -> list[str]:
-    """The lines of a UTF-8 text file, without their newlines (see :func:`read_text`); line ``k`` is item ``k - 1``."""
+    """The lines of a UTF-8 text file, without their newlines (see :func:`read_text`); line ``k`` is
+    item ``k - 1``."""
     text = read_text(path, what)
     lines = text.split("\n")
     if lines and lines[-1] == "":
@@ -195,31 +197,34 @@ def read_lines(path, what: str | None = None) -> list[str]:
 
 #: ``repeated="mean"`` refuses poses of one time stamp further apart than this (deg).
 MEAN_MAX_DEG = 90.0
-#: What a trajectory may do with a time stamp repeated with another pose (``read_table(repeated=...)``).
+#: What a trajectory may do with a time stamp repeated with another pose
+#: (``read_table(repeated=...)``).
 REPEATED = ("refuse", "keep-first", "keep-last", "mean")
 
 
 def read_table(path, names, *, delimiter=None, what: str | None = None, header: bool = False,
                drop_repeated: bool = False, increasing_first: bool = True, optional=(), repeated: str = "refuse",
                quaternion=None, tally: dict | None = None):
-    """Numeric rows of a text file, skipping blank and ``#`` lines; every error names file, line and column.
+    """Numeric rows of a text file, skipping blank and ``#`` lines; every error names file, line and
+    column.
 
-    ``names``: the columns (their number is the expected count; a bad value names its column); ``optional``: names
-    of further columns a file may carry after them (all its lines alike, the first data line decides; they are
-    checked as numbers and not returned); ``delimiter``: ``None`` splits on white space; ``header``: skip the first
-    data line (a header of names); ``drop_repeated``: skip a line identical in every value to the previous data line;
+    ``names``: the columns (their number is the expected count; a bad value names its column);
+    ``optional``: names of further columns a file may carry after them (all its lines alike, the
+    first data line decides; they are checked as numbers and not returned); ``delimiter``: ``None``
+    splits on white space; ``header``: skip the first data line (a header of names);
+    ``drop_repeated``: skip a line identical in every value to the previous data line;
     ``increasing_first``: the first column (a time stamp) must increase strictly.
 
-    ``repeated``: what to do with consecutive lines that share a time stamp but not every value (with
-    ``increasing_first``): ``"refuse"`` (the default: a :class:`DataFileError` naming the values that read it),
-    ``"keep-first"``, ``"keep-last"`` or ``"mean"`` of each group (``quaternion``: the indices of 4 quaternion
-    columns, averaged in one hemisphere and normalised; each line's quaternion is checked against
-    :data:`QUATERNION_NORM_TOL` first). ``tally``: a dict that receives ``repeated_timestamps`` (the lines merged
-    into an earlier one's time stamp), ``repeated_groups``, ``repeated_max_deg`` (the largest angle between two
-    quaternions of one group, with ``quaternion``; else None) and ``verbatim_repeats`` (lines dropped by
-    ``drop_repeated``).
-    A line with another number of columns raises :class:`ColumnCountError`, any other problem
-    :class:`DataFileError`.
+    ``repeated``: what to do with consecutive lines that share a time stamp but not every value
+    (with ``increasing_first``): ``"refuse"`` (the default: a :class:`DataFileError` naming the
+    values that read it), ``"keep-first"``, ``"keep-last"`` or ``"mean"`` of each group
+    (``quaternion``: the indices of 4 quaternion columns, averaged in one hemisphere and normalised;
+    each line's quaternion is checked against :data:`QUATERNION_NORM_TOL` first). ``tally``: a dict
+    that receives ``repeated_timestamps`` (the lines merged into an earlier one's time stamp),
+    ``repeated_groups``, ``repeated_max_deg`` (the largest angle between two quaternions of one
+    group, with ``quaternion``; else None) and ``verbatim_repeats`` (lines dropped by
+    ``drop_repeated``). A line with another number of columns raises :class:`ColumnCountError`, any
+    other problem :class:`DataFileError`.
 
     Returns
     -------
@@ -275,8 +280,9 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     data = np.array([_merged(path, g, repeated, quaternion, line) for g, line in zip(groups, lines)])
     if tally is not None:
         tally.update(_repeat_tally(groups, quaternion, verbatim))
-    # the values move at their last bits under REPLICATION_JITTER; time stamps do not: they are the recorder's exact
-    # ticks, which every machine parses to the same double and differences exactly alike
+    # the values move at their last bits under REPLICATION_JITTER; time stamps do not: they are the
+    # recorder's exact ticks, which every machine parses to the same double and differences exactly
+    # alike
     if increasing_first:
         data[:, 1:] = jitter(data[:, 1:])
     else:
@@ -291,7 +297,8 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
 
 
 def _number(x) -> str:
-    """A value in a message: a plain number (never numpy's ``np.float64(...)``), integral values without ``.0``."""
+    """A value in a message: a plain number (never numpy's ``np.float64(...)``), integral values
+    without ``.0``."""
     x = float(x)
     return str(int(x)) if x.is_integer() and abs(x) < 1e20 else repr(x)
 
@@ -304,7 +311,8 @@ def _quaternion_angle_deg(q1, q2) -> float:
 
 
 def _same_pose(values, other, quaternion) -> bool:
-    """Whether two lines hold the same values, a quaternion and its negative (one rotation) counting as equal."""
+    """Whether two lines hold the same values, a quaternion and its negative (one rotation) counting
+    as equal."""
     if values == other or quaternion is None:
         return values == other
     rest = [i for i in range(len(values)) if i not in quaternion]
@@ -371,10 +379,11 @@ def is_number(text) -> bool:
 
 
 def unit_quaternion_rotations(path, q_wxyz, lines, tol: float = QUATERNION_NORM_TOL):
-    """Rotation matrices of unit quaternions ``(w, x, y, z)`` read from ``path`` (``lines``: their line numbers).
+    """Rotation matrices of unit quaternions ``(w, x, y, z)`` read from ``path`` (``lines``: their
+    line numbers).
 
-    A norm off 1 by more than ``tol`` raises :class:`DataFileError` at its line (a wrong column order or
-    unit); the others are normalised.
+    A norm off 1 by more than ``tol`` raises :class:`DataFileError` at its line (a wrong column
+    order or unit); the others are normalised.
     """
     from ..core.so3 import matrix_from_quaternion
 

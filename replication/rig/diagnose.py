@@ -1,5 +1,5 @@
-"""Name the usual input mistakes of a calibration where the data show them. Theory and measured numbers:
-``docs/judging.md``, section ``replication.rig.diagnose``."""
+"""Name the usual input mistakes of a calibration where the data show them. Theory and measured
+numbers: ``docs/judging.md``, section ``replication.rig.diagnose``."""
 from __future__ import annotations
 
 import warnings
@@ -13,27 +13,30 @@ from .streams import GyroStream, OrientationStream
 __all__ = ["input_mistakes", "pose_direction", "reference_mistakes", "HYPOTHESES", "POSE_HYPOTHESES", "FIT_SHARE",
            "FIT_TO_MOTION", "POSE_FIT_SHARE", "TIE_SHARE", "TIE_ATOL", "IMU_AS_CAMERA_DEG"]
 
-#: The camera file looks like the IMU's own trajectory when ``R0`` is within this angle (deg) of the identity while
-#: the reference is more than twice as far from it. Measured with the IMU body's pose as the camera (TUM-VI mocap0
-#: against its raw gyro, intervals 0.5 / 1 / 2 s): 0.04-0.07 deg; with a gyro bias added, EuRoC's (about 0.08 rad/s)
-#: 0.42-0.98 deg, 0.1 rad/s on one axis and 0.05 on two 1.07-3.65 deg. The rigs' references are 89 deg (EuRoC cam0)
-#: and 179 deg (TUM-VI cam0) from the identity. The same bound (the reference check's fail bound) tells the files
-#: swapped: ``R0`` within it of the reference's inverse (EuRoC, ground truth as camera and the camera's SLAM
+#: The camera file looks like the IMU's own trajectory when ``R0`` is within this angle (deg) of the
+#: identity while the reference is more than twice as far from it. Measured with the IMU body's pose
+#: as the camera (TUM-VI mocap0 against its raw gyro, intervals 0.5 / 1 / 2 s): 0.04-0.07 deg; with
+#: a gyro bias added, EuRoC's (about 0.08 rad/s) 0.42-0.98 deg, 0.1 rad/s on one axis and 0.05 on
+#: two 1.07-3.65 deg. The rigs' references are 89 deg (EuRoC cam0) and 179 deg (TUM-VI cam0) from
+#: the identity. The same bound (the reference check's fail bound) tells the files swapped: ``R0``
+#: within it of the reference's inverse (EuRoC, ground truth as camera and the camera's SLAM
 #: trajectory as sensor: 0.14-0.18 deg; TUM-VI: 0.09-0.11 deg).
 IMU_AS_CAMERA_DEG = 5.0
 
-#: Static pose sets: an inverted hypothesis is named when its median residual is below this share of the input's.
+#: Static pose sets: an inverted hypothesis is named when its median residual is below this share of
+#: the input's.
 POSE_FIT_SHARE = 0.6
 
 #: A hypothesis fits when its median residual is below this share of the calibration's ...
 FIT_SHARE = 0.2
 #: ... and below this share of the median motion angle.
 FIT_TO_MOTION = 0.1
-#: Fitting hypotheses whose median residual is within this factor of the best one (plus :data:`TIE_ATOL`) are one
-#: finding: the data cannot tell them apart (measured: tied hypotheses differ in the 14th digit on real recordings;
-#: distinct ones by factors of 2 and more).
+#: Fitting hypotheses whose median residual is within this factor of the best one (plus
+#: :data:`TIE_ATOL`) are one finding: the data cannot tell them apart (measured: tied hypotheses
+#: differ in the 14th digit on real recordings; distinct ones by factors of 2 and more).
 TIE_SHARE = 1.1
-#: ... and within this (deg) in absolute terms: residual angles of data that fit exactly (noise-free) are rounding,
+#: ... and within this (deg) in absolute terms: residual angles of data that fit exactly
+#: (noise-free) are rounding,
 #: 1e-14 to 1e-12 deg, whose order means nothing.
 TIE_ATOL = 1e-6
 
@@ -70,7 +73,8 @@ def _inverted(stream: OrientationStream) -> OrientationStream:
 
 
 def _undone(side: str, mistake: str, camera, sensor):
-    """``(camera, sensor)`` with the mistake undone, or None where it does not apply to these streams."""
+    """``(camera, sensor)`` with the mistake undone, or None where it does not apply to these
+    streams."""
     orientation = isinstance(sensor, OrientationStream)
     if mistake in _ORDERS:
         if side == "camera":
@@ -88,7 +92,8 @@ def _undone(side: str, mistake: str, camera, sensor):
 
 
 def _one_finding(fits, base, names, reference, what_else=""):
-    """The tied group of ``fits`` (``(order, residual, name, R, extra)``) as one sentence, in the fixed order."""
+    """The tied group of ``fits`` (``(order, residual, name, R, extra)``) as one sentence, in the
+    fixed order."""
     best = min(f[1] for f in fits)
     tied = sorted((f for f in fits if f[1] <= TIE_SHARE * best + TIE_ATOL), key=lambda f: f[0])
     note = ""
@@ -109,10 +114,11 @@ def _one_finding(fits, base, names, reference, what_else=""):
 
 
 def reference_mistakes(R, reference) -> list[Reason]:
-    """Reasons naming the likely cause where the estimate ``R`` disagrees with the ``reference`` beyond the reference
-    check's ``fail`` bound: the camera file holding the IMU's own trajectory (``R`` within :data:`IMU_AS_CAMERA_DEG`
-    of the identity, the reference more than twice that from it), or the camera and sensor files swapped (``R``
-    within the fail bound of the reference's inverse). ``[]`` otherwise, or without a reference."""
+    """Reasons naming the likely cause where the estimate ``R`` disagrees with the ``reference``
+    beyond the reference check's ``fail`` bound: the camera file holding the IMU's own trajectory
+    (``R`` within :data:`IMU_AS_CAMERA_DEG` of the identity, the reference more than twice that from
+    it), or the camera and sensor files swapped (``R`` within the fail bound of the reference's
+    inverse). ``[]`` otherwise, or without a reference."""
     if reference is None or R is None:
         return []
     bound = THRESHOLDS["reference_error_deg"][1]
@@ -138,7 +144,8 @@ def reference_mistakes(R, reference) -> list[Reason]:
 
 def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: float, interval: float,
                    max_offset: float, calibrate, reference=None, R=None) -> list[Reason]:
-    """Reasons naming each input mistake whose undoing makes the calibration fit (see the module notes).
+    """Reasons naming each input mistake whose undoing makes the calibration fit (see the module
+    notes).
 
     Parameters
     ----------
@@ -149,7 +156,8 @@ def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: floa
     interval, max_offset : float
         As given to the calibration.
     calibrate : callable
-        :func:`replication.rig.calibration.calibrate` (re-run on each hypothesis, no bootstrap, no diagnosis).
+        :func:`replication.rig.calibration.calibrate` (re-run on each hypothesis, no bootstrap, no
+        diagnosis).
     reference : (3, 3) array, optional
         A reference ``R0``: tells tied hypotheses apart where it agrees with some of them only.
     R : (3, 3) array, optional
@@ -180,11 +188,12 @@ def input_mistakes(camera, sensor, *, base_residual_deg: float, motion_deg: floa
 
 def pose_direction(C, S, *, base_residual_deg: float, pairs: str, min_motion_deg: float, calibrate_poses,
                    reference=None) -> list[Reason]:
-    """Static pose sets: calibrate with the camera poses or the robot poses inverted; a ``fail`` reason naming the
-    pose direction when one fits clearly better (median residual below :data:`POSE_FIT_SHARE` of the input's).
-    Static poses carry no clock or speed to check, so this runs on every pose calibration. Both sets inverted is a
-    consistent problem for another unknown (the world-to-world rotation): the rotations alone cannot show it, only
-    a reference can (see :mod:`replication.rig.quality`)."""
+    """Static pose sets: calibrate with the camera poses or the robot poses inverted; a ``fail``
+    reason naming the pose direction when one fits clearly better (median residual below
+    :data:`POSE_FIT_SHARE` of the input's). Static poses carry no clock or speed to check, so this
+    runs on every pose calibration. Both sets inverted is a consistent problem for another unknown
+    (the world-to-world rotation): the rotations alone cannot show it, only a reference can (see
+    :mod:`replication.rig.quality`)."""
     inv = lambda M: np.swapaxes(M, -1, -2)  # noqa: E731
     fits = []
     for order, (mistake, c, s) in enumerate(zip(POSE_HYPOTHESES, (inv(C), C), (S, inv(S)))):

@@ -1,5 +1,5 @@
-"""Put a calibration into the user's own VIO configuration: Kalibr, OpenVINS, Basalt, ORB-SLAM3, ROS 2. Theory and
-measured numbers: ``docs/reading.md``, section ``replication.rig.export``."""
+"""Put a calibration into the user's own VIO configuration: Kalibr, OpenVINS, Basalt, ORB-SLAM3, ROS
+2. Theory and measured numbers: ``docs/reading.md``, section ``replication.rig.export``."""
 from __future__ import annotations
 
 import json
@@ -25,19 +25,20 @@ TARGETS = ("kalibr", "openvins", "basalt", "orbslam3", "ros2")
 
 
 class ExportWarning(ReplicationWarning):
-    """The exported values carry a doubt the report measured: a ``warning`` (or forced ``fail``) verdict, or a
-    clock offset measured against a stream other than the IMU's gyro."""
+    """The exported values carry a doubt the report measured: a ``warning`` (or forced ``fail``)
+    verdict, or a clock offset measured against a stream other than the IMU's gyro."""
 
 
 class TranslationNotEstimatedWarning(ReplicationWarning):
-    """A ROS 2 command: the translation written is zero, not an estimate (only the rotation and the clock offset are
-    estimated here); put your measured translation in its ``--x --y --z``."""
+    """A ROS 2 command: the translation written is zero, not an estimate (only the rotation and the
+    clock offset are estimated here); put your measured translation in its ``--x --y --z``."""
 
 
 @dataclass(frozen=True)
 class Export:
-    """An exported calibration: ``text`` (the file's content, or the ROS 2 command), the fields ``changed`` and
-    ``added`` (a key the base file lacked), and ``notes`` (what was kept or not written, and why)."""
+    """An exported calibration: ``text`` (the file's content, or the ROS 2 command), the fields
+    ``changed`` and ``added`` (a key the base file lacked), and ``notes`` (what was kept or not
+    written, and why)."""
 
     text: str
     to: str
@@ -100,8 +101,8 @@ def _reasons(report) -> str:
 
 
 def _source(report) -> str:
-    """The sensor stream, on one line, its file by name only (a file name may hold anything: it is written into
-    commands; a folder is the user's own business)."""
+    """The sensor stream, on one line, its file by name only (a file name may hold anything: it is
+    written into commands; a folder is the user's own business)."""
     sensor = (report.get("inputs") or {}).get("sensor") or {}
     sensor = sensor if isinstance(sensor, dict) else {}
     source = sensor.get("source") or ""
@@ -112,8 +113,8 @@ def _source(report) -> str:
 _NOT_ESTIMATED = ("translation NOT estimated (zeros written): only the rotation and the clock offset come from "
                   "this calibration; put your measured translation in --x --y --z")
 
-#: What each tool's loader requires that a calibration of R0 does not give: a file is written only into a base that
-#: has them (the sources: docs/conventions.md, "Other tools' files").
+#: What each tool's loader requires that a calibration of R0 does not give: a file is written only
+#: into a base that has them (the sources: docs/conventions.md, "Other tools' files").
 NEEDS_BASE = {
     "kalibr": ("Kalibr", "camera_model, intrinsics, distortion_model, distortion_coeffs, resolution and rostopic for "
                          "each camera (ConfigReader.py)"),
@@ -152,20 +153,22 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
         The calibration (``python -m replication calibrate ... --out REPORT.json``).
     to : {'kalibr', 'openvins', 'basalt', 'orbslam3', 'ros2'}
     base : path
-        The user's own file of that tool (required but for ``ros2``: each tool's loader needs intrinsics and more
-        that a calibration of ``R0`` does not give, :data:`NEEDS_BASE`): the output is a copy in which only the
-        rotations and the clock offset are changed. Its format is recognised from its content and must be ``to``.
+        The user's own file of that tool (required but for ``ros2``: each tool's loader needs
+        intrinsics and more that a calibration of ``R0`` does not give, :data:`NEEDS_BASE`): the
+        output is a copy in which only the rotations and the clock offset are changed. Its format is
+        recognised from its content and must be ``to``.
     camera : str
-        ``cam0``, ``cam1``, ... (Basalt: the index into ``T_imu_cam``; ORB-SLAM3: ``cam0`` = ``T_b_c1``): the camera
-        the report calibrated.
+        ``cam0``, ``cam1``, ... (Basalt: the index into ``T_imu_cam``; ORB-SLAM3: ``cam0`` =
+        ``T_b_c1``): the camera the report calibrated.
     parent_frame, child_frame : str
         ``ros2``: the frame names of the command (the IMU's, the camera's optical frame: REP-103).
     force : bool
-        Export a report whose verdict is ``fail`` (with an :class:`ExportWarning`) instead of refusing it.
+        Export a report whose verdict is ``fail`` (with an :class:`ExportWarning`) instead of
+        refusing it.
     whole_rig : bool
-        The file's other cameras turn with ``camera`` (by the same correction of the IMU frame), so every
-        camera-camera transform stays as the file has it; False changes ``camera`` only, with an
-        :class:`ExportWarning` saying how far each camera-camera rotation moves.
+        The file's other cameras turn with ``camera`` (by the same correction of the IMU frame), so
+        every camera-camera transform stays as the file has it; False changes ``camera`` only, with
+        an :class:`ExportWarning` saying how far each camera-camera rotation moves.
 
     Returns
     -------
@@ -175,8 +178,8 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
     Raises
     ------
     ValueError
-        A report that is not one, a ``fail`` verdict without ``force``, no ``base`` (naming what the tool's loader
-        needs from it), a base file of another format, a camera the base file lacks
+        A report that is not one, a ``fail`` verdict without ``force``, no ``base`` (naming what the
+        tool's loader needs from it), a base file of another format, a camera the base file lacks
         (:class:`~replication.rig.datafile.DataFileError` for file problems, naming the file).
     """
     if to not in TARGETS:
@@ -250,9 +253,10 @@ def export_calibration(report, to: str, *, base=None, camera: str = "cam0", pare
 
 
 def _rig_notes(before, after, camera, whole_rig) -> list:
-    """What happened to the file's other cameras, checked on the text written: with the whole rig, every
-    camera-camera rotation and translation is as it was (else an error: the export is not written); with one camera
-    only, an :class:`ExportWarning` says how far each camera-camera rotation moved."""
+    """What happened to the file's other cameras, checked on the text written: with the whole rig,
+    every camera-camera rotation and translation is as it was (else an error: the export is not
+    written); with one camera only, an :class:`ExportWarning` says how far each camera-camera
+    rotation moved."""
     from ..core.so3 import angle_between_deg
 
     others = [c for c in before.cameras() if c != camera]

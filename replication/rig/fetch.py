@@ -1,5 +1,6 @@
-"""The real recordings notebook 07 and the tests read: manifest, checksums, download from their public origins. Theory
-and measured numbers: ``docs/reading.md``, section ``replication.rig.fetch``."""
+"""The real recordings notebook 07 and the tests read: manifest, checksums, download from their
+public origins. Theory and measured numbers: ``docs/reading.md``, section
+``replication.rig.fetch``."""
 from __future__ import annotations
 
 import csv
@@ -13,7 +14,8 @@ from .datafile import fail, read_text
 
 __all__ = ["MANIFEST", "MANIFEST_NAME", "ManifestEntry", "NoNetwork", "load_manifest", "verify", "fetch", "sha256_of"]
 
-#: The manifest shipped with the project (the clone's ``data/``, or the copy an installed wheel carries).
+#: The manifest shipped with the project (the clone's ``data/``, or the copy an installed wheel
+#: carries).
 MANIFEST_NAME = "data/real_data_manifest.csv"
 MANIFEST = shipped(MANIFEST_NAME)
 COLUMNS = ["folder", "file", "bytes", "sha256", "repository", "commit", "path", "licence", "citation"]
@@ -46,7 +48,8 @@ class ManifestEntry:
 
     @property
     def lfs_url(self) -> str:
-        """The same file from GitHub's LFS media host (for repositories that store it with Git LFS)."""
+        """The same file from GitHub's LFS media host (for repositories that store it with Git
+        LFS)."""
         return f"https://media.githubusercontent.com/media/{self.repository}/{self.commit}/{self.path}"
 
 
@@ -105,15 +108,17 @@ def _status(path: Path, entry: ManifestEntry) -> str:
 
 
 def verify(root, entries=None) -> dict:
-    """``{relative path: "ok" | "missing" | "size ... != ..." | "sha256 ... != ..."}`` for a real-data folder."""
+    """``{relative path: "ok" | "missing" | "size ... != ..." | "sha256 ... != ..."}`` for a
+    real-data folder."""
     root = Path(root)
     entries = load_manifest() if entries is None else entries
     return {str(e.relpath): _status(root / e.relpath, e) for e in entries}
 
 
 class NoNetwork(ConnectionError):
-    """A download could not reach its server (no network, a host name that does not resolve, a refused or reset
-    connection, a timeout): :func:`fetch` stops there, as every other download would fail alike.
+    """A download could not reach its server (no network, a host name that does not resolve, a
+    refused or reset connection, a timeout): :func:`fetch` stops there, as every other download
+    would fail alike.
 
     Attributes
     ----------
@@ -139,8 +144,8 @@ class NoNetwork(ConnectionError):
 
 
 def _download(url: str, timeout: float) -> bytes:
-    """The bytes at ``url``; a server that answers with an error raises ``OSError`` naming the URL and the HTTP
-    status, a server not reached :class:`NoNetwork`."""
+    """The bytes at ``url``; a server that answers with an error raises ``OSError`` naming the URL
+    and the HTTP status, a server not reached :class:`NoNetwork`."""
     import urllib.error
     import urllib.request
 
@@ -169,8 +174,9 @@ def _obtain(entry: ManifestEntry, mirror, timeout: float) -> bytes:
 
 
 def _check_destination(dest: Path, mirror, todo) -> None:
-    """Before any download: ``dest`` is not the mirror (no file written onto itself) and every folder a file goes to
-    can be created and written (``ValueError`` with the path and the reason)."""
+    """Before any download: ``dest`` is not the mirror (no file written onto itself) and every
+    folder a file goes to can be created and written (``ValueError`` with the path and the
+    reason)."""
     if mirror is not None:
         source = Path(str(mirror).removeprefix("file://"))
         if same_file(dest, source):
@@ -188,14 +194,14 @@ def _check_destination(dest: Path, mirror, todo) -> None:
 def fetch(dest, *, mirror=None, entries=None, timeout: float = 60.0, log=print) -> dict:
     """Download (or copy from ``mirror``) every manifest file into ``dest`` and verify it.
 
-    Files already present with the right checksum are kept. Returns :func:`verify`'s report
-    after the fetch; a file whose download fails or does not match is reported, not written.
-    Before any download, ``dest`` and its folders are created and checked: a file in the way, a folder that
-    cannot be created or written, or ``dest`` being the mirror raises ``ValueError`` (``NotADirectoryError`` for
-    an existing file) naming the path and the reason; a write that fails later (a full disk) too, the files
-    fetched before it kept. A server that cannot be reached (no network) stops the fetch with :class:`NoNetwork`
-    (a ``ConnectionError``) naming the URL, the reason and how many files are left; the files fetched before it
-    are kept.
+    Files already present with the right checksum are kept. Returns :func:`verify`'s report after
+    the fetch; a file whose download fails or does not match is reported, not written. Before any
+    download, ``dest`` and its folders are created and checked: a file in the way, a folder that
+    cannot be created or written, or ``dest`` being the mirror raises ``ValueError``
+    (``NotADirectoryError`` for an existing file) naming the path and the reason; a write that fails
+    later (a full disk) too, the files fetched before it kept. A server that cannot be reached (no
+    network) stops the fetch with :class:`NoNetwork` (a ``ConnectionError``) naming the URL, the
+    reason and how many files are left; the files fetched before it are kept.
     """
     dest = Path(dest)
     if dest.exists() and not dest.is_dir():

@@ -1,5 +1,6 @@
-"""The diagnostic figure of a calibration (:meth:`replication.rig.report.CalibrationResult.plot`), like Kalibr's
-report: matplotlib, no computation here beyond the conventions' conversions of the reference."""
+"""The diagnostic figure of a calibration (:meth:`replication.rig.report.CalibrationResult.plot`),
+like Kalibr's report: matplotlib, no computation here beyond the conventions' conversions of the
+reference."""
 from __future__ import annotations
 
 import math
@@ -25,9 +26,9 @@ def _rotation_text(quaternion_wxyz, yaw_pitch_roll) -> str:
 
 
 def headline(result, *, name: str | None = None, reference_name: str | None = None) -> tuple[str, list[str]]:
-    """The figure's title and the lines that state ``R0``: the recording, the method and the pairs; ``R0`` as a
-    quaternion and as yaw / pitch / roll (conventions: ``docs/conventions.md``); the bootstrap radius and what it
-    covers; the reference, when one was given, and the angle to it.
+    """The figure's title and the lines that state ``R0``: the recording, the method and the pairs;
+    ``R0`` as a quaternion and as yaw / pitch / roll (conventions: ``docs/conventions.md``); the
+    bootstrap radius and what it covers; the reference, when one was given, and the angle to it.
 
     Returns
     -------
@@ -69,18 +70,20 @@ def _reference_line(said: str, ref, error_deg: float) -> str:
 
 
 def calibration_figure(result, *, name: str | None = None, reference_name: str | None = None):
-    """The diagnostic figure of a calibration (:meth:`replication.rig.report.CalibrationResult.plot`), like Kalibr's
-    report.
+    """The diagnostic figure of a calibration
+    (:meth:`replication.rig.report.CalibrationResult.plot`), like Kalibr's report.
 
-    A title naming the recording (``name``), the method and the pairs, and a band of text stating ``R0``
-    (:func:`headline`: quaternion, yaw / pitch / roll, the bootstrap radius and what it covers, the reference
-    (``reference_name`` says where it came from) and the angle to it). Then the panels that have data, lettered in
-    order. Streams: angular speed of both streams after the clock alignment; the clock-offset cross-correlation with
-    the chosen peak and the search bounds. Static pose sets: each station's median pair residual against the
-    outlying-station threshold; the residuals against the station pair. Then the per-pair residuals over time, their
-    histogram, the bootstrap cloud (estimates as rotation vectors of ``R_boot R^T``, deg; left out without a
-    bootstrap), the verdict and its reasons; with ``online`` results, the online estimate's radius (and error to a
-    reference) over time, when it became ready and its events, and the online verdict.
+    A title naming the recording (``name``), the method and the pairs, and a band of text stating
+    ``R0`` (:func:`headline`: quaternion, yaw / pitch / roll, the bootstrap radius and what it
+    covers, the reference (``reference_name`` says where it came from) and the angle to it). Then
+    the panels that have data, lettered in order. Streams: angular speed of both streams after the
+    clock alignment; the clock-offset cross-correlation with the chosen peak and the search bounds.
+    Static pose sets: each station's median pair residual against the outlying-station threshold;
+    the residuals against the station pair. Then the per-pair residuals over time, their histogram,
+    the bootstrap cloud (estimates as rotation vectors of ``R_boot R^T``, deg; left out without a
+    bootstrap), the verdict and its reasons; with ``online`` results, the online estimate's radius
+    (and error to a reference) over time, when it became ready and its events, and the online
+    verdict.
     """
     d = result.diagnostics
     online = result.online if result.online and d.get("online_track") is not None else None
@@ -150,7 +153,8 @@ _ZOOM_MIN_MS = 0.5
 
 def offset_zoom_ms(result):
     """The offset panel's x range (ms): the 95 % interval with half its width either side (at least
-    :data:`_ZOOM_MIN_MS` wide), or None where the interval is not finite (the full search is shown)."""
+    :data:`_ZOOM_MIN_MS` wide), or None where the interval is not finite (the full search is
+    shown)."""
     lo, hi = (1e3 * float(v) for v in result.time_offset_ci95_s)
     if not (math.isfinite(lo) and math.isfinite(hi)):
         return None
@@ -255,7 +259,8 @@ def _online_verdict_panel(ax, k, online):
 
 
 def _online_panel(ax, k, online, track, t0):
-    """The online replay: radius (and error to a reference) over time, when it became ready, its events."""
+    """The online replay: radius (and error to a reference) over time, when it became ready, its
+    events."""
     t = np.asarray(track["t_seen"]) - t0
     ax.semilogy(t, track["radius_deg"], "--", label=f"stated {100 * online['radius_level']:g} % radius")
     if "error_deg" in track:

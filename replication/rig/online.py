@@ -1,6 +1,6 @@
-"""Online alignment: the paper's two-step iteration as a live estimator that says when the motion so far determines
-``R0``, how far off it may be, and what changed when its residuals jump. Theory and measured numbers:
-``docs/judging.md``, section ``replication.rig.online``."""
+"""Online alignment: the paper's two-step iteration as a live estimator that says when the motion so
+far determines ``R0``, how far off it may be, and what changed when its residuals jump. Theory and
+measured numbers: ``docs/judging.md``, section ``replication.rig.online``."""
 from __future__ import annotations
 
 import math
@@ -20,20 +20,25 @@ from .online_guard import drift_lag_deg, follow_drift, not_ready_reasons, recogn
 __all__ = ["OnlineCalibrator", "OnlineState", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 
 _EYE = np.eye(3)
-#: Floor of the change detector's reference level ``d^2``: a residual of 0.01 deg (``d^2 ~ 2 theta^2``), below any
-#: real sensor's noise; noise-free data would otherwise make rounding look like a change.
+#: Floor of the change detector's reference level ``d^2``: a residual of 0.01 deg (``d^2 ~ 2
+#: theta^2``), below any real sensor's noise; noise-free data would otherwise make rounding look
+#: like a change.
 D2_FLOOR = 2.0 * math.radians(0.01) ** 2
-#: Floor of the RMS pair residual the radius assumes (deg): the same 0.01 deg. Data that fit exactly (noise-free or
-#: repeated pairs) then give a radius set by the motion's geometry, never 0 (and infinite about an unexcited axis).
+#: Floor of the RMS pair residual the radius assumes (deg): the same 0.01 deg. Data that fit exactly
+#: (noise-free or repeated pairs) then give a radius set by the motion's geometry, never 0 (and
+#: infinite about an unexcited axis).
 NOISE_FLOOR_DEG = 0.01
-#: The motion determines ``R0`` once the RMS rotation about axes perpendicular to the least-excited direction is at
-#: least this (deg). The batch verdict warns below an axis spread of 1 deg (:mod:`replication.rig.quality`); the
-#: excitation is at least the axis spread (``lambda_min(G) ~ s_2^2 + s_3^2`` of the rotation vectors).
+#: The motion determines ``R0`` once the RMS rotation about axes perpendicular to the least-excited
+#: direction is at least this (deg). The batch verdict warns below an axis spread of 1 deg
+#: (:mod:`replication.rig.quality`); the excitation is at least the axis spread (``lambda_min(G) ~
+#: s_2^2 + s_3^2`` of the rotation vectors).
 MIN_EXCITATION_DEG = 1.0
-#: Pairs before the radius, ``ready`` and the change detector mean anything (3 unknowns, noise from J - 3).
+#: Pairs before the radius, ``ready`` and the change detector mean anything (3 unknowns, noise from
+#: J - 3).
 MIN_PAIRS = 10
-#: ``ready`` is withdrawn at this many gross misfits (``d^2`` above 10 times its level; about 1 in 10^5 pairs without a
-#: change) since the CUSUM last stood at 0: a change or outliers, which the detector has not decided yet.
+#: ``ready`` is withdrawn at this many gross misfits (``d^2`` above 10 times its level; about 1 in
+#: 10^5 pairs without a change) since the CUSUM last stood at 0: a change or outliers, which the
+#: detector has not decided yet.
 MISFITS_WITHDRAW_READY = 2
 #: Recent pairs whose residuals and motions the online verdict reads (its medians).
 RECENT_PAIRS = 200
@@ -63,22 +68,26 @@ class OnlineCalibrator:
     level : float
         Confidence of the radius, in (0, 1) (default 0.95).
     forgetting : float
-        Exponential forgetting factor in ``[(min_pairs - 1) / (min_pairs + 1), 1]``; 1 keeps every pair with weight
-        1 (the state then equals the batch problem of all pairs since the last start). Below that range the
-        effective number of pairs ``(1 + lambda) / (1 - lambda)`` could never reach ``min_pairs``.
+        Exponential forgetting factor in ``[(min_pairs - 1) / (min_pairs + 1), 1]``; 1 keeps every
+        pair with weight 1 (the state then equals the batch problem of all pairs since the last
+        start). Below that range the effective number of pairs ``(1 + lambda) / (1 - lambda)`` could
+        never reach ``min_pairs``.
     step_every, refine_every : int
-        A two-step step every ``step_every`` pairs; a Newton refinement (and the radius) every ``refine_every``
-        pairs or every tenth of the pairs so far, whichever is more.
+        A two-step step every ``step_every`` pairs; a Newton refinement (and the radius) every
+        ``refine_every`` pairs or every tenth of the pairs so far, whichever is more.
     min_pairs : int
         Effective distinct pairs the motion needs (at least 4: 3 unknowns and a noise estimate).
     cusum_k, cusum_h, cusum_cap : float
-        The change detector's allowance, threshold and per-pair cap (``0 < k < cap``; see the module notes).
+        The change detector's allowance, threshold and per-pair cap (``0 < k < cap``; see the module
+        notes).
     reference_rate : float
-        How fast the detector's reference level follows the in-control residuals (an exponential average), in (0, 1].
+        How fast the detector's reference level follows the in-control residuals (an exponential
+        average), in (0, 1].
     confirm_pairs : int
         Pairs in the confirmation window after an alarm (at least 5).
     noise_floor_deg, min_excitation_deg, duplicate_deg : float
-        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG`, :data:`DUPLICATE_DEG` (0: exact repeats only).
+        See :data:`NOISE_FLOOR_DEG`, :data:`MIN_EXCITATION_DEG`, :data:`DUPLICATE_DEG` (0: exact
+        repeats only).
     init : array_like (3, 3), optional
         Start of the iteration (default identity).
 
@@ -110,7 +119,8 @@ class OnlineCalibrator:
                              f"{cusum_cap!r}, cusum_k={cusum_k!r}")
         self.level = check_range("level", level, low=0.0, high=1.0, high_open=True)
         self.reference_rate = check_range("reference_rate", reference_rate, low=0.0, high=1.0)
-        # min_pairs: 3 unknowns and a noise estimate; confirm_pairs: also a trim; drift_pairs: a window solved alone
+        # min_pairs: 3 unknowns and a noise estimate; confirm_pairs: also a trim; drift_pairs: a
+        # window solved alone
         for name, value, least in (("step_every", step_every, 1), ("refine_every", refine_every, 1),
                                    ("min_pairs", min_pairs, 4), ("confirm_pairs", confirm_pairs, 5),
                                    ("max_confirm_pairs", max_confirm_pairs, 5), ("drift_pairs", drift_pairs, 10)):
@@ -147,9 +157,11 @@ class OnlineCalibrator:
         self._context: dict = {}
         self.restart()
 
-    # ------------------------------------------------------------------------------------------------ state
+    # ----------------------------------------------------------------------------------------------
+    # state
     def restart(self, init=None) -> None:
-        """Forget every pair (after a re-mount): the estimate starts again from ``init`` (default: the last one)."""
+        """Forget every pair (after a re-mount): the estimate starts again from ``init`` (default:
+        the last one)."""
         self._S = np.zeros((9, 9))     # sum of weights x (B kron A)
         self._SB = np.zeros((3, 3))    # sum of weights x B  (G = 2 w I - SB - SB^T)
         self._SB2 = np.zeros((3, 3))   # sum of squared weights x B (forgetting: the covariance's middle factor)
@@ -215,17 +227,20 @@ class OnlineCalibrator:
 
     @property
     def excitation_deg(self) -> float:
-        """RMS rotation about axes perpendicular to the least-excited direction (deg, at the last refinement)."""
+        """RMS rotation about axes perpendicular to the least-excited direction (deg, at the last
+        refinement)."""
         return self._excitation
 
     @property
     def effective_pairs(self) -> float:
-        """``(sum w)^2 / sum w^2`` over the distinct pairs in the estimate (at the last refinement)."""
+        """``(sum w)^2 / sum w^2`` over the distinct pairs in the estimate (at the last
+        refinement)."""
         return self._n_eff
 
     @property
     def determined(self) -> bool:
-        """The motion so far determines ``R0``: excitation and effective distinct pairs (see the module notes)."""
+        """The motion so far determines ``R0``: excitation and effective distinct pairs (see the
+        module notes)."""
         return bool(self._excitation >= self.min_excitation_deg and self._n_eff >= self.min_pairs - 1e-9)
 
     checking = property(lambda self: self._detector.checking, doc="A change-detector alarm is being confirmed.")
@@ -237,7 +252,8 @@ class OnlineCalibrator:
                     and (self._verdict is None or self._verdict.level != "fail"))
 
     def unresolved_end(self):
-        """:meth:`replication.rig.online_events.ChangeDetector.undecided` at the end of a stream, or None."""
+        """:meth:`replication.rig.online_events.ChangeDetector.undecided` at the end of a stream, or
+        None."""
         return self._detector.undecided(MISFITS_WITHDRAW_READY)
 
     def _state(self, event) -> OnlineState:
@@ -245,9 +261,11 @@ class OnlineCalibrator:
         return OnlineState(self._n, self._R, self.radius, self.ready, event == "remount", event, self.determined,
                            self._detector.checking, self._refined)
 
-    # ------------------------------------------------------------------------------------------------ update
+    # ----------------------------------------------------------------------------------------------
+    # update
     def update(self, A, B) -> OnlineState:
-        """Add one pair ``(A_j, B_j)`` (camera and sensor motion over the same interval). O(1) work and memory."""
+        """Add one pair ``(A_j, B_j)`` (camera and sensor motion over the same interval). O(1) work
+        and memory."""
         if np.iscomplexobj(A) or np.iscomplexobj(B):  # float() would drop the imaginary part with a warning only
             raise ValueError("a pair is two 3x3 rotations, real-valued; got a complex array")
         try:
@@ -262,7 +280,8 @@ class OnlineCalibrator:
         return self._update(M[0], M[1], fa, fb)
 
     def update_many(self, A, B) -> list[OnlineState]:
-        """:meth:`update` for each pair of ``(J, 3, 3)`` arrays in order (a replay); validated once, up front."""
+        """:meth:`update` for each pair of ``(J, 3, 3)`` arrays in order (a replay); validated once,
+        up front."""
         A = check_rotation_matrices(A, "A (camera motions)")
         B = check_rotation_matrices(B, "B (sensor motions)")
         if A.shape != B.shape or A.ndim != 3:
@@ -304,12 +323,13 @@ class OnlineCalibrator:
     def _refine_gap(self) -> int:  # following a drift, every refine_every pairs (the lag counts them)
         return self.refine_every if self._drift_rate is not None else max(self.refine_every, self._n // 10)
 
-    # ------------------------------------------------------------------------------------------------ estimates
+    # ----------------------------------------------------------------------------------------------
+    # estimates
     def _step(self) -> None:
-        """One warm-started two-step iteration (eqs. (14)-(17)) on the next refinement's start. The published
-        estimate stays the last minimiser of eq. (8), the one the radius describes: the two-step fixed point is
-        not that minimiser and is farther from ``R0`` (notebook 01), so publishing it would leave the radius
-        describing another estimate."""
+        """One warm-started two-step iteration (eqs. (14)-(17)) on the next refinement's start. The
+        published estimate stays the last minimiser of eq. (8), the one the radius describes: the
+        two-step fixed point is not that minimiser and is farther from ``R0`` (notebook 01), so
+        publishing it would leave the radius describing another estimate."""
         K = self.K
         if not self._w:
             return
@@ -317,9 +337,10 @@ class OnlineCalibrator:
         self._warm = nearest_rotation_up_to_sign(unvec(K.T @ vec(right)))  # eq. (15), projected (17)
 
     def _refine(self, max_iterations: int = 30) -> None:
-        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate and from the relaxed minimiser of
-        ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg or more away can end at another
-        critical point, about 180 deg off), then the radius, the detector's start and the residual checks."""
+        """Newton on SO(3) to the minimiser of eq. (8) from the two-step iterate and from the
+        relaxed minimiser of ``K`` (the lower cost wins: from the identity alone, a mounting 150 deg
+        or more away can end at another critical point, about 180 deg off), then the radius, the
+        detector's start and the residual checks."""
         from ..core.solvers.certificate import chordal_newton, relaxed_rotation
 
         K = self.K
@@ -338,7 +359,8 @@ class OnlineCalibrator:
         self._verdict = self.verdict()
 
     def _update_radius(self) -> float:
-        """Excitation, noise level and radius at the current estimate; returns the cost (8) (weighted)."""
+        """Excitation, noise level and radius at the current estimate; returns the cost (8)
+        (weighted)."""
         x = vec(self._R)
         cost = max(2.0 * (3.0 * self._w - x @ (0.5 * (self._S + self._S.T)) @ x), 0.0)  # eq. (8) from the running K
         n_eff = self._n_eff
@@ -367,7 +389,8 @@ class OnlineCalibrator:
         return cost
 
     def estimate(self) -> np.ndarray:
-        """The minimiser of eq. (8) over the pairs so far (Newton to convergence from the current iterate)."""
+        """The minimiser of eq. (8) over the pairs so far (Newton to convergence from the current
+        iterate)."""
         self._flush()
         if self._w:
             self._refine(max_iterations=100)
@@ -377,9 +400,11 @@ class OnlineCalibrator:
         """Angle (degrees) between the current estimate and ``R0``."""
         return float(angle_between_deg(self._R, np.asarray(R0, dtype=float)))
 
-    # ------------------------------------------------------------------------------------------------ changes
+    # ----------------------------------------------------------------------------------------------
+    # changes
     def _decide(self) -> str | None:
-        """The detector's decision on its confirmation window, acted on; None while it waits for more pairs."""
+        """The detector's decision on its confirmation window, acted on; None while it waits for
+        more pairs."""
         decision = self._detector.decide(self._R, self._cov, self._s2, self.n_total - 1)
         if decision is None:
             return None
@@ -401,9 +426,11 @@ class OnlineCalibrator:
         self.events = [e for e in self.events if e.kind != "drift" or e.onset_pair != event.onset_pair] + [event]
         return event.kind
 
-    # ------------------------------------------------------------------------------------------------ judging
+    # ----------------------------------------------------------------------------------------------
+    # judging
     def evidence(self) -> dict:
-        """What the estimator measured about itself (the inputs of :meth:`verdict` and :meth:`status`)."""
+        """What the estimator measured about itself (the inputs of :meth:`verdict` and
+        :meth:`status`)."""
         self._flush()
         res, mot = list(self._recent_res), list(self._recent_motion)
         return {"n_pairs": self._n, "effective_pairs": self._n_eff, "repeated_pairs": self.duplicates,
@@ -415,9 +442,10 @@ class OnlineCalibrator:
                 "determined": self.determined, "checking": self._detector.checking}
 
     def verdict(self):
-        """The online verdict: the batch checks (:func:`replication.rig.quality.judge`, same thresholds) on what the
-        estimator measured (the radius in place of the bootstrap radius; medians over the last
-        :data:`RECENT_PAIRS` pairs) and on the stream front end's evidence (:meth:`set_context`)."""
+        """The online verdict: the batch checks (:func:`replication.rig.quality.judge`, same
+        thresholds) on what the estimator measured (the radius in place of the bootstrap radius;
+        medians over the last :data:`RECENT_PAIRS` pairs) and on the stream front end's evidence
+        (:meth:`set_context`)."""
         from .quality import Evidence, judge
 
         e = self.evidence()
@@ -432,19 +460,21 @@ class OnlineCalibrator:
                               repeated_pairs=self.duplicates, **context), found + ((steady,) if steady else ()))
 
     def set_context(self, **evidence) -> None:
-        """Evidence from a stream front end (:class:`replication.rig.live.LiveRig`: clock offset, gaps, gyro rate, as
-        fields of :class:`replication.rig.quality.Evidence`; ``extra``: further reasons, e.g. a named input mistake),
-        judged with the estimator's own from now on (``ready`` needs the verdict not to fail)."""
+        """Evidence from a stream front end (:class:`replication.rig.live.LiveRig`: clock offset,
+        gaps, gyro rate, as fields of :class:`replication.rig.quality.Evidence`; ``extra``: further
+        reasons, e.g. a named input mistake), judged with the estimator's own from now on (``ready``
+        needs the verdict not to fail)."""
         self._context.update(evidence)
         if self._refined or evidence.get("extra"):  # a named cause counts before the first estimate too
             self._verdict = self.verdict()
 
     @property
     def current_verdict(self):
-        """The verdict as of the last refinement (what ``ready`` reads), or None before the first."""
+        """The verdict as of the last refinement (what ``ready`` reads), or None before the
+        first."""
         return self._verdict
 
     def status(self) -> dict:
-        """:meth:`evidence` with ``ready`` and, while not ready, ``not_ready``: one sentence per unmet condition,
-        with its number."""
+        """:meth:`evidence` with ``ready`` and, while not ready, ``not_ready``: one sentence per
+        unmet condition, with its number."""
         return {**self.evidence(), "ready": self.ready, "not_ready": not_ready_reasons(self, MISFITS_WITHDRAW_READY)}

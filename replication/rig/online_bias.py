@@ -1,16 +1,20 @@
-"""The gyro's bias for the live front end (:class:`replication.rig.live.LiveRig`; issue 34, point 1, online half).
+"""The gyro's bias for the live front end (:class:`replication.rig.live.LiveRig`; issue 34, point 1,
+online half).
 
-A raw gyro reports ``omega + b``; integrated over a pairing interval ``T`` the bias turns every sensor motion by
-about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb: left in, it moves ``R0`` (by degrees at 0.1 rad/s). The
-live rig holds its first ``offset_window`` seconds anyway (for the clock offset); on them the bias is estimated with
-``R0`` as the batch does (:func:`replication.rig.sensor_model.estimate_sensor_model`: a centred or rest start, then
-Gauss-Newton on the pair residuals), removed from every rate (the held samples integrated again), and published with
-its 95 % interval. What its interval leaves in ``R0`` is measured (:func:`bias_effect_deg`: the chordal minimiser's
-response to the bias, by finite differences on the window's pairs, through the bias's covariance); ``ready`` is
-withheld, naming the bias (a ``gyro_bias`` reason at level ``fail``), where the bias could not be estimated or where
-its interval leaves ``R0`` uncertain by the target or more.
+A raw gyro reports ``omega + b``; integrated over a pairing interval ``T`` the bias turns every
+sensor motion by about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb: left in, it moves ``R0``
+(by degrees at 0.1 rad/s). The live rig holds its first ``offset_window`` seconds anyway (for the
+clock offset); on them the bias is estimated with ``R0`` as the batch does
+(:func:`replication.rig.sensor_model.estimate_sensor_model`: a centred or rest start, then
+Gauss-Newton on the pair residuals), removed from every rate (the held samples integrated again),
+and published with its 95 % interval. What its interval leaves in ``R0`` is measured
+(:func:`bias_effect_deg`: the chordal minimiser's response to the bias, by finite differences on the
+window's pairs, through the bias's covariance); ``ready`` is withheld, naming the bias (a
+``gyro_bias`` reason at level ``fail``), where the bias could not be estimated or where its interval
+leaves ``R0`` uncertain by the target or more.
 
-Not done online: a bias that changes later (temperature) is not followed; the window's estimate is kept.
+Not done online: a bias that changes later (temperature) is not followed; the window's estimate is
+kept.
 """
 from __future__ import annotations
 
@@ -22,17 +26,19 @@ import numpy as np
 __all__ = ["exp3", "start_bias", "start_rig_bias", "hold_raw", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S",
            "BIAS_WAIT_WINDOWS"]
 
-#: Where the bias cannot be estimated on the first window, the live rig waits for more data up to this many windows.
+#: Where the bias cannot be estimated on the first window, the live rig waits for more data up to
+#: this many windows.
 BIAS_WAIT_WINDOWS = 4
 
-#: The finite-difference step of :func:`bias_effect_deg` (rad/s): small against any bias that matters, large against
-#: the solver's convergence (1e-10 in the gradient).
+#: The finite-difference step of :func:`bias_effect_deg` (rad/s): small against any bias that
+#: matters, large against the solver's convergence (1e-10 in the gradient).
 BIAS_STEP_RAD_S = 1e-3
 
 
 def exp3(x: float, y: float, z: float) -> np.ndarray:
-    """``exp([w]x)`` of one rotation vector (Rodrigues' formula in plain Python: the per-sample hot path of a live gyro;
-    :func:`replication.core.so3.matrix_from_rotation_vector` is the batched form, equal to rounding)."""
+    """``exp([w]x)`` of one rotation vector (Rodrigues' formula in plain Python: the per-sample hot
+    path of a live gyro; :func:`replication.core.so3.matrix_from_rotation_vector` is the batched
+    form, equal to rounding)."""
     t2 = x * x + y * y + z * z
     if t2 < 1e-16:  # second order: sin(t)/t and (1 - cos t)/t^2 to within 1e-24
         a, b = 1.0 - t2 / 6.0, 0.5 - t2 / 24.0
@@ -45,8 +51,9 @@ def exp3(x: float, y: float, z: float) -> np.ndarray:
 
 
 def reintegrate(samples, bias) -> list:
-    """``[(t, Q), ...]``: the raw gyro ``samples`` ``[(t, (wx, wy, wz)), ...]`` integrated from the identity with
-    ``omega - bias`` (the trapezoidal rule of :meth:`replication.rig.live.LiveRig.add_gyro`)."""
+    """``[(t, Q), ...]``: the raw gyro ``samples`` ``[(t, (wx, wy, wz)), ...]`` integrated from the
+    identity with ``omega - bias`` (the trapezoidal rule of
+    :meth:`replication.rig.live.LiveRig.add_gyro`)."""
     bx, by, bz = (float(v) for v in bias)
     out, Q, last = [], np.eye(3), None
     for t, (wx, wy, wz) in samples:
@@ -60,9 +67,10 @@ def reintegrate(samples, bias) -> list:
 
 
 def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95) -> float:
-    """The radius (deg, at ``level``) of ``R0``'s uncertainty that the bias's own uncertainty leaves: ``S C_b S^T``
-    with ``C_b`` the bias's covariance (``model.covariance[3:6, 3:6]``) and ``S`` the chordal minimiser's rotation per
-    unit bias on the window's pairs (finite differences of :data:`BIAS_STEP_RAD_S` per axis)."""
+    """The radius (deg, at ``level``) of ``R0``'s uncertainty that the bias's own uncertainty
+    leaves: ``S C_b S^T`` with ``C_b`` the bias's covariance (``model.covariance[3:6, 3:6]``) and
+    ``S`` the chordal minimiser's rotation per unit bias on the window's pairs (finite differences
+    of :data:`BIAS_STEP_RAD_S` per axis)."""
     from ..core.so3 import rotation_vector_from_matrix
     from ..core.solvers.optimal import chordal_optimal
     from ..core.stats import radius_deg
@@ -83,9 +91,10 @@ def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95) -
 
 
 def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: float):
-    """The bias on the first window (``camera``: an OrientationStream, ``gyro``: the raw GyroStream): ``(model,
-    effect_deg, reason)``; ``model`` None where it could not be estimated (``reason`` says why); ``reason`` (a
-    :class:`replication.rig.quality.Reason`, check ``gyro_bias``) or None where the bias is known well enough."""
+    """The bias on the first window (``camera``: an OrientationStream, ``gyro``: the raw
+    GyroStream): ``(model, effect_deg, reason)``; ``model`` None where it could not be estimated
+    (``reason`` says why); ``reason`` (a :class:`replication.rig.quality.Reason`, check
+    ``gyro_bias``) or None where the bias is known well enough."""
     from .quality import Reason
     from .sensor_verdict import model_or_note
 
@@ -117,20 +126,22 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
 
 
 def hold_raw(raw, t: float, omega, window: float) -> None:
-    """Hold one raw gyro sample ``(t, omega)`` in the deque ``raw`` until the bias is estimated, the oldest dropped
-    beyond ``BIAS_WAIT_WINDOWS + 1`` windows (O(1) memory where no bias is ever tried: no camera, no clock offset;
-    the integration starts where the held samples do, and pairs use relative rotations only)."""
+    """Hold one raw gyro sample ``(t, omega)`` in the deque ``raw`` until the bias is estimated, the
+    oldest dropped beyond ``BIAS_WAIT_WINDOWS + 1`` windows (O(1) memory where no bias is ever
+    tried: no camera, no clock offset; the integration starts where the held samples do, and pairs
+    use relative rotations only)."""
     raw.append((t, omega))
     while t - raw[0][0] > (BIAS_WAIT_WINDOWS + 1) * window:
         raw.popleft()
 
 
 def start_rig_bias(rig) -> bool:
-    """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias` on every camera
-    pose and raw rate held so far), removed from its rates (its buffer integrated again from the raw samples) and any
-    reason named. False while it waits: for the first window, and, where the bias could not be estimated on it (a
-    rig at rest at the start), for more data, every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are
-    held meanwhile; at the end of the streams: whatever arrived)."""
+    """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias`
+    on every camera pose and raw rate held so far), removed from its rates (its buffer integrated
+    again from the raw samples) and any reason named. False while it waits: for the first window,
+    and, where the bias could not be estimated on it (a rig at rest at the start), for more data,
+    every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are held meanwhile; at the end
+    of the streams: whatever arrived)."""
     from .streams import GyroStream, OrientationStream
 
     gyro, cam = rig._gyro, rig._camera

@@ -1,8 +1,8 @@
-"""Causes the online estimator names, as the batch verdict does (issue 33, point 7): a rig turning at constant speed
-(:func:`constant_speed`), time stamps of the two streams in different units (:func:`time_unit_by_rate`), and a clock
-offset beyond the search (:func:`offset_beyond_search`). Each returns a :class:`replication.rig.quality.Reason`
-(``fail``) with its measured number, or None. Theory and measured numbers: ``docs/judging.md``, section
-``replication.rig.online_causes``."""
+"""Causes the online estimator names, as the batch verdict does (issue 33, point 7): a rig turning
+at constant speed (:func:`constant_speed`), time stamps of the two streams in different units
+(:func:`time_unit_by_rate`), and a clock offset beyond the search (:func:`offset_beyond_search`).
+Each returns a :class:`replication.rig.quality.Reason` (``fail``) with its measured number, or None.
+Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.online_causes``."""
 from __future__ import annotations
 
 import math
@@ -13,31 +13,35 @@ __all__ = ["constant_speed", "constant_speed_stream", "time_unit_by_rate", "offs
            "CONSTANT_SPEED_SPREAD", "CONSTANT_SPEED_MIN_DEG", "PLAUSIBLE_INTERVAL_RATIO", "WIDE_SEARCH_SHARE",
            "WIDE_CORRELATION", "WIDE_GAIN"]
 
-#: Relative spread (median absolute deviation over the median) of the recent camera motion angles below which the
-#: rig turns at constant speed (noise of 0.05-0.5 deg on 10-60 deg motions: 0.1-3 %; a hand-held or robot motion:
-#: tens of %).
+#: Relative spread (median absolute deviation over the median) of the recent camera motion angles
+#: below which the rig turns at constant speed (noise of 0.05-0.5 deg on 10-60 deg motions: 0.1-3 %;
+#: a hand-held or robot motion: tens of %).
 CONSTANT_SPEED_SPREAD = 0.05
-#: Median motion per pair (deg) above which constant speed is named (below, the rig is near rest: its own check).
+#: Median motion per pair (deg) above which constant speed is named (below, the rig is near rest:
+#: its own check).
 CONSTANT_SPEED_MIN_DEG = 1.0
-#: Plausible range of (sensor sample interval) / (camera sample interval): a 2000 Hz gyro beside a 0.1 Hz camera (a
-#: SLAM keyframe trajectory; 1/20000) to an orientation sensor ten times slower than the camera (10). Camera stamps in
-#: ms beside a 200 Hz gyro (1e-4) lie inside: those the streams' spans show, at the end (as the batch's check).
+#: Plausible range of (sensor sample interval) / (camera sample interval): a 2000 Hz gyro beside a
+#: 0.1 Hz camera (a SLAM keyframe trajectory; 1/20000) to an orientation sensor ten times slower
+#: than the camera (10). Camera stamps in ms beside a 200 Hz gyro (1e-4) lie inside: those the
+#: streams' spans show, at the end (as the batch's check).
 PLAUSIBLE_INTERVAL_RATIO = (1 / 20000, 10.0)
-#: The wider offset search spans this share of the offset window on each side (5 s of the default 20 s window: the
-#: search keeps half the window's camera samples).
+#: The wider offset search spans this share of the offset window on each side (5 s of the default 20
+#: s window: the search keeps half the window's camera samples).
 WIDE_SEARCH_SHARE = 0.25
-#: Correlation the wider search's peak needs to be named, and its least gain over the correlation found.
+#: Correlation the wider search's peak needs to be named, and its least gain over the correlation
+#: found.
 WIDE_CORRELATION, WIDE_GAIN = 0.9, 0.1
 
-#: A typical rig's ratio of sample intervals (a 200 Hz gyro beside a 20 Hz camera): of the units that bring a ratio
-#: into the plausible range, the one nearest it is named.
+#: A typical rig's ratio of sample intervals (a 200 Hz gyro beside a 20 Hz camera): of the units
+#: that bring a ratio into the plausible range, the one nearest it is named.
 TYPICAL_INTERVAL_RATIO = 0.1
 _UNITS = {1e3: "ms", 1e6: "us", 1e9: "ns"}
 
 
 def constant_speed(motions_deg, excitation_deg: float, min_excitation_deg: float, weak_axis):
-    """A ``constant_speed`` fail reason when the motion does not determine ``R0`` and the camera motion angles
-    ``motions_deg`` (recent pairs, at least 10) agree within :data:`CONSTANT_SPEED_SPREAD`, else None."""
+    """A ``constant_speed`` fail reason when the motion does not determine ``R0`` and the camera
+    motion angles ``motions_deg`` (recent pairs, at least 10) agree within
+    :data:`CONSTANT_SPEED_SPREAD`, else None."""
     from .quality import Reason
 
     m = np.asarray(motions_deg, dtype=float)
@@ -58,9 +62,10 @@ def constant_speed(motions_deg, excitation_deg: float, min_excitation_deg: float
 
 
 def constant_speed_stream(t, world_from_camera, interval: float):
-    """:func:`constant_speed` on a camera stream's own motions (samples ``t``, ``world_from_camera``): the angles
-    turned over successive ``interval`` spans. Named where every pair repeats (a noise-free camera turning at constant
-    speed gives the same pair again and again, refused as repeats, so the estimator's own motions stay few)."""
+    """:func:`constant_speed` on a camera stream's own motions (samples ``t``,
+    ``world_from_camera``): the angles turned over successive ``interval`` spans. Named where every
+    pair repeats (a noise-free camera turning at constant speed gives the same pair again and again,
+    refused as repeats, so the estimator's own motions stay few)."""
     from ..core.so3 import angle_between_deg
 
     t = np.asarray(t, dtype=float)
@@ -72,8 +77,9 @@ def constant_speed_stream(t, world_from_camera, interval: float):
 
 
 def time_unit_by_rate(camera_dt: float | None, sensor_dt: float | None):
-    """A ``time_unit`` fail reason when the ratio of the streams' typical sample intervals is 1e3, 1e6 or 1e9 times
-    outside :data:`PLAUSIBLE_INTERVAL_RATIO` (one stream's stamps read in another unit), else None."""
+    """A ``time_unit`` fail reason when the ratio of the streams' typical sample intervals is 1e3,
+    1e6 or 1e9 times outside :data:`PLAUSIBLE_INTERVAL_RATIO` (one stream's stamps read in another
+    unit), else None."""
     from .quality import Reason
 
     if not camera_dt or not sensor_dt or not camera_dt > 0 or not sensor_dt > 0:
@@ -82,8 +88,9 @@ def time_unit_by_rate(camera_dt: float | None, sensor_dt: float | None):
     low, high = PLAUSIBLE_INTERVAL_RATIO
     if low <= ratio <= high:
         return None
-    # of the units that bring the ratio into the plausible range, the one that brings it nearest a typical rig's (the
-    # range spans more than one factor of 1000: camera stamps in us also fit it read as ms, at its edge)
+    # of the units that bring the ratio into the plausible range, the one that brings it nearest a
+    # typical rig's (the range spans more than one factor of 1000: camera stamps in us also fit it
+    # read as ms, at its edge)
     fits = [(abs(math.log(scaled / TYPICAL_INTERVAL_RATIO)), factor, unit, side)
             for factor, unit in _UNITS.items()
             for side, scaled in (("sensor", ratio / factor), ("camera", ratio * factor)) if low <= scaled <= high]
@@ -98,10 +105,10 @@ def time_unit_by_rate(camera_dt: float | None, sensor_dt: float | None):
 
 
 def offset_beyond_search(camera, sensor, *, max_offset: float, window: float, found_correlation, resolution: float):
-    """An ``offset_beyond_search`` fail reason when the clock offset searched on ``camera`` and ``sensor``
-    (:class:`replication.rig.streams.OrientationStream`, the first ``window`` seconds) over ``+-WIDE_SEARCH_SHARE x
-    window`` lies beyond ``max_offset`` with a correlation of at least :data:`WIDE_CORRELATION` and
-    :data:`WIDE_GAIN` above ``found_correlation``, else None."""
+    """An ``offset_beyond_search`` fail reason when the clock offset searched on ``camera`` and
+    ``sensor`` (:class:`replication.rig.streams.OrientationStream`, the first ``window`` seconds)
+    over ``+-WIDE_SEARCH_SHARE x window`` lies beyond ``max_offset`` with a correlation of at least
+    :data:`WIDE_CORRELATION` and :data:`WIDE_GAIN` above ``found_correlation``, else None."""
     from .association import estimate_time_offset
     from .quality import Reason
 

@@ -1,7 +1,8 @@
-"""What the online estimator decides about pairs that do not fit its running picture: a pair that repeats an earlier
-one (:class:`RepeatFilter`), and an alarm of its change detector (:class:`OnlineEvent`, with the window solves
-behind it: the pairs after an alarm solved on their own and compared with the estimate). Theory and measured
-numbers: ``docs/judging.md``, section ``replication.rig.online_events``."""
+"""What the online estimator decides about pairs that do not fit its running picture: a pair that
+repeats an earlier one (:class:`RepeatFilter`), and an alarm of its change detector
+(:class:`OnlineEvent`, with the window solves behind it: the pairs after an alarm solved on their
+own and compared with the estimate). Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.online_events``."""
 from __future__ import annotations
 
 import math
@@ -20,39 +21,46 @@ __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL
            "ChangeDetector", "CONFIRM_LEVEL", "NOISE_Z", "TRIM_FACTOR", "solve_window", "pair_d2", "classify",
            "drift_test", "combined_threshold", "describe", "residual_angle_deg"]
 
-#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them, ``drift`` (a
-#: re-mount that continues the last one: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a
-#: drift followed that stopped: :func:`replication.rig.online_guard.track_drift`).
+#: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them,
+#: ``drift`` (a re-mount that continues the last one:
+#: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a drift followed that
+#: stopped: :func:`replication.rig.online_guard.track_drift`).
 EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
-#: Level of the test that the window's pairs do not fit the old estimate at the old level (a re-mount needs both).
+#: Level of the test that the window's pairs do not fit the old estimate at the old level (a
+#: re-mount needs both).
 FIT_LEVEL = 0.9
-#: In-control ``d^2 / m`` is about ``chi^2_3 / 3`` (median 0.79). A window whose median at its own best fit is above
-#: this (RMS residual about 1.6 times the old level) has a new noise level.
+#: In-control ``d^2 / m`` is about ``chi^2_3 / 3`` (median 0.79). A window whose median at its own
+#: best fit is above this (RMS residual about 1.6 times the old level) has a new noise level.
 NOISE_Z = 2.0
-#: A window's pairs whose ``d^2`` exceeds this many times the window's median are trimmed before its estimate is
-#: re-solved (outlier pairs inside the window).
+#: A window's pairs whose ``d^2`` exceeds this many times the window's median are trimmed before its
+#: estimate is re-solved (outlier pairs inside the window).
 TRIM_FACTOR = 9.0
 
 
-#: Two pairs whose camera motions and sensor motions agree within this (deg, elementwise on the matrices, i.e. about
-#: an angle) are one pair repeated: independent measurements of real motion never agree that closely in all six
-#: degrees of freedom (the sensors' noise over a pairing interval is 0.005-0.5 deg).
+#: Two pairs whose camera motions and sensor motions agree within this (deg, elementwise on the
+#: matrices, i.e. about an angle) are one pair repeated: independent measurements of real motion
+#: never agree that closely in all six degrees of freedom (the sensors' noise over a pairing
+#: interval is 0.005-0.5 deg).
 DUPLICATE_DEG = 0.01
-#: Once the pairs' noise ``s`` (RMS residual) is known, a pair within this share of ``s`` of an earlier one is a repeat
-#: too (a copy jittered far below the noise has the same noise), at most :data:`REPEAT_MAX_FACTOR` x ``duplicate_deg``:
-#: independent measurements of one motion differ by about ``0.6 s`` per axis (all six within ``0.1 s``: odds < 1e-5).
+#: Once the pairs' noise ``s`` (RMS residual) is known, a pair within this share of ``s`` of an
+#: earlier one is a repeat too (a copy jittered far below the noise has the same noise), at most
+#: :data:`REPEAT_MAX_FACTOR` x ``duplicate_deg``: independent measurements of one motion differ by
+#: about ``0.6 s`` per axis (all six within ``0.1 s``: odds < 1e-5).
 REPEAT_NOISE_SHARE = 0.1
 REPEAT_MAX_FACTOR = 5.0
-#: Pairs whose camera and sensor motions are both below this (deg) are never called repeats (a rig at rest).
+#: Pairs whose camera and sensor motions are both below this (deg) are never called repeats (a rig
+#: at rest).
 SMALL_MOTION_DEG = 0.5
-#: Pairs between the onset of a suspected change and its alarm that are kept (the CUSUM rises for at most
-#: ``h / (cap - k)`` pairs after a jump; more are only kept after a slow drift).
+#: Pairs between the onset of a suspected change and its alarm that are kept (the CUSUM rises for at
+#: most ``h / (cap - k)`` pairs after a jump; more are only kept after a slow drift).
 SINCE_ONSET = 64
-#: Width of the repeat test's grid cells, in tolerances (wide: a pair is rarely near a cell edge, so one look-up).
+#: Width of the repeat test's grid cells, in tolerances (wide: a pair is rarely near a cell edge, so
+#: one look-up).
 CELL_TOLERANCES = 16.0
-#: Most distinct pairs remembered for the repeat test (about 0.3 kB each, 15 MB in all): 14 h at one pair per second.
+#: Most distinct pairs remembered for the repeat test (about 0.3 kB each, 15 MB in all): 14 h at one
+#: pair per second.
 DUPLICATE_MEMORY = 50_000
 
 
@@ -61,15 +69,16 @@ _KEY = 1 << 40  # a cell's three integer coordinates as one integer key (|coordi
 
 
 class RepeatFilter:
-    """Remembers the pairs seen and tells whether a new one repeats one of them (within ``tol_deg`` elementwise on
-    both rotation matrices; ``tol_deg = 0``: exact repeats only). Pairs whose camera and sensor motions are both
-    below :data:`SMALL_MOTION_DEG` are never repeats.
+    """Remembers the pairs seen and tells whether a new one repeats one of them (within ``tol_deg``
+    elementwise on both rotation matrices; ``tol_deg = 0``: exact repeats only). Pairs whose camera
+    and sensor motions are both below :data:`SMALL_MOTION_DEG` are never repeats.
 
-    O(1) per pair: a grid on the sensor motion's antisymmetric part, cells of :data:`CELL_TOLERANCES` ``tol`` per
-    axis; a pair within ``tol`` lies in this pair's cell or, where this pair is within ``tol`` of the cell's edge on
-    an axis, in the neighbour across it (mostly one look-up, at most 8). The first :data:`DUPLICATE_MEMORY` distinct
-    pairs are remembered (18 floats each in one array, about 0.3 kB per pair with the grid); later ones are compared,
-    not remembered.
+    O(1) per pair: a grid on the sensor motion's antisymmetric part, cells of
+    :data:`CELL_TOLERANCES` ``tol`` per axis; a pair within ``tol`` lies in this pair's cell or,
+    where this pair is within ``tol`` of the cell's edge on an axis, in the neighbour across it
+    (mostly one look-up, at most 8). The first :data:`DUPLICATE_MEMORY` distinct pairs are
+    remembered (18 floats each in one array, about 0.3 kB per pair with the grid); later ones are
+    compared, not remembered.
     """
 
     def __init__(self, tol_deg: float = DUPLICATE_DEG):
@@ -92,16 +101,17 @@ class RepeatFilter:
         self.remembered += 1
 
     def set_noise(self, rms_deg: float) -> None:
-        """The pairs' RMS residual (deg): the tolerance becomes :data:`REPEAT_NOISE_SHARE` of it, never below the
-        one given nor above :data:`REPEAT_MAX_FACTOR` times it (exact repeats only stay exact)."""
+        """The pairs' RMS residual (deg): the tolerance becomes :data:`REPEAT_NOISE_SHARE` of it,
+        never below the one given nor above :data:`REPEAT_MAX_FACTOR` times it (exact repeats only
+        stay exact)."""
         if self._tol0:
             self._tol = min(max(self._tol0, REPEAT_NOISE_SHARE * math.radians(rms_deg)), REPEAT_MAX_FACTOR * self._tol0)
 
     tolerance_deg = property(lambda self: math.degrees(self._tol), doc="The tolerance in use (deg).")
 
     def seen(self, fa, fb) -> bool:
-        """Whether the pair (row-major flat ``A`` and ``B``, lists of 9 floats) repeats an earlier one; remembers it
-        if not."""
+        """Whether the pair (row-major flat ``A`` and ``B``, lists of 9 floats) repeats an earlier
+        one; remembers it if not."""
         small = self._small_trace
         if fa[0] + fa[4] + fa[8] > small and fb[0] + fb[4] + fb[8] > small:
             return False  # a rig at rest repeats the identity with independent noise: not a repeat
@@ -130,7 +140,8 @@ class RepeatFilter:
 
 @dataclass(frozen=True)
 class OnlineEvent:
-    """A change-detector alarm, confirmed on the pairs after it and classified (see the module notes)."""
+    """A change-detector alarm, confirmed on the pairs after it and classified (see the module
+    notes)."""
 
     kind: str                   # one of EVENT_KINDS
     pair: int                   # pair index (over the calibrator's life) where it was decided
@@ -158,7 +169,8 @@ class OnlineEvent:
 
 
 def pair_d2(R, A, B) -> np.ndarray:
-    """``||A_j R - R B_j||_F^2`` of every pair (``8 sin^2(theta_j / 2)``, ``theta_j`` the residual angle)."""
+    """``||A_j R - R B_j||_F^2`` of every pair (``8 sin^2(theta_j / 2)``, ``theta_j`` the residual
+    angle)."""
     return 6.0 - 2.0 * np.einsum("jab,jab->j", A @ R, R @ B)
 
 
@@ -176,13 +188,15 @@ def _excitation_deg(B) -> float:
 def solve_window(A, B, *, min_excitation_deg: float, s2_floor: float, d2_floor: float):
     """A window of pairs solved on its own: ``(R, keep, cov)``.
 
-    A consensus first (``robust``: MSAC over two-pair samples, then Cauchy IRLS), so that outlier pairs inside the
-    window do not move it; then the minimiser of eq. (8) over the pairs within :data:`TRIM_FACTOR` times the median
-    ``d^2`` of that consensus (the certified ``chordal_optimal``; ``keep`` marks them). ``cov`` is the estimate's
-    covariance ``(s^2 / 3) G^{-1}`` over the kept pairs, ``s^2`` their mean square residual, never below ``s2_floor``
-    (the estimate's own noise level: from a handful of pairs ``s^2`` is too uncertain to lower the threshold a
-    re-mount must pass); None where the window does not determine ``R0`` (excitation below ``min_excitation_deg``,
-    fewer than 5 pairs or half the window kept, a degenerate solve): then no re-mount can be confirmed from it.
+    A consensus first (``robust``: MSAC over two-pair samples, then Cauchy IRLS), so that outlier
+    pairs inside the window do not move it; then the minimiser of eq. (8) over the pairs within
+    :data:`TRIM_FACTOR` times the median ``d^2`` of that consensus (the certified
+    ``chordal_optimal``; ``keep`` marks them). ``cov`` is the estimate's covariance ``(s^2 / 3)
+    G^{-1}`` over the kept pairs, ``s^2`` their mean square residual, never below ``s2_floor`` (the
+    estimate's own noise level: from a handful of pairs ``s^2`` is too uncertain to lower the
+    threshold a re-mount must pass); None where the window does not determine ``R0`` (excitation
+    below ``min_excitation_deg``, fewer than 5 pairs or half the window kept, a degenerate solve):
+    then no re-mount can be confirmed from it.
     """
     from ..core.solvers import solve
 
@@ -213,24 +227,26 @@ def chi2_quantile(level: float, dof: int) -> float:
 
 
 def combined_threshold(cov_a, cov_b) -> float:
-    """The :data:`CONFIRM_LEVEL` radius (deg) of the difference of two independent estimates (``inf`` if either
-    covariance is unknown)."""
+    """The :data:`CONFIRM_LEVEL` radius (deg) of the difference of two independent estimates
+    (``inf`` if either covariance is unknown)."""
     if cov_a is None or cov_b is None:
         return math.inf
     return radius_deg(cov_a + cov_b, CONFIRM_LEVEL)
 
 
 def classify(R_old, cov_old, s2_old, m, A, B, *, cap, min_excitation_deg, d2_floor):
-    """Classify a confirmation window ``(A, B)`` against the estimate ``R_old`` (covariance ``cov_old``, mean square
-    residual ``s2_old``) and the reference level ``m`` (see the module notes).
+    """Classify a confirmation window ``(A, B)`` against the estimate ``R_old`` (covariance
+    ``cov_old``, mean square residual ``s2_old``) and the reference level ``m`` (see the module
+    notes).
 
     Returns
     -------
     dict
-        ``kind`` (one of :data:`EVENT_KINDS`), ``undecided`` (the angle lies between half the threshold and the
-        threshold: more pairs may show a small re-mount), ``R_new``, ``keep``, ``angle_deg``, ``threshold_deg``,
-        ``z_old``, ``z_new`` (``d^2 / m`` of each window pair at each estimate), ``median_z_before``,
-        ``median_z_after`` and ``level_new`` (the window's mean ``d^2`` at its own estimate, kept pairs).
+        ``kind`` (one of :data:`EVENT_KINDS`), ``undecided`` (the angle lies between half the
+        threshold and the threshold: more pairs may show a small re-mount), ``R_new``, ``keep``,
+        ``angle_deg``, ``threshold_deg``, ``z_old``, ``z_new`` (``d^2 / m`` of each window pair at
+        each estimate), ``median_z_before``, ``median_z_after`` and ``level_new`` (the window's mean
+        ``d^2`` at its own estimate, kept pairs).
     """
     R_new, keep, cov_new = solve_window(A, B, min_excitation_deg=min_excitation_deg, s2_floor=s2_old,
                                         d2_floor=d2_floor)
@@ -242,9 +258,10 @@ def classify(R_old, cov_old, s2_old, m, A, B, *, cap, min_excitation_deg, d2_flo
     z_old, z_new = d2_old / m, d2_new / m
     med_old, med_new = float(np.median(z_old)), float(np.median(z_new))
     gross = z_old > cap
-    # the pairs the window's own estimate keeps must not fit the old estimate at its noise level s2_old (the mean
-    # square residual angle over every pair in it; the detector's reference level m follows slow changes): their
-    # sum of 3 d^2 / (2 s2_old), about chi^2_{3n} in control, above its FIT_LEVEL quantile
+    # the pairs the window's own estimate keeps must not fit the old estimate at its noise level
+    # s2_old (the mean square residual angle over every pair in it; the detector's reference level m
+    # follows slow changes): their sum of 3 d^2 / (2 s2_old), about chi^2_{3n} in control, above its
+    # FIT_LEVEL quantile
     n = int(keep.sum())
     misfit = 1.5 * float(np.sum(d2_old[keep])) / s2_old > chi2_quantile(FIT_LEVEL, 3 * n)
     if angle > threshold and med_new <= cap and misfit:
@@ -257,8 +274,8 @@ def classify(R_old, cov_old, s2_old, m, A, B, *, cap, min_excitation_deg, d2_flo
         kind = "outliers"
     else:
         kind = "new_information"
-    # close to a re-mount (more than half the threshold away, or beyond it but fitting the old estimate): more pairs
-    # may decide
+    # close to a re-mount (more than half the threshold away, or beyond it but fitting the old
+    # estimate): more pairs may decide
     return {"kind": kind, "undecided": kind != "remount" and angle > 0.5 * threshold, "R_new": R_new, "keep": keep,
             "angle_deg": angle, "threshold_deg": threshold, "z_old": z_old, "z_new": z_new,
             "median_z_before": med_old, "median_z_after": med_new,
@@ -266,15 +283,16 @@ def classify(R_old, cov_old, s2_old, m, A, B, *, cap, min_excitation_deg, d2_flo
 
 
 def drift_test(R, cov, s2_old, A, B, *, min_excitation_deg) -> tuple[bool, float, float]:
-    """Whether the last pairs ``(A, B)`` (already in the estimate) agree on another rotation than the estimate ``R``
-    (covariance ``cov``). Returns ``(alarm, angle_deg, threshold_deg)``.
+    """Whether the last pairs ``(A, B)`` (already in the estimate) agree on another rotation than
+    the estimate ``R`` (covariance ``cov``). Returns ``(alarm, angle_deg, threshold_deg)``.
 
-    One Gauss-Newton step from ``R`` on the window's own pairs, in closed form: at ``R exp([w]x)`` pair ``j``'s
-    residual rotation vector is about ``r_j - (I - B_j) w`` (``r_j`` the vee of the antisymmetric part of
-    ``R^T A_j R B_j^T``), so the window's estimate is ``w = G^{-1} sum_j (I - B_j^T) r_j`` with covariance
-    ``(s^2 / 3) G^{-1}`` (``s^2`` the window's mean square residual after the step, ``n / (n - 3)`` corrected, never
-    below the estimate's own ``s2_old``). An alarm when ``|w|`` exceeds the :data:`CONFIRM_LEVEL` combined radius; cheap
-    (no solver, no per-pair Python), and it is confirmed on the pairs after it.
+    One Gauss-Newton step from ``R`` on the window's own pairs, in closed form: at ``R exp([w]x)``
+    pair ``j``'s residual rotation vector is about ``r_j - (I - B_j) w`` (``r_j`` the vee of the
+    antisymmetric part of ``R^T A_j R B_j^T``), so the window's estimate is ``w = G^{-1} sum_j (I -
+    B_j^T) r_j`` with covariance ``(s^2 / 3) G^{-1}`` (``s^2`` the window's mean square residual
+    after the step, ``n / (n - 3)`` corrected, never below the estimate's own ``s2_old``). An alarm
+    when ``|w|`` exceeds the :data:`CONFIRM_LEVEL` combined radius; cheap (no solver, no per-pair
+    Python), and it is confirmed on the pairs after it.
     """
     if cov is None:
         return False, math.nan, math.inf
@@ -312,10 +330,11 @@ def describe(kind: str, info: dict, n_window: int, dropped: int) -> str:
 
 
 class ChangeDetector:
-    """The online estimator's change detector (see :mod:`replication.rig.online`'s notes): a CUSUM on the pair
-    residuals against a reference level, the drift test, the confirmation window after an alarm, and its decision
-    (:func:`classify`). It holds no estimate: :class:`replication.rig.online.OnlineCalibrator` passes its estimate and
-    covariance in, adds the pairs it is told to add, and acts on the decisions.
+    """The online estimator's change detector (see :mod:`replication.rig.online`'s notes): a CUSUM
+    on the pair residuals against a reference level, the drift test, the confirmation window after
+    an alarm, and its decision (:func:`classify`). It holds no estimate:
+    :class:`replication.rig.online.OnlineCalibrator` passes its estimate and covariance in, adds the
+    pairs it is told to add, and acts on the decisions.
 
     Attributes
     ----------
@@ -347,14 +366,16 @@ class ChangeDetector:
 
     @property
     def misfits(self) -> int:
-        """Pairs held out as gross misfits (``d^2`` above ``cap`` times the level) since the CUSUM last stood at 0:
-        the start of a change or of an outlier burst that the CUSUM has not decided yet."""
+        """Pairs held out as gross misfits (``d^2`` above ``cap`` times the level) since the CUSUM
+        last stood at 0: the start of a change or of an outlier burst that the CUSUM has not decided
+        yet."""
         return sum(held for *_, held in self.since_onset) if self.cusum > 0.0 else 0
 
     def undecided(self, misfits: int):
-        """A warning :class:`replication.rig.quality.Reason` when a stream stops while this detector is undecided (an
-        alarm being confirmed, or at least ``misfits`` gross misfits since the CUSUM last stood at 0), else None:
-        a change of ``R0`` in the last pairs can be neither confirmed nor ruled out."""
+        """A warning :class:`replication.rig.quality.Reason` when a stream stops while this detector
+        is undecided (an alarm being confirmed, or at least ``misfits`` gross misfits since the
+        CUSUM last stood at 0), else None: a change of ``R0`` in the last pairs can be neither
+        confirmed nor ruled out."""
         from .quality import Reason
 
         if self.checking:
@@ -377,10 +398,9 @@ class ChangeDetector:
         self.onset = index
 
     def observe(self, A, B, d2: float, index: int, R, cov, s2) -> tuple[bool, bool]:
-        """One pair (``index``) with residual ``d2`` at the estimate ``R`` (covariance ``cov``, mean square residual
-        ``s2``). Returns ``(add,
-        decide)``: whether the calibrator adds it to its sums, and whether the confirmation window is complete (call
-        :meth:`decide`)."""
+        """One pair (``index``) with residual ``d2`` at the estimate ``R`` (covariance ``cov``, mean
+        square residual ``s2``). Returns ``(add, decide)``: whether the calibrator adds it to its
+        sums, and whether the confirmation window is complete (call :meth:`decide`)."""
         if self.checking:
             self.window.append((A, B))
             return False, len(self.window) >= self.target
@@ -410,16 +430,17 @@ class ChangeDetector:
         return not held, False
 
     def _alarm(self, index: int, source: str) -> None:
-        # a jump (CUSUM) shows in a few pairs; a drift was seen in drift_pairs pairs and needs more than a few
+        # a jump (CUSUM) shows in a few pairs; a drift was seen in drift_pairs pairs and needs more
+        # than a few
         self.checking, self.alarm_pair, self.source = True, index, source
         self.window = []
         self.target = self.confirm_pairs if source == "cusum" else min(self.drift_pairs // 2, self.max_confirm_pairs)
 
     def decide(self, R_old, cov_old, s2_old, index: int):
-        """The confirmation window's decision (:func:`classify`), or None while it waits for more pairs. Returns a
-        dict: ``event`` (:class:`OnlineEvent`), ``restart`` (a re-mount: start over from ``R_new``), ``kept`` (the
-        pairs to add: the window's and the held-out ones that fit), ``held_before`` (pairs held out before the
-        alarm, already counted as dropped)."""
+        """The confirmation window's decision (:func:`classify`), or None while it waits for more
+        pairs. Returns a dict: ``event`` (:class:`OnlineEvent`), ``restart`` (a re-mount: start over
+        from ``R_new``), ``kept`` (the pairs to add: the window's and the held-out ones that fit),
+        ``held_before`` (pairs held out before the alarm, already counted as dropped)."""
         A = np.array([a for a, _ in self.window])
         B = np.array([b for _, b in self.window])
         m = max(self.level, self.d2_floor)

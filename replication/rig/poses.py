@@ -1,11 +1,12 @@
-"""Calibrate from static pose sets: ``R0`` from poses measured by both sides at the same stations (e.g. a robot
-and a chessboard camera, Tabb & Ahmad Yousef's data), with a verdict.
+"""Calibrate from static pose sets: ``R0`` from poses measured by both sides at the same stations
+(e.g. a robot and a chessboard camera, Tabb & Ahmad Yousef's data), with a verdict.
 
-Every pair of stations ``(i, j)`` (or consecutive ones) gives a motion pair (eqs. (3)-(4)); the solve, the
-residuals and the verdict are :func:`replication.rig.solve_and_judge.solve_pairs`'s, the bootstrap resamples *stations*
-(each station's measurement error is in every pair that uses it), each station's median residual is reported, and
-an outlying station is named in the verdict. The pose direction is always checked
-(:func:`replication.rig.diagnose.pose_direction`). Conventions: ``docs/conventions.md``.
+Every pair of stations ``(i, j)`` (or consecutive ones) gives a motion pair (eqs. (3)-(4)); the
+solve, the residuals and the verdict are :func:`replication.rig.solve_and_judge.solve_pairs`'s, the
+bootstrap resamples *stations* (each station's measurement error is in every pair that uses it),
+each station's median residual is reported, and an outlying station is named in the verdict. The
+pose direction is always checked (:func:`replication.rig.diagnose.pose_direction`). Conventions:
+``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -28,16 +29,17 @@ from .solve_and_judge import (
 __all__ = ["calibrate_poses", "pose_pairs", "repeated_stations", "own_residuals_deg",
            "SAME_STATION_FLOOR_DEG"]
 
-#: Two stations are the same (a repeat) when neither side turns more than ``min_motion_deg`` between them (a pair
-#: of them carries noise, not motion, and is dropped), and at least when neither turns more than this (deg): the
-#: same pose given twice, to rounding, with ``min_motion_deg = 0``.
+#: Two stations are the same (a repeat) when neither side turns more than ``min_motion_deg`` between
+#: them (a pair of them carries noise, not motion, and is dropped), and at least when neither turns
+#: more than this (deg): the same pose given twice, to rounding, with ``min_motion_deg = 0``.
 SAME_STATION_FLOOR_DEG = 1e-6
 
 
 def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chordal_optimal",
                     pairs: str = "all", min_motion_deg: float = 2.0, n_bootstrap: int = 200, seed: int = 0,
                     reference=None, diagnose: bool = True, progress: bool = False, **options) -> CalibrationResult:
-    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with a verdict.
+    """``R0`` from static poses measured by both sides (e.g. a robot and a chessboard camera), with
+    a verdict.
 
     Parameters
     ----------
@@ -52,12 +54,13 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
     min_motion_deg : float
         Drop pairs whose sensor rotation is smaller than this.
     n_bootstrap, seed, reference, progress, **options
-        As in :func:`replication.rig.calibration.calibrate`. The bootstrap resamples stations (with ``pairs="all"``;
-        blocks of two pairs with ``"consecutive"``): see :mod:`replication.rig.solve_and_judge`.
+        As in :func:`replication.rig.calibration.calibrate`. The bootstrap resamples stations (with
+        ``pairs="all"``; blocks of two pairs with ``"consecutive"``): see
+        :mod:`replication.rig.solve_and_judge`.
     diagnose : bool
-        Also calibrate with either pose set inverted, and fail naming the pose direction when one of them fits
-        clearly better (:func:`replication.rig.diagnose.pose_direction`). Both sets inverted is a consistent problem
-        for another unknown: only a reference reveals it.
+        Also calibrate with either pose set inverted, and fail naming the pose direction when one of
+        them fits clearly better (:func:`replication.rig.diagnose.pose_direction`). Both sets
+        inverted is a consistent problem for another unknown: only a reference reveals it.
     """
     references = check_common(method, n_bootstrap, seed, reference)  # one, or two (2, 3, 3)
     reference = first_reference(references)
@@ -92,12 +95,14 @@ def calibrate_poses(camera_attitudes, sensor_attitudes, *, method: str = "chorda
 
 
 def own_residuals_deg(C, S, R) -> np.ndarray:
-    """Each station's own residual (deg) at the estimate ``R``: the angle between its ``Y_k = S_k^T R^T C_k`` (the
-    target's frame in the robot base's, the same at every station when ``C_k = R0 S_k Y``) and a robust centre of
-    them (the chordal mean of the half nearest the station whose median angle to the others is least).
+    """Each station's own residual (deg) at the estimate ``R``: the angle between its ``Y_k = S_k^T
+    R^T C_k`` (the target's frame in the robot base's, the same at every station when ``C_k = R0 S_k
+    Y``) and a robust centre of them (the chordal mean of the half nearest the station whose median
+    angle to the others is least).
 
-    With consecutive pairs a bad station spoils both its pairs and each neighbour shares one of them, so the pairs'
-    residuals blame the neighbours too; a station's own residual blames it alone."""
+    With consecutive pairs a bad station spoils both its pairs and each neighbour shares one of
+    them, so the pairs' residuals blame the neighbours too; a station's own residual blames it
+    alone."""
     Y = np.swapaxes(S, -1, -2) @ R.T @ C
     angles = rotation_angle_deg(np.swapaxes(Y[:, None], -1, -2) @ Y[None, :])
     medoid = int(np.argmin(np.median(angles, axis=1)))
@@ -108,11 +113,12 @@ def own_residuals_deg(C, S, R) -> np.ndarray:
 
 
 def repeated_stations(C, S, within_deg: float) -> np.ndarray:
-    """Station labels: stations whose camera and sensor attitudes both lie within ``within_deg`` of each other (a
-    station given twice, identical or re-measured within the noise) share a label, the group's first station;
-    ``labels[k] == k`` for every station that repeats none before it. A station joins a group only if it lies within
-    ``within_deg`` of every member (complete linkage): a chain of stations each close to the next, spanning more than
-    ``within_deg``, is distinct stations, not one."""
+    """Station labels: stations whose camera and sensor attitudes both lie within ``within_deg`` of
+    each other (a station given twice, identical or re-measured within the noise) share a label, the
+    group's first station; ``labels[k] == k`` for every station that repeats none before it. A
+    station joins a group only if it lies within ``within_deg`` of every member (complete linkage):
+    a chain of stations each close to the next, spanning more than ``within_deg``, is distinct
+    stations, not one."""
     n = len(C)
     i, j = np.triu_indices(n, k=1)
     close = ((rotation_angle_deg(C[j] @ np.swapaxes(C[i], -1, -2)) <= within_deg)
@@ -133,8 +139,8 @@ def repeated_stations(C, S, within_deg: float) -> np.ndarray:
 
 
 def pose_pairs(C, S, *, pairs: str = "all", min_motion_deg: float = 2.0, stations: bool = False):
-    """Relative rotations from static attitudes (see :func:`calibrate_poses`); returns ``(A, B)``, and with
-    ``stations`` the two station indices of each pair, ``(A, B, i, j)``."""
+    """Relative rotations from static attitudes (see :func:`calibrate_poses`); returns ``(A, B)``,
+    and with ``stations`` the two station indices of each pair, ``(A, B, i, j)``."""
     if pairs == "all":
         i, j = np.triu_indices(len(C), k=1)
     elif pairs == "consecutive":

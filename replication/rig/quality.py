@@ -1,5 +1,5 @@
-"""The quality verdict of a calibration: ``ok``, ``warning`` or ``fail``, with every reason measured. Theory and
-measured numbers: ``docs/judging.md``, section ``replication.rig.quality``."""
+"""The quality verdict of a calibration: ``ok``, ``warning`` or ``fail``, with every reason
+measured. Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.quality``."""
 from __future__ import annotations
 
 import math
@@ -78,7 +78,8 @@ class Verdict:
 
 @dataclass(frozen=True)
 class Evidence:
-    """What a calibration measured about itself (``None`` where it does not apply, e.g. static poses)."""
+    """What a calibration measured about itself (``None`` where it does not apply, e.g. static
+    poses)."""
 
     n_pairs: int
     residual_median_deg: float | None
@@ -115,8 +116,9 @@ class Evidence:
 
 
 def p_with_level(p_value: float, level: float | None, significant: bool) -> str:
-    """A test's p-value next to its level, e.g. ``p = 0.049 >= the test's level 0.01`` (a p of 0.049 is "within the
-    noise" at level 0.01); as many digits as keep ``p`` and the level apart; without a level, ``p`` alone."""
+    """A test's p-value next to its level, e.g. ``p = 0.049 >= the test's level 0.01`` (a p of 0.049
+    is "within the noise" at level 0.01); as many digits as keep ``p`` and the level apart; without
+    a level, ``p`` alone."""
     if level is None:
         return f"p = {p_value:.2g}"
     digits = 2
@@ -156,7 +158,8 @@ def _quaternion(R) -> str:
 
 
 def _outlying_poses(medians, kind="median residual of its pairs"):
-    """A warning naming the stations whose pairs' median residual exceeds the threshold share of the stations'."""
+    """A warning naming the stations whose pairs' median residual exceeds the threshold share of the
+    stations'."""
     factor = THRESHOLDS["pose_residual_ratio"][0]
     finite = np.isfinite(medians)
     base = float(np.median(np.asarray(medians)[finite])) if finite.any() else np.nan  # no station: nothing to compare
@@ -175,9 +178,11 @@ def _outlying_poses(medians, kind="median residual of its pairs"):
                   f"a bad measurement at that station (a target detection, a robot pose); its pairs pull R0")
 
 
-#: The solver a verdict recommends where the chosen one is slowed or misled by the motions (``calibrate``'s default).
+#: The solver a verdict recommends where the chosen one is slowed or misled by the motions
+#: (``calibrate``'s default).
 DEFAULT_METHOD = "chordal_optimal"
-#: The two-step iteration's cap and the relative precision it iterates to (``two_step``'s ``cap`` and ``tol``).
+#: The two-step iteration's cap and the relative precision it iterates to (``two_step``'s ``cap``
+#: and ``tol``).
 _TWO_STEP_CAP, _TWO_STEP_TOL = 1000, 1e-12
 
 
@@ -189,8 +194,8 @@ def _motion_words(e: Evidence) -> str:
 
 
 def _solver_reason(name: str, level: str, e: Evidence) -> Reason:
-    """A solver's warning in the verdict: its measured cause and what to do, not the warning's class (the class and
-    the solver's own words stay in the result's ``warnings``)."""
+    """A solver's warning in the verdict: its measured cause and what to do, not the warning's class
+    (the class and the solver's own words stay in the result's ``warnings``)."""
     method = f"solver {e.method!r}" if e.method else "the solver"
     other = (f"use the default method {DEFAULT_METHOD}" if e.method != DEFAULT_METHOD
              else "check the pairs (outliers, mismatched streams)")
@@ -229,7 +234,8 @@ def _solver_reason(name: str, level: str, e: Evidence) -> Reason:
 
 
 def judge(e: Evidence, extra=()) -> Verdict:
-    """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g. diagnoses)."""
+    """The verdict on a calibration from its evidence (and further reasons ``extra``, e.g.
+    diagnoses)."""
     poses = e.pose_residual_medians_deg is not None  # static poses: the remedies are more stations, not a recording
     reasons = [_below("n_pairs", e.n_pairs, "motion pairs", "", "too few for R0 and a check of it (3 unknowns; "
                       + ("more static poses, each turned from the others by more than min_motion_deg)" if poses else

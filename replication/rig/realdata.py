@@ -1,5 +1,5 @@
-"""Loaders for real camera / IMU / robot recordings and their published reference rotations. Theory and measured
-numbers: ``docs/reading.md``, section ``replication.rig.realdata``."""
+"""Loaders for real camera / IMU / robot recordings and their published reference rotations. Theory
+and measured numbers: ``docs/reading.md``, section ``replication.rig.realdata``."""
 from __future__ import annotations
 
 import os
@@ -31,12 +31,14 @@ __all__ = [
     "load_reference",
 ]
 
-#: Where the shared recordings are when neither an argument nor ``$REPLICATION_REAL_DATA`` says otherwise.
+#: Where the shared recordings are when neither an argument nor ``$REPLICATION_REAL_DATA`` says
+#: otherwise.
 DEFAULT_REAL_DATA = PROJECT_ROOT.parent / "shared" / "data" / "real"
 
 
 def data_root(path=None) -> Path:
-    """The folder of the real recordings: ``path``, else ``$REPLICATION_REAL_DATA``, else :data:`DEFAULT_REAL_DATA`.
+    """The folder of the real recordings: ``path``, else ``$REPLICATION_REAL_DATA``, else
+    :data:`DEFAULT_REAL_DATA`.
 
     Raises
     ------
@@ -76,8 +78,9 @@ def _seconds(t, path, time_unit):
 
 TUM_COLUMNS = ("t", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
 EUROC_POSE_COLUMNS = ("t[ns]", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z")
-#: The 9 further columns of EuRoC's ``state_groundtruth_estimate0/data.csv`` (17 in all): velocity, gyro bias,
-#: accelerometer bias (``v_RS_R``, ``b_w_RS_S``, ``b_a_RS_S``); read as numbers, not used.
+#: The 9 further columns of EuRoC's ``state_groundtruth_estimate0/data.csv`` (17 in all): velocity,
+#: gyro bias, accelerometer bias (``v_RS_R``, ``b_w_RS_S``, ``b_a_RS_S``); read as numbers, not
+#: used.
 EUROC_GROUNDTRUTH_EXTRA = ("v_x", "v_y", "v_z", "b_w_x", "b_w_y", "b_w_z", "b_a_x", "b_a_y", "b_a_z")
 EUROC_IMU_COLUMNS = ("t[ns]", "w_x", "w_y", "w_z", "a_x", "a_y", "a_z")
 
@@ -88,13 +91,13 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
 
     Each pose is ``T_world<-body`` (ORB-SLAM3's ``SaveTrajectoryEuRoC`` writes camera-to-world
     ``Twc``; OpenVINS' ground truth writes the IMU body in the world), so the stream holds
-    ``world_from_body``. ``time_unit``: ``"s"``, ``"ms"``, ``"us"``, ``"ns"`` or ``"auto"`` (ns when timestamps
-    exceed 1e12, as ORB-SLAM3's do). Translations are ignored. ``drop_repeated=True`` skips
-    lines that repeat the previous line exactly (one of the shared ORB-SLAM3 runs has such
-    lines). A time stamp repeated with a *different* pose is refused unless ``repeated`` says which pose to keep:
-    ``"keep-first"``, ``"keep-last"`` or ``"mean"`` (the refusal names them); ``tally``, a dict, receives how many
-    lines were merged and the largest angle between two poses of one time stamp
-    (:func:`~replication.rig.datafile.read_table`).
+    ``world_from_body``. ``time_unit``: ``"s"``, ``"ms"``, ``"us"``, ``"ns"`` or ``"auto"`` (ns when
+    timestamps exceed 1e12, as ORB-SLAM3's do). Translations are ignored. ``drop_repeated=True``
+    skips lines that repeat the previous line exactly (one of the shared ORB-SLAM3 runs has such
+    lines). A time stamp repeated with a *different* pose is refused unless ``repeated`` says which
+    pose to keep: ``"keep-first"``, ``"keep-last"`` or ``"mean"`` (the refusal names them);
+    ``tally``, a dict, receives how many lines were merged and the largest angle between two poses
+    of one time stamp (:func:`~replication.rig.datafile.read_table`).
 
     Raises
     ------
@@ -109,15 +112,17 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
 
 def load_euroc_mocap(path, *, drop_repeated: bool = False, repeated: str = "refuse",
                      tally: dict | None = None) -> OrientationStream:
-    """EuRoC / TUM-VI ``mocap0/data.csv`` or ground truth, as shipped: ``t[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z``.
+    """EuRoC / TUM-VI ``mocap0/data.csv`` or ground truth, as shipped: ``t[ns], p_x, p_y, p_z, q_w,
+    q_x, q_y, q_z``.
 
     8 columns (``mocap0/data.csv``; TUM-VI's ground truth) or the 17 of EuRoC's
-    ``state_groundtruth_estimate0/data.csv`` (header ``#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m],
-    q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y, v_RS_R_z, b_w_RS_S_x [rad s^-1],
-    b_w_RS_S_y, b_w_RS_S_z, b_a_RS_S_x [m s^-2], b_a_RS_S_y, b_a_RS_S_z``): the first 8 are used, the velocity and
-    the two biases are checked as numbers and left out; every line of a file has the same count.
-    ``q_RS`` (scalar first) rotates body (sensor S) vectors into the world R: ``world_from_body``.
-    ``drop_repeated``, ``repeated`` and ``tally``: as :func:`load_tum_trajectory`'s.
+    ``state_groundtruth_estimate0/data.csv`` (header ``#timestamp, p_RS_R_x [m], p_RS_R_y [m],
+    p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y, v_RS_R_z,
+    b_w_RS_S_x [rad s^-1], b_w_RS_S_y, b_w_RS_S_z, b_a_RS_S_x [m s^-2], b_a_RS_S_y, b_a_RS_S_z``):
+    the first 8 are used, the velocity and the two biases are checked as numbers and left out; every
+    line of a file has the same count. ``q_RS`` (scalar first) rotates body (sensor S) vectors into
+    the world R: ``world_from_body``. ``drop_repeated``, ``repeated`` and ``tally``: as
+    :func:`load_tum_trajectory`'s.
     """
     data, lines = read_table(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz[, v_xyz, b_w_xyz, "
                              "b_a_xyz]", optional=EUROC_GROUNDTRUTH_EXTRA, drop_repeated=drop_repeated,
@@ -130,8 +135,8 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, drop_repeated: bool = 
                    tally: dict | None = None) -> GyroStream:
     """EuRoC / TUM-VI ``imu0/data.csv``: ``t[ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]``.
 
-    Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are
-    rejected as a units error (deg/s stored as rad/s). ``drop_repeated``, ``repeated`` and ``tally``: as
+    Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are rejected
+    as a units error (deg/s stored as rad/s). ``drop_repeated``, ``repeated`` and ``tally``: as
     :func:`load_tum_trajectory`'s (``"mean"`` averages the rates).
     """
     data, lines = read_table(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]",
@@ -145,7 +150,8 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, drop_repeated: bool = 
 
 
 def _rotation(path, M, what, atol):
-    """``check_rotation_matrices`` whose error is a :class:`~replication.rig.datafile.DataFileError` for ``path``."""
+    """``check_rotation_matrices`` whose error is a :class:`~replication.rig.datafile.DataFileError`
+    for ``path``."""
     try:
         return check_rotation_matrices(M, what, atol=atol)
     except ValueError as err:
@@ -172,8 +178,8 @@ def _tabb_count(path, tokens):
 def load_tabb_poses(path) -> np.ndarray:
     """Tabb & Ahmad Yousef ``robot_cali.txt``: N, then N row-major 4x4 base->hand transforms.
 
-    Returns the rotations ``hand_from_base`` (body-from-world attitudes of the hand), shape (N, 3, 3).
-    The file prints 6 digits, so each rotation is checked to 1e-4 and projected onto SO(3).
+    Returns the rotations ``hand_from_base`` (body-from-world attitudes of the hand), shape (N, 3,
+    3). The file prints 6 digits, so each rotation is checked to 1e-4 and projected onto SO(3).
     """
     tokens = read_text(path).split()
     n = _tabb_count(path, tokens)
@@ -217,7 +223,8 @@ def load_tabb_camera_poses(path) -> np.ndarray:
 
 
 def load_tabb_solution(path) -> np.ndarray:
-    """Tabb's published solution ``transformations.txt``: the rotation of ``Z = T_cam<-hand`` (``R0``)."""
+    """Tabb's published solution ``transformations.txt``: the rotation of ``Z = T_cam<-hand``
+    (``R0``)."""
     lines = [ln.split() for ln in read_lines(path)]
     try:
         start = next(i for i, ln in enumerate(lines) if ln and ln[0] == "Z")
@@ -232,11 +239,11 @@ def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", dro
     """Load a stream by kind and file type.
 
     ``kind="gyro"``: an EuRoC/TUM-VI ``imu0/data.csv`` (:func:`load_euroc_imu`).
-    ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth, 8 or 17 columns
-    (:func:`load_euroc_mocap`), anything else as a TUM trajectory (:func:`load_tum_trajectory`,
-    which takes ``time_unit``). EuRoC CSVs are in nanoseconds by their format:
-    a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them. ``drop_repeated``, ``repeated`` and
-    ``tally`` go to the loader (:func:`load_tum_trajectory`).
+    ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth, 8 or 17
+    columns (:func:`load_euroc_mocap`), anything else as a TUM trajectory
+    (:func:`load_tum_trajectory`, which takes ``time_unit``). EuRoC CSVs are in nanoseconds by their
+    format: a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them.
+    ``drop_repeated``, ``repeated`` and ``tally`` go to the loader (:func:`load_tum_trajectory`).
     """
     if kind not in ("gyro", "orientation"):
         raise ValueError(f"kind must be 'gyro' or 'orientation', got {kind!r}")
@@ -251,12 +258,14 @@ def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", dro
 
 
 def load_reference(path, camera: str = "cam0") -> np.ndarray:
-    """A reference ``camera_from_sensor`` from a calibration file, its kind recognised from the content.
+    """A reference ``camera_from_sensor`` from a calibration file, its kind recognised from the
+    content.
 
-    Kalibr camchains (``<camera>.T_cam_imu``), OpenVINS ``%YAML:1.0`` imu-camera chains (``T_imu_cam`` or
-    ``T_cam_imu``), ORB-SLAM3 visual-inertial settings (``IMU.T_b_c1``), Basalt's calibration JSON
-    (``value0.T_imu_cam``), EuRoC camera ``sensor.yaml`` files (``T_BS``): see
-    :mod:`replication.rig.vioformats`; anything else is read as Tabb's ``transformations.txt`` (a ``Z`` matrix).
+    Kalibr camchains (``<camera>.T_cam_imu``), OpenVINS ``%YAML:1.0`` imu-camera chains
+    (``T_imu_cam`` or ``T_cam_imu``), ORB-SLAM3 visual-inertial settings (``IMU.T_b_c1``), Basalt's
+    calibration JSON (``value0.T_imu_cam``), EuRoC camera ``sensor.yaml`` files (``T_BS``): see
+    :mod:`replication.rig.vioformats`; anything else is read as Tabb's ``transformations.txt`` (a
+    ``Z`` matrix).
     """
     from .vioformats import looks_like_vio_file, read_vio_file
 
@@ -294,7 +303,8 @@ class StereoCalibration:
     source: str
 
     def rectification_rotation(self) -> np.ndarray:
-        """``R1`` of ``cv2.stereoRectify``: the rotation from the raw left camera to the rectified one.
+        """``R1`` of ``cv2.stereoRectify``: the rotation from the raw left camera to the rectified
+        one.
 
         ORB-SLAM3 (v1.0) rectifies a pinhole stereo pair itself and reports the *rectified* left
         camera, so a stereo trajectory's camera is ``R1`` times the raw ``cam0``:
@@ -309,7 +319,8 @@ class StereoCalibration:
 
 
 def load_orbslam3_stereo(path) -> StereoCalibration:
-    """Read an ORB-SLAM3 stereo settings file (OpenCV ``FileStorage`` YAML, ``Camera.type: "PinHole"``).
+    """Read an ORB-SLAM3 stereo settings file (OpenCV ``FileStorage`` YAML, ``Camera.type:
+    "PinHole"``).
 
     Raises
     ------

@@ -1,5 +1,5 @@
-"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time and the segments that disagree. Theory and
-measured numbers: ``docs/judging.md``, section ``replication.rig.segments``."""
+"""Does ``R0`` hold over the whole recording? ``R0`` per segment of time and the segments that
+disagree. Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.segments``."""
 from __future__ import annotations
 
 import math
@@ -15,22 +15,25 @@ from .changepoint import S2_FLOOR, _fit, _long_run
 __all__ = ["Segment", "SegmentTest", "segment_test", "SEGMENT_S", "ANALYSIS_INTERVAL_S", "MIN_SEGMENTS",
            "MAX_LEFT_OUT_SHARE", "run", "report", "reasons", "consistent_mask", "parts_angle_deg"]
 
-#: Target length of a segment (s): long enough for each segment's R0 to be determined by its own motion (10 s
-#: of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills segments of its own.
+#: Target length of a segment (s): long enough for each segment's R0 to be determined by its own
+#: motion (10 s of 1 s pairs at 20 Hz: 180 pairs), short enough that a stretch of bad tracking fills
+#: segments of its own.
 SEGMENT_S = 10.0
-#: The pairs the segment and change tests run on, whatever ``calibrate``'s ``interval`` (module notes).
+#: The pairs the segment and change tests run on, whatever ``calibrate``'s ``interval`` (module
+#: notes).
 ANALYSIS_INTERVAL_S = 1.0
 #: Fewest segments the test runs with (two are the change test's job).
 MIN_SEGMENTS = 3
-#: ``use="consistent"`` keeps the majority: left out beyond this share it may be the wrong part (a ``fail``).
+#: ``use="consistent"`` keeps the majority: left out beyond this share it may be the wrong part (a
+#: ``fail``).
 MAX_LEFT_OUT_SHARE = 1 / 3
 
 
 @dataclass(frozen=True)
 class Segment:
-    """One segment: its time span (s, since the first camera sample in ``calibrate``'s report), pairs, ``R0``, its
-    95 % noise radius, its angle to the other segments' mean, that difference's statistic, p-value and whether it
-    disagrees (significant after Bonferroni over the segments)."""
+    """One segment: its time span (s, since the first camera sample in ``calibrate``'s report),
+    pairs, ``R0``, its 95 % noise radius, its angle to the other segments' mean, that difference's
+    statistic, p-value and whether it disagrees (significant after Bonferroni over the segments)."""
 
     start_s: float
     end_s: float
@@ -50,24 +53,28 @@ class Segment:
 
 @dataclass(frozen=True)
 class SegmentTest:
-    """What :func:`segment_test` found (times as given in ``t``; ``calibrate`` reports them since the first camera
-    sample).
+    """What :func:`segment_test` found (times as given in ``t``; ``calibrate`` reports them since
+    the first camera sample).
 
     Attributes
     ----------
     segments : tuple of Segment
     significant : bool
-        The segments disagree beyond their noise (``statistic > threshold``, false-alarm probability ``level``).
+        The segments disagree beyond their noise (``statistic > threshold``, false-alarm probability
+        ``level``).
     statistic, threshold, p_value, level, dof : float
-        ``Q / (3 (S - 1))``, the F quantile it is compared with, its p-value, the level, and ``3 (S - 1)``.
+        ``Q / (3 (S - 1))``, the F quantile it is compared with, its p-value, the level, and ``3 (S
+        - 1)``.
     inflation, effective_blocks : float
         ``phi`` and ``n_eff`` (module notes).
     R_mean : ndarray (3, 3)
         The segments' weighted mean.
     pairs_radius_deg, between_radius_deg : float
-        95 % radius of ``R_mean`` from the pairs' noise, and from the segments' scatter (module notes).
+        95 % radius of ``R_mean`` from the pairs' noise, and from the segments' scatter (module
+        notes).
     consistent : tuple of int
-        The segments of the consistent part (every one where none disagrees; empty where no half of them agrees).
+        The segments of the consistent part (every one where none disagrees; empty where no half of
+        them agrees).
     max_angle_deg : float
         The largest angle of a disagreeing segment to the others' mean (0 where none disagrees).
     interval_s : float or None
@@ -96,8 +103,8 @@ class SegmentTest:
         return tuple(i for i, s in enumerate(self.segments) if s.disagrees)
 
     def used_spans(self, left_out: bool = False) -> list:
-        """The consistent part (``left_out``: the rest) as ``[start_s, end_s]`` spans (neighbouring segments
-        merged)."""
+        """The consistent part (``left_out``: the rest) as ``[start_s, end_s]`` spans (neighbouring
+        segments merged)."""
         spans = []
         for i in (sorted(set(range(len(self.segments))) - set(self.consistent)) if left_out else self.consistent):
             s = self.segments[i]
@@ -131,7 +138,8 @@ class SegmentTest:
 
 
 def _mean(R, W, start, iterations: int = 20):
-    """Weighted mean rotation: Gauss-Newton on ``sum_i d_i^T W_i d_i``, ``d_i = log(R_bar^T R_i)``."""
+    """Weighted mean rotation: Gauss-Newton on ``sum_i d_i^T W_i d_i``, ``d_i = log(R_bar^T
+    R_i)``."""
     Rb = start
     H = W.sum(axis=0)
     for _ in range(iterations):
@@ -144,13 +152,15 @@ def _mean(R, W, start, iterations: int = 20):
 
 
 def _against(Ri, Ci, Rr, Cr) -> tuple[float, float]:
-    """A segment against the others' mean ``Rr``, covariance ``Cr``: ``d^T (C_i + C_r)^{-1} d / 3`` and the angle."""
+    """A segment against the others' mean ``Rr``, covariance ``Cr``: ``d^T (C_i + C_r)^{-1} d / 3``
+    and the angle."""
     di = rotation_vector_from_matrix(Rr.T @ Ri)
     return float(di @ np.linalg.solve(Ci + Cr, di)) / 3.0, float(angle_between_deg(Ri, Rr))
 
 
 def _homogeneity(R, C, nu):
-    """Over the segments ``R``, ``C``: the mean, ``Q / dof``, each segment's leave-one-out statistic and angle."""
+    """Over the segments ``R``, ``C``: the mean, ``Q / dof``, each segment's leave-one-out statistic
+    and angle."""
     S = len(R)
     W = np.linalg.inv(C)
     Rb, Cb = _mean(R, W, R[int(np.argmin(np.trace(C, axis1=1, axis2=2)))])
@@ -166,7 +176,8 @@ def _homogeneity(R, C, nu):
 
 def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level: float = 0.01,
                  interval: float | None = None) -> SegmentTest:
-    """``R0`` per segment of about ``segment_s`` seconds, and whether the segments agree (module notes).
+    """``R0`` per segment of about ``segment_s`` seconds, and whether the segments agree (module
+    notes).
 
     Parameters
     ----------
@@ -177,7 +188,8 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
     block : int
         Pairs per interval (as :func:`replication.rig.changepoint.two_segment_test`).
     segment_s : float
-        Target segment length (s); the recording is cut into ``floor(span / segment_s)`` equal segments.
+        Target segment length (s); the recording is cut into ``floor(span / segment_s)`` equal
+        segments.
     level : float
         False-alarm probability, in (0, 0.5).
     interval : float or None
@@ -186,8 +198,8 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
     Raises
     ------
     ValueError
-        Bad parameters (named), too short a recording for :data:`MIN_SEGMENTS` segments, or a segment whose
-        motions are about one axis only (its R0 is not determined).
+        Bad parameters (named), too short a recording for :data:`MIN_SEGMENTS` segments, or a
+        segment whose motions are about one axis only (its R0 is not determined).
     """
     from .changepoint import _check
 
@@ -219,8 +231,8 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
     omega = sum(_long_run(A[a:b], B[a:b], R1[0], m) for a, b in zip(first, stop))
     Gi = np.linalg.inv(G1[0])
     phi = max(1.0, float(np.trace(Gi @ omega @ Gi) / np.trace(Gi @ ((s21[0] / 3.0) * G1[0]) @ Gi)))
-    # the noise scale from each segment's residuals about its own estimate, pooled (a segment that disagrees does
-    # not inflate it); the inflation, a ratio, from the fit of all the pairs
+    # the noise scale from each segment's residuals about its own estimate, pooled (a segment that
+    # disagrees does not inflate it); the inflation, a ratio, from the fit of all the pairs
     s2 = np.full(S, max(float(cost.sum() / (2.0 * (n - 3.0)).sum()), S2_FLOOR))
     C = phi * (s2 / 3.0)[:, None, None] * np.linalg.inv(G)
     nu = max((J - m) / (2 * m + 1), 1.0)
@@ -260,8 +272,8 @@ def segment_test(A, B, t, *, block: int = 1, segment_s: float = SEGMENT_S, level
 
 
 def run(A, B, t, block: int, interval: float = ANALYSIS_INTERVAL_S):
-    """:func:`segment_test` for ``calibrate``: ``(test, None)``, or ``(None, why)`` where it cannot run (too short a
-    recording, a segment whose motions are about one axis)."""
+    """:func:`segment_test` for ``calibrate``: ``(test, None)``, or ``(None, why)`` where it cannot
+    run (too short a recording, a segment whose motions are about one axis)."""
     try:
         return segment_test(A, B, t, block=block, interval=interval), None
     except ValueError as err:
@@ -269,8 +281,9 @@ def run(A, B, t, block: int, interval: float = ANALYSIS_INTERVAL_S):
 
 
 def parts_angle_deg(test) -> float:
-    """The angle (deg) between the ``R0`` of the consistent part and that of the rest, each the pair-weighted
-    chordal mean of its segments' (0 where nothing is left out): how far ``R0`` moves if the rest is right."""
+    """The angle (deg) between the ``R0`` of the consistent part and that of the rest, each the
+    pair-weighted chordal mean of its segments' (0 where nothing is left out): how far ``R0`` moves
+    if the rest is right."""
     keep = np.zeros(len(test.segments), bool)
     keep[list(test.consistent)] = True
     if keep.all() or not keep.any():
@@ -283,8 +296,9 @@ def parts_angle_deg(test) -> float:
 
 
 def report(test, note, t0: float, used=None) -> dict:
-    """The segment test for the JSON report (times since ``t0``); ``used``: what ``use="consistent"`` kept, with
-    the spans kept and left out and :func:`parts_angle_deg` where it kept a part."""
+    """The segment test for the JSON report (times since ``t0``); ``used``: what
+    ``use="consistent"`` kept, with the spans kept and left out and :func:`parts_angle_deg` where it
+    kept a part."""
     if test is None:
         return {"run": False, "note": note, "use": used}
     if used is not None and used.get("kept_s") is not None:
@@ -295,7 +309,8 @@ def report(test, note, t0: float, used=None) -> dict:
 
 
 def consistent_mask(test, t_start, interval: float) -> np.ndarray:
-    """The pairs (start times ``t_start``, ``interval`` long) that lie inside the consistent part of ``test``."""
+    """The pairs (start times ``t_start``, ``interval`` long) that lie inside the consistent part of
+    ``test``."""
     keep = np.zeros(len(t_start), bool)
     last = test.segments[-1].end_s
     for a, b in test.used_spans():  # the last segment's pairs reach one analysis interval past its last start
@@ -304,9 +319,9 @@ def consistent_mask(test, t_start, interval: float) -> np.ndarray:
 
 
 def reasons(test, t0: float, used=None, note=None) -> list:
-    """Verdict reasons: segments that disagree with the rest beyond their noise, named with their times (a
-    ``warning``; a ``fail`` beyond ``remount_deg``'s fail bound, :data:`replication.rig.quality.THRESHOLDS`); what
-    ``use="consistent"`` dropped."""
+    """Verdict reasons: segments that disagree with the rest beyond their noise, named with their
+    times (a ``warning``; a ``fail`` beyond ``remount_deg``'s fail bound,
+    :data:`replication.rig.quality.THRESHOLDS`); what ``use="consistent"`` dropped."""
     from .quality import THRESHOLDS, Reason
 
     out = []

@@ -1,6 +1,7 @@
 """The common end of :func:`replication.rig.calibration.calibrate` (streams) and
-:func:`replication.rig.poses.calibrate_poses` (static pose sets): solve the pairs, their residuals, a bootstrap
-radius, the verdict. Theory and measured numbers: ``docs/judging.md``, section ``replication.rig.solve_and_judge``."""
+:func:`replication.rig.poses.calibrate_poses` (static pose sets): solve the pairs, their residuals,
+a bootstrap radius, the verdict. Theory and measured numbers: ``docs/judging.md``, section
+``replication.rig.solve_and_judge``."""
 from __future__ import annotations
 
 import dataclasses
@@ -25,26 +26,30 @@ __all__ = ["check_common", "first_reference", "reference_reading", "check_option
            "bootstrap_replicates", "unfit_replicates", "block_indices", "station_indices", "per_station_median",
            "REPLICATE_FIT_FACTOR", "REPLICATE_FIT_FLOOR_DEG", "FROZEN_DEG"]
 
-#: A bootstrap replicate is no solution of its resample when the root-mean-square residual of its pairs (cost (8) as
-#: an angle) exceeds this factor times that of the answer on all pairs, on the same pairs, ... Measured (the ratio of
-#: the two, every registered solver, 200 replicates, seed 0): TUM-VI, EuRoC MH01 and Tabb DS1 0.92-1.06, except sqp
-#: on EuRoC, one replicate at 26.6 (a local minimum: 2.9 deg against 0.11); the synthetic rig of tests/
-#: test_calibration.py (50 replicates) with 0.2 deg noise 1.00-1.02, OpenCV's wrappers up to 1.75; noise-free up
-#: to 3.0 (1e-9 deg residuals, under the floor); a pose set with 1-3 outlying stations of 30-120 deg (3 seeds, both
-#: pairings) up to 1.00 (chordal_optimal), 1.01 (robust), 1.78 (two_step_left). A random rotation: tens to hundreds.
+#: A bootstrap replicate is no solution of its resample when the root-mean-square residual of its
+#: pairs (cost (8) as an angle) exceeds this factor times that of the answer on all pairs, on the
+#: same pairs, ... Measured (the ratio of the two, every registered solver, 200 replicates, seed 0):
+#: TUM-VI, EuRoC MH01 and Tabb DS1 0.92-1.06, except sqp on EuRoC, one replicate at 26.6 (a local
+#: minimum: 2.9 deg against 0.11); the synthetic rig of tests/ test_calibration.py (50 replicates)
+#: with 0.2 deg noise 1.00-1.02, OpenCV's wrappers up to 1.75; noise-free up to 3.0 (1e-9 deg
+#: residuals, under the floor); a pose set with 1-3 outlying stations of 30-120 deg (3 seeds, both
+#: pairings) up to 1.00 (chordal_optimal), 1.01 (robust), 1.78 (two_step_left). A random rotation:
+#: tens to hundreds.
 REPLICATE_FIT_FACTOR = 4.0
-#: ... plus this (deg): residuals of noise-free data are rounding (1e-9 deg measured), whose ratios mean nothing.
+#: ... plus this (deg): residuals of noise-free data are rounding (1e-9 deg measured), whose ratios
+#: mean nothing.
 REPLICATE_FIT_FLOOR_DEG = 1e-6
-#: Replicates all within this angle (deg) of the answer on all the pairs, where the pairs leave more than
-#: :data:`REPLICATE_FIT_FLOOR_DEG`, are the answer returned unchanged (a solver that ignores its input): a radius of
-#: zero. Measured (chordal_optimal, 200 replicates, seed 0): the replicate nearest the answer is 0.0019 deg from it on
-#: TUM-VI, 0.0041 on EuRoC MH01, 0.011 on Tabb DS1; noise-free pairs leave 1e-9 deg, under the floor.
+#: Replicates all within this angle (deg) of the answer on all the pairs, where the pairs leave more
+#: than :data:`REPLICATE_FIT_FLOOR_DEG`, are the answer returned unchanged (a solver that ignores
+#: its input): a radius of zero. Measured (chordal_optimal, 200 replicates, seed 0): the replicate
+#: nearest the answer is 0.0019 deg from it on TUM-VI, 0.0041 on EuRoC MH01, 0.011 on Tabb DS1;
+#: noise-free pairs leave 1e-9 deg, under the floor.
 FROZEN_DEG = 1e-9
 
 
 def check_common(method, n_bootstrap, seed, reference):
-    """Check the parameters every calibration takes (before any work); returns the reference as a rotation or
-    None."""
+    """Check the parameters every calibration takes (before any work); returns the reference as a
+    rotation or None."""
     solver_info(method)  # an unknown name fails before any work, listing the available ones
     check_number("n_bootstrap", n_bootstrap, minimum=0, integer=True, strict=False)
     check_number("seed", seed, minimum=0, integer=True, strict=False)
@@ -68,11 +73,12 @@ def first_reference(reference):
 
 
 def reference_reading(errors_deg, disagreement_deg: float, radius_deg: float = float("nan")) -> str:
-    """Which reading two references' errors allow: an error below the references' own disagreement (the reference
-    floor) is agreement with them, not a measure of accuracy. With R0's 95 % radius (``radius_deg``, finite), errors
-    that differ by no more than the radius cannot tell the references apart, and errors both within it are agreement
-    with both; a difference beyond it names the closer reference whatever the floor (references 10 deg apart, R0 on
-    one of them: closer to that one, not "agreement")."""
+    """Which reading two references' errors allow: an error below the references' own disagreement
+    (the reference floor) is agreement with them, not a measure of accuracy. With R0's 95 % radius
+    (``radius_deg``, finite), errors that differ by no more than the radius cannot tell the
+    references apart, and errors both within it are agreement with both; a difference beyond it
+    names the closer reference whatever the floor (references 10 deg apart, R0 on one of them:
+    closer to that one, not "agreement")."""
     e1, e2 = errors_deg
     r = radius_deg if np.isfinite(radius_deg) and radius_deg >= 0 else None
     floor = f"the references' own disagreement {disagreement_deg:.3f} deg (the reference floor)"
@@ -99,8 +105,8 @@ def reference_reading(errors_deg, disagreement_deg: float, radius_deg: float = f
 
 
 def check_options(method, options):
-    """Refuse solver options the solver does not take (or values it refuses), before any work: the solver is
-    called once with them on a tiny exact problem."""
+    """Refuse solver options the solver does not take (or values it refuses), before any work: the
+    solver is called once with them on a tiny exact problem."""
     if not options:
         return
     A = so3.matrix_from_rotation_vector(np.array([[0.5, 0.0, 0.0], [0.0, 0.6, 0.0], [0.0, 0.0, 0.7], [0.3, 0.4, 0.0]]))
@@ -115,17 +121,19 @@ def check_options(method, options):
 
 
 def block_indices(rng, J: int, block: int, n_bootstrap: int) -> np.ndarray:
-    """Moving-block bootstrap: ``(n_bootstrap, J)`` pair indices, blocks of ``block`` consecutive pairs."""
+    """Moving-block bootstrap: ``(n_bootstrap, J)`` pair indices, blocks of ``block`` consecutive
+    pairs."""
     block = int(min(J, block))
     starts = rng.integers(0, J - block + 1, size=(n_bootstrap, -(-J // block)))
     return (starts[..., None] + np.arange(block)).reshape(n_bootstrap, -1)[:, :J]
 
 
 def station_indices(rng, stations, n_bootstrap: int) -> list:
-    """Station bootstrap (see the module notes): for each replicate, the pair indices, pair ``k`` of stations
-    ``(i_k, j_k)`` repeated ``m_i m_j`` times (``m`` the stations' multiplicities in a draw of ``N`` with
-    replacement). ``stations = (i, j, N)``, or ``(i, j, N, labels)``: stations that share a label (repeats of one
-    station) are drawn together, as one, ``D`` distinct stations drawn ``D`` times."""
+    """Station bootstrap (see the module notes): for each replicate, the pair indices, pair ``k`` of
+    stations ``(i_k, j_k)`` repeated ``m_i m_j`` times (``m`` the stations' multiplicities in a draw
+    of ``N`` with replacement). ``stations = (i, j, N)``, or ``(i, j, N, labels)``: stations that
+    share a label (repeats of one station) are drawn together, as one, ``D`` distinct stations drawn
+    ``D`` times."""
     i, j, N = stations[:3]
     labels = stations[3] if len(stations) > 3 else np.arange(N)
     distinct, group = np.unique(labels, return_inverse=True)
@@ -137,7 +145,8 @@ def station_indices(rng, stations, n_bootstrap: int) -> list:
 
 
 def _repeats(stations):
-    """The report's ``station_repeats`` (stations given, distinct, the groups of repeats), or None without repeats."""
+    """The report's ``station_repeats`` (stations given, distinct, the groups of repeats), or None
+    without repeats."""
     if stations is None or len(stations) < 4 or len(np.unique(stations[3])) == stations[2]:
         return None
     labels = np.asarray(stations[3])
@@ -165,8 +174,8 @@ def per_station_median(res, stations) -> np.ndarray:
 
 
 def _progress(items, **options):
-    """``items`` behind a tqdm progress bar on standard error; without tqdm (an optional package: the extra
-    ``study``) ``items`` as they are, the bar being all that is lost."""
+    """``items`` behind a tqdm progress bar on standard error; without tqdm (an optional package:
+    the extra ``study``) ``items`` as they are, the bar being all that is lost."""
     try:
         from tqdm import tqdm
     except ImportError:
@@ -175,19 +184,22 @@ def _progress(items, **options):
 
 
 def bootstrap_replicates(motions, method, options, index_sets, *, progress=False, masks=False, fit_to=None):
-    """The solver on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list of index arrays of
-    any lengths), through the registry's one door for re-solves
-    (:func:`replication.core.solvers.checked_core`): validated pairs, so no re-validation; the replicates' own
-    warnings would repeat the main solve's and are not issued; every answer is checked as :func:`solve` checks it.
+    """The solver on each resample (``index_sets``: an ``(n, J)`` array of pair indices, or a list
+    of index arrays of any lengths), through the registry's one door for re-solves
+    (:func:`replication.core.solvers.checked_core`): validated pairs, so no re-validation; the
+    replicates' own warnings would repeat the main solve's and are not issued; every answer is
+    checked as :func:`solve` checks it.
 
-    Every replicate is also checked for being a solution of its resample against ``fit_to``, the answer on all
-    the pairs (:func:`unfit_replicates`; without ``fit_to`` the solver is run once on all the pairs for it).
+    Every replicate is also checked for being a solution of its resample against ``fit_to``, the
+    answer on all the pairs (:func:`unfit_replicates`; without ``fit_to`` the solver is run once on
+    all the pairs for it).
 
-    Returns the replicates' answers ``R_boot``; with ``masks`` ``(R_boot, failed, reflection, unfit)``, with the
-    masks of the solver's declared failures (NaN blocks), reflections and answers that are no solutions, which never
-    enter a radius (without ``masks`` any of them raises); with ``masks="reason"`` ``(R_boot, reason)``, the ``fail``
-    reason naming the solver, or None. Raises :class:`~replication.core.solvers.SolverAnswerError`
-    (a ``ValueError`` naming the solver) where an answer is neither a rotation nor a NaN block (e.g. ``2 R``)."""
+    Returns the replicates' answers ``R_boot``; with ``masks`` ``(R_boot, failed, reflection,
+    unfit)``, with the masks of the solver's declared failures (NaN blocks), reflections and answers
+    that are no solutions, which never enter a radius (without ``masks`` any of them raises); with
+    ``masks="reason"`` ``(R_boot, reason)``, the ``fail`` reason naming the solver, or None. Raises
+    :class:`~replication.core.solvers.SolverAnswerError` (a ``ValueError`` naming the solver) where
+    an answer is neither a rotation nor a NaN block (e.g. ``2 R``)."""
     out = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ReplicationWarning)
@@ -227,17 +239,17 @@ def bootstrap_replicates(motions, method, options, index_sets, *, progress=False
 
 
 def _rms_deg(residual_deg) -> float:
-    """The pairs' cost (8) as an angle: the residual angle whose chordal distance is the root mean square of theirs
-    (``||A R - R B||_F = 2 sqrt(2) sin(angle / 2)``)."""
+    """The pairs' cost (8) as an angle: the residual angle whose chordal distance is the root mean
+    square of theirs (``||A R - R B||_F = 2 sqrt(2) sin(angle / 2)``)."""
     return math.degrees(2.0 * math.asin(min(1.0, math.sqrt(float(np.mean(np.sin(np.radians(residual_deg) / 2) ** 2))))))
 
 
 def unfit_replicates(motions, R_boot, index_sets, R, *, skip=None):
-    """Which bootstrap replicates are no solution of their resample: ``(unfit, (replicate, full))``, ``unfit`` the
-    mask of replicates whose pairs' root-mean-square residual (cost (8) as an angle) exceeds
-    :data:`REPLICATE_FIT_FACTOR` times that of ``R`` (the answer on all pairs) on the same pairs plus
-    :data:`REPLICATE_FIT_FLOOR_DEG`, and the two per replicate (deg; NaN where ``skip``, e.g. the replicates that
-    are no rotations)."""
+    """Which bootstrap replicates are no solution of their resample: ``(unfit, (replicate, full))``,
+    ``unfit`` the mask of replicates whose pairs' root-mean-square residual (cost (8) as an angle)
+    exceeds :data:`REPLICATE_FIT_FACTOR` times that of ``R`` (the answer on all pairs) on the same
+    pairs plus :data:`REPLICATE_FIT_FLOOR_DEG`, and the two per replicate (deg; NaN where ``skip``,
+    e.g. the replicates that are no rotations)."""
     n = len(R_boot)
     skip = np.zeros(n, dtype=bool) if skip is None else np.asarray(skip, dtype=bool)
     own, full = np.full(n, np.nan), np.full(n, np.nan)
@@ -253,8 +265,8 @@ def unfit_replicates(motions, R_boot, index_sets, R, *, skip=None):
 
 
 def _frozen(R_boot, R, skip, fit) -> bool:
-    """Whether every usable replicate is ``R`` itself (within :data:`FROZEN_DEG`) although the pairs leave more than
-    :data:`REPLICATE_FIT_FLOOR_DEG` (see :data:`FROZEN_DEG`)."""
+    """Whether every usable replicate is ``R`` itself (within :data:`FROZEN_DEG`) although the pairs
+    leave more than :data:`REPLICATE_FIT_FLOOR_DEG` (see :data:`FROZEN_DEG`)."""
     usable = ~np.asarray(skip, dtype=bool)
     if usable.sum() < 2 or not np.nanmax(fit[1][usable]) > REPLICATE_FIT_FLOOR_DEG:
         return False
@@ -262,8 +274,8 @@ def _frozen(R_boot, R, skip, fit) -> bool:
 
 
 def _bad_replicates(method, failed, reflection, unfit=None, fit=None, frozen=False):
-    """A ``fail`` reason naming the solver where some bootstrap replicates are no rotations or no solutions of their
-    resamples (no radius then), or None."""
+    """A ``fail`` reason naming the solver where some bootstrap replicates are no rotations or no
+    solutions of their resamples (no radius then), or None."""
     unfit = np.zeros_like(failed) if unfit is None else unfit
     if frozen:
         n = int((~(failed | reflection)).sum())
@@ -295,10 +307,11 @@ def _bad_replicates(method, failed, reflection, unfit=None, fit=None, frozen=Fal
 
 @dataclass(frozen=True)
 class Resampling:
-    """How :func:`solve_pairs` measures the radius: ``n_bootstrap`` replicates from ``seed``, resampling moving blocks
-    of ``block`` pairs (streams), or, with ``stations = (i, j, N[, labels])`` (pair ``k`` between static stations
-    ``i_k`` and ``j_k``), resampling stations, whose median residual (or, with ``station_residual(R)``, whose own
-    residual at the estimate ``R``) is also reported and judged; ``progress`` shows a progress bar."""
+    """How :func:`solve_pairs` measures the radius: ``n_bootstrap`` replicates from ``seed``,
+    resampling moving blocks of ``block`` pairs (streams), or, with ``stations = (i, j, N[,
+    labels])`` (pair ``k`` between static stations ``i_k`` and ``j_k``), resampling stations, whose
+    median residual (or, with ``station_residual(R)``, whose own residual at the estimate ``R``) is
+    also reported and judged; ``progress`` shows a progress bar."""
 
     n_bootstrap: int
     seed: int | None
@@ -310,9 +323,10 @@ class Resampling:
 
 @dataclass(frozen=True)
 class Provenance:
-    """What :func:`solve_pairs` carries into the report unjudged: the pairing ``interval`` (s, NaN for poses), the
-    clock (``time_offset = (offset, correlation, applied)``, its 95 % interval and peak margin), the change test's
-    report, the call's ``parameters`` and ``inputs``, each pair's start time and further diagnostics."""
+    """What :func:`solve_pairs` carries into the report unjudged: the pairing ``interval`` (s, NaN
+    for poses), the clock (``time_offset = (offset, correlation, applied)``, its 95 % interval and
+    peak margin), the change test's report, the call's ``parameters`` and ``inputs``, each pair's
+    start time and further diagnostics."""
 
     interval: float = math.nan
     time_offset: tuple = (math.nan, math.nan, False)
@@ -329,9 +343,10 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
                 provenance: Provenance):
     """Solve, residuals, bootstrap, verdict: a :class:`~replication.rig.report.CalibrationResult`.
 
-    ``method(**options)`` solves the pairs, ``reference`` (one rotation, two stacked, or None) and ``evidence`` (the
-    caller's measurements, :class:`~replication.rig.quality.Evidence`'s fields) join the verdict; the radius is
-    measured as ``resampling`` says (:class:`Resampling`); ``provenance`` goes into the report (:class:`Provenance`).
+    ``method(**options)`` solves the pairs, ``reference`` (one rotation, two stacked, or None) and
+    ``evidence`` (the caller's measurements, :class:`~replication.rig.quality.Evidence`'s fields)
+    join the verdict; the radius is measured as ``resampling`` says (:class:`Resampling`);
+    ``provenance`` goes into the report (:class:`Provenance`).
     """
     n_bootstrap, seed, block, stations, station_residual, progress = (
         resampling.n_bootstrap, resampling.seed, resampling.block, resampling.stations, resampling.station_residual,
@@ -441,8 +456,8 @@ def solve_pairs(A, B, *, method: str, options: dict, reference, evidence: dict, 
 
 
 def _two_references(R, references, radius_deg: float = float("nan")) -> dict:
-    """The result's fields for two references: each error, their disagreement and the reading it allows (with R0's
-    95 % radius, :func:`reference_reading`)."""
+    """The result's fields for two references: each error, their disagreement and the reading it
+    allows (with R0's 95 % radius, :func:`reference_reading`)."""
     if references is None:
         return {}
     errors = tuple(float(so3.angle_between_deg(R, ref)) for ref in references)

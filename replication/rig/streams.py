@@ -1,5 +1,5 @@
-"""Timestamped rotation streams: orientations, gyroscope rates, and gyro integration. Theory and measured numbers:
-``docs/reading.md``, section ``replication.rig.streams``."""
+"""Timestamped rotation streams: orientations, gyroscope rates, and gyro integration. Theory and
+measured numbers: ``docs/reading.md``, section ``replication.rig.streams``."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -48,8 +48,8 @@ class OrientationStream:
     def at(self, times) -> np.ndarray:
         """``world_from_body`` slerp-interpolated at ``times`` (which must lie inside the stream).
 
-        The interpolator (:func:`replication.core.so3.slerp_interpolator`) is built on the first call
-        and kept on the stream.
+        The interpolator (:func:`replication.core.so3.slerp_interpolator`) is built on the first
+        call and kept on the stream.
         """
         interpolator = self._interpolator
         if interpolator is None:
@@ -65,7 +65,8 @@ class OrientationStream:
 
 @dataclass(frozen=True)
 class GyroStream:
-    """Angular velocity ``omega[k]`` (rad/s, body frame) at time ``t[k]`` (s, strictly increasing)."""
+    """Angular velocity ``omega[k]`` (rad/s, body frame) at time ``t[k]`` (s, strictly
+    increasing)."""
 
     t: np.ndarray
     omega: np.ndarray
@@ -104,10 +105,10 @@ def _check_times(t, source):
 def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     """Orientation ``world_from_body`` (``Q(t_0) = I``) from body-frame rates, trapezoidal rule.
 
-    ``Q_{k+1} = Q_k exp([(omega_k + omega_{k+1}) / 2] dt_k)``; the products are a batched
-    prefix scan (:func:`replication.core.so3.cumulative_product`). No bias is removed here:
-    :func:`replication.rig.calibration.calibrate` estimates a gyro's bias with ``R0`` and removes it first
-    (:mod:`replication.rig.sensor_model`; ``gyro_bias=False`` keeps the rates as recorded).
+    ``Q_{k+1} = Q_k exp([(omega_k + omega_{k+1}) / 2] dt_k)``; the products are a batched prefix
+    scan (:func:`replication.core.so3.cumulative_product`). No bias is removed here:
+    :func:`replication.rig.calibration.calibrate` estimates a gyro's bias with ``R0`` and removes it
+    first (:mod:`replication.rig.sensor_model`; ``gyro_bias=False`` keeps the rates as recorded).
     """
     dt = np.diff(gyro.t)
     steps = matrix_from_rotation_vector(0.5 * (gyro.omega[:-1] + gyro.omega[1:]) * dt[:, None])
@@ -115,16 +116,18 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
     return OrientationStream(gyro.t, Q, f"integrated {gyro.source}")
 
 
-#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit mistake puts one
-#: stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach that in 2286).
+#: Spans (s) a calibration recording plausibly has (a second to about three hours); a time-unit
+#: mistake puts one stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach
+#: that in 2286).
 PLAUSIBLE_SPAN_S = (1.0, 1e4)
 _UNITS = {1e3: "milliseconds", 1e6: "microseconds", 1e9: "nanoseconds"}
 
 
 def time_unit_mismatch(camera, sensor):
-    """``(ratio, factor, sentence)`` when the two streams' spans differ by about 1e3, 1e6 or 1e9 (one file's time
-    stamps in another unit than its loader read them in), else None. The sentence names the units and blames the
-    stream whose span (or first stamp, beyond 1e10 s) is implausible for a recording (:data:`PLAUSIBLE_SPAN_S`)."""
+    """``(ratio, factor, sentence)`` when the two streams' spans differ by about 1e3, 1e6 or 1e9
+    (one file's time stamps in another unit than its loader read them in), else None. The sentence
+    names the units and blames the stream whose span (or first stamp, beyond 1e10 s) is implausible
+    for a recording (:data:`PLAUSIBLE_SPAN_S`)."""
     cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
     if not (cs > 0 and ss > 0):
         return None

@@ -1,5 +1,6 @@
-"""Camera-IMU calibration files of the VIO ecosystem: read ``R0`` and the clock offset, change them in a copy. Theory
-and measured numbers: ``docs/reading.md``, section ``replication.rig.vioformats``."""
+"""Camera-IMU calibration files of the VIO ecosystem: read ``R0`` and the clock offset, change them
+in a copy. Theory and measured numbers: ``docs/reading.md``, section
+``replication.rig.vioformats``."""
 from __future__ import annotations
 
 import json
@@ -22,7 +23,8 @@ _MATRIX_TAG = "tag:yaml.org,2002:opencv-matrix"
 
 
 def format_number(x: float) -> str:
-    """``x`` to 17 significant digits (round-trips exactly), always with a dot: YAML 1.1 reads ``1e-05`` as text."""
+    """``x`` to 17 significant digits (round-trips exactly), always with a dot: YAML 1.1 reads
+    ``1e-05`` as text."""
     if not math.isfinite(x):
         raise ValueError(f"cannot write a non-finite number ({x}) into a calibration file")
     text = repr(float(x))
@@ -47,7 +49,8 @@ def _loader():
 
 
 def _yaml_text(path, text):
-    """The text PyYAML can read: OpenCV's ``%YAML:1.0`` header turned into a comment of the same length."""
+    """The text PyYAML can read: OpenCV's ``%YAML:1.0`` header turned into a comment of the same
+    length."""
     if _OPENCV_HEADER.match(text):
         return "#" + text[1:]
     return text
@@ -62,8 +65,8 @@ class _Span:
 
 
 def _compose(path, text, json_text: bool = False):
-    """PyYAML's node tree, for the spans. JSON is YAML but for tabs as white space: they become spaces (a JSON
-    string holds none unescaped, so every index stays where it was)."""
+    """PyYAML's node tree, for the spans. JSON is YAML but for tabs as white space: they become
+    spaces (a JSON string holds none unescaped, so every index stays where it was)."""
     import yaml
 
     try:
@@ -121,7 +124,8 @@ class VioFile:
         self.unwritable = None  # why a rotation cannot be written into it, if it cannot
         self.format = self._recognise()
 
-    # -- recognising -------------------------------------------------------------------------------------------
+    # -- recognising
+    # -------------------------------------------------------------------------------------------
     def _recognise(self) -> str:
         doc = self.doc
         if not isinstance(doc, dict):
@@ -153,8 +157,8 @@ class VioFile:
                         "IMU.T_b_c1 (ORB-SLAM3), T_BS (EuRoC) or value0.T_imu_cam (Basalt JSON)")
 
     def _orbslam3_entry(self) -> str:
-        """The key ORB-SLAM3 reads the extrinsic from: ``IMU.T_b_c1`` with ``File.version: "1.0"`` (a string), else
-        its legacy ``Tbc`` (``System.cc``)."""
+        """The key ORB-SLAM3 reads the extrinsic from: ``IMU.T_b_c1`` with ``File.version: "1.0"``
+        (a string), else its legacy ``Tbc`` (``System.cc``)."""
         version = _child(self._root, "File.version")
         versioned = version is not None and version.value == "1.0" and version.style in ('"', "'")
         if versioned:
@@ -183,10 +187,11 @@ class VioFile:
             fail(self.path, f"no camera {camera!r} in this {self.format} file; it has "
                             f"{', '.join(self.cameras())}{only}")
 
-    # -- the rotation --------------------------------------------------------------------------------------------
+    # -- the rotation
+    # --------------------------------------------------------------------------------------------
     def _matrix_nodes(self, camera):
-        """``(key, transposed, nine scalar nodes in row-major order, the translation's three)`` of the camera's
-        extrinsic."""
+        """``(key, transposed, nine scalar nodes in row-major order, the translation's three)`` of
+        the camera's extrinsic."""
         import yaml
 
         self._check_camera(camera)
@@ -233,8 +238,8 @@ class VioFile:
         return nodes
 
     def _not_shared(self, containers, scalars, what):
-        """Refuse to edit an entry that a YAML alias (``*name``) also stands for elsewhere: one edit would change
-        both."""
+        """Refuse to edit an entry that a YAML alias (``*name``) also stands for elsewhere: one edit
+        would change both."""
         if any(id(n) in self._shared for n in [*containers, *scalars] if n is not None):
             fail(self.path, f"{what} is shared with another entry through a YAML anchor and alias (&, *): changing it "
                             "would change both; write it out in full")
@@ -246,7 +251,8 @@ class VioFile:
         return node
 
     def camera_from_sensor(self, camera: str = "cam0") -> np.ndarray:
-        """``R0`` (``camera_from_sensor``) as this file states it for ``camera``, checked to be a rotation."""
+        """``R0`` (``camera_from_sensor``) as this file states it for ``camera``, checked to be a
+        rotation."""
         self._check_camera(camera)
         if self.format == "basalt":
             from scipy.spatial.transform import Rotation
@@ -271,7 +277,8 @@ class VioFile:
             fail(self.path, str(err))
         return M.T if transposed else M
 
-    # -- the clock offset -----------------------------------------------------------------------------------------
+    # -- the clock offset
+    # -----------------------------------------------------------------------------------------
     def _offset_node(self, camera):
         self._check_camera(camera)
         if self.format in ("kalibr", "openvins"):
@@ -285,7 +292,8 @@ class VioFile:
         return "cam0" if self.format == "openvins" and "cam0" in self.cameras() else camera
 
     def time_offset_s(self, camera: str = "cam0") -> float | None:
-        """``d`` (``t_imu = t_cam + d``, seconds) as this file states it; None if the file has no such field."""
+        """``d`` (``t_imu = t_cam + d``, seconds) as this file states it; None if the file has no
+        such field."""
         node, scale = self._offset_node(camera)
         if node is None:
             return None
@@ -294,10 +302,12 @@ class VioFile:
         except ValueError:
             fail(self.path, f"the time offset {node.value!r} is not a number", line=node.start_mark.line + 1)
 
-    # -- the rig: positions ---------------------------------------------------------------------------------------
+    # -- the rig: positions
+    # ---------------------------------------------------------------------------------------
     def _translation(self, camera):
-        """``(stored as T_imu_cam, the three numbers as stored, their nodes)``: the camera's position in the IMU frame
-        (``T_imu_cam``, Basalt) or the IMU's in the camera frame (``T_cam_imu``)."""
+        """``(stored as T_imu_cam, the three numbers as stored, their nodes)``: the camera's
+        position in the IMU frame (``T_imu_cam``, Basalt) or the IMU's in the camera frame
+        (``T_cam_imu``)."""
         if self.format == "basalt":
             entry = self._root_value0("T_imu_cam").value[int(camera[3:])]
             nodes, transposed = [_child(entry, k) for k in ("px", "py", "pz")], True
@@ -311,19 +321,23 @@ class VioFile:
             fail(self.path, f"{camera}'s translation has an entry that is not a number")
 
     def camera_position(self, camera: str = "cam0") -> np.ndarray:
-        """Where ``camera`` is in the IMU frame (metres), from its translation as this file states it."""
+        """Where ``camera`` is in the IMU frame (metres), from its translation as this file states
+        it."""
         transposed, t, _ = self._translation(camera)
         return t if transposed else -self.camera_from_sensor(camera).T @ t
 
-    # -- writing ---------------------------------------------------------------------------------------------------
+    # -- writing
+    # ----------------------------------------------------------------------------------------------
     def with_values(self, camera: str, R0, time_offset_s: float | None, whole_rig: bool = True):
-        """The text of a copy with ``camera``'s rotation set to ``R0`` and, if given and the format has a field for
-        it, the clock offset set to ``time_offset_s``; the names of the fields changed, and of those added.
+        """The text of a copy with ``camera``'s rotation set to ``R0`` and, if given and the format
+        has a field for it, the clock offset set to ``time_offset_s``; the names of the fields
+        changed, and of those added.
 
-        ``whole_rig``: the other cameras turn with ``camera`` (each ``R_i`` becomes ``R_i C`` with the correction
-        ``C = R_old^T R0``), their positions in the IMU frame with them, and Kalibr's other per-camera clock offsets
-        move by the same amount, so that every camera-camera transform (Kalibr's ``T_cn_cnm1`` too) stays as it was.
-        The edited camera's translation is kept as stored."""
+        ``whole_rig``: the other cameras turn with ``camera`` (each ``R_i`` becomes ``R_i C`` with
+        the correction ``C = R_old^T R0``), their positions in the IMU frame with them, and Kalibr's
+        other per-camera clock offsets move by the same amount, so that every camera-camera
+        transform (Kalibr's ``T_cn_cnm1`` too) stays as it was. The edited camera's translation is
+        kept as stored."""
         if not FORMATS[self.format]:
             fail(self.path, f"{self.format} files are read as references only, not written")
         self._check_camera(camera)
@@ -362,9 +376,10 @@ class VioFile:
         return [(_span(n), format_number(v)) for n, v in zip(nine, (R.T if transposed else R).ravel())]
 
     def _position_edits(self, camera, others, C, changed):
-        """The other cameras' translations such that each one's transform to ``camera`` is kept: positions in the
-        IMU frame ``p_i -> p_c' + C^T (p_i - p_c)``. Stored as ``T_cam_imu`` next to a ``T_cam_imu`` anchor they
-        are unchanged (``t_i`` is the IMU's position in camera ``i``): left as written."""
+        """The other cameras' translations such that each one's transform to ``camera`` is kept:
+        positions in the IMU frame ``p_i -> p_c' + C^T (p_i - p_c)``. Stored as ``T_cam_imu`` next
+        to a ``T_cam_imu`` anchor they are unchanged (``t_i`` is the IMU's position in camera
+        ``i``): left as written."""
         anchor_imu_cam, _, _ = self._translation(camera)
         p_c = self.camera_position(camera)
         p_c_new = p_c if anchor_imu_cam else C.T @ p_c  # the anchor keeps its stored numbers
@@ -405,7 +420,8 @@ class VioFile:
         return edits
 
     def _insertion(self, camera, line):
-        """An edit that adds ``line`` as the camera mapping's first key, at its indentation (block style only)."""
+        """An edit that adds ``line`` as the camera mapping's first key, at its indentation (block
+        style only)."""
         cam = _child(self._root, camera)
         if cam.flow_style:
             fail(self.path, f"{camera} is written in flow style: add timeshift_cam_imu by hand")
@@ -415,8 +431,9 @@ class VioFile:
 
 
 def _checked_tree(path, root) -> set:
-    """``id`` of every node reached more than once (through an alias) from ``root``; a mapping with a key twice is
-    refused, naming its line (readers differ on which one counts: PyYAML and Kalibr take the last)."""
+    """``id`` of every node reached more than once (through an alias) from ``root``; a mapping with
+    a key twice is refused, naming its line (readers differ on which one counts: PyYAML and Kalibr
+    take the last)."""
     import yaml
 
     seen, shared, stack = set(), set(), [root]
@@ -443,8 +460,8 @@ def _checked_tree(path, root) -> set:
 
 
 def looks_like_vio_file(path, text: str) -> bool:
-    """Whether ``text`` (the content of ``path``) is to be read as YAML or JSON: a ``.yaml``, ``.yml`` or ``.json``
-    name, an OpenCV ``%YAML`` header, or a JSON object."""
+    """Whether ``text`` (the content of ``path``) is to be read as YAML or JSON: a ``.yaml``,
+    ``.yml`` or ``.json`` name, an OpenCV ``%YAML`` header, or a JSON object."""
     stripped = text.lstrip()
     if Path(path).suffix.lower() in (".yaml", ".yml", ".json") or stripped.startswith(("%YAML", "{")):
         return True
@@ -453,7 +470,8 @@ def looks_like_vio_file(path, text: str) -> bool:
 
 
 def read_vio_file(path, text: str | None = None) -> VioFile:
-    """Read a calibration file of any format in :data:`FORMATS` (recognised by content, not by name).
+    """Read a calibration file of any format in :data:`FORMATS` (recognised by content, not by
+    name).
 
     ``text``: the file's content when already read (a pipe can be read once)."""
     if text is not None:

@@ -80,25 +80,28 @@ def compare(A, B, R0, *, methods=None, options=None, ratio_to: str | None = None
     options : dict, optional
         ``{method: {option: value}}`` passed to :func:`replication.core.solvers.solve`.
     ratio_to : str, optional
-        A method in ``methods``: adds ``ratio`` (each method's mean error over its mean error, on the
-        problems both solved) with a paired bootstrap 95 % interval ``ratio_low``, ``ratio_high`` (needs ``rng``).
+        A method in ``methods``: adds ``ratio`` (each method's mean error over its mean error, on
+        the problems both solved) with a paired bootstrap 95 % interval ``ratio_low``,
+        ``ratio_high`` (needs ``rng``).
     rng : numpy.random.Generator, optional
         For the bootstrap.
     pairs_for : dict, optional
-        ``{name prefix: (A, B)}``: other pairs for the methods whose name starts with the prefix (e.g. the
-        ``opencv_`` solvers, which rebuild a pose chain from consecutive pairs and form all its pairs).
+        ``{name prefix: (A, B)}``: other pairs for the methods whose name starts with the prefix
+        (e.g. the ``opencv_`` solvers, which rebuild a pose chain from consecutive pairs and form
+        all its pairs).
     ignore_warnings : tuple of Warning classes
-        Warnings left out of the ``warnings`` column (e.g. :class:`~replication.core.solvers.ObservabilityWarning`,
-        which concerns the data set, not the solver).
+        Warnings left out of the ``warnings`` column (e.g.
+        :class:`~replication.core.solvers.ObservabilityWarning`, which concerns the data set, not
+        the solver).
 
     Returns
     -------
     pandas.DataFrame
-        Index ``method``; columns ``mean_deg``, ``sd_deg`` (its standard deviation over the problems; NaN for one),
-        ``n_solved`` (the problems these statistics are over), ``median_deg``, ``p95_deg``,
-        ``max_deg`` (angle to ``R0``), ``mean_cost`` (eq. (8)), ``failures``
-        (problems where OpenCV returned no rotation; they are left out of the
-        error statistics), ``warnings`` (the classes of the warnings the call issued, e.g.
+        Index ``method``; columns ``mean_deg``, ``sd_deg`` (its standard deviation over the
+        problems; NaN for one), ``n_solved`` (the problems these statistics are over),
+        ``median_deg``, ``p95_deg``, ``max_deg`` (angle to ``R0``), ``mean_cost`` (eq. (8)),
+        ``failures`` (problems where OpenCV returned no rotation; they are left out of the error
+        statistics), ``warnings`` (the classes of the warnings the call issued, e.g.
         ``LocalMinimumWarning``; empty if none), ``seconds`` (wall time of the call), ``per_s``
         (calibrations per second), ``n_pairs`` (pairs per problem given to the method).
     """

@@ -1,12 +1,13 @@
-"""The book's generated pages (``bash scripts/docs``): the front page's claims, the full ledger, the API reference
-and the calibration report's schema, all Markdown (MyST) written from the records and files they describe, never
-copied by hand.
+"""The book's generated pages (``bash scripts/docs``): the front page's claims, the full ledger, the
+API reference and the calibration report's schema, all Markdown (MyST) written from the records and
+files they describe, never copied by hand.
 
-The book's source is assembled in ``docs/_build/source`` by :func:`stage`: the pages of ``docs/`` (a line
-``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py``, ``docs/_static/``
-and the executed notebooks under ``notebooks/`` (rendered from their stored outputs, never re-executed). Links to a
-notebook section use the anchor of its heading (:func:`~replication.study.ledger.heading_anchor`, as MyST makes
-it); Sphinx resolves each one or the build fails.
+The book's source is assembled in ``docs/_build/source`` by :func:`stage`: the pages of ``docs/`` (a
+line ``<!-- book:NAME -->`` in one is replaced by the generated block ``NAME``), ``docs/conf.py``,
+``docs/_static/`` and the executed notebooks under ``notebooks/`` (rendered from their stored
+outputs, never re-executed). Links to a notebook section use the anchor of its heading
+(:func:`~replication.study.ledger.heading_anchor`, as MyST makes it); Sphinx resolves each one or
+the build fails.
 """
 from __future__ import annotations
 
@@ -25,7 +26,8 @@ __all__ = ["MARKER", "TITLES", "VERDICT_MARKS", "claim_anchor", "verdict_badge",
            "front_page_claims", "ledger_chapter", "schema_fields", "schema_chapter", "api_chapter", "fill_markers",
            "stage"]
 
-#: Each claim's heading in the ledger chapter: what it is about, in words (its id follows the heading).
+#: Each claim's heading in the ledger chapter: what it is about, in words (its id follows the
+#: heading).
 TITLES = {
     "eq7_relative": "Eq. (7): relative rotations remove the global frames",
     "theorem1": "Theorem 1: the two-step iteration converges to R0",
@@ -59,17 +61,19 @@ TITLES = {
     "online_recalibration": "The method meets the requirements of online re-calibration",
 }
 
-#: Each verdict's mark and CSS class (``docs/_static/book.css`` colours them): told apart at a glance and in print.
+#: Each verdict's mark and CSS class (``docs/_static/book.css`` colours them): told apart at a
+#: glance and in print.
 VERDICT_MARKS = {"holds": ("✔", "holds"), HOLDS_ONLY_IF: ("◐", "only-if"), "fails": ("✘", "fails"),
                  "undecidable from the text": ("?", "undecidable")}
 
-#: A line of a page of ``docs/`` that :func:`stage` replaces by a generated block (its name in the group).
+#: A line of a page of ``docs/`` that :func:`stage` replaces by a generated block (its name in the
+#: group).
 MARKER = re.compile(r"^<!-- book:([a-z_]+) -->$", re.MULTILINE)
 
 
 def _md(text) -> str:
-    """Text that Markdown shows as written, in a table cell too (``|``, emphasis and brackets escaped; code in
-    backticks kept)."""
+    """Text that Markdown shows as written, in a table cell too (``|``, emphasis and brackets
+    escaped; code in backticks kept)."""
     return re.sub(r"([\\*_\[\]<>|])", r"\\\1", str(text).replace("\n", " "))
 
 
@@ -98,8 +102,9 @@ def verdict_badge(verdict: str) -> str:
 
 
 def readme_headlines(readme: str, ledger: pd.DataFrame) -> str:
-    """README's headlines (the bullets after "The headlines:", up to the next heading), each claim id in them linked
-    to its record in the ledger chapter: the front page says what README says, never a copy kept by hand.
+    """README's headlines (the bullets after "The headlines:", up to the next heading), each claim
+    id in them linked to its record in the ledger chapter: the front page says what README says,
+    never a copy kept by hand.
 
     Raises
     ------
@@ -118,17 +123,17 @@ def readme_headlines(readme: str, ledger: pd.DataFrame) -> str:
 
 
 def _brief(text: str) -> tuple[str, bool]:
-    """The text's first clause, whole (:func:`~replication.study.ledger.first_clause` without a word limit), and
-    whether more follows it."""
+    """The text's first clause, whole (:func:`~replication.study.ledger.first_clause` without a word
+    limit), and whether more follows it."""
     clause = first_clause(text, max_words=10**6)
     return (clause[:-2], True) if clause.endswith(" …") else (clause, False)
 
 
 def front_page_claims(ledger: pd.DataFrame) -> str:
-    """The counts, then one row per claim: what the paper claims (linked to its full record in the ledger chapter),
-    the verdict with its mark (:func:`verdict_badge`), the condition in full (``holds only if``: never cut) or the
-    evidence's first clause (a link to the rest where there is more), and the notebook section where it is
-    measured."""
+    """The counts, then one row per claim: what the paper claims (linked to its full record in the
+    ledger chapter), the verdict with its mark (:func:`verdict_badge`), the condition in full
+    (``holds only if``: never cut) or the evidence's first clause (a link to the rest where there is
+    more), and the notebook section where it is measured."""
     lines = [f"**{counts_in_words(ledger)}.**", "",
              "| the paper claims | verdict | the condition it holds under, or the evidence | measured in |",
              "|---|---|---|---|"]
@@ -145,9 +150,10 @@ def front_page_claims(ledger: pd.DataFrame) -> str:
 
 
 def ledger_chapter(ledger: pd.DataFrame) -> str:
-    """Every record in full, one section per claim (its title the heading, :data:`TITLES`, then its id): the
-    paper's statement and where it makes it, the paper's number, the verdict and its condition, the evidence, its
-    uncertainty, the setting and the notebook section where it is measured."""
+    """Every record in full, one section per claim (its title the heading, :data:`TITLES`, then its
+    id): the paper's statement and where it makes it, the paper's number, the verdict and its
+    condition, the evidence, its uncertainty, the setting and the notebook section where it is
+    measured."""
     parts = [f"**{counts_in_words(ledger)}.**\n"]
     for row in ledger.itertuples(index=False):
         verdict = verdict_badge(row.verdict) + (f": {_md(row.condition)}" if row.verdict == HOLDS_ONLY_IF else "")
@@ -179,8 +185,8 @@ def _type(node: dict) -> str:
 
 
 def schema_fields(schema: dict) -> list[tuple[str, str, str]]:
-    """``(field, type, description)`` of every field of the report's JSON schema, its definitions first
-    (``#name``), nested fields as ``parent.child`` and array items as ``parent[].child``.
+    """``(field, type, description)`` of every field of the report's JSON schema, its definitions
+    first (``#name``), nested fields as ``parent.child`` and array items as ``parent[].child``.
 
     Raises
     ------
@@ -215,7 +221,8 @@ def schema_fields(schema: dict) -> list[tuple[str, str, str]]:
 
 
 def schema_chapter(schema: dict) -> str:
-    """A table of every field of the report's schema (:func:`schema_fields`): name, type, description."""
+    """A table of every field of the report's schema (:func:`schema_fields`): name, type,
+    description."""
     lines = ["| field | type | description |", "|---|---|---|"]
     for field, kind, description in schema_fields(schema):
         lines.append(f"| `{field}` | {_md(kind)} | {_md(description)} |")
@@ -223,8 +230,8 @@ def schema_chapter(schema: dict) -> str:
 
 
 def api_chapter(public: dict) -> str:
-    """An autodoc entry (numpy docstrings) for every public name of the package (``replication._PUBLIC``: name ->
-    the module that defines it), grouped by room."""
+    """An autodoc entry (numpy docstrings) for every public name of the package
+    (``replication._PUBLIC``: name -> the module that defines it), grouped by room."""
     groups = {"rig": ("Calibrating a rig", []), "core": ("Solving A X = X B", [])}
     for name, module in public.items():
         obj = getattr(importlib.import_module(f"replication.{module}"), name)
@@ -235,15 +242,16 @@ def api_chapter(public: dict) -> str:
         else:
             directive = "autofunction"
         options = "   :members:\n" if directive == "autoclass" else ""
-        # autodoc writes reStructuredText: an eval-rst block parses it as such (a MyST directive would not)
+        # autodoc writes reStructuredText: an eval-rst block parses it as such (a MyST directive
+        # would not)
         groups[module.split(".")[0]][1].append(f"```{{eval-rst}}\n.. {directive}:: replication.{module}.{name}\n"
                                                f"{options}```\n")
     return "\n".join(f"## {title}\n\n" + "\n".join(entries) for title, entries in groups.values())
 
 
 def fill_markers(text: str, blocks: dict, path) -> str:
-    """``text`` with each marker line (:data:`MARKER`) replaced by its block; ``ValueError`` naming the page, the
-    line and the name for a marker that names no block."""
+    """``text`` with each marker line (:data:`MARKER`) replaced by its block; ``ValueError`` naming
+    the page, the line and the name for a marker that names no block."""
     for match in MARKER.finditer(text):
         if match.group(1) not in blocks:
             line = text.count("\n", 0, match.start()) + 1
@@ -261,13 +269,13 @@ def _write_if_changed(path: Path, data: bytes | str) -> None:
 def stage(source=None, *, public: dict, root=None, ledger=None) -> Path:
     """Assemble the book's source in ``source`` (default ``docs/_build/source``) and return it.
 
-    ``public``: the package's public names (``replication._PUBLIC``, passed in: the study room does not import the
-    package face) for :func:`api_chapter`; ``ledger``: default :func:`~replication.study.ledger.collect` of
-    ``root``'s notebooks.
+    ``public``: the package's public names (``replication._PUBLIC``, passed in: the study room does
+    not import the package face) for :func:`api_chapter`; ``ledger``: default
+    :func:`~replication.study.ledger.collect` of ``root``'s notebooks.
 
-    Files are written only when they change, so that Sphinx rebuilds only what changed. Pages of ``docs/`` whose
-    marker names no block, a report schema field without a description and a ledger that
-    :func:`~replication.study.ledger.collect` refuses raise ``ValueError``.
+    Files are written only when they change, so that Sphinx rebuilds only what changed. Pages of
+    ``docs/`` whose marker names no block, a report schema field without a description and a ledger
+    that :func:`~replication.study.ledger.collect` refuses raise ``ValueError``.
     """
     root = Path(root) if root else PROJECT_ROOT
     source = Path(source) if source else root / "docs" / "_build" / "source"

@@ -1,7 +1,7 @@
 """Plot helpers shared by the notebooks (matplotlib; no computation here).
 
-One style per solver (:data:`METHOD_STYLE`, :func:`method_style`): every figure takes a method's colour from it, by
-name, so a method's colour never depends on which other methods a figure shows.
+One style per solver (:data:`METHOD_STYLE`, :func:`method_style`): every figure takes a method's
+colour from it, by name, so a method's colour never depends on which other methods a figure shows.
 """
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ import numpy as np
 __all__ = ["METHOD_STYLE", "SQP_CONFIG_STYLE", "method_style", "sqp_config_style", "convergence_figure",
            "SWEEP_LABELS", "SWEEP_TITLES", "sweep_figure", "FIG7_STYLE", "fig6_figure", "fig7_figure", "live_figure"]
 
-#: SQP's configurations in notebooks 02 and 04 (:func:`replication.study.fig5.sqp_configs_for`; a stop-short label
-#: ``"family: value"`` by its family): SQP's blue, one line style and marker each.
+#: SQP's configurations in notebooks 02 and 04 (:func:`replication.study.fig5.sqp_configs_for`; a
+#: stop-short label ``"family: value"`` by its family): SQP's blue, one line style and marker each.
 SQP_CONFIG_STYLE = {
     "analytic": {"ls": "-", "marker": "."},
     "finite-difference": {"ls": "--", "marker": "^"},
@@ -27,10 +27,11 @@ SQP_CONFIG_STYLE = {
 _PAPER = {"ls": "-", "lw": 2.0}
 _BASELINE = {"ls": "--", "lw": 1.2}
 #: One colour per method, reused in every figure, keyed by the registered solver names
-#: (:func:`replication.core.solvers.available`) and by the paper's names of its three methods, which keep the
-#: colours of the paper's Fig. 7 (``R^r`` cyan, ``R^l`` magenta, SQP blue): ``ours_right`` is ``two_step_right``,
-#: ``ours_left`` ``two_step_left``, ``optimization`` ``sqp``. An OpenCV wrapper takes a light shade of the method
-#: it wraps. SQP's configurations (notebook 02) are SQP: its blue, told apart by line style and marker.
+#: (:func:`replication.core.solvers.available`) and by the paper's names of its three methods, which
+#: keep the colours of the paper's Fig. 7 (``R^r`` cyan, ``R^l`` magenta, SQP blue): ``ours_right``
+#: is ``two_step_right``, ``ours_left`` ``two_step_left``, ``optimization`` ``sqp``. An OpenCV
+#: wrapper takes a light shade of the method it wraps. SQP's configurations (notebook 02) are SQP:
+#: its blue, told apart by line style and marker.
 METHOD_STYLE = {
     "two_step_right": {"color": "c", **_PAPER, "label": "two_step_right (ours, $R^r$)"},
     "two_step_left": {"color": "m", **_PAPER, "label": "two_step_left (ours, $R^l$)"},
@@ -61,13 +62,13 @@ _SPARE_MARKERS = ("x", "+", "1", "2", "3", "4")
 
 
 def method_style(name: str) -> dict:
-    """Line style of method ``name`` (``color``, ``label``: the name unless :data:`METHOD_STYLE` gives one, maybe
-    ``ls``, ``lw``, ``marker``), the same in every figure.
+    """Line style of method ``name`` (``color``, ``label``: the name unless :data:`METHOD_STYLE`
+    gives one, maybe ``ls``, ``lw``, ``marker``), the same in every figure.
 
-    A name :data:`METHOD_STYLE` does not know (a solver registered by a user) gets a colour and marker chosen from
-    its name alone (CRC-32), among colours no known method uses, so it never changes another method's colour; two
-    unknown names may share one (their labels tell them apart). Every solver this package registers has its own
-    entry (tested).
+    A name :data:`METHOD_STYLE` does not know (a solver registered by a user) gets a colour and
+    marker chosen from its name alone (CRC-32), among colours no known method uses, so it never
+    changes another method's colour; two unknown names may share one (their labels tell them apart).
+    Every solver this package registers has its own entry (tested).
 
     >>> method_style("two_step_right")["color"], method_style("ours_right")["color"]
     ('c', 'c')
@@ -80,14 +81,15 @@ def method_style(name: str) -> dict:
 
 
 def sqp_config_style(label: str) -> dict:
-    """Style of an SQP configuration of notebook 04 (:data:`SQP_CONFIG_STYLE`, a stop-short label by its family):
-    SQP's colour; an unknown configuration gets a dash-dot line and a ``*`` marker."""
+    """Style of an SQP configuration of notebook 04 (:data:`SQP_CONFIG_STYLE`, a stop-short label by
+    its family): SQP's colour; an unknown configuration gets a dash-dot line and a ``*`` marker."""
     style = SQP_CONFIG_STYLE.get(label) or SQP_CONFIG_STYLE.get(label.split(": ")[0], {"ls": "-.", "marker": "*"})
     return {"color": METHOD_STYLE["sqp"]["color"], **style}
 
 
 def convergence_figure(curves: dict, *, ylabel: str, title: str, logy: bool = True, ax=None):
-    """One line per method: ``curves[name]`` is a 1-D array over iterations 1..N (on ``ax`` if given)."""
+    """One line per method: ``curves[name]`` is a 1-D array over iterations 1..N (on ``ax`` if
+    given)."""
     fig, ax = plt.subplots() if ax is None else (ax.figure, ax)
     for name, values in curves.items():
         values = np.asarray(values)
@@ -125,9 +127,10 @@ def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error 
     """One panel per sweep parameter, one line per solver in its :func:`method_style`; ``sweeps`` is
     :func:`replication.study.baselines.sweep` output.
 
-    With ``metric="mean_deg"`` each point has its 95 % interval of the mean, ``± 1.96 sd_deg / sqrt(n_solved)``
-    (log scale: one that reaches 0 runs off the bottom of the axis); each panel's title says how many problems each
-    point averages (``n_solved``: fewer where a solver returned no rotation).
+    With ``metric="mean_deg"`` each point has its 95 % interval of the mean, ``± 1.96 sd_deg /
+    sqrt(n_solved)`` (log scale: one that reaches 0 runs off the bottom of the axis); each panel's
+    title says how many problems each point averages (``n_solved``: fewer where a solver returned no
+    rotation).
     """
     params = list(dict.fromkeys(sweeps["parameter"]))
     ncols = 2
@@ -169,8 +172,8 @@ def sweep_figure(sweeps, *, metric: str = "mean_deg", ylabel: str = "mean error 
     return fig
 
 
-#: Fig. 7's colours as the paper describes them: camera red, sensor frame black, projections cyan / magenta / blue
-#: (the colours of the three methods in :data:`METHOD_STYLE`).
+#: Fig. 7's colours as the paper describes them: camera red, sensor frame black, projections cyan /
+#: magenta / blue (the colours of the three methods in :data:`METHOD_STYLE`).
 FIG7_STYLE = {
     "camera": {"color": "tab:red", "label": "camera (PnP)", "lw": 1.6},
     "sensor_frame": {"color": "black", "label": "sensor frame (uncalibrated)", "lw": 1.0},
@@ -229,9 +232,10 @@ def fig7_figure(traces):
 
 
 def live_figure(runs: dict, targets=(0.5, 0.2)):
-    """Notebook 08: the online estimate's error to the reference and its stated radius over time, per recording,
-    with the moment VINS-Mono's rule declares success (``runs``: :func:`replication.study.live_study.live_run`
-    results); each ``"ready"`` target (deg) is a labelled dotted line. Points before the 10th pair are left out."""
+    """Notebook 08: the online estimate's error to the reference and its stated radius over time,
+    per recording, with the moment VINS-Mono's rule declares success (``runs``:
+    :func:`replication.study.live_study.live_run` results); each ``"ready"`` target (deg) is a
+    labelled dotted line. Points before the 10th pair are left out."""
     fig, axes = plt.subplots(1, len(runs), figsize=(6.5 * len(runs), 4.2), squeeze=False)
     for ax, (name, (track, vins)) in zip(axes[0], runs.items()):
         ok = track["n_pairs"] >= 10

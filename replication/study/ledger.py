@@ -1,5 +1,6 @@
-"""The claims ledger: every checkable statement of the paper, its verdict, the evidence and its uncertainty. Theory and
-measured numbers: ``docs/studies.md``, section ``replication.study.ledger``."""
+"""The claims ledger: every checkable statement of the paper, its verdict, the evidence and its
+uncertainty. Theory and measured numbers: ``docs/studies.md``, section
+``replication.study.ledger``."""
 from __future__ import annotations
 
 import difflib
@@ -24,7 +25,8 @@ HOLDS_ONLY_IF = "holds only if"
 VERDICTS = ("holds", "fails", HOLDS_ONLY_IF, "undecidable from the text")
 CLAIM_MIME = "application/vnd.replication.claim+json"
 README_START, README_END = "<!-- claims:start -->", "<!-- claims:end -->"
-#: Optional inline markers of README's first screen, between which :func:`update_readme` writes the counts.
+#: Optional inline markers of README's first screen, between which :func:`update_readme` writes the
+#: counts.
 COUNTS = re.compile(r"<!-- counts:start -->.*?<!-- counts:end -->")
 
 
@@ -41,14 +43,15 @@ class ClaimRecord:
     evidence : str
         What was computed, with the number(s) the verdict rests on (asserted in the same cell).
     uncertainty : str
-        Its uncertainty: a confidence interval or standard error (a count out of a total with its interval), a
-        bound (from the paper's rounding, say so: a bound is not an interval), or ``exact (deterministic)`` for a
-        computation without sampling.
+        Its uncertainty: a confidence interval or standard error (a count out of a total with its
+        interval), a bound (from the paper's rounding, say so: a bound is not an interval), or
+        ``exact (deterministic)`` for a computation without sampling.
     setting : str
-        The setting it was measured in (simulation settings, solver variant, data set; for a count over seeds, the
-        seeds it was found on and the fresh seeds it was confirmed on).
+        The setting it was measured in (simulation settings, solver variant, data set; for a count
+        over seeds, the seeds it was found on and the fresh seeds it was confirmed on).
     section : str
-        The heading (its text, without the ``#``) of the notebook section where the evidence is measured.
+        The heading (its text, without the ``#``) of the notebook section where the evidence is
+        measured.
     condition : str
         For ``holds only if``: the condition.
     """
@@ -79,10 +82,11 @@ def _unknown_claim(claim, known, claims_path) -> str:
 
 def check_record(claim, verdict, evidence, uncertainty, setting, section, condition="", *, claims=None,
                  claims_path=None) -> ClaimRecord:
-    """The record if it keeps the rules of the module notes, else ``ValueError`` naming the claim and the problem.
+    """The record if it keeps the rules of the module notes, else ``ValueError`` naming the claim
+    and the problem.
 
-    ``claims``: the claims table (:func:`~replication.study.paper.load_claim_table`), read from ``claims_path`` (default
-    ``data/paper/claims.csv``) when not given.
+    ``claims``: the claims table (:func:`~replication.study.paper.load_claim_table`), read from
+    ``claims_path`` (default ``data/paper/claims.csv``) when not given.
     """
     values = dict(claim=claim, verdict=verdict, evidence=evidence, uncertainty=uncertainty, setting=setting,
                   section=section, condition=condition)
@@ -105,15 +109,16 @@ def check_record(claim, verdict, evidence, uncertainty, setting, section, condit
 
 def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting: str, section: str,
            condition: str = "") -> None:
-    """Record a verdict in the executed notebook (see the module notes); it is displayed, nothing is returned.
+    """Record a verdict in the executed notebook (see the module notes); it is displayed, nothing is
+    returned.
 
     Raises
     ------
     ValueError
-        A record that breaks a rule of :func:`check_record`: an unknown claim id (the close known ids
-        named), a verdict not in :data:`VERDICTS`, a field that is not text, blank evidence, uncertainty,
-        setting or section, ``holds only if`` without a condition or a condition with another verdict.
-        (A second record of the same claim is found by :func:`collect`.)
+        A record that breaks a rule of :func:`check_record`: an unknown claim id (the close known
+        ids named), a verdict not in :data:`VERDICTS`, a field that is not text, blank evidence,
+        uncertainty, setting or section, ``holds only if`` without a condition or a condition with
+        another verdict. (A second record of the same claim is found by :func:`collect`.)
     """
     rec = check_record(claim, verdict, evidence, uncertainty, setting, section, condition)
     verdict_text = f"{HOLDS_ONLY_IF} {condition}" if verdict == HOLDS_ONLY_IF else verdict
@@ -131,19 +136,20 @@ def record(claim: str, verdict: str, *, evidence: str, uncertainty: str, setting
 
 
 def check_evidence(holds, claim: str, condition: str) -> None:
-    """Nothing if ``holds``; else ``ValueError`` naming the claim and the ``condition`` its verdict rests on.
+    """Nothing if ``holds``; else ``ValueError`` naming the claim and the ``condition`` its verdict
+    rests on.
 
     The sanity checks of the functions that build a notebook's records (e.g.
-    :func:`replication.study.table1.two_step_10_iterations`): the measured numbers must bear the verdict, or no
-    record is made. ``condition`` says what should hold, with the measured values.
+    :func:`replication.study.table1.two_step_10_iterations`): the measured numbers must bear the
+    verdict, or no record is made. ``condition`` says what should hold, with the measured values.
     """
     if not holds:
         raise ValueError(f"claim {claim!r}: the evidence does not bear the verdict: expected {condition}")
 
 
 def heading_anchor(heading: str) -> str:
-    """The anchor of a Markdown heading, as GitHub and MyST make it: lower case, every character that is not a
-    letter, digit, ``_``, ``-`` or space dropped, spaces as ``-``.
+    """The anchor of a Markdown heading, as GitHub and MyST make it: lower case, every character
+    that is not a letter, digit, ``_``, ``-`` or space dropped, spaces as ``-``.
 
     >>> heading_anchor("Fig. 6 — `R0` across the 10 data sets")
     'fig-6--r0-across-the-10-data-sets'
@@ -152,7 +158,8 @@ def heading_anchor(heading: str) -> str:
 
 
 def notebook_headings(nb: dict) -> list[str]:
-    """The text of every Markdown heading of a notebook (``#`` to ``######``, the marks stripped), in order."""
+    """The text of every Markdown heading of a notebook (``#`` to ``######``, the marks stripped),
+    in order."""
     found = []
     for cell in nb["cells"]:
         if isinstance(cell, dict) and cell.get("cell_type") == "markdown":
@@ -165,7 +172,8 @@ def notebook_headings(nb: dict) -> list[str]:
 
 
 def _read_notebook(path: Path) -> dict:
-    """A notebook's JSON; ``DataFileError`` naming the file (and line and column of a JSON error)."""
+    """A notebook's JSON; ``DataFileError`` naming the file (and line and column of a JSON
+    error)."""
     text = read_text(path, "a notebook")
     try:
         nb = json.loads(text)
@@ -206,10 +214,11 @@ def collect(notebooks=None, *, claims_path=None, complete: bool = True) -> pd.Da
     Raises
     ------
     DataFileError
-        (a ``ValueError``) naming the notebook: not valid JSON (line and column), not a notebook, a stored
-        record that is not an object of the :class:`ClaimRecord` fields, one that breaks a rule of
-        :func:`check_record` (with its cell), or a second record of a claim (both notebooks and cells);
-        or naming the claims file and line (:func:`~replication.study.paper.load_claim_table`).
+        (a ``ValueError``) naming the notebook: not valid JSON (line and column), not a notebook, a
+        stored record that is not an object of the :class:`ClaimRecord` fields, one that breaks a
+        rule of :func:`check_record` (with its cell), or a second record of a claim (both notebooks
+        and cells); or naming the claims file and line
+        (:func:`~replication.study.paper.load_claim_table`).
     ValueError
         ``complete`` and a claim without a record.
     """
@@ -256,8 +265,8 @@ def _verdict_text(row) -> str:
 
 
 def markdown_from_ledger(ledger: pd.DataFrame) -> str:
-    """A compact Markdown table: claim, where, verdict, evidence, uncertainty, where measured (the setting and a
-    link to the notebook section)."""
+    """A compact Markdown table: claim, where, verdict, evidence, uncertainty, where measured (the
+    setting and a link to the notebook section)."""
     lines = ["| claim | the paper | verdict | evidence | uncertainty | where measured |", "|---|---|---|---|---|---|"]
     for row in ledger.itertuples(index=False):
         cells = [f"`{row.claim}`", f"{row.statement} ({row.where})", _verdict_text(row), row.evidence,
@@ -274,21 +283,22 @@ _PLURAL = {"holds": "hold", HOLDS_ONLY_IF: "hold only if", "fails": "fail",
 
 
 def verdict_counts(ledger: pd.DataFrame) -> dict:
-    """The number of claims per verdict, every verdict of :data:`VERDICTS` in its order (zeros included)."""
+    """The number of claims per verdict, every verdict of :data:`VERDICTS` in its order (zeros
+    included)."""
     found = ledger.drop_duplicates("claim")["verdict"].value_counts()
     return {v: int(found.get(v, 0)) for v in VERDICTS}
 
 
 def counts_in_words(ledger: pd.DataFrame) -> str:
-    """One line: the number of claims and how many have each verdict, e.g. ``28 claims: 4 hold, 7 hold only if,
-    6 fail, 11 undecidable from the text``."""
+    """One line: the number of claims and how many have each verdict, e.g. ``28 claims: 4 hold, 7
+    hold only if, 6 fail, 11 undecidable from the text``."""
     counts = verdict_counts(ledger)
     return f"{sum(counts.values())} claims: " + ", ".join(f"{counts[v]} {_PLURAL[v]}" for v in _PLURAL)
 
 
 def first_clause(text: str, max_words: int = 30) -> str:
-    """The text up to its first ``"; "`` (or ``". "`` before a capital: not ``eq. (8)``) outside brackets, at most
-    ``max_words`` words; ``…`` marks a cut.
+    """The text up to its first ``"; "`` (or ``". "`` before a capital: not ``eq. (8)``) outside
+    brackets, at most ``max_words`` words; ``…`` marks a cut.
 
     >>> first_clause("error < 1e-12 (3a; 3b) by eq. (8); start 170 deg off: the reflection")
     'error < 1e-12 (3a; 3b) by eq. (8) …'
@@ -314,9 +324,9 @@ def _cell(text: str) -> str:
 
 
 def summary_from_ledger(ledger: pd.DataFrame) -> str:
-    """The compact ledger (README, ``claims --summary``): the counts (:func:`counts_in_words`), then one row per
-    claim: its id, what the paper says, the verdict (the condition is in the full ledger) and a link to the
-    notebook section where it is measured."""
+    """The compact ledger (README, ``claims --summary``): the counts (:func:`counts_in_words`), then
+    one row per claim: its id, what the paper says, the verdict (the condition is in the full
+    ledger) and a link to the notebook section where it is measured."""
     lines = [f"**{counts_in_words(ledger)}.**", "", "| claim | the paper says | verdict | measured in |",
              "|---|---|---|---|"]
     for row in ledger.itertuples(index=False):
@@ -327,8 +337,9 @@ def summary_from_ledger(ledger: pd.DataFrame) -> str:
 
 
 def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
-    """The README's text before its start marker and from its end marker on; ``DataFileError`` naming the file,
-    and the marker, if a marker is missing or repeated or the end comes before the start."""
+    """The README's text before its start marker and from its end marker on; ``DataFileError``
+    naming the file, and the marker, if a marker is missing or repeated or the end comes before the
+    start."""
     found = {}
     for marker in (README_START, README_END):
         at = [text.count("\n", 0, m.start()) + 1 for m in re.finditer(re.escape(marker), text)]
@@ -349,17 +360,17 @@ def _readme_parts(readme: Path, text: str) -> tuple[str, str]:
 
 
 def update_readme(ledger: pd.DataFrame, readme=None, *, check: bool = False) -> bool:
-    """Write the compact ledger (:func:`summary_from_ledger`) between the README's claims markers, and the counts
-    (:func:`counts_in_words`) between each pair of inline counts markers (:data:`COUNTS`) on one line; ``check``:
-    only say whether it is current.
+    """Write the compact ledger (:func:`summary_from_ledger`) between the README's claims markers,
+    and the counts (:func:`counts_in_words`) between each pair of inline counts markers
+    (:data:`COUNTS`) on one line; ``check``: only say whether it is current.
 
     Raises
     ------
     DataFileNotFound
         No README (also a ``FileNotFoundError``).
     DataFileError
-        A claims marker (:data:`README_START`, :data:`README_END`) missing or repeated, or the end marker not
-        after the start marker.
+        A claims marker (:data:`README_START`, :data:`README_END`) missing or repeated, or the end
+        marker not after the start marker.
     """
     readme = Path(readme) if readme else PROJECT_ROOT / "README.md"
     text = read_text(readme, "the README with the claims table")

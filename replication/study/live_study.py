@@ -1,11 +1,13 @@
-"""The studies of ``notebooks/08_online.ipynb``: the online estimator's radius coverage (at every pair and at the
-moment it says ready), its ``ready`` on streams that do not determine ``R0`` and on the usual input mistakes, its
-events over long simulated streams (false re-mounts per hour, outlier bursts, noise jumps, detection of re-mounts
-of each size), live replays of the real recordings beside VINS-Mono's initialiser rule, and the cost per pair.
+"""The studies of ``notebooks/08_online.ipynb``: the online estimator's radius coverage (at every
+pair and at the moment it says ready), its ``ready`` on streams that do not determine ``R0`` and on
+the usual input mistakes, its events over long simulated streams (false re-mounts per hour, outlier
+bursts, noise jumps, detection of re-mounts of each size), live replays of the real recordings
+beside VINS-Mono's initialiser rule, and the cost per pair.
 
-Every replay feeds :class:`replication.rig.live.LiveRig` the recorded streams in time order; VINS-Mono's rule
-(:class:`replication.study.vins_rule.VinsExRotation`) gets exactly the same pairs. Simulated pair streams come from
-:func:`pair_stream`, simulated rigs from :func:`replication.testing.rig_streams`.
+Every replay feeds :class:`replication.rig.live.LiveRig` the recorded streams in time order;
+VINS-Mono's rule (:class:`replication.study.vins_rule.VinsExRotation`) gets exactly the same pairs.
+Simulated pair streams come from :func:`pair_stream`, simulated rigs from
+:func:`replication.testing.rig_streams`.
 """
 from __future__ import annotations
 
@@ -28,9 +30,10 @@ REMOUNT_AXIS = np.array([0.6, 0.0, 0.8])
 
 
 def pair_stream(rng: np.random.Generator, n: int, R0, *, noise_deg: float = 0.2, motion_deg=(5.0, 60.0), axis=None):
-    """``n`` independent motion pairs of a rig with ``camera_from_sensor = R0``: camera motions about uniform axes
-    (or ``axis``) with angles uniform in ``motion_deg``, sensor motions ``R0^T A R0``, and isotropic Gaussian
-    rotation-vector noise of RMS ``noise_deg / sqrt(2)`` on each side (so the pair residual's RMS is ``noise_deg``).
+    """``n`` independent motion pairs of a rig with ``camera_from_sensor = R0``: camera motions
+    about uniform axes (or ``axis``) with angles uniform in ``motion_deg``, sensor motions ``R0^T A
+    R0``, and isotropic Gaussian rotation-vector noise of RMS ``noise_deg / sqrt(2)`` on each side
+    (so the pair residual's RMS is ``noise_deg``).
 
     Returns ``(A, B)``, each ``(n, 3, 3)``.
     """
@@ -54,16 +57,17 @@ def coverage_study(settings: dict, *, n_runs: int, n_pairs: int, checkpoints, se
                    **calibrator_options):
     """Share of checks where the true error is within the stated radius, per simulation setting.
 
-    ``settings``: ``{label: overrides of replication.study.simulation.simulate}`` (noise, motions). Each run feeds
-    ``n_pairs`` pairs one by one to a fresh :class:`~replication.rig.online.OnlineCalibrator` (change detector off)
-    (with ``calibrator_options``, e.g. ``forgetting``) and checks at each of ``checkpoints``.
+    ``settings``: ``{label: overrides of replication.study.simulation.simulate}`` (noise, motions).
+    Each run feeds ``n_pairs`` pairs one by one to a fresh
+    :class:`~replication.rig.online.OnlineCalibrator` (change detector off) (with
+    ``calibrator_options``, e.g. ``forgetting``) and checks at each of ``checkpoints``.
 
     Returns
     -------
     pandas.DataFrame
-        Index the setting; ``checks``, ``covered`` (share), ``covered low`` / ``covered high`` (its 95 % interval,
-        ``mean +- 1.96 SE`` over the runs: the checks within one run are correlated, the runs are independent), and
-        the median radius and error at the last checkpoint.
+        Index the setting; ``checks``, ``covered`` (share), ``covered low`` / ``covered high`` (its
+        95 % interval, ``mean +- 1.96 SE`` over the runs: the checks within one run are correlated,
+        the runs are independent), and the median radius and error at the last checkpoint.
     """
     from .simulation import simulate
 
@@ -91,12 +95,13 @@ def coverage_study(settings: dict, *, n_runs: int, n_pairs: int, checkpoints, se
 
 
 def ready_coverage(settings: dict, *, n_runs: int, n_pairs: int, seed: int, target_deg: float = 0.5):
-    """Coverage of the radius at the moment the estimator first says ``ready`` (one check per run: the runs are
-    independent, so the share has a binomial (Wilson) interval).
+    """Coverage of the radius at the moment the estimator first says ``ready`` (one check per run:
+    the runs are independent, so the share has a binomial (Wilson) interval).
 
-    ``settings``: ``{label: keyword arguments of pair_stream}`` (``noise_deg``, ``motion_deg``); a random ``R0`` per
-    run. Returns per setting: runs, runs that became ready, the share of those whose error was within the stated
-    radius then (with its interval), the median pairs to ready, and the median radius and error then.
+    ``settings``: ``{label: keyword arguments of pair_stream}`` (``noise_deg``, ``motion_deg``); a
+    random ``R0`` per run. Returns per setting: runs, runs that became ready, the share of those
+    whose error was within the stated radius then (with its interval), the median pairs to ready,
+    and the median radius and error then.
     """
     rows = {}
     for k, (label, kwargs) in enumerate(settings.items()):
@@ -150,11 +155,11 @@ def _degenerate_cases(rng, R0, n):
 def degenerate_streams(*, n_runs: int, n_pairs: int = 200, seed: int, target_deg: float = 0.5):
     """``ready`` on streams that do not determine ``R0`` (or determine it from few distinct pairs).
 
-    Each case is run ``n_runs`` times (random ``R0``). A *false ready* is ``ready`` while the estimate is farther
-    from ``R0`` than the target, or while the stream cannot determine ``R0`` (every case but the last, whose 30
-    distinct pairs do). Returns per case: runs, runs ever ready, false-ready runs (with the Wilson interval of the
-    share), the largest error while ready, and what :meth:`~replication.rig.online.OnlineCalibrator.status` said at
-    the end of the first run.
+    Each case is run ``n_runs`` times (random ``R0``). A *false ready* is ``ready`` while the
+    estimate is farther from ``R0`` than the target, or while the stream cannot determine ``R0``
+    (every case but the last, whose 30 distinct pairs do). Returns per case: runs, runs ever ready,
+    false-ready runs (with the Wilson interval of the share), the largest error while ready, and
+    what :meth:`~replication.rig.online.OnlineCalibrator.status` said at the end of the first run.
     """
     rows = {}
     for run in range(n_runs):
@@ -181,8 +186,9 @@ def degenerate_streams(*, n_runs: int, n_pairs: int = 200, seed: int, target_deg
 
 
 def online_mistakes(*, seed: int, seconds: float = 90.0, target_deg: float = 0.5):
-    """The usual input mistakes made on purpose on a synthetic rig (camera at 20 Hz, gyro at 200 Hz, small noise),
-    replayed as if live: whether the estimator ever says ``ready``, its final verdict and the reasons it names."""
+    """The usual input mistakes made on purpose on a synthetic rig (camera at 20 Hz, gyro at 200 Hz,
+    small noise), replayed as if live: whether the estimator ever says ``ready``, its final verdict
+    and the reasons it names."""
     from ..rig.streams import GyroStream, OrientationStream
     from ..testing import rig_streams
 
@@ -220,9 +226,10 @@ def online_mistakes(*, seed: int, seconds: float = 90.0, target_deg: float = 0.5
 
 def _event_stream(rng, hours, R0, *, noise_deg, motion_deg, burst_every=None, burst_length=(4, 8),
                   jump_every=None, jump_factor=3.0):
-    """One long in-control stream (one pair per second) with optional outlier bursts (``burst_every`` pairs apart on
-    average, each a run of pairs with random camera motions) and noise jumps (the noise level alternates between
-    ``noise_deg`` and ``jump_factor`` times it every ``jump_every`` pairs)."""
+    """One long in-control stream (one pair per second) with optional outlier bursts
+    (``burst_every`` pairs apart on average, each a run of pairs with random camera motions) and
+    noise jumps (the noise level alternates between ``noise_deg`` and ``jump_factor`` times it every
+    ``jump_every`` pairs)."""
     n = int(round(hours * 3600))
     if jump_every:
         A, B = [], []
@@ -245,12 +252,14 @@ def _event_stream(rng, hours, R0, *, noise_deg, motion_deg, burst_every=None, bu
 
 
 def event_rates(settings: dict, *, hours: float, seed: int, **stream):
-    """Events per hour over long simulated streams without any re-mount (one pair per second), per setting.
+    """Events per hour over long simulated streams without any re-mount (one pair per second), per
+    setting.
 
-    ``settings``: ``{label: {"noise_deg": ..., "motion_deg": (lo, hi)}}``; ``stream``: the class of disturbance
-    (``burst_every`` for outlier bursts, ``jump_every`` for noise jumps; see :func:`_event_stream`). Every re-mount
-    reported is false. Returns per setting the hours, the number of each event kind, false re-mounts per hour with
-    its one-sided 95 % upper bound (exact Poisson), and the final error.
+    ``settings``: ``{label: {"noise_deg": ..., "motion_deg": (lo, hi)}}``; ``stream``: the class of
+    disturbance (``burst_every`` for outlier bursts, ``jump_every`` for noise jumps; see
+    :func:`_event_stream`). Every re-mount reported is false. Returns per setting the hours, the
+    number of each event kind, false re-mounts per hour with its one-sided 95 % upper bound (exact
+    Poisson), and the final error.
     """
     rows = {}
     for k, (label, kwargs) in enumerate(settings.items()):
@@ -275,12 +284,12 @@ def event_rates(settings: dict, *, hours: float, seed: int, **stream):
 
 def detection_study(steps_deg, settings: dict, *, n_placements: int, seed: int, before: int = 200,
                     after: int = 200):
-    """Re-mounts of each size in simulated streams: ``before`` in-control pairs, then the sensor turned by the step
-    about a random axis, then ``after`` pairs.
+    """Re-mounts of each size in simulated streams: ``before`` in-control pairs, then the sensor
+    turned by the step about a random axis, then ``after`` pairs.
 
-    Returns per (setting, step): re-mounts confirmed after the step (count, Wilson interval), the median and 90th
-    percentile delay (pairs from the step to the confirming pair), events of other kinds, false re-mounts before
-    the step, and the median error to the new mounting at the end.
+    Returns per (setting, step): re-mounts confirmed after the step (count, Wilson interval), the
+    median and 90th percentile delay (pairs from the step to the confirming pair), events of other
+    kinds, false re-mounts before the step, and the median error to the new mounting at the end.
     """
     rows = []
     for k, (label, kwargs) in enumerate(settings.items()):
@@ -319,10 +328,10 @@ def live_run(camera, sensor, reference, *, interval: float = 1.0, remount=None, 
     Returns
     -------
     (track, vins) : (pandas.DataFrame, dict)
-        ``track``: :func:`replication.rig.live.replay`'s rows with ``t`` and ``t_seen`` since the camera's first sample,
-        and ``vins_error_deg`` (the rule's error after the same pairs);
-        ``vins``: ``ready_t`` (s since the start, when the pair that made it declare success was formed, or NaN),
-        ``ready_pairs`` and ``error_at_ready_deg``.
+        ``track``: :func:`replication.rig.live.replay`'s rows with ``t`` and ``t_seen`` since the
+        camera's first sample, and ``vins_error_deg`` (the rule's error after the same pairs);
+        ``vins``: ``ready_t`` (s since the start, when the pair that made it declare success was
+        formed, or NaN), ``ready_pairs`` and ``error_at_ready_deg``.
     """
     vins = VinsExRotation()
     errors = []
@@ -345,14 +354,14 @@ def live_run(camera, sensor, reference, *, interval: float = 1.0, remount=None, 
 
 
 def ready_table(runs: dict, targets) -> pd.DataFrame:
-    """When each estimator declares itself ready, how far off it is then, and how far off the other one is after
-    the same pairs (the fair comparison: both have seen the same data).
+    """When each estimator declares itself ready, how far off it is then, and how far off the other
+    one is after the same pairs (the fair comparison: both have seen the same data).
 
-    ``runs``: ``{recording: (track, vins)}`` from :func:`live_run`. Ours is ready at a target when it first says
-    ``ready`` with its radius below that target (the motion determines ``R0``, no change being confirmed, verdict
-    not ``fail``); VINS-Mono's rule when it first declares success (its own rule: 10 pairs and the second-smallest
-    singular value above 0.25). Times are when the deciding pair was formed (the first pairs wait for the
-    clock-offset window).
+    ``runs``: ``{recording: (track, vins)}`` from :func:`live_run`. Ours is ready at a target when
+    it first says ``ready`` with its radius below that target (the motion determines ``R0``, no
+    change being confirmed, verdict not ``fail``); VINS-Mono's rule when it first declares success
+    (its own rule: 10 pairs and the second-smallest singular value above 0.25). Times are when the
+    deciding pair was formed (the first pairs wait for the clock-offset window).
     """
     rows = []
     for name, (track, vins) in runs.items():
@@ -376,18 +385,19 @@ def ready_table(runs: dict, targets) -> pd.DataFrame:
 
 def remount_study(recordings: dict, *, steps_deg, when=(1 / 3, 1 / 2, 2 / 3), axes=None, interval: float = 1.0,
                   wrong_deg: float = 1.0) -> pd.DataFrame:
-    """Re-mount detection on the real recordings: synthetic re-mounts of each size, at several times and about
-    several axes, and the recording as recorded (any re-mount reported there is false: nothing was re-mounted).
+    """Re-mount detection on the real recordings: synthetic re-mounts of each size, at several times
+    and about several axes, and the recording as recorded (any re-mount reported there is false:
+    nothing was re-mounted).
 
     Returns
     -------
     pandas.DataFrame
-        Index ``(recording, re-mount (deg))``; ``detected`` (re-mounts confirmed after the step), ``of``, ``median
-        delay (s)`` and ``max delay (s)`` over those caught (from the re-mount to the pair that confirmed it),
-        ``ready but wrong at the end`` (replays that end ``ready`` more than ``wrong_deg`` from the re-mounted
-        reference), ``other events`` (of other kinds, summed over the replays), ``re-mounts before the step``
-        (false), and the replay without a re-mount: its events by kind (a property of the recording, repeated on
-        its rows).
+        Index ``(recording, re-mount (deg))``; ``detected`` (re-mounts confirmed after the step),
+        ``of``, ``median delay (s)`` and ``max delay (s)`` over those caught (from the re-mount to
+        the pair that confirmed it), ``ready but wrong at the end`` (replays that end ``ready`` more
+        than ``wrong_deg`` from the re-mounted reference), ``other events`` (of other kinds, summed
+        over the replays), ``re-mounts before the step`` (false), and the replay without a re-mount:
+        its events by kind (a property of the recording, repeated on its rows).
     """
     axes = [REMOUNT_AXIS, np.array([0.0, 0.0, 1.0])] if axes is None else axes
     rows = []
@@ -420,8 +430,9 @@ def remount_study(recordings: dict, *, steps_deg, when=(1 / 3, 1 / 2, 2 / 3), ax
 
 
 def update_costs(n_pairs: int = 2000, *, seed: int = 0) -> dict:
-    """Per-pair cost of :meth:`~replication.rig.online.OnlineCalibrator.update` on one simulated problem: the median,
-    mean and 99th percentile of single updates (µs), and the replay rate of :meth:`update_many` (pairs/s)."""
+    """Per-pair cost of :meth:`~replication.rig.online.OnlineCalibrator.update` on one simulated
+    problem: the median, mean and 99th percentile of single updates (µs), and the replay rate of
+    :meth:`update_many` (pairs/s)."""
     import time
 
     from .simulation import simulate

@@ -75,7 +75,8 @@ def save_table(df: pd.DataFrame, name: str, *, floatfmt: str = ".4g") -> None:
 
 
 def save_figure(fig, name: str) -> None:
-    """Write ``fig`` as ``results/figures/<name>.png`` and show that PNG in the notebook; close ``fig``.
+    """Write ``fig`` as ``results/figures/<name>.png`` and show that PNG in the notebook; close
+    ``fig``.
 
     Returns nothing, like :func:`save_table`. The figure is displayed explicitly (an
     ``image/png`` output) and closed, so the stored output is the same with the inline
@@ -98,7 +99,8 @@ def save_figure(fig, name: str) -> None:
 
 
 def best_of(fn, repeat: int = 7) -> float:
-    """Smallest wall time (s) of ``repeat`` calls of ``fn()`` (the timing cells and ``benchmarks/``)."""
+    """Smallest wall time (s) of ``repeat`` calls of ``fn()`` (the timing cells and
+    ``benchmarks/``)."""
     times = []
     for _ in range(repeat):
         start = time.perf_counter()

@@ -67,7 +67,8 @@ def _read(name: str, columns: list[str], numeric: list[str]) -> pd.DataFrame:
 
 
 def load_r0() -> np.ndarray:
-    """R0 of the simulation as printed in Sec. III-A (4 decimals, not exactly orthogonal), (3, 3)."""
+    """R0 of the simulation as printed in Sec. III-A (4 decimals, not exactly orthogonal), (3,
+    3)."""
     df = _read("r0.csv", ["row", "col0", "col1", "col2"], ["col0", "col1", "col2"])
     if len(df) != 3:
         fail(data_dir() / "paper" / "r0.csv", f"expected 3 rows, got {len(df)}")
@@ -105,7 +106,8 @@ def load_table2() -> pd.DataFrame:
 
 
 def load_claims() -> pd.Series:
-    """The paper's numbers in its checkable claims, indexed by claim id (claims without a number left out).
+    """The paper's numbers in its checkable claims, indexed by claim id (claims without a number
+    left out).
 
     The full table of claims (statements, where the paper makes them) is :func:`load_claim_table`.
     """
@@ -122,19 +124,21 @@ CLAIM_ID = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
 
 
 def load_claim_table(path=None) -> pd.DataFrame:
-    """The checkable claims of ``data/paper/claims.csv``, indexed by ``claim``: ``statement``, ``where``,
-    ``paper_value``, ``unit`` (the ledger's rows, :mod:`replication.study.ledger`), all text.
+    """The checkable claims of ``data/paper/claims.csv``, indexed by ``claim``: ``statement``,
+    ``where``, ``paper_value``, ``unit`` (the ledger's rows, :mod:`replication.study.ledger`), all
+    text.
 
     Raises
     ------
     DataFileNotFound
         The file is missing.
     DataFileError
-        Naming the file and the line (a record's first line; the header is line 1) and, where it is one field,
-        the column: not a CSV (an unclosed quote, text after a closing quote), a header other than
-        :data:`CLAIM_COLUMNS`, a record with another number of fields, an empty ``claim``, ``statement`` or
-        ``where``, a claim id that is not :data:`CLAIM_ID`, a claim id given twice, a ``paper_value`` that is not
-        a finite number, or a ``unit`` without a ``paper_value`` (or the reverse).
+        Naming the file and the line (a record's first line; the header is line 1) and, where it is
+        one field, the column: not a CSV (an unclosed quote, text after a closing quote), a header
+        other than :data:`CLAIM_COLUMNS`, a record with another number of fields, an empty
+        ``claim``, ``statement`` or ``where``, a claim id that is not :data:`CLAIM_ID`, a claim id
+        given twice, a ``paper_value`` that is not a finite number, or a ``unit`` without a
+        ``paper_value`` (or the reverse).
     """
     path = Path(path) if path else data_dir() / "paper" / "claims.csv"
     reader = csv.reader(io.StringIO(read_text(path, "the claims file"), newline=""), strict=True)

@@ -33,8 +33,9 @@ def recording_warnings(fn, *args, **kwargs):
     Returns
     -------
     (result, observability_warned, others) : (object, bool, str)
-        ``fn``'s result, whether it issued an :class:`~replication.core.solvers.ObservabilityWarning`, and the
-        sorted names of the other :class:`~replication.core.solvers.ReplicationWarning` classes it issued.
+        ``fn``'s result, whether it issued an
+        :class:`~replication.core.solvers.ObservabilityWarning`, and the sorted names of the other
+        :class:`~replication.core.solvers.ReplicationWarning` classes it issued.
     """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ReplicationWarning)
@@ -49,12 +50,13 @@ def calibration_table(results: dict) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``pairs``, ``bootstrap95_deg``,
-        ``offset_ms``, its 95 % interval ``offset_low_ms`` / ``offset_high_ms`` and ``offset_corr`` (the clock offset
-        and its correlation; NaN for pose sets), ``change_deg`` (the angle between R0 before and after the change
-        test's split, where it ran), ``change_significant``,
-        ``axis_spread_deg`` (camera), ``observability_warning``, ``other warnings`` (from the result's warnings) and
-        ``verdict`` (the level of the result's verdict, :mod:`replication.rig.quality`).
+        Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``pairs``,
+        ``bootstrap95_deg``, ``offset_ms``, its 95 % interval ``offset_low_ms`` / ``offset_high_ms``
+        and ``offset_corr`` (the clock offset and its correlation; NaN for pose sets),
+        ``change_deg`` (the angle between R0 before and after the change test's split, where it
+        ran), ``change_significant``, ``axis_spread_deg`` (camera), ``observability_warning``,
+        ``other warnings`` (from the result's warnings) and ``verdict`` (the level of the result's
+        verdict, :mod:`replication.rig.quality`).
     """
     rows = []
     for (name, method), r in results.items():
@@ -73,18 +75,20 @@ def calibration_table(results: dict) -> pd.DataFrame:
 
 
 def solver_tables(streams: dict, pose_sets: dict, references: dict, *, interval: float = 1.0) -> pd.DataFrame:
-    """Every registered solver on the same pairs of each data set (:func:`replication.study.baselines.compare`).
+    """Every registered solver on the same pairs of each data set
+    (:func:`replication.study.baselines.compare`).
 
-    Streams are paired at ``interval`` seconds (:func:`~replication.rig.association.stream_pairs`), pose sets
-    over all pairs (:func:`~replication.rig.poses.pose_pairs`). The ``opencv_*`` solvers rebuild a pose
-    chain from the pairs and form all its pairs, so they get non-overlapping pairs: every ``interval / dt``-th
-    pair of a stream, the consecutive pairs of a pose set.
+    Streams are paired at ``interval`` seconds (:func:`~replication.rig.association.stream_pairs`),
+    pose sets over all pairs (:func:`~replication.rig.poses.pose_pairs`). The ``opencv_*`` solvers
+    rebuild a pose chain from the pairs and form all its pairs, so they get non-overlapping pairs:
+    every ``interval / dt``-th pair of a stream, the consecutive pairs of a pose set.
 
     Returns
     -------
     pandas.DataFrame
-        Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``n_pairs``, ``warnings``
-        (other than :class:`~replication.core.solvers.ObservabilityWarning`), ``seconds``.
+        Index ``(data, method)``; columns ``error_deg`` (angle to the reference), ``n_pairs``,
+        ``warnings`` (other than :class:`~replication.core.solvers.ObservabilityWarning`),
+        ``seconds``.
     """
     tables = {}
     for name, (cam, sensor, ref) in streams.items():
@@ -103,14 +107,15 @@ def _one_problem(A, B, reference, opencv_pairs) -> pd.DataFrame:
 
 
 def protocol_table(streams: dict, references: dict, intervals) -> pd.DataFrame:
-    """The paper's protocol (50 two-step iterations) against the default (run to the limit) on the same pairs.
+    """The paper's protocol (50 two-step iterations) against the default (run to the limit) on the
+    same pairs.
 
     Returns
     -------
     pandas.DataFrame
-        Index ``(data, interval (s))``; columns ``sigma2/sigma1 of K`` (rounded to 5 digits), the error of
-        ``R^l`` after 50 iterations and at the default's answer (deg), the default's iterations (or
-        ``"closed form"``) and whether the 50-iteration run warned
+        Index ``(data, interval (s))``; columns ``sigma2/sigma1 of K`` (rounded to 5 digits), the
+        error of ``R^l`` after 50 iterations and at the default's answer (deg), the default's
+        iterations (or ``"closed form"``) and whether the 50-iteration run warned
         (:class:`~replication.core.solvers.ConvergenceWarning`).
     """
     rows = {}
@@ -135,7 +140,8 @@ def protocol_table(streams: dict, references: dict, intervals) -> pd.DataFrame:
 
 def sensitivity_table(camera, gyro, reference, *, intervals, shares, methods, n_bootstrap: int,
                       seed: int) -> pd.DataFrame:
-    """:func:`~replication.rig.calibration.calibrate` over pairing intervals and over leading shares of the recording.
+    """:func:`~replication.rig.calibration.calibrate` over pairing intervals and over leading shares
+    of the recording.
 
     Returns
     -------
@@ -164,8 +170,9 @@ def sensitivity_table(camera, gyro, reference, *, intervals, shares, methods, n_
 
 def calibrations(streams: dict, pose_sets: dict, references: dict, methods=("chordal_optimal",), *, seed: int,
                  **options) -> dict:
-    """:func:`~replication.rig.calibration.calibrate` on every stream pair (``calibrate_poses`` on every pose set), with
-    each method, warnings recorded in the results, not shown: ``{(data, method): result}``."""
+    """:func:`~replication.rig.calibration.calibrate` on every stream pair (``calibrate_poses`` on
+    every pose set), with each method, warnings recorded in the results, not shown: ``{(data,
+    method): result}``."""
     out = {}
     for name, (cam, sensor, ref) in {**streams, **pose_sets}.items():
         fn = calibrate_poses if name in pose_sets else calibrate
@@ -176,11 +183,12 @@ def calibrations(streams: dict, pose_sets: dict, references: dict, methods=("cho
 
 
 def usual_mistakes(camera, gyro, reference, *, seed: int, n_bootstrap: int = 50) -> dict:
-    """The issue's usual input mistakes made on purpose on one good recording (an intervention): ``{case: result}``.
+    """The issue's usual input mistakes made on purpose on one good recording (an intervention):
+    ``{case: result}``.
 
-    Cases: as recorded; the camera quaternions read in the wrong component order (``(w, x, y, z)`` read as
-    ``(x, y, z, w)``); the camera poses inverted (``camera_from_world``); the gyro in deg/s read as rad/s; the
-    sensor clock 10 s off (beyond the default offset search of 0.2 s).
+    Cases: as recorded; the camera quaternions read in the wrong component order (``(w, x, y, z)``
+    read as ``(x, y, z, w)``); the camera poses inverted (``camera_from_world``); the gyro in deg/s
+    read as rad/s; the sensor clock 10 s off (beyond the default offset search of 0.2 s).
     """
     from ..core.so3 import matrix_from_quaternion, quaternion_from_matrix
     from ..rig.streams import GyroStream, OrientationStream
@@ -200,8 +208,8 @@ def usual_mistakes(camera, gyro, reference, *, seed: int, n_bootstrap: int = 50)
 
 
 def verdict_table(results: dict) -> pd.DataFrame:
-    """One row per result: its verdict, the checks behind it (names, worst first), an input mistake it named, and
-    its angle to the reference (deg).
+    """One row per result: its verdict, the checks behind it (names, worst first), an input mistake
+    it named, and its angle to the reference (deg).
 
     The reasons' full messages (with their measured numbers and thresholds) are in each result's
     ``verdict.reasons`` and on its diagnostic figure.
@@ -218,8 +226,9 @@ def verdict_table(results: dict) -> pd.DataFrame:
 
 
 def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
-    """A static pose set's 95 % bootstrap radius resampling its stations (what :func:`calibrate_poses` does) and
-    resampling its pairs one by one (what it did before, treating the ``N (N - 1) / 2`` pairs as independent)."""
+    """A static pose set's 95 % bootstrap radius resampling its stations (what
+    :func:`calibrate_poses` does) and resampling its pairs one by one (what it did before, treating
+    the ``N (N - 1) / 2`` pairs as independent)."""
     from ..core.motions import prepare_motions
     from ..core.so3 import angle_between_deg
     from ..rig.poses import calibrate_poses, pose_pairs
@@ -234,7 +243,8 @@ def station_bootstrap(C, S, *, n_bootstrap: int = 200, seed: int = 0) -> dict:
 
 
 def reference_floor_table(results: dict, rig_of: dict, references: dict) -> pd.DataFrame:
-    """Every estimate against every published calibration of its rig, and the references' own disagreement.
+    """Every estimate against every published calibration of its rig, and the references' own
+    disagreement.
 
     Parameters
     ----------
@@ -248,12 +258,13 @@ def reference_floor_table(results: dict, rig_of: dict, references: dict) -> pd.D
     Returns
     -------
     pandas.DataFrame
-        Index ``(data, method)``; one column ``to <reference> (deg)`` per reference name (NaN where the rig has no
-        such reference), ``references apart (deg)`` (the largest angle between two references of the rig: the
-        *reference floor*; NaN with one reference) and ``reading``: ``within the floor`` when the estimate is no
-        farther from any reference than they are from each other (it agrees with each as far as they agree; that
-        says nothing on which is nearer the truth), ``beyond the floor`` when it is farther from one of them than
-        they are from each other, ``one reference`` when there is no floor to compare with.
+        Index ``(data, method)``; one column ``to <reference> (deg)`` per reference name (NaN where
+        the rig has no such reference), ``references apart (deg)`` (the largest angle between two
+        references of the rig: the *reference floor*; NaN with one reference) and ``reading``:
+        ``within the floor`` when the estimate is no farther from any reference than they are from
+        each other (it agrees with each as far as they agree; that says nothing on which is nearer
+        the truth), ``beyond the floor`` when it is farther from one of them than they are from each
+        other, ``one reference`` when there is no floor to compare with.
     """
     names = list(dict.fromkeys(n for refs in references.values() for n in refs))
     rows = []

@@ -1,13 +1,15 @@
-"""The paper's online re-calibration claim (Sec. III-A), checked in ``notebooks/02_theorem1_convergence.ipynb``.
+"""The paper's online re-calibration claim (Sec. III-A), checked in
+``notebooks/02_theorem1_convergence.ipynb``.
 
-The paper: the sensor node is taped to the camera and moves a little against it on uneven ground, so "online
-re-calibration must be performed during the experiments, which significantly requires the efficiency and
-simplicity of the calibration algorithm. The proposed method have shown its strength meet the requirements for
-such applications." It states no requirement (rate, latency, accuracy, how a re-mount is noticed) and shows no
-online run. What can be measured is what its protocol does with the motions such a robot sees between
-re-calibrations, which are small: :func:`small_motion_study` runs the two-step method at the paper's 50 iterations
-and to its limit over motion ranges; :func:`online_recalibration_record` builds the record. Notebook 08 studies an
-online estimator built for the task (warm starts, its own radius, ``ready``, change detection).
+The paper: the sensor node is taped to the camera and moves a little against it on uneven ground, so
+"online re-calibration must be performed during the experiments, which significantly requires the
+efficiency and simplicity of the calibration algorithm. The proposed method have shown its strength
+meet the requirements for such applications." It states no requirement (rate, latency, accuracy, how
+a re-mount is noticed) and shows no online run. What can be measured is what its protocol does with
+the motions such a robot sees between re-calibrations, which are small: :func:`small_motion_study`
+runs the two-step method at the paper's 50 iterations and to its limit over motion ranges;
+:func:`online_recalibration_record` builds the record. Notebook 08 studies an online estimator built
+for the task (warm starts, its own radius, ``ready``, change detection).
 """
 from __future__ import annotations
 
@@ -25,11 +27,12 @@ __all__ = ["small_motion_study", "online_recalibration_record"]
 
 
 def small_motion_study(seed: int, n_runs: int, ranges: dict, *, iterations: int = 50) -> pd.DataFrame:
-    """The two-step error (``R^r``, deg) at ``iterations`` and at its limit, per motion range, the paper's noise.
+    """The two-step error (``R^r``, deg) at ``iterations`` and at its limit, per motion range, the
+    paper's noise.
 
-    Range ``k`` (in the order of ``ranges``: label -> ``motion_angle_range_deg``) draws ``simulate(seed + k,
-    n_runs, ...)``. Returns one row per range: ``at <iterations>`` and ``limit`` (mean angle to ``R0``), each with
-    ``_se``, and ``ratio`` (their quotient).
+    Range ``k`` (in the order of ``ranges``: label -> ``motion_angle_range_deg``) draws
+    ``simulate(seed + k, n_runs, ...)``. Returns one row per range: ``at <iterations>`` and
+    ``limit`` (mean angle to ``R0``), each with ``_se``, and ``ratio`` (their quotient).
     """
     rows = {}
     for k, (label, motions) in enumerate(ranges.items()):
@@ -51,10 +54,10 @@ def online_recalibration_record(found: pd.DataFrame, fresh: pd.DataFrame, *, sec
                                 iterations: int = 50, short_factor: float = 2.0) -> dict:
     """The record of ``online_recalibration``: ``undecidable from the text``.
 
-    ``found`` / ``fresh``: :func:`small_motion_study` on two seed sets, ranges from the smallest motions to the
-    largest. Checked first (``ValueError`` naming the claim otherwise), on both: with the smallest motions the
-    estimate at ``iterations`` is more than ``short_factor`` times as far from ``R0`` as the limit (the protocol
-    stops short), with the largest within 10 % of it.
+    ``found`` / ``fresh``: :func:`small_motion_study` on two seed sets, ranges from the smallest
+    motions to the largest. Checked first (``ValueError`` naming the claim otherwise), on both: with
+    the smallest motions the estimate at ``iterations`` is more than ``short_factor`` times as far
+    from ``R0`` as the limit (the protocol stops short), with the largest within 10 % of it.
     """
     claim, at = "online_recalibration", f"at {iterations}"
     for label, f in (("found", found), ("fresh", fresh)):

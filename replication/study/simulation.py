@@ -32,7 +32,8 @@ __all__ = ["SimulationSettings", "SimulatedProblems", "simulate", "noise_bound_f
 
 
 def noise_bound_for_angle_deg(angle_deg: float) -> float:
-    """``||v||`` bound whose noise rotation angle is ``angle_deg``: ``tan(angle)`` (see ``noise_rotations``)."""
+    """``||v||`` bound whose noise rotation angle is ``angle_deg``: ``tan(angle)`` (see
+    ``noise_rotations``)."""
     if not 0 <= angle_deg < 90:
         raise ValueError(f"angle_deg must be in [0, 90), got {angle_deg}")
     return float(np.tan(np.radians(angle_deg)))
@@ -169,7 +170,8 @@ class OpenCVProtocolProblem:
 
 
 def _opencv_pose(rng: np.random.Generator, lo_deg: float, hi_deg: float) -> np.ndarray:
-    # generatePose: axis components uniform in [-1, 1] (not normalised), angle uniform with a random sign
+    # generatePose: axis components uniform in [-1, 1] (not normalised), angle uniform with a random
+    # sign
     axis = rng.uniform(-1.0, 1.0, 3)
     theta = rng.uniform(np.radians(lo_deg), np.radians(hi_deg)) * np.sign(rng.uniform(-1.0, 1.0))
     return matrix_from_rotation_vector(theta * axis)
@@ -211,9 +213,10 @@ def opencv_protocol(rng: np.random.Generator, *, n_poses: int = 10, noise: bool 
     return OpenCVProtocolProblem(X, Rg, Rc, A, B, A_chain, B_chain)
 
 
-#: The simulation setting notebook 03 finds closest to Table I's two-step columns: motion angles uniform in
-#: 0-90 deg, every run started from the paper's R0 turned by :data:`MATCHED_START_DEG` about
-#: :data:`MATCHED_START_AXIS`. Chosen to match the paper, not stated by it (notebook 03 re-derives and asserts it).
+#: The simulation setting notebook 03 finds closest to Table I's two-step columns: motion angles
+#: uniform in 0-90 deg, every run started from the paper's R0 turned by :data:`MATCHED_START_DEG`
+#: about :data:`MATCHED_START_AXIS`. Chosen to match the paper, not stated by it (notebook 03
+#: re-derives and asserts it).
 MATCHED_MOTIONS_DEG = (0.0, 90.0)
 MATCHED_START_DEG = 150.0
 MATCHED_START_AXIS = (0.0, 0.6, 0.8)

@@ -1,15 +1,16 @@
-"""Table II: its statistics, what they measure, and the comparison with the paper's (beside Table I's
-:mod:`replication.study.table1`).
+"""Table II: its statistics, what they measure, and the comparison with the paper's (beside Table
+I's :mod:`replication.study.table1`).
 
-Table II compares the camera's relative attitude ``Delta R_c = C_k C_ref^T`` with the sensor's, projected into
-the camera frame with an estimate of ``R0``: ``R0 Delta R_i R0^T``, ``Delta R_i = I_k I_ref^T``. Its numbers
-mix two errors: that of the ``R0`` used, and that of the sensor's own attitude (the AHRS filter's) at the
-reference frame and at each time. :func:`projection_statistics` re-projects a lab run's dynamic trial with any
-``R0`` (the true one included) and any reference frame, which separates the two by intervention:
-project with the true ``R0`` (no calibration error left), move the reference frame, switch error sources off.
-Roll, pitch and yaw are the intrinsic ``z-y'-x''`` angles of a relative rotation,
-``Delta R = Rz(yaw) Ry(pitch) Rx(roll)`` (:func:`replication.core.so3.yaw_pitch_roll_deg_from_matrix`), listed roll
-first as in Table II. The lab over many seeds is :func:`replication.study.lab.seed_study`.
+Table II compares the camera's relative attitude ``Delta R_c = C_k C_ref^T`` with the sensor's,
+projected into the camera frame with an estimate of ``R0``: ``R0 Delta R_i R0^T``, ``Delta R_i = I_k
+I_ref^T``. Its numbers mix two errors: that of the ``R0`` used, and that of the sensor's own
+attitude (the AHRS filter's) at the reference frame and at each time. :func:`projection_statistics`
+re-projects a lab run's dynamic trial with any ``R0`` (the true one included) and any reference
+frame, which separates the two by intervention: project with the true ``R0`` (no calibration error
+left), move the reference frame, switch error sources off. Roll, pitch and yaw are the intrinsic
+``z-y'-x''`` angles of a relative rotation, ``Delta R = Rz(yaw) Ry(pitch) Rx(roll)``
+(:func:`replication.core.so3.yaw_pitch_roll_deg_from_matrix`), listed roll first as in Table II. The
+lab over many seeds is :func:`replication.study.lab.seed_study`.
 """
 from __future__ import annotations
 
@@ -56,7 +57,8 @@ def attitude_statistics(estimate_deg, reference_deg) -> pd.DataFrame:
 
 
 def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0) -> pd.DataFrame:
-    """Table II's statistics (:func:`attitude_statistics`) of the dynamic trial projected with ``R0``.
+    """Table II's statistics (:func:`attitude_statistics`) of the dynamic trial projected with
+    ``R0``.
 
     Parameters
     ----------
@@ -65,8 +67,8 @@ def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0)
     R0 : array_like (3, 3)
         ``camera_from_sensor`` to project with.
     reference_time : float
-        Seconds after the trial's start of the reference frame of the relative attitudes (the paper's, and
-        :func:`replication.study.lab.run_lab`'s, is the first frame).
+        Seconds after the trial's start of the reference frame of the relative attitudes (the
+        paper's, and :func:`replication.study.lab.run_lab`'s, is the first frame).
     """
     R0 = check_rotation_matrices(R0, "R0", atol=1e-6)
     t, C, Q = result.dynamic["t"], result.dynamic["camera_from_world"], result.dynamic["world_from_sensor"]
@@ -80,7 +82,8 @@ def projection_statistics(result: LabResult, R0, *, reference_time: float = 0.0)
 
 
 def reference_frame_dependence(result: LabResult, estimates: dict, times) -> pd.DataFrame:
-    """Mean difference (the bias, deg) and RMS of roll, pitch, yaw for each ``R0`` of ``estimates`` and reference time.
+    """Mean difference (the bias, deg) and RMS of roll, pitch, yaw for each ``R0`` of ``estimates``
+    and reference time.
 
     Returns
     -------

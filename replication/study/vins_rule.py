@@ -1,5 +1,5 @@
-"""VINS-Mono's online camera-IMU extrinsic *rotation* initialiser, ported to ``A X = X B``. Theory and measured
-numbers: ``docs/studies.md``, section ``replication.study.vins_rule``."""
+"""VINS-Mono's online camera-IMU extrinsic *rotation* initialiser, ported to ``A X = X B``. Theory
+and measured numbers: ``docs/studies.md``, section ``replication.study.vins_rule``."""
 from __future__ import annotations
 
 import numpy as np
@@ -13,9 +13,10 @@ __all__ = ["VinsExRotation"]
 def _eigen_quaternion_xyzw(M: np.ndarray) -> np.ndarray:
     """``Quaterniond(M).coeffs()``: Eigen's ``(x, y, z, w)`` with Eigen's choice of sign.
 
-    Eigen (``quaternionbase_assign_impl``): if ``trace > 0`` then ``w = sqrt(trace + 1) / 2 > 0``; otherwise
-    ``i`` = index of the largest diagonal entry (ties to the lower index) and coefficient ``i`` is positive.
-    Magnitudes come from :func:`replication.core.so3.quaternion_from_matrix` (``w >= 0``); only the sign is Eigen's.
+    Eigen (``quaternionbase_assign_impl``): if ``trace > 0`` then ``w = sqrt(trace + 1) / 2 > 0``;
+    otherwise ``i`` = index of the largest diagonal entry (ties to the lower index) and coefficient
+    ``i`` is positive. Magnitudes come from :func:`replication.core.so3.quaternion_from_matrix` (``w
+    >= 0``); only the sign is Eigen's.
     """
     q = quaternion_from_matrix(M)  # (w, x, y, z), w >= 0
     if np.trace(M) <= 0.0:
@@ -30,9 +31,11 @@ def _eigen_quaternion_xyzw(M: np.ndarray) -> np.ndarray:
 
 
 def _l_minus_r(q_Rc: np.ndarray, q_Rimu: np.ndarray) -> np.ndarray:
-    """``L - R`` of lines 32-47, from Eigen-order ``(x, y, z, w)`` quaternions of ``Rc[i]`` and ``Rimu[i]``.
+    """``L - R`` of lines 32-47, from Eigen-order ``(x, y, z, w)`` quaternions of ``Rc[i]`` and
+    ``Rimu[i]``.
 
-    ``L(q_Rc) x = q_Rc (x) x`` and ``R(q_Rimu) x = x (x) q_Rimu`` (Hamilton products, ``x`` in Eigen's order).
+    ``L(q_Rc) x = q_Rc (x) x`` and ``R(q_Rimu) x = x (x) q_Rimu`` (Hamilton products, ``x`` in
+    Eigen's order).
     """
     w, q = q_Rc[3], q_Rc[:3]  # L34-L35: w = Quaterniond(Rc[i]).w(); q = Quaterniond(Rc[i]).vec();
     L = np.empty((4, 4))  # L32: Matrix4d L, R;
@@ -56,7 +59,8 @@ NULL_TOL = 1e-9
 
 
 class VinsExRotation:
-    """Online rotation calibration of VINS-Mono's ``InitialEXRotation``, in our ``A X = X B`` convention.
+    """Online rotation calibration of VINS-Mono's ``InitialEXRotation``, in our ``A X = X B``
+    convention.
 
     Parameters
     ----------
@@ -74,8 +78,8 @@ class VinsExRotation:
     ready : bool
         Whether success has been declared (latched).
     ready_at : int or None
-        0-based index ``j`` of the pair whose update first declared success (``ready_at + 1`` pairs had then
-        been seen, VINS-Mono's ``frame_count``).
+        0-based index ``j`` of the pair whose update first declared success (``ready_at + 1`` pairs
+        had then been seen, VINS-Mono's ``frame_count``).
     R_ready : numpy.ndarray or None
         The estimate at that moment (VINS-Mono's ``calib_ric_result``, as ``camera_from_sensor``).
     singular_values : numpy.ndarray, shape (4,)
@@ -94,8 +98,9 @@ class VinsExRotation:
         self.window_size = int(window_size)
         self.huber_deg = float(huber_deg)
         self.ready_singular_value = float(ready_singular_value)
-        # L3-L9 (constructor): frame_count = 0; ric = Identity. The C++ pushes a dummy identity at index 0
-        # of Rc, Rc_g, Rimu and loops from i = 1; here the lists start empty and are indexed from 0.
+        # L3-L9 (constructor): frame_count = 0; ric = Identity. The C++ pushes a dummy identity at
+        # index 0 of Rc, Rc_g, Rimu and loops from i = 1; here the lists start empty and are indexed
+        # from 0.
         self.frame_count = 0
         self._Rc: list[np.ndarray] = []
         self._Rimu: list[np.ndarray] = []
@@ -117,10 +122,12 @@ class VinsExRotation:
         return self._ric.T.copy()
 
     def update(self, A_j, B_j) -> bool:
-        """Add one pair (camera motion ``A_j``, sensor motion ``B_j``), re-solve, return the C++ return value.
+        """Add one pair (camera motion ``A_j``, sensor motion ``B_j``), re-solve, return the C++
+        return value.
 
-        The return value is ``CalibrationExRotation``'s for this call; since old rows never change it stays
-        ``True`` once it has been ``True`` (see the module docstring), so it equals :attr:`ready`.
+        The return value is ``CalibrationExRotation``'s for this call; since old rows never change
+        it stays ``True`` once it has been ``True`` (see the module docstring), so it equals
+        :attr:`ready`.
 
         Raises
         ------
@@ -138,9 +145,10 @@ class VinsExRotation:
         self._Rc.append(Rc_new)  # L14: Rc.push_back(solveRelativeR(corres));
         self._Rimu.append(Rimu_new)  # L15: Rimu.push_back(delta_q_imu.toRotationMatrix());
         self._Rc_g.append(self._ric.T @ Rimu_new @ self._ric)  # L16: Rc_g.push_back(ric.inverse() * delta_q_imu * ric);
-        # Rc[i], Rimu[i] and Rc_g[i] never change once pushed, so the per-pair conversions of the loop body
-        # (L23-L26, L32-L47) are computed once here and cached; the loop then uses them.
-        # L23-L26: angular_distance = 180 / M_PI * Quaterniond(Rc[i]).angularDistance(Quaterniond(Rc_g[i]));
+        # Rc[i], Rimu[i] and Rc_g[i] never change once pushed, so the per-pair conversions of the
+        # loop body (L23-L26, L32-L47) are computed once here and cached; the loop then uses them.
+        # L23-L26: angular_distance = 180 / M_PI *
+        # Quaterniond(Rc[i]).angularDistance(Quaterniond(Rc_g[i]));
         self._angular_distance.append(float(angle_between_deg(self._Rc[-1], self._Rc_g[-1])))
         self._q_Rc.append(_eigen_quaternion_xyzw(self._Rc[-1]))  # L34-L35: Quaterniond(Rc[i])
         self._q_Rimu.append(_eigen_quaternion_xyzw(self._Rimu[-1]))  # L41: Quaterniond R_ij(Rimu[i]);
@@ -159,11 +167,12 @@ class VinsExRotation:
 
         _, s, Vt = np.linalg.svd(A)  # L52: JacobiSVD<MatrixXd> svd(A, ComputeFullU | ComputeFullV);
         x = Vt[3]  # L53: x = svd.matrixV().col(3);  (Eigen coefficient order x, y, z, w)
-        # Deviation from the C++ (deterministic replays): where the smallest singular value is repeated, the last
-        # singular vector is any vector of a subspace of dimension >= 2, which the SVD picks by rounding. This is
-        # always so for the first pair (L(q) - R(p) has its singular values in equal pairs) and again whenever the
-        # system is that degenerate. Its estimate then sets the Huber weights of the pairs that follow (line 16),
-        # so every later estimate would depend on rounding. There the port takes the quaternion of that subspace
+        # Deviation from the C++ (deterministic replays): where the smallest singular value is
+        # repeated, the last singular vector is any vector of a subspace of dimension >= 2, which
+        # the SVD picks by rounding. This is always so for the first pair (L(q) - R(p) has its
+        # singular values in equal pairs) and again whenever the system is that degenerate. Its
+        # estimate then sets the Huber weights of the pairs that follow (line 16), so every later
+        # estimate would depend on rounding. There the port takes the quaternion of that subspace
         # nearest the identity (the estimate's start, line 7).
         null = Vt[s - s[-1] <= NULL_TOL * max(s[0], 1e-300)]
         if len(null) >= 2:

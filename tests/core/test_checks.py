@@ -1,7 +1,8 @@
 """The rotation and number checks of :mod:`replication.core.checks` at their boundaries: ``atol`` in
-``(0, MAX_ROTATION_ATOL]``, orthonormality and determinant at exactly ``atol``, the first offending index and the
-counts in the messages, numbers strictly or not above a minimum, and the per-sample check of one flat rotation.
-Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+``(0, MAX_ROTATION_ATOL]``, orthonormality and determinant at exactly ``atol``, the first offending
+index and the counts in the messages, numbers strictly or not above a minimum, and the per-sample
+check of one flat rotation. Mutation testing (scripts/mutation) found these unguarded by the fast
+tests."""
 import math
 
 import numpy as np
@@ -18,7 +19,8 @@ from replication.core.checks import (
 
 
 def _stretched(eps):
-    """A matrix with ||R^T R - I||_F = eps exactly in its (0, 0) entry: diag(sqrt(1 + eps), 1, 1)."""
+    """A matrix with ||R^T R - I||_F = eps exactly in its (0, 0) entry: diag(sqrt(1 + eps), 1,
+    1)."""
     return np.diag([math.sqrt(1.0 + eps), 1.0, 1.0])
 
 
@@ -76,8 +78,8 @@ def test_a_reflection_is_named_with_its_index_and_determinant():
 
 
 def test_the_determinant_test_uses_atol():
-    # orthonormal to rounding but det off: a matrix scaled along one axis fails the first test; here a tiny
-    # non-orthogonal shear passes it with the loosest atol while det stays 1 + O(shear^2)
+    # orthonormal to rounding but det off: a matrix scaled along one axis fails the first test; here
+    # a tiny non-orthogonal shear passes it with the loosest atol while det stays 1 + O(shear^2)
     s = 1e-3
     M = np.array([[1.0, s, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     ortho = np.linalg.norm(M.T @ M - np.eye(3))

@@ -37,9 +37,10 @@ def test_cost_zero_at_truth_and_kron_form_exact_for_any_matrix(problem, rng):
 
 
 def test_batched_weights_are_normalised_per_problem(rng):
-    """A (2, 3) batch of problems, each with its own weights on its own scale (1e-3 .. 1e3): every K equals the
-    problem's own ``sum_j w_j kron(B_j, A_j) / sum_j w_j``, as if computed alone (a normalisation over the whole
-    batch would scale each K by its share of the batch's total weight)."""
+    """A (2, 3) batch of problems, each with its own weights on its own scale (1e-3 .. 1e3): every K
+    equals the problem's own ``sum_j w_j kron(B_j, A_j) / sum_j w_j``, as if computed alone (a
+    normalisation over the whole batch would scale each K by its share of the batch's total
+    weight)."""
     J = 7
     A, B = so3.random_rotations(rng, (2, 2, 3, J))  # unrelated A and B: any scale error in K shows
     w = rng.uniform(0.1, 1.0, (2, 3, J)) * np.logspace(-3, 3, 6).reshape(2, 3, 1)

@@ -1,8 +1,9 @@
-"""The batched small-matrix kernels (replication/core/kernels.py) against the LAPACK path they replace.
+"""The batched small-matrix kernels (replication/core/kernels.py) against the LAPACK path they
+replace.
 
-Every kernel is compared with ``method="lapack"`` (today's ``numpy.linalg`` path) to 1e-12 on random, near-rotation,
-rank-deficient, repeated-singular-value and reflection inputs at batch shapes (), (n,) and (a, b); each fallback
-threshold is tested just below and just above.
+Every kernel is compared with ``method="lapack"`` (today's ``numpy.linalg`` path) to 1e-12 on
+random, near-rotation, rank-deficient, repeated-singular-value and reflection inputs at batch shapes
+(), (n,) and (a, b); each fallback threshold is tested just below and just above.
 """
 import numpy as np
 import pytest
@@ -31,7 +32,8 @@ MODES = ["rotation", "orthogonal", "up_to_sign"]
 
 
 def _svd_compose(rng, shape, sigma):
-    """Matrices ``U diag(sigma) V^T`` with Haar-random ``U``, ``V`` (det +1 each) and the given singular values."""
+    """Matrices ``U diag(sigma) V^T`` with Haar-random ``U``, ``V`` (det +1 each) and the given
+    singular values."""
     U, V = random_rotations(rng, shape), random_rotations(rng, shape)
     return U @ (np.asarray(sigma, dtype=float)[..., None] * np.swapaxes(V, -1, -2))
 
@@ -91,7 +93,8 @@ def _ratio(M):
 
 
 def _diag_with_ratio(target):
-    """``diag(1, 1, t)`` whose ratio ``2 t / (2 + t^2)^1.5`` equals ``target`` (bisection in ``t``)."""
+    """``diag(1, 1, t)`` whose ratio ``2 t / (2 + t^2)^1.5`` equals ``target`` (bisection in
+    ``t``)."""
     lo, hi = 0.0, 1.0
     for _ in range(200):
         t = 0.5 * (lo + hi)
@@ -100,7 +103,8 @@ def _diag_with_ratio(target):
 
 
 def _lapack_rows(monkeypatch, name):
-    """Record how many matrices each call of the LAPACK fallback ``name`` of the kernels module received."""
+    """Record how many matrices each call of the LAPACK fallback ``name`` of the kernels module
+    received."""
     seen = []
     original = getattr(kernels, name)
 
@@ -401,7 +405,8 @@ def test_quaternion_from_rotation_vector_is_quaternion_from_matrix_without_the_r
 
 
 def test_cofactors_are_the_explicit_formula_to_the_last_bit(rng):
-    """Seven passes over (9, n) instead of 27 over (n,): the same products and differences in the same order."""
+    """Seven passes over (9, n) instead of 27 over (n,): the same products and differences in the
+    same order."""
     x = rng.normal(size=(9, 1000))
     a, b, c, d, e, f, g, h, i = x
     want = np.stack([e * i - f * h, f * g - d * i, d * h - e * g, c * h - b * i, a * i - c * g, b * g - a * h,
@@ -457,8 +462,9 @@ def test_top_eigenvector3_falls_back_below_its_gap_bound_only(factor, to_lapack,
 
 @pytest.mark.parametrize("mode", MODES)
 def test_polar_factor_one_block_path_is_the_gathered_path_to_the_last_bit(mode, rng):
-    """A batch whose matrices are all safe skips the gather and scatter; one unsafe matrix more (to LAPACK) sends
-    the same matrices through the gathered path: the Newton iterates are the same to the last bit."""
+    """A batch whose matrices are all safe skips the gather and scatter; one unsafe matrix more (to
+    LAPACK) sends the same matrices through the gathered path: the Newton iterates are the same to
+    the last bit."""
     X = _matrices("scaled_unit_vector", rng, (MIN_BATCH,))
     alone = polar_factor(X, mode)
     with_singular = polar_factor(np.concatenate([X, np.zeros((1, 3, 3))]), mode)

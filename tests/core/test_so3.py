@@ -154,15 +154,18 @@ def test_yaw_pitch_roll_order_is_in_the_name():
     assert so3.yaw_pitch_roll_deg_from_matrix(np.broadcast_to(R, (4, 5, 3, 3))).shape == (4, 5, 3)
 
 
-# ----------------------------------------------------------------------------------------- conversions, round trips
+# -----------------------------------------------------------------------------------------
+# conversions, round trips
 #
-# Measured (NumPy/SciPy of requirements.lock, 2 000 rotations per band): every round trip below is within 1.1e-15
-# (absolute, for vectors of norm <= pi and for matrix entries) and, near angle 0, within 4e-16 of the angle
-# (relative). The tolerances are 1e-14 absolute and 1e-14 relative: 10 to 25 times what is measured.
+# Measured (NumPy/SciPy of requirements.lock, 2 000 rotations per band): every round trip below is
+# within 1.1e-15 (absolute, for vectors of norm <= pi and for matrix entries) and, near angle 0,
+# within 4e-16 of the angle (relative). The tolerances are 1e-14 absolute and 1e-14 relative: 10 to
+# 25 times what is measured.
 ABS, REL = 1e-14, 1e-14
 
-#: Angle bands (rad): near 0 (1e-12 .. 1e-6), generic (log-uniform 1e-6 .. 1, and uniform 1e-3 .. pi - 1e-3), and
-#: near a half-turn (pi - 1e-9 .. pi, where the axis no longer follows from the antisymmetric part of R).
+#: Angle bands (rad): near 0 (1e-12 .. 1e-6), generic (log-uniform 1e-6 .. 1, and uniform 1e-3 .. pi
+#: - 1e-3), and near a half-turn (pi - 1e-9 .. pi, where the axis no longer follows from the
+#: antisymmetric part of R).
 BANDS = {
     "near 0": lambda rng, n: 10 ** rng.uniform(-12, -6, n),
     "small": lambda rng, n: 10 ** rng.uniform(-6, 0, n),
@@ -200,7 +203,8 @@ def test_rotation_vector_from_matrix_inverts_matrix_from_rotation_vector(rng, ba
 
 
 def test_rotation_vector_from_matrix_at_a_half_turn_is_either_sign(rng):
-    """At exactly pi, ``w`` and ``-w`` are one rotation: ``log`` may return either, but exp(log R) is R."""
+    """At exactly pi, ``w`` and ``-w`` are one rotation: ``log`` may return either, but exp(log R)
+    is R."""
     w = _rotvecs(rng, "generic", (50,))
     w *= np.pi / np.linalg.norm(w, axis=-1, keepdims=True)
     w = np.concatenate([w, np.pi * np.eye(3), -np.pi * np.eye(3)])
@@ -235,7 +239,8 @@ def test_quaternion_round_trips_and_sign(rng, band):
 
 
 def test_quaternion_order_is_scalar_first():
-    """A quarter-turn about z is (cos 45, 0, 0, sin 45); read scalar-last it would be another rotation."""
+    """A quarter-turn about z is (cos 45, 0, 0, sin 45); read scalar-last it would be another
+    rotation."""
     R = so3.matrix_from_rotation_vector(np.array([0.0, 0.0, np.pi / 2]))
     np.testing.assert_allclose(so3.quaternion_from_matrix(R), [np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)], atol=ABS)
     np.testing.assert_allclose(so3.matrix_from_quaternion([0.0, 1.0, 0.0, 0.0]), np.diag([1.0, -1.0, -1.0]), atol=ABS)
@@ -254,7 +259,8 @@ def test_yaw_pitch_roll_round_trips(rng):
     n = 400
     ypr = np.column_stack([rng.uniform(-180, 180, n), rng.uniform(-89.9, 89.9, n), rng.uniform(-180, 180, n)])
     R = so3.matrix_from_euler("ZYX", ypr, degrees=True)
-    # measured: 4e-13 deg (the angles of a rotation 0.1 deg from gimbal lock are ill-conditioned); bound 1e-10 deg
+    # measured: 4e-13 deg (the angles of a rotation 0.1 deg from gimbal lock are ill-conditioned);
+    # bound 1e-10 deg
     np.testing.assert_allclose(so3.yaw_pitch_roll_deg_from_matrix(R), ypr, rtol=0, atol=1e-10)
     # any rotation, gimbal lock included: the angles give the rotation back
     R = np.concatenate([so3.random_rotations(rng, n), so3.matrix_from_euler("ZYX", [[10.0, 90.0, 0.0], [0.0, -90.0,
@@ -284,8 +290,9 @@ def test_conversions_keep_batch_shapes(rng, shape):
 
 
 def test_rotation_vector_from_matrix_half_turns_with_signed_zero_entries_give_no_negative_zero():
-    """Beyond 120 deg the axis is a column of (R + R^T)/2 - c I; its off-diagonal entries are x - c * 0 (c < 0), which
-    turns an entry of -0.0 into 0.0: the rotation vector of diag(1, -1, -1) written with -0.0 is (pi, 0, 0)."""
+    """Beyond 120 deg the axis is a column of (R + R^T)/2 - c I; its off-diagonal entries are x - c
+    * 0 (c < 0), which turns an entry of -0.0 into 0.0: the rotation vector of diag(1, -1, -1)
+    written with -0.0 is (pi, 0, 0)."""
     R = np.array([[1.0, -0.0, -0.0], [-0.0, -1.0, -0.0], [-0.0, -0.0, -1.0]])
     w = so3.rotation_vector_from_matrix(R)
     assert np.array_equal(w, [np.pi, 0.0, 0.0]) and not np.signbit(w).any()

@@ -50,16 +50,17 @@ from replication.study.simulation import opencv_protocol, simulate
 from replication.testing import assert_rotations_close
 
 ALL = available()
-#: Noise-free precision each solver guarantees, as ||rvec_est - rvec_true|| (OpenCV's metric; about the
-#: Frobenius error). OpenCV's own threshold is 1e-8. SLSQP stops on its objective tolerance (ftol = 1e-12),
-#: which leaves 1e-7 to 1e-6 (smaller motions, less curvature: more); local solvers are held to
-#: LOCAL_ANGLE_TOL_DEG from the certified minimiser, beyond which they warn.
+#: Noise-free precision each solver guarantees, as ||rvec_est - rvec_true|| (OpenCV's metric; about
+#: the Frobenius error). OpenCV's own threshold is 1e-8. SLSQP stops on its objective tolerance
+#: (ftol = 1e-12), which leaves 1e-7 to 1e-6 (smaller motions, less curvature: more); local solvers
+#: are held to LOCAL_ANGLE_TOL_DEG from the certified minimiser, beyond which they warn.
 PRECISION = {name: 1e-8 for name in ALL} | {
     name: 1.5 * np.sqrt(2) * np.radians(LOCAL_ANGLE_TOL_DEG) for name in ALL if solver_info(name).local}
 
 
 def _pairs_for(method, problem):
-    """OpenCV's wrappers get the consecutive pairs (from which OpenCV rebuilds its own poses and pairs)."""
+    """OpenCV's wrappers get the consecutive pairs (from which OpenCV rebuilds its own poses and
+    pairs)."""
     if method.startswith("opencv_"):
         return problem.A_chain, problem.B_chain
     return problem.A, problem.B
@@ -80,7 +81,8 @@ def _rvec_error(R, X):
     return float(np.linalg.norm(so3.rotation_vector_from_matrix(R) - so3.rotation_vector_from_matrix(X)))
 
 
-# ----------------------------------------------------------------------------------------- OpenCV protocol
+# ----------------------------------------------------------------------------------------- OpenCV
+# protocol
 
 @pytest.fixture(scope="module")
 def opencv_problems():
@@ -108,7 +110,8 @@ def test_opencv_protocol_every_answer_is_accurate_or_flagged(method, opencv_prob
 
 @pytest.mark.parametrize("method", ["two_step_right", "two_step_left"])
 def test_opencv_protocol_two_step_reaches_opencv_threshold_by_default(method, opencv_problems):
-    """With 50 iterations ~97 % of these noise-free problems missed 1e-8; the default runs to the limit."""
+    """With 50 iterations ~97 % of these noise-free problems missed 1e-8; the default runs to the
+    limit."""
     errs = []
     for clean, _ in opencv_problems:
         with warnings.catch_warnings():
@@ -122,8 +125,9 @@ def test_opencv_protocol_two_step_reaches_opencv_threshold_by_default(method, op
 
 
 def test_opencv_regression_24871_orthogonal_start():
-    """OpenCV's regression data for issue 24871: R_cam2gripper is a 120 deg rotation, so the identity start
-    is orthogonal to it (<I, R0> = tr R0 = 0). Every solver recovers it to 1e-10, or says why not."""
+    """OpenCV's regression data for issue 24871: R_cam2gripper is a 120 deg rotation, so the
+    identity start is orthogonal to it (<I, R0> = tr R0 = 0). Every solver recovers it to 1e-10, or
+    says why not."""
     X = np.array([[0, 0, -1], [1, 0, 0], [0, -1, 0]], dtype=float)
     Rc = np.array([
         [[0.04964505493834381, 0.5136826827431226, 0.8565427426404346],
@@ -164,7 +168,8 @@ def test_opencv_regression_24871_orthogonal_start():
         assert error is None, (method, error)
         ok = so3.frobenius_error(R, X) < max(1e-10, PRECISION[method])
         assert ok or caught, (method, so3.frobenius_error(R, X))
-    # the paper's iteration from the identity cannot leave the orthogonal complement: 50 iterations end far off
+    # the paper's iteration from the identity cannot leave the orthogonal complement: 50 iterations
+    # end far off
     with pytest.warns(ConvergenceWarning, match=r"two_step stopped 90 deg from its fixed point after 50 iterations"):
         assert so3.angle_between_deg(two_step(A, B, iterations=50).R_left, X) > 45
     with pytest.warns(IterationCapWarning, match="started orthogonal to the limit"):
@@ -172,7 +177,8 @@ def test_opencv_regression_24871_orthogonal_start():
     assert res.closed_form and so3.frobenius_error(res.R_left, X) < 1e-12
 
 
-# ----------------------------------------------------------------------------------------- noise-free sets
+# -----------------------------------------------------------------------------------------
+# noise-free sets
 
 @pytest.mark.parametrize("J, angles", [(3, None), (3, (150.0, 180.0)), (4, (0.0, 3.0)), (20, None)])
 def test_noise_free_any_R0_every_solver_exact_or_refuses(J, angles):
@@ -203,7 +209,8 @@ def test_two_step_with_two_pairs_is_refused_with_the_reason(rng):
             solve(method, A, B)
     with pytest.raises(ValueError, match="J = 2 motion pairs.*triple"):
         two_step(A, B)
-    # the reason, shown: two starts give two different zero-residual-free answers, neither R0 in general
+    # the reason, shown: two starts give two different zero-residual-free answers, neither R0 in
+    # general
     starts = so3.random_rotations(rng, 2)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
@@ -215,7 +222,8 @@ def test_two_step_with_two_pairs_is_refused_with_the_reason(rng):
 
 
 def test_two_step_repeated_top_singular_value_is_refused(rng):
-    """J = 3 whose relative motions B_1^T B_2 and B_1^T B_3 share an axis: sigma_1 of K is repeated."""
+    """J = 3 whose relative motions B_1^T B_2 and B_1^T B_3 share an axis: sigma_1 of K is
+    repeated."""
     R0 = so3.random_rotations(rng, ())
     B1 = so3.random_rotations(rng, ())
     c = np.array([0.0, 0.6, 0.8])
@@ -252,11 +260,13 @@ def test_two_step_auto_matches_the_paper_protocol_once_converged(rng):
     assert_rotations_close(auto.R_left, two_step_fixed_point(sim.A, sim.B)[1], 5e-10, name="auto.R_left")
 
 
-# ----------------------------------------------------------------------------------------- global certificate
+# ----------------------------------------------------------------------------------------- global
+# certificate
 
 @pytest.fixture(scope="module")
 def outlier_problems():
-    """Small J with 20-40 % outlier pairs: where Newton from the relaxed start stops on non-global minima."""
+    """Small J with 20-40 % outlier pairs: where Newton from the relaxed start stops on non-global
+    minima."""
     out = []
     for J, fraction in ((3, 0.3), (4, 0.4), (6, 0.3)):
         sim = simulate(100 + J, 150, n_motions=J)
@@ -276,7 +286,8 @@ def test_certificate_is_global_on_outlier_problems(outlier_problems):
         worse = newton.cost > res.cost + 1e-9
         local_only += int(worse.sum())
         assert newton.local_minimum[worse].all()  # those were genuine, non-global local minima
-        # independent check: no start of 64 random ones finds a lower minimum than the certified bound
+        # independent check: no start of 64 random ones finds a lower minimum than the certified
+        # bound
         starts = so3.random_rotations(np.random.default_rng(0), (64,) + A.shape[:1])
         g = chordal_newton(handeye.kronecker_operator(A, B), starts)[1]
         assert np.all(2 * A.shape[-3] * (3 - g) >= res.lower_bound - 1e-9)
@@ -306,7 +317,8 @@ def test_solution_reports_the_certificate_for_every_method():
 
 
 def test_sqp_from_far_starts_warns_with_a_local_minimum_warning():
-    """TUM-VI-like R0 (a near half-turn) and the identity start: SLSQP lands on wrong stationary points."""
+    """TUM-VI-like R0 (a near half-turn) and the identity start: SLSQP lands on wrong stationary
+    points."""
     sim = simulate(2, 30, random_R0=True)
     far = np.array([so3.angle_between_deg(np.eye(3), R) for R in sim.R0]) > 150
     with warnings.catch_warnings():
@@ -341,7 +353,8 @@ def test_uncertified_answers_warn(monkeypatch, outlier_problems):
     assert not res.global_optimum.all() and set(res.certificate[~res.global_optimum]) == {"none"}
 
 
-# ----------------------------------------------------------------------------------------- the public doors
+# ----------------------------------------------------------------------------------------- the
+# public doors
 
 EXPORTED = {
     "two_step": two_step, "two_step_fixed_point": two_step_fixed_point, "sqp": sqp,
@@ -419,8 +432,9 @@ def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
 
 
 def test_singular_values_and_top_vectors_from_one_eigh_match_the_svd(rng):
-    """One eigh of K^T K stands for the SVD of K: the top pair to rounding, the small values within eps sigma_1^2 /
-    sigma_k (what their docstring states), the limit's vectors paired as K v1 = sigma_1 u1."""
+    """One eigh of K^T K stands for the SVD of K: the top pair to rounding, the small values within
+    eps sigma_1^2 / sigma_k (what their docstring states), the limit's vectors paired as K v1 =
+    sigma_1 u1."""
     m = Motions(*_noisy_batch(rng, J=3))  # J = 3: small singular values down to about 1e-5
     U, s, Vt = np.linalg.svd(m.K)
     sv = m.singular_values
@@ -485,7 +499,8 @@ def test_chordal_observability_is_computed_when_read(rng, monkeypatch):
 MIN_BATCH_SOLVE = 300
 
 
-# ----------------------------------------------------------------------------------------- from the referee's report
+# ----------------------------------------------------------------------------------------- from the
+# referee's report
 
 def _half_turn(n):
     n = np.asarray(n, dtype=float)
@@ -493,7 +508,8 @@ def _half_turn(n):
 
 
 def test_half_turn_sign_flips_are_flagged_not_silent():
-    """Exact half-turns: the log map / quaternion sign is arbitrary, and the classic closed forms can flip."""
+    """Exact half-turns: the log map / quaternion sign is arbitrary, and the classic closed forms
+    can flip."""
     R0 = Rotation.from_rotvec([0, 0, np.pi / 2]).as_matrix()
     axes = np.array([[1, 0, 0], [0, 1, 2], [2, 1, 3.0]])
     A = np.stack([_half_turn(a) for a in axes])
@@ -517,7 +533,8 @@ def test_paper_variant_reflection_is_flagged_and_never_certified(rng):
 
 
 def test_a_second_exact_solution_is_refused():
-    """Motions about n plus half-turns about axes perpendicular to n: R0 Rot(n, 180 deg) solves eq. (7) too."""
+    """Motions about n plus half-turns about axes perpendicular to n: R0 Rot(n, 180 deg) solves eq.
+    (7) too."""
     R0 = Rotation.from_rotvec([0.3, 0.2, 1.0]).as_matrix()
     A = np.stack([Rotation.from_rotvec([0, 0, 1.2]).as_matrix(), _half_turn([1, 0, 0]), _half_turn([1, 1, 0])])
     B = R0.T @ A @ R0
@@ -609,7 +626,8 @@ def test_exported_wrapper_warnings_point_at_the_caller(rng):
 
 
 def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
-    """SLSQP is not scale-invariant: the objective's scale (unstated in the paper) changes its path, not its answer."""
+    """SLSQP is not scale-invariant: the objective's scale (unstated in the paper) changes its path,
+    not its answer."""
     from replication.core.solvers import sqp
     from replication.study.simulation import simulate
 
@@ -618,7 +636,8 @@ def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     assert_rotations_close(as_printed.R, per_pair.R, 1e-3)
     # SQPResult.cost is eq. (8) as printed either way: the same at the common minimiser ...
     assert np.allclose(as_printed.cost[..., -1], per_pair.cost[..., -1], rtol=1e-4)
-    # ... but the first step differs by orders of magnitude (the identity Hessian guess meets another scale)
+    # ... but the first step differs by orders of magnitude (the identity Hessian guess meets
+    # another scale)
     assert (as_printed.cost[..., 0] > 100 * per_pair.cost[..., 0]).all()
     for bad in ("mean", 0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="cost must be"):
@@ -626,7 +645,8 @@ def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
 
 
 def test_newton_hessian_products_equal_the_contraction(rng):
-    """The Riemannian Hessian's D M D^T is taken as two matrix products: the contraction it replaced, to rounding."""
+    """The Riemannian Hessian's D M D^T is taken as two matrix products: the contraction it
+    replaced, to rounding."""
     from replication.core.solvers.certificate import _GENERATORS, _derivatives
 
     R = so3.random_rotations(rng, (200,))
@@ -638,8 +658,9 @@ def test_newton_hessian_products_equal_the_contraction(rng):
     want = 2.0 * np.einsum("...ka,...ab,...lb->...kl", D, M, D) + 2.0 * (Ps - tr * np.eye(3))
     assert np.max(np.abs(_derivatives(M, R)[2] - want)) <= 1e-13 * np.max(np.abs(want))
 
-# ----------------------------------------------------------------------------------------------------
-# Solver-specific properties of the baselines beyond the shared contract (tests/core/test_solvers_registry.py).
+# --------------------------------------------------------------------------------------------------
+# Solver-specific properties of the baselines beyond the shared contract
+# (tests/core/test_solvers_registry.py).
 
 
 @pytest.fixture(scope="module")

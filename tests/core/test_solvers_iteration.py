@@ -48,7 +48,8 @@ def test_batched_equals_looped(rng):
 
 
 def test_the_default_start_is_the_identity(problem):
-    """``init=None`` is documented as the identity: the same iterates, bit for bit; another start gives others."""
+    """``init=None`` is documented as the identity: the same iterates, bit for bit; another start
+    gives others."""
     _, A, B = problem
     default, identity = two_step(A, B, iterations=20), two_step(A, B, iterations=20, init=np.eye(3))
     assert np.array_equal(default.left, identity.left) and np.array_equal(default.cost_right, identity.cost_right)
@@ -134,7 +135,8 @@ def test_too_few_motions_and_nan(problem):
 def test_no_underflow_when_sigma1_is_well_below_one(rng):
     """Inconsistent pairs make sigma_1(K) < 1: the printed iterates shrink like sigma_1^(2n).
 
-    Without rescaling they reach 0 after a few hundred iterations and the projection returns garbage.
+    Without rescaling they reach 0 after a few hundred iterations and the projection returns
+    garbage.
     """
     A = random_rotations(rng, (2, 20))
     B = random_rotations(rng, (2, 20))  # unrelated: sigma_1(K) around 0.5

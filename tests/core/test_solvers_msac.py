@@ -1,5 +1,5 @@
-"""MSAC + IRLS (``robust``, :mod:`replication.core.solvers.msac`): its hypotheses drawn in O(J) memory above a cap,
-bit-identical to the full enumeration below it.
+"""MSAC + IRLS (``robust``, :mod:`replication.core.solvers.msac`): its hypotheses drawn in O(J)
+memory above a cap, bit-identical to the full enumeration below it.
 
 Figures behind the limits: ``benchmarks/bench_bounded.py``.
 """
@@ -27,7 +27,8 @@ def _outlier_problem(J, *, share=0.3, noise_deg=0.5, seed=0):
 
 
 def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_iterations=10):
-    """``robust`` as it was before the cost was bounded (all pairs listed, one (..., H, J) residual array)."""
+    """``robust`` as it was before the cost was bounded (all pairs listed, one (..., H, J) residual
+    array)."""
     from replication.core.handeye import kronecker_operator
     from replication.core.solvers.certificate import chordal_newton
 
@@ -46,7 +47,8 @@ def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_
     return R
 
 
-# --- robust ------------------------------------------------------------------------------------------------------
+# --- robust
+# --------------------------------------------------------------------------------------------------
 
 def test_sample_positions_decode_to_the_itertools_order():
     for J in (3, 4, 17, 200, 1001):

@@ -1,4 +1,5 @@
-"""The OpenCV wrappers (:mod:`replication.core.solvers.opencv`): their size limit, refused before OpenCV is called.
+"""The OpenCV wrappers (:mod:`replication.core.solvers.opencv`): their size limit, refused before
+OpenCV is called.
 
 Figures behind the limit: ``benchmarks/bench_bounded.py``.
 """

@@ -1,5 +1,5 @@
-"""``chordal_optimal`` (``core/solvers/optimal.py``): the same answer type as ``solve(full_output=True)``, and every
-answer says how its lower bound was certified."""
+"""``chordal_optimal`` (``core/solvers/optimal.py``): the same answer type as
+``solve(full_output=True)``, and every answer says how its lower bound was certified."""
 import numpy as np
 import pytest
 

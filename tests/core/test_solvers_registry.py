@@ -69,11 +69,13 @@ def test_solve_refuses_degenerate_motion(rng):
         solve("two_step_right", A, R0.T @ A @ R0)
 
 
-# ------------------------------------------------------------------ what a core returns is checked at the door
+# ------------------------------------------------------------------ what a core returns is checked
+# at the door
 
 @pytest.fixture
 def bad_core():
-    """``make(core, **register_options) -> name``: registers ``core`` under a unique name, removed afterwards."""
+    """``make(core, **register_options) -> name``: registers ``core`` under a unique name, removed
+    afterwards."""
     names = []
 
     def make(core, **options):
@@ -122,7 +124,8 @@ def test_a_core_answer_breaking_the_contract_is_refused(bad_core, two_noisy, ans
 
 
 def _stretched(R, violation):
-    """``R diag(1 + e, 1, 1)`` with ``||(.)^T (.) - I||_F = 2 e + e^2 = violation`` (and ``|det - 1| = e``)."""
+    """``R diag(1 + e, 1, 1)`` with ``||(.)^T (.) - I||_F = 2 e + e^2 = violation`` (and ``|det - 1|
+    = e``)."""
     e = np.sqrt(1.0 + violation) - 1.0
     return R @ np.diag([1.0 + e, 1.0, 1.0])
 
@@ -142,7 +145,8 @@ def test_answer_tolerance_boundary(bad_core, two_noisy):
 
 @pytest.mark.parametrize("local", [False, True])
 def test_a_reflection_is_warned_not_refused_and_never_certified(bad_core, two_noisy, local):
-    """``-R*`` (det -1) has exactly the cost (8) of the minimiser ``R*``: only its determinant tells it apart."""
+    """``-R*`` (det -1) has exactly the cost (8) of the minimiser ``R*``: only its determinant tells
+    it apart."""
     A, B, X = two_noisy
     name = bad_core(lambda motions, **_: _edited(X, 1, -X[1]), local=local)
     with pytest.warns(AccuracyWarning, match=rf"{name} returned a reflection \(det -1\), not a rotation, in 1 of 2"):
@@ -172,7 +176,8 @@ def test_a_core_answer_is_returned_as_floats(bad_core, two_noisy):
     assert R.dtype == float and np.array_equal(R, np.broadcast_to(np.eye(3), (2, 3, 3)))
 
 
-# ------------------------------------------------------------------ the tolerance of the rotation test is checked
+# ------------------------------------------------------------------ the tolerance of the rotation
+# test is checked
 
 @pytest.mark.parametrize("atol, match", [
     (float("nan"), r"atol must be a finite number, got nan"),
@@ -201,7 +206,8 @@ def test_motions_accept_an_atol_in_range(problem, atol):
         Motions(2 * A, B, atol=atol)
 
 
-# ------------------------------------------------------------------ the same checks for every re-solve
+# ------------------------------------------------------------------ the same checks for every
+# re-solve
 
 @pytest.mark.parametrize("answer, match", [
     (lambda X: 2 * X, r"returned a matrix that is not a rotation on replicates at batch index \(0,\): .*det R = 8"),
@@ -233,8 +239,8 @@ def test_checked_core_returns_the_masks_of_non_rotations(bad_core, two_noisy):
 # ------------------------------------------------ one axis plus a single turn: every solver warns
 
 def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn_deg=0.0):
-    """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one before it
-    ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
+    """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one
+    before it ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
     R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.3, 0.8]))
     w = np.zeros((J, 3))
     w[:, 2] = np.radians(rng.uniform(10.0, 40.0, J))
@@ -249,7 +255,8 @@ def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn
 
 @pytest.mark.parametrize("method", sorted(available()))
 def test_every_registered_solver_warns_when_one_pair_carries_the_dominant_axis(rng, method):
-    """The OpenCV wrappers included: opencv_tsai is 0.5 deg off here (chordal_optimal 0.07) and was silent."""
+    """The OpenCV wrappers included: opencv_tsai is 0.5 deg off here (chordal_optimal 0.07) and was
+    silent."""
     from replication.core.solvers import ObservabilityWarning
 
     _, A, B = _one_axis_plus_one_turn(rng)
@@ -261,8 +268,9 @@ def test_every_registered_solver_warns_when_one_pair_carries_the_dominant_axis(r
 
 
 def test_the_one_pair_warning_at_its_boundary(rng):
-    """Noise-free, so the spread without the turn is that of the second turn about y alone: 20 pairs, the second
-    turn of 4.3 deg gives sqrt(4.3^2 / 19) = 0.99 deg (warned), 4.4 deg gives 1.01 deg (not)."""
+    """Noise-free, so the spread without the turn is that of the second turn about y alone: 20
+    pairs, the second turn of 4.3 deg gives sqrt(4.3^2 / 19) = 0.99 deg (warned), 4.4 deg gives 1.01
+    deg (not)."""
     from replication.core.motions import Motions
     from replication.core.solvers import ObservabilityWarning
 
@@ -293,10 +301,11 @@ def test_opencvs_own_door_warns_too(rng):
     with pytest.warns(ObservabilityWarning, match="rest on one pair for the rotation about their dominant axis"):
         calibrate_hand_eye(A, B, "CALIB_HAND_EYE_TSAI")
 
-# ----------------------------------------------------------------------------------------------------
-# The answer checks of :mod:`replication.core.solvers._registry` at their boundaries: which local answers get a
-# :class:`LocalMinimumWarning` or a :class:`ConvergenceWarning` (cost gap, angle, gradient), and when a closed form's
-# answer is grossly off. Mutation testing (scripts/mutation) found these rules unguarded by the fast tests.
+# --------------------------------------------------------------------------------------------------
+# The answer checks of :mod:`replication.core.solvers._registry` at their boundaries: which local
+# answers get a :class:`LocalMinimumWarning` or a :class:`ConvergenceWarning` (cost gap, angle,
+# gradient), and when a closed form's answer is grossly off. Mutation testing (scripts/mutation)
+# found these rules unguarded by the fast tests.
 
 
 J = 10
@@ -325,7 +334,8 @@ def _warned(fn, *args, **kwargs):
 
 @pytest.fixture
 def crafted(monkeypatch):
-    """check_local_answer with the gap to f*, f*'s bound and the angle to the minimiser set by the test."""
+    """check_local_answer with the gap to f*, f*'s bound and the angle to the minimiser set by the
+    test."""
     state = {}
 
     def gap_to_global(motions, R, cert=None):
@@ -347,12 +357,13 @@ def test_local_answer_boundaries_of_gap_and_angles(crafted):
     tol = _tolerance(lower)
     crafted["lower"] = np.full(6, lower)
     wrong, short_tol = _registry.WRONG_POINT_DEG, _registry.LOCAL_ANGLE_TOL_DEG
-    #                         gap      angle: off, short, off,  at the point tol, short at angle tol, clean
+    # gap      angle: off, short, off,  at the point tol, short at angle tol, clean
     crafted["gap"] = np.array([tol * 1.001, tol, tol * 1.001, tol * 1.001, 0.0, 0.0])
     crafted["angle"] = np.array([2 * wrong, 2 * wrong, wrong, wrong * 1.0001, short_tol, short_tol * 1.01])
     flagged, caught = _warned(_registry.check_local_answer, m, R, "fake")
-    # 0: above the gap tolerance and beyond 1 deg -> another point; 1: at the tolerance -> only stopped short;
-    # 2: at exactly 1 deg -> short; 3: beyond 1 deg -> off; 4: at exactly the angle tolerance -> clean; 5: short
+    # 0: above the gap tolerance and beyond 1 deg -> another point; 1: at the tolerance -> only
+    # stopped short; 2: at exactly 1 deg -> short; 3: beyond 1 deg -> off; 4: at exactly the angle
+    # tolerance -> clean; 5: short
     assert flagged.tolist() == [True, True, True, True, False, True]
     kinds = [c for c, _ in caught]
     assert kinds == [LocalMinimumWarning, ConvergenceWarning]
@@ -373,7 +384,8 @@ def test_gradient_tells_a_stop_before_converging_from_another_stationary_point(c
     crafted["gap"] = np.ones(4)
     crafted["angle"] = np.full(4, 90.0)
     tol = _registry.STATIONARY_TOL
-    # |grad (8)| / J = 2 |grad g|: 0 and exactly the tolerance are stationary; above it, still moving
+    # |grad (8)| / J = 2 |grad g|: 0 and exactly the tolerance are stationary; above it, still
+    # moving
     norms = np.array([0.0, tol / 2, 3 * tol, tol / 2 * 1.01])
     grad = np.zeros((4, 3))
     grad[:, 1] = -norms
@@ -437,8 +449,8 @@ def _geodesic(R_from, R_to, t):
 
 
 def _gross_case():
-    """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* + LOCAL_ATOL J`` and cost
-    (8)."""
+    """A noisy problem, its certificate, a far answer, the gross bound ``GROSS_FACTOR f* +
+    LOCAL_ATOL J`` and cost (8)."""
     m = _motions(noise_deg=3.0)
     cert = certificate.global_certificate(m)
     far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
@@ -447,7 +459,8 @@ def _gross_case():
 
 
 def _bisect(cert, far, cost, target):
-    """The bracket ``(lo, hi)`` of the fraction along the geodesic from the minimiser to ``far`` where cost = target."""
+    """The bracket ``(lo, hi)`` of the fraction along the geodesic from the minimiser to ``far``
+    where cost = target."""
     lo, hi = 0.0, 1.0
     for _ in range(60):
         mid = (lo + hi) / 2
@@ -498,8 +511,8 @@ def test_reflections_are_flagged_and_said_with_the_two_step_hint():
 
 
 def test_a_singular_answer_is_flagged_and_said_not_an_error():
-    """det 0 is neither a rotation nor a reflection: flagged and said, never handed to the gross screen (which
-    measured its angle and raised SciPy's "Non-positive determinant")."""
+    """det 0 is neither a rotation nor a reflection: flagged and said, never handed to the gross
+    screen (which measured its angle and raised SciPy's "Non-positive determinant")."""
     m = _motions((3,))
     R = certificate.global_certificate(m).R.copy()
     R[1] = np.diag([1.0, 1.0, 0.0])
@@ -508,12 +521,13 @@ def test_a_singular_answer_is_flagged_and_said_not_an_error():
     assert caught == [(AccuracyWarning, "fake returned a singular matrix (det 0), not a rotation, in 1 of 3 problems")]
 
 
-# ------------------------------------------------------------------ what solve() accepts from a core, at the door
+# ------------------------------------------------------------------ what solve() accepts from a
+# core, at the door
 
 @pytest.fixture
 def core(monkeypatch):
-    """``make(answer, local=False) -> name``: a solver whose core returns ``answer(motions)``, registered for the
-    test."""
+    """``make(answer, local=False) -> name``: a solver whose core returns ``answer(motions)``,
+    registered for the test."""
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
     count = []
 
@@ -569,7 +583,8 @@ def test_an_overflowing_or_infinite_answer_is_refused_without_a_numpy_warning(co
 @pytest.mark.parametrize("local", [False, True])
 def test_a_rotation_whose_determinant_rounds_below_one_is_not_a_reflection(core, local):
     m = _motions(noise_deg=3.0)
-    # the minimiser shrunk: det = 1 - 5e-7, within ANSWER_ATOL of 1: a rotation to the tolerance, not a reflection
+    # the minimiser shrunk: det = 1 - 5e-7, within ANSWER_ATOL of 1: a rotation to the tolerance,
+    # not a reflection
     M = certificate.global_certificate(m).R @ np.diag([1.0 - 2.5e-7, 1.0 - 2.5e-7, 1.0])
     name = core(lambda motions: M.copy(), local=local)
     with warnings.catch_warnings():
@@ -591,7 +606,8 @@ def test_the_gross_screen_keeps_a_two_dimensional_batch_shape():
 
 
 def test_the_gross_threshold_is_ten_times_the_minimum_plus_the_absolute_tolerance():
-    """Answers whose cost (8) lies 0.5 LOCAL_ATOL J below and above ``GROSS_FACTOR f* + LOCAL_ATOL J``."""
+    """Answers whose cost (8) lies 0.5 LOCAL_ATOL J below and above ``GROSS_FACTOR f* + LOCAL_ATOL
+    J``."""
     m, cert, far, bound, cost = _gross_case()
 
     def at(target):  # the answer on the geodesic from the minimiser towards `far` whose cost is `target`
@@ -631,11 +647,11 @@ def test_the_gradient_quoted_is_the_largest_over_problems_off_and_moving_only(cr
     assert f"1 where eq. (8) still has a gradient (up to {4 * stat:.3g} J)" in caught[0][1]
     assert "; 1 at another stationary point of (8)" in caught[0][1]
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # The contract every registered solver must meet, parametrised over ``available()``.
 #
-# A new baseline added with ``@register`` is picked up here from the registry; its measured worst error on
-# :func:`noisy` goes in :data:`MEASURED_WORST_DEG` (a test fails until it does).
+# A new baseline added with ``@register`` is picked up here from the registry; its measured worst
+# error on :func:`noisy` goes in :data:`MEASURED_WORST_DEG` (a test fails until it does).
 
 
 ALL = available()
@@ -666,16 +682,17 @@ def test_registry_holds_the_required_solvers():
         assert solver_info(name).reference, name
 
 
-#: Worst angle (deg) from R0 over the three problems of :func:`noisy`, measured per solver with the NumPy, SciPy
-#: and OpenCV of requirements.lock. The optimum of eq. (8) (chordal_optimal, sqp, andreff,
-#: horaud_dornaika) is 0.262 deg; OpenCV's Tsai, which is not frame-invariant, is the worst at 0.749 deg.
+#: Worst angle (deg) from R0 over the three problems of :func:`noisy`, measured per solver with the
+#: NumPy, SciPy and OpenCV of requirements.lock. The optimum of eq. (8) (chordal_optimal, sqp,
+#: andreff, horaud_dornaika) is 0.262 deg; OpenCV's Tsai, which is not frame-invariant, is the worst
+#: at 0.749 deg.
 MEASURED_WORST_DEG = {
     "andreff": 0.2624, "chordal_optimal": 0.2624, "horaud_dornaika": 0.2624, "sqp": 0.2624, "robust": 0.2558,
     "park_martin": 0.2632, "tsai_lenz": 0.2724, "two_step_right": 0.3737, "two_step_left": 0.3930,
     "opencv_horaud": 0.5253, "opencv_park": 0.5293, "opencv_tsai": 0.7486,
 }
-#: The problems are fixed (seed 7), so only rounding moves these numbers (by far less than 1e-6 deg); a solver that
-#: becomes 20 % worse on them fails.
+#: The problems are fixed (seed 7), so only rounding moves these numbers (by far less than 1e-6
+#: deg); a solver that becomes 20 % worse on them fails.
 MARGIN = 1.2
 
 
@@ -690,7 +707,8 @@ def test_output_is_a_rotation(method, noisy):
     assert R.shape == (3, 3, 3)
     checks.check_rotation_matrices(R, atol=1e-10)
     assert np.all(np.linalg.det(R) > 0)
-    # as accurate as measured: the paper's noise (<= 1.15 deg per rotation) moves the optimum 0.26 deg from R0
+    # as accurate as measured: the paper's noise (<= 1.15 deg per rotation) moves the optimum 0.26
+    # deg from R0
     assert_rotations_close(R, R0, MARGIN * MEASURED_WORST_DEG[method])
 
 
@@ -721,8 +739,8 @@ def test_equivariance_under_a_change_of_frame(method, side, noisy):
         expected = R @ G.T
     gap = so3.frobenius_error(R2, expected).max()
     if solver_info(method).equivariant:
-        # measured: 1.3e-8 for the local solver (sqp stops at its tolerance from the moved start), below 1e-12 for
-        # the others
+        # measured: 1.3e-8 for the local solver (sqp stops at its tolerance from the moved start),
+        # below 1e-12 for the others
         assert gap < (1e-7 if solver_info(method).local else 1e-10)
     else:  # the registry's flag must be true: a non-equivariant solver visibly moves (measured 9e-4 and more)
         assert gap > 1e-4
@@ -757,8 +775,9 @@ def test_degenerate_motion_is_refused(method, rng):
         solve(method, A, R0.T @ A @ R0, **_start_options(method, R0))
 
 
-# ----------------------------------------------------------------------------------------------------
-# One solver shape: the registered doors show what they take; the registry's flags; solve_pairs' arguments.
+# --------------------------------------------------------------------------------------------------
+# One solver shape: the registered doors show what they take; the registry's flags; solve_pairs'
+# arguments.
 
 
 EXPORTED_DOORS = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "robust"]
@@ -821,5 +840,6 @@ def test_solve_decomposes_sym_k_once_for_a_relaxed_start_solver(monkeypatch, rel
     register(name, reference="test", relaxed_start=relaxed_start)(lambda motions: relaxed_rotation(motions.K))
     m = Motions(*_problem(1)[1:])
     solve(name, m)
-    # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the same array)
+    # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the
+    # same array)
     assert (m.sym_eigvals is m.sym_eigh[0]) is relaxed_start

@@ -52,7 +52,8 @@ def test_bracket_guards_its_edges_by_the_margin(value, ok):
 
 @pytest.mark.parametrize("k, ok", [(242, True), (243, True), (241, False), (253, True), (254, False)])
 def test_share_range_keeps_the_runs_a_machine_moves_from_the_edges(k, ok):
-    # 300 runs, 2 runs of margin: 80-85 % holds counts 240-254; a count within 2 runs of 240 or 255 is refused
+    # 300 runs, 2 runs of margin: 80-85 % holds counts 240-254; a count within 2 runs of 240 or 255
+    # is refused
     if ok:
         assert share_range(k / 300, margin=2 / 300) == "80-85 %"
     else:

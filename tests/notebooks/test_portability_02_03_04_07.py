@@ -1,5 +1,5 @@
-"""The other half of the portability re-runs (see ``test_portability_01_05_06_08.py``): a second file, so that the second xdist
-worker takes it."""
+"""The other half of the portability re-runs (see ``test_portability_01_05_06_08.py``): a second
+file, so that the second xdist worker takes it."""
 import pytest
 from test_portability_01_05_06_08 import check_on_another_machine, notebooks
 

@@ -1,4 +1,5 @@
-"""The nbval sanitiser (tests/sanitize.cfg, read by nbval's own parser) masks memory addresses and nothing else."""
+"""The nbval sanitiser (tests/sanitize.cfg, read by nbval's own parser) masks memory addresses and
+nothing else."""
 import re
 from pathlib import Path
 
@@ -9,7 +10,8 @@ CFG = Path(__file__).resolve().parents[1] / "sanitize.cfg"
 
 
 def _sanitize(text):
-    """What nbval does with each stored and fresh output: every (regex, replace) of the file, in order."""
+    """What nbval does with each stored and fresh output: every (regex, replace) of the file, in
+    order."""
     for regex, replace in get_sanitize_patterns(CFG.read_text()):
         text = re.sub(regex, replace, text)
     return text

@@ -1,9 +1,10 @@
-"""The clock offset of :mod:`replication.rig.association`: refined below the search grid, with a block-bootstrap
-interval, the margin of its correlation peak over the next one, and its sign in words.
+"""The clock offset of :mod:`replication.rig.association`: refined below the search grid, with a
+block-bootstrap interval, the margin of its correlation peak over the next one, and its sign in
+words.
 
-The synthetic rig is the one of ``tests/rig/test_calibration.py`` (a 20 Hz camera and, rigidly attached, a 200 Hz
-gyro; smooth three-axis motion), here with the gyro's clock shifted and optional noise on both streams. The truth
-is the shift: without it the rig's correlation peaks at -0.0001 ms.
+The synthetic rig is the one of ``tests/rig/test_calibration.py`` (a 20 Hz camera and, rigidly
+attached, a 200 Hz gyro; smooth three-axis motion), here with the gyro's clock shifted and optional
+noise on both streams. The truth is the shift: without it the rig's correlation peaks at -0.0001 ms.
 """
 import dataclasses
 import math
@@ -32,9 +33,9 @@ _world_from_camera = rig_motion
 
 
 def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0):
-    """``(camera, sensor)``: the camera's poses and the integrated gyro, whose clock reads ``offset`` s ahead (the
-    sensor sample stamped ``t + offset`` is the camera's at ``t``); noise on the camera's poses (deg per axis) and
-    on the gyro's rates (rad/s per sample), from ``seed``."""
+    """``(camera, sensor)``: the camera's poses and the integrated gyro, whose clock reads
+    ``offset`` s ahead (the sensor sample stamped ``t + offset`` is the camera's at ``t``); noise on
+    the camera's poses (deg per axis) and on the gyro's rates (rad/s per sample), from ``seed``."""
     rng = np.random.default_rng(seed)
     _, camera, gyro, _ = rig_streams(seconds, offset=offset,
                                      camera_noise_deg=lambda n: rng.normal(scale=np.radians(camera_noise_deg), size=n),
@@ -43,8 +44,9 @@ def _rig(offset=0.0, seconds=30.0, camera_noise_deg=0.0, gyro_noise=0.0, seed=0)
 
 
 def _periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0, offset=0.0):
-    """A single-axis sinusoidal oscillation (the angular speed repeats every ``1 / (2 freq_hz)`` s), times
-    ``aperiodic`` times the rig's three-axis motion; the sensor's clock reads ``offset`` s ahead."""
+    """A single-axis sinusoidal oscillation (the angular speed repeats every ``1 / (2 freq_hz)`` s),
+    times ``aperiodic`` times the rig's three-axis motion; the sensor's clock reads ``offset`` s
+    ahead."""
     axis = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, 0.1]))
 
     def world_from_camera(t):
@@ -58,7 +60,8 @@ def _periodic(freq_hz=3.0, seconds=60.0, aperiodic=0.0, offset=0.0):
             OrientationStream(t_sensor + offset, world_from_camera(t_sensor) @ R0, "sensor"))
 
 
-# ------------------------------------------------------------------------------------------- sub-grid refinement
+# -------------------------------------------------------------------------------------------
+# sub-grid refinement
 
 #: Each at least 0.12 ms from the 0.5 ms grid: the grid's maximum alone is off by more than 0.1 ms.
 OFF_GRID_MS = (0.13, 0.37, -1.71, 2.29, -12.62, 7.77)
@@ -74,7 +77,8 @@ def test_an_off_grid_offset_is_found_within_0_1_ms(offset_ms):
 
 @pytest.mark.parametrize("offset_ms", (0.13, 0.37))
 def test_the_parabola_refines_below_the_sub_grid(offset_ms):
-    """0.02 ms from the 0.05 ms sub-grid: its maximum alone would be off by 0.02 ms (measured: 1e-4 ms)."""
+    """0.02 ms from the 0.05 ms sub-grid: its maximum alone would be off by 0.02 ms (measured: 1e-4
+    ms)."""
     assert abs(estimate_time_offset(*_rig(1e-3 * offset_ms))[0] - 1e-3 * offset_ms) <= 0.005e-3
 
 
@@ -98,7 +102,8 @@ def test_the_offset_does_not_depend_on_the_block_size(monkeypatch):
     np.testing.assert_allclose(blocked.ci95_s, default.ci95_s, rtol=0, atol=1e-12)  # BLAS rounds by shape
 
 
-# ------------------------------------------------------------------------------------------- the interval
+# ------------------------------------------------------------------------------------------- the
+# interval
 
 def test_the_interval_holds_the_truth_when_clean_and_widens_with_noise():
     truth = 0.37e-3
@@ -109,7 +114,8 @@ def test_the_interval_holds_the_truth_when_clean_and_widens_with_noise():
     widths = [f.ci95_s[1] - f.ci95_s[0] for f in found]
     assert widths[0] < widths[1] < widths[2] and widths[1] > 0.5e-3, widths
     assert all(f.ci95_s[0] <= f.offset_s <= f.ci95_s[1] for f in found)
-    # whether a noisy interval holds the truth is a matter of chance: benchmarks/bench_offset.py measures how often
+    # whether a noisy interval holds the truth is a matter of chance: benchmarks/bench_offset.py
+    # measures how often
 
 
 def test_the_interval_is_deterministic_for_a_seed():
@@ -128,7 +134,8 @@ def test_without_replicates_there_is_no_interval():
 
 @pytest.mark.parametrize("seed", (2, 3, 4))
 def test_an_unrelated_sensor_has_an_interval_beyond_the_offsets_evaluated(seed):
-    """A gyro of white noise: the replicates' maxima scatter to the ends of the +-0.1 s they are evaluated on."""
+    """A gyro of white noise: the replicates' maxima scatter to the ends of the +-0.1 s they are
+    evaluated on."""
     camera, _ = _rig()
     noise = np.random.default_rng(seed).normal(size=(6400, 3))
     found = offset_analysis(camera, integrate_gyro(GyroStream(np.arange(-1.0, 31.0, 0.005), noise, "noise")),
@@ -136,7 +143,8 @@ def test_an_unrelated_sensor_has_an_interval_beyond_the_offsets_evaluated(seed):
     assert math.inf in np.abs(found.ci95_s) and found.correlation < 0.2
 
 
-# ------------------------------------------------------------------------------------------- an ambiguous peak
+# ------------------------------------------------------------------------------------------- an
+# ambiguous peak
 
 def test_periodic_motion_has_a_small_peak_margin():
     found = offset_analysis(*_periodic(), n_bootstrap=0)
@@ -147,8 +155,9 @@ def test_periodic_motion_has_a_small_peak_margin():
 
 @pytest.mark.parametrize("offset_ms", (5.0, 46.6))
 def test_of_near_equal_peaks_the_highest_refined_wins(offset_ms):
-    """Mostly periodic motion with the peak between coarse offsets: its alias 167 ms away sits closer to the 10 ms
-    grid and is higher there (the coarse maximum alone picked 171.66 and -120.07 ms)."""
+    """Mostly periodic motion with the peak between coarse offsets: its alias 167 ms away sits
+    closer to the 10 ms grid and is higher there (the coarse maximum alone picked 171.66 and -120.07
+    ms)."""
     found = offset_analysis(*_periodic(aperiodic=0.3, offset=1e-3 * offset_ms), n_bootstrap=0)
     assert abs(found.offset_s - 1e-3 * offset_ms) < 0.1e-3
     assert 0 < found.peak_margin < 0.01  # measured 0.0032
@@ -162,7 +171,8 @@ def test_three_axis_motion_has_a_large_peak_margin():
     assert math.isnan(default.peak_margin) and math.isnan(default.second_peak_offset_s)  # no other peak in +-0.2 s
 
 
-# ------------------------------------------------------------------------------------------- the sign in words
+# ------------------------------------------------------------------------------------------- the
+# sign in words
 
 KALIBR = "Kalibr's timeshift_cam_imu, t_imu = t_cam + shift"
 
@@ -191,8 +201,9 @@ def test_offset_in_words_to_more_decimals_and_on_the_estimate():
     assert "95 % interval [+12.1, +12.5] ms excludes 0" in resolved.in_words()
 
 
-#: (offset, interval) at both sides of 0: an end just beyond 0 (1 ns) resolves the direction, an end at or just past
-#: 0 does not (EuRoC MH01: -0.25 ms with [-0.59, +0.33] ms was worded "behind the camera's")
+#: (offset, interval) at both sides of 0: an end just beyond 0 (1 ns) resolves the direction, an end
+#: at or just past 0 does not (EuRoC MH01: -0.25 ms with [-0.59, +0.33] ms was worded "behind the
+#: camera's")
 @pytest.mark.parametrize("offset_s, ci95_s, side", [
     (-0.25e-3, (-0.59e-3, 0.33e-3), None),        # EuRoC MH01 as measured
     (-0.25e-3, (-0.59e-3, -1e-9), "behind"),      # just excluding 0, below
@@ -215,7 +226,8 @@ def test_offset_direction_only_where_its_interval_excludes_0(offset_s, ci95_s, s
         assert words.startswith("no offset resolved: -0.25 ms, its 95 % interval [-0.59, +0.33] ms includes 0")
 
 
-# ------------------------------------------------------------------------------------------- parameters
+# -------------------------------------------------------------------------------------------
+# parameters
 
 @pytest.mark.parametrize("name, value", [("n_bootstrap", -1), ("n_bootstrap", 2.5), ("n_bootstrap", True),
                                          ("n_bootstrap", "200"), ("n_bootstrap", None), ("seed", -1), ("seed", 1.5),
@@ -236,7 +248,8 @@ def test_offset_in_words_refuses_bad_arguments(kw):
         offset_in_words(**kw)
 
 
-# ------------------------------------------------------------------------------------------- real recordings
+# ------------------------------------------------------------------------------------------- real
+# recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
@@ -257,9 +270,9 @@ def test_tumvi_off_grid_shifts_come_back_within_0_1_ms():
 
 @needs_real
 def test_euroc_off_grid_shifts_come_back_within_0_01_ms():
-    """EuRoC's 20 Hz camera and 200 Hz ground truth share their clock phase, so the curve has a kink every 5 ms: a
-    parabola on the 0.5 ms grid alone is off by 0.077-0.086 ms for these shifts (measured); with the sub-grid,
-    by 0.0001 ms."""
+    """EuRoC's 20 Hz camera and 200 Hz ground truth share their clock phase, so the curve has a kink
+    every 5 ms: a parabola on the 0.5 ms grid alone is off by 0.077-0.086 ms for these shifts
+    (measured); with the sub-grid, by 0.0001 ms."""
     d = data_root() / "euroc_mh01_orbslam3"
     camera = load_tum_trajectory(d / "orbslam3_mono_cam0_traj_runA.txt")
     truth = load_tum_trajectory(d / "gt_body_MH_01_easy_tum.txt")
@@ -270,7 +283,8 @@ def test_euroc_off_grid_shifts_come_back_within_0_01_ms():
 
 
 def test_the_offset_search_names_stamps_in_different_units():
-    """The message the online front end used to show ("overlap 1000000000000.000..1060.793 s") names the units."""
+    """The message the online front end used to show ("overlap 1000000000000.000..1060.793 s") names
+    the units."""
     t = np.arange(1000.0, 1060.8, 0.05)
     Q = so3.matrix_from_rotation_vector(np.stack([np.sin(t), np.cos(0.7 * t), 0.1 * t], axis=-1))
     with pytest.raises(ValueError, match=r"overlap in fewer than 10 camera samples \(overlap .*\); the camera stream "
@@ -280,11 +294,11 @@ def test_the_offset_search_names_stamps_in_different_units():
     with pytest.raises(ValueError, match=r"fewer than 10 camera samples \(overlap [-0-9.]+\.\.[-0-9.]+ s\)$"):
         estimate_time_offset(OrientationStream(t, Q, "c"), OrientationStream(t + 500.0, Q, "s"))  # no unit mistake
 
-# ----------------------------------------------------------------------------------------------------
-# The clock-offset search's pieces and the pairing (:mod:`replication.rig.association`) at their boundaries: the
-# parabola's vertex, which maxima count, the overlap's ten samples, the offset in words, which camera samples pair at
-# an interval and offset, and ``stream_pairs``. Mutation testing (scripts/mutation) found these unguarded by the fast
-# tests.
+# --------------------------------------------------------------------------------------------------
+# The clock-offset search's pieces and the pairing (:mod:`replication.rig.association`) at their
+# boundaries: the parabola's vertex, which maxima count, the overlap's ten samples, the offset in
+# words, which camera samples pair at an interval and offset, and ``stream_pairs``. Mutation testing
+# (scripts/mutation) found these unguarded by the fast tests.
 
 
 def test_vertex_of_the_parabola_through_the_maximum_and_its_neighbours():
@@ -327,7 +341,8 @@ def test_the_overlap_needs_ten_camera_samples_inside_the_shifted_sensor_stream()
     t, speed = association._overlap(cam, sen, 0.2)
     assert np.array_equal(t, cam.t) and speed.shape == (39,)
     assert np.allclose(speed, np.linalg.norm([0.4, 0.9, -0.3]))
-    # the sensor covers camera times 0 .. 0.45 + 0.2 exactly: ten samples (0 .. 0.45), inclusive at both ends
+    # the sensor covers camera times 0 .. 0.45 + 0.2 exactly: ten samples (0 .. 0.45), inclusive at
+    # both ends
     sen10 = OrientationStream(np.linspace(-0.2, 0.65, 86), so3.matrix_from_rotation_vector(np.linspace(-0.2, 0.65,
                                                                                                        86)[:, None]
                                                                          * np.array([0.4, 0.9, -0.3])))
@@ -371,7 +386,8 @@ def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
     assert np.allclose(t2, t) and np.allclose(A2, A)
     A3, _, t3 = motion_pairs(cam, sen, 0.2249)
     assert len(t3) == 36 and np.allclose(A3[0], so3.matrix_from_rotation_vector(-0.2 * w), atol=1e-9)
-    # the offset: the sensor read at t + offset; camera samples whose shifted time leaves the sensor are dropped
+    # the offset: the sensor read at t + offset; camera samples whose shifted time leaves the sensor
+    # are dropped
     _, B4, t4 = motion_pairs(cam, sen, 0.25, offset=0.1)
     assert np.allclose(t4, t) and np.allclose(B4, A, atol=1e-6)
     short = OrientationStream(np.arange(0.0, 1.0, 0.01), so3.matrix_from_rotation_vector(np.arange(0.0, 1.0,
@@ -410,10 +426,12 @@ def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_t
         stream_pairs(cam, omega)
 
 
-# ------------------------------------------------------------------ offset_analysis: parameters, block, interval
+# ------------------------------------------------------------------ offset_analysis: parameters,
+# block, interval
 
 def _turning_rig(n_cam=61, dt=0.05, offset=0.0):
-    """A camera at 20 Hz (3 s) and a 200 Hz orientation sensor over a wider span, turning at a varying speed."""
+    """A camera at 20 Hz (3 s) and a 200 Hz orientation sensor over a wider span, turning at a
+    varying speed."""
     def Q(t):
         t = np.asarray(t, float)
         return so3.matrix_from_rotation_vector(np.stack([np.sin(1.3 * t) + 0.5 * t, 0.8 * np.cos(2.1 * t), 0.3 * t * t],
@@ -438,7 +456,8 @@ def test_offset_analysis_names_the_parameter_it_refuses(name, value, match):
 
 @pytest.fixture
 def replicates(monkeypatch):
-    """offset_analysis with the bootstrap's replicate offsets set by the test; records the block length asked."""
+    """offset_analysis with the bootstrap's replicate offsets set by the test; records the block
+    length asked."""
     state = {"blocks": []}
 
     def fake(a, rows, x, n_bootstrap, block, rng):
@@ -496,8 +515,9 @@ def test_offset_analysis_defaults_and_its_returned_fields():
 # ------------------------------------------------------------------ the bootstrap's replicates
 
 def _spike(n=10, seed=1):
-    """Camera speeds with a spike at sample 0 (and an exact 0 at sample 1), and sensor rows at three offsets: the
-    first matches the spike only, the last matches the rest only, the middle neither."""
+    """Camera speeds with a spike at sample 0 (and an exact 0 at sample 1), and sensor rows at three
+    offsets: the first matches the spike only, the last matches the rest only, the middle
+    neither."""
     rng = np.random.default_rng(seed)
     p = np.concatenate([[0.0, 0.0], rng.standard_normal(n - 2)])
     e0 = np.eye(n)[0]
@@ -511,8 +531,8 @@ def test_a_replicate_peaking_at_the_first_or_last_offset_is_minus_or_plus_infini
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a replicate without the spike has a constant first row: 0/0, silently
         out = association._bootstrap_offsets(a, rows, x, 200, 1, np.random.default_rng(0))
-    # with the spike drawn the first offset matches best (-inf), without it the last (+inf); every sample, the
-    # first too, is drawn with probability 1 - 0.9^10 = 65 % per replicate
+    # with the spike drawn the first offset matches best (-inf), without it the last (+inf); every
+    # sample, the first too, is drawn with probability 1 - 0.9^10 = 65 % per replicate
     assert np.all(np.isinf(out))
     assert 110 <= np.sum(out == -np.inf) <= 150 and np.sum(out == np.inf) == 200 - np.sum(out == -np.inf)
 
@@ -538,10 +558,12 @@ def test_the_replicates_do_not_depend_on_the_speeds_scale():
     assert np.allclose(small, out, rtol=0, atol=1e-12)
 
 
-# ------------------------------------------------------------------ motion_pairs: which samples pair
+# ------------------------------------------------------------------ motion_pairs: which samples
+# pair
 
 def _dyadic_streams(tc, w=(0.4, 0.9, -0.3), sensor_t=None):
-    """A camera at times ``tc`` and a sensor (at ``sensor_t``, default the camera's own stamps) turning at ``w``."""
+    """A camera at times ``tc`` and a sensor (at ``sensor_t``, default the camera's own stamps)
+    turning at ``w``."""
     w = np.asarray(w)
     ts = np.asarray(tc if sensor_t is None else sensor_t, float)
     tc = np.asarray(tc, float)
@@ -572,7 +594,8 @@ def test_an_interval_nearer_the_sample_itself_pairs_nothing():
 
 
 def test_the_first_sample_pairs_only_with_its_nearest_neighbour_at_the_interval():
-    # irregular stamps: the median step is 0.05 (tolerance 0.025); 0.009 s after sample 0 is nearest sample 0 itself
+    # irregular stamps: the median step is 0.05 (tolerance 0.025); 0.009 s after sample 0 is nearest
+    # sample 0 itself
     tc = np.array([0.0, 0.02, 0.03, 0.04, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5])
     cam, sen = _dyadic_streams(tc, sensor_t=np.arange(-0.5, 1.0, 0.005))
     _, _, t = motion_pairs(cam, sen, 0.009)
@@ -601,9 +624,9 @@ def test_orientations_off_orthogonal_by_a_few_millionths_still_pair():
     assert len(t) == 16 and np.allclose(A, B)
 
 
-# ----------------------------------------------------------------------------------------------------------------------
-# The offset search in blocks: bounded memory, bit-identical to the search over all offsets at once (figures behind the
-# block size: benchmarks/bench_bounded.py).
+# --------------------------------------------------------------------------------------------------
+# The offset search in blocks: bounded memory, bit-identical to the search over all offsets at once
+# (figures behind the block size: benchmarks/bench_bounded.py).
 
 
 def _offset_streams(seconds=30.0, offset=0.0123):

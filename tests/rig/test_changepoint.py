@@ -1,11 +1,11 @@
-"""The batch change test: a re-mount half-way is found where it happened with both mountings right, no change is not
-flagged, the splits keep ``min_share`` of the pairs on each side, the scan equals a solve per side, and bad input is
-refused naming the parameter. The real recordings as recorded are not flagged as a large change; a 2 deg re-mount
-inside TUM-VI is.
+"""The batch change test: a re-mount half-way is found where it happened with both mountings right,
+no change is not flagged, the splits keep ``min_share`` of the pairs on each side, the scan equals a
+solve per side, and bad input is refused naming the parameter. The real recordings as recorded are
+not flagged as a large change; a 2 deg re-mount inside TUM-VI is.
 
-The synthetic rig is that of tests/rig/test_calibration.py (a camera at 20 Hz and a gyro at 200 Hz on one rigid
-body, smooth three-axis motion) with noise on the camera orientations and the gyro; pairs start at every camera time
-and last 1 s (20 per block), as calibrate forms them.
+The synthetic rig is that of tests/rig/test_calibration.py (a camera at 20 Hz and a gyro at 200 Hz
+on one rigid body, smooth three-axis motion) with noise on the camera orientations and the gyro;
+pairs start at every camera time and last 1 s (20 per block), as calibrate forms them.
 """
 import math
 import warnings
@@ -46,8 +46,8 @@ BLOCK = 20  # pairs per 1 s interval at 20 Hz
 
 
 def _rig(seed, seconds=60.0, cam_deg=0.05, gyro_rad_s=0.005, remount=None):
-    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise (:func:`replication.testing.noisy_rig`);
-    ``remount = (t, R)`` re-mounts the gyro."""
+    """Camera (20 Hz) and gyro (200 Hz) streams of one rigid body with noise
+    (:func:`replication.testing.noisy_rig`); ``remount = (t, R)`` re-mounts the gyro."""
     return noisy_rig(seed, seconds, cam_deg, gyro_rad_s, remount=remount)
 
 
@@ -113,15 +113,17 @@ def test_each_side_is_the_minimiser_of_eq8_over_its_pairs(remount_half_way):
 
 
 def test_the_inflation_measures_overlap():
-    """A gyro's integration noise is shared by the ``block`` pairs that overlap: the inflation is about ``block``."""
+    """A gyro's integration noise is shared by the ``block`` pairs that overlap: the inflation is
+    about ``block``."""
     camera, gyro = _rig(3, seconds=135.0, cam_deg=0.0)
     r = two_segment_test(*_pairs(camera, gyro), block=BLOCK)
     assert 0.6 * BLOCK < r.inflation < 1.4 * BLOCK
 
 
 def test_threshold_is_andrews_for_long_recordings_and_higher_for_short():
-    # sup of a 3-dim squared normalised Brownian bridge over [0.15, 0.85]: 1 % point 18.0-18.3, 5 % 14.0-14.1
-    # (simulated, benchmarks/bench_changepoint.py); the approximation is a little above (on the safe side)
+    # sup of a 3-dim squared normalised Brownian bridge over [0.15, 0.85]: 1 % point 18.0-18.3, 5 %
+    # 14.0-14.1 (simulated, benchmarks/bench_changepoint.py); the approximation is a little above
+    # (on the safe side)
     assert threshold(0.01, 1e9, 0.15, 0.85) == pytest.approx(18.3, abs=0.3)
     assert threshold(0.05, 1e9, 0.15, 0.85) == pytest.approx(14.2, abs=0.3)
     short, long_ = threshold(0.01, 30.0, 0.15, 0.85), threshold(0.01, 300.0, 0.15, 0.85)
@@ -191,7 +193,8 @@ def test_too_few_pairs_are_refused(pairs):
     two_segment_test(A[:500], B[:500], t[:500], block=BLOCK)  # 25 s: enough
 
 
-# ------------------------------------------------------------------------------------------- real recordings
+# ------------------------------------------------------------------------------------------- real
+# recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
@@ -209,7 +212,8 @@ def _recording(name):
 
 
 def _calibrated_pairs(camera, sensor):
-    """calibrate's result and its pairs (its clock offset, interval 1 s, the pairs across gaps dropped, its block)."""
+    """calibrate's result and its pairs (its clock offset, interval 1 s, the pairs across gaps
+    dropped, its block)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the mocap stream's gaps and EuRoC's observability are calibrate's to say
         r = calibrate(camera, sensor, n_bootstrap=0, diagnose=False)
@@ -240,11 +244,11 @@ def test_a_2_deg_remount_in_tumvi_is_found():
     assert_rotations_close(c.R_before, base, 0.2, name="R_before")
     assert_rotations_close(c.R_after, base @ STEP, 0.2, name="R_after")
 
-# ----------------------------------------------------------------------------------------------------
-# The change test's rules (:mod:`replication.rig.changepoint`) at their boundaries: parameter ranges, the candidate
-# splits and the least pairs, the split and each side's counts, the statistic against the threshold, the sentence, and
-# a synthetic re-mount from exactly its time. Mutation testing (scripts/mutation) found these unguarded by the fast
-# tests.
+# --------------------------------------------------------------------------------------------------
+# The change test's rules (:mod:`replication.rig.changepoint`) at their boundaries: parameter
+# ranges, the candidate splits and the least pairs, the split and each side's counts, the statistic
+# against the threshold, the sentence, and a synthetic re-mount from exactly its time. Mutation
+# testing (scripts/mutation) found these unguarded by the fast tests.
 
 
 R0_MC = so3.matrix_from_rotation_vector(np.array([0.3, 0.2, -0.6]))
@@ -391,9 +395,10 @@ def test_remounted_changes_the_samples_from_exactly_the_time_on():
 
 
 def test_the_numbers_of_two_seeded_tests():
-    """The statistic, its threshold and p-value, the inflation and the noise radius of two seeded problems: a 3 deg
-    re-mount (block 1) and no change with overlapping pairs (block 3, inflation above 1). Any change to a side's
-    fit, its noise, the long-run covariance or the false-alarm formula moves them (rounding: 1e-6)."""
+    """The statistic, its threshold and p-value, the inflation and the noise radius of two seeded
+    problems: a 3 deg re-mount (block 1) and no change with overlapping pairs (block 3, inflation
+    above 1). Any change to a side's fit, its noise, the long-run covariance or the false-alarm
+    formula moves them (rounding: 1e-6)."""
     rng = np.random.default_rng(1)
     A, B, t = _pairs_mc(150, rng, change_at=90, change_deg=3.0)
     r = two_segment_test(A, B, t)
@@ -441,7 +446,8 @@ def test_the_degenerate_side_message():
 
 
 def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
-    # the sensor turns about z tilted +-3e-6 rad: G's eigenvalues ~ (T delta^2, T, T), a ratio ~1e-11 < 1e-10
+    # the sensor turns about z tilted +-3e-6 rad: G's eigenvalues ~ (T delta^2, T, T), a ratio
+    # ~1e-11 < 1e-10
     rng = np.random.default_rng(5)
     J, delta = 80, 3e-6
     axes = np.stack([delta * (-1.0) ** np.arange(J), np.zeros(J), np.ones(J)], axis=1)
@@ -452,7 +458,8 @@ def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
 
 
 def test_the_p_value_never_exceeds_one():
-    # over a wide span of splits the tail formula exceeds 1 just above 3 degrees of freedom; a probability does not
+    # over a wide span of splits the tail formula exceeds 1 just above 3 degrees of freedom; a
+    # probability does not
     assert p_value(5.0, 1000.0, 0.01, 0.99) == 1.0
     assert 0.9 < p_value(8.0, 1000.0, 0.01, 0.99) < 1.0
 

@@ -1,7 +1,8 @@
-"""The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump of the camera's
-clock are named clock_jump with their time, size and clock (not a drift); a drift and a clean rig are not; the
-decision at its thresholds; the sensor re-stamped for the segment test (a drift or a step removed). Rigs:
-``replication.testing``'s noisy rig (60 s, a gyro bias) and its clock edits."""
+"""The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump
+of the camera's clock are named clock_jump with their time, size and clock (not a drift); a drift
+and a clean rig are not; the decision at its thresholds; the sensor re-stamped for the segment test
+(a drift or a step removed). Rigs: ``replication.testing``'s noisy rig (60 s, a gyro bias) and its
+clock edits."""
 import warnings
 
 import numpy as np

@@ -1,5 +1,5 @@
-"""Every loader family reports an unreadable or malformed file with one error, DataFileError: the file,
-the line and the column of the problem (realdata, lab.recording, paper)."""
+"""Every loader family reports an unreadable or malformed file with one error, DataFileError: the
+file, the line and the column of the problem (realdata, lab.recording, paper)."""
 import pickle
 import re
 
@@ -162,7 +162,8 @@ def test_utf16_file(family, encoding, problem):
 
 
 def test_a_valid_file_loads_with_its_values(family):
-    """The loaded values are those of the text (a loader that drops, shifts or mis-scales a column fails)."""
+    """The loaded values are those of the text (a loader that drops, shifts or mis-scales a column
+    fails)."""
     path, text, load = family
     path.write_text(text)
     loaded = load(path)
@@ -234,7 +235,8 @@ def test_other_realdata_loaders_raise_it_too(tmp_path):
 
 
 def test_read_table_is_the_loaders_parser_with_a_header_and_quaternion_check(tmp_path):
-    """A new format's loader needs only the toolkit: header, file/line/column errors, quaternion norms."""
+    """A new format's loader needs only the toolkit: header, file/line/column errors, quaternion
+    norms."""
     from replication.rig.datafile import read_table, unit_quaternion_rotations
 
     path = tmp_path / "poses.csv"

@@ -1,6 +1,7 @@
 """Input mistakes that only a reference shows: the IMU's own trajectory given as the camera file,
-and the camera and sensor files swapped, named where the reference check would otherwise blame permuted gyro axes
-or a reference for another rig; at the bounds of :data:`replication.rig.diagnose.IMU_AS_CAMERA_DEG`."""
+and the camera and sensor files swapped, named where the reference check would otherwise blame
+permuted gyro axes or a reference for another rig; at the bounds of
+:data:`replication.rig.diagnose.IMU_AS_CAMERA_DEG`."""
 import warnings
 from types import SimpleNamespace
 
@@ -60,8 +61,8 @@ def _checks(result):
 @pytest.mark.parametrize("tilt, named", [(0.0, True), (IMU_AS_CAMERA_DEG - 0.3, True),
                                          (IMU_AS_CAMERA_DEG + 0.3, False)])
 def test_the_imu_trajectory_as_camera_is_named_within_the_bound(imu, tilt, named):
-    """The 'camera' is the IMU body turned by ``tilt`` (R0 = that turn): named just inside the bound, not past it
-    (there the reference check's own reason stays the only word)."""
+    """The 'camera' is the IMU body turned by ``tilt`` (R0 = that turn): named just inside the
+    bound, not past it (there the reference check's own reason stays the only word)."""
     pose, gyro = imu
     camera = OrientationStream(pose.t, pose.R @ _turn(tilt).T, "imu pose as camera")
     r = _run(camera, gyro, R_CAM)
@@ -85,7 +86,8 @@ def test_not_named_without_a_reference_or_without_diagnosis(imu):
 @pytest.mark.parametrize("reference_deg, named", [(2 * IMU_AS_CAMERA_DEG - 0.3, False),
                                                   (2 * IMU_AS_CAMERA_DEG + 0.3, True)])
 def test_a_reference_near_the_identity_does_not_make_an_identity_estimate_suspect(reference_deg, named):
-    """R0 at the identity against a reference just within / past twice the bound from the identity."""
+    """R0 at the identity against a reference just within / past twice the bound from the
+    identity."""
     found = reference_mistakes(np.eye(3), _turn(reference_deg, [1.0, 0.0, 0.0]))
     assert [r.check for r in found] == (["imu_as_camera"] if named else [])
 
@@ -98,8 +100,9 @@ def test_an_estimate_that_agrees_with_the_reference_names_nothing():
 
 @pytest.mark.parametrize("off, named", [(0.0, True), (FAIL - 0.3, True), (FAIL + 0.3, False)])
 def test_swapped_files_are_named_within_the_reference_checks_bound(imu, off, named):
-    """The camera's trajectory given as the sensor and the IMU's as the camera: R0 is the reference's inverse; a
-    reference turned by ``off`` puts the estimate that far from its inverse."""
+    """The camera's trajectory given as the sensor and the IMU's as the camera: R0 is the
+    reference's inverse; a reference turned by ``off`` puts the estimate that far from its
+    inverse."""
     pose, _ = imu
     camera = OrientationStream(pose.t, pose.R @ R_CAM.T, "camera")  # v_cam = R_CAM v_imu
     r = _run(pose, camera, R_CAM @ _turn(off))
@@ -112,7 +115,8 @@ def test_swapped_files_are_named_within_the_reference_checks_bound(imu, off, nam
 
 
 def test_named_beside_the_re_run_hypotheses(monkeypatch):
-    """``input_mistakes`` returns the reference's findings even when no re-run fits (the stand-in fits nothing)."""
+    """``input_mistakes`` returns the reference's findings even when no re-run fits (the stand-in
+    fits nothing)."""
     class Trial:
         residual_deg = {"median": 1.0}
         diagnostics = {"motion_median_deg": 1.0}
@@ -124,11 +128,12 @@ def test_named_beside_the_re_run_hypotheses(monkeypatch):
                                     calibrate=lambda *a, **k: Trial(), reference=R_CAM, R=np.eye(3))
     assert [r.check for r in found] == ["imu_as_camera"]
 
-# ----------------------------------------------------------------------------------------------------
-# The input-mistake diagnosis (:mod:`replication.rig.diagnose`) at its boundaries, with a stand-in calibration whose
-# residual per hypothesis the test sets: which mistakes are tried on which streams and how each is undone, when a
-# hypothesis fits (strictly below both shares), which fits tie, how a reference splits a tie, and the sentence.
-# Mutation testing (scripts/mutation) found these rules unguarded by the fast tests.
+# --------------------------------------------------------------------------------------------------
+# The input-mistake diagnosis (:mod:`replication.rig.diagnose`) at its boundaries, with a stand-in
+# calibration whose residual per hypothesis the test sets: which mistakes are tried on which streams
+# and how each is undone, when a hypothesis fits (strictly below both shares), which fits tie, how a
+# reference splits a tie, and the sentence. Mutation testing (scripts/mutation) found these rules
+# unguarded by the fast tests.
 
 
 RNG = np.random.default_rng(3)
@@ -140,7 +145,8 @@ BASE, MOTION = 10.0, 30.0
 
 
 class FakeCalibrate:
-    """Records each call; returns the residual, motion, R and correlation set for the hypothesis at that call."""
+    """Records each call; returns the residual, motion, R and correlation set for the hypothesis at
+    that call."""
 
     def __init__(self, residuals, motion=MOTION, R=None, raise_at=()):
         self.residuals, self.motion, self.R, self.raise_at, self.calls = residuals, motion, R or {}, raise_at, []
@@ -200,7 +206,8 @@ def test_each_hypothesis_is_undone_on_a_gyro_stream():
 
 
 def test_a_hypothesis_fits_only_strictly_below_both_shares():
-    # FIT_SHARE of the base residual (2.0 deg) and FIT_TO_MOTION of the motion (3.0 deg): the stricter one rules
+    # FIT_SHARE of the base residual (2.0 deg) and FIT_TO_MOTION of the motion (3.0 deg): the
+    # stricter one rules
     at_share = FIT_SHARE * BASE
     assert _run_md(ORI, FakeCalibrate({0: at_share})) == []
     (r,) = _run_md(ORI, FakeCalibrate({0: at_share * (1 - 1e-9)}))
@@ -230,7 +237,8 @@ def test_the_sentence_names_the_mistake_the_residuals_and_the_correlation():
 def test_ties_within_the_share_plus_the_atol_are_named_together_in_the_fixed_order():
     best = 0.5
     edge = TIE_SHARE * best + TIE_ATOL
-    # hypotheses 6 (best), 2 (exactly at the tie edge), 0 (just beyond it): 2 and 6 named, in HYPOTHESES order
+    # hypotheses 6 (best), 2 (exactly at the tie edge), 0 (just beyond it): 2 and 6 named, in
+    # HYPOTHESES order
     (r,) = _run_md(ORI, FakeCalibrate({6: best, 2: edge, 0: edge * (1 + 1e-9)}))
     assert r.message.startswith("likely input mistake: the camera file holds camera_from_world poses where "
                                 "world_from_camera belongs, or the camera and sensor file holds inverted poses "

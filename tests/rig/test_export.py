@@ -1,10 +1,10 @@
-"""Export into the ecosystem's files (:mod:`replication.rig.export`, :mod:`replication.rig.vioformats`) and those
-files as references.
+"""Export into the ecosystem's files (:mod:`replication.rig.export`,
+:mod:`replication.rig.vioformats`) and those files as references.
 
-Round trips against the real files of both rigs (Kalibr camchain, OpenVINS ``%YAML:1.0`` chains, Basalt's JSON,
-ORB-SLAM3 settings); only the rotation and the offset change, every other value and comment stays; ``cv2.FileStorage``
-still reads the OpenCV-style files; the offset's sign: a gyro clock shifted by a known amount gives that amount in
-each file, under each tool's own name and unit.
+Round trips against the real files of both rigs (Kalibr camchain, OpenVINS ``%YAML:1.0`` chains,
+Basalt's JSON, ORB-SLAM3 settings); only the rotation and the offset change, every other value and
+comment stays; ``cv2.FileStorage`` still reads the OpenCV-style files; the offset's sign: a gyro
+clock shifted by a known amount gives that amount in each file, under each tool's own name and unit.
 """
 import argparse
 import difflib
@@ -41,7 +41,8 @@ FILE_FORMATS = ("kalibr", "openvins", "basalt", "orbslam3")
 
 
 def _rig(offset, seconds=30.0):
-    """A 20 Hz camera and a rigid 200 Hz gyro (raw rates) whose clock reads ``offset`` s ahead of the camera's."""
+    """A 20 Hz camera and a rigid 200 Hz gyro (raw rates) whose clock reads ``offset`` s ahead of
+    the camera's."""
     return rig_streams(seconds, offset=offset)[1:3]
 
 
@@ -69,7 +70,8 @@ def _written(tmp_path, export, name):
     return path
 
 
-# ------------------------------------------------------------------------------------------------ numbers and files
+# ------------------------------------------------------------------------------------------------
+# numbers and files
 
 def test_numbers_round_trip_and_always_carry_a_dot():
     for x in (1e-05, -0.1, 0.9995250378696743, 123456789.0, 5e-324):
@@ -92,8 +94,9 @@ def test_numbers_round_trip_and_always_carry_a_dot():
     ("orbslam3", "Camera.type, the camera's intrinsics"),
 ])
 def test_without_a_base_a_file_is_refused_naming_what_the_tools_loader_needs(to, needs):
-    """No tool loads a file holding only the extrinsic (Basalt's loader: 10 required fields missing): refused, with
-    the fields a base must provide and the way out (--base, or ros2 for the rotation alone)."""
+    """No tool loads a file holding only the extrinsic (Basalt's loader: 10 required fields
+    missing): refused, with the fields a base must provide and the way out (--base, or ros2 for the
+    rotation alone)."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # refused before any warning
         with pytest.raises(ValueError, match=f"--to {to} needs --base: .* loads no file without ") as info:
@@ -102,7 +105,8 @@ def test_without_a_base_a_file_is_refused_naming_what_the_tools_loader_needs(to,
 
 
 def _base(tmp_path, to):
-    """A small base file of each tool, two cameras where the tool has several (identity rotations)."""
+    """A small base file of each tool, two cameras where the tool has several (identity
+    rotations)."""
     path = tmp_path / f"base_{to}.{'json' if to == 'basalt' else 'yaml'}"
     pose = {"px": 0.1, "py": 0.2, "pz": 0.3, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}
     path.write_text({"kalibr": KALIBR_BASE, "openvins": "%YAML:1.0\n" + KALIBR_BASE.replace("T_cam_imu", "T_imu_cam"),
@@ -156,8 +160,8 @@ def test_a_kalibr_base_changes_in_three_rotation_rows_and_the_offset_only(tmp_pa
 
 
 def test_by_default_the_other_cameras_turn_with_the_one_calibrated(tmp_path):
-    """KALIBR_BASE's cameras are both the identity: cam0 set to R_TRUE turns cam1 to R_TRUE too; their T_cam_imu
-    translations (the IMU in each camera) stay, and so does every other line."""
+    """KALIBR_BASE's cameras are both the identity: cam0 set to R_TRUE turns cam1 to R_TRUE too;
+    their T_cam_imu translations (the IMU in each camera) stay, and so does every other line."""
     base = tmp_path / "camchain.yaml"
     base.write_text(KALIBR_BASE)
     with warnings.catch_warnings():
@@ -174,8 +178,9 @@ def test_by_default_the_other_cameras_turn_with_the_one_calibrated(tmp_path):
 
 
 def test_another_cameras_entry_that_cannot_turn_is_named_with_the_way_out(tmp_path):
-    """The rig's correction reaches every camera: one whose entry cannot be edited (a merge key, a matrix that is
-    not a rotation) stops the export naming that camera and --one-camera; with --one-camera it goes through."""
+    """The rig's correction reaches every camera: one whose entry cannot be edited (a merge key, a
+    matrix that is not a rotation) stops the export naming that camera and --one-camera; with
+    --one-camera it goes through."""
     base = tmp_path / "camchain.yaml"
     for cam1 in ("cam1:\n  <<: *b\n  T_cam_imu:\n", "cam1:\n  T_cam_imu:\n  - [2.0, 0.0, 0.0, 0.7]\n"):
         text = KALIBR_BASE.split("cam1:\n  T_cam_imu:\n")
@@ -211,7 +216,8 @@ def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
     export = export_calibration(_report(d=None), "kalibr", base=base)
     assert read_vio_file(_written(tmp_path, export, "n.yaml")).time_offset_s() == -0.5
     assert "cam0.timeshift_cam_imu" not in export.changed and any("left as it was" in n for n in export.notes)
-    # a static-pose report written before time_offset_s became null carries 0.0: not a measurement either
+    # a static-pose report written before time_offset_s became null carries 0.0: not a measurement
+    # either
     for d in (0.0, 0.0042, None):
         report = {**_report(d=d), "inputs": {"sensor": {"kind": "static poses", "samples": 10}}}
         export = export_calibration(report, "kalibr", base=base)
@@ -225,9 +231,9 @@ def test_a_static_pose_report_leaves_the_files_offset_as_it_was(tmp_path):
 
 @pytest.mark.parametrize("offset", ["null", "0.0"])
 def test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command(tmp_path, offset):
-    """Issue 33: the report of static poses (calibrate --poses) has no clock; before, its 0.0 overwrote the user's
-    timeshift_cam_imu of 0.0042. Null (the schema now) and 0.0 (older reports) both leave it, and the command says
-    so; a gyro report's number is written."""
+    """Issue 33: the report of static poses (calibrate --poses) has no clock; before, its 0.0
+    overwrote the user's timeshift_cam_imu of 0.0042. Null (the schema now) and 0.0 (older reports)
+    both leave it, and the command says so; a gyro report's number is written."""
     R = np.asarray(R_TRUE).tolist()
     report, base, out = tmp_path / "robot.json", tmp_path / "camchain-imucam.yaml", tmp_path / "new.yaml"
     poses = '{"kind": "static poses", "samples": 12}'
@@ -283,7 +289,8 @@ def test_basalt_keeps_the_files_quaternion_hemisphere(tmp_path):
     assert (out["value0"]["T_imu_cam"][1]["px"], out["value0"]["T_imu_cam"][1]["pz"]) == (0.1, 0.3)
 
 
-# ----------------------------------------------------------------------------------------------------- refusals
+# --------------------------------------------------------------------------------------------------
+# refusals
 
 def test_a_failed_verdict_is_refused_unless_forced_and_a_warning_is_carried_over():
     with pytest.raises(ValueError, match="verdict is fail .*m.*force"):
@@ -365,13 +372,15 @@ def test_reference_files_that_are_not_camera_imu_extrinsics_are_refused(tmp_path
         load_reference(path)
 
 
-# --------------------------------------------------------------------------------------------------------- sign
+# --------------------------------------------------------------------------------------------------
+# sign
 
 @pytest.mark.parametrize("shift_ms", (2.29, -12.62))
 def test_a_known_gyro_clock_shift_comes_out_in_each_tools_field_and_sign(tmp_path, shift_ms):
-    """The gyro's clock reads ``shift`` ahead (its sample stamped t + shift is the camera's at t): Kalibr's and
-    OpenVINS' ``timeshift_cam_imu`` (t_imu = t_cam + shift) and Basalt's ``cam_time_offset_ns`` (camera time plus
-    it is IMU time) are +shift; the ROS 2 note and ORB-SLAM3's (no field) state it with its sign."""
+    """The gyro's clock reads ``shift`` ahead (its sample stamped t + shift is the camera's at t):
+    Kalibr's and OpenVINS' ``timeshift_cam_imu`` (t_imu = t_cam + shift) and Basalt's
+    ``cam_time_offset_ns`` (camera time plus it is IMU time) are +shift; the ROS 2 note and
+    ORB-SLAM3's (no field) state it with its sign."""
     result = calibrate(*_rig(1e-3 * shift_ms), n_bootstrap=0)
     assert result.verdict.level == "ok"
     for to in ("kalibr", "openvins", "basalt"):
@@ -383,7 +392,8 @@ def test_a_known_gyro_clock_shift_comes_out_in_each_tools_field_and_sign(tmp_pat
     assert f"d = {1e-3 * shift_ms:.5f}"[:-1] in _export(result, "ros2").notes[0]
 
 
-# ------------------------------------------------------------------------------------------------------------ CLI
+# --------------------------------------------------------------------------------------------------
+# CLI
 
 def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
     report, base, out = tmp_path / "report.json", tmp_path / "camchain.yaml", tmp_path / "new.yaml"
@@ -404,7 +414,8 @@ def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
     assert failed.returncode == 2 and "verdict is fail" in failed.stderr and failed.stdout == ""
     forced = subprocess.run(cmd + ["--force"], capture_output=True, text=True)
     assert forced.returncode == 0 and forced.stdout.startswith("# my rig")  # no --out: standard output
-    # one camera only, into cam1 which has no offset: the key is said to be added, and the rig's move is warned
+    # one camera only, into cam1 which has no offset: the key is said to be added, and the rig's
+    # move is warned
     one = subprocess.run(cmd + ["--force", "--camera", "cam1", "--one-camera"], capture_output=True, text=True)
     assert one.returncode == 0 and "kalibr: changed cam1.T_cam_imu rotation; added cam1.timeshift_cam_imu" in \
         one.stderr and "ExportWarning: one camera only: cam1 is changed" in one.stderr
@@ -412,11 +423,13 @@ def test_the_export_command_writes_a_copy_and_says_what_changed(tmp_path):
     assert bare.returncode == 2 and "error: --to kalibr needs --base" in bare.stderr and bare.stdout == ""
 
 
-# ------------------------------------------------------------------------------------------------ real files
+# ------------------------------------------------------------------------------------------------
+# real files
 
 def _orbslam3_inertial(folder, tmp_path):
-    """ORB-SLAM3's real monocular settings with the visual-inertial block its Monocular-Inertial settings carry
-    (``IMU.T_b_c1`` as an ``!!opencv-matrix`` of ``dt: f``), holding the rig's published extrinsic."""
+    """ORB-SLAM3's real monocular settings with the visual-inertial block its Monocular-Inertial
+    settings carry (``IMU.T_b_c1`` as an ``!!opencv-matrix`` of ``dt: f``), holding the rig's
+    published extrinsic."""
     name = {"euroc_mh01_orbslam3": "orbslam3_Monocular_EuRoC.yaml",
             "tumvi_room1_orbslam3mono": "orbslam3_Monocular_TUM-VI.yaml"}[folder]
     T = np.eye(4)
@@ -497,8 +510,8 @@ def test_real_files_round_trip_with_only_the_rotation_and_offset_changed(tmp_pat
             fs.release()
 
 
-#: Both rigs' files with two cameras: Kalibr's camchain (with T_cn_cnm1), OpenVINS' chains (T_imu_cam on EuRoC,
-#: T_cam_imu on TUM-VI), Basalt's JSON (two camera models each).
+#: Both rigs' files with two cameras: Kalibr's camchain (with T_cn_cnm1), OpenVINS' chains
+#: (T_imu_cam on EuRoC, T_cam_imu on TUM-VI), Basalt's JSON (two camera models each).
 _RIG_FILES = [(f, n) for f, names in _REFERENCES.items() for n in names[1:]] + [("tumvi_room1_orbslam3mono",
                                                                                "camchain.yaml")]
 
@@ -513,9 +526,10 @@ def _camera_to_camera(file, i, j):
 @pytest.mark.parametrize("folder, name", _RIG_FILES)
 @pytest.mark.parametrize("camera", ("cam0", "cam1"))
 def test_a_two_camera_file_stays_a_rig(tmp_path, folder, name, camera):
-    """Issue 35: exporting cam0's (or cam1's) R0 into a stereo file leaves the cam0-cam1 rotation as it was to 1e-9
-    deg and its translation to 1e-12 m (Kalibr's T_cn_cnm1 unchanged byte for byte); the calibrated camera gets R0
-    exactly; one camera only moves the stereo rotation by the whole correction, and warns with that angle."""
+    """Issue 35: exporting cam0's (or cam1's) R0 into a stereo file leaves the cam0-cam1 rotation as
+    it was to 1e-9 deg and its translation to 1e-12 m (Kalibr's T_cn_cnm1 unchanged byte for byte);
+    the calibrated camera gets R0 exactly; one camera only moves the stereo rotation by the whole
+    correction, and warns with that angle."""
     base = data_root() / folder / name
     before = read_vio_file(base)
     R = so3.matrix_from_rotation_vector(np.radians([0.12, -0.08, 0.1])) @ before.camera_from_sensor(camera)
@@ -542,8 +556,8 @@ def test_a_two_camera_file_stays_a_rig(tmp_path, folder, name, camera):
 
 @needs_real
 def test_the_two_published_references_of_each_rig_disagree_by_the_reference_floor():
-    """Kalibr's (the dataset's) and Basalt's calibrations of cam0: 0.343 deg apart on EuRoC (both of Basalt's camera
-    models), 0.034 deg on TUM-VI; OpenVINS' files repeat the dataset's (0 deg)."""
+    """Kalibr's (the dataset's) and Basalt's calibrations of cam0: 0.343 deg apart on EuRoC (both of
+    Basalt's camera models), 0.034 deg on TUM-VI; OpenVINS' files repeat the dataset's (0 deg)."""
     floors = {"euroc_mh01_orbslam3": 0.343, "tumvi_room1_orbslam3mono": 0.034}
     for folder, names in _REFERENCES.items():
         R = [load_reference(data_root() / folder / n) for n in names]
@@ -664,8 +678,8 @@ def test_names_from_the_report_and_the_command_line_cannot_add_lines_or_shell_wo
 
 @pytest.mark.parametrize("source", ("/home/me/rig/imu0.csv", "C:\\Users\\me\\imu0.csv", "imu0.csv"))
 def test_no_folder_reaches_any_output(tmp_path, source):
-    """Issue 35: file names only, in the command, the notes and the warnings (the report's sensor path and the
-    base's folder are the user's own business)."""
+    """Issue 35: file names only, in the command, the notes and the warnings (the report's sensor
+    path and the base's folder are the user's own business)."""
     report = _report(kind="OrientationStream")
     report["inputs"]["sensor"]["source"] = source
     base = _base(tmp_path, "kalibr")
@@ -689,12 +703,14 @@ def test_the_export_help_says_what_the_command_now_does():
     assert "without --base a file is refused" in " ".join(text.split()) and "minimal" not in text
     assert "replication/_shipped/docs/conventions.md" in " ".join(text.split())
 
-# ----------------------------------------------------------------------------------------------------
-# Adversarial inputs to ``python -m replication export`` and ``load_reference`` (replication.rig.export, vioformats,
-# realdata), written by an independent referee who tried to make them lie: YAML anchors and duplicate keys, files with
-# both OpenVINS keys, ORB-SLAM3 version and legacy keys, integer OpenCV matrices, camera names out of range, implausible
-# or mistyped report fields, CRLF and byte-order marks, tabs in JSON, files recognised by content. Each test states the
-# behaviour the product claims; every one failed before the fixes it guards. No calibration is run.
+# --------------------------------------------------------------------------------------------------
+# Adversarial inputs to ``python -m replication export`` and ``load_reference``
+# (replication.rig.export, vioformats, realdata), written by an independent referee who tried to
+# make them lie: YAML anchors and duplicate keys, files with both OpenVINS keys, ORB-SLAM3 version
+# and legacy keys, integer OpenCV matrices, camera names out of range, implausible or mistyped
+# report fields, CRLF and byte-order marks, tabs in JSON, files recognised by content. Each test
+# states the behaviour the product claims; every one failed before the fixes it guards. No
+# calibration is run.
 
 
 R = RIG_R0
@@ -728,7 +744,8 @@ def _angle(A, B):
 
 
 def test_anchor_alias_editing_cam1_leaves_cam0_untouched(tmp_path):
-    """A row anchored in cam0 and aliased in cam1: exporting cam1 rewrites the anchor, i.e. cam0's row."""
+    """A row anchored in cam0 and aliased in cam1: exporting cam1 rewrites the anchor, i.e. cam0's
+    row."""
     text = ("cam0:\n  T_cam_imu:\n  - &r0 [1.0, 0.0, 0.0, 0.1]\n  - [0.0, 1.0, 0.0, 0.2]\n  - [0.0, 0.0, 1.0, 0.3]\n"
             "  - [0.0, 0.0, 0.0, 1.0]\n  timeshift_cam_imu: 0.0\n"
             "cam1:\n  T_cam_imu:\n  - *r0\n  - [0.0, 1.0, 0.0, 0.2]\n  - [0.0, 0.0, 1.0, 0.3]\n"
@@ -761,7 +778,8 @@ def test_anchor_alias_on_the_offset_of_another_camera(tmp_path):
     "cam0:\n  timeshift_cam_imu: 0.0\n  T_cam_imu:\n" + I4 + "  timeshift_cam_imu: 0.5\n",
 ], ids=["duplicate camera", "duplicate timeshift"])
 def test_duplicate_keys_edit_what_yaml_readers_see(tmp_path, text):
-    """PyYAML (Kalibr's reader) keeps the last duplicate; the export edits the first and reports success."""
+    """PyYAML (Kalibr's reader) keeps the last duplicate; the export edits the first and reports
+    success."""
     try:
         out = _export_ea(tmp_path, text, "kalibr").text
     except ValueError:
@@ -772,7 +790,8 @@ def test_duplicate_keys_edit_what_yaml_readers_see(tmp_path, text):
 
 
 def test_openvins_with_both_keys_uses_T_imu_cam_like_openvins(tmp_path):
-    """OpenVINS parses T_imu_cam and falls back to T_cam_imu only when it is missing (opencv_yaml_parse.h)."""
+    """OpenVINS parses T_imu_cam and falls back to T_cam_imu only when it is missing
+    (opencv_yaml_parse.h)."""
     Rz = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # T_imu_cam rotation: R0 = Rz^T
     text = ("%YAML:1.0\ncam0:\n  T_imu_cam:\n  - [0.0, -1.0, 0.0, 0.0]\n  - [1.0, 0.0, 0.0, 0.0]\n"
             "  - [0.0, 0.0, 1.0, 0.0]\n  - [0.0, 0.0, 0.0, 1.0]\n  T_cam_imu:\n" + I4 + "  timeshift_cam_imu: 0.0\n")
@@ -785,7 +804,8 @@ def test_openvins_with_both_keys_uses_T_imu_cam_like_openvins(tmp_path):
 
 
 def test_orbslam3_unquoted_file_version_is_warned(tmp_path):
-    """ORB-SLAM3 uses IMU.T_b_c1 only if File.version is the *string* "1.0" (System.cc: node.isString())."""
+    """ORB-SLAM3 uses IMU.T_b_c1 only if File.version is the *string* "1.0" (System.cc:
+    node.isString())."""
     text = ("%YAML:1.0\nFile.version: 1.0\nIMU.T_b_c1: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: f\n"
             f"   data: [{I16}]\n")
     (tmp_path / "o.yaml").write_text(text)
@@ -813,7 +833,8 @@ def test_opencv_integer_matrix_does_not_truncate_the_rotation(tmp_path):
 @needs_real_ea
 @pytest.mark.parametrize("camera", ["cam-1", "cam-2", "cam2", "camx"])
 def test_basalt_camera_name_is_checked_without_an_offset(tmp_path, camera):
-    """With time_offset_s null the camera is never checked: cam-1 edits the last camera, cam-2 the first."""
+    """With time_offset_s null the camera is never checked: cam-1 edits the last camera, cam-2 the
+    first."""
     with pytest.raises(DataFileError, match="no camera"):
         _export_ea(tmp_path, BASALT.read_text(), "basalt", name="b.json", report=_report_ea(d=None), camera=camera)
 
@@ -840,7 +861,8 @@ def test_euroc_sensor_yaml_without_sensor_type_is_not_taken_for_a_camera(tmp_pat
 
 @pytest.mark.parametrize("to", ["ros2", "orbslam3"])
 def test_offset_against_an_orientation_stream_is_warned_for_every_target(tmp_path, to):
-    """Claim (4): ros2 and orbslam3 tell the user to add d to the stamps, without the ExportWarning."""
+    """Claim (4): ros2 and orbslam3 tell the user to add d to the stamps, without the
+    ExportWarning."""
     base = None
     if to == "orbslam3":
         base = tmp_path / "orb.yaml"
@@ -898,7 +920,8 @@ def test_odd_bases_are_clear_errors_not_tracebacks(tmp_path, text):
 
 @needs_real_ea
 def test_a_camchain_named_txt_is_recognised_by_content(tmp_path):
-    """Claim (7): recognised by content; a .txt camchain is read as Tabb's file ('a line starting with Z')."""
+    """Claim (7): recognised by content; a .txt camchain is read as Tabb's file ('a line starting
+    with Z')."""
     path = tmp_path / "camchain.txt"
     path.write_text(CAMCHAIN.read_text())
     assert _angle(load_reference(path), load_reference(CAMCHAIN)) < 1e-12
@@ -921,7 +944,8 @@ def test_valid_json_indented_with_tabs_is_read(tmp_path):
 
 @needs_real_ea
 def test_basalt_quaternion_within_the_documented_norm_tolerance_is_read(tmp_path):
-    """docs/conventions.md: stored quaternions must have a norm within 1e-3 of 1; Basalt's check is 1e-6."""
+    """docs/conventions.md: stored quaternions must have a norm within 1e-3 of 1; Basalt's check is
+    1e-6."""
     text = re.sub(r'("q[xyzw]": )(-?[0-9.]+)', lambda m: m.group(1) + f"{float(m.group(2)):.5f}",
                   BASALT.read_text())
     path = tmp_path / "b5.json"

@@ -37,14 +37,16 @@ def _files_the_project_reads():
     return names
 
 
-#: Names the scanned files write themselves (scratch files of test_realdata.py), not real recordings.
+#: Names the scanned files write themselves (scratch files of test_realdata.py), not real
+#: recordings.
 SCRATCH_FILES = {"bad.txt", "c.yaml", "cam.txt", "imu.csv", "none.csv", "rep.txt", "robot.txt", "t.txt",
                  "any.txt", "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv"}
 
 
 def test_manifest_lists_every_real_data_file_the_project_reads():
-    """Without looking at the data folder: every file name the scanned code opens is in the manifest or is a
-    scratch file of the tests (a new real file not added to the manifest fails here with or without the data)."""
+    """Without looking at the data folder: every file name the scanned code opens is in the manifest
+    or is a scratch file of the tests (a new real file not added to the manifest fails here with or
+    without the data)."""
     entries = fetch.load_manifest()
     listed = {e.file for e in entries}
     used = _files_the_project_reads() - SCRATCH_FILES
@@ -199,8 +201,8 @@ def test_without_a_network_fetch_data_says_so_once(tmp_path, monkeypatch, capsys
 
 
 def test_a_server_that_answers_with_an_error_fails_that_file_only(tmp_path, monkeypatch, capsys):
-    """The other side of the line: an HTTP error is the file's problem, said per file with its URL; the fetch goes
-    on."""
+    """The other side of the line: an HTTP error is the file's problem, said per file with its URL;
+    the fetch goes on."""
     from replication.cli import main
 
     urlopen, calls = _unreachable(urllib.error.HTTPError("u", 404, "Not Found", {}, None))

@@ -1,5 +1,6 @@
-"""The live front end and the command line's online path: the batch options honoured, short recordings handled,
-the usual input mistakes named online, ready at the pair's formation time, and the online results in the report."""
+"""The live front end and the command line's online path: the batch options honoured, short
+recordings handled, the usual input mistakes named online, ready at the pair's formation time, and
+the online results in the report."""
 import json
 import math
 
@@ -66,7 +67,8 @@ def test_clean_rig_is_ready_at_the_pairs_formation_time(rig):
 
 
 def test_a_short_recording_is_paired_at_its_end(rig):
-    """15 s of both streams, shorter than the 20 s offset window: the offset is estimated when the streams end."""
+    """15 s of both streams, shorter than the 20 s offset window: the offset is estimated when the
+    streams end."""
     R0, camera, gyro, _ = rig
     keep = gyro.t < 16.0
     rows, summary = _summary(camera.between(0.0, 15.0), GyroStream(gyro.t[keep], gyro.omega[keep], "gyro"), R0)
@@ -159,12 +161,13 @@ def test_cli_online_on_a_short_recording_writes_the_report(tmp_path, rig):
     online = json.loads(out.read_text())["online"]
     assert 12 <= online["pairs"] <= 15 and online["clock_offset_s"] == pytest.approx(0.0, abs=1e-3)  # 14; -0.1 ms
 
-# ----------------------------------------------------------------------------------------------------
-# The live front end (:class:`replication.rig.live.LiveRig`) on an orientation sensor, exactly: which poses pair
-# (``interval`` reached exactly, no shared pose, the stride), the sensor slerped to the camera time plus the clock
-# offset (``B = R0^T A R0`` to rounding for a constant-rate motion), gaps at ``GAP_FACTOR`` typical steps, the
-# buffer and the early window kept, the refusals, and the evidence it adds to the verdict. Mutation testing
-# (scripts/mutation) found these unguarded by the fast tests.
+# --------------------------------------------------------------------------------------------------
+# The live front end (:class:`replication.rig.live.LiveRig`) on an orientation sensor, exactly:
+# which poses pair (``interval`` reached exactly, no shared pose, the stride), the sensor slerped to
+# the camera time plus the clock offset (``B = R0^T A R0`` to rounding for a constant-rate motion),
+# gaps at ``GAP_FACTOR`` typical steps, the buffer and the early window kept, the refusals, and the
+# evidence it adds to the verdict. Mutation testing (scripts/mutation) found these unguarded by the
+# fast tests.
 
 
 R0 = so3.matrix_from_rotation_vector(np.array([0.3, -0.5, 0.8]))
@@ -177,8 +180,8 @@ def _C(t):
 
 
 def _feed(rig, t_end, offset=0.0, sensor_skip=()):
-    """Camera poses every DT_CAM and sensor orientations every DT_SEN (stamped t + offset) up to t_end, in time
-    order; sensor samples whose index is in ``sensor_skip`` are left out (a gap)."""
+    """Camera poses every DT_CAM and sensor orientations every DT_SEN (stamped t + offset) up to
+    t_end, in time order; sensor samples whose index is in ``sensor_skip`` are left out (a gap)."""
     events = [(k * DT_CAM, 1, k) for k in range(int(round(t_end / DT_CAM)) + 1)]
     events += [(k * DT_SEN + offset, 0, k) for k in range(-128, int(round((t_end + 1) / DT_SEN)) + 1)
                if k not in sensor_skip]
@@ -495,7 +498,8 @@ def test_the_rigs_options_are_checked():
                     ({"on_pair": 5}, r"^on_pair must be callable or None, got 5$")):
         with pytest.raises(ValueError, match=msg):
             LiveRig(cal, **kw)
-    # the offset window must exceed the search both ways plus a second, only when the offset is estimated
+    # the offset window must exceed the search both ways plus a second, only when the offset is
+    # estimated
     with pytest.raises(ValueError, match=r"^offset_window must exceed 2 max_offset \+ 1 s = 1\.6 s \(the offset search "
                                          r"shifts the window by up to max_offset both ways\), got 1\.6$"):
         LiveRig(cal, max_offset=0.3, offset_window=1.6)
@@ -510,10 +514,12 @@ def test_the_rigs_options_are_checked():
     assert rig.correct_offset is True and rig.on_pair is None and rig.GAP_FACTOR == 5.0
 
 
-# ------------------------------------------------------------------ pairing boundaries, gaps and the buffer
+# ------------------------------------------------------------------ pairing boundaries, gaps and
+# the buffer
 def _feed_orientations(rig, cam_times, sen_times, offset=0.0):
-    """The constant-rate rig: camera poses at ``cam_times``, sensor orientations stamped ``t`` (true time
-    ``t - offset``) at ``sen_times``, merged in time order (a sensor sample before a camera pose at the same time)."""
+    """The constant-rate rig: camera poses at ``cam_times``, sensor orientations stamped ``t`` (true
+    time ``t - offset``) at ``sen_times``, merged in time order (a sensor sample before a camera
+    pose at the same time)."""
     events = sorted([(t, 1) for t in cam_times] + [(t, 0) for t in sen_times])
     for t, kind in events:
         if kind:
@@ -581,7 +587,8 @@ def test_a_gap_between_the_only_two_samples_inside_a_pair_drops_it():
     rig, pairs = _rig(interval=1 / 16, offset=1 / 256)  # spans fall half-way between sensor samples
     sen = [k * DT_SEN for k in range(-8, 40) if k not in range(2, 8)]  # hole: 1 -> 8 (7 steps)
     _feed_orientations(rig, [0.0, 1 / 16, 3 / 32, 5 / 32], sen)
-    # pair 1 spans [0.5, 8.5]/128: its ends are bracketed by (0, 1) and (8, 9), only 1 and 8 lie inside
+    # pair 1 spans [0.5, 8.5]/128: its ends are bracketed by (0, 1) and (8, 9), only 1 and 8 lie
+    # inside
     assert rig.pairs_dropped == 1 and [t for t, _, _ in pairs] == [5 / 32]
 
 
@@ -594,7 +601,8 @@ def test_a_sensor_slower_than_the_pairs_is_slerped_not_refused():
 
 
 def test_a_sensor_slower_than_the_buffer_still_brackets_a_pose_with_its_last_two_samples():
-    # keep = interval + 2 max_offset + 1 = 2.2 s < the 3 s sensor step: the buffer holds the last two samples
+    # keep = interval + 2 max_offset + 1 = 2.2 s < the 3 s sensor step: the buffer holds the last
+    # two samples
     rig, pairs = _rig(interval=1.0, max_offset=0.1)
     _feed_orientations(rig, [0.5, 1.5], [0.0, 3.0])
     assert [g[0] for g in rig._gyro] == [0.0, 3.0]
@@ -711,7 +719,8 @@ def test_the_summary_says_whether_an_estimated_offset_was_applied():
     assert s["clock_offset_s"] is None and s["clock_offset_applied"] is False and s["note"] == short.offset_note
 
 
-# ------------------------------------------------------------------ replay's options, columns and re-mount
+# ------------------------------------------------------------------ replay's options, columns and
+# re-mount
 def test_replay_passes_its_options_to_the_rig():
     cam, sen = _streams(3.0)
     seen = []
@@ -776,7 +785,8 @@ def test_replay_remounts_a_gyro_by_its_rates():
 
 # ------------------------------------------------------------------ the input-mistake diagnosis
 def _gyro_in_deg_per_s(seconds=5.0):
-    """Camera poses at 8 Hz and a 32 Hz gyro of the same motion whose rates are in deg/s (read as rad/s)."""
+    """Camera poses at 8 Hz and a 32 Hz gyro of the same motion whose rates are in deg/s (read as
+    rad/s)."""
     tc, ts = np.arange(0.0, seconds, 1 / 8), np.arange(-0.5, seconds + 0.5, 1 / 32)
     S = np.array([_motion(t) @ R0 for t in ts])
     w = so3.rotation_vector_from_matrix(np.swapaxes(S[:-1], -1, -2) @ S[1:]) * 32
@@ -834,8 +844,9 @@ def test_an_event_of_pairs_the_rig_did_not_form_has_no_times():
 
 
 def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
-    # sample times whose step 1 -> T2 is exactly GAP_FACTOR x the running typical step (0.99 x 1 + 0.01 x step) in
-    # floating point, and T2 -> T3 leaves the typical step there (found by search over the last bits)
+    # sample times whose step 1 -> T2 is exactly GAP_FACTOR x the running typical step (0.99 x 1 +
+    # 0.01 x step) in floating point, and T2 -> T3 leaves the typical step there (found by search
+    # over the last bits)
     T2, T3 = 6.2105263157894735, 7.252631578947368
     slow = lambda t: so3.matrix_from_rotation_vector(0.1 * W * t)  # noqa: E731  (0.52 rad over the long step: slerp stays exact)
     for (t0, t1), samples in (((1.5, 2.5), (0.0, 1.0, T2)),   # both poses bracketed by the long step
@@ -853,7 +864,8 @@ def test_a_sensor_step_of_exactly_five_typical_steps_is_not_a_gap():
 
 @pytest.mark.parametrize("formed, used", [(9, 3), (10, 4), (11, 4), (12, 4), (1, 1)])
 def test_the_pairs_before_gaps_count_the_pairs_a_stride_uses_like_the_batch(formed, used):
-    """Pairs 1, 1 + stride, 1 + 2 stride, ... are used: ceil(formed / stride), as the batch's len(A[::stride])."""
+    """Pairs 1, 1 + stride, 1 + 2 stride, ... are used: ceil(formed / stride), as the batch's
+    len(A[::stride])."""
     from replication.rig.live import LiveRig
 
     rig = LiveRig(OnlineCalibrator(), stride=3, offset=0.0)

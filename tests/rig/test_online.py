@@ -1,5 +1,6 @@
-"""The online estimator: O(1) updates equal to the batch solver on the same pairs, a calibrated radius, re-mount
-detection on synthetic steps, and bad input refused like the rest of the package."""
+"""The online estimator: O(1) updates equal to the batch solver on the same pairs, a calibrated
+radius, re-mount detection on synthetic steps, and bad input refused like the rest of the
+package."""
 import math
 
 import numpy as np
@@ -31,7 +32,8 @@ def _drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3
 
 
 def _noisy_pairs(rng, J, R0, *, noise_deg=0.2, max_motion_deg=60.0):
-    """Camera motions up to ``max_motion_deg``, sensor motions ``R0^T A R0``, Gaussian noise on both sides."""
+    """Camera motions up to ``max_motion_deg``, sensor motions ``R0^T A R0``, Gaussian noise on both
+    sides."""
     w = rng.normal(size=(J, 3))
     w *= (np.radians(max_motion_deg) * rng.uniform(0.3, 1.0, J) / np.linalg.norm(w, axis=1))[:, None]
     A = so3.matrix_from_rotation_vector(w)
@@ -68,7 +70,8 @@ def test_pairwise_updates_equal_the_replay():
 
 
 def test_radius_covers_the_error_about_95_percent(rng):
-    """Coverage at several checkpoints over 150 problems: inside 88-99 % (the 95 % level, 150 draws)."""
+    """Coverage at several checkpoints over 150 problems: inside 88-99 % (the 95 % level, 150
+    draws)."""
     R0s = so3.random_rotations(rng, 150)
     covered, checks = [], (20, 40, 100)
     for R0 in R0s:
@@ -142,10 +145,12 @@ def test_bad_settings_are_refused(kwargs, message):
         OnlineCalibrator(**kwargs)
 
 
-# ------------------------------------------------------------------------------------------------ the live front end
+# ------------------------------------------------------------------------------------------------
+# the live front end
 
 def _streams(seconds=60.0, phase=0.0):
-    """The synthetic rig, its first motion component shifted by ``phase``, the orientation sensor at 200 Hz."""
+    """The synthetic rig, its first motion component shifted by ``phase``, the orientation sensor at
+    200 Hz."""
     from replication.testing import rig_streams
 
     return rig_streams(seconds, phase=(phase, 0.0, 0.0), sensor_step=1)
@@ -220,7 +225,8 @@ def test_cli_online_writes_the_track(tmp_path, capsys):
 
 
 def test_between_refinements_the_estimate_is_the_last_minimiser(rng):
-    """The two-step steps only prepare the next refinement: the published estimate is the one the radius describes."""
+    """The two-step steps only prepare the next refinement: the published estimate is the one the
+    radius describes."""
     R0 = so3.random_rotations(rng, ())
     A, B = _noisy_pairs(rng, 19, R0)
     states = OnlineCalibrator(cusum_h=1e9).update_many(A, B)
@@ -240,9 +246,10 @@ def test_live_pairs_share_no_pose():
 
 
 def test_a_mounting_far_from_the_identity_is_found_like_the_batch_solver():
-    """R0 150-180 deg from the identity (a camera upside down relative to the sensor), Haar-distributed motions:
-    Newton from the identity alone ended about 180 deg off in 21 of these 30 (a critical point of eq. (8)); the
-    refinement also starts from the relaxed minimiser and lands where the batch solver does."""
+    """R0 150-180 deg from the identity (a camera upside down relative to the sensor),
+    Haar-distributed motions: Newton from the identity alone ended about 180 deg off in 21 of these
+    30 (a critical point of eq. (8)); the refinement also starts from the relaxed minimiser and
+    lands where the batch solver does."""
     from replication.core.solvers import solve
 
     rng = np.random.default_rng(3)
@@ -255,11 +262,11 @@ def test_a_mounting_far_from_the_identity_is_found_like_the_batch_solver():
         oc.update_many(A, B)
         assert so3.angle_between_deg(oc.estimate(), solve("chordal_optimal", A, B)) < 1e-6
 
-# ----------------------------------------------------------------------------------------------------
-# The online estimator's words earn their meaning: ``ready`` only when the motion determines R0 (excitation, distinct
-# pairs, a radius with a noise floor, a verdict that does not fail), repeated pairs not counted, alarms confirmed and
-# told apart (re-mount, noise change, outliers, new information), every parameter validated; each rule is tested at
-# its boundary.
+# --------------------------------------------------------------------------------------------------
+# The online estimator's words earn their meaning: ``ready`` only when the motion determines R0
+# (excitation, distinct pairs, a radius with a noise floor, a verdict that does not fail), repeated
+# pairs not counted, alarms confirmed and told apart (re-mount, noise change, outliers, new
+# information), every parameter validated; each rule is tested at its boundary.
 
 
 @pytest.fixture
@@ -272,7 +279,8 @@ def _feed(A, B, **kw):
     return oc, oc.update_many(A, B)
 
 
-# ------------------------------------------------------------------------------------------------ ready = determined
+# ------------------------------------------------------------------------------------------------
+# ready = determined
 
 def test_single_axis_noise_free_motion_is_never_ready_and_the_axis_is_named(rng, R0):
     axis = np.array([0.3, 0.4, 0.5]) / np.linalg.norm([0.3, 0.4, 0.5])
@@ -288,8 +296,8 @@ def test_single_axis_noise_free_motion_is_never_ready_and_the_axis_is_named(rng,
 
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_the_named_axis_has_one_sign_whatever_the_motions_direction(rng, R0, sign):
-    # eigh's eigenvector sign is arbitrary (it flipped between numpy's AVX-512 and AVX2 paths in notebook 08): the
-    # axis is named with its largest component positive
+    # eigh's eigenvector sign is arbitrary (it flipped between numpy's AVX-512 and AVX2 paths in
+    # notebook 08): the axis is named with its largest component positive
     axis = sign * np.array([0.3, 0.4, 0.5]) / np.linalg.norm([0.3, 0.4, 0.5])
     A, B = pair_stream(rng, 200, R0, noise_deg=0.0, axis=axis)
     oc, _ = _feed(A, B)
@@ -321,7 +329,8 @@ def test_a_stalled_stream_leaves_the_estimate_and_radius_as_they_were(rng, R0):
 
 @pytest.mark.parametrize("share, repeat", [(0.9, True), (1.1, False)])
 def test_near_duplicates_at_the_tolerance(rng, R0, share, repeat):
-    """A pair within duplicate_deg (elementwise) of an earlier one is a repeat; just outside, a new pair."""
+    """A pair within duplicate_deg (elementwise) of an earlier one is a repeat; just outside, a new
+    pair."""
     A, B = pair_stream(rng, 1, R0, motion_deg=(30.0, 40.0))
     tol = math.radians(DUPLICATE_DEG)
     # a unit rotation vector: scale it to the elementwise change
@@ -367,8 +376,8 @@ def test_noise_free_data_get_the_noise_floor_not_zero(rng, R0):
 @pytest.mark.parametrize("excitation, determined", [(0.98 * MIN_EXCITATION_DEG, False),
                                                     (1.02 * MIN_EXCITATION_DEG, True)])
 def test_determined_at_the_excitation_threshold(excitation, determined):
-    """Motions about z (20-40 deg) and about x by small angles phi_k: about z, lambda_min(G) = sum_k 4 sin^2(phi_k /
-    2), so the excitation is sqrt of that over the n pairs."""
+    """Motions about z (20-40 deg) and about x by small angles phi_k: about z, lambda_min(G) = sum_k
+    4 sin^2(phi_k / 2), so the excitation is sqrt of that over the n pairs."""
     n_z, n_x = 20, 20
     u = np.linspace(0.5, 1.5, n_x)
     target = math.radians(excitation) ** 2 * (n_z + n_x)
@@ -404,7 +413,8 @@ def test_ready_at_the_radius_target(rng, R0):
 
 
 def test_with_forgetting_the_effective_pairs_bound_ready(rng, R0):
-    """(1 + l) / (1 - l) = min_pairs at the lowest accepted factor: determined only in the limit; below it, refused."""
+    """(1 + l) / (1 - l) = min_pairs at the lowest accepted factor: determined only in the limit;
+    below it, refused."""
     lowest = (10 - 1) / (10 + 1)
     with pytest.raises(ValueError, match="forgetting must be in"):
         OnlineCalibrator(forgetting=lowest - 1e-9)
@@ -434,7 +444,8 @@ def test_every_parameter_is_validated_by_name(kwargs, message):
         OnlineCalibrator(**kwargs)
 
 
-# ------------------------------------------------------------------------------------------------ events told apart
+# ------------------------------------------------------------------------------------------------
+# events told apart
 
 def _two_mountings(rng, R0, step_deg, n1=200, n2=200, noise_deg=0.2):
     R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * np.array([0.6, 0.0, 0.8]))
@@ -515,11 +526,12 @@ def test_the_reference_level_stops_following_once_a_change_builds_up(rng, R0):
         a, b = pair_stream(rng, 1, R0)
 
 
-# ------------------------------------------------------------------------------------------------ an undecided end
+# ------------------------------------------------------------------------------------------------
+# an undecided end
 
 def test_ready_is_withdrawn_at_the_second_gross_misfit_and_said(rng, R0):
-    """A re-mount shows first as pairs that do not fit: one gross misfit leaves ``ready`` (outliers happen), the
-    second withdraws it, naming the misfits, before the CUSUM decides."""
+    """A re-mount shows first as pairs that do not fit: one gross misfit leaves ``ready`` (outliers
+    happen), the second withdraws it, naming the misfits, before the CUSUM decides."""
     from replication.rig.online import MISFITS_WITHDRAW_READY
 
     A, B = pair_stream(rng, 300, R0)
@@ -548,8 +560,9 @@ def test_an_alarm_being_confirmed_at_the_end_is_an_undecided_end(rng, R0):
 
 
 def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned():
-    """A 5 deg re-mount 3 s before the end of a 60 s replay (three pairs, too few for the CUSUM to alarm): the
-    summary is not ready and its verdict warns; without the re-mount, ready and no such warning."""
+    """A 5 deg re-mount 3 s before the end of a 60 s replay (three pairs, too few for the CUSUM to
+    alarm): the summary is not ready and its verdict warns; without the re-mount, ready and no such
+    warning."""
     from replication.rig.live import replay
     from replication.testing import rig_streams
 
@@ -563,11 +576,13 @@ def test_a_remount_just_before_the_end_of_a_live_replay_is_not_ready_and_warned(
     assert clean["ready"] and clean["verdict"]["level"] == "ok"
 
 
-# ------------------------------------------------------------------------------------------------ near copies
+# ------------------------------------------------------------------------------------------------
+# near copies
 def test_near_copies_of_pairs_are_counted_once_and_the_radius_covers_the_error():
-    """15 noisy pairs (0.3 deg) each given 8 times with a 1e-4 rad jitter (a case once found: counted as new
-    information, the radius covered the error in 8 of 30 runs, seeds [5, 0..29]): copies far below the noise are
-    repeats, the radius covers the error in at least 26 of 30 (29 measured)."""
+    """15 noisy pairs (0.3 deg) each given 8 times with a 1e-4 rad jitter (a case once found:
+    counted as new information, the radius covered the error in 8 of 30 runs, seeds [5, 0..29]):
+    copies far below the noise are repeats, the radius covers the error in at least 26 of 30 (29
+    measured)."""
     covered = 0
     for seed in range(30):
         rng = np.random.default_rng([5, seed])
@@ -615,11 +630,11 @@ def test_the_calibrator_starts_at_the_widest_tolerance_and_then_takes_the_noise(
     rms = oc.status()["rms_residual_deg"]
     assert 0.2 < rms < 0.4 and oc._repeats.tolerance_deg == pytest.approx(0.1 * rms)
 
-# ----------------------------------------------------------------------------------------------------
-# The online calibrator's rules (:class:`replication.rig.online.OnlineCalibrator`) at their boundaries: every option's
-# range and default, the running sums and their forgetting, the radius (``inf`` until the motion determines ``R0``),
-# ``determined`` and ``ready``, the evidence and the not-ready sentences. Mutation testing (scripts/mutation) found
-# these unguarded by the fast tests.
+# --------------------------------------------------------------------------------------------------
+# The online calibrator's rules (:class:`replication.rig.online.OnlineCalibrator`) at their
+# boundaries: every option's range and default, the running sums and their forgetting, the radius
+# (``inf`` until the motion determines ``R0``), ``determined`` and ``ready``, the evidence and the
+# not-ready sentences. Mutation testing (scripts/mutation) found these unguarded by the fast tests.
 
 
 R0_MO = so3.matrix_from_rotation_vector(np.array([0.4, -0.2, 0.9]))
@@ -746,7 +761,8 @@ def test_radius_and_readiness_once_determined():
     s = states[MIN_PAIRS - 1]
     assert s.estimated and s.determined and s.ready and 0 < s.radius_deg < 5.0 and s.n_pairs == MIN_PAIRS
     assert so3.angle_between_deg(c.estimate(), R0_MO) < 0.5
-    # the radius: (s^2 / 3) G^-1 at the calibrator's level, s^2 the mean square residual corrected for 3 unknowns
+    # the radius: (s^2 / 3) G^-1 at the calibrator's level, s^2 the mean square residual corrected
+    # for 3 unknowns
     x = c.R.reshape(-1, order="F")
     e = c.evidence()
     assert e["n_pairs"] == 40 and e["effective_pairs"] == 40 and e["determined"] is True and e["checking"] is False
@@ -830,7 +846,8 @@ def test_a_remount_online_starts_over_from_the_new_estimate():
     assert c._next_refine > c.n_pairs
 
 
-# --------------------------------------------------------------------------------------------- judging and status
+# ---------------------------------------------------------------------------------------------
+# judging and status
 def _small_noisy_pairs(n, rng, noise_deg):
     """Motions of 4-8 deg about random axes, sensor motions with ``noise_deg`` per axis."""
     axes = rng.standard_normal((n, 3))
@@ -895,7 +912,8 @@ def test_status_thresholds_are_strict_where_the_rule_says_below():
     c = OnlineCalibrator(target_deg=5.0)
     c.update_many(A, B)
     assert c.effective_pairs == MIN_PAIRS and c.status()["not_ready"] == [] and c.ready
-    # a calibrator whose thresholds equal what it measures: the excitation is enough, the radius is not below target
+    # a calibrator whose thresholds equal what it measures: the excitation is enough, the radius is
+    # not below target
     same = OnlineCalibrator(target_deg=c.radius, min_excitation_deg=c.excitation_deg)
     same.update_many(A, B)
     assert same.excitation_deg == c.excitation_deg and same.radius == c.radius and same.determined
@@ -949,8 +967,8 @@ def test_the_noise_level_from_four_pairs_divides_by_at_least_one():
 
 
 def test_the_radius_is_infinite_only_about_an_exactly_unexcited_axis_however_small_the_motions():
-    # ten motions of 1-3 deg about axes within a few microradians of z: lambda_min(G) ~ 3e-13, far below
-    # 1e-12 but above 1e-12 lambda_max (lambda_max ~ 0.015 < 1)
+    # ten motions of 1-3 deg about axes within a few microradians of z: lambda_min(G) ~ 3e-13, far
+    # below 1e-12 but above 1e-12 lambda_max (lambda_max ~ 0.015 < 1)
     rng = np.random.default_rng(5)
     axes = np.tile([0.0, 0.0, 1.0], (10, 1))
     axes[:, :2] += 3e-6 * rng.standard_normal((10, 2))
@@ -1006,9 +1024,11 @@ def test_update_many_names_the_camera_or_the_sensor_motions():
         OnlineCalibrator().update_many(A, -A)
 
 
-# --------------------------------------------------------------------------------------------- changes, online
+# ---------------------------------------------------------------------------------------------
+# changes, online
 def _outliers_after_the_start():
-    """40 pairs; pairs 10-13 (just after the detector starts at pair 10) have a 2 deg error in the sensor motion."""
+    """40 pairs; pairs 10-13 (just after the detector starts at pair 10) have a 2 deg error in the
+    sensor motion."""
     rng = np.random.default_rng(11)
     A, B = _pairs(40, rng, 0.2)
     B[10:14] = B[10:14] @ so3.matrix_from_rotation_vector(np.radians(2.0) * np.array([1.0, 0.0, 0.0]))
@@ -1019,7 +1039,8 @@ def test_outliers_right_after_the_detector_starts_date_their_onset_at_its_start(
     A, B = _outliers_after_the_start()
     c = OnlineCalibrator()
     states = c.update_many(A[:16], B[:16])
-    # each outlier adds cap - k = 8 to the CUSUM: above h = 30 at the fourth (pair 13); the next go to the window
+    # each outlier adds cap - k = 8 to the CUSUM: above h = 30 at the fourth (pair 13); the next go
+    # to the window
     assert [s.checking for s in states[9:16]] == [False, False, False, False, True, True, True]
     assert "a change is being confirmed (2 of 10 pairs)" in c.status()["not_ready"]
     c.update_many(A[16:], B[16:])
@@ -1042,7 +1063,8 @@ def test_the_first_refinement_gives_a_verdict_that_ready_reads():
 
 
 def test_after_a_large_remount_the_estimate_restarts_from_the_windows_own_estimate():
-    # Newton from the estimate before a 170 deg re-mount would stop at another critical point of eq. (8)
+    # Newton from the estimate before a 170 deg re-mount would stop at another critical point of eq.
+    # (8)
     rng = np.random.default_rng(0)
     A, B = _pairs(60, rng, 0.2)
     turn = so3.matrix_from_rotation_vector(np.radians(170.0) * np.array([0.0, 0.6, 0.8]))
@@ -1054,7 +1076,8 @@ def test_after_a_large_remount_the_estimate_restarts_from_the_windows_own_estima
 
 
 def test_a_refinement_does_not_restart_the_cusum_building_up():
-    # the noise triples from pair 27 on; the estimate is refined at pair 29 (its 30th) while the CUSUM rises
+    # the noise triples from pair 27 on; the estimate is refined at pair 29 (its 30th) while the
+    # CUSUM rises
     rng = np.random.default_rng(12)
     A, B = _pairs(60, rng, 0.2)
     B[27:] = B[27:] @ so3.matrix_from_rotation_vector(np.radians(0.6) * rng.standard_normal((33, 3)))
@@ -1109,7 +1132,7 @@ def test_a_complex_pair_is_refused_by_update_as_by_update_many():
         OnlineCalibrator().update_many(A[None], np.eye(3)[None])
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # the drift's end on the estimates' centroids (point 2) and the live gyro bias
 
 

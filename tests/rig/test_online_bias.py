@@ -1,5 +1,5 @@
-"""The live rig's gyro bias (``rig/online_bias.py``): estimated with R0 on the first window, removed, published with
-its interval, and ``ready`` withheld when it cannot be removed."""
+"""The live rig's gyro bias (``rig/online_bias.py``): estimated with R0 on the first window,
+removed, published with its interval, and ``ready`` withheld when it cannot be removed."""
 from collections import deque
 
 import numpy as np
@@ -75,8 +75,9 @@ def test_gyro_bias_must_be_a_bool():
 
 
 def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
-    """12 s at rest, then 40 s of motion (offset given): the bias cannot be estimated on the first 20 s (most pairs
-    at rest fit no rig), so the pairs wait; half a window later it is, and R0 is right."""
+    """12 s at rest, then 40 s of motion (offset given): the bias cannot be estimated on the first
+    20 s (most pairs at rest fit no rig), so the pairs wait; half a window later it is, and R0 is
+    right."""
     from replication.rig.live import replay
     from replication.rig.streams import GyroStream, OrientationStream
     from replication.testing import rig_streams
@@ -97,7 +98,8 @@ def test_a_rest_at_the_start_makes_the_bias_wait_for_motion():
 
 @pytest.mark.parametrize("seconds", [24.995, 25.005])
 def test_raw_samples_are_held_for_at_most_five_windows(seconds):
-    """Samples every 10 ms: the held span stays within five windows, and no sample is dropped that is within it."""
+    """Samples every 10 ms: the held span stays within five windows, and no sample is dropped that
+    is within it."""
     from replication.rig.online_bias import BIAS_WAIT_WINDOWS, hold_raw
 
     assert BIAS_WAIT_WINDOWS == 4
@@ -109,8 +111,9 @@ def test_raw_samples_are_held_for_at_most_five_windows(seconds):
 
 
 def test_pairs_held_while_the_bias_waits_are_all_formed_when_it_gives_up():
-    """A rig at rest for 100 s (offset given): no bias on any window; after four windows it gives up, names why, and
-    every held camera pose is still covered by the gyro (no pair dropped as if across a gap)."""
+    """A rig at rest for 100 s (offset given): no bias on any window; after four windows it gives
+    up, names why, and every held camera pose is still covered by the gyro (no pair dropped as if
+    across a gap)."""
     from replication.rig.live import replay
     from replication.rig.streams import GyroStream, OrientationStream
 

@@ -1,6 +1,6 @@
 """Causes named online as the batch does: a rig turning at constant speed, time stamps in different
-units, a clock offset beyond the search; in the online verdict and in ``calibrate --online``'s output; each rule at its
-boundary."""
+units, a clock offset beyond the search; in the online verdict and in ``calibrate --online``'s
+output; each rule at its boundary."""
 import math
 
 import numpy as np
@@ -40,7 +40,8 @@ def _fails(summary):
 
 
 def _spinning(seconds=60.0, deg_s=30.0, seed=5, noise=0.05):
-    """A rig turning at a constant angular velocity about one axis (camera and gyro noise ``noise``, deg, deg/s)."""
+    """A rig turning at a constant angular velocity about one axis (camera and gyro noise ``noise``,
+    deg, deg/s)."""
     rng = np.random.default_rng(seed)
     R0 = RIG_R0
     axis = np.array([0.2, 0.5, 0.8]) / np.linalg.norm([0.2, 0.5, 0.8])
@@ -51,7 +52,8 @@ def _spinning(seconds=60.0, deg_s=30.0, seed=5, noise=0.05):
     return R0, OrientationStream(t, C, "camera"), GyroStream(ti, omega, "gyro")
 
 
-# ------------------------------------------------------------------------------------------------ constant speed
+# ------------------------------------------------------------------------------------------------
+# constant speed
 
 def test_a_rig_turning_at_constant_speed_is_named_never_ready():
     R0, camera, gyro = _spinning()
@@ -63,7 +65,8 @@ def test_a_rig_turning_at_constant_speed_is_named_never_ready():
 
 
 def test_a_noise_free_rig_at_constant_speed_is_named_from_the_camera_stream():
-    """Noise-free, every pair is the same pair (refused as repeats): the camera stream's own motions name the cause."""
+    """Noise-free, every pair is the same pair (refused as repeats): the camera stream's own motions
+    name the cause."""
     R0, camera, gyro = _spinning(seconds=40.0, noise=0.0)
     rows, summary = _summary(camera, gyro, R0)
     assert not summary["ready"] and summary["repeated_pairs"] > 20
@@ -101,7 +104,8 @@ def test_constant_speed_needs_undetermined_motion_ten_motions_and_motion():
 
 
 def test_varying_single_axis_motion_is_single_axis_not_constant_speed(rng):
-    """Motions about one axis at varying speed: the motion does not determine R0 (said), but it is not constant."""
+    """Motions about one axis at varying speed: the motion does not determine R0 (said), but it is
+    not constant."""
     from replication.study.live_study import pair_stream
 
     R0 = so3.random_rotations(rng, ())
@@ -112,7 +116,8 @@ def test_varying_single_axis_motion_is_single_axis_not_constant_speed(rng):
     assert "constant_speed" not in checks and any("does not determine R0" in m for m in oc.status()["not_ready"])
 
 
-# ------------------------------------------------------------------------------------------------ units
+# ------------------------------------------------------------------------------------------------
+# units
 
 @pytest.mark.parametrize("scale, unit", [(1e9, "ns"), (1e3, "ms")])
 def test_gyro_stamps_in_another_unit_are_named_and_nothing_is_raised(rig, scale, unit):
@@ -127,8 +132,8 @@ def test_gyro_stamps_in_another_unit_are_named_and_nothing_is_raised(rig, scale,
 
 
 def test_camera_stamps_in_ms_are_named_from_the_spans(rig):
-    """Camera stamps in ms beside a 200 Hz gyro: the sample intervals' ratio (1e-4) is a plausible keyframe rate;
-    the streams' spans (60,000 s against 62 s) show it, as in the batch."""
+    """Camera stamps in ms beside a 200 Hz gyro: the sample intervals' ratio (1e-4) is a plausible
+    keyframe rate; the streams' spans (60,000 s against 62 s) show it, as in the batch."""
     R0, camera, gyro, _ = rig
     rows, summary = _summary(OrientationStream(camera.t * 1e3, camera.world_from_body, "c"), gyro, R0)
     reason = _fails(summary)["time_unit"]
@@ -145,7 +150,8 @@ def test_a_keyframe_trajectory_beside_a_fast_gyro_is_not_a_unit_mistake():
     (0.1 * 1e9, "sensor ... ns"), (PLAUSIBLE_INTERVAL_RATIO[1] * 1e9, "sensor ... ns"),
     (PLAUSIBLE_INTERVAL_RATIO[1] * 1e9 * 1.01, None), (PLAUSIBLE_INTERVAL_RATIO[0] * 0.99, "camera ... ms"),
     (PLAUSIBLE_INTERVAL_RATIO[0] / 1e9, "camera ... ns"), (PLAUSIBLE_INTERVAL_RATIO[0] / 1e9 * 0.99, None),
-    # camera stamps in us (or ns) also fit the range read as ms (us): the unit nearest a typical rig is named
+    # camera stamps in us (or ns) also fit the range read as ms (us): the unit nearest a typical rig
+    # is named
     (0.1 / 1e6, "camera ... us"), (0.1 / 1e9, "camera ... ns"), (0.1 * 1e3, "sensor ... ms"),
 ])
 def test_time_units_by_the_ratio_of_sample_intervals(ratio, named):
@@ -158,7 +164,8 @@ def test_time_units_by_the_ratio_of_sample_intervals(ratio, named):
     assert time_unit_by_rate(None, 0.01) is None and time_unit_by_rate(0.05, 0.0) is None
 
 
-# ------------------------------------------------------------------------------------------------ offset
+# ------------------------------------------------------------------------------------------------
+# offset
 
 def test_a_clock_offset_beyond_the_search_is_named_with_its_value(rig):
     R0, camera, gyro, _ = rig
@@ -206,7 +213,8 @@ def test_the_wider_search_spans_a_quarter_of_the_window_and_says_when_at_its_bou
                                 resolution=5e-4) is None  # no wider search than the one made
 
 
-# ------------------------------------------------------------------------------------------------ the command line
+# ------------------------------------------------------------------------------------------------
+# the command line
 
 def _write(tmp_path, camera, gyro, shift=0.0, scale=1e9):
     cam_file, imu_file = tmp_path / "cam.txt", tmp_path / "imu.csv"

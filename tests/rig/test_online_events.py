@@ -1,6 +1,7 @@
-"""The online change detector's rules (:mod:`replication.rig.online_events`) at their boundaries: repeats within the
-tolerance, never at rest; the CUSUM's arithmetic, its reference level, held-out outliers, onset and alarms; the drift
-test; the event sentences and record. Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+"""The online change detector's rules (:mod:`replication.rig.online_events`) at their boundaries:
+repeats within the tolerance, never at rest; the CUSUM's arithmetic, its reference level, held-out
+outliers, onset and alarms; the drift test; the event sentences and record. Mutation testing
+(scripts/mutation) found these unguarded by the fast tests."""
 import math
 
 import numpy as np
@@ -112,7 +113,8 @@ def test_pair_d2_and_the_residual_angle():
 
 
 def test_chi2_quantile_and_the_combined_radius():
-    # Wilson-Hilferty: dof (1 - 2 / (9 dof) + z sqrt(2 / (9 dof)))^3 (the exact quantiles: 2.366, 40.256)
+    # Wilson-Hilferty: dof (1 - 2 / (9 dof) + z sqrt(2 / (9 dof)))^3 (the exact quantiles: 2.366,
+    # 40.256)
     assert chi2_quantile(0.5, 3) == pytest.approx(3 * (1 - 2 / 27) ** 3, rel=1e-9)
     z = 1.2815515655446004
     assert chi2_quantile(0.9, 30) == pytest.approx(30 * (1 - 2 / 270 + z * math.sqrt(2 / 270)) ** 3, rel=1e-6)
@@ -147,8 +149,8 @@ def test_an_event_record_holds_every_field():
 
 
 def _old_estimate(noise_deg, sd_deg):
-    """The old estimate's mean square residual ``s2`` and reference level ``m`` at pair noise ``noise_deg``, and its
-    covariance (``sd_deg`` per axis)."""
+    """The old estimate's mean square residual ``s2`` and reference level ``m`` at pair noise
+    ``noise_deg``, and its covariance (``sd_deg`` per axis)."""
     sigma = math.radians(noise_deg)
     return 1.5 * sigma ** 2, 3 * sigma ** 2, np.eye(3) * np.radians(sd_deg) ** 2
 
@@ -308,8 +310,8 @@ def test_classify_a_better_fit_within_the_radius_is_new_information():
     R_old = _rot(30.0)
     new = R_old @ _rot(0.3, (0, 1, 0))
     A, B = _window(new, 30, 0.1, rng)
-    # a poorly known old estimate (1 deg per axis): 0.3 deg is within the combined radius, yet the window fits the
-    # new rotation far better than the old one at the noise level
+    # a poorly known old estimate (1 deg per axis): 0.3 deg is within the combined radius, yet the
+    # window fits the new rotation far better than the old one at the noise level
     info, _, _ = _classify(R_old, A, B, cov_deg=1.0, noise_deg=0.1)
     assert info["angle_deg"] < info["threshold_deg"]
     assert info["median_z_before"] > NOISE_Z >= info["median_z_after"]
@@ -454,7 +456,8 @@ def test_a_remount_needs_the_window_to_misfit_the_old_estimate_at_its_level():
     assert kinds[0] == "remount" and kinds[1] != "remount"
 
 
-# ------------------------------------------------------------------------------------ classify at its boundaries
+# ------------------------------------------------------------------------------------ classify at
+# its boundaries
 def _classify_m(R_old, A, B, m, *, cap=CAP, cov_deg=0.05, s2=1.5 * math.radians(0.2) ** 2):
     cov = np.eye(3) * np.radians(cov_deg) ** 2
     return classify(R_old, cov, s2, m, A, B, cap=cap, min_excitation_deg=1.0, d2_floor=FLOOR)
@@ -495,7 +498,8 @@ def test_classify_a_pair_exactly_at_cap_times_the_level_is_not_gross():
     R_old = _rot(30.0)
     A, B = _window(R_old, 21, 0.2, rng)
     d = np.sort(pair_d2(R_old, A, B))
-    # a level at which the window's median z (its 11th) is above NOISE_Z, and the median of the other 20 is not
+    # a level at which the window's median z (its 11th) is above NOISE_Z, and the median of the
+    # other 20 is not
     m = float((d[9] + d[10]) / 4 + d[10] / 2) / 2
     cap = float(d[-1] / m)  # the largest pair's z, exactly
     info = _classify_m(R_old, A, B, m, cap=cap, cov_deg=1.0)
@@ -517,10 +521,12 @@ def test_classify_medians_exactly_at_noise_z_fit_the_old_level():
     s2 = 1.5 * math.radians(0.1) ** 2
     d2_new = _classify_m(R_old, A, B, 1.0, cap=1e9, cov_deg=1.0, s2=s2)["z_new"]  # z at m = 1: d^2 itself
     d2_old = pair_d2(R_old, A, B)
-    # the window's own median exactly NOISE_Z, the old estimate's above: new information, not a noise change
+    # the window's own median exactly NOISE_Z, the old estimate's above: new information, not a
+    # noise change
     info = _classify_m(R_old, A, B, float(np.median(d2_new)) / NOISE_Z, cap=1e9, cov_deg=1.0, s2=s2)
     assert info["median_z_after"] == NOISE_Z < info["median_z_before"] and info["kind"] == "new_information"
-    # the old estimate's median exactly NOISE_Z: the pairs still fit it (outliers, none dropped here)
+    # the old estimate's median exactly NOISE_Z: the pairs still fit it (outliers, none dropped
+    # here)
     info = _classify_m(R_old, A, B, float(np.median(d2_old)) / NOISE_Z, cap=1e9, cov_deg=1.0, s2=s2)
     assert info["median_z_before"] == NOISE_Z > info["median_z_after"] and info["kind"] == "outliers"
 
@@ -561,7 +567,8 @@ def test_classify_a_misfit_exactly_at_the_fit_quantile_is_no_remount():
     assert info["undecided"] is True  # beyond the threshold but fitting the old estimate: more pairs may decide
 
 
-# ------------------------------------------------------------------------------------ the drift test's numbers
+# ------------------------------------------------------------------------------------ the drift
+# test's numbers
 def test_drift_test_measures_a_drift_about_each_axis():
     rng = np.random.default_rng(43)
     R = _rot(30.0)
@@ -587,8 +594,8 @@ def test_drift_test_needs_the_windows_excitation_at_least_the_minimum():
 
 
 def test_drift_test_takes_the_windows_noise_as_its_mean_square_residual_over_n_minus_3():
-    # pairs in couples with the same sensor motion and opposite residual rotations: the step is w = 0 and every
-    # residual, of angle theta, stays: s^2 = n sin^2(theta) / (n - 3)
+    # pairs in couples with the same sensor motion and opposite residual rotations: the step is w =
+    # 0 and every residual, of angle theta, stays: s^2 = n sin^2(theta) / (n - 3)
     rng = np.random.default_rng(45)
     R = _rot(30.0)
     n, theta = 20, math.radians(0.5)
@@ -614,7 +621,8 @@ def test_drift_test_no_alarm_when_the_window_agrees_exactly_at_zero_noise():
     assert (alarm, angle, thr) == (False, 0.0, 0.0)
 
 
-# ------------------------------------------------------------------------------------ the repeat filter's edges
+# ------------------------------------------------------------------------------------ the repeat
+# filter's edges
 def _turn_z(deg):
     c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
@@ -654,7 +662,8 @@ def test_beyond_its_memory_the_filter_compares_but_does_not_remember(monkeypatch
     assert all(f.seen(a, b) for a, b in pairs[:100]) and not any(f.seen(a, b) for a, b in pairs[100:])
 
 
-# ------------------------------------------------------------------------------------ solve_window's bounds
+# ------------------------------------------------------------------------------------
+# solve_window's bounds
 def _gross_window(n, n_gross):
     """``n`` pairs at 0.2 deg, the first ``n_gross`` with an error of 40 deg."""
     rng = np.random.default_rng(46)
@@ -682,10 +691,12 @@ def test_solve_window_takes_an_excitation_exactly_at_the_minimum():
     assert solve_window(A, B, min_excitation_deg=exc, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
 
 
-# ------------------------------------------------------------------------------------ decide on each kind
+# ------------------------------------------------------------------------------------ decide on
+# each kind
 def _fill(d, R_old, A, B, cov, s2):
-    """The first four pairs reported far off (held out: the CUSUM rises by cap - k = 8 each, above h at the fourth)
-    raise the alarm; the next fill the confirmation window. Returns the index of the last pair observed."""
+    """The first four pairs reported far off (held out: the CUSUM rises by cap - k = 8 each, above h
+    at the fourth) raise the alarm; the next fill the confirmation window. Returns the index of the
+    last pair observed."""
     for k in range(4):
         d.observe(A[k], B[k], 100.0 * d.level, k, R_old, cov, s2)
     assert d.checking and d.alarm_pair == 3

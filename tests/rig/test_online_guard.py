@@ -1,6 +1,6 @@
 """``ready`` means still right: the online estimator withdraws ``ready`` as soon as the recent pairs
-agree on a rotation that its radius does not allow, before its change detector has decided anything; each rule of the
-guard (:mod:`replication.rig.online_guard`) at its boundary."""
+agree on a rotation that its radius does not allow, before its change detector has decided anything;
+each rule of the guard (:mod:`replication.rig.online_guard`) at its boundary."""
 import math
 from collections import deque
 from types import SimpleNamespace
@@ -62,9 +62,9 @@ def test_the_guard_constants():
 
 
 def test_a_1_deg_remount_withdraws_ready_within_a_few_pairs_before_the_detector_decides():
-    """1 deg at 0.2 deg of noise: the CUSUM needs about 6 pairs to alarm and 10 more to confirm; ``ready`` goes at
-    the 2nd-5th pair, withdrawn by the guard; in most runs by the guard alone (no alarm, fewer than 2 gross misfits,
-    radius and verdict fine)."""
+    """1 deg at 0.2 deg of noise: the CUSUM needs about 6 pairs to alarm and 10 more to confirm;
+    ``ready`` goes at the 2nd-5th pair, withdrawn by the guard; in most runs by the guard alone (no
+    alarm, fewer than 2 gross misfits, radius and verdict fine)."""
     alone = 0
     for seed in range(6):
         R1, (A1, B1), (A2, B2) = _remounted([21, seed], 1.0, 0.2)
@@ -82,9 +82,9 @@ def test_a_1_deg_remount_withdraws_ready_within_a_few_pairs_before_the_detector_
 
 
 def test_a_shift_too_small_for_any_residual_is_seen_by_the_guard():
-    """1 deg at 0.5 deg of noise: no pair's residual stands out (no gross misfit), the CUSUM has not alarmed; the
-    guard withdraws ``ready`` within 30 pairs in each of 8 runs, by its run or by its window of the last 20 pairs
-    (seed [22, 2]: the window, at the 29th pair)."""
+    """1 deg at 0.5 deg of noise: no pair's residual stands out (no gross misfit), the CUSUM has not
+    alarmed; the guard withdraws ``ready`` within 30 pairs in each of 8 runs, by its run or by its
+    window of the last 20 pairs (seed [22, 2]: the window, at the 29th pair)."""
     by = []
     for seed in range(8):
         R1, (A1, B1), (A2, B2) = _remounted([22, seed], 1.0, 0.5)
@@ -102,8 +102,9 @@ def test_a_shift_too_small_for_any_residual_is_seen_by_the_guard():
 
 
 def test_clean_streams_keep_ready():
-    """No change: after the first ready, ready is withdrawn at fewer than 0.3 % of pairs (measured 36 of 39,820 at 0.2
-    deg of noise and 36 of 39,630 at 0.5 deg, 2000 pairs for each of seeds [7, 0..19]; here seeds [70, 0..2])."""
+    """No change: after the first ready, ready is withdrawn at fewer than 0.3 % of pairs (measured
+    36 of 39,820 at 0.2 deg of noise and 36 of 39,630 at 0.5 deg, 2000 pairs for each of seeds [7,
+    0..19]; here seeds [70, 0..2])."""
     lost = total = 0
     for seed in range(3):
         rng = np.random.default_rng([70, seed])
@@ -136,7 +137,8 @@ def test_the_statistic_equals_the_gauss_newton_step_in_numpy(rng):
 
 
 def test_the_run_bound_never_understates_the_statistic(rng):
-    """The run is solved only when its sum of 1.5 d^2 / s^2 exceeds the threshold: that sum bounds the statistic."""
+    """The run is solved only when its sum of 1.5 d^2 / s^2 exceeds the threshold: that sum bounds
+    the statistic."""
     for _ in range(200):
         n = int(rng.integers(3, 30))
         R, A, B = _guard_pairs(rng, n, offset_deg=rng.uniform(0, 5), noise_deg=rng.uniform(0.05, 1.0))
@@ -211,11 +213,13 @@ def test_the_window_is_tested_every_guard_every_pairs_on_the_last_guard_window(r
     assert guard.misfit is None
 
 
-# ------------------------------------------------------------------------------------------------ every rule of ready
-# ready = determined (excitation, distinct pairs) and the radius below the target and no change being confirmed and
-# fewer than 2 gross misfits and the guard's recent pairs fit and the verdict not fail. Each test below holds every
-# other condition and fails if its own is dropped; the radius (test_online.py::test_ready_at_the_radius_target),
-# the gross misfits (::test_ready_is_withdrawn_at_the_second_gross_misfit_and_said) and the verdict
+# ------------------------------------------------------------------------------------------------
+# every rule of ready
+# ready = determined (excitation, distinct pairs) and the radius below the target and no change
+# being confirmed and fewer than 2 gross misfits and the guard's recent pairs fit and the verdict
+# not fail. Each test below holds every other condition and fails if its own is dropped; the radius
+# (test_online.py::test_ready_at_the_radius_target), the gross misfits
+# (::test_ready_is_withdrawn_at_the_second_gross_misfit_and_said) and the verdict
 # (::test_ready_needs_the_verdict_not_to_fail) are guarded there, the guard above.
 
 def _others_hold(oc, *, determined=True):
@@ -225,7 +229,8 @@ def _others_hold(oc, *, determined=True):
 
 
 def _excited(excitation_deg, n_z=20, n_x=20):
-    """Noise-free motions about z (20-40 deg) and about x by small angles scaled to the given excitation (R0 = I)."""
+    """Noise-free motions about z (20-40 deg) and about x by small angles scaled to the given
+    excitation (R0 = I)."""
     u = np.linspace(0.5, 1.5, n_x)
     target = math.radians(excitation_deg) ** 2 * (n_z + n_x)
     lo, hi = 0.0, 1.0
@@ -238,9 +243,9 @@ def _excited(excitation_deg, n_z=20, n_x=20):
 
 @pytest.mark.parametrize("excitation, ready", [(0.5, False), (0.75, False), (0.98, False), (1.02, True)])
 def test_ready_needs_the_motion_to_determine_r0_even_with_a_small_radius(excitation, ready):
-    """Noise-free motion with 0.5-0.98 deg of excitation has a finite radius (the noise floor over the weak axis,
-    0.1-0.2 deg) below the 0.5 deg target and a verdict that does not fail: only "the motion determines R0" keeps
-    ``ready`` false; just above the threshold it is ready."""
+    """Noise-free motion with 0.5-0.98 deg of excitation has a finite radius (the noise floor over
+    the weak axis, 0.1-0.2 deg) below the 0.5 deg target and a verdict that does not fail: only "the
+    motion determines R0" keeps ``ready`` false; just above the threshold it is ready."""
     A = _excited(excitation)
     oc = OnlineCalibrator()
     states = oc.update_many(A, A.copy())
@@ -265,8 +270,8 @@ def test_ready_needs_min_pairs_distinct_pairs_however_often_repeated(rng, distin
 
 
 def test_ready_waits_while_a_change_is_being_confirmed(rng):
-    """An alarm being confirmed (here raised by hand on in-control pairs): not ready, every other condition holding;
-    ready again once the window is decided (outliers: nothing changed)."""
+    """An alarm being confirmed (here raised by hand on in-control pairs): not ready, every other
+    condition holding; ready again once the window is decided (outliers: nothing changed)."""
     R0 = so3.random_rotations(rng, ())
     A, B = pair_stream(rng, 300, R0)
     oc = OnlineCalibrator()
@@ -303,7 +308,8 @@ def test_a_window_withdrawal_holds_until_a_window_fits_as_usual(rng):
     assert guard.window_misfit is None
 
 
-# ------------------------------------------------------------------------------------------------ the long windows
+# ------------------------------------------------------------------------------------------------
+# the long windows
 def _long_remount(seed, step_deg=0.7, noise_deg=1.0):
     R1, (A1, B1), (A2, B2) = _remounted([23, seed], step_deg, noise_deg, before=600, after=600)
     return R1, np.concatenate([A1, A2]), np.concatenate([B1, B2])
@@ -311,10 +317,11 @@ def _long_remount(seed, step_deg=0.7, noise_deg=1.0):
 
 @pytest.mark.parametrize("seed", [1, 3, 4])
 def test_a_remount_smaller_than_the_noise_withdraws_ready_within_the_long_windows(seed):
-    """0.7 deg at 1 deg of pair noise after 600 pairs (a case once found: ready while more than 0.5 deg off on 301-739
-    of 1800 pairs, only an ``outliers`` event): no pair's residual and no 20 pairs show it. Was ready while wrong on
-    280, 249 and 270 of the 600 pairs after it (seeds [23, 1/3/4]); the long windows withdraw it within 150 pairs
-    (the statistic of 0.7 deg in N pairs at 1 deg of noise passes the 99.99 % level at N of about 100)."""
+    """0.7 deg at 1 deg of pair noise after 600 pairs (a case once found: ready while more than 0.5
+    deg off on 301-739 of 1800 pairs, only an ``outliers`` event): no pair's residual and no 20
+    pairs show it. Was ready while wrong on 280, 249 and 270 of the 600 pairs after it (seeds [23,
+    1/3/4]); the long windows withdraw it within 150 pairs (the statistic of 0.7 deg in N pairs at 1
+    deg of noise passes the 99.99 % level at N of about 100)."""
     R1, A, B = _long_remount(seed)
     oc = OnlineCalibrator()
     states = oc.update_many(A, B)
@@ -323,10 +330,11 @@ def test_a_remount_smaller_than_the_noise_withdraws_ready_within_the_long_window
 
 
 def test_a_long_window_alone_keeps_ready_false_and_widens_the_radius():
-    """The condition "recent pairs fit" by the long windows alone: on seed [23, 4] at pair 600 + 100 the last 80-320
-    pairs misfit while every other condition of ``ready`` holds (determined, the estimate's radius below the target,
-    no change being confirmed, no gross misfit, no run or 20-pair window, verdict not fail); ``not_ready`` says it and
-    the published radius includes the misfit's angle. Dropping the condition would leave ready true."""
+    """The condition "recent pairs fit" by the long windows alone: on seed [23, 4] at pair 600 + 100
+    the last 80-320 pairs misfit while every other condition of ``ready`` holds (determined, the
+    estimate's radius below the target, no change being confirmed, no gross misfit, no run or
+    20-pair window, verdict not fail); ``not_ready`` says it and the published radius includes the
+    misfit's angle. Dropping the condition would leave ready true."""
     R1, A, B = _long_remount(4)
     oc = OnlineCalibrator()
     for j in range(len(A)):
@@ -390,14 +398,16 @@ def test_a_long_window_withdraws_just_past_the_threshold(rng, just, withdrawn):
         guard.add(a, b, 0.0, R, None, s2)
     assert (guard.long_misfit is not None) is withdrawn
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # One event per cause: a frame that drifts is one ``drift`` event with its rate, not a storm of
-# re-mounts; the estimator starts over at most once for it and then follows it (or says it cannot), its radius holding
-# the lag; the rules of :func:`replication.rig.online_guard.recognise_drift` at their boundaries.
+# re-mounts; the estimator starts over at most once for it and then follows it (or says it cannot),
+# its radius holding the lag; the rules of :func:`replication.rig.online_guard.recognise_drift` at
+# their boundaries.
 
 
 def _drifting(seed, n, total_deg, noise_deg=0.05):
-    """``n`` pairs whose camera_from_sensor turns by ``total_deg`` about AXIS, uniformly over the stream."""
+    """``n`` pairs whose camera_from_sensor turns by ``total_deg`` about AXIS, uniformly over the
+    stream."""
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
     Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(total_deg * j / n) * AXIS)  # noqa: E731
@@ -412,8 +422,9 @@ def test_the_kinds_and_constants():
 
 @pytest.mark.parametrize("noise_deg", [0.05, 0.2])
 def test_a_frame_wandering_2_deg_is_one_drift_event_with_its_rate_and_one_restart(noise_deg):
-    """2 deg over 1800 pairs: was 5 re-mounts at 0.05 deg of noise (31 in the held-out campaign's live case), each
-    a restart; now one drift event, the first re-mount folded into it, one restart, never ready while wrong."""
+    """2 deg over 1800 pairs: was 5 re-mounts at 0.05 deg of noise (31 in the held-out campaign's
+    live case), each a restart; now one drift event, the first re-mount folded into it, one restart,
+    never ready while wrong."""
     Rt, A, B = _drifting([41, int(noise_deg * 100)], 1800, 2.0, noise_deg)
     oc = OnlineCalibrator()
     states = oc.update_many(A, B)
@@ -475,7 +486,8 @@ def test_a_wandering_camera_frame_live_is_one_drift_with_its_rate_in_deg_per_s()
     assert rows["ready"].iloc[-1] and rows["ready"].mean() > 0.6
 
 
-# ------------------------------------------------------------------------------------------------ the rules
+# ------------------------------------------------------------------------------------------------
+# the rules
 
 def _event(pair, R_before, R_after):
     return OnlineEvent("remount", pair, pair - 10, "drift", pair - 20, 25, 0.0, 0.1, 3.0, 1.0, 0, R_before, R_after,
@@ -483,7 +495,8 @@ def _event(pair, R_before, R_after):
 
 
 def _steps(first_deg, second_deg, cos, gap=100):
-    """A re-mount by ``first_deg`` about x at pair 100, then one by ``second_deg`` whose axis makes ``cos`` with x."""
+    """A re-mount by ``first_deg`` about x at pair 100, then one by ``second_deg`` whose axis makes
+    ``cos`` with x."""
     R = np.eye(3)
     R1 = so3.matrix_from_rotation_vector(np.radians(first_deg) * np.array([1.0, 0.0, 0.0]))
     axis = np.array([cos, math.sqrt(max(0.0, 1.0 - cos * cos)), 0.0])
@@ -538,9 +551,11 @@ def test_the_memory_is_never_shorter_than_the_distinct_pairs_allow():
     assert follow_forgetting(1e-15, 0.5, 0.8, 10) == 1.0 - 1e-9
 
 
-# ------------------------------------------------------------------------------------------------ a drift followed
+# ------------------------------------------------------------------------------------------------ a
+# drift followed
 def _cubic(seed, n=1800, total_deg=6.0, noise_deg=0.1):
-    """A drift that speeds up: ``total_deg (j / n)^3`` about AXIS (rate at the end ``3 total_deg / n``)."""
+    """A drift that speeds up: ``total_deg (j / n)^3`` about AXIS (rate at the end ``3 total_deg /
+    n``)."""
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())
     Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(total_deg * (j / n) ** 3) * AXIS)  # noqa: E731
@@ -550,9 +565,10 @@ def _cubic(seed, n=1800, total_deg=6.0, noise_deg=0.1):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_drift_that_speeds_up_is_followed_at_its_current_rate(seed):
-    """6 deg * (j / 1800)^3 at 0.1 deg of noise (a case once found: ready while wrong on 92, 101 and 63 pairs of seeds
-    [71, 0/1/2], the rate reported stale: a third of the final one): the rate is measured again on the estimate's
-    track, the forgetting and the lag follow it; never ready while wrong, the rate within 25 % of the final one."""
+    """6 deg * (j / 1800)^3 at 0.1 deg of noise (a case once found: ready while wrong on 92, 101 and
+    63 pairs of seeds [71, 0/1/2], the rate reported stale: a third of the final one): the rate is
+    measured again on the estimate's track, the forgetting and the lag follow it; never ready while
+    wrong, the rate within 25 % of the final one."""
     Rt, A, B = _cubic([71, seed])
     oc = OnlineCalibrator()
     states = oc.update_many(A, B)
@@ -564,9 +580,9 @@ def test_a_drift_that_speeds_up_is_followed_at_its_current_rate(seed):
 
 
 def test_a_drift_that_stops_is_said_and_full_memory_returns():
-    """2 deg over 1200 pairs, then still for 1800 (a case once found: it kept forgetting, about 28 effective pairs, and
-    advised a longer recording): one ``drift`` and one ``drift_end`` within 500 pairs of the stop, forgetting back to
-    1, the effective pairs growing again."""
+    """2 deg over 1200 pairs, then still for 1800 (a case once found: it kept forgetting, about 28
+    effective pairs, and advised a longer recording): one ``drift`` and one ``drift_end`` within 500
+    pairs of the stop, forgetting back to 1, the effective pairs growing again."""
     rng = np.random.default_rng([72, 0])
     R0 = so3.random_rotations(rng, ())
     Rt = lambda j: R0 @ so3.matrix_from_rotation_vector(np.radians(2.0 * min(j, 1200) / 1200) * AXIS)  # noqa: E731
@@ -583,8 +599,9 @@ def test_a_drift_that_stops_is_said_and_full_memory_returns():
 
 
 def _tracked(moved_deg, span=400, rate=0.001, sd_deg=0.02):
-    """A calibrator-like record following a drift at ``rate`` whose estimate moved ``moved_deg`` along its axis in
-    ``span`` pairs, the estimate's noise ``sd_deg`` along the axis (lag excluded)."""
+    """A calibrator-like record following a drift at ``rate`` whose estimate moved ``moved_deg``
+    along its axis in ``span`` pairs, the estimate's noise ``sd_deg`` along the axis (lag
+    excluded)."""
     from types import SimpleNamespace
 
     from replication.rig.online_guard import track_drift
@@ -632,9 +649,10 @@ def test_a_drift_ends_nearer_none_than_its_rate(share, ended):
 
 
 def test_the_direction_so_far_ends_at_the_estimate_not_at_the_last_window():
-    """The last step's window estimate is a few pairs (seed [36, 4] of a slow drift: 0.28 deg off, its direction at a
-    cosine of 0.57 with the next step's: two re-mounts, two restarts); the estimate before the new event holds many:
-    the movement so far ends there. Here the window was 60 deg off the drift's axis, the estimate on it."""
+    """The last step's window estimate is a few pairs (seed [36, 4] of a slow drift: 0.28 deg off,
+    its direction at a cosine of 0.57 with the next step's: two re-mounts, two restarts); the
+    estimate before the new event holds many: the movement so far ends there. Here the window was 60
+    deg off the drift's axis, the estimate on it."""
     x = np.array([1.0, 0.0, 0.0])
     # the window: cosine 0.5 with x
     noisy = so3.matrix_from_rotation_vector(np.radians(0.3) * np.array([0.5, math.sqrt(0.75), 0.0]))
@@ -670,7 +688,7 @@ def test_the_report_schema_names_every_kind():
     assert found == [EVENT_KINDS]
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # the drift's end on the estimates' centroids (point 2) and the live gyro bias
 
 
@@ -700,8 +718,8 @@ def test_a_steady_drift_is_not_said_to_end():
 
 
 def _tracked_centroid(moved_deg, sd_deg, span=400, rate=0.001):
-    """A calibrator-like record following a drift at ``rate``; its estimate moved ``moved_deg`` along the drift's
-    axis over ``span`` pairs of centroid, its noise ``sd_deg`` along the axis."""
+    """A calibrator-like record following a drift at ``rate``; its estimate moved ``moved_deg``
+    along the drift's axis over ``span`` pairs of centroid, its noise ``sd_deg`` along the axis."""
     axis = TRACK_AXIS / np.linalg.norm(TRACK_AXIS)
     lam = 0.99
     lag = math.radians(drift_lag_deg(rate, lam, 10))
@@ -718,8 +736,9 @@ def _tracked_centroid(moved_deg, sd_deg, span=400, rate=0.001):
 
 @pytest.mark.parametrize("factor, ended", [(1.01, False), (0.99, True)])
 def test_an_end_waits_until_none_and_the_rate_are_far_enough_apart(factor, ended):
-    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at least
-    TRACK_APART x Z standard errors of the two estimates' difference; below that the track waits (no new rate)."""
+    """Nothing moved in 400 pairs at 0.001 deg per pair (0.4 deg): said to end only if 0.4 deg is at
+    least TRACK_APART x Z standard errors of the two estimates' difference; below that the track
+    waits (no new rate)."""
     assert TRACK_APART == 3.0
     se = 0.4 / (TRACK_APART * TRACK_Z) * factor
     cal, kind = _tracked_centroid(0.0, sd_deg=se / math.sqrt(2))

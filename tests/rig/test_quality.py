@@ -1,9 +1,11 @@
-"""Every threshold of the verdict (``replication.rig.quality.THRESHOLDS``) at its boundary, through ``judge(Evidence)``.
+"""Every threshold of the verdict (``replication.rig.quality.THRESHOLDS``) at its boundary, through
+``judge(Evidence)``.
 
-For each check and each of its bounds (warning, fail): a value just below and just above the bound, and the bound
-itself. A check is either a "below" check (a value under the bound reaches its level) or an "above" check; all are
-strict except the offset at the search bound ("within 2 resolutions" includes 2). :data:`DRIVERS` says how each
-check's measured value enters :class:`Evidence`; a threshold added to ``THRESHOLDS`` without a driver fails
+For each check and each of its bounds (warning, fail): a value just below and just above the bound,
+and the bound itself. A check is either a "below" check (a value under the bound reaches its level)
+or an "above" check; all are strict except the offset at the search bound ("within 2 resolutions"
+includes 2). :data:`DRIVERS` says how each check's measured value enters :class:`Evidence`; a
+threshold added to ``THRESHOLDS`` without a driver fails
 :func:`test_every_threshold_has_a_boundary_test`.
 """
 import dataclasses
@@ -22,7 +24,8 @@ GOOD = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, b
                 offset_resolution_s=5e-4, blocks=100.0, overlap_s=1000.0, interval_s=1.0, gyro_rate_hz=200.0,
                 reference_error_deg=0.1, excitation_deg=20.0, offset_peak_margin=0.5, second_peak_offset_s=0.4)
 
-#: Relative step from a bound for "just below" / "just above" (a bound of 0 moves by this absolute amount).
+#: Relative step from a bound for "just below" / "just above" (a bound of 0 moves by this absolute
+#: amount).
 EPS = 1e-9
 
 
@@ -45,11 +48,13 @@ def _outlying_station(ratio):
     return dict(pose_residual_medians_deg=tuple(medians))
 
 
-#: check -> (direction, reason's check name, value -> Evidence changes). Other values of GOOD stay as they are, and
-#: are chosen so that only the driven check can fire (e.g. a small residual where the motion is driven).
+#: check -> (direction, reason's check name, value -> Evidence changes). Other values of GOOD stay
+#: as they are, and are chosen so that only the driven check can fire (e.g. a small residual where
+#: the motion is driven).
 DRIVERS = {
     "offset_correlation": ("below", "offset_correlation", lambda v: dict(offset_correlation=v)),
-    # the value is the distance of |offset| from the search bound, in resolutions; "within" includes the bound
+    # the value is the distance of |offset| from the search bound, in resolutions; "within" includes
+    # the bound
     "offset_at_bound_resolutions": ("within", "offset_at_bound",
                                     lambda v: dict(offset_s=GOOD.max_offset_s - v * GOOD.offset_resolution_s)),
     "offset_peak_margin": ("below", "offset_peak_margin", lambda v: dict(offset_peak_margin=v)),
@@ -89,12 +94,14 @@ def _found(check, value):
 
 
 def _below_the(level, check):
-    """The level one step milder than ``level`` for ``check`` (a fail bound falls back to the warning if any)."""
+    """The level one step milder than ``level`` for ``check`` (a fail bound falls back to the
+    warning if any)."""
     return "warning" if level == "fail" and THRESHOLDS[check][0] is not None else None
 
 
-#: The bounds the module notes of replication/rig/quality.py state and argue for (warning, fail). The tests below read
-#: THRESHOLDS, so they follow any change of it; this pins the values so that a change must also update the notes.
+#: The bounds the module notes of replication/rig/quality.py state and argue for (warning, fail).
+#: The tests below read THRESHOLDS, so they follow any change of it; this pins the values so that a
+#: change must also update the notes.
 DOCUMENTED = {
     "offset_correlation": (0.9, 0.5), "offset_at_bound_resolutions": (None, 2), "offset_peak_margin": (0.1, 0.01),
     "blocks": (10, 3), "overlap_intervals": (10, 2), "residual_to_motion": (0.1, 0.3),
@@ -160,8 +167,8 @@ def test_a_nan_offset_correlation_fails():
 
 
 def test_a_peak_margin_without_the_second_peak_offset_is_judged():
-    """``second_peak_offset_s`` defaults to None: judge used to format it into the message before comparing, and
-    raised TypeError for any margin, even one far above the bound."""
+    """``second_peak_offset_s`` defaults to None: judge used to format it into the message before
+    comparing, and raised TypeError for any margin, even one far above the bound."""
     assert judge(dataclasses.replace(GOOD, second_peak_offset_s=None)).reasons == ()
     reason, = judge(dataclasses.replace(GOOD, offset_peak_margin=0.005, second_peak_offset_s=None)).reasons
     assert (reason.check, reason.level) == ("offset_peak_margin", "fail") and "another clock offset" in reason.message
@@ -233,8 +240,8 @@ CAP_RATIO = math.exp(math.log(1e-12) / 2000)  # sigma_2 / sigma_1 of K above whi
 @pytest.mark.parametrize("ratio, slow", [(CAP_RATIO * (1 + EPS), True), (0.9975, True),
                                          (CAP_RATIO * (1 - EPS), False), (None, False)])
 def test_the_iteration_cap_is_named_by_its_measured_cause_and_what_to_do(ratio, slow):
-    """EuRoC with two_step_left: sigma_2 / sigma_1 0.9975 at axis spread 3.2 deg; the verdict names that, with the
-    threshold, and the default method, never the class IterationCapWarning."""
+    """EuRoC with two_step_left: sigma_2 / sigma_1 0.9975 at axis spread 3.2 deg; the verdict names
+    that, with the threshold, and the default method, never the class IterationCapWarning."""
     e = dataclasses.replace(GOOD, warnings=("IterationCapWarning",), spectral_ratio=ratio, axis_spread_deg=3.2,
                             method="two_step_left")
     (r,) = judge(e).reasons
@@ -272,8 +279,8 @@ def test_the_verdict_is_the_worst_reason():
 
 @pytest.mark.parametrize("poses", [False, True])
 def test_the_remedies_are_for_static_poses_or_for_streams(poses):
-    """Static pose sets are told to add stations, streams to record longer (a case once found: a pose set was told to
-    use a shorter interval)."""
+    """Static pose sets are told to add stations, streams to record longer (a case once found: a
+    pose set was told to use a shorter interval)."""
     e = dataclasses.replace(GOOD, n_pairs=2, blocks=1.0, pose_residual_medians_deg=(0.1, 0.1, 0.1) if poses else None)
     reasons = {r.check: r.message for r in judge(e).reasons}
     stream_words = ("stride", "recording", "overlap", "interval")
@@ -283,9 +290,10 @@ def test_the_remedies_are_for_static_poses_or_for_streams(poses):
     else:
         assert "a longer recording" in reasons["n_pairs"] and "a shorter interval" in reasons["blocks"]
 
-# ----------------------------------------------------------------------------------------------------
-# The verdict rules of :func:`replication.rig.quality.judge` at their boundaries, one check at a time: mutation testing
-# (scripts/mutation) found loosened thresholds, flipped comparisons and removed branches that no test saw.
+# --------------------------------------------------------------------------------------------------
+# The verdict rules of :func:`replication.rig.quality.judge` at their boundaries, one check at a
+# time: mutation testing (scripts/mutation) found loosened thresholds, flipped comparisons and
+# removed branches that no test saw.
 
 
 #: Evidence that every check passes: no reason at all.
@@ -301,7 +309,8 @@ def test_good_evidence_gives_ok_and_no_reason():
     assert v.level == "ok" and v.reasons == ()
 
 
-#: check, the Evidence field(s) a value sets, "below" or "above", the unit printed, the name printed.
+#: check, the Evidence field(s) a value sets, "below" or "above", the unit printed, the name
+#: printed.
 CHECKS = [
     ("n_pairs", lambda v: dict(n_pairs=v), "below", "", "motion pairs"),
     ("offset_correlation", lambda v: dict(offset_correlation=v), "below", "", "time-offset correlation"),
@@ -430,7 +439,8 @@ def test_bootstrap_failure_and_repeated_pairs_are_warnings():
 
 
 def test_gap_share_uses_the_pairs_before_the_gaps():
-    # 1 of 3 dropped: a third, below the fail bound; without the count before, the share is over at least one pair
+    # 1 of 3 dropped: a third, below the fail bound; without the count before, the share is over at
+    # least one pair
     r = _reasons(dataclasses.replace(CLEAN, pairs_dropped_at_gaps=1, pairs_before_gaps=3))["gap_share_dropped"]
     assert (r.level, r.measured) == ("warning", pytest.approx(1 / 3))
     assert r.message.endswith("1 pairs spanned a gap in a stream and were dropped")

@@ -182,10 +182,10 @@ def test_cli_help_explains_the_formats():
     out = _cli("--help")
     assert out.returncode == 0 and "t tx ty tz qx qy qz qw" in out.stdout and "T_cam_imu" in out.stdout
 
-# ----------------------------------------------------------------------------------------------------
-# Dataset files as shipped: EuRoC's 17-column ground truth, time stamps repeated with another
-# pose (refused naming the option that reads them, or kept first / last / averaged and counted), messages with plain
-# numbers (never numpy's ``np.float64(...)``).
+# --------------------------------------------------------------------------------------------------
+# Dataset files as shipped: EuRoC's 17-column ground truth, time stamps repeated with another pose
+# (refused naming the option that reads them, or kept first / last / averaged and counted), messages
+# with plain numbers (never numpy's ``np.float64(...)``).
 
 
 #: EuRoC's state_groundtruth_estimate0/data.csv header, as shipped.
@@ -252,7 +252,8 @@ def test_a_gyro_file_is_not_read_as_ground_truth_nor_the_reverse(tmp_path):
 
 
 def _repeated(tmp_path, angle_deg, *, verbatim=False, name="rep.csv"):
-    """A 17-column file whose 4th line repeats the 3rd's time stamp with a pose turned by ``angle_deg``."""
+    """A 17-column file whose 4th line repeats the 3rd's time stamp with a pose turned by
+    ``angle_deg``."""
     rows = _gt_rows()
     twin = list(rows[2])
     if not verbatim:
@@ -295,7 +296,8 @@ def test_repeats_read_by_the_policy_asked_and_counted(tmp_path, policy):
 
 
 def test_mean_of_a_group_takes_quaternion_signs_into_account(tmp_path):
-    """q and -q are one rotation: the mean of a pose and its sign-flipped copy is that pose, not a zero vector."""
+    """q and -q are one rotation: the mean of a pose and its sign-flipped copy is that pose, not a
+    zero vector."""
     rows = _gt_rows()
     twin = list(rows[2])
     twin[4:8] = [-v for v in twin[4:8]]
@@ -374,7 +376,8 @@ def test_cli_names_a_ground_truth_given_as_gyro(tmp_path, capsys):
 
 
 def test_refusals_of_time_stamps_carry_no_numpy_reprs():
-    """Streams and the live front end refuse time going back; the numbers in their messages are plain."""
+    """Streams and the live front end refuse time going back; the numbers in their messages are
+    plain."""
     t = np.array([0.0, 0.5, 0.5, 1.0])
     messages = []
     for build in (lambda: OrientationStream(t, np.tile(np.eye(3), (4, 1, 1)), "s"),
@@ -406,8 +409,8 @@ def _rig_streams():
 
 
 def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
-    """Parameters given as NumPy scalars (read from an array, a config parsed by NumPy): the refusal shows the
-    number (``-1.0``), never ``np.float64(-1.0)``."""
+    """Parameters given as NumPy scalars (read from an array, a config parsed by NumPy): the refusal
+    shows the number (``-1.0``), never ``np.float64(-1.0)``."""
     from replication.core.checks import check_number, check_range
     from replication.rig.calibration import calibrate
     from replication.rig.poses import calibrate_poses

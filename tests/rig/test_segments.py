@@ -1,8 +1,9 @@
-"""The segment test and the clock jumps (replication.rig.segments): segments that agree are not named, a stretch
-mounted otherwise is named with its times and left out by ``use="consistent"``, the verdict's angle bounds hold at
-their boundaries, calibrate gives one verdict at intervals 0.5, 1 and 2 s on a lost-tracking rig, a clock jump is
-found with its time and size, and no jump is not. The rigs are :func:`replication.testing.noisy_rig` (camera 20 Hz,
-gyro 200 Hz, smooth three-axis motion), as in benchmarks/bench_changepoint.py and bench_segments.py."""
+"""The segment test and the clock jumps (replication.rig.segments): segments that agree are not
+named, a stretch mounted otherwise is named with its times and left out by ``use="consistent"``, the
+verdict's angle bounds hold at their boundaries, calibrate gives one verdict at intervals 0.5, 1 and
+2 s on a lost-tracking rig, a clock jump is found with its time and size, and no jump is not. The
+rigs are :func:`replication.testing.noisy_rig` (camera 20 Hz, gyro 200 Hz, smooth three-axis
+motion), as in benchmarks/bench_changepoint.py and bench_segments.py."""
 import dataclasses
 import warnings
 
@@ -156,7 +157,8 @@ def test_the_consistent_part_keeps_the_pairs_inside_it():
     test = _fake(1.0)  # segments 0-10, 10-20 (disagrees), 20-30, 30-40 s; the consistent part 0-10 and 20-40 s
     assert test.used_spans() == [[0.0, 10.0], [20.0, 40.0]]
     t = np.array([0.0, 8.9, 9.1, 10.0, 19.5, 20.0, 38.9, 39.5, 39.9])
-    # a pair that ends past its span is out, but the last segment's pairs run one analysis interval past its start
+    # a pair that ends past its span is out, but the last segment's pairs run one analysis interval
+    # past its start
     assert consistent_mask(test, t, 1.0).tolist() == [True, True, False, False, False, True, True, True, True]
     assert consistent_mask(test, t, 2.0).tolist() == [True, False, False, False, False, True, True, False, False]
 
@@ -176,8 +178,9 @@ def test_the_consistent_part_fails_when_much_is_left_out_and_it_disagrees_beyond
     assert ("calibrate each on its own" in r.message) == (level == "fail")
 
 
-# ----------------------------------------------------------------------------------------------------
-# The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump of the camera's
+# --------------------------------------------------------------------------------------------------
+# The clocks (replication.rig.clock): a step of the clock without a skip in the stamps and a jump of
+# the camera's
 
 
 def test_use_consistent_keeping_a_wrong_majority_says_which_seconds_and_by_how_much_not_that_it_is_right():

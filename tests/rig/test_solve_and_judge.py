@@ -1,5 +1,5 @@
-"""The common end of ``calibrate`` (``rig/solve_and_judge.py``): ``solve_pairs`` takes the pairs and its named
-groups (``Resampling``, ``Provenance``), frozen."""
+"""The common end of ``calibrate`` (``rig/solve_and_judge.py``): ``solve_pairs`` takes the pairs and
+its named groups (``Resampling``, ``Provenance``), frozen."""
 import inspect
 
 import numpy as np

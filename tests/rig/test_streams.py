@@ -1,4 +1,5 @@
-"""Orientation and gyro streams: the cached slerp, the world_from_body field, gyro integration, a light import."""
+"""Orientation and gyro streams: the cached slerp, the world_from_body field, gyro integration, a
+light import."""
 import dataclasses
 import subprocess
 import sys

@@ -1,4 +1,5 @@
-"""scripts/spread.py: which stored notebook outputs another machine's rounding changes (its comparison logic)."""
+"""scripts/spread.py: which stored notebook outputs another machine's rounding changes (its
+comparison logic)."""
 import importlib.util
 from pathlib import Path
 

@@ -1,6 +1,6 @@
-"""The study layer on small inputs: the one solver loop (baselines.compare, sweep), the lab's studies
-(summarize, ablation, sensitivity), Table II beside the paper's, and the studies of the real recordings
-(real_study) on a synthetic rig whose R0 is known."""
+"""The study layer on small inputs: the one solver loop (baselines.compare, sweep), the lab's
+studies (summarize, ablation, sensitivity), Table II beside the paper's, and the studies of the real
+recordings (real_study) on a synthetic rig whose R0 is known."""
 import dataclasses
 
 import numpy as np
@@ -26,7 +26,8 @@ from replication.study.table2 import table2_versus_paper
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
 
 
-# ------------------------------------------------------------------------------------------------ the solver loop
+# ------------------------------------------------------------------------------------------------
+# the solver loop
 
 def test_compare_rows_errors_and_ratio_on_noise_free_problems():
     sim = simulate(3, 4, noise_camera=0.0, noise_sensor=0.0)
@@ -65,7 +66,8 @@ def test_sweep_is_compare_at_each_value():
     assert (by_value[2.0] > by_value[0.5]).all()  # more noise, larger error
 
 
-# ------------------------------------------------------------------------------------------------ the lab's studies
+# ------------------------------------------------------------------------------------------------
+# the lab's studies
 
 def _hand_built_result():
     per_set = pd.DataFrame({
@@ -114,11 +116,13 @@ def test_table2_versus_paper_sits_beside_the_paper_in_its_order():
                                result.table2.loc[("pitch", "ours_right"), "rms_deg"])
 
 
-# ------------------------------------------------------------------------------------------------ real-data studies
+# ------------------------------------------------------------------------------------------------
+# real-data studies
 
 @pytest.fixture(scope="module")
 def synthetic_rig():
-    """A camera stream and a sensor stream of the same rigid motion, sensor = camera rotated by R0 (no noise)."""
+    """A camera stream and a sensor stream of the same rigid motion, sensor = camera rotated by R0
+    (no noise)."""
     rng = np.random.default_rng(5)
     R0 = so3.random_rotations(rng, ())
     t = np.arange(0.0, 40.0, 0.05)

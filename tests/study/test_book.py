@@ -1,7 +1,8 @@
-"""The book (``bash scripts/docs``): its generated pages come from the records and the schema, it builds with warnings
-as errors, and a real browser (headless Chromium) finds no console error, missing image, or dead local link or anchor on
-the front page and every chapter. Without Chromium (or Sphinx) the browser tests skip, unless
-``REPLICATION_REQUIRE_BROWSER=1`` (CI: ``.ci/run`` installs Chromium), where they fail."""
+"""The book (``bash scripts/docs``): its generated pages come from the records and the schema, it
+builds with warnings as errors, and a real browser (headless Chromium) finds no console error,
+missing image, or dead local link or anchor on the front page and every chapter. Without Chromium
+(or Sphinx) the browser tests skip, unless ``REPLICATION_REQUIRE_BROWSER=1`` (CI: ``.ci/run``
+installs Chromium), where they fail."""
 import base64
 import copy
 import fcntl
@@ -31,7 +32,8 @@ def collected():
     return ledger.collect()
 
 
-# ---- the compact ledger (README, claims --summary) ----------------------------------------------------------------
+# ---- the compact ledger (README, claims --summary)
+# ----------------------------------------------------------------
 
 def test_summary_gives_the_counts_and_one_row_per_claim(collected):
     summary = ledger.summary_from_ledger(collected)
@@ -84,7 +86,8 @@ def test_first_clause_stops_at_a_clause_outside_brackets_only():
     assert ledger.first_clause("it holds.") == "it holds."
 
 
-# ---- the generated pages ------------------------------------------------------------------------------------------
+# ---- the generated pages
+# ------------------------------------------------------------------------------------------
 
 def test_front_page_links_every_claim_to_its_record_and_its_notebook_section(collected):
     page = book.front_page_claims(collected)
@@ -103,8 +106,9 @@ def _condition_cells(page):
 
 
 def test_front_page_gives_every_condition_in_full_and_cuts_nothing(collected):
-    """Issue 35: a "holds only if" row carries its whole condition (the cell wraps; no "…" or "..." cut), and an
-    evidence cell ends at its first clause with a link to the rest, never an ellipsis."""
+    """Issue 35: a "holds only if" row carries its whole condition (the cell wraps; no "…" or "..."
+    cut), and an evidence cell ends at its first clause with a link to the rest, never an
+    ellipsis."""
     cells = _condition_cells(book.front_page_claims(collected))
     only_if = collected[collected["verdict"] == ledger.HOLDS_ONLY_IF]
     assert len(only_if) >= 5  # theorem1, table2_methods_agree (380 characters), ...
@@ -226,14 +230,16 @@ def test_stage_fills_every_page_and_copies_the_notebooks(tmp_path, collected):
 
 
 def test_the_notebooks_hold_no_output_type_the_book_cannot_show():
-    """docs/conf.py silences MyST-NB's unknown-type warning for the claim records' type only: no other may appear."""
+    """docs/conf.py silences MyST-NB's unknown-type warning for the claim records' type only: no
+    other may appear."""
     shown = {"text/plain", "text/html", "text/markdown", "image/png", ledger.CLAIM_MIME}
     found = {mime for path in NOTEBOOKS for cell in json.loads(path.read_text(encoding="utf-8"))["cells"]
              for out in cell.get("outputs", []) for mime in out.get("data", {})}
     assert found <= shown, found - shown
 
 
-# ---- the browser --------------------------------------------------------------------------------------------------
+# ---- the browser
+# --------------------------------------------------------------------------------------------------
 
 def _need(what: str):
     if os.environ.get("REPLICATION_REQUIRE_BROWSER") == "1":
@@ -253,7 +259,8 @@ def chromium():
 
 @pytest.fixture(scope="module")
 def built():
-    """The book, built by scripts/book.py (incremental: Sphinx rebuilds what changed), one build at a time."""
+    """The book, built by scripts/book.py (incremental: Sphinx rebuilds what changed), one build at
+    a time."""
     if importlib.util.find_spec("sphinx") is None or importlib.util.find_spec("myst_nb") is None:
         _need("Sphinx and MyST-NB are not installed (pip install -e '.[docs]')")
     BUILD.mkdir(parents=True, exist_ok=True)
@@ -311,7 +318,8 @@ def test_the_checker_passes_a_clean_page(tmp_path, chromium):
 
 
 def test_the_book_reads_cleanly_in_a_real_browser(built, chromium):
-    """The front page and every chapter it leads to: no console error, every image, every local link and anchor."""
+    """The front page and every chapter it leads to: no console error, every image, every local link
+    and anchor."""
     import browser
 
     with browser.serve(built) as base, browser.Chromium(chromium) as page:
@@ -337,9 +345,10 @@ def test_the_front_page_shows_the_counts_of_the_records(built, collected):
 
 
 def test_the_front_page_reads_in_five_minutes_in_a_real_browser(built, chromium, collected):
-    """Issue 35, in the rendered page: README's four headlines first; every "holds only if" row shows its whole
-    condition (no "…" or "..."), wrapped rather than cut (the cell's text fits its box); each verdict a mark and a
-    background of its own; the ledger's headings are titles, not ids."""
+    """Issue 35, in the rendered page: README's four headlines first; every "holds only if" row
+    shows its whole condition (no "…" or "..."), wrapped rather than cut (the cell's text fits its
+    box); each verdict a mark and a background of its own; the ledger's headings are titles, not
+    ids."""
     import browser
 
     with browser.serve(built) as base, browser.Chromium(chromium) as page:

@@ -1,6 +1,7 @@
-"""The audit's study functions (``replication.study.convexity``: section 4 of notebook 06 and section 3d of
-notebook 01): the Hessian of eq. (8) in vec(R), the derivatives on SO(3) computed from it, the non-global minima
-Newton finds, their counts with Wilson intervals, and the guards of the ``convex_problem`` record."""
+"""The audit's study functions (``replication.study.convexity``: section 4 of notebook 06 and
+section 3d of notebook 01): the Hessian of eq. (8) in vec(R), the derivatives on SO(3) computed from
+it, the non-global minima Newton finds, their counts with Wilson intervals, and the guards of the
+``convex_problem`` record."""
 import numpy as np
 import pandas as pd
 import pytest
@@ -29,7 +30,8 @@ def runs(noisy):
     return bl.newton_from_starts(noisy.A, noisy.B, so3.random_rotations(np.random.default_rng(2), (3, 40)))
 
 
-# --- counts --------------------------------------------------------------------------------------------------------
+# --- counts
+# --------------------------------------------------------------------------------------------------
 
 def test_count_text_gives_the_wilson_interval():
     low, high = wilson_interval(51, 1800)
@@ -48,7 +50,8 @@ def test_bracket_interval_is_the_wilson_interval_at_the_bracket_ends(k, text, en
 
 @pytest.mark.parametrize("k", [449, 450, 451, 499])
 def test_a_count_within_two_runs_of_a_bracket_edge_is_refused(k):
-    # which basin a start falls into moves with the machine's rounding by a run or two: the bracket would flip
+    # which basin a start falls into moves with the machine's rounding by a run or two: the bracket
+    # would flip
     with pytest.raises(ValueError, match="a share of starts .* of an edge of its bracket"):
         bl.bracket_interval(k, 1000)
 
@@ -59,7 +62,8 @@ def test_bracket_interval_does_not_move_inside_its_bracket():
     assert bl.bracket_interval(1000, 1000)[0] == "all"
 
 
-# --- the Hessian of (8) in vec(R) ----------------------------------------------------------------------------------
+# --- the Hessian of (8) in vec(R)
+# ----------------------------------------------------------------------------------
 
 def test_cost_hessian_vec_is_the_quadratic_form_of_eq8_for_any_matrix(noisy):
     H = bl.cost_hessian_vec(noisy.A, noisy.B)
@@ -80,7 +84,8 @@ def test_cost_hessian_vec_is_psd_and_singular_exactly_noise_free(noisy, clean):
 
 
 def test_cost_convexity_counts_against_its_tolerance(noisy):
-    """``PSD`` counts problems whose smallest eigenvalue / J is at least ``-tol``: just below and just above."""
+    """``PSD`` counts problems whose smallest eigenvalue / J is at least ``-tol``: just below and
+    just above."""
     smallest = bl.cost_convexity(noisy.A, noisy.B)["smallest / J (min)"]
     assert bl.cost_convexity(noisy.A, noisy.B, tol=-(smallest - 1e-9))["PSD"] == 40
     assert bl.cost_convexity(noisy.A, noisy.B, tol=-(smallest + 1e-9))["PSD"] == 39
@@ -88,7 +93,8 @@ def test_cost_convexity_counts_against_its_tolerance(noisy):
         bl.cost_hessian_vec(noisy.A, noisy.B[:, :4])
 
 
-# --- derivatives on SO(3), independent of the solver's ---------------------------------------------------------------
+# --- derivatives on SO(3), independent of the solver's
+# ---------------------------------------------------------------
 
 def test_derivatives_on_so3_match_finite_differences(noisy):
     R = so3.random_rotations(np.random.default_rng(3), 40)
@@ -114,7 +120,8 @@ def test_derivatives_on_so3_agree_with_the_solver_at_its_end_points(noisy):
     np.testing.assert_allclose(np.linalg.norm(grad, axis=-1) / 20, res.gradient_norm, atol=1e-10)
 
 
-# --- non-global minima -----------------------------------------------------------------------------------------------
+# --- non-global minima
+# -----------------------------------------------------------------------------------------------
 
 def test_newton_from_starts_finds_strict_half_turn_twins(runs):
     bad = runs[runs["non-global"]]
@@ -166,7 +173,8 @@ def test_a_point_that_is_not_stationary_is_not_strict(noisy):
 
 
 def test_a_stationary_point_that_is_a_maximum_is_not_strict(noisy):
-    """The Hessian condition of ``strict``: the maximisers of (8) on SO(3) are stationary, with a negative Hessian."""
+    """The Hessian condition of ``strict``: the maximisers of (8) on SO(3) are stationary, with a
+    negative Hessian."""
     K = handeye.kronecker_operator(noisy.A, noisy.B)
     R_max = chordal_newton(-K, so3.random_rotations(np.random.default_rng(7), 40), max_iterations=100)[0]
     at_max = bl.newton_from_starts(noisy.A, noisy.B, R_max, max_iterations=0)  # judged where they are
@@ -203,7 +211,8 @@ def test_basin_sensitivity_zero_and_large_perturbations(noisy):
     assert bl.basin_sensitivity(noisy.A, noisy.B, starts, scale=2.0, rng=np.random.default_rng(0), repeats=2) >= 5
 
 
-# --- outliers, the fixed point ---------------------------------------------------------------------------------------
+# --- outliers, the fixed point
+# ---------------------------------------------------------------------------------------
 
 def test_outlier_certificate_study_is_certified_and_counts_strict_minima():
     table = bl.outlier_certificate_study(123, 60, configs=((3, 0.4),))
@@ -219,7 +228,8 @@ def test_fixed_point_costs_more_than_the_certified_minimiser(noisy):
     assert t["angle minimiser"].mean() < t["angle R^l"].mean()
 
 
-# --- the convex_problem record and its guards ----------------------------------------------------------------------
+# --- the convex_problem record and its guards
+# ----------------------------------------------------------------------
 
 def _record_inputs():
     s = {"runs": 1000, "non-global": 470, "share": "40-50 %", "share low": 0.37, "share high": 0.53, "problems": 1000,

@@ -112,7 +112,8 @@ def test_fig5_figure_draws_two_step_with_error_bars_and_every_sqp_variant():
     plt.close(fig)
 
 
-# ---- resilience over all runs, and the changes of the mean errors ------------------------------------------------
+# ---- resilience over all runs, and the changes of the mean errors
+# ------------------------------------------------
 
 def _sweep(at_minimum=True):
     rng = np.random.default_rng(3)
@@ -151,7 +152,8 @@ def test_resilience_where_sqp_converged_is_unchanged_by_all_runs():
     assert a[1] == b[1]
 
 
-# ---- matching stop-short SQPs to Table I ------------------------------------------------------------------------
+# ---- matching stop-short SQPs to Table I
+# ------------------------------------------------------------------------
 
 FAMILIES = {"early": {"start": "identity", "knob": "max_iterations", "grid": range(1, 13), "text": "{:g} it"},
             "tol": {"start": "identity", "knob": "ftol", "grid": [1e-3, 1e-1], "text": "ftol {:g}"}}
@@ -170,7 +172,8 @@ def test_match_to_table1_picks_the_grid_value_closest_to_the_target():
     for neighbour in (early["mean below"], early["mean above"]):           # no neighbour is closer on a log scale
         assert abs(np.log(neighbour / 0.05)) >= abs(np.log(early["SQP mean"] / 0.05))
     assert early["matched"] == (np.exp(abs(np.log(early["SQP mean"] / 0.05))) <= 1.25)
-    # the configuration runs SQP stopped after k iterations: the same errors as the matching read from the history
+    # the configuration runs SQP stopped after k iterations: the same errors as the matching read
+    # from the history
     from replication.core.so3 import frobenius_error
     from replication.core.solvers import sqp
     from replication.study.simulation import simulate
@@ -214,7 +217,8 @@ def test_matching_display_texts():
     assert out.loc[("far", "Haar", "ball")].tolist() == ["no match (best: 1 iterations)", "2.73", "-", "-", "0.0065"]
 
 
-# ---- problem sets, fresh seeds ----------------------------------------------------------------------------------
+# ---- problem sets, fresh seeds
+# ----------------------------------------------------------------------------------
 
 def test_problem_sets_groups_rows_on_the_same_problems_and_measures_their_differences():
     base = _sweep()
@@ -294,7 +298,8 @@ def test_fig5_figure_shows_table1_beside_ours_and_says_why_only_there():
     plt.close(fig)
 
 
-# ---- the ledger record ------------------------------------------------------------------------------------------
+# ---- the ledger record
+# ------------------------------------------------------------------------------------------
 
 LEVEL_NAMES = ["motions", "start", "noise", "SQP variant", "sensor noise (deg)"]
 CONV = [("Haar", "identity", "ball", "analytic"), ("Haar", "identity", "ball", "capped"),
@@ -336,8 +341,8 @@ RANGE_ROWS = [("0-30 deg", "to its limit"), ("0-30 deg", "50 iterations"), ("0-9
 
 
 def _ranges(shift=0.0):
-    """Synthetic :func:`range_sweep` output: growth ratio 1.04 [1.01, 1.08] to 1.7 [1.6, 1.9] where both converge,
-    the stopped two-step 0.55 [0.4, 0.7], 6 times less accurate than SQP at 1 deg."""
+    """Synthetic :func:`range_sweep` output: growth ratio 1.04 [1.01, 1.08] to 1.7 [1.6, 1.9] where
+    both converge, the stopped two-step 0.55 [0.4, 0.7], 6 times less accurate than SQP at 1 deg."""
     idx = pd.MultiIndex.from_tuples(RANGE_ROWS, names=["motions", "two-step"])
     growth = pd.DataFrame({"sqp_failed_share": 0.0, "ratio": [1.04, 0.55, 1.1, 1.7], "low": [1.01, 0.4, 1.05, 1.6],
                            "high": [1.08, 0.7, 1.15, 1.9]}, index=idx)

@@ -1,4 +1,5 @@
-"""Fig. 5's claim in pieces (``study/fig5/claims.py``): each piece of evidence checks its own numbers."""
+"""Fig. 5's claim in pieces (``study/fig5/claims.py``): each piece of evidence checks its own
+numbers."""
 import pytest
 from test_fig5 import FAIL, _record_inputs
 

@@ -1,6 +1,6 @@
-"""Figures a reader can use alone: one fixed colour per solver, panels with titles, units, N per point and intervals,
-labelled target lines, and a calibration figure that names its recording and states R0, the radius and the
-reference, without empty panels."""
+"""Figures a reader can use alone: one fixed colour per solver, panels with titles, units, N per
+point and intervals, labelled target lines, and a calibration figure that names its recording and
+states R0, the radius and the reference, without empty panels."""
 import math
 
 import matplotlib
@@ -29,7 +29,8 @@ def _drawn(ax) -> int:
 
 
 def _texts(fig) -> str:
-    """Every text of a figure: its title, each axes' title, labels, texts, annotations and legend entries."""
+    """Every text of a figure: its title, each axes' title, labels, texts, annotations and legend
+    entries."""
     out = [fig._suptitle.get_text() if fig._suptitle else ""] + [t.get_text() for t in fig.texts]
     for ax in fig.axes:
         out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
@@ -38,7 +39,8 @@ def _texts(fig) -> str:
     return "\n".join(out)
 
 
-# ------------------------------------------------------------------------------------------- one colour per solver
+# ------------------------------------------------------------------------------------------- one
+# colour per solver
 
 def test_every_registered_solver_has_its_own_colour_and_the_papers_names_share_their_solvers():
     colours = {name: to_rgba(METHOD_STYLE[name]["color"]) for name in available()}  # KeyError: a solver without one
@@ -87,7 +89,8 @@ def test_adding_a_solver_keeps_every_other_solvers_colour(monkeypatch):
     plt.close("all")
 
 
-# ------------------------------------------------------------------------------------------------ the sweep panels
+# ------------------------------------------------------------------------------------------------
+# the sweep panels
 
 def test_sweep_panels_have_titles_units_n_per_point_and_intervals():
     df = _sweeps(["chordal_optimal", "two_step_right"], n=100, sd=0.5)
@@ -101,7 +104,8 @@ def test_sweep_panels_have_titles_units_n_per_point_and_intervals():
                       "(c) against outlier pairs: N = 100 problems per point"]
     assert fig.axes[0].get_xlabel() == "noise bound on each rotation (deg)" and "(deg)" in fig.axes[0].get_ylabel()
     assert "95 % interval of the mean" in fig.axes[0].get_ylabel()
-    # chordal_optimal at 1 deg: mean 0.5, half-width 1.96 * 0.5 / 10 = 0.098 (below the mean: drawn whole)
+    # chordal_optimal at 1 deg: mean 0.5, half-width 1.96 * 0.5 / 10 = 0.098 (below the mean: drawn
+    # whole)
     low, high = _bar_ends(fig, "chordal_optimal")
     assert (low, high) == pytest.approx((0.5 - 0.098, 0.5 + 0.098))
     # a half-width above the mean is cut just above 0 (log scale), the upper end kept
@@ -126,7 +130,8 @@ def test_live_figure_labels_its_target_lines_and_names_each_recording():
     plt.close(fig)
 
 
-# ----------------------------------------------------------------------------------------- the calibration figure
+# ----------------------------------------------------------------------------------------- the
+# calibration figure
 
 @pytest.fixture(scope="module")
 def rig():

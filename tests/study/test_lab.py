@@ -250,8 +250,9 @@ def _table2_rms(rec):
 
 @pytest.mark.parametrize("noisy", [True, False])
 def test_table2_is_rounding_sensitive_only_without_accelerometer_and_magnetometer_noise(noisy):
-    """Madgwick's correction is a normalised gradient step: with noise-free accelerometer and magnetometer its
-    direction is set by rounding, so a 1e-13 relative change of the IMU data moves Table II; with noise it does not."""
+    """Madgwick's correction is a normalised gradient step: with noise-free accelerometer and
+    magnetometer its direction is set by rounding, so a 1e-13 relative change of the IMU data moves
+    Table II; with noise it does not."""
     settings = dataclasses.replace(SMALL, dynamic_seconds=10.0)
     if not noisy:
         settings = settings.without("accelerometer errors", "magnetometer errors")

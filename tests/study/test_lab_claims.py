@@ -1,7 +1,8 @@
-"""Notebook 05's seed study over two sets of seeds and the pieces it rests on: the faster equivalents of the lab's
-chain (each against the original), the all-sample calibration, the interventions with the camera reused, the
-findings with their intervals, and each check of the lab's claims (:mod:`replication.study.lab.claims`) raising
-just past its threshold (on the fresh seeds too) and not just before it."""
+"""Notebook 05's seed study over two sets of seeds and the pieces it rests on: the faster
+equivalents of the lab's chain (each against the original), the all-sample calibration, the
+interventions with the camera reused, the findings with their intervals, and each check of the lab's
+claims (:mod:`replication.study.lab.claims`) raising just past its threshold (on the fresh seeds
+too) and not just before it."""
 import dataclasses
 import re
 
@@ -41,8 +42,8 @@ def test_transcribed_madgwick_is_ahrs_madgwick(small_recording):
 
 
 def test_transcribed_madgwick_takes_ahrs_branches():
-    """A still gyroscope keeps the quaternion, a zero magnetometer falls back to the IMU update, a zero
-    accelerometer skips the correction: as in ``ahrs``."""
+    """A still gyroscope keeps the quaternion, a zero magnetometer falls back to the IMU update, a
+    zero accelerometer skips the correction: as in ``ahrs``."""
     from ahrs.filters import Madgwick
 
     rng = np.random.default_rng(3)
@@ -112,7 +113,8 @@ def test_fast_run_is_the_default_run(small_recording):
         lab.run_lab(small_recording, dynamic_camera=fast.dynamic["camera_from_world"][1:])
 
 
-# ----------------------------------------------------------------------------- every sample of each orientation
+# ----------------------------------------------------------------------------- every sample of each
+# orientation
 
 def test_every_sample_gives_one_motion_per_sample_pair(small_recording):
     mean, every = lab.static_motions(small_recording), lab.static_motions(small_recording, sample="all")
@@ -120,8 +122,8 @@ def test_every_sample_gives_one_motion_per_sample_pair(small_recording):
     for k, (A, B) in every.items():
         n = per_pose.loc[k].to_numpy()
         assert A.shape == B.shape == (int(np.minimum(n[:-1], n[1:]).sum()), 3, 3)
-        # the first orientation pair's motions scatter (one sample's noise) about its mean motion, not about the
-        # identity (a motion within one orientation)
+        # the first orientation pair's motions scatter (one sample's noise) about its mean motion,
+        # not about the identity (a motion within one orientation)
         j = int(n[0])
         for per_sample, of_means in ((A[:j], mean[k][0][0]), (B[:j], mean[k][1][0])):
             centre = so3.nearest_rotation(per_sample.sum(axis=0))
@@ -154,7 +156,8 @@ def test_seed_study_with_every_sample_and_parts_switched_off():
         lab.seed_study([1], SMALL_LAB, without=["pixel noise"])
 
 
-# ----------------------------------------------------------------------------- findings and their intervals
+# ----------------------------------------------------------------------------- findings and their
+# intervals
 
 def test_count_text_and_seed_range():
     low, high = wilson_interval(15, 20)
@@ -166,8 +169,8 @@ def test_count_text_and_seed_range():
 
 
 def lab_study(seeds):
-    """A synthetic :func:`seed_study` frame whose findings pass every check of the lab's claims, each with a
-    margin the threshold tests below compute."""
+    """A synthetic :func:`seed_study` frame whose findings pass every check of the lab's claims,
+    each with a margin the threshold tests below compute."""
     seeds = pd.Index(list(seeds), name="seed")
     n = len(seeds)
     r, alt = np.linspace(0.0, 1.0, n), np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
@@ -197,8 +200,8 @@ def lab_study(seeds):
 
 
 def pitch_frame(seeds, mean=0.02, half_width=0.06, base=1.9):
-    """A synthetic :func:`replication.study.lab.pitch_bias_intervention` frame: the change of |pitch bias| alternates
-    about ``mean`` so that its 95 % half-width (1.96 SE) is ``half_width``."""
+    """A synthetic :func:`replication.study.lab.pitch_bias_intervention` frame: the change of |pitch
+    bias| alternates about ``mean`` so that its 95 % half-width (1.96 SE) is ``half_width``."""
     seeds = pd.Index(list(seeds), name="seed")
     n = len(seeds)
     alt = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
@@ -208,8 +211,8 @@ def pitch_frame(seeds, mean=0.02, half_width=0.06, base=1.9):
 
 
 def lab_claims_inputs():
-    """The keyword arguments of :func:`lab_claims` (the notebook's calls above): synthetic seed studies (seeds 1-20
-    and fresh 21-40) and the committed draw's quantities."""
+    """The keyword arguments of :func:`lab_claims` (the notebook's calls above): synthetic seed
+    studies (seeds 1-20 and fresh 21-40) and the committed draw's quantities."""
     frames = pd.DataFrame({"pitch mean": [-4.09, -1.58, 1.43, 0.2]},
                           index=pd.MultiIndex.from_tuples([("true R0", 0.0), ("true R0", 5.0), ("true R0", 10.0),
                                                            ("ours_right", 0.0)], names=["R0", "reference time (s)"]))
@@ -229,9 +232,9 @@ def lab_claims_inputs():
 
 def lab_claims(study, fresh, *, poses, held, summary, ablation_table, sensitivity_table, table2, checks, pitch_true,
                frames, bounds, sqp_runs, pitch_cal):
-    """The lab's ten records as notebook 05 makes them, one call per claim with its numbers (in the notebook's
-    cells: "The recordings", "The lab over 20 seeds", "The lab over fresh seeds" and the pitch-bias intervention),
-    listed in the ledger's order."""
+    """The lab's ten records as notebook 05 makes them, one call per claim with its numbers (in the
+    notebook's cells: "The recordings", "The lab over 20 seeds", "The lab over fresh seeds" and the
+    pitch-bias intervention), listed in the ledger's order."""
     records = [
         claims.lab_protocol(poses, held),
         claims.fig6_consistency(study, summary.loc["ours_right", "spread_mean_deg"],
@@ -303,8 +306,8 @@ def test_lab_claims_name_both_seed_sets_and_the_fresh_section():
 
 
 def _shift(column, which="fresh", seeds=None):
-    """An edit of the inputs: add ``delta`` to ``column`` of the ``which`` study (all seeds, or the first ``seeds``),
-    or set it (``seeds`` given with ``set_to``)."""
+    """An edit of the inputs: add ``delta`` to ``column`` of the ``which`` study (all seeds, or the
+    first ``seeds``), or set it (``seeds`` given with ``set_to``)."""
     def edit(inputs, delta):
         frame = inputs[which]
         rows = frame.index if seeds is None else frame.index[:seeds]
@@ -313,7 +316,8 @@ def _shift(column, which="fresh", seeds=None):
 
 
 def _critical(inputs, which, key, *, scale_key=None, factor=0.0, sign=1.0, absolute=False):
-    """The shift of a finding's value at which ``value + sign * 2 se`` meets ``factor * <scale_key's value>``."""
+    """The shift of a finding's value at which ``value + sign * 2 se`` meets ``factor * <scale_key's
+    value>``."""
     f = seed_findings(inputs[which])
     target = factor * f.loc[scale_key, "value"] if scale_key else 0.0
     if absolute:
@@ -360,8 +364,9 @@ def test_table2_blindness_check_raises_just_past_its_threshold(which):
             assert len(lab_claims(**inputs)) == 10
 
 
-# (claim, column, value that breaks the count in a seed (or its function of the frame), what the error names): a
-# Wilson interval of k of 20 lies above one half from k = 15 on, so 5 seeds turned against the finding pass, 6 not
+# (claim, column, value that breaks the count in a seed (or its function of the frame), what the
+# error names): a Wilson interval of k of 20 lies above one half from k = 15 on, so 5 seeds turned
+# against the finding pass, 6 not
 COUNT_CHECKS = [
     ("table2_reduction", "rms_sensor_frame", 0.0, "calibrated RMS below the sensor frame's"),
     ("fig6_accuracy", "spread_ours_right", 100.0, "error of the mean of the 10 estimates above"),
@@ -407,8 +412,8 @@ def _per_seed(*counts):
     return np.array(list(counts) + [0] * (20 - len(counts)), dtype=float)
 
 
-# SQP's failure counts (columns of the 20 seeds) just inside and just outside one bound's margin of 2 data sets
-# (seeds, failed sets), the others kept
+# SQP's failure counts (columns of the 20 seeds) just inside and just outside one bound's margin of
+# 2 data sets (seeds, failed sets), the others kept
 SQP_CASES = {
     "more than 10 % of the 200 data sets fail with 100 iterations, by 2: 22 of 200, not 21": (
         {"failed_sqp_100 iterations": _per_seed(2, 2, *[1] * 18),
@@ -452,7 +457,8 @@ def test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin(mea
             seed_findings(study)
 
 
-# ----------------------------------------------------------------------------- the calibration errors' share of the
+# ----------------------------------------------------------------------------- the calibration
+# errors' share of the
 # pitch bias: resolved to 0.1 deg, many seeds, the words follow the intervals
 
 def test_pitch_bias_intervention_is_the_seed_studys():
@@ -510,7 +516,7 @@ def test_the_pitch_share_in_words_follows_the_intervals(means, words):
     assert "seeds 900001-900120, confirmed on fresh seeds 910001-910120" in measures["setting"]
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # Claims where their evidence is: one small function per claim, taking only its numbers, called
 
 

@@ -1,4 +1,5 @@
-"""The seed study on its two sets of seeds (``study/lab/seed_sets.py``): the labels the lab's claims print."""
+"""The seed study on its two sets of seeds (``study/lab/seed_sets.py``): the labels the lab's claims
+print."""
 from test_lab_claims import lab_study
 
 from replication.study.lab.seed_sets import SeedSets

@@ -1,4 +1,5 @@
-"""The claims ledger: every checkable claim of the paper has a verdict, evidence and uncertainty, and README agrees."""
+"""The claims ledger: every checkable claim of the paper has a verdict, evidence and uncertainty,
+and README agrees."""
 import ast
 import json
 import os
@@ -68,7 +69,8 @@ def test_malformed_claims_file_names_line_and_column(tmp_path):
         paper.load_claim_table(path)
 
 
-# ---- the claims file: every problem named with file and line --------------------------------------------------
+# ---- the claims file: every problem named with file and line
+# --------------------------------------------------
 
 HEADER = "claim,statement,where,paper_value,unit\n"
 
@@ -119,7 +121,8 @@ def test_a_missing_claims_file_is_named(tmp_path):
         paper.load_claim_table(tmp_path / "nowhere.csv")
 
 
-# ---- ledger.record in the notebook: the rules ------------------------------------------------------------------
+# ---- ledger.record in the notebook: the rules
+# ------------------------------------------------------------------
 
 GOOD = dict(claim="theorem1", verdict="holds", evidence="e 1", uncertainty="u", setting="s", section="S", condition="")
 
@@ -158,7 +161,8 @@ def test_the_vocabulary_is_the_documented_one():
     assert ledger.HOLDS_ONLY_IF in ledger.VERDICTS
 
 
-# ---- collecting: stored outputs checked again (they could have been edited) --------------------------------------
+# ---- collecting: stored outputs checked again (they could have been edited)
+# --------------------------------------
 
 NOTEBOOKS = sorted((PROJECT_ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
 
@@ -175,7 +179,8 @@ def _copy(path, folder, name=None):
 
 
 def _edit(path, which, **changes):
-    """Change the stored record of claim ``which`` in the notebook ``path`` (a copy); ``_DROP`` deletes a field."""
+    """Change the stored record of claim ``which`` in the notebook ``path`` (a copy); ``_DROP``
+    deletes a field."""
     nb = json.loads(path.read_text(encoding="utf-8"))
     for cell in nb["cells"]:
         for out in cell.get("outputs", []):
@@ -193,7 +198,8 @@ _DROP = object()
 
 
 def _notebook(path, *records):
-    """A minimal notebook at ``path`` with one cell per stored record (a dict, or any JSON value)."""
+    """A minimal notebook at ``path`` with one cell per stored record (a dict, or any JSON
+    value)."""
     cells = [{"cell_type": "code", "source": "", "metadata": {}, "execution_count": 1,
               "outputs": [{"output_type": "display_data", "metadata": {}, "data": {ledger.CLAIM_MIME: rec}}]}
              for rec in records] + [{"cell_type": "markdown", "source": ["## S"], "metadata": {}}]
@@ -298,7 +304,8 @@ def test_collect_accepts_a_valid_minimal_ledger(tmp_path):
     assert table[["claim", "verdict", "notebook", "cell"]].values.tolist() == [["theorem1", "holds", "01_x", 0]]
 
 
-# ---- README's markers ------------------------------------------------------------------------------------------
+# ---- README's markers
+# ------------------------------------------------------------------------------------------
 
 S, E = ledger.README_START, ledger.README_END
 
@@ -335,11 +342,13 @@ def test_readme_table_is_written_between_the_markers(tmp_path, collected):
     assert ledger.update_readme(collected, readme, check=True)
 
 
-# ---- the command line: exit 2 and the message on stderr, never a traceback --------------------------------------
+# ---- the command line: exit 2 and the message on stderr, never a traceback
+# --------------------------------------
 
 @pytest.fixture
 def project(tmp_path, monkeypatch):
-    """A copy of the project's notebooks, README and claims file; ``python -m replication claims`` reads it."""
+    """A copy of the project's notebooks, README and claims file; ``python -m replication claims``
+    reads it."""
     (tmp_path / "notebooks").mkdir()
     for path in NOTEBOOKS:
         _copy(path, tmp_path / "notebooks")
@@ -461,8 +470,9 @@ def test_the_repository_ledger_passes_check():
 
 
 def test_a_reader_that_stops_early_ends_the_output_quietly():
-    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback, exit 141 (SIGPIPE's). The
-    output (1 MB) is larger than a pipe's buffer, so the pipe does break; without the wrapper it prints a traceback."""
+    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback, exit 141
+    (SIGPIPE's). The output (1 MB) is larger than a pipe's buffer, so the pipe does break; without
+    the wrapper it prints a traceback."""
     script = ("import sys, replication.cli as m\n"
               "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
               "sys.exit(m.main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
@@ -496,10 +506,10 @@ def test_each_claims_flag_alone_is_not_refused_as_a_conflict(flag, capsys, monke
     assert _claims_cli(flag) == 2  # it reached the work (which this test makes fail), not the conflict check
     assert "error: collected" in capsys.readouterr().err
 
-# ----------------------------------------------------------------------------------------------------
-# The claims ledger's rules that mutation testing found unguarded (scripts/mutation): what :func:`record` displays,
-# how :func:`collect` reads records back (which notebook and cell, the claims file's order), the Markdown table and the
-# README update.
+# --------------------------------------------------------------------------------------------------
+# The claims ledger's rules that mutation testing found unguarded (scripts/mutation): what
+# :func:`record` displays, how :func:`collect` reads records back (which notebook and cell, the
+# claims file's order), the Markdown table and the README update.
 
 
 CLAIMS_CSV = ("claim,statement,where,paper_value,unit\n"
@@ -513,7 +523,8 @@ def _record(claim, verdict="holds", condition="", evidence="e 1.0", uncertainty=
 
 
 def _notebook_ml(path, cells):
-    """A notebook whose cells carry these outputs (a list of output lists; None: a cell without outputs)."""
+    """A notebook whose cells carry these outputs (a list of output lists; None: a cell without
+    outputs)."""
     nb = {"cells": [{"cell_type": "code", "source": ""} if outs is None else
                     {"cell_type": "code", "source": "", "outputs": outs} for outs in cells]
           + [{"cell_type": "markdown", "source": "## S"}]}  # the section every _record names
@@ -610,7 +621,8 @@ def test_collect_reads_every_record_with_its_notebook_and_cell_in_the_claims_ord
     assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "section",
                                  "notebook", "cell", "anchor", "statement", "where", "paper_value"]
     assert list(got.index) == [0, 1, 2]
-    # claims in the claims file's order (zeta, alpha, mid: not alphabetical), not in the notebooks' order
+    # claims in the claims file's order (zeta, alpha, mid: not alphabetical), not in the notebooks'
+    # order
     assert list(got["claim"]) == ["zeta", "alpha", "mid"]
     assert list(got["notebook"]) == ["01_a", "01_a", "02_b"]
     assert list(got["cell"]) == [3, 1, 1]
@@ -725,7 +737,7 @@ def test_notebook_headings_reads_every_level_from_markdown_cells_only():
     assert ledger.notebook_headings(nb) == ["One", "Six", "Two"]
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # Claims where their evidence is: one small function per claim, taking only its numbers, called
 
 
@@ -745,8 +757,8 @@ CLAIM_MIME = "application/vnd.replication.claim+json"
 
 
 def oversized(source: str, max_lines: int = MAX_LINES, max_params: int = MAX_PARAMS) -> list:
-    """``(name, lines, parameters)`` of every function of ``source`` longer than ``max_lines`` or with more than
-    ``max_params`` parameters."""
+    """``(name, lines, parameters)`` of every function of ``source`` longer than ``max_lines`` or
+    with more than ``max_params`` parameters."""
     found = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -776,8 +788,9 @@ def test_no_claim_builder_over_60_lines_or_8_parameters(path):
 
 
 def records_away_from_their_function(nb: dict) -> list:
-    """``(cell, claim)`` of every stored record whose cell does not call a function named for its claim (``<claim>(``
-    or ``<claim>_record(``): a record built elsewhere, in a builder of several claims, and only recorded here."""
+    """``(cell, claim)`` of every stored record whose cell does not call a function named for its
+    claim (``<claim>(`` or ``<claim>_record(``): a record built elsewhere, in a builder of several
+    claims, and only recorded here."""
     away = []
     for index, cell in enumerate(nb["cells"]):
         source = "".join(cell.get("source", ""))

@@ -1,8 +1,9 @@
-"""The simulation half of notebook 08 (``replication.study.live_study``) at small sizes, without the real recordings.
+"""The simulation half of notebook 08 (``replication.study.live_study``) at small sizes, without the
+real recordings.
 
-The notebook runs these studies at full size (100-200 runs, 12-hour streams) and only where the real recordings are
-present; here each runs in about a second on a few runs, and the assertions are the notebook's claims, loosened to
-what so few runs can show.
+The notebook runs these studies at full size (100-200 runs, 12-hour streams) and only where the real
+recordings are present; here each runs in about a second on a few runs, and the assertions are the
+notebook's claims, loosened to what so few runs can show.
 """
 import numpy as np
 import pytest
@@ -42,8 +43,8 @@ def test_coverage_study_covers_about_95_percent():
     table = coverage_study({"paper's simulation": {}}, n_runs=20, n_pairs=60, checkpoints=range(10, 61), seed=8000)
     row = table.loc["paper's simulation"]
     assert row["checks"] == 20 * 51
-    # measured: 0.90 [0.82, 0.98]; a radius twice too large covers every check (interval [1, 1]), half of it
-    # covers 0.42
+    # measured: 0.90 [0.82, 0.98]; a radius twice too large covers every check (interval [1, 1]),
+    # half of it covers 0.42
     assert row["covered low"] <= 0.95 <= row["covered high"] and 0.8 <= row["covered"] <= 0.99
     assert 0 < row["median error (deg)"] < row["median radius (deg)"] < 0.5
 
@@ -118,6 +119,7 @@ def test_a_5_deg_remount_is_detected_and_no_remount_is_not():
 def test_update_costs_are_per_pair_microseconds():
     costs = update_costs(300, seed=0)
     assert set(costs) == {"median_us", "mean_us", "p99_us", "replay_pairs_per_s"}
-    # microseconds, not seconds: one Python-level update takes more than 1 us and (here) well under 100 ms
+    # microseconds, not seconds: one Python-level update takes more than 1 us and (here) well under
+    # 100 ms
     assert 1.0 < costs["median_us"] <= costs["p99_us"] < 1e5 and costs["mean_us"] > 1.0
     assert 10 < costs["replay_pairs_per_s"] < 1e7

@@ -73,8 +73,8 @@ def _ours_equal_to_paper(se: float):
 def test_versus_paper_compares_in_standard_errors():
     ours = _ours_equal_to_paper(1e-4)
     assert (versus_paper(ours)["verdict"] == "agrees").all()
-    # at the noise floor the paper's SE is 0.0055 / sqrt(1000) = 1.7e-4 (its std at the top of its rounding): 0.002
-    # off is 0.0015 beyond the rounding, about 7.5 SE, a difference
+    # at the noise floor the paper's SE is 0.0055 / sqrt(1000) = 1.7e-4 (its std at the top of its
+    # rounding): 0.002 off is 0.0015 beyond the rounding, about 7.5 SE, a difference
     ours.loc[50, ("ours_left", "mean")] += 0.002
     # the old relative tolerance max(0.005, 0.25 x paper) would have accepted it
     ours.loc[20, ("ours_right", "mean")] += 0.0004  # inside the paper's rounding: z 0, agrees
@@ -139,7 +139,8 @@ def test_diverting_runs_with_an_absolute_bar_and_feasibility():
         diverting_runs(err, cost[:, :3])
 
 
-# --- the studies of notebook 03 ---------------------------------------------------------------------------------
+# --- the studies of notebook 03
+# ---------------------------------------------------------------------------------
 
 def test_compact_shows_ours_with_z_beside_the_paper():
     ours = _ours_equal_to_paper(1e-4)
@@ -157,18 +158,21 @@ def test_two_step_means_mismatch_is_the_mean_absolute_log_ratio():
     sim = simulate(3, 3)
     means, _, agreeing = two_step_means(sim, None, pm)
     assert agreeing == 0  # Haar motions from the identity: no early cell near Table I's
-    # a "paper" e times ours on one side and equal on the other: |log| is 1 on half of the cells (no rounding)
+    # a "paper" e times ours on one side and equal on the other: |log| is 1 on half of the cells (no
+    # rounding)
     fake = means[["ours_right", "ours_left"]].copy()
     fake["ours_right"] *= np.e
     assert two_step_means(sim, None, fake, half_unit=0.0)[1] == pytest.approx(0.5)
 
 
-#: Crafted means of the fake two-step runs, per (motion range, start, noise distribution): R^r and R^l at
-#: iterations 2, 5, 10, 20, 50 and the mismatch. Cells not listed sit at their floor from iteration 2 on.
+#: Crafted means of the fake two-step runs, per (motion range, start, noise distribution): R^r and
+#: R^l at iterations 2, 5, 10, 20, 50 and the mismatch. Cells not listed sit at their floor from
+#: iteration 2 on.
 _ITERS = (2, 5, 10, 20, 50)
 _CELLS = {
     (None, None, "uniform"): ([0.5, 0.3, 0.2, 0.1, 0.1], [0.5, 0.29, 0.1, 0.1, 0.1], 0.25),
-    # R^r @2 just above twice the floor (counted), @5 exactly twice (not: "above"), @10 just below (not)
+    # R^r @2 just above twice the floor (counted), @5 exactly twice (not: "above"), @10 just below
+    # (not)
     ((0.0, 90.0), "far", "sphere"): ([0.2 + 1e-9, 0.2, 0.2 - 1e-9, 0.15, 0.1], [0.1] * 5, 0.75),
 }
 _FLOOR = ([0.1] * 5, [0.1] * 5, 0.5)
@@ -176,7 +180,8 @@ _FLOOR = ([0.1] * 5, [0.1] * 5, 0.5)
 
 @pytest.fixture
 def fake_runs(monkeypatch):
-    """simulate and two_step_means replaced by fakes that record their calls and return :data:`_CELLS`."""
+    """simulate and two_step_means replaced by fakes that record their calls and return
+    :data:`_CELLS`."""
     import replication.study.table1.grid as study
 
     calls = {"simulate": [], "means": []}
@@ -199,7 +204,8 @@ def test_sensitivity_grid_order_values_and_left_closer(fake_runs):
     motions, starts = {"Haar": None, "0-90": (0.0, 90.0)}, {"identity": None, "far": "far"}
     noise = {"ball": "uniform", "sphere": "sphere"}
     sens, left_closer = sensitivity_grid(7, 3, motions, starts, noise, paper_two_step_means())
-    # noise outermost, start innermost; one draw per (noise, motions), the same seed for all, shared by the starts
+    # noise outermost, start innermost; one draw per (noise, motions), the same seed for all, shared
+    # by the starts
     assert fake_runs["simulate"] == [(7, 3, None, "uniform"), (7, 3, (0.0, 90.0), "uniform"),
                                      (7, 3, None, "sphere"), (7, 3, (0.0, 90.0), "sphere")]
     assert fake_runs["means"] == [(1, None), (1, "far"), (2, None), (2, "far"), (3, None), (3, "far"),
@@ -212,7 +218,8 @@ def test_sensitivity_grid_order_values_and_left_closer(fake_runs):
     assert sens.loc[("Haar", "identity", "ball", order)].tolist() == [0.5, 0.3, 0.2, 0.1, 0.1, 0.25, 2]
     assert sens.loc[("0-90", "far", "sphere", order), "mismatch"] == 0.75 and sens.loc[("Haar", "far", "ball", order),
                                                                                          "mismatch"] == 0.5
-    # counted: (Haar, identity, ball) @2 (R^l equal: not closer) and @5 (closer); (0-90, far, sphere) @2 only
+    # counted: (Haar, identity, ball) @2 (R^l equal: not closer) and @5 (closer); (0-90, far,
+    # sphere) @2 only
     assert left_closer.tolist() == [False, True, True]
     assert list(left_closer.index) == [("Haar", "identity", "ball", order, 2), ("Haar", "identity", "ball", order, 5),
                                        ("0-90", "far", "sphere", order, 2)]
@@ -258,8 +265,8 @@ def test_sqp_failures_and_other_minimum():
     sim = simulate(2, 3, noise_camera=0.0, noise_sensor=0.0)
     res, failed, at_limit = sqp_failures(sim.A, sim.B, sim.R0)
     assert not failed.any() and not at_limit.any() and not at_other_minimum(res, sim.A, sim.B).any()
-    # fake SQP answers: stopped early on a rotation 120 deg from the minimiser (another minimum); the same at the
-    # limit; the same but its last raw iterate off SO(3); and at the minimiser
+    # fake SQP answers: stopped early on a rotation 120 deg from the minimiser (another minimum);
+    # the same at the limit; the same but its last raw iterate off SO(3); and at the minimiser
     R0 = sim.R0[0]
     far = R0 @ matrix_from_rotation_vector(np.array([0.0, 0.0, np.deg2rad(120.0)]))
     R = np.stack([far, far, far, R0])
@@ -353,7 +360,8 @@ def test_diverting_table_with_fake_runs():
     cost = np.array([[9.0, 5.0, 4.0, 1.0], [9.0, 5.0, 4.0, 3.0]])   # always falling: every error rise diverts
     iterates = np.broadcast_to(np.eye(3), (2, 4, 3, 3)).copy()
     iterates[0, 2] *= 2.0                                           # run 0's rise (iteration 3) is off SO(3)
-    # the projected iterates read against R0 = I: run 0's projected error only falls, run 1's rises at iteration 3
+    # the projected iterates read against R0 = I: run 0's projected error only falls, run 1's rises
+    # at iteration 3
     proj_err = np.array([[1.0, 0.5, 0.4, 0.01], [1.0, 0.5, 0.6, 0.7]])
     angles = 2 * np.arcsin(proj_err / (2 * np.sqrt(2)))
     projected = matrix_from_rotation_vector(angles[..., None] * np.array([0.0, 0.0, 1.0]))

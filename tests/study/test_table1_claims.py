@@ -1,6 +1,7 @@
-"""Notebook 03 after the referee's points 4 and 7: comparisons with Table I that take its three printed decimals as a
-bound, the half-steps in either order, shares of runs with Wilson intervals and their confirmation on fresh seeds,
-and the checks of the records built on them (each raising just past its threshold, not just before it)."""
+"""Notebook 03 after the referee's points 4 and 7: comparisons with Table I that take its three
+printed decimals as a bound, the half-steps in either order, shares of runs with Wilson intervals
+and their confirmation on fresh seeds, and the checks of the records built on them (each raising
+just past its threshold, not just before it)."""
 import json
 from pathlib import Path
 
@@ -38,11 +39,11 @@ from replication.study.table1 import (
     versus_paper,
 )
 
-# ----------------------------------------------------------------------------------------------------
-# The ledger records of notebooks 03 (Table I, section 5) and 05 (the lab's claims), built from small synthetic
-# measurements: the claim ids and verdicts in the notebooks' order, the numbers in the evidence formatted as the
-# notebooks print them, every record valid for the ledger, and each sanity check raising just past its threshold
-# and not just before it.
+# --------------------------------------------------------------------------------------------------
+# The ledger records of notebooks 03 (Table I, section 5) and 05 (the lab's claims), built from
+# small synthetic measurements: the claim ids and verdicts in the notebooks' order, the numbers in
+# the evidence formatted as the notebooks print them, every record valid for the ledger, and each
+# sanity check raising just past its threshold and not just before it.
 
 
 CLAIMS_CSV = Path(__file__).resolve().parents[2] / "data" / "paper" / "claims.csv"
@@ -57,10 +58,12 @@ LAB_IDS = ["lab_protocol", "lab_averaging", "fig6_consistency", "fig6_accuracy",
            "table2_correlation", "table2_methods_agree", "table2_measures_calibration", "table2_rms", "fig7_projection"]
 
 
-# ---- notebook 03: synthetic measurements that pass every check --------------------------------------------------
+# ---- notebook 03: synthetic measurements that pass every check
+# --------------------------------------------------
 
 def _conv():
-    """A convergence table (index (setting, method)) whose numbers pass every check, each at a set distance."""
+    """A convergence table (index (setting, method)) whose numbers pass every check, each at a set
+    distance."""
     rows = {}
     two_step = {DEF: (5, 8, 7, 9), IDENT: (11, 12, 11, 13), FAR: (12, 20, 16, 22)}  # below 1 %, settled, its interval
     for label, (below, settled, low, high) in two_step.items():
@@ -104,7 +107,8 @@ def _versus(verdict_early="differs"):
 
 
 def _reference():
-    """The paper's Table I with SQP's means at iterations 15 and 30 changed (to see that they are the ones printed)."""
+    """The paper's Table I with SQP's means at iterations 15 and 30 changed (to see that they are
+    the ones printed)."""
     ref = paper.load_table1().copy()
     ref.loc[(15, "optimization"), "mean"], ref.loc[(30, "optimization"), "mean"] = 0.2, 0.05
     return ref
@@ -174,7 +178,8 @@ def _table1_inputs():
 
 def two_step_claims(settings, conv, cost_ratio, min_cost, scales, scale_names, *, sqp_names, caps, n_runs, n_slow,
                     seeds, confirm, fresh_minimum, reference):
-    """Notebook 03's two-step records (section 5), one call per claim with its numbers, in the ledger's order."""
+    """Notebook 03's two-step records (section 5), one call per claim with its numbers, in the
+    ledger's order."""
     runs = t1.Runs(n_runs=n_runs, n_slow=n_slow, n_grid=300, seeds=seeds, reference=reference)
     return [t1.two_step_10_iterations(settings, conv, runs, confirm, caps=caps),
             t1.cost_to_zero(cost_ratio, min_cost, fresh_minimum, runs, confirm),
@@ -185,8 +190,8 @@ def two_step_claims(settings, conv, cost_ratio, min_cost, scales, scale_names, *
 def sqp_and_table_claims(conv, div, fails, scales, far_scaled, cmp_default, cmp_matched, matched, sens, left_closer,
                          fresh, scale_names, *, sqp_names, caps, n_runs, n_slow, seeds, confirm, cap_shares,
                          n_grid=300, bar=0.05, reference):
-    """Notebook 03's other records: SQP's (section 5 and its cost scales) and Table I's cells (section 2), one call
-    per claim with its numbers, in the ledger's order."""
+    """Notebook 03's other records: SQP's (section 5 and its cost scales) and Table I's cells
+    (section 2), one call per claim with its numbers, in the ledger's order."""
     runs = t1.Runs(n_runs=n_runs, n_slow=n_slow, n_grid=n_grid, seeds=seeds, reference=reference)
     far_fail = fails.loc["matched setting (fresh seeds)", "optimization (analytic)"]
     return [t1.sqp_diverts(conv, div, runs, confirm, bar=bar),
@@ -325,7 +330,8 @@ def _set(frame, index, column, value):
 
 
 def _conv_at(index, column, value):
-    """Set ``conv.loc[index, column]`` in both functions' inputs (``index``: a row, or a list of rows)."""
+    """Set ``conv.loc[index, column]`` in both functions' inputs (``index``: a row, or a list of
+    rows)."""
     rows = index if isinstance(index, list) else [index]
 
     def change(first, second):
@@ -348,7 +354,8 @@ def _frame_at(key, index, column, value):
     return lambda first, second: second.update({key: _set(second[key], index, column, value)})
 
 
-# (claim, change of the passing inputs just inside the check, the same just outside): every former assert
+# (claim, change of the passing inputs just inside the check, the same just outside): every former
+# assert
 BOUNDARIES = {
     "R^r under 1 % by iteration 5 at the defaults": (
         "two_step_10_iterations", _conv_at((DEF, "ours_right"), "below_1pct", 5),
@@ -402,8 +409,8 @@ BOUNDARIES = {
 
 
 def check_just_inside_and_past(boundaries, name):
-    """Table I's claims pass with ``boundaries[name]``'s inside edit and raise, naming the claim, with its outside
-    one (also used by ``tests/study/test_table1_claims.py``)."""
+    """Table I's claims pass with ``boundaries[name]``'s inside edit and raise, naming the claim,
+    with its outside one (also used by ``tests/study/test_table1_claims.py``)."""
     claim, inside, outside = boundaries[name]
     first, second = _table1_inputs()
     inside(first, second)
@@ -427,10 +434,12 @@ def test_a_missing_setting_is_named():
         two_step_claims(**first)
 
 
-# ---- notebook 05 ---------------------------------------------------------------------------------------------
+# ---- notebook 05
+# ---------------------------------------------------------------------------------------------
 
 def _lab_inputs():
-    """Synthetic seed studies (seeds 1-20, fresh 21-40) and committed-draw quantities passing every check."""
+    """Synthetic seed studies (seeds 1-20, fresh 21-40) and committed-draw quantities passing every
+    check."""
     return lab_claims_inputs()
 
 
@@ -502,7 +511,8 @@ def test_each_lab_check_raises_just_past_its_threshold(column, inside, outside):
             assert len(lab_claims(**inputs)) == 10
 
 
-# ---- online_recalibration (notebook 02) --------------------------------------------------------------------------
+# ---- online_recalibration (notebook 02)
+# --------------------------------------------------------------------------
 
 def _small(ratio_small=15.0, ratio_large=1.0):
     from replication.study.recalibration import small_motion_study  # noqa: F401 (the frame's producer)
@@ -541,13 +551,14 @@ def test_small_motion_study_stops_short_only_with_small_motions():
     assert f.loc["0-10 deg", "ratio"] > 5 and abs(f.loc["0-90 deg", "ratio"] - 1) < 0.2
 
 
-# ====================================================================================================
+# ==================================================================================================
 
 
 NOTEBOOK = Path(__file__).resolve().parents[2] / "notebooks" / "03_table1_monte_carlo.ipynb"
 
 
-# ---- the paper's rounding -----------------------------------------------------------------------------------------
+# ---- the paper's rounding
+# -----------------------------------------------------------------------------------------
 
 def test_printed_z_takes_the_nearest_value_the_rounding_allows():
     h, n = PRINTED_HALF_UNIT, 1000
@@ -608,7 +619,8 @@ def test_paper_settled_at_both_ends_of_the_rounding():
         assert paper_settled(changed, "ours_right") == expected
 
 
-# ---- shares of runs ------------------------------------------------------------------------------------------------
+# ---- shares of runs
+# ------------------------------------------------------------------------------------------------
 
 def test_share_ci_gives_the_wilson_interval():
     low, high = wilson_interval(25, 100)
@@ -625,15 +637,17 @@ def test_bracket_ci_covers_every_count_in_the_bracket():
     assert bracket_ci(0.97, 100) == "95-100 % [89, 100]"  # the last bracket stops at n - 1 runs: 95 ... 99
 
 
-# ---- the half-steps in the other order ---------------------------------------------------------------------------
+# ---- the half-steps in the other order
+# ---------------------------------------------------------------------------
 
 def test_reversed_half_steps_start_with_eq_15():
     sim = simulate(4, 3, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
     start = np.eye(3)  # <start, R0> > 0: the corrected and the printed projections agree
     (e, c), (e_rev, c_rev) = (iterate_errors(sim, iterations=3, init=start, with_sqp=False, return_costs=True,
                                              reversed_halves=flip) for flip in (False, True))
-    # printed: R^r_1 from the start by eq. (14); reversed: R^l_1 from the start by eq. (15), R^r_1 from its raw
-    # iterate by (14) (the iteration carries raw iterates, projected only to be reported)
+    # printed: R^r_1 from the start by eq. (14); reversed: R^l_1 from the start by eq. (15), R^r_1
+    # from its raw iterate by (14) (the iteration carries raw iterates, projected only to be
+    # reported)
     r1 = nearest_rotation(operator_T(sim.A, sim.B, start))
     raw_l1 = operator_T_adjoint(sim.A, sim.B, start)
     l1_rev, r1_rev = nearest_rotation(raw_l1), nearest_rotation(operator_T(sim.A, sim.B, raw_l1))
@@ -653,7 +667,8 @@ def test_the_half_step_order_decides_which_estimate_leads():
     assert list(HALF_STEP_ORDERS) == [PRINTED_ORDER, "(15) then (14)"] and not HALF_STEP_ORDERS[PRINTED_ORDER]
 
 
-# ---- the counts again on fresh seeds -----------------------------------------------------------------------------
+# ---- the counts again on fresh seeds
+# -----------------------------------------------------------------------------
 
 def test_fresh_seed_counts_layout():
     scales = {"as printed": 1.0, "/ 2J": 0.025, "/ 100J": 0.0005}
@@ -672,7 +687,8 @@ def test_fresh_seed_counts_layout():
                                          ("matched", "/ 100J")]
 
 
-# ---- the records: sections, and the checks added with the points 4 and 7 -----------------------------------------
+# ---- the records: sections, and the checks added with the points 4 and 7
+# -----------------------------------------
 
 def test_each_record_names_a_heading_of_notebook_03():
     headings = ledger.notebook_headings(json.loads(NOTEBOOK.read_text()))
@@ -749,7 +765,8 @@ NEW_BOUNDARIES = {
         "sqp_diverts", _confirm_at("div", (IDENT, "SQP, eq. (8) as printed"), _DIV, 0.001),
         _confirm_at("div", (IDENT, "SQP, eq. (8) as printed"), _DIV, 0.0)),
     "far-start SQP as printed fails in over half of the runs": (
-        # just inside: 0.51, as the share is printed in a 10-point bracket that must keep 2 runs from 50 %
+        # just inside: 0.51, as the share is printed in a 10-point bracket that must keep 2 runs
+        # from 50 %
         "sqp_30_iterations", _second_at("fails", "matched setting (fresh seeds)", _SQP_C, 0.51),
         _second_at("fails", "matched setting (fresh seeds)", _SQP_C, 0.5)),
     "far-start SQP / 100J fails in no run": (
@@ -814,7 +831,8 @@ def test_the_early_iterations_are_undecidable_and_say_what_they_depend_on():
     assert f"{FAR}" not in early["evidence"]  # the settings are named by their parts, not by section 5's labels
 
 
-# ---- SQP's failures at two caps, the two-step iterates against the certified minimum -------------------
+# ---- SQP's failures at two caps, the two-step iterates against the certified minimum
+# -------------------
 
 def test_sqp_cap_shares_reads_one_run_at_each_cap():
     from replication.study.table1 import sqp_cap_shares
@@ -867,7 +885,7 @@ def test_minimum_study_and_the_either_minimises_record():
             either_minimises_record(found, fresh, section="s", setting="t")
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # Claims where their evidence is: one small function per claim, taking only its numbers, called
 
 

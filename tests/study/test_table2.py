@@ -1,5 +1,5 @@
-"""What Table II measures (replication.study.table2): re-projection with any R0 and reference frame, the seed study
-and its interventions, and the single-sample protocol of lab.static_motions."""
+"""What Table II measures (replication.study.table2): re-projection with any R0 and reference frame,
+the seed study and its interventions, and the single-sample protocol of lab.static_motions."""
 import dataclasses
 
 import numpy as np

@@ -14,7 +14,8 @@ from replication.testing import assert_rotations_close
 
 
 def _three_axis_pairs(rng, R0, n_pairs, step_deg=20.0):
-    """Consecutive-frame pairs ``(A, B)`` of a random three-axis sensor trajectory, with ``C_t = R0 I_t``."""
+    """Consecutive-frame pairs ``(A, B)`` of a random three-axis sensor trajectory, with ``C_t = R0
+    I_t``."""
     w = rng.normal(size=(n_pairs, 3))
     w *= np.radians(step_deg) / np.linalg.norm(w, axis=1, keepdims=True)
     I = [random_rotations(rng, ())]
@@ -44,10 +45,11 @@ def test_noise_free_recovers_R0(rng):
 
 
 def test_convention_matches_vins_definitions(rng):
-    """The port's ric = R.T satisfies VINS-Mono's ``Rimu * ric = ric * Rc`` with VINS-Mono's own inputs.
+    """The port's ric = R.T satisfies VINS-Mono's ``Rimu * ric = ric * Rc`` with VINS-Mono's own
+    inputs.
 
-    VINS-Mono's Rc (solveRelativeR) and delta_q are ``frame_{k-1}_from_frame_k``: with world_from_body
-    attitudes Q (= C^T, I^T here) they are ``Q_{k-1}^T Q_k``.
+    VINS-Mono's Rc (solveRelativeR) and delta_q are ``frame_{k-1}_from_frame_k``: with
+    world_from_body attitudes Q (= C^T, I^T here) they are ``Q_{k-1}^T Q_k``.
     """
     R0 = random_rotations(rng, ())
     A, B, C, I = _three_axis_pairs(rng, R0, 12)
@@ -89,8 +91,8 @@ def test_success_gated_by_window_and_second_smallest_singular_value(rng):
 
 
 def test_single_axis_motion_never_declares_success(rng):
-    # All motions about one axis n: every X exp(theta [n]x) solves A X = X B, so the null space of the
-    # stacked 4N x 4 matrix is two-dimensional (the two smallest singular values are ~0) and the
+    # All motions about one axis n: every X exp(theta [n]x) solves A X = X B, so the null space of
+    # the stacked 4N x 4 matrix is two-dimensional (the two smallest singular values are ~0) and the
     # second-smallest one, ric_cov(1), never exceeds 0.25: the port never declares success, and its
     # estimate is an arbitrary member of that family (not R0 in general).
     R0 = random_rotations(rng, ())
@@ -111,8 +113,9 @@ def test_huber_downweights_one_gross_outlier(rng):
     R0 = random_rotations(rng, ())
     A, B, _, _ = _three_axis_pairs(rng, R0, 30)
     A = A @ matrix_from_rotation_vector(rng.normal(scale=np.radians(0.05), size=(30, 3)))  # small camera noise
-    # The outlier: 90 deg camera and sensor motions about unrelated axes (same angle, so the scalar parts
-    # of the quaternions agree and the pair biases the null vector instead of adding an isotropic term).
+    # The outlier: 90 deg camera and sensor motions about unrelated axes (same angle, so the scalar
+    # parts of the quaternions agree and the pair biases the null vector instead of adding an
+    # isotropic term).
     A_out = R0 @ matrix_from_rotation_vector(np.radians(90.0) * np.array([0.0, 1.0, 0.0])) @ R0.T
     B_out = matrix_from_rotation_vector(np.radians(90.0) * np.array([1.0, 0.0, 0.0]))
     A_all = np.concatenate([A[:15], A_out[None], A[15:]])
@@ -158,7 +161,8 @@ def test_eigen_quaternion_sign():
     R = matrix_from_rotation_vector(np.radians(60.0) * np.array([0.0, 0.0, -1.0]))
     q = _eigen_quaternion_xyzw(R)
     assert q[3] > 0
-    # trace <= 0 (170 deg about -x): Eigen makes the largest-diagonal coefficient (x) positive, so w < 0.
+    # trace <= 0 (170 deg about -x): Eigen makes the largest-diagonal coefficient (x) positive, so w
+    # < 0.
     R = matrix_from_rotation_vector(np.radians(170.0) * np.array([-1.0, 0.0, 0.0]))
     q = _eigen_quaternion_xyzw(R)
     assert q[0] > 0 and q[3] < 0
@@ -166,9 +170,10 @@ def test_eigen_quaternion_sign():
 
 
 def test_huber_weight_fixed_when_pair_arrives(rng):
-    # As in the C++, Rc_g[i] = ric^-1 Rimu[i] ric is pushed once, with the estimate in force *before* the
-    # update that adds pair i (identity for the first pair), and never recomputed. On noise-free data the
-    # first pair therefore keeps the weight 5 / angle(Rc, Rimu) even after the estimate has converged.
+    # As in the C++, Rc_g[i] = ric^-1 Rimu[i] ric is pushed once, with the estimate in force
+    # *before* the update that adds pair i (identity for the first pair), and never recomputed. On
+    # noise-free data the first pair therefore keeps the weight 5 / angle(Rc, Rimu) even after the
+    # estimate has converged.
     R0 = random_rotations(rng, ())
     A, B, _, _ = _three_axis_pairs(rng, R0, 12)
     rule, _, _ = _run(A, B)
@@ -180,8 +185,9 @@ def test_huber_weight_fixed_when_pair_arrives(rng):
 
 
 def test_repeated_smallest_singular_value_is_resolved_without_rounding():
-    """The first pair leaves the smallest singular value repeated; the port then takes the quaternion nearest
-    the identity, so a 1e-12 perturbation (rounding on another machine) does not change any later estimate."""
+    """The first pair leaves the smallest singular value repeated; the port then takes the
+    quaternion nearest the identity, so a 1e-12 perturbation (rounding on another machine) does not
+    change any later estimate."""
     rng = np.random.default_rng(11)
     R0 = random_rotations(rng, ())
     A = random_rotations(rng, 15)

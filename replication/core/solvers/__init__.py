@@ -1,5 +1,5 @@
-"""Rotation-only hand-eye solvers for ``A X = X B`` behind one entry point. Theory and measured numbers:
-``docs/methods.md``, section ``replication.core.solvers.__init__``."""
+"""Rotation-only hand-eye solvers for ``A X = X B`` behind one entry point. Theory and measured
+numbers: ``docs/methods.md``, section ``replication.core.solvers.__init__``."""
 from ..handeye import pair_residual_deg
 from ..motions import Motions, prepare_motions
 from ._registry import (

@@ -28,40 +28,45 @@ __all__ = ["SolverInfo", "register", "available", "solver_info", "solve",
            "ANSWER_ATOL", "check_answer", "warn_if_weak", "SolverAnswerError", "checked_core"]
 
 #: A local solver's answer is flagged (:class:`LocalMinimumWarning`) when its cost (8) exceeds the
-#: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the minimum
-#: the excess grows like ``J delta^2`` (``delta`` the angle to the minimiser, radians, times a curvature
-#: of order 2-3), so either term corresponds to about 0.03 deg at the paper's noise: well above
-#: SLSQP's own stopping jitter (0.01 deg seen), far below an answer in another basin or stopped far away at
-#: an iteration limit (0.3-43 % of ``f*`` and tens of degrees off).
+#: certified global minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J``. Near the
+#: minimum the excess grows like ``J delta^2`` (``delta`` the angle to the minimiser, radians, times
+#: a curvature of order 2-3), so either term corresponds to about 0.03 deg at the paper's noise:
+#: well above SLSQP's own stopping jitter (0.01 deg seen), far below an answer in another basin or
+#: stopped far away at an iteration limit (0.3-43 % of ``f*`` and tens of degrees off).
 LOCAL_RTOL = 1e-3
 LOCAL_ATOL = 1e-6
-#: Within the basin of the global minimum, a local solver's answer farther than this from the certified
-#: minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's objective tolerance).
+#: Within the basin of the global minimum, a local solver's answer farther than this from the
+#: certified minimiser gets a :class:`ConvergenceWarning` (it stopped short, e.g. on SLSQP's
+#: objective tolerance).
 LOCAL_ANGLE_TOL_DEG = 1e-4
-#: An answer above the certified minimum and farther than this from the minimiser did not reach the global
-#: minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before converging); closer, it stopped
-#: short (:class:`ConvergenceWarning`). The minima of eq. (8) seen here lie 100 deg and more apart (notebook 06);
-#: SLSQP's short stops are hundredths of a degree.
+#: An answer above the certified minimum and farther than this from the minimiser did not reach the
+#: global minimum (:class:`LocalMinimumWarning`: another stationary point, or stopped before
+#: converging); closer, it stopped short (:class:`ConvergenceWarning`). The minima of eq. (8) seen
+#: here lie 100 deg and more apart (notebook 06); SLSQP's short stops are hundredths of a degree.
 WRONG_POINT_DEG = 1.0
-#: ``|grad f| / J`` above which an answer is not a stationary point of eq. (8) (the warning then says the solver
-#: stopped before converging rather than on another stationary point).
+#: ``|grad f| / J`` above which an answer is not a stationary point of eq. (8) (the warning then
+#: says the solver stopped before converging rather than on another stationary point).
 STATIONARY_TOL = 1e-3
-#: A non-local solver's answer gets an :class:`AccuracyWarning` when its cost (8) exceeds ``GROSS_FACTOR`` times
-#: the certified minimum plus ``LOCAL_ATOL * J``: a failure, not a less efficient estimate. Measured on 300
-#: problems each at the paper's noise and J = 3, 5, 20 (and 5 deg noise): the closed forms stay within 1.2x of
-#: the minimum cost, OpenCV (whose pose chain accumulates noise) within 6x, the two-step fixed point within
-#: 4.4x at J >= 5; the half-turn sign flips of Park & Martin, Horaud & Dornaika and Tsai & Lenz cost 35-8000x.
+#: A non-local solver's answer gets an :class:`AccuracyWarning` when its cost (8) exceeds
+#: ``GROSS_FACTOR`` times the certified minimum plus ``LOCAL_ATOL * J``: a failure, not a less
+#: efficient estimate. Measured on 300 problems each at the paper's noise and J = 3, 5, 20 (and 5
+#: deg noise): the closed forms stay within 1.2x of the minimum cost, OpenCV (whose pose chain
+#: accumulates noise) within 6x, the two-step fixed point within 4.4x at J >= 5; the half-turn sign
+#: flips of Park & Martin, Horaud & Dornaika and Tsai & Lenz cost 35-8000x.
 GROSS_FACTOR = 10.0
-#: The motions count as weakly determining ``R0`` (:class:`ObservabilityWarning`) when the gap between the two
-#: largest eigenvalues of ``sym(K)`` is below this many times the data's inconsistency ``1 - lambda_1``.
+#: The motions count as weakly determining ``R0`` (:class:`ObservabilityWarning`) when the gap
+#: between the two largest eigenvalues of ``sym(K)`` is below this many times the data's
+#: inconsistency ``1 - lambda_1``.
 WEAK_GAP_FACTOR = 3.0
-#: :func:`solve` refuses (``ValueError``) a core's answer block with ``||R^T R - I||_F`` or ``| |det R| - 1 |``
-#: above this. Measured over the contract, solver-core, baseline and registry tests' problems and 1700 harsher ones
-#: (J = 3-20, noise up to 17 deg, motions of 0.5-3 deg and of 150-180 deg, 40 % outliers): every registered solver
-#: stays within 1.1e-14 except OpenCV's Park & Martin ((M^T M)^(-1/2) M^T of an ill-conditioned M: 4e-11 in the tests,
-#: 8e-9 at 17 deg noise with small motions). 1e-6 is 100x above that, and the tolerance at which every door of the
-#: package (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or data
-#: anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the paper's noise.
+#: :func:`solve` refuses (``ValueError``) a core's answer block with ``||R^T R - I||_F`` or ``| |det
+#: R| - 1 |`` above this. Measured over the contract, solver-core, baseline and registry tests'
+#: problems and 1700 harsher ones (J = 3-20, noise up to 17 deg, motions of 0.5-3 deg and of 150-180
+#: deg, 40 % outliers): every registered solver stays within 1.1e-14 except OpenCV's Park & Martin
+#: ((M^T M)^(-1/2) M^T of an ill-conditioned M: 4e-11 in the tests, 8e-9 at 17 deg noise with small
+#: motions). 1e-6 is 100x above that, and the tolerance at which every door of the package
+#: (``checks.ROTATION_ATOL``) accepts its input as a rotation, so an answer passes as ``init`` or
+#: data anywhere; a non-rotation part of 1e-6 is 3e-5 deg, far below any solver's error at the
+#: paper's noise.
 ANSWER_ATOL = 1e-6
 
 
@@ -75,18 +80,18 @@ class SolverInfo:
         The ``method`` name given to :func:`solve`.
     core : callable
         ``core(motions, **options) -> ndarray (..., 3, 3)``; receives a validated
-        :class:`replication.core.motions.Motions`. It returns one rotation per problem (a reflection is
-        warned about), or a whole 3x3 block of NaN for a problem it declares failed; :func:`solve`
-        refuses anything else (see :data:`ANSWER_ATOL`).
+        :class:`replication.core.motions.Motions`. It returns one rotation per problem (a reflection
+        is warned about), or a whole 3x3 block of NaN for a problem it declares failed;
+        :func:`solve` refuses anything else (see :data:`ANSWER_ATOL`).
     reference : str
         The paper the solver implements.
     min_motions : int
         Fewest motion pairs ``J`` it accepts.
     local : bool
-        ``True`` for a local method whose answer depends on a start ``init``
-        (an option it accepts); from a start far from ``R0`` it may stop short of
-        the minimum (an iteration limit) or on another stationary point. :func:`solve` then checks its answer against
-        the certified global minimum of eq. (8).
+        ``True`` for a local method whose answer depends on a start ``init`` (an option it accepts);
+        from a start far from ``R0`` it may stop short of the minimum (an iteration limit) or on
+        another stationary point. :func:`solve` then checks its answer against the certified global
+        minimum of eq. (8).
     equivariant : bool
         ``True`` if re-expressing the camera frame by ``G`` (``A -> G A G^T``)
         maps the estimate to ``G R``, and likewise for the sensor frame
@@ -94,9 +99,9 @@ class SolverInfo:
         Gibbs-vector parametrisation is not.
     relaxed_start : bool
         ``True`` for a solver that reads the eigenvectors of ``sym(K)`` (the relaxed solution,
-        ``motions.sym_eigh``): :func:`solve` then decomposes ``sym(K)`` once, vectors included, and its answer
-        checks read its eigenvalues (equal to ``eigvalsh``'s to rounding) instead of decomposing again: one
-        decomposition, not two.
+        ``motions.sym_eigh``): :func:`solve` then decomposes ``sym(K)`` once, vectors included, and
+        its answer checks read its eigenvalues (equal to ``eigvalsh``'s to rounding) instead of
+        decomposing again: one decomposition, not two.
     """
 
     name: str
@@ -115,13 +120,12 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
              equivariant: bool = True, relaxed_start: bool = False):
     """Decorator adding a solver core to the registry; returns its public, validating door.
 
-    The decorated ``core(motions, **options)`` receives a
-    :class:`replication.core.motions.Motions` already validated by :func:`solve`
-    (rotations, same shape, ``J >= min_motions``, not degenerate): ``motions.A``
-    (camera relative rotations), ``motions.B`` (sensor relative rotations), both
-    ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
-    ``camera_from_sensor``, a numpy array of shape ``(..., 3, 3)``: a rotation per problem, or a whole
-    3x3 block of NaN for a problem it declares failed; :func:`solve` refuses anything else.
+    The decorated ``core(motions, **options)`` receives a :class:`replication.core.motions.Motions`
+    already validated by :func:`solve` (rotations, same shape, ``J >= min_motions``, not
+    degenerate): ``motions.A`` (camera relative rotations), ``motions.B`` (sensor relative
+    rotations), both ``(..., J, 3, 3)``, and the cached ``motions.K``. It returns
+    ``camera_from_sensor``, a numpy array of shape ``(..., 3, 3)``: a rotation per problem, or a
+    whole 3x3 block of NaN for a problem it declares failed; :func:`solve` refuses anything else.
 
     The decorator returns ``public(A, B, **options) = solve(name, A, B, **options)``,
     so the exported name validates its input like every other door.
@@ -154,7 +158,8 @@ def register(name: str, *, reference: str, min_motions: int = 2, local: bool = F
 
 
 def _door_signature(core) -> inspect.Signature:
-    """``(A, B=None, *, full_output=False, warn_axis_spread_deg=1.0, <the core's options>)``: :func:`solve`'s."""
+    """``(A, B=None, *, full_output=False, warn_axis_spread_deg=1.0, <the core's options>)``:
+    :func:`solve`'s."""
     P = inspect.Parameter
     head = [P("A", P.POSITIONAL_OR_KEYWORD), P("B", P.POSITIONAL_OR_KEYWORD, default=None),
             P("full_output", P.KEYWORD_ONLY, default=False, annotation="bool"),
@@ -183,14 +188,16 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
     """Issue an :class:`ObservabilityWarning` where the motions weakly determine ``R0``.
 
     Three tests, each naming what it measured: nearly single-axis motion (axis spread below
-    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small); motion about one
-    axis but for one pair (``J >= 3``: the spread without the pair that turns most about other axes below
-    ``warn_axis_spread_deg``, :attr:`replication.core.motions.Motions.leave_one_out_spread_deg`); and a
-    second rotation fitting eq. (8) almost as well (gap between the two largest eigenvalues of ``sym(K)``
-    below ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the noise,
-    outlier pairs, or near-symmetric motions).
+    ``warn_axis_spread_deg``; reported as small motions when the RMS motion itself is that small);
+    motion about one axis but for one pair (``J >= 3``: the spread without the pair that turns most
+    about other axes below ``warn_axis_spread_deg``,
+    :attr:`replication.core.motions.Motions.leave_one_out_spread_deg`); and a second rotation
+    fitting eq. (8) almost as well (gap between the two largest eigenvalues of ``sym(K)`` below
+    ``WEAK_GAP_FACTOR`` times the data's inconsistency ``1 - lambda_1``: motions small for the
+    noise, outlier pairs, or near-symmetric motions).
     """
-    # the cached pieces of motions.observability these tests need, without the singular values of K it also holds
+    # the cached pieces of motions.observability these tests need, without the singular values of K
+    # it also holds
     camera_spread, sensor_spread = motions.axis_spread_deg
     rms_motion = motions.rms_motion_deg
     ev = motions.sym_eigvals
@@ -240,19 +247,22 @@ def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
     J = motions.J
     x = vec(R)
     g = np.einsum("...a,...ab,...b->...", x, motions.sym, x)
-    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J * 3
+    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J *
+    # 3
     gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
     return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
 
 
 def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
-    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8): :class:`LocalMinimumWarning`
-    (cost (8) above the certified minimum ``f*`` by more than ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than
-    ``WRONG_POINT_DEG`` from the minimiser: another stationary point, or stopped far away, the gradient of (8) tells
-    which); else :class:`ConvergenceWarning` farther than ``LOCAL_ANGLE_TOL_DEG`` from it (stopped short).
+    """Warn where a local solver's ``R`` is not the certified global minimiser of eq. (8):
+    :class:`LocalMinimumWarning` (cost (8) above the certified minimum ``f*`` by more than
+    ``LOCAL_RTOL * f* + LOCAL_ATOL * J`` and farther than ``WRONG_POINT_DEG`` from the minimiser:
+    another stationary point, or stopped far away, the gradient of (8) tells which); else
+    :class:`ConvergenceWarning` farther than ``LOCAL_ANGLE_TOL_DEG`` from it (stopped short).
 
-    Answers that are not rotations (NaN, a solver's declared failure; a reflection), which :func:`solve` warns
-    about itself, are skipped. Returns the boolean mask of problems flagged either way.
+    Answers that are not rotations (NaN, a solver's declared failure; a reflection), which
+    :func:`solve` warns about itself, are skipped. Returns the boolean mask of problems flagged
+    either way.
     """
     cert_R = global_certificate(motions).R
     finite = np.isfinite(R).all(axis=(-2, -1))
@@ -294,12 +304,13 @@ def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel:
 
 
 def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
-    """Warn (:class:`AccuracyWarning`) where a non-local solver's answer is grossly off or not a rotation.
+    """Warn (:class:`AccuracyWarning`) where a non-local solver's answer is grossly off or not a
+    rotation.
 
-    A cheap screen first: the relaxation ``g <= 3 lambda_1(sym K)`` bounds the minimum of (8) from below,
-    ``f* >= 6 J (1 - lambda_1)``; only answers whose cost exceeds ``GROSS_FACTOR`` times that bound (plus
-    ``LOCAL_ATOL * J``) are compared with the certified minimum. NaN answers (a solver's declared
-    failures) are skipped. Returns the boolean mask of flagged problems.
+    A cheap screen first: the relaxation ``g <= 3 lambda_1(sym K)`` bounds the minimum of (8) from
+    below, ``f* >= 6 J (1 - lambda_1)``; only answers whose cost exceeds ``GROSS_FACTOR`` times that
+    bound (plus ``LOCAL_ATOL * J``) are compared with the certified minimum. NaN answers (a solver's
+    declared failures) are skipped. Returns the boolean mask of flagged problems.
     """
     R = np.asarray(R, dtype=float)
     finite = np.isfinite(R).all(axis=(-2, -1))
@@ -314,7 +325,8 @@ def check_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int =
 
 
 def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray, stacklevel: int) -> None:
-    """:class:`AccuracyWarning` for declared failures (NaN blocks) and for reflections among a solver's answers."""
+    """:class:`AccuracyWarning` for declared failures (NaN blocks) and for reflections among a
+    solver's answers."""
     if np.any(failed):
         warnings.warn(
             f"{method} declared a failure (returned NaN) in {int(np.sum(failed))} of {failed.size} problems, first at "
@@ -330,7 +342,8 @@ def _warn_not_rotations(method: str, failed: np.ndarray, reflection: np.ndarray,
 
 
 def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: str, stacklevel: int) -> np.ndarray:
-    """The gross-error screen of :func:`check_answer` over the ``usable`` answers (rotations); returns its mask."""
+    """The gross-error screen of :func:`check_answer` over the ``usable`` answers (rotations);
+    returns its mask."""
     batch, J = R.shape[:-2], motions.J
     flat, usable = R.reshape(-1, 3, 3), usable.reshape(-1)
     safe = np.where(usable[:, None, None], flat, np.eye(3))
@@ -360,28 +373,30 @@ def _screen_gross(motions: Motions, R: np.ndarray, usable: np.ndarray, method: s
 
 
 class SolverAnswerError(ValueError):
-    """A solver's core broke the contract of :class:`SolverInfo` (not one rotation, or one whole 3x3 block of NaN,
-    per problem); the message names the solver, where, the first offending index and the measured violation."""
+    """A solver's core broke the contract of :class:`SolverInfo` (not one rotation, or one whole 3x3
+    block of NaN, per problem); the message names the solver, where, the first offending index and
+    the measured violation."""
 
 
 def checked_core(method: str, motions: Motions, *, where: str = "", **options):
-    """The core of ``method`` on validated ``motions``, its answer checked as :func:`solve` checks it: the one door
-    for every re-solve inside a calibration (bootstrap replicates, ...), which skip :func:`solve`'s validation and
-    its warnings but never its contract check.
+    """The core of ``method`` on validated ``motions``, its answer checked as :func:`solve` checks
+    it: the one door for every re-solve inside a calibration (bootstrap replicates, ...), which skip
+    :func:`solve`'s validation and its warnings but never its contract check.
 
-    Returns ``(R, failed, reflection)``: the answers and the masks of declared failures (whole NaN blocks) and of
-    reflections (det -1), which the caller must not use as rotations. Raises :class:`SolverAnswerError` (a
-    ``ValueError`` naming the solver and ``where``, e.g. ``"on bootstrap replicates"``) where the answer is not a
-    rotation or a NaN block.
+    Returns ``(R, failed, reflection)``: the answers and the masks of declared failures (whole NaN
+    blocks) and of reflections (det -1), which the caller must not use as rotations. Raises
+    :class:`SolverAnswerError` (a ``ValueError`` naming the solver and ``where``, e.g. ``"on
+    bootstrap replicates"``) where the answer is not a rotation or a NaN block.
     """
     return _checked_answer(method, motions, solver_info(method).core(motions, **options), where=where)
 
 
 def _checked_answer(method: str, motions: Motions, R, where: str = ""):
-    """A core's answer as a float array, with its masks ``(failed, reflection)``; :class:`SolverAnswerError` if it
-    breaks the contract of :class:`SolverInfo` (one rotation, or one whole 3x3 block of NaN, per problem). One pass:
-    ``||R^T R - I||_F`` and ``| |det R| - 1 |`` against :data:`ANSWER_ATOL` (a reflection passes both and is only
-    warned about); any NaN or inf in a block that is not all NaN fails them."""
+    """A core's answer as a float array, with its masks ``(failed, reflection)``;
+    :class:`SolverAnswerError` if it breaks the contract of :class:`SolverInfo` (one rotation, or
+    one whole 3x3 block of NaN, per problem). One pass: ``||R^T R - I||_F`` and ``| |det R| - 1 |``
+    against :data:`ANSWER_ATOL` (a reflection passes both and is only warned about); any NaN or inf
+    in a block that is not all NaN fails them."""
     expected = motions.batch_shape + (3, 3)
     if not isinstance(R, np.ndarray) or R.shape != expected:
         got = (f"an array of shape {R.shape}" if isinstance(R, np.ndarray) else
@@ -419,8 +434,8 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
     method : str
         A name from :func:`available`.
     A : array_like, shape (..., J, 3, 3), or Motions
-        Camera relative rotations ``Delta R_c``; or a
-        :class:`replication.core.motions.Motions` prepared once for several solvers (then ``B=None``).
+        Camera relative rotations ``Delta R_c``; or a :class:`replication.core.motions.Motions`
+        prepared once for several solvers (then ``B=None``).
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     full_output : bool
@@ -445,23 +460,24 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
     ObservabilityWarning
         The motions weakly determine ``R0`` (see :func:`warn_if_weak`).
     LocalMinimumWarning, ConvergenceWarning
-        A ``local`` solver (e.g. ``sqp``) ended above, or short of, the certified global minimum of eq. (8).
+        A ``local`` solver (e.g. ``sqp``) ended above, or short of, the certified global minimum of
+        eq. (8).
     AccuracyWarning
-        Any solver returned a reflection (det -1) or declared a failure (a 3x3 block of NaN); any other solver
-        (except ``chordal_optimal``, which certifies itself) returned an answer far from the certified
-        minimiser (see :func:`check_answer`).
+        Any solver returned a reflection (det -1) or declared a failure (a 3x3 block of NaN); any
+        other solver (except ``chordal_optimal``, which certifies itself) returned an answer far
+        from the certified minimiser (see :func:`check_answer`).
     IterationCapWarning, CertificateWarning
         From the solvers themselves (see each).
 
     Raises
     ------
     ValueError
-        Unknown method (the message lists the available ones), malformed input
-        (see :func:`replication.core.handeye.check_motion_pairs`), fewer motions than
-        the solver needs, or degenerate motion (``R0`` not unique); or the solver's core broke its contract
-        (:class:`SolverInfo`): not an array of shape ``batch shape + (3, 3)``, not real, a block partly NaN
-        or inf, or a block farther than :data:`ANSWER_ATOL` from orthogonal (the message names the solver, the
-        first offending batch index and the measured violation).
+        Unknown method (the message lists the available ones), malformed input (see
+        :func:`replication.core.handeye.check_motion_pairs`), fewer motions than the solver needs,
+        or degenerate motion (``R0`` not unique); or the solver's core broke its contract
+        (:class:`SolverInfo`): not an array of shape ``batch shape + (3, 3)``, not real, a block
+        partly NaN or inf, or a block farther than :data:`ANSWER_ATOL` from orthogonal (the message
+        names the solver, the first offending batch index and the measured violation).
     """
     info = solver_info(method)
     motions = prepare_motions(A, B, min_motions=info.min_motions, _sym_vectors=info.relaxed_start)

@@ -1,5 +1,5 @@
-"""Convex (semidefinite) relaxation of eq. (8) over SO(3), solved by Clarabel: a global lower bound. Theory and
-measured numbers: ``docs/methods.md``, section ``replication.core.solvers._sdp``."""
+"""Convex (semidefinite) relaxation of eq. (8) over SO(3), solved by Clarabel: a global lower bound.
+Theory and measured numbers: ``docs/methods.md``, section ``replication.core.solvers._sdp``."""
 from __future__ import annotations
 
 import numpy as np
@@ -16,7 +16,8 @@ _OFF = np.array([i != j for i, j in _TRIU])
 
 
 def _quadratic(terms) -> np.ndarray:
-    """The symmetric 10x10 ``A`` with ``y^T A y = sum c y_a y_b`` over ``terms = [(a, b, c), ...]``."""
+    """The symmetric 10x10 ``A`` with ``y^T A y = sum c y_a y_b`` over ``terms = [(a, b, c),
+    ...]``."""
     A = np.zeros((_N, _N))
     for a, b, c in terms:
         A[a, b] += 0.5 * c
@@ -109,7 +110,8 @@ def _objective(M):
 
 
 def upper_bound(M: np.ndarray, R: np.ndarray, lam: np.ndarray) -> float:
-    """A rigorous upper bound on ``max_{R in SO(3)} g`` from multipliers ``lam``, refined at a candidate ``R``.
+    """A rigorous upper bound on ``max_{R in SO(3)} g`` from multipliers ``lam``, refined at a
+    candidate ``R``.
 
     The multipliers of a tight relaxation satisfy ``S(lam) y* = 0`` at the global minimiser
     ``y* = [vec(R*); 1]``. The solver's ``lam`` meets this only to its tolerance, which would

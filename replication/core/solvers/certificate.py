@@ -1,5 +1,6 @@
-"""The global minimiser of the paper's cost (8) over SO(3) and its certificate of global optimality: the maths. Theory
-and measured numbers: ``docs/methods.md``, section ``replication.core.solvers.certificate``."""
+"""The global minimiser of the paper's cost (8) over SO(3) and its certificate of global optimality:
+the maths. Theory and measured numbers: ``docs/methods.md``, section
+``replication.core.solvers.certificate``."""
 from __future__ import annotations
 
 import warnings
@@ -17,8 +18,8 @@ from .result import Solution
 
 __all__ = ["chordal_newton", "global_certificate", "relaxed_rotation", "GAP_TOL"]
 
-#: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8) of
-#: the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
+#: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8)
+#: of the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
 GAP_TOL = 1e-8
 
 _GENERATORS = skew(np.eye(3))  # [e_k]x, k = 1, 2, 3
@@ -96,7 +97,8 @@ def chordal_newton(K, init, *, max_iterations: int = 30, gradient_tol: float = 1
 
 
 def _lagrangian_upper_bound(M, R):
-    """Upper bound on ``max g`` over O(3) from the multiplier ``Lambda = sym(R^T unvec(M vec R))``."""
+    """Upper bound on ``max g`` over O(3) from the multiplier ``Lambda = sym(R^T unvec(M vec
+    R))``."""
     P = np.swapaxes(R, -1, -2) @ unvec(np.einsum("...ab,...b->...a", M, vec(R)))
     Lam = 0.5 * (P + np.swapaxes(P, -1, -2))
     # vec(R Lambda) = (Lambda kron I) vec(R) for symmetric Lambda (column-major vec)
@@ -122,7 +124,8 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
         how[ok] = "lagrangian"
         if not ok.all():
             R, g, upper, how = _sdp_fallback(K, M, J, R, g, upper, how, ~ok)  # step 2
-            # the fallback may have replaced R: judge stationarity at the final answer (else Newton's stands)
+            # the fallback may have replaced R: judge stationarity at the final answer (else
+            # Newton's stands)
             _, grad, hess = _derivatives(np.broadcast_to(M, R.shape[:-2] + (9, 9)), R)
             grad_norm = np.linalg.norm(grad, axis=-1)
             hmin = eigvalsh3(-hess)[..., 0]
@@ -155,7 +158,8 @@ def _chordal_core(m: Motions, *, init=None, max_iterations: int = 30, gradient_t
 
 
 def _sdp_fallback(K, M, J, R, g, upper, how, todo):
-    """Step 2 of the certificate for the problems in ``todo``: relaxation, polish, keep the better minimum."""
+    """Step 2 of the certificate for the problems in ``todo``: relaxation, polish, keep the better
+    minimum."""
     if not todo.any():
         return R, g, upper, how
     R, g, upper, how = (np.array(a) for a in (np.broadcast_to(R, todo.shape + (3, 3)), g, upper, how))
@@ -175,9 +179,11 @@ def _sdp_fallback(K, M, J, R, g, upper, how, todo):
 
 
 def global_certificate(motions: Motions) -> Solution:
-    """:func:`chordal_optimal` with default options on prepared motions, computed once per :class:`Motions`.
+    """:func:`chordal_optimal` with default options on prepared motions, computed once per
+    :class:`Motions`.
 
-    Raises ``ValueError`` for degenerate motion (see :meth:`replication.core.motions.Motions.require`).
+    Raises ``ValueError`` for degenerate motion (see
+    :meth:`replication.core.motions.Motions.require`).
     """
     motions.require()
     return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
@@ -201,8 +207,8 @@ def relaxed_rotation(K) -> np.ndarray:
 
 
 def _relaxed_from_vectors(vecs) -> np.ndarray:
-    """:func:`relaxed_rotation` from the eigenvectors of ``sym(K)``, columns by descending eigenvalue (as
-    :attr:`replication.core.motions.Motions.sym_eigh` holds them: one decomposition serves the start and the
-    eigenvalues every solver's checks need)."""
+    """:func:`relaxed_rotation` from the eigenvectors of ``sym(K)``, columns by descending
+    eigenvalue (as :attr:`replication.core.motions.Motions.sym_eigh` holds them: one decomposition
+    serves the start and the eigenvalues every solver's checks need)."""
     # eigenvector of the largest eigenvalue of sym(K); it has no sign, so take the one with det > 0
     return nearest_rotation_up_to_sign(unvec(vecs[..., :, 0]))

@@ -1,5 +1,5 @@
-"""Classic closed-form solvers of the rotation part of hand-eye calibration ``A X = X B``. Theory and measured numbers:
-``docs/methods.md``, section ``replication.core.solvers.classic``."""
+"""Classic closed-form solvers of the rotation part of hand-eye calibration ``A X = X B``. Theory
+and measured numbers: ``docs/methods.md``, section ``replication.core.solvers.classic``."""
 from __future__ import annotations
 
 import numpy as np
@@ -51,7 +51,8 @@ def park_martin(motions):
 
 
 def _multiplication_matrix(q, side: str):
-    """``L(q)`` with ``q * p = L(q) p`` (``side="left"``) or ``W(q)`` with ``p * q = W(q) p`` (``"right"``).
+    """``L(q)`` with ``q * p = L(q) p`` (``side="left"``) or ``W(q)`` with ``p * q = W(q) p``
+    (``"right"``).
 
     Scalar-first quaternions, batched: (..., 4) -> (..., 4, 4). The two differ only in the sign of
     the cross-product block (Horaud & Dornaika's ``Q`` and ``W``, their Appendix A).
@@ -88,7 +89,8 @@ def horaud_dornaika(motions):
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as
+        ``A``).
 
     Returns
     -------
@@ -128,7 +130,8 @@ def andreff(motions):
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as
+        ``A``).
 
     Returns
     -------
@@ -164,14 +167,16 @@ def tsai_lenz(motions):
     Parameters
     ----------
     A, B : array_like, shape (..., J, 3, 3)
-        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as ``A``).
+        Camera and sensor relative rotations (or a :class:`~replication.core.motions.Motions` as
+        ``A``).
 
     Returns
     -------
     ndarray, shape (..., 3, 3)
         ``camera_from_sensor``.
     """
-    # Tsai eq. (12): P = 2 sin(theta/2) n, the vector part of quaternion_from_matrix(A) (and B) times 2
+    # Tsai eq. (12): P = 2 sin(theta/2) n, the vector part of quaternion_from_matrix(A) (and B)
+    # times 2
     Pa, Pb = (2.0 * quaternion_from_rotation_vector(w)[..., 1:] for w in motions.rotation_vectors)
     S = skew(Pa + Pb)  # eq. (12): skew(P_a + P_b) p' = P_b - P_a
     d = Pb - Pa

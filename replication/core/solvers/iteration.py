@@ -1,5 +1,5 @@
-"""The paper's two-step iteration (Sec. II-B, eqs. (11)-(19)). Theory and measured numbers: ``docs/methods.md``,
-section ``replication.core.solvers.iteration``."""
+"""The paper's two-step iteration (Sec. II-B, eqs. (11)-(19)). Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.iteration``."""
 from __future__ import annotations
 
 import warnings
@@ -95,13 +95,15 @@ class TwoStepResult:
 
 
 def _history(m: Motions, init: np.ndarray, iterations: int, variant: str, keep: bool = True):
-    """The paper's protocol: exactly ``iterations`` steps, every raw iterate recorded (``keep``) or the last only."""
+    """The paper's protocol: exactly ``iterations`` steps, every raw iterate recorded (``keep``) or
+    the last only."""
     K = m.K
     Kt = np.swapaxes(K, -1, -2)  # vec(H1^+ H2V(Y H2)) = K^T vec(Y)
     # The printed iteration never rescales: its iterates shrink like sigma_1(K)^(2n) and, with
-    # inconsistent data (sigma_1 well below 1, e.g. outlier pairs), underflow to 0 after a few hundred
-    # iterations. We iterate on unit vectors and carry the scale separately; the projections (16)-(19)
-    # are scale-invariant, and the recorded raw iterates are the printed ones (scale * unit vector).
+    # inconsistent data (sigma_1 well below 1, e.g. outlier pairs), underflow to 0 after a few
+    # hundred iterations. We iterate on unit vectors and carry the scale separately; the projections
+    # (16)-(19) are scale-invariant, and the recorded raw iterates are the printed ones (scale *
+    # unit vector).
     x_l = vec(init)  # R^l_{0,0}: step 1, n = 1
     scale = np.ones(K.shape[:-2])
     unit_r, unit_l, scales_r, scales_l = [], [], [], []
@@ -127,7 +129,8 @@ def _history(m: Motions, init: np.ndarray, iterations: int, variant: str, keep: 
 
 
 def _auto(m: Motions, init: np.ndarray, variant: str, fp_r, fp_l, u, v, tol: float, cap: int):
-    """Iterate until the projected estimates are within ``tol`` of their limits, at most ``cap`` iterations.
+    """Iterate until the projected estimates are within ``tol`` of their limits, at most ``cap``
+    iterations.
 
     Returns ``(right, left, raw_right, raw_left, n_iterations, closed_form, orthogonal)`` over the
     flattened batch. Problems that do not converge within ``cap`` get the closed-form limits.
@@ -141,8 +144,9 @@ def _auto(m: Motions, init: np.ndarray, variant: str, fp_r, fp_l, u, v, tol: flo
     x = vec(init).reshape(n, 9)
     x = x / np.linalg.norm(x, axis=-1, keepdims=True)
     orthogonal = np.abs(np.einsum("ni,ni->n", x, vf)) < ORTHOGONAL_TOL
-    # a unit iterate within d of the unit limit is projected within about lip * d of the projected limit;
-    # sigma_2 + sigma_3 of unvec(v) from the closed-form eigenvalues of its Gram matrix (no 3x3 SVD per problem)
+    # a unit iterate within d of the unit limit is projected within about lip * d of the projected
+    # limit; sigma_2 + sigma_3 of unvec(v) from the closed-form eigenvalues of its Gram matrix (no
+    # 3x3 SVD per problem)
     V = unvec(vf)
     ev = np.sqrt(np.clip(eigvalsh3(np.swapaxes(V, -1, -2) @ V), 0.0, None))
     lip = 2.0 / (ev[:, 1] + ev[:, 0])
@@ -152,7 +156,8 @@ def _auto(m: Motions, init: np.ndarray, variant: str, fp_r, fp_l, u, v, tol: flo
     done = orthogonal.copy()
     active = np.flatnonzero(~done)
     xa = x[active]
-    # the active problems' operators and limits, gathered again only when problems leave (not every iteration)
+    # the active problems' operators and limits, gathered again only when problems leave (not every
+    # iteration)
     Ka, Kta, lip_a, ua, va, fra, fla = (a[active] for a in (K, Kt, lip, uf, vf, fr, fl))
     k, next_check = 0, 1
     while active.size and k < cap:
@@ -161,7 +166,8 @@ def _auto(m: Motions, init: np.ndarray, variant: str, fp_r, fp_l, u, v, tol: flo
         xa = np.einsum("nab,nb->na", Kta, xr)  # eq. (15)
         xa /= np.linalg.norm(xa, axis=-1, keepdims=True)
         k += 1
-        # cheap test every iteration (distance of the unit vectors), projected test on a geometric schedule
+        # cheap test every iteration (distance of the unit vectors), projected test on a geometric
+        # schedule
         vec_close = lip_a * np.maximum(np.linalg.norm(xr - ua, axis=-1), np.linalg.norm(xa - va, axis=-1)) <= tol
         if vec_close.all() or k >= next_check or k == cap:
             next_check = k + max(1, k // 4)

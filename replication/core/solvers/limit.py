@@ -36,8 +36,9 @@ def _check_variant(variant: str) -> None:
 
 
 def _fixed_point(m: Motions, init: np.ndarray, variant: str):
-    """Projected limits ``(right, left)`` and the signed unit limits ``(u, v)`` from the top singular vectors of
-    ``K`` (:attr:`~replication.core.motions.Motions.top_singular_vectors`, one ``eigh`` of ``K^T K``)."""
+    """Projected limits ``(right, left)`` and the signed unit limits ``(u, v)`` from the top
+    singular vectors of ``K`` (:attr:`~replication.core.motions.Motions.top_singular_vectors`, one
+    ``eigh`` of ``K^T K``)."""
     u1, _, v1 = m.top_singular_vectors
     # the iteration keeps the sign of <init, v1>; u1 is paired with v1 (K v1 = sigma1 u1)
     c = np.where(np.einsum("...i,...i->...", vec(init), v1) < 0, -1.0, 1.0)[..., None]
@@ -51,7 +52,8 @@ def _first(mask) -> str:
 
 
 def _check_unique_limit(m: Motions) -> None:
-    """Raise ``ValueError`` where the top singular value of ``K`` is repeated (the limit depends on the start)."""
+    """Raise ``ValueError`` where the top singular value of ``K`` is repeated (the limit depends on
+    the start)."""
     if m.J == 2:
         raise ValueError(
             "the two-step iteration cannot determine R0 from J = 2 motion pairs: the top singular value of K "

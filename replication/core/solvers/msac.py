@@ -1,5 +1,5 @@
-"""Robust estimation of ``R0`` when some motion pairs are outliers. Theory and measured numbers: ``docs/methods.md``,
-section ``replication.core.solvers.msac``."""
+"""Robust estimation of ``R0`` when some motion pairs are outliers. Theory and measured numbers:
+``docs/methods.md``, section ``replication.core.solvers.msac``."""
 from __future__ import annotations
 
 from itertools import combinations
@@ -19,29 +19,33 @@ REFERENCE = (
     "IRLS with Cauchy weights on the exact minimiser of Zhang's weighted eq. (8)"
 )
 
-#: Most two-pair samples ``J (J - 1) / 2`` that :func:`robust` enumerates as an explicit list (``J <= 200``).
-#: The list costs about 110 bytes and 2 us per pair (``itertools.combinations``; measured: 2.3 MB and 0.04 s
-#: at J = 201, 1.9 GB at J = 6000), so the cap keeps it below ~2.5 MB while covering every problem of the
-#: paper's simulation and notebook 06 (J <= 50) on the exact code path of before. Above it the samples are drawn
-#: by their position in the same lexicographic order (:func:`_pair_at`) from the same generator call, so the
-#: hypotheses are the same ones; only the scoring arithmetic differs (see :func:`_scores_blocked`).
+#: Most two-pair samples ``J (J - 1) / 2`` that :func:`robust` enumerates as an explicit list (``J
+#: <= 200``). The list costs about 110 bytes and 2 us per pair (``itertools.combinations``;
+#: measured: 2.3 MB and 0.04 s at J = 201, 1.9 GB at J = 6000), so the cap keeps it below ~2.5 MB
+#: while covering every problem of the paper's simulation and notebook 06 (J <= 50) on the exact
+#: code path of before. Above it the samples are drawn by their position in the same lexicographic
+#: order (:func:`_pair_at`) from the same generator call, so the hypotheses are the same ones; only
+#: the scoring arithmetic differs (see :func:`_scores_blocked`).
 MAX_ENUMERATED_PAIRS = 20_000
-#: Most residuals (hypotheses x pairs) held at once while scoring. Below :data:`MAX_ENUMERATED_PAIRS` a block
-#: of ``pair_residual_deg`` costs about 220 bytes per residual (three (..., 3, 3) temporaries): 2**17 of them,
-#: ~29 MB. Above it, the 81-vector form costs ~40 bytes per residual (2**20: ~40 MB) and larger blocks keep
-#: its matrix products efficient (measured at J = 2e5, H = 200, 2 threads: 4.4 s in blocks of 2**16, 0.25 s in
-#: blocks of 2**20 for the products alone).
+#: Most residuals (hypotheses x pairs) held at once while scoring. Below
+#: :data:`MAX_ENUMERATED_PAIRS` a block of ``pair_residual_deg`` costs about 220 bytes per residual
+#: (three (..., 3, 3) temporaries): 2**17 of them, ~29 MB. Above it, the 81-vector form costs ~40
+#: bytes per residual (2**20: ~40 MB) and larger blocks keep its matrix products efficient (measured
+#: at J = 2e5, H = 200, 2 threads: 4.4 s in blocks of 2**16, 0.25 s in blocks of 2**20 for the
+#: products alone).
 SCORE_BLOCK = 2 ** 20
 _EXACT_BLOCK = 2 ** 17
 
 
 def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
-    """Index pairs (H, 2) in lexicographic order: all ``J (J - 1) / 2`` pairs, or a seeded subset of ``max_hypotheses``.
+    """Index pairs (H, 2) in lexicographic order: all ``J (J - 1) / 2`` pairs, or a seeded subset of
+    ``max_hypotheses``.
 
-    Up to :data:`MAX_ENUMERATED_PAIRS` pairs the list is built and indexed (the code of before, bit for
-    bit); above it the same positions are drawn from the same generator call,
-    ``default_rng(seed).choice(n_pairs, max_hypotheses, replace=False)`` (which needs ``O(max_hypotheses)``
-    memory), and turned into pairs by :func:`_pair_at`, so no ``O(J^2)`` list is built.
+    Up to :data:`MAX_ENUMERATED_PAIRS` pairs the list is built and indexed (the code of before, bit
+    for bit); above it the same positions are drawn from the same generator call,
+    ``default_rng(seed).choice(n_pairs, max_hypotheses, replace=False)`` (which needs
+    ``O(max_hypotheses)`` memory), and turned into pairs by :func:`_pair_at`, so no ``O(J^2)`` list
+    is built.
     """
     n_pairs = J * (J - 1) // 2
     if n_pairs <= MAX_ENUMERATED_PAIRS:
@@ -57,10 +61,11 @@ def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
 
 
 def _pair_at(k, J: int) -> np.ndarray:
-    """The pairs ``(i, j)`` at positions ``k`` of ``itertools.combinations(range(J), 2)``, shape (len(k), 2).
+    """The pairs ``(i, j)`` at positions ``k`` of ``itertools.combinations(range(J), 2)``, shape
+    (len(k), 2).
 
-    Row ``i`` starts at position ``i (2 J - i - 1) / 2``; ``i`` is the largest row starting at or before ``k``
-    (from the quadratic formula, then corrected in integers for rounding).
+    Row ``i`` starts at position ``i (2 J - i - 1) / 2``; ``i`` is the largest row starting at or
+    before ``k`` (from the quadratic formula, then corrected in integers for rounding).
     """
     k = np.asarray(k, dtype=np.int64)
 
@@ -76,11 +81,12 @@ def _pair_at(k, J: int) -> np.ndarray:
 
 
 def _scores_exact(R_h, A, B, threshold_deg: float) -> np.ndarray:
-    """MSAC scores (P, H) with the arithmetic of before: ``pair_residual_deg`` on blocks of problems x hypotheses.
+    """MSAC scores (P, H) with the arithmetic of before: ``pair_residual_deg`` on blocks of problems
+    x hypotheses.
 
-    Each residual and each row sum is computed exactly as in one (P, H, J) evaluation (the block only selects
-    rows), so the scores are bit-identical to it; at most :data:`_EXACT_BLOCK` residuals exist at once
-    (plus one row of ``J``).
+    Each residual and each row sum is computed exactly as in one (P, H, J) evaluation (the block
+    only selects rows), so the scores are bit-identical to it; at most :data:`_EXACT_BLOCK`
+    residuals exist at once (plus one row of ``J``).
     """
     P, H, J = R_h.shape[0], R_h.shape[1], A.shape[-3]
     if H * J <= _EXACT_BLOCK:
@@ -99,11 +105,11 @@ def _scores_exact(R_h, A, B, threshold_deg: float) -> np.ndarray:
 def _scores_blocked(R_h, A, B, threshold_deg: float) -> np.ndarray:
     """MSAC scores (P, H) in ``O(SCORE_BLOCK)`` memory from one matrix product per block of pairs.
 
-    Term ``j`` of eq. (8) at a rotation ``R`` is ``||A_j R - R B_j||_F^2 = 6 - 2 <A_j, R B_j R^T>`` and
-    ``vec(R B_j R^T) = (R kron R) vec(B_j)`` (row-major ``vec``), so
-    ``<A_j, R B_j R^T> = <vec(A_j) vec(B_j)^T, R kron R>``: a (pairs, 81) @ (81, hypotheses) product.
-    The residual angle then follows as in :func:`~replication.core.handeye.pair_residual_deg`; it agrees with
-    it to rounding (about 1e-12 deg at the residuals that count, below the threshold).
+    Term ``j`` of eq. (8) at a rotation ``R`` is ``||A_j R - R B_j||_F^2 = 6 - 2 <A_j, R B_j R^T>``
+    and ``vec(R B_j R^T) = (R kron R) vec(B_j)`` (row-major ``vec``), so ``<A_j, R B_j R^T> =
+    <vec(A_j) vec(B_j)^T, R kron R>``: a (pairs, 81) @ (81, hypotheses) product. The residual angle
+    then follows as in :func:`~replication.core.handeye.pair_residual_deg`; it agrees with it to
+    rounding (about 1e-12 deg at the residuals that count, below the threshold).
     """
     P, H, J = R_h.shape[0], R_h.shape[1], A.shape[-3]
     hs = min(H, SCORE_BLOCK)
@@ -130,7 +136,8 @@ def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, se
     1. Hypotheses: Park & Martin's rotation for every pair of motions ``(j, k)``
        (all of them if ``J (J - 1) / 2 <= max_hypotheses``, else a seeded subset).
     2. Score (MSAC): ``sum_j min(r_j, t)^2`` with ``r_j`` the residual angle
-       (:func:`replication.core.handeye.pair_residual_deg`) and ``t = threshold_deg``; keep the best.
+       (:func:`replication.core.handeye.pair_residual_deg`) and ``t = threshold_deg``; keep the
+       best.
     3. IRLS: weights ``w_j = 1 / (1 + (r_j / c)^2)`` (Cauchy, ``c = threshold_deg / 2``)
        and the exact minimiser of ``sum_j w_j ||A_j R - R B_j||_F^2`` on SO(3),
        ``irls_iterations`` times.
@@ -138,14 +145,15 @@ def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, se
     It is deterministic for a given ``seed`` (which only matters when the pairs
     are subsampled) and equivariant under changes of camera or sensor frame.
 
-    Cost: memory ``O(J + max_hypotheses)``, time ``O(max_hypotheses J)``; J = 10^6 pairs take 5-8 s on 2 cores,
-    0.35 GB traced peak and 0.66 GB resident through :func:`~replication.core.solvers.solve`
-    (``benchmarks/bench_bounded.py``). The two-pair samples are listed explicitly only while
-    there are at most :data:`MAX_ENUMERATED_PAIRS` (20 000, i.e. ``J <= 200``): the list costs ~110 bytes per
-    pair, 1.9 GB at J = 6000. Above the cap the seeded subset is drawn from the same generator call
-    without the list (same samples as the list would give), and the hypotheses are scored block by block
-    through an 81-vector form of eq. (8) (:data:`SCORE_BLOCK` residuals at a time) whose residuals agree with
-    ``pair_residual_deg`` to rounding. Up to the cap every operation is the one of before, bit for bit.
+    Cost: memory ``O(J + max_hypotheses)``, time ``O(max_hypotheses J)``; J = 10^6 pairs take 5-8 s
+    on 2 cores, 0.35 GB traced peak and 0.66 GB resident through
+    :func:`~replication.core.solvers.solve` (``benchmarks/bench_bounded.py``). The two-pair samples
+    are listed explicitly only while there are at most :data:`MAX_ENUMERATED_PAIRS` (20 000, i.e.
+    ``J <= 200``): the list costs ~110 bytes per pair, 1.9 GB at J = 6000. Above the cap the seeded
+    subset is drawn from the same generator call without the list (same samples as the list would
+    give), and the hypotheses are scored block by block through an 81-vector form of eq. (8)
+    (:data:`SCORE_BLOCK` residuals at a time) whose residuals agree with ``pair_residual_deg`` to
+    rounding. Up to the cap every operation is the one of before, bit for bit.
 
     Parameters
     ----------

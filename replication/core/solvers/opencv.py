@@ -1,5 +1,5 @@
-"""OpenCV's ``cv2.calibrateHandEye`` as rotation-only solvers of ``A X = X B``. Theory and measured numbers:
-``docs/methods.md``, section ``replication.core.solvers.opencv``."""
+"""OpenCV's ``cv2.calibrateHandEye`` as rotation-only solvers of ``A X = X B``. Theory and measured
+numbers: ``docs/methods.md``, section ``replication.core.solvers.opencv``."""
 from __future__ import annotations
 
 import numpy as np
@@ -17,15 +17,16 @@ OPENCV_METHODS = {
 }
 #: OpenCV methods that need translations and fail on rotation-only data.
 UNUSABLE_FOR_ROTATION_ONLY = ("CALIB_HAND_EYE_ANDREFF", "CALIB_HAND_EYE_DANIILIDIS")
-#: Most motion pairs ``J`` per problem the wrappers pass to OpenCV (a chain of ``J + 1`` poses, of which
-#: OpenCV forms all ``J (J + 1) / 2`` pairs). One ``cv2.calibrateHandEye`` call takes about ``3.2e-6 N^2`` s
-#: for ``N`` poses (``CALIB_HAND_EYE_PARK``, the slowest; ``benchmarks/bench_bounded.py``): at this limit
-#: 0.5 s, and ``calibrate``'s 200 bootstrap replicates about 100 s. Notebook 07 passes at most 181
-#: non-overlapping pairs per recording and notebook 06 at most 50; a whole recording's overlapping pairs
-#: (2700 for TUM-VI room1) would take ~24 s per call, over an hour with the bootstrap.
+#: Most motion pairs ``J`` per problem the wrappers pass to OpenCV (a chain of ``J + 1`` poses, of
+#: which OpenCV forms all ``J (J + 1) / 2`` pairs). One ``cv2.calibrateHandEye`` call takes about
+#: ``3.2e-6 N^2`` s for ``N`` poses (``CALIB_HAND_EYE_PARK``, the slowest;
+#: ``benchmarks/bench_bounded.py``): at this limit 0.5 s, and ``calibrate``'s 200 bootstrap
+#: replicates about 100 s. Notebook 07 passes at most 181 non-overlapping pairs per recording and
+#: notebook 06 at most 50; a whole recording's overlapping pairs (2700 for TUM-VI room1) would take
+#: ~24 s per call, over an hour with the bootstrap.
 MAX_PAIRS = 400
-#: Seconds per squared pose of one ``cv2.calibrateHandEye`` call, measured per method (2 cores, OpenCV 4.14);
-#: only for the estimate in the refusal message.
+#: Seconds per squared pose of one ``cv2.calibrateHandEye`` call, measured per method (2 cores,
+#: OpenCV 4.14); only for the estimate in the refusal message.
 _SECONDS_PER_POSE2 = {"CALIB_HAND_EYE_TSAI": 1.8e-6, "CALIB_HAND_EYE_PARK": 3.2e-6, "CALIB_HAND_EYE_HORAUD": 2.5e-6}
 
 
@@ -42,7 +43,8 @@ def _cv2():
 
 
 def _chain(A, B):
-    """Absolute poses whose consecutive relative motions are ``(A_k, B_k)`` (see the module notes)."""
+    """Absolute poses whose consecutive relative motions are ``(A_k, B_k)`` (see the module
+    notes)."""
     J = A.shape[0]
     Hg = np.empty((J + 1, 3, 3))
     Hc = np.empty((J + 1, 3, 3))
@@ -54,7 +56,8 @@ def _chain(A, B):
 
 
 def _check_size(J: int, method: str, max_pairs: int) -> None:
-    """Refuse a chain of more than ``max_pairs`` motions: OpenCV's time grows as the square of its poses."""
+    """Refuse a chain of more than ``max_pairs`` motions: OpenCV's time grows as the square of its
+    poses."""
     if int(max_pairs) != max_pairs or max_pairs < 1:
         raise ValueError(f"max_pairs must be a positive integer, got {max_pairs!r}")
     if J <= max_pairs:
@@ -75,14 +78,14 @@ def calibrate_hand_eye(A, B=None, method: str = "CALIB_HAND_EYE_TSAI", *, on_fai
                        max_pairs: int = MAX_PAIRS) -> np.ndarray:
     """``R0`` from ``cv2.calibrateHandEye`` on the pose chain of ``(A, B)``, one call per problem.
 
-    OpenCV's own log messages are silenced during the call; its output is checked
-    instead. ``CALIB_HAND_EYE_TSAI`` (OpenCV 4.14) sometimes gives up ("Not enough
-    informative motions", seen with J = 3 and with small motions) and returns its initial
-    value, the identity; an exact identity is treated as a failure unless it is the
-    certified minimum of eq. (8) (within the tolerance of
-    :func:`replication.core.solvers._registry.check_local_answer`). ``CALIB_HAND_EYE_PARK`` computes
-    ``(M^T M)^{-1/2} M^T`` without a determinant check and returns a *reflection* (det -1) when few noisy
-    motions make ``det M < 0`` (seen with J = 3 at the paper's noise level).
+    OpenCV's own log messages are silenced during the call; its output is checked instead.
+    ``CALIB_HAND_EYE_TSAI`` (OpenCV 4.14) sometimes gives up ("Not enough informative motions", seen
+    with J = 3 and with small motions) and returns its initial value, the identity; an exact
+    identity is treated as a failure unless it is the certified minimum of eq. (8) (within the
+    tolerance of :func:`replication.core.solvers._registry.check_local_answer`).
+    ``CALIB_HAND_EYE_PARK`` computes ``(M^T M)^{-1/2} M^T`` without a determinant check and returns
+    a *reflection* (det -1) when few noisy motions make ``det M < 0`` (seen with J = 3 at the
+    paper's noise level).
 
     Parameters
     ----------
@@ -146,7 +149,8 @@ def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise",
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(out).all(axis=(-2, -1)) | ~(np.linalg.det(np.nan_to_num(out)) > 0.5)
     # OpenCV's Tsai gives up with only a log line ("Not enough informative motions") and returns its
-    # initial value, the exact identity; accept an identity only if it is the certified minimum of eq. (8)
+    # initial value, the exact identity; accept an identity only if it is the certified minimum of
+    # eq. (8)
     identity = np.all(out == np.eye(3), axis=(-2, -1))
     if identity.any():
         from ..motions import Motions

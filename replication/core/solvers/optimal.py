@@ -1,11 +1,13 @@
-"""The registered solver ``chordal_optimal``: the global minimiser of the paper's cost (8) over SO(3), with a
-certificate of global optimality.
+"""The registered solver ``chordal_optimal``: the global minimiser of the paper's cost (8) over
+SO(3), with a certificate of global optimality.
 
-Neither the two-step iteration nor the relaxed solution of :func:`replication.core.solvers.classic.andreff`
-minimises eq. (8) on SO(3) once there is noise; this solver does: Riemannian Newton on SO(3) from the relaxed
-solution, with a first- and second-order optimality certificate (the derivation is in :mod:`.certificate`'s notes).
+Neither the two-step iteration nor the relaxed solution of
+:func:`replication.core.solvers.classic.andreff` minimises eq. (8) on SO(3) once there is noise;
+this solver does: Riemannian Newton on SO(3) from the relaxed solution, with a first- and
+second-order optimality certificate (the derivation is in :mod:`.certificate`'s notes).
 
-The Newton steps, the certificate and the relaxed start are in :mod:`.certificate`; this module is the public door.
+The Newton steps, the certificate and the relaxed start are in :mod:`.certificate`; this module is
+the public door.
 """
 from __future__ import annotations
 
@@ -24,7 +26,8 @@ REFERENCE = (
 
 def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: float = 1e-10,
                     hessian_tol: float = 0.0, certify: bool = True) -> Solution:
-    """The global minimiser of the paper's eq. (8) over SO(3), with a certificate of global optimality.
+    """The global minimiser of the paper's eq. (8) over SO(3), with a certificate of global
+    optimality.
 
     Solves ``min_{R in SO(3)} sum_j ||A_j R - R B_j||_F^2`` (eq. (8) subject to
     eqs. (9)-(10)) by Riemannian Newton with backtracking, started from the
@@ -42,7 +45,8 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
     B : array_like, shape (..., J, 3, 3)
         Sensor relative rotations ``Delta R_i``.
     init : None or array_like, shape (3, 3) or (..., 3, 3)
-        Newton start; ``None``: the relaxed solution (:func:`replication.core.solvers.classic.andreff`).
+        Newton start; ``None``: the relaxed solution
+        (:func:`replication.core.solvers.classic.andreff`).
     max_iterations : int
         Newton iterations at most.
     gradient_tol : float
@@ -56,9 +60,9 @@ def chordal_optimal(A, B, *, init=None, max_iterations: int = 30, gradient_tol: 
     Returns
     -------
     Solution
-        The answer, its cost (8) and certificate (as :func:`replication.core.solvers.solve` returns with
-        ``full_output=True``), and how the Newton iteration ended (``iterations``, ``gradient_norm``,
-        ``hessian_min_eigenvalue``, ``local_minimum``).
+        The answer, its cost (8) and certificate (as :func:`replication.core.solvers.solve` returns
+        with ``full_output=True``), and how the Newton iteration ended (``iterations``,
+        ``gradient_norm``, ``hessian_min_eigenvalue``, ``local_minimum``).
 
     Raises
     ------

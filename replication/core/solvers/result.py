@@ -1,7 +1,8 @@
-"""The one answer type of the solvers: what :func:`replication.core.solvers.solve` returns with ``full_output=True``
-and what :func:`replication.core.solvers.chordal_optimal` returns: the answer with its cost (8), the certificate of
-the global minimum of eq. (8) and the observability diagnostic. (The paper's protocol functions ``two_step`` and
-``sqp`` return their per-iteration histories, :class:`~replication.core.solvers.TwoStepResult` and
+"""The one answer type of the solvers: what :func:`replication.core.solvers.solve` returns with
+``full_output=True`` and what :func:`replication.core.solvers.chordal_optimal` returns: the answer
+with its cost (8), the certificate of the global minimum of eq. (8) and the observability
+diagnostic. (The paper's protocol functions ``two_step`` and ``sqp`` return their per-iteration
+histories, :class:`~replication.core.solvers.TwoStepResult` and
 :class:`~replication.core.solvers.SQPResult`, whose final estimates are this type's ``R``.)"""
 from __future__ import annotations
 
@@ -28,28 +29,34 @@ class Solution:
         Eq. (8) at ``R``: ``sum_j ||A_j R - R B_j||_F^2`` (NaN where ``R`` is NaN).
     lower_bound : ndarray, shape (...)
         Certified lower bound on the minimum of eq. (8) over SO(3) (the certificate of
-        :func:`replication.core.solvers.chordal_optimal`; NaN where none was computed, ``certify=False``).
+        :func:`replication.core.solvers.chordal_optimal`; NaN where none was computed,
+        ``certify=False``).
     duality_gap : ndarray, shape (...)
         ``cost - lower_bound``: how far ``R`` can be above the global minimum of eq. (8) over SO(3);
-        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection) or no certificate was computed.
+        NaN where ``R`` is not in SO(3) (a declared failure, NaN, or a reflection) or no certificate
+        was computed.
     global_optimum : ndarray of bool, shape (...)
         ``R`` is a rotation certified to be the global minimiser of eq. (8) (``duality_gap`` at most
-        ``GAP_TOL * J``; for ``chordal_optimal`` also a strict local minimum, ``local_minimum``); never for a NaN or a
-        reflection. The paper's two-step method is not, once there is noise: its fixed point is not the minimiser of
-        its own cost. Where another minimum has a cost within that tolerance (motions that nearly admit a second
-        solution; an :class:`~replication.core.solvers.ObservabilityWarning` says so), eq. (8) cannot tell the two
-        apart.
+        ``GAP_TOL * J``; for ``chordal_optimal`` also a strict local minimum, ``local_minimum``);
+        never for a NaN or a reflection. The paper's two-step method is not, once there is noise:
+        its fixed point is not the minimiser of its own cost. Where another minimum has a cost
+        within that tolerance (motions that nearly admit a second solution; an
+        :class:`~replication.core.solvers.ObservabilityWarning` says so), eq. (8) cannot tell the
+        two apart.
     certificate : ndarray of str, shape (...), or None
-        How ``lower_bound`` was certified: ``"lagrangian"`` (the fast O(3) dual at the Newton solution),
-        ``"sdp"`` (the semidefinite relaxation), ``"none"`` (not certified; see ``duality_gap``).
+        How ``lower_bound`` was certified: ``"lagrangian"`` (the fast O(3) dual at the Newton
+        solution), ``"sdp"`` (the semidefinite relaxation), ``"none"`` (not certified; see
+        ``duality_gap``).
     iterations, gradient_norm, hessian_min_eigenvalue, local_minimum : ndarray, shape (...), or None
-        How ``chordal_optimal``'s Riemannian Newton ended (``None`` from :func:`solve`): Newton iterations from the
-        relaxed start (the fallback's polish not counted); the norm of the Riemannian gradient of eq. (8) at ``R``
-        and the smallest eigenvalue of its Riemannian Hessian, both divided by ``J``; ``gradient_norm <= 2
-        gradient_tol`` and ``hessian_min_eigenvalue > hessian_tol`` (a strict local minimum).
+        How ``chordal_optimal``'s Riemannian Newton ended (``None`` from :func:`solve`): Newton
+        iterations from the relaxed start (the fallback's polish not counted); the norm of the
+        Riemannian gradient of eq. (8) at ``R`` and the smallest eigenvalue of its Riemannian
+        Hessian, both divided by ``J``; ``gradient_norm <= 2 gradient_tol`` and
+        ``hessian_min_eigenvalue > hessian_tol`` (a strict local minimum).
     observability : MotionObservability
-        How well the motions determine ``R0`` (:class:`replication.core.motions.MotionObservability`), computed on
-        first access (the certificate does not need the singular values of ``K``; a call that never reads them does
+        How well the motions determine ``R0``
+        (:class:`replication.core.motions.MotionObservability`), computed on first access (the
+        certificate does not need the singular values of ``K``; a call that never reads them does
         not pay for their decomposition); ``None`` for a solution built without its motions.
     """
 
@@ -73,6 +80,6 @@ class Solution:
 
     @property
     def sdp_used(self) -> np.ndarray | None:
-        """Problems the fast certificate could not settle (``certificate != "lagrangian"``: the relaxation was
-        solved), ``None`` without a certificate field."""
+        """Problems the fast certificate could not settle (``certificate != "lagrangian"``: the
+        relaxation was solved), ``None`` without a certificate field."""
         return None if self.certificate is None else self.certificate != "lagrangian"

@@ -1,5 +1,5 @@
-"""SQP baseline: problem (8)-(10) solved by SciPy's SLSQP, with per-iteration history. Theory and measured numbers:
-``docs/methods.md``, section ``replication.core.solvers.slsqp``."""
+"""SQP baseline: problem (8)-(10) solved by SciPy's SLSQP, with per-iteration history. Theory and
+measured numbers: ``docs/methods.md``, section ``replication.core.solvers.slsqp``."""
 from __future__ import annotations
 
 import warnings
@@ -105,8 +105,9 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic, scale):
     c = 2.0 * J * scale
 
     def f(x):
-        # eq. (8) as in handeye_cost_kron (times ``scale``), written out on the flat vector: it runs in SLSQP's
-        # inner loop, and the recorded histories (chaotic when SQP diverges) depend on its rounding
+        # eq. (8) as in handeye_cost_kron (times ``scale``), written out on the flat vector: it runs
+        # in SLSQP's inner loop, and the recorded histories (chaotic when SQP diverges) depend on
+        # its rounding
         return c * (x @ x - x @ K @ x)
 
     def grad(x):
@@ -156,11 +157,12 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     gradient : {"analytic", "finite-difference"}
         Analytic gradients (default) or SciPy's finite differences (see the module notes).
     cost : {"sum", "per-pair"} or float
-        The objective SLSQP sees: eq. (8) as printed, a sum over the ``J`` pairs (default), divided by
-        ``2J`` (``"per-pair"``), or multiplied by a positive number; the minimiser is the same. SLSQP is not
-        invariant to the objective's scale (its first Hessian estimate is the identity, ``ftol`` is absolute),
-        so its path, speed and failures change with it (notebook 03); the paper does not say which scale its
-        SQP saw. ``SQPResult.cost`` is eq. (8) as printed either way.
+        The objective SLSQP sees: eq. (8) as printed, a sum over the ``J`` pairs (default), divided
+        by ``2J`` (``"per-pair"``), or multiplied by a positive number; the minimiser is the same.
+        SLSQP is not invariant to the objective's scale (its first Hessian estimate is the identity,
+        ``ftol`` is absolute), so its path, speed and failures change with it (notebook 03); the
+        paper does not say which scale its SQP saw. ``SQPResult.cost`` is eq. (8) as printed either
+        way.
 
     Returns
     -------

@@ -1,9 +1,11 @@
-"""The ledger record of ``notebooks/04_noise_sweep.ipynb`` (claim ``fig5_resilience``, verdict ``fails``), in the
-pieces of its evidence, each a function of the numbers one section measures, called from that section's cell: (1)
-:func:`at_minimum` and (2) :func:`stop_short_sqps` and (3) :func:`far_start` once the fresh seeds of section 3 are run,
-(4) :func:`motion_ranges` in section 4; :func:`resilience_record` puts them together in section 5. Each piece checks
-its numbers first (:func:`replication.study.ledger.check_evidence`: a check that fails raises ``ValueError`` naming
-the claim and the condition) and returns its text with the counts the record's setting and uncertainty name.
+"""The ledger record of ``notebooks/04_noise_sweep.ipynb`` (claim ``fig5_resilience``, verdict
+``fails``), in the pieces of its evidence, each a function of the numbers one section measures,
+called from that section's cell: (1) :func:`at_minimum` and (2) :func:`stop_short_sqps` and (3)
+:func:`far_start` once the fresh seeds of section 3 are run, (4) :func:`motion_ranges` in section 4;
+:func:`resilience_record` puts them together in section 5. Each piece checks its numbers first
+(:func:`replication.study.ledger.check_evidence`: a check that fails raises ``ValueError`` naming
+the claim and the condition) and returns its text with the counts the record's setting and
+uncertainty name.
 """
 from __future__ import annotations
 
@@ -18,20 +20,22 @@ from .sweep import ratio_range, rounding_bound, span_text
 __all__ = ["RECORD_SECTION", "at_minimum", "stop_short_sqps", "far_start", "motion_ranges", "resilience_record"]
 
 
-#: The notebook section (its heading) where the record of ``fig5_resilience`` is built from the measurements.
+#: The notebook section (its heading) where the record of ``fig5_resilience`` is built from the
+#: measurements.
 RECORD_SECTION = "5. The resilience claim, checked"
 _CLAIM = "fig5_resilience"
 
 
 def at_minimum(grid_levels: pd.DataFrame, sets: pd.DataFrame, growth: pd.DataFrame, fresh: pd.DataFrame, *,
                low: float = 1.0, high: float = 10.0) -> dict:
-    """Evidence (1), sections 1 and 3: where SQP reaches the certified minimum in every run, the two-step error grows
-    faster and is larger at every level.
+    """Evidence (1), sections 1 and 3: where SQP reaches the certified minimum in every run, the
+    two-step error grows faster and is larger at every level.
 
-    ``grid_levels``, ``growth``: ``per_level`` and ``growth`` of :func:`sweep_grid` (the grid of section 1, found
-    seeds); ``sets``: :func:`problem_sets` of its rows where SQP reached the minimum in every run; ``fresh``: the
-    rows run again on fresh seeds (at least ``sets["first"]``). Checked: the growth ratio's lower 95 % bound above 1
-    in every problem set, found and fresh, and the two-step / SQP ratio's lower bound above 1 at every level.
+    ``grid_levels``, ``growth``: ``per_level`` and ``growth`` of :func:`sweep_grid` (the grid of
+    section 1, found seeds); ``sets``: :func:`problem_sets` of its rows where SQP reached the
+    minimum in every run; ``fresh``: the rows run again on fresh seeds (at least ``sets["first"]``).
+    Checked: the growth ratio's lower 95 % bound above 1 in every problem set, found and fresh, and
+    the two-step / SQP ratio's lower bound above 1 at every level.
     """
     conv_keys = [k for k in growth.index if growth.loc[k, "sqp_failed_share"] == 0]
     firsts = list(sets["first"])
@@ -75,12 +79,12 @@ def _families(matching: pd.DataFrame) -> str:
 
 def stop_short_sqps(stop_levels: pd.DataFrame, stop_growth: pd.DataFrame, fresh: pd.DataFrame, matching: pd.DataFrame,
                table1_sqp: tuple, *, n_sets: int, low: float = 1.0, high: float = 10.0) -> dict:
-    """Evidence (2), sections 2 and 3: SQPs that stop short as the paper's does are the more accurate at ``low``
-    but grow faster. ``stop_levels``, ``stop_growth``: ``per_level`` and ``growth`` of :func:`sweep_grid` for the
-    stop-short SQPs (found seeds); ``fresh``: their rows again on fresh seeds; ``matching``:
-    :func:`match_to_table1`'s table; ``table1_sqp``: Table I's SQP error at iteration 50, ``(mean, SD)``;
-    ``n_sets``: the problem sets of :func:`at_minimum`. Checked: no growth ratio's upper bound below 1, found or
-    fresh."""
+    """Evidence (2), sections 2 and 3: SQPs that stop short as the paper's does are the more
+    accurate at ``low`` but grow faster. ``stop_levels``, ``stop_growth``: ``per_level`` and
+    ``growth`` of :func:`sweep_grid` for the stop-short SQPs (found seeds); ``fresh``: their rows
+    again on fresh seeds; ``matching``: :func:`match_to_table1`'s table; ``table1_sqp``: Table I's
+    SQP error at iteration 50, ``(mean, SD)``; ``n_sets``: the problem sets of :func:`at_minimum`.
+    Checked: no growth ratio's upper bound below 1, found or fresh."""
     target, target_sd = table1_sqp
     stop_keys = list(stop_levels.index.droplevel(-1).unique())
     stop_f, stop_x = stop_growth.loc[stop_keys], fresh.loc[stop_keys]
@@ -110,9 +114,9 @@ def stop_short_sqps(stop_levels: pd.DataFrame, stop_growth: pd.DataFrame, fresh:
 
 def far_start(growth: pd.DataFrame, fresh: pd.DataFrame, *, n_runs: int, start: str = "150 deg from R0",
               failing_share: float = 0.5, low: float = 1.0, high: float = 10.0) -> dict:
-    """Evidence (3), sections 1 and 3: where SQP fails (in at least ``failing_share`` of the runs of a row of the
-    grid ``growth``: only from ``start``), its change from ``low`` to ``high`` is nowhere resolved above the
-    two-step's, found or ``fresh``; ``n_runs`` runs per level."""
+    """Evidence (3), sections 1 and 3: where SQP fails (in at least ``failing_share`` of the runs of
+    a row of the grid ``growth``: only from ``start``), its change from ``low`` to ``high`` is
+    nowhere resolved above the two-step's, found or ``fresh``; ``n_runs`` runs per level."""
     failing_keys = [k for k in growth.index if growth.loc[k, "sqp_failed_share"] >= failing_share]
     check_evidence(len(failing_keys) > 0 and all(k[1] == start for k in failing_keys), _CLAIM,
                    f"SQP fails in most runs only from the far start ({start})")
@@ -141,12 +145,13 @@ def far_start(growth: pd.DataFrame, fresh: pd.DataFrame, *, n_runs: int, start: 
 
 
 def motion_ranges(ranges: dict, *, low: float = 1.0, high: float = 10.0) -> dict:
-    """Evidence (4), section 4: the growth ratio over motion ranges where both converge, and a two-step method that
-    stops short. ``ranges``: :func:`replication.study.fig5.range_sweep`'s ``"found"`` and ``"fresh"``, each its
-    ``(per_level, growth)``, and ``"seeds"``, a text naming both sets' root seeds. Checked: no growth ratio's upper
-    bound below 1 where both converge, the widest motions' lower bound above the narrowest motions' upper bound
-    (found and fresh); every two-step method that stops short grows more slowly only while it is less accurate than
-    SQP at ``low`` (ratio's lower bound above 1)."""
+    """Evidence (4), section 4: the growth ratio over motion ranges where both converge, and a
+    two-step method that stops short. ``ranges``: :func:`replication.study.fig5.range_sweep`'s
+    ``"found"`` and ``"fresh"``, each its ``(per_level, growth)``, and ``"seeds"``, a text naming
+    both sets' root seeds. Checked: no growth ratio's upper bound below 1 where both converge, the
+    widest motions' lower bound above the narrowest motions' upper bound (found and fresh); every
+    two-step method that stops short grows more slowly only while it is less accurate than SQP at
+    ``low`` (ratio's lower bound above 1)."""
     claim = _CLAIM
     texts = {}
     for which in ("found", "fresh"):
@@ -198,10 +203,11 @@ def motion_ranges(ranges: dict, *, low: float = 1.0, high: float = 10.0) -> dict
 
 def resilience_record(at_min: dict, stop: dict, far: dict, ranges: dict, *, n_runs: int, seeds: dict,
                       low: float = 1.0, high: float = 10.0) -> dict:
-    """The ledger record of ``fig5_resilience`` (keyword arguments of :func:`replication.study.ledger.record`) from
-    its four pieces of evidence (:func:`at_minimum`, :func:`stop_short_sqps`, :func:`far_start`, :func:`motion_ranges`,
-    each checked where it was measured); ``n_runs`` runs per level; ``seeds``: texts ``{"found": ..., "fresh": ...,
-    "tuning": ...}`` naming the root seeds."""
+    """The ledger record of ``fig5_resilience`` (keyword arguments of
+    :func:`replication.study.ledger.record`) from its four pieces of evidence (:func:`at_minimum`,
+    :func:`stop_short_sqps`, :func:`far_start`, :func:`motion_ranges`, each checked where it was
+    measured); ``n_runs`` runs per level; ``seeds``: texts ``{"found": ..., "fresh": ..., "tuning":
+    ...}`` naming the root seeds."""
     evidence = (
         "wherever the two-step method converges, as in Table I (its R^r at 0.009 from iteration 20), its error "
         "grows at least as fast as SQP's, faster by an amount that depends on the motions. "

@@ -1,11 +1,12 @@
-"""The growth ratio over motion ranges, and a two-step method that stops short (notebook 04, section 4).
+"""The growth ratio over motion ranges, and a two-step method that stops short (notebook 04, section
+4).
 
-Where both methods converge (SQP from the identity at the certified minimum of (8), the two-step iteration run to
-its limit), how much faster the two-step error grows with the sensor noise depends on the motions: the ledger's
-first two motion distributions do not span it. And the mirror image of :mod:`.stop_short`: a two-step method
-stopped at the paper's 50 iterations with small motions, where it has not converged, beside the same SQP.
-:func:`range_sweep` runs both on one set of problems per motion range (the two-step variants share SQP's runs);
-:func:`range_table` shows it.
+Where both methods converge (SQP from the identity at the certified minimum of (8), the two-step
+iteration run to its limit), how much faster the two-step error grows with the sensor noise depends
+on the motions: the ledger's first two motion distributions do not span it. And the mirror image of
+:mod:`.stop_short`: a two-step method stopped at the paper's 50 iterations with small motions, where
+it has not converged, beside the same SQP. :func:`range_sweep` runs both on one set of problems per
+motion range (the two-step variants share SQP's runs); :func:`range_table` shows it.
 """
 from __future__ import annotations
 
@@ -21,19 +22,21 @@ from .sweep import AT_MINIMUM_DEG, _interval, resilience
 
 __all__ = ["CONVERGED", "range_sweep", "range_table"]
 
-#: The two-step label of the runs iterated to the limit (``iterations="auto"``: to convergence, or the closed-form
-#: limit beyond 1000 iterations).
+#: The two-step label of the runs iterated to the limit (``iterations="auto"``: to convergence, or
+#: the closed-form limit beyond 1000 iterations).
 CONVERGED = "to its limit"
 
 
 def range_sweep(levels, n_runs: int, seed: int, rng: np.random.Generator, *, ranges: dict, stop_short: dict,
                 init=None, noise_distribution: str = "uniform", camera_noise_deg: float = 1.0,
                 sqp_iterations: int = 50, n_boot: int = 2000):
-    """Both methods over motion ranges: the two-step method to its limit everywhere, and stopped early where asked.
+    """Both methods over motion ranges: the two-step method to its limit everywhere, and stopped
+    early where asked.
 
-    Level ``k`` of range ``r`` draws ``n_runs`` problems with seed ``seed + k`` (as :func:`noise_sweep`: the ranges
-    share their noise draws). SQP (analytic, at most ``sqp_iterations``) runs once per level and serves every
-    two-step variant; an SQP run counts as converged within :data:`AT_MINIMUM_DEG` of the certified minimiser.
+    Level ``k`` of range ``r`` draws ``n_runs`` problems with seed ``seed + k`` (as
+    :func:`noise_sweep`: the ranges share their noise draws). SQP (analytic, at most
+    ``sqp_iterations``) runs once per level and serves every two-step variant; an SQP run counts as
+    converged within :data:`AT_MINIMUM_DEG` of the certified minimiser.
 
     Parameters
     ----------
@@ -42,7 +45,8 @@ def range_sweep(levels, n_runs: int, seed: int, rng: np.random.Generator, *, ran
     ranges : dict
         label -> ``motion_angle_range_deg`` of :func:`replication.study.simulation.simulate`.
     stop_short : dict
-        label of a range -> iterations at which a second two-step variant stops (e.g. ``{"0-30 deg": 50}``).
+        label of a range -> iterations at which a second two-step variant stops (e.g. ``{"0-30 deg":
+        50}``).
     rng : numpy.random.Generator
         Bootstrap draws of :func:`resilience`, row after row.
 
@@ -84,8 +88,9 @@ def range_sweep(levels, n_runs: int, seed: int, rng: np.random.Generator, *, ran
 
 
 def range_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float = 1.0) -> pd.DataFrame:
-    """One text row per (motions, two-step): SQP's runs off the minimum, the two-step / SQP error ratio at ``low``
-    and the growth ratio, each ``"r [low, high]"`` (95 % bootstrap), or ``"-"`` where SQP left the minimum."""
+    """One text row per (motions, two-step): SQP's runs off the minimum, the two-step / SQP error
+    ratio at ``low`` and the growth ratio, each ``"r [low, high]"`` (95 % bootstrap), or ``"-"``
+    where SQP left the minimum."""
     at_low = per_level.xs(low, level=-1)
     out = pd.DataFrame({
         "SQP runs off the minimum": growth["sqp_failed_share"].map(lambda p: f"{100 * p:.0f} %"),

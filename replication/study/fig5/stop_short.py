@@ -1,10 +1,12 @@
-"""SQPs that stop short of the minimum of eq. (8), as the paper's Table I SQP does, each matched to Table I.
+"""SQPs that stop short of the minimum of eq. (8), as the paper's Table I SQP does, each matched to
+Table I.
 
-The paper's Table I SQP ends at 0.015 at iteration 50, less accurate than its two-step method's 0.009, while in
-every setting of :mod:`.sweep` the certified minimiser of eq. (8) is the more accurate: that SQP stopped short of
-the minimiser. :func:`match_to_table1` builds such SQPs (stopped early, a loose tolerance), each with one knob
-matched to Table I on its own problems, for :func:`replication.study.fig5.sweep_grid` to run with
-``all_runs=True``; :func:`matching_display` shows the matching.
+The paper's Table I SQP ends at 0.015 at iteration 50, less accurate than its two-step method's
+0.009, while in every setting of :mod:`.sweep` the certified minimiser of eq. (8) is the more
+accurate: that SQP stopped short of the minimiser. :func:`match_to_table1` builds such SQPs (stopped
+early, a loose tolerance), each with one knob matched to Table I on its own problems, for
+:func:`replication.study.fig5.sweep_grid` to run with ``all_runs=True``; :func:`matching_display`
+shows the matching.
 """
 from __future__ import annotations
 
@@ -21,19 +23,22 @@ from ..simulation import simulate
 __all__ = ["MAX_MISMATCH", "match_to_table1", "matching_display"]
 
 
-#: A stop-short SQP counts as matched to Table I when its mean error is within this factor of Table I's.
+#: A stop-short SQP counts as matched to Table I when its mean error is within this factor of Table
+#: I's.
 MAX_MISMATCH = 1.25
 
 
 def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, starts: dict, noise: dict,
                     families: dict, iterations: int = 50, max_mismatch: float = MAX_MISMATCH):
-    """SQPs that stop short of the minimum of eq. (8), each tuned to Table I's SQP error at iteration 50.
+    """SQPs that stop short of the minimum of eq. (8), each tuned to Table I's SQP error at
+    iteration 50.
 
-    The problems are Table I's (the paper's noise bound 0.02 on both sides: :func:`simulate`'s defaults), drawn
-    with seed ``seed`` for every motion distribution and noise distribution. In each, every family's knob is set
-    to the value of its grid whose mean error ``||R - R0||_F`` over the ``n_runs`` problems is closest to
-    ``target`` on a log scale; the family is *matched* there if that mean is within a factor ``max_mismatch`` of
-    ``target`` (a start from which SQP fails, say, matches with no value).
+    The problems are Table I's (the paper's noise bound 0.02 on both sides: :func:`simulate`'s
+    defaults), drawn with seed ``seed`` for every motion distribution and noise distribution. In
+    each, every family's knob is set to the value of its grid whose mean error ``||R - R0||_F`` over
+    the ``n_runs`` problems is closest to ``target`` on a log scale; the family is *matched* there
+    if that mean is within a factor ``max_mismatch`` of ``target`` (a start from which SQP fails,
+    say, matches with no value).
 
     Parameters
     ----------
@@ -43,11 +48,12 @@ def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, sta
     motions, starts, noise : dict
         As for :func:`sweep_grid`.
     families : dict
-        name -> dict with ``start`` (a label of ``starts``), ``knob`` (``"max_iterations"``: SQP stopped after
-        that many iterations, read from one run's history; or an option of
-        :func:`replication.core.solvers.sqp` such as ``"ftol"``, one run per value), ``grid`` (the knob's values,
-        increasing), ``options`` (other options of ``sqp``, e.g. ``{"cost": 1 / 2000}``) and ``text`` (a format
-        of the knob's value, e.g. ``"{:g} iterations"``; the label is ``"name: text"``).
+        name -> dict with ``start`` (a label of ``starts``), ``knob`` (``"max_iterations"``: SQP
+        stopped after that many iterations, read from one run's history; or an option of
+        :func:`replication.core.solvers.sqp` such as ``"ftol"``, one run per value), ``grid`` (the
+        knob's values, increasing), ``options`` (other options of ``sqp``, e.g. ``{"cost": 1 /
+        2000}``) and ``text`` (a format of the knob's value, e.g. ``"{:g} iterations"``; the label
+        is ``"name: text"``).
     iterations : int
         The iteration limit of SQP for the other knobs, and the two-step method's iterations.
     max_mismatch : float
@@ -55,11 +61,12 @@ def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, sta
     Returns
     -------
     (matching, configs, keys)
-        ``matching``: index ``(family, motions, noise)``; columns ``knob``, ``value`` (its chosen value), ``SQP mean``,
-        ``SQP SE``, ``SQP SD``, ``mean below`` / ``mean above`` (the mean errors at the neighbouring grid values,
-        NaN at the ends), ``two-step mean`` (same problems and start), ``matched`` and ``label``.
-        ``configs``: label -> ``("analytic", options)`` of the matched rows, for :func:`sweep_grid`; ``keys``:
-        their rows ``(motions, start, noise, label)``, to run with ``variants_for=variants_of(keys)``.
+        ``matching``: index ``(family, motions, noise)``; columns ``knob``, ``value`` (its chosen
+        value), ``SQP mean``, ``SQP SE``, ``SQP SD``, ``mean below`` / ``mean above`` (the mean
+        errors at the neighbouring grid values, NaN at the ends), ``two-step mean`` (same problems
+        and start), ``matched`` and ``label``. ``configs``: label -> ``("analytic", options)`` of
+        the matched rows, for :func:`sweep_grid`; ``keys``: their rows ``(motions, start, noise,
+        label)``, to run with ``variants_for=variants_of(keys)``.
     """
     rows, configs, keys = {}, {}, []
     for m_name, m_range in motions.items():
@@ -97,9 +104,9 @@ def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, sta
 
 
 def matching_display(matching: pd.DataFrame, target: float) -> pd.DataFrame:
-    """:func:`match_to_table1`'s table as text: the SQP chosen, its mean error ``± SE`` and SD against ``target``,
-    the means at the neighbouring knob values (the match is bracketed where they lie on either side), and the
-    two-step method's mean on the same problems."""
+    """:func:`match_to_table1`'s table as text: the SQP chosen, its mean error ``± SE`` and SD
+    against ``target``, the means at the neighbouring knob values (the match is bracketed where they
+    lie on either side), and the two-step method's mean on the same problems."""
     def row(r):
         m = r["SQP mean"]
         if not r["matched"]:

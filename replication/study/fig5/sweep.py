@@ -1,5 +1,5 @@
-"""The noise sweep of Fig. 5: both methods' errors per sensor-noise level, over a grid of settings. Theory and measured
-numbers: ``docs/studies.md``, section ``replication.study.fig5.sweep``."""
+"""The noise sweep of Fig. 5: both methods' errors per sensor-noise level, over a grid of settings.
+Theory and measured numbers: ``docs/studies.md``, section ``replication.study.fig5.sweep``."""
 from __future__ import annotations
 
 import warnings
@@ -17,7 +17,8 @@ __all__ = ["noise_sweep", "resilience", "AT_MINIMUM_DEG", "sqp_configs_for", "sw
            "span_text", "rounding_bound", "PAPER_ITERATION", "PAPER_LEVEL_DEG"]
 
 
-#: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having reached it.
+#: An SQP answer within this angle of the certified global minimiser of eq. (8) counts as having
+#: reached it.
 AT_MINIMUM_DEG = 0.01
 
 
@@ -26,15 +27,15 @@ def noise_sweep(levels, n_runs: int, seed: int, *, motions=None, init=None, nois
                 camera_noise_deg: float = 1.0) -> dict:
     """Final errors of both methods at each sensor-noise level (degrees).
 
-    Level ``k`` draws ``n_runs`` problems with seed ``seed + k``. The two-step method runs the paper's
-    ``iterations``; SQP (the named variant of ``SQP_VARIANTS``, updated by ``sqp_options``, e.g.
-    ``{"cost": 0.0005}``; at most ``iterations``) is projected onto SO(3) at the end.
+    Level ``k`` draws ``n_runs`` problems with seed ``seed + k``. The two-step method runs the
+    paper's ``iterations``; SQP (the named variant of ``SQP_VARIANTS``, updated by ``sqp_options``,
+    e.g. ``{"cost": 0.0005}``; at most ``iterations``) is projected onto SO(3) at the end.
 
     Returns
     -------
     dict
-        level -> ``{"two_step": (n,) errors of R^r, "sqp": (n,) errors, "sqp_at_minimum": (n,) bool}``
-        (errors ``||R - R0||_F``).
+        level -> ``{"two_step": (n,) errors of R^r, "sqp": (n,) errors, "sqp_at_minimum": (n,)
+        bool}`` (errors ``||R - R0||_F``).
     """
     options = {**SQP_VARIANTS[sqp_variant], **(sqp_options or {})}
     cap = min(int(options.pop("max_iterations", iterations)), iterations)
@@ -65,26 +66,28 @@ def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000,
     sweep : dict
         :func:`noise_sweep` output.
     rng : numpy.random.Generator
-        Bootstrap draws: per level (where a ratio is given), then the resampled problems of the lowest and the
-        highest level.
+        Bootstrap draws: per level (where a ratio is given), then the resampled problems of the
+        lowest and the highest level.
     n_boot : int
     all_runs : bool
-        ``False`` (default): ratios only where SQP reached the global minimum in every run (its failures stop
-        at points that depend on rounding). ``True``: over all runs, for SQPs meant to stop short of the minimum
-        (:func:`match_to_table1`), whose errors are smooth functions of the data.
+        ``False`` (default): ratios only where SQP reached the global minimum in every run (its
+        failures stop at points that depend on rounding). ``True``: over all runs, for SQPs meant to
+        stop short of the minimum (:func:`match_to_table1`), whose errors are smooth functions of
+        the data.
 
     Returns
     -------
     (per_level, growth)
-        ``per_level``: index level; columns ``two_step``, ``two_step_se``, ``sqp_failed`` (runs not at the
-        global minimum), ``sqp`` and ``sqp_se`` (NaN where any run failed, unless ``all_runs``),
-        ``ratio``, ``ratio_low``, ``ratio_high`` (two-step / SQP, paired bootstrap 95 %; NaN likewise).
-        ``growth``: ``{"ratio", "low", "high"}`` between the lowest and the highest level (NaN if SQP failed in
-        either, unless ``all_runs``), ``{"sqp_failed_share"}`` over all levels, ``sqp_all_lowest`` /
-        ``sqp_all_highest``: SQP's mean error over *all* runs at the lowest and highest level, and the changes of
-        the mean errors from the lowest to the highest level with their 95 % bootstrap intervals (the same
-        resampled problems as the growth ratio): ``two_step_change`` (``_low``, ``_high``) and ``sqp_change``
-        (``_low``, ``_high``; over all runs, including failed ones).
+        ``per_level``: index level; columns ``two_step``, ``two_step_se``, ``sqp_failed`` (runs not
+        at the global minimum), ``sqp`` and ``sqp_se`` (NaN where any run failed, unless
+        ``all_runs``), ``ratio``, ``ratio_low``, ``ratio_high`` (two-step / SQP, paired bootstrap 95
+        %; NaN likewise). ``growth``: ``{"ratio", "low", "high"}`` between the lowest and the
+        highest level (NaN if SQP failed in either, unless ``all_runs``), ``{"sqp_failed_share"}``
+        over all levels, ``sqp_all_lowest`` / ``sqp_all_highest``: SQP's mean error over *all* runs
+        at the lowest and highest level, and the changes of the mean errors from the lowest to the
+        highest level with their 95 % bootstrap intervals (the same resampled problems as the growth
+        ratio): ``two_step_change`` (``_low``, ``_high``) and ``sqp_change`` (``_low``, ``_high``;
+        over all runs, including failed ones).
     """
     levels = sorted(sweep)
     rows = {}
@@ -124,7 +127,8 @@ def resilience(sweep: dict, rng: np.random.Generator, *, n_boot: int = 2000,
     return per_level, growth
 
 
-#: The settings of notebook 04's grid where the slow SQP variants also run: our defaults and the matched setting.
+#: The settings of notebook 04's grid where the slow SQP variants also run: our defaults and the
+#: matched setting.
 FULL_SETTINGS = (("Haar", "identity"), ("0-90 deg", "150 deg from R0"))
 
 
@@ -132,14 +136,15 @@ def sqp_configs_for(motions: str, start: str, noise: str, *, full_noise: str = "
                     full_settings=FULL_SETTINGS) -> list:
     """The SQP configurations run in one setting of the grid (labels of notebook 04's ``CONFIGS``).
 
-    Analytic SQP everywhere; with noise ``full_noise`` also analytic SQP on eq. (8) / 100J (``"cost / 100J"``),
-    and where ``(motions, start)`` is in ``full_settings`` the finite-difference and capped variants too.
+    Analytic SQP everywhere; with noise ``full_noise`` also analytic SQP on eq. (8) / 100J (``"cost
+    / 100J"``), and where ``(motions, start)`` is in ``full_settings`` the finite-difference and
+    capped variants too.
 
     Returns
     -------
     list of str
-        In this order: ``"analytic"``, ``"cost / 100J"``, ``"finite-difference"``, ``"capped"`` (the order in
-        which :func:`sweep_grid` runs them and draws their bootstrap samples).
+        In this order: ``"analytic"``, ``"cost / 100J"``, ``"finite-difference"``, ``"capped"`` (the
+        order in which :func:`sweep_grid` runs them and draws their bootstrap samples).
     """
     variants = ["analytic"]
     if noise == full_noise:
@@ -154,9 +159,9 @@ def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, moti
                all_runs: bool = False):
     """:func:`noise_sweep` and :func:`resilience` over a grid of settings.
 
-    Loops over ``motions``, then ``starts``, then ``noise``, then ``variants_for(motions label, start label,
-    noise label)``; every setting uses the same ``seed`` (level ``k``: ``seed + k``), so settings share their
-    problems where their motions and noise distribution agree.
+    Loops over ``motions``, then ``starts``, then ``noise``, then ``variants_for(motions label,
+    start label, noise label)``; every setting uses the same ``seed`` (level ``k``: ``seed + k``),
+    so settings share their problems where their motions and noise distribution agree.
 
     Parameters
     ----------
@@ -178,9 +183,10 @@ def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, moti
     Returns
     -------
     (sweeps, per_level, growth)
-        ``sweeps``: ``(motions, start, noise, SQP variant) -> noise_sweep output``. ``per_level``: the stacked
-        per-level tables of :func:`resilience`, index ``(motions, start, noise, SQP variant, sensor noise (deg))``,
-        sorted. ``growth``: one row per setting (the ``growth`` dicts), sorted.
+        ``sweeps``: ``(motions, start, noise, SQP variant) -> noise_sweep output``. ``per_level``:
+        the stacked per-level tables of :func:`resilience`, index ``(motions, start, noise, SQP
+        variant, sensor noise (deg))``, sorted. ``growth``: one row per setting (the ``growth``
+        dicts), sorted.
     """
     results, sweeps = {}, {}
     for m_name, m_range in motions.items():
@@ -202,9 +208,9 @@ def sweep_grid(levels, n_runs: int, seed: int, rng: np.random.Generator, *, moti
 def problem_sets(sweeps: dict, growth: pd.DataFrame) -> pd.DataFrame:
     """The rows of a grid grouped by the problems they ran on.
 
-    :func:`sweep_grid` gives every setting the same seeds, so rows with the same motions and noise distribution
-    ran on the same problems: one problem set, however many SQP configurations and starts ran on it. Where they
-    all end at the same point, the rows repeat one measurement.
+    :func:`sweep_grid` gives every setting the same seeds, so rows with the same motions and noise
+    distribution ran on the same problems: one problem set, however many SQP configurations and
+    starts ran on it. Where they all end at the same point, the rows repeat one measurement.
 
     Parameters
     ----------
@@ -216,11 +222,11 @@ def problem_sets(sweeps: dict, growth: pd.DataFrame) -> pd.DataFrame:
     Returns
     -------
     DataFrame
-        Index ``(motions, noise)``, in order of first appearance; columns ``rows`` (how many), ``first`` (the
-        first row's key), ``SQP difference`` and ``two-step difference`` (the largest difference, run by run at
-        any level, between the errors of any row and the first row's), ``growth ratio`` (the first row's,
-        ``"v [low, high]"``) and ``growth ratios of the rows`` (smallest and largest, ``"a-b"``, or one number
-        where they agree to 2 decimals).
+        Index ``(motions, noise)``, in order of first appearance; columns ``rows`` (how many),
+        ``first`` (the first row's key), ``SQP difference`` and ``two-step difference`` (the largest
+        difference, run by run at any level, between the errors of any row and the first row's),
+        ``growth ratio`` (the first row's, ``"v [low, high]"``) and ``growth ratios of the rows``
+        (smallest and largest, ``"a-b"``, or one number where they agree to 2 decimals).
     """
     groups: dict = {}
     for key in growth.index:
@@ -245,18 +251,20 @@ def problem_sets(sweeps: dict, growth: pd.DataFrame) -> pd.DataFrame:
 
 
 def variants_of(keys):
-    """``variants_for`` of :func:`sweep_grid` that runs exactly the rows ``keys`` (``(motions, start, noise,
-    SQP variant)``), e.g. to run them again on fresh seeds."""
+    """``variants_for`` of :func:`sweep_grid` that runs exactly the rows ``keys`` (``(motions,
+    start, noise, SQP variant)``), e.g. to run them again on fresh seeds."""
     keys = list(keys)
     return lambda m, s, n: [k[3] for k in keys if k[:3] == (m, s, n)]
 
 
 def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame:
-    """The growth ratio and the changes of the mean errors (lowest to highest level), found against fresh seeds.
+    """The growth ratio and the changes of the mean errors (lowest to highest level), found against
+    fresh seeds.
 
-    ``found`` and ``fresh``: ``growth`` tables of :func:`sweep_grid`; one row per row of ``fresh``. Texts
-    ``"v [low, high]"`` (95 % bootstrap); ``"-"`` where no growth ratio is given, and there SQP's change as a bound
-    (:func:`rounding_bound`: its failed runs stop at points that depend on the machine's rounding).
+    ``found`` and ``fresh``: ``growth`` tables of :func:`sweep_grid`; one row per row of ``fresh``.
+    Texts ``"v [low, high]"`` (95 % bootstrap); ``"-"`` where no growth ratio is given, and there
+    SQP's change as a bound (:func:`rounding_bound`: its failed runs stop at points that depend on
+    the machine's rounding).
     """
     def ratio(g):
         return g.apply(lambda r: _interval(r["ratio"], r["low"], r["high"]), axis=1)
@@ -275,19 +283,21 @@ def confirmation_table(found: pd.DataFrame, fresh: pd.DataFrame) -> pd.DataFrame
                          "two-step change (fresh)": change(fresh, "two_step_change")})
 
 
-#: The declared bound (deg) on the change of a failing SQP's mean error, and the margin its interval ends must keep
-#: inside it. Where a failing SQP's runs stop depends on the machine's rounding: such interval ends moved by up to
-#: 0.04 deg between machines (OpenBLAS's Sandybridge kernels: 0.2698 -> 0.2879; numpy's AVX2 paths: an end of about
-#: 0.26 below 0.25), so an end rounded outwards to 0.1 deg flipped; a bound declared in advance does not, and 0.1 is
-#: more than twice the largest move seen (the ends here: -0.31 and 0.27, twice the margin inside +-0.6).
+#: The declared bound (deg) on the change of a failing SQP's mean error, and the margin its interval
+#: ends must keep inside it. Where a failing SQP's runs stop depends on the machine's rounding: such
+#: interval ends moved by up to 0.04 deg between machines (OpenBLAS's Sandybridge kernels: 0.2698 ->
+#: 0.2879; numpy's AVX2 paths: an end of about 0.26 below 0.25), so an end rounded outwards to 0.1
+#: deg flipped; a bound declared in advance does not, and 0.1 is more than twice the largest move
+#: seen (the ends here: -0.31 and 0.27, twice the margin inside +-0.6).
 FAILING_CHANGE_BOUND_DEG = 0.6
 FAILING_CHANGE_MARGIN_DEG = 0.1
 
 
 def rounding_bound(low: float, high: float) -> str:
-    """``"within [-0.6, 0.6]"``: the declared :data:`FAILING_CHANGE_BOUND_DEG`, once ``low`` and ``high`` are checked
-    to lie :data:`FAILING_CHANGE_MARGIN_DEG` inside it (:func:`replication.core.stats.declared_bound`); a bound that
-    holds on machines that round differently, not an interval.
+    """``"within [-0.6, 0.6]"``: the declared :data:`FAILING_CHANGE_BOUND_DEG`, once ``low`` and
+    ``high`` are checked to lie :data:`FAILING_CHANGE_MARGIN_DEG` inside it
+    (:func:`replication.core.stats.declared_bound`); a bound that holds on machines that round
+    differently, not an interval.
 
     >>> rounding_bound(-0.13, 0.20)
     'within [-0.6, 0.6]'
@@ -303,10 +313,11 @@ def _interval(v, lo, hi) -> str:
 
 
 def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float = 1.0, high: float = 10.0):
-    """One text row per setting: SQP's failure share, the two-step / SQP ratio at two levels, the growth ratio.
+    """One text row per setting: SQP's failure share, the two-step / SQP ratio at two levels, the
+    growth ratio.
 
-    Ratios are ``"r [low, high]"`` (95 % bootstrap), ``"-"`` where SQP failed (NaN); the failure share goes
-    through :func:`replication.core.stats.share_range`.
+    Ratios are ``"r [low, high]"`` (95 % bootstrap), ``"-"`` where SQP failed (NaN); the failure
+    share goes through :func:`replication.core.stats.share_range`.
 
     Parameters
     ----------
@@ -330,8 +341,9 @@ def summary_table(per_level: pd.DataFrame, growth: pd.DataFrame, *, low: float =
     })
 
 
-#: The paper's points shown in Fig. 5: Table I at its last iteration, whose setting (1 deg noise on both sides) is
-#: Fig. 5's lowest level. Fig. 5's own curves are not in the paper's text (its figure is an image we do not have).
+#: The paper's points shown in Fig. 5: Table I at its last iteration, whose setting (1 deg noise on
+#: both sides) is Fig. 5's lowest level. Fig. 5's own curves are not in the paper's text (its figure
+#: is an image we do not have).
 PAPER_ITERATION = 50
 PAPER_LEVEL_DEG = 1.0
 
@@ -341,13 +353,15 @@ def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
                 title: str = "Fig. 5 (replicated)", paper: pd.DataFrame | None = None):
     """Fig. 5 replicated: final error against sensor noise, one panel per setting.
 
-    Each panel: the two-step mean error (``R^r``) with ``± 1.96 SE`` error bars (from the ``"analytic"`` row of
-    ``per_level``), and each SQP variant's mean error over *all* runs (including runs that did not reach the
-    minimum), log scale, in the colours of :func:`replication.study.figures.method_style` (SQP's blue for every
-    variant, each with its line style and marker); a variant that did not run in a panel's setting is left out of
-    that panel, and each panel has its own legend and says how many runs each point averages. With ``paper``, the
-    paper's numbers beside ours, never used: Table I's mean ± SD at iteration :data:`PAPER_ITERATION` for ``R^r``
-    and SQP, at :data:`PAPER_LEVEL_DEG` (Table I's noise), as stars.
+    Each panel: the two-step mean error (``R^r``) with ``± 1.96 SE`` error bars (from the
+    ``"analytic"`` row of ``per_level``), and each SQP variant's mean error over *all* runs
+    (including runs that did not reach the minimum), log scale, in the colours of
+    :func:`replication.study.figures.method_style` (SQP's blue for every variant, each with its line
+    style and marker); a variant that did not run in a panel's setting is left out of that panel,
+    and each panel has its own legend and says how many runs each point averages. With ``paper``,
+    the paper's numbers beside ours, never used: Table I's mean ± SD at iteration
+    :data:`PAPER_ITERATION` for ``R^r`` and SQP, at :data:`PAPER_LEVEL_DEG` (Table I's noise), as
+    stars.
 
     Parameters
     ----------
@@ -404,19 +418,20 @@ def fig5_figure(per_level: pd.DataFrame, sweeps: dict, levels, panels,
 
 
 def two_step_growth(sweeps: dict, keys, *, low: float = 1.0, high: float = 10.0) -> dict:
-    """Growth of the two-step mean error between two levels: ``mean(error at high) - mean(error at low)``, per key."""
+    """Growth of the two-step mean error between two levels: ``mean(error at high) - mean(error at
+    low)``, per key."""
     return {k: sweeps[k][high]["two_step"].mean() - sweeps[k][low]["two_step"].mean() for k in keys}
 
 
 def ratio_range(per_level: pd.DataFrame, motions: str, start: str = "identity") -> tuple:
-    """Smallest and largest two-step / SQP ratio over every level, noise distribution and SQP configuration of one
-    (motions, start) setting."""
+    """Smallest and largest two-step / SQP ratio over every level, noise distribution and SQP
+    configuration of one (motions, start) setting."""
     ratio = per_level.xs(motions, level="motions").xs(start, level="start")["ratio"]
     return ratio.min(), ratio.max()
 
 
 def span_text(values, digits: int = 2) -> str:
-    """Smallest and largest of ``values`` as ``"a-b"`` (``"a to b"`` where one is negative), or ``"a"`` if they
-    agree at ``digits`` decimals."""
+    """Smallest and largest of ``values`` as ``"a-b"`` (``"a to b"`` where one is negative), or
+    ``"a"`` if they agree at ``digits`` decimals."""
     lo, hi = f"{min(values):.{digits}f}", f"{max(values):.{digits}f}"
     return lo if lo == hi else f"{lo} to {hi}" if lo.startswith("-") or hi.startswith("-") else f"{lo}-{hi}"

@@ -1,5 +1,5 @@
-"""A simulated version of the paper's lab experiment (Sec. III-B, Fig. 6-7, Table II). Theory and measured numbers:
-``docs/studies.md``, section ``replication.study.lab.__init__``."""
+"""A simulated version of the paper's lab experiment (Sec. III-B, Fig. 6-7, Table II). Theory and
+measured numbers: ``docs/studies.md``, section ``replication.study.lab.__init__``."""
 import importlib
 
 from .recording import (
@@ -18,8 +18,8 @@ from .recording import (
 )
 from .settings import GRAVITY, NOMINAL_CAMERA_FROM_SENSOR, PARTS, SOURCES, TABLE2_SOLVERS, WAND_POINTS, LabSettings
 
-#: Names of the modules that need OpenCV, ``ahrs`` or the solvers, loaded on first use so that reading or writing a
-#: recording (:mod:`.recording`) imports none of them.
+#: Names of the modules that need OpenCV, ``ahrs`` or the solvers, loaded on first use so that
+#: reading or writing a recording (:mod:`.recording`) imports none of them.
 _LAZY = {
     "simulate_lab": "simulate",
     "camera_orientations": "chain", "static_sensor_orientations": "chain", "dynamic_sensor_orientations": "chain",

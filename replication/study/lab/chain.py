@@ -1,5 +1,6 @@
-"""The experiment's processing chain (Sec. III-B): attitudes from raw samples, motions, calibration, Table II. Theory
-and measured numbers: ``docs/studies.md``, section ``replication.study.lab.chain``."""
+"""The experiment's processing chain (Sec. III-B): attitudes from raw samples, motions, calibration,
+Table II. Theory and measured numbers: ``docs/studies.md``, section
+``replication.study.lab.chain``."""
 from __future__ import annotations
 
 import warnings
@@ -38,9 +39,10 @@ def camera_orientations(uv, rig, *, refine: str = "opencv") -> np.ndarray:
     rig : dict
         ``camera_matrix``, ``dist_coeffs``, ``wand_points`` (see :class:`LabRecording`).
     refine : {"opencv", "batched"}
-        How the SQPnP solution is refined to the least reprojection error: ``cv2.solvePnPRefineLM`` image by
-        image, or Gauss-Newton on all images at once (:mod:`replication.study.lab.fastchain`: the same minimum to
-        about 1e-6 deg, ``tests/study/test_lab_claims.py``; faster on many images).
+        How the SQPnP solution is refined to the least reprojection error: ``cv2.solvePnPRefineLM``
+        image by image, or Gauss-Newton on all images at once
+        (:mod:`replication.study.lab.fastchain`: the same minimum to about 1e-6 deg,
+        ``tests/study/test_lab_claims.py``; faster on many images).
 
     Returns
     -------
@@ -57,7 +59,8 @@ def camera_orientations(uv, rig, *, refine: str = "opencv") -> np.ndarray:
 
 
 def camera_poses(uv, rig, *, refine: str = "opencv"):
-    """:func:`camera_orientations` with the translations: ``(C, t)``, shapes (M, 3, 3) and (M, 3), ``x = C X + t``."""
+    """:func:`camera_orientations` with the translations: ``(C, t)``, shapes (M, 3, 3) and (M, 3),
+    ``x = C X + t``."""
     if refine not in ("opencv", "batched"):
         raise ValueError(f"refine must be 'opencv' or 'batched', got {refine!r}")
     K = np.asarray(rig["camera_matrix"], dtype=float)
@@ -120,8 +123,8 @@ def dynamic_sensor_orientations(imu: pd.DataFrame, rate_hz: float, *, madgwick: 
         ``t`` and the IMU columns.
     rate_hz : float
     madgwick : {"ahrs", "transcribed"}
-        ``ahrs``' filter, or :func:`~replication.study.lab.fastchain.madgwick_marg` (the same filter, faster: the
-        seed studies).
+        ``ahrs``' filter, or :func:`~replication.study.lab.fastchain.madgwick_marg` (the same
+        filter, faster: the seed studies).
 
     Returns
     -------
@@ -148,27 +151,29 @@ def static_motions(recording: LabRecording, *, sample: str = "mean") -> dict:
     """Camera and sensor relative rotations of each static data set (the paper's protocol).
 
     At each static orientation the *mean* of the measurements is used (Sec. III-B, "to increase the
-    signal-to-noise ratio"): the mean marker pixels give one PnP attitude ``C_t``, the mean accelerometer and
-    magnetometer vectors one ``I_t``. Consecutive orientations give the motions
+    signal-to-noise ratio"): the mean marker pixels give one PnP attitude ``C_t``, the mean
+    accelerometer and magnetometer vectors one ``I_t``. Consecutive orientations give the motions
     ``Delta R_c = C_{t+1} C_t^T`` and ``Delta R_i = I_{t+1} I_t^T`` (eqs. (3)-(4)).
 
     Parameters
     ----------
     recording : LabRecording
     sample : {"mean", "single", "all"}
-        ``"mean"``: the paper's protocol; ``"single"``: the first sample of each orientation instead; ``"all"``:
-        every measurement, the alternative the paper names ("instead of using all the measurements"): each IMU
-        sample gives its own ``I`` (:func:`~replication.study.lab.fastchain.ecompass_attitudes`) and is paired with
-        the camera frame at or before its time (its own ``C``,
-        :func:`~replication.study.lab.fastchain.refine_camera_orientations` from the PnP pose of the mean pixels); the
-        ``j``-th pair of an orientation and the ``j``-th of the next give one motion, so each pair of consecutive
-        orientations gives as many motions as it has samples (the fewer of the two), weighted alike.
+        ``"mean"``: the paper's protocol; ``"single"``: the first sample of each orientation
+        instead; ``"all"``: every measurement, the alternative the paper names ("instead of using
+        all the measurements"): each IMU sample gives its own ``I``
+        (:func:`~replication.study.lab.fastchain.ecompass_attitudes`) and is paired with the camera
+        frame at or before its time (its own ``C``,
+        :func:`~replication.study.lab.fastchain.refine_camera_orientations` from the PnP pose of the
+        mean pixels); the ``j``-th pair of an orientation and the ``j``-th of the next give one
+        motion, so each pair of consecutive orientations gives as many motions as it has samples
+        (the fewer of the two), weighted alike.
 
     Returns
     -------
     dict
-        set id -> ``(A, B)``, each of shape (motions, 3, 3): ``poses - 1`` motions, or with ``"all"`` the sum over
-        consecutive orientations of their samples.
+        set id -> ``(A, B)``, each of shape (motions, 3, 3): ``poses - 1`` motions, or with
+        ``"all"`` the sum over consecutive orientations of their samples.
     """
     if sample not in ("mean", "single", "all"):
         raise ValueError(f"sample must be 'mean', 'single' or 'all', got {sample!r}")
@@ -240,9 +245,10 @@ class LabResult:
     truth : numpy.ndarray or None
         The true ``R0`` if the recording carries one (simulation).
     dynamic : dict
-        The dynamic trial at the camera times: ``t`` (s), ``camera_from_world`` (``C_t``, by PnP) and
-        ``world_from_sensor`` (the Madgwick stream slerped to the camera times; ``I_t`` is its transpose),
-        for re-projecting it with another ``R0`` or another reference frame (:mod:`replication.study.table2`).
+        The dynamic trial at the camera times: ``t`` (s), ``camera_from_world`` (``C_t``, by PnP)
+        and ``world_from_sensor`` (the Madgwick stream slerped to the camera times; ``I_t`` is its
+        transpose), for re-projecting it with another ``R0`` or another reference frame
+        (:mod:`replication.study.table2`).
     """
 
     estimates: dict
@@ -261,19 +267,20 @@ def run_lab(recording: LabRecording, solvers: dict = TABLE2_SOLVERS, *, fast: bo
     Parameters
     ----------
     recording : LabRecording
-        Simulated (:func:`simulate_lab`) or loaded (:func:`replication.study.lab.recording.load_lab`).
+        Simulated (:func:`simulate_lab`) or loaded
+        (:func:`replication.study.lab.recording.load_lab`).
     solvers : dict
         Column name -> (registered solver, options); default Table II's three methods
         (:data:`TABLE2_SOLVERS`).
     fast : bool
         The dynamic trial through the faster equivalents of the seed studies: the camera by
-        ``camera_orientations(..., refine="batched")``, the sensor by ``dynamic_sensor_orientations(...,
-        madgwick="transcribed")`` (each equal to the default to about 1e-6 deg and to rounding,
-        ``tests/study/test_lab_claims.py``).
+        ``camera_orientations(..., refine="batched")``, the sensor by
+        ``dynamic_sensor_orientations(..., madgwick="transcribed")`` (each equal to the default to
+        about 1e-6 deg and to rounding, ``tests/study/test_lab_claims.py``).
     dynamic_camera : array_like (M, 3, 3), optional
-        The dynamic trial's camera attitudes (``LabResult.dynamic["camera_from_world"]``) of a run on a recording
-        with the same marker pixels (e.g. the same seed with IMU errors switched off), reused instead of
-        PnP on every frame again.
+        The dynamic trial's camera attitudes (``LabResult.dynamic["camera_from_world"]``) of a run
+        on a recording with the same marker pixels (e.g. the same seed with IMU errors switched
+        off), reused instead of PnP on every frame again.
 
     Returns
     -------

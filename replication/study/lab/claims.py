@@ -1,7 +1,8 @@
-"""The ledger records of ``notebooks/05_table2_experiment.ipynb``: one function per claim of the lab experiment, each
-taking only the numbers its verdict rests on and called from the notebook cell that measures them. Each checks those
-numbers first (:func:`replication.study.ledger.check_evidence`), on both sets of seeds where it has both (the seeds
-of :class:`~replication.study.lab.seed_sets.SeedSets`), and returns the keyword arguments of
+"""The ledger records of ``notebooks/05_table2_experiment.ipynb``: one function per claim of the lab
+experiment, each taking only the numbers its verdict rests on and called from the notebook cell that
+measures them. Each checks those numbers first (:func:`replication.study.ledger.check_evidence`), on
+both sets of seeds where it has both (the seeds of
+:class:`~replication.study.lab.seed_sets.SeedSets`), and returns the keyword arguments of
 :func:`replication.study.ledger.record`.
 """
 from __future__ import annotations
@@ -26,8 +27,9 @@ __all__ = ["SECTIONS", "lab_protocol", "lab_averaging", "fig6_consistency", "fig
            "fig7_projection"]
 
 _FIG6, _SEEDS, _FRESH = "Fig. 6 — `R0` across the 10 data sets", "The lab over 20 seeds", "The lab over fresh seeds"
-#: The notebook section (its heading) where each record's evidence is measured: the seed study's findings are put
-#: beside their fresh-seed confirmation (with their intervals) in "The lab over fresh seeds".
+#: The notebook section (its heading) where each record's evidence is measured: the seed study's
+#: findings are put beside their fresh-seed confirmation (with their intervals) in "The lab over
+#: fresh seeds".
 SECTIONS = {
     "lab_protocol": "The recordings", "lab_averaging": _FRESH, "fig6_consistency": _SEEDS, "fig6_accuracy": _FRESH,
     "table2_reduction": _FRESH, "table2_correlation": _FRESH, "table2_methods_agree": _FRESH,
@@ -49,8 +51,9 @@ def _plus_se(f: pd.DataFrame, key: str, sign: float) -> float:
 
 
 def lab_protocol(poses: pd.Series, held: pd.Series) -> dict:
-    """``lab_protocol``: the recordings follow the paper's protocol by construction. ``poses``: orientations per
-    static data set; ``held``: :func:`~replication.study.lab.static_hold_seconds` of the recordings."""
+    """``lab_protocol``: the recordings follow the paper's protocol by construction. ``poses``:
+    orientations per static data set; ``held``: :func:`~replication.study.lab.static_hold_seconds`
+    of the recordings."""
     return _record(
         "lab_protocol", "undecidable from the text",
         evidence=f"a description of the authors' recordings, which are not public; our simulated lab follows it by "
@@ -60,9 +63,10 @@ def lab_protocol(poses: pd.Series, held: pd.Series) -> dict:
 
 
 def lab_averaging(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
-    """``lab_averaging`` fails: the mean of each orientation gains nothing over every sample (its gain, plus two
-    standard errors, below 1 % of the error on both sets of seeds), while one sample per orientation is worse by
-    more than two standard errors. ``study``, ``fresh``: the seed studies (:class:`SeedSets`)."""
+    """``lab_averaging`` fails: the mean of each orientation gains nothing over every sample (its
+    gain, plus two standard errors, below 1 % of the error on both sets of seeds), while one sample
+    per orientation is worse by more than two standard errors. ``study``, ``fresh``: the seed
+    studies (:class:`SeedSets`)."""
     s = SeedSets(study, fresh)
     for label, (_, f) in s.sets.items():
         mean_gain = -f.loc["all_minus_mean", "value"]
@@ -78,8 +82,8 @@ def lab_averaging(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
         return declared_bound(100 * abs(f.loc['all_minus_mean', 'value']) / f.loc['true_mean', 'value'], high=0.5,
                               margin=0.05, what="lab_averaging: the change with every sample (% of the error)") + " %"
 
-    # seed_findings declared the change's bound on both sets, with a margin from 0 that exceeds its spread between
-    # machines, so its sign is the bound's (every sample the more accurate)
+    # seed_findings declared the change's bound on both sets, with a margin from 0 that exceeds its
+    # spread between machines, so its sign is the bound's (every sample the more accurate)
     lo, hi = ALL_MINUS_MEAN_BOUND
     changes = f"between {lo:g} and {hi:g}"
     f1, f2 = s.found, s.confirmed
@@ -106,9 +110,10 @@ def lab_averaging(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
 
 
 def fig6_consistency(study: pd.DataFrame, committed_spread: float, without_deflection_spread: float) -> dict:
-    """``fig6_consistency``: 'very small' is not quantified. ``study``: the seed study (the first seeds);
-    ``committed_spread``: the committed draw's mean spread of the two-step estimates (deg);
-    ``without_deflection_spread``: the same without the field's deflection between poses (the ablation)."""
+    """``fig6_consistency``: 'very small' is not quantified. ``study``: the seed study (the first
+    seeds); ``committed_spread``: the committed draw's mean spread of the two-step estimates (deg);
+    ``without_deflection_spread``: the same without the field's deflection between poses (the
+    ablation)."""
     n = len(study)
     return _record(
         "fig6_consistency", "undecidable from the text",
@@ -120,9 +125,9 @@ def fig6_consistency(study: pd.DataFrame, committed_spread: float, without_defle
 
 
 def fig6_accuracy(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
-    """``fig6_accuracy`` holds only if consistency means repeatability: the 10 estimates share most of their error
-    (above spread / sqrt(10) in most seeds), which falls without the magnetometer's calibration errors and not
-    without its noise, on both sets of seeds."""
+    """``fig6_accuracy`` holds only if consistency means repeatability: the 10 estimates share most
+    of their error (above spread / sqrt(10) in most seeds), which falls without the magnetometer's
+    calibration errors and not without its noise, on both sets of seeds."""
     s = SeedSets(study, fresh)
     for label, (_, f) in s.sets.items():
         check_evidence(f.loc["shared_exceeds_independent", "low"] > 0.5, "fig6_accuracy",
@@ -156,7 +161,8 @@ def fig6_accuracy(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
 
 
 def table2_reduction(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
-    """``table2_reduction`` holds: the calibrated RMS below the sensor frame's in most seeds of both sets."""
+    """``table2_reduction`` holds: the calibrated RMS below the sensor frame's in most seeds of both
+    sets."""
     s = SeedSets(study, fresh)
     for label, (_, f) in s.sets.items():
         check_evidence(f.loc["calibration_reduces", "low"] > 0.5, "table2_reduction",
@@ -173,8 +179,9 @@ def table2_reduction(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
 
 
 def table2_correlation(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
-    """``table2_correlation``: every correlation after calibration above 0.95, the roll correlation reaching the
-    paper's 0.999 in no seed, on both sets of seeds; the paper's values depend on settings it does not give."""
+    """``table2_correlation``: every correlation after calibration above 0.95, the roll correlation
+    reaching the paper's 0.999 in no seed, on both sets of seeds; the paper's values depend on
+    settings it does not give."""
     s = SeedSets(study, fresh)
     for label, (frame, f) in s.sets.items():
         corr_min = {a: float(frame[f"corr_{a}_ours_right"].min()) for a in _ANGLES}
@@ -197,10 +204,10 @@ def table2_correlation(study: pd.DataFrame, fresh: pd.DataFrame) -> dict:
 
 def table2_methods_agree(study: pd.DataFrame, fresh: pd.DataFrame, *, largest_rms_difference: float, bounds: dict,
                          sqp_runs) -> dict:
-    """``table2_methods_agree`` holds only if SQP converges on every data set. ``largest_rms_difference``: the
-    committed draw's largest Table II RMS difference between methods (deg); ``bounds``: SQP's declared failure
-    shares (the notebook's ``BOUNDS``), checked on both sets of seeds over its runs ``sqp_runs``
-    (:func:`~replication.study.lab.check_sqp_shares`)."""
+    """``table2_methods_agree`` holds only if SQP converges on every data set.
+    ``largest_rms_difference``: the committed draw's largest Table II RMS difference between methods
+    (deg); ``bounds``: SQP's declared failure shares (the notebook's ``BOUNDS``), checked on both
+    sets of seeds over its runs ``sqp_runs`` (:func:`~replication.study.lab.check_sqp_shares`)."""
     s = SeedSets(study, fresh)
     for label, (frame, _) in s.sets.items():
         check_sqp_shares(sqp_shares(frame, sqp_runs), bounds, label)
@@ -223,8 +230,9 @@ def table2_methods_agree(study: pd.DataFrame, fresh: pd.DataFrame, *, largest_rm
 
 
 def _cal_share(found: dict, fresh: dict) -> str:
-    """The calibration errors' share of |pitch bias| in words (:func:`intervention_finding` on both sets of seeds,
-    each resolved to :data:`RESOLVE_DEG`): what the intervals show decides the words."""
+    """The calibration errors' share of |pitch bias| in words (:func:`intervention_finding` on both
+    sets of seeds, each resolved to :data:`RESOLVE_DEG`): what the intervals show decides the
+    words."""
     numbers = (f"{found['text']} deg on {found['n']} seeds and {fresh['text']} deg on {fresh['n']} fresh seeds "
                "(mean ± SE [95 % interval])")
     signs = [(p["low"] > 0) - (p["high"] < 0) for p in (found, fresh)]
@@ -243,8 +251,9 @@ def _cal_share(found: dict, fresh: dict) -> str:
 
 
 def _check_blindness(s: SeedSets, small: str) -> None:
-    """Table II moved less by the estimate's error than by ``small``-degree turns, by more than the intervals (and
-    the turns and the reversal losing in most seeds, the noise's share resolved), on both sets of seeds."""
+    """Table II moved less by the estimate's error than by ``small``-degree turns, by more than the
+    intervals (and the turns and the reversal losing in most seeds, the noise's share resolved), on
+    both sets of seeds."""
     for label, (_, f) in s.sets.items():
         blind = abs(f.loc["rms_estimate_minus_truth", "value"]) + 2 * f.loc["rms_estimate_minus_truth", "se"]
         check_evidence(blind < _plus_se(f, f"rms_turned_{small}_minus_truth", -1), "table2_measures_calibration",
@@ -260,8 +269,8 @@ def _check_blindness(s: SeedSets, small: str) -> None:
 
 
 def _pitch_shares(pitch_cal) -> tuple[list, list]:
-    """The seeds and :func:`intervention_finding` of each pitch-bias intervention, each checked: resolved to
-    :data:`RESOLVE_DEG` and below a quarter of |pitch bias|."""
+    """The seeds and :func:`intervention_finding` of each pitch-bias intervention, each checked:
+    resolved to :data:`RESOLVE_DEG` and below a quarter of |pitch bias|."""
     check_disjoint(pitch_cal[0].index, pitch_cal[1].index, "the pitch-bias intervention")
     seeds, shares = [seed_range(frame) for frame in pitch_cal], [intervention_finding(frame) for frame in pitch_cal]
     for label, p in zip(seeds, shares):
@@ -278,10 +287,11 @@ def table2_measures_calibration(study: pd.DataFrame, fresh: pd.DataFrame, *, pit
                                 true_r0_pitch: pd.Series, pitch_cal) -> dict:
     """``table2_measures_calibration`` fails: Table II does not reward the more accurate ``R0``.
 
-    ``pitch_true``: the committed draw's pitch bias with the true ``R0`` (deg); ``true_r0_pitch``: its pitch mean
-    per reference frame (:func:`~replication.study.table2.reference_frame_dependence`, rows ``"true R0"``);
-    ``pitch_cal``: :func:`~replication.study.lab.pitch_bias_intervention` without the magnetometer's calibration
-    errors, on its own seeds and on fresh ones (consecutive), each resolved to
+    ``pitch_true``: the committed draw's pitch bias with the true ``R0`` (deg); ``true_r0_pitch``:
+    its pitch mean per reference frame
+    (:func:`~replication.study.table2.reference_frame_dependence`, rows ``"true R0"``);
+    ``pitch_cal``: :func:`~replication.study.lab.pitch_bias_intervention` without the magnetometer's
+    calibration errors, on its own seeds and on fresh ones (consecutive), each resolved to
     :data:`~replication.study.lab.study.RESOLVE_DEG` and below a quarter of |pitch bias|.
     """
     s = SeedSets(study, fresh)
@@ -291,7 +301,8 @@ def table2_measures_calibration(study: pd.DataFrame, fresh: pd.DataFrame, *, pit
     small = f"{turned[0]:g}"
     _check_blindness(s, small)
     pitch_seeds, pitch_shares = _pitch_shares(pitch_cal)
-    # a count "replicates" if its Wilson interval lies on the same side of one half on both sets of seeds
+    # a count "replicates" if its Wilson interval lies on the same side of one half on both sets of
+    # seeds
     sides = {int(f.loc["estimate_beats_truth", "low"] > 0.5) - int(f.loc["estimate_beats_truth", "high"] < 0.5)
              for f in (f1, f2)}
     preference = "is the same on both sets of seeds" if sides in ({1}, {-1}) else "does not replicate"
@@ -331,8 +342,9 @@ def table2_measures_calibration(study: pd.DataFrame, fresh: pd.DataFrame, *, pit
 
 
 def table2_rms(study: pd.DataFrame, sensitivity_rms: pd.Series) -> dict:
-    """``table2_rms``: the RMS follows settings the paper does not give. ``study``: the seed study (the first
-    seeds); ``sensitivity_rms``: the committed draw's calibrated RMS per magnetometer noise level (0 to 1.4 uT)."""
+    """``table2_rms``: the RMS follows settings the paper does not give. ``study``: the seed study
+    (the first seeds); ``sensitivity_rms``: the committed draw's calibrated RMS per magnetometer
+    noise level (0 to 1.4 uT)."""
     n = len(study)
     return _record(
         "table2_rms", "undecidable from the text",
@@ -344,8 +356,9 @@ def table2_rms(study: pd.DataFrame, sensitivity_rms: pd.Series) -> dict:
 
 
 def fig7_projection(study: pd.DataFrame, sensor_frame_correlation: pd.Series) -> dict:
-    """``fig7_projection`` holds: after projection the traces follow the camera's. ``study``: the seed study (the
-    first seeds); ``sensor_frame_correlation``: Table II's sensor-frame correlations on the committed draw."""
+    """``fig7_projection`` holds: after projection the traces follow the camera's. ``study``: the
+    seed study (the first seeds); ``sensor_frame_correlation``: Table II's sensor-frame correlations
+    on the committed draw."""
     return _record(
         "fig7_projection", "holds",
         evidence=f"after projection the traces follow the camera's (smallest correlation "

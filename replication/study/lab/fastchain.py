@@ -1,11 +1,12 @@
-"""Faster equivalents of steps of the lab's processing chain (:mod:`replication.study.lab.chain`), for the seed
-studies of ``notebooks/05_table2_experiment.ipynb``, each checked against the original in
-``tests/study/test_lab_claims.py``:
+"""Faster equivalents of steps of the lab's processing chain (:mod:`replication.study.lab.chain`),
+for the seed studies of ``notebooks/05_table2_experiment.ipynb``, each checked against the original
+in ``tests/study/test_lab_claims.py``:
 
-* :func:`refine_camera_orientations`: PnP's least squares (the reprojection error ``cv2.solvePnPRefineLM``
-  minimises) solved for many images at once, by Gauss-Newton with the analytic Jacobian of OpenCV's camera model
-  (:func:`_project`); it gives every frame of a static orientation its own attitude (the all-sample calibration)
-  and refines the dynamic trial's SQPnP poses (``camera_orientations(..., refine="batched")``);
+* :func:`refine_camera_orientations`: PnP's least squares (the reprojection error
+  ``cv2.solvePnPRefineLM`` minimises) solved for many images at once, by Gauss-Newton with the
+  analytic Jacobian of OpenCV's camera model (:func:`_project`); it gives every frame of a static
+  orientation its own attitude (the all-sample calibration) and refines the dynamic trial's SQPnP
+  poses (``camera_orientations(..., refine="batched")``);
 * :func:`ecompass_attitudes`: ``ahrs``' ``ecompass`` on arrays of samples;
 * :func:`madgwick_marg`: ``ahrs``' Madgwick MARG update transcribed to plain Python floats.
 """
@@ -21,9 +22,10 @@ __all__ = ["refine_camera_orientations", "ecompass_attitudes", "madgwick_marg"]
 
 
 def _project(X, C, t, K, dist, *, jacobian: bool = False):
-    """OpenCV's pinhole + (k1, k2, p1, p2, k3) distortion model (no skew), batched: pixels (M, N, 2) of points X
-    (N, 3) seen from poses ``x = C X + t`` (C (M, 3, 3), t (M, 3)); with ``jacobian``, also their derivatives
-    (M, 6, 2, N) by the pose's change ``(w, dt)``: ``C -> exp(w) C``, ``t -> t + dt``."""
+    """OpenCV's pinhole + (k1, k2, p1, p2, k3) distortion model (no skew), batched: pixels (M, N, 2)
+    of points X (N, 3) seen from poses ``x = C X + t`` (C (M, 3, 3), t (M, 3)); with ``jacobian``,
+    also their derivatives (M, 6, 2, N) by the pose's change ``(w, dt)``: ``C -> exp(w) C``, ``t ->
+    t + dt``."""
     # C X as three contiguous (M, N) arrays: one matrix product
     qx, qy, qz = np.ascontiguousarray(np.moveaxis((C.reshape(-1, 3) @ X.T).reshape(C.shape[:-1] + (len(X),)), 1, 0))
     Px, Py, Pz = qx + t[:, :1], qy + t[:, 1:2], qz + t[:, 2:]
@@ -55,12 +57,13 @@ def _project(X, C, t, K, dist, *, jacobian: bool = False):
 
 
 def refine_camera_orientations(uv, rig, C0, t0, *, iterations: int = 3) -> np.ndarray:
-    """PnP's least squares (reprojection error, as ``cv2.solvePnPRefineLM``) solved for many images at once.
+    """PnP's least squares (reprojection error, as ``cv2.solvePnPRefineLM``) solved for many images
+    at once.
 
-    Gauss-Newton from a nearby pose (each image's own, e.g. the PnP pose of the mean pixels of a static
-    orientation), with the analytic Jacobian of :func:`_project`; converges to the pose
-    :func:`~replication.study.lab.chain.camera_orientations` finds (``tests/study/test_lab_claims.py``) at a fraction of
-    its cost per image.
+    Gauss-Newton from a nearby pose (each image's own, e.g. the PnP pose of the mean pixels of a
+    static orientation), with the analytic Jacobian of :func:`_project`; converges to the pose
+    :func:`~replication.study.lab.chain.camera_orientations` finds
+    (``tests/study/test_lab_claims.py``) at a fraction of its cost per image.
 
     Parameters
     ----------
@@ -71,8 +74,9 @@ def refine_camera_orientations(uv, rig, C0, t0, *, iterations: int = 3) -> np.nd
     C0, t0 : array_like, shapes (M, 3, 3) and (M, 3)
         Starting poses (:func:`~replication.study.lab.chain.camera_poses`).
     iterations : int
-        Gauss-Newton steps (from a static orientation's mean pose each takes about two digits off the angle to
-        OpenCV's answer: three leave about 1e-5 deg, ``tests/study/test_lab_claims.py``).
+        Gauss-Newton steps (from a static orientation's mean pose each takes about two digits off
+        the angle to OpenCV's answer: three leave about 1e-5 deg,
+        ``tests/study/test_lab_claims.py``).
 
     Returns
     -------
@@ -91,7 +95,8 @@ def refine_camera_orientations(uv, rig, C0, t0, *, iterations: int = 3) -> np.nd
 
 
 def _gauss_newton_pnp(uv, X, K, dist, C, t, iterations):
-    """Gauss-Newton on the reprojection error from the poses ``(C, t)``; ``(C, t)`` refined, checked to 5 px."""
+    """Gauss-Newton on the reprojection error from the poses ``(C, t)``; ``(C, t)`` refined, checked
+    to 5 px."""
     for _ in range(iterations):
         proj, J = _project(X, C, t, K, dist, jacobian=True)
         r, J = np.swapaxes(proj - uv, -1, -2).reshape(len(uv), -1, 1), J.reshape(len(uv), 6, -1)   # (u.., v..)
@@ -106,7 +111,8 @@ def _gauss_newton_pnp(uv, X, K, dist, C, t, iterations):
 
 
 def ecompass_attitudes(acc, mag) -> np.ndarray:
-    """:func:`static_sensor_orientations` on arrays: ``ahrs``' ``ecompass`` (ENU) for many samples at once.
+    """:func:`static_sensor_orientations` on arrays: ``ahrs``' ``ecompass`` (ENU) for many samples
+    at once.
 
     Parameters
     ----------
@@ -115,7 +121,8 @@ def ecompass_attitudes(acc, mag) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (M, 3, 3)
-        ``I_t`` (body-from-world): columns ``m x a``, ``a x (m x a)``, ``a`` normalised, as ``ecompass``'s rows.
+        ``I_t`` (body-from-world): columns ``m x a``, ``a x (m x a)``, ``a`` normalised, as
+        ``ecompass``'s rows.
     """
     acc, mag = np.asarray(acc, dtype=float), np.asarray(mag, dtype=float)
     z = acc / np.linalg.norm(acc, axis=-1, keepdims=True)
@@ -128,13 +135,15 @@ def ecompass_attitudes(acc, mag) -> np.ndarray:
 
 
 def madgwick_marg(gyr, acc, mag, rate_hz: float, gain: float = 0.041) -> np.ndarray:
-    """``ahrs.filters.Madgwick(gyr, acc, mag, frequency=rate_hz).Q`` transcribed to plain Python floats.
+    """``ahrs.filters.Madgwick(gyr, acc, mag, frequency=rate_hz).Q`` transcribed to plain Python
+    floats.
 
-    The same operations in the same order as ``Madgwick.updateMARG`` (and ``updateIMU`` where the magnetometer
-    reads zero), started like it by ``ecompass(acc[0], mag[0], frame="NED", representation="quaternion")``;
-    about 8 times faster, because it skips ``ahrs``' per-sample array checks and small-array overheads. It agrees
-    with ``ahrs`` to rounding where the accelerometer or magnetometer is noisy (``tests/study/test_lab_claims.py``);
-    without noise on either, both follow rounding (:attr:`LabSettings.noise_free_dynamic_attitude`).
+    The same operations in the same order as ``Madgwick.updateMARG`` (and ``updateIMU`` where the
+    magnetometer reads zero), started like it by ``ecompass(acc[0], mag[0], frame="NED",
+    representation="quaternion")``; about 8 times faster, because it skips ``ahrs``' per-sample
+    array checks and small-array overheads. It agrees with ``ahrs`` to rounding where the
+    accelerometer or magnetometer is noisy (``tests/study/test_lab_claims.py``); without noise on
+    either, both follow rounding (:attr:`LabSettings.noise_free_dynamic_attitude`).
 
     Returns
     -------

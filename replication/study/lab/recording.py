@@ -1,5 +1,6 @@
-"""What the lab records (:class:`LabRecording`), and the files it is stored in: writer and validating loader. Theory
-and measured numbers: ``docs/studies.md``, section ``replication.study.lab.recording``."""
+"""What the lab records (:class:`LabRecording`), and the files it is stored in: writer and
+validating loader. Theory and measured numbers: ``docs/studies.md``, section
+``replication.study.lab.recording``."""
 from __future__ import annotations
 
 import io
@@ -77,7 +78,8 @@ def marker_pixels(markers: pd.DataFrame, n: int) -> np.ndarray:
 
 
 def static_hold_seconds(static_imu: pd.DataFrame, imu_rate_hz: float) -> pd.Series:
-    """How long each static orientation was recorded: ``t_last - t_first + 1 / rate``, indexed by (set, pose)."""
+    """How long each static orientation was recorded: ``t_last - t_first + 1 / rate``, indexed by
+    (set, pose)."""
     t = static_imu.groupby(["set", "pose"])["t"]
     return t.last() - t.first() + 1.0 / imu_rate_hz
 
@@ -90,7 +92,8 @@ UNITS = {"t": "s", "acc": "m/s^2", "gyr": "rad/s", "mag": "uT", "uv": "px", "wan
 
 FILES = ("rig.json", "static_imu.csv", "static_markers.csv", "dynamic_imu.csv", "dynamic_markers.csv")
 
-#: Sensor ranges: ADXL330 +-3.6 g (minimum full scale), ITG-3200 +-2000 deg/s, HMC5843 +-4 gauss (400 uT).
+#: Sensor ranges: ADXL330 +-3.6 g (minimum full scale), ITG-3200 +-2000 deg/s, HMC5843 +-4 gauss
+#: (400 uT).
 ACC_LIMIT = 3.6 * GRAVITY
 GYR_LIMIT = np.deg2rad(2000.0)
 MAG_LIMIT = 400.0
@@ -282,8 +285,9 @@ def _check_gyro_units(path, df, window_s=2.0, limit_deg=20.0):
 
 
 def _check_time_unit(path, df, rate_hz):
-    """The time column must step by the rig's sample period (within a factor of 2 in the median): a column in
-    ms or us steps 1000 or 1e6 times too far, and every duration computed from it is off by that factor."""
+    """The time column must step by the rig's sample period (within a factor of 2 in the median): a
+    column in ms or us steps 1000 or 1e6 times too far, and every duration computed from it is off
+    by that factor."""
     step = np.median(np.diff(df["t"].to_numpy()))
     ratio = step * rate_hz
     if not 0.5 < ratio < 2.0:
@@ -309,7 +313,8 @@ TRUTH_ATOL = 1e-5
 
 
 def _load_truth(path: Path) -> np.ndarray:
-    """``camera_from_sensor`` of ``truth.json``: a rotation, else an error at the line and column of its value."""
+    """``camera_from_sensor`` of ``truth.json``: a rotation, else an error at the line and column of
+    its value."""
     text = read_text(path)
     try:
         data = json.loads(text)

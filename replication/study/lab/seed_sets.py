@@ -1,7 +1,7 @@
-"""The lab's seed study on the two sets of seeds its claims rest on, in the words the ledger uses: the seeds where
-each finding was made (1-20 in notebook 05) and the fresh ones where it was checked again (21-40), each with its
-:func:`~replication.study.lab.seed_findings`, and the setting each record of the lab names. The claims themselves
-are in :mod:`replication.study.lab.claims`.
+"""The lab's seed study on the two sets of seeds its claims rest on, in the words the ledger uses:
+the seeds where each finding was made (1-20 in notebook 05) and the fresh ones where it was checked
+again (21-40), each with its :func:`~replication.study.lab.seed_findings`, and the setting each
+record of the lab names. The claims themselves are in :mod:`replication.study.lab.claims`.
 """
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ _COMMITTED = "(and the committed draw, seed 20130501)"
 
 
 def check_disjoint(found, fresh, what: str) -> None:
-    """``ValueError`` naming the shared seeds unless the ``fresh`` seeds are disjoint from the ``found`` ones: a
-    finding is confirmed only on seeds it was not made on."""
+    """``ValueError`` naming the shared seeds unless the ``fresh`` seeds are disjoint from the
+    ``found`` ones: a finding is confirmed only on seeds it was not made on."""
     shared = sorted(set(found) & set(fresh))
     if shared:
         shown = ", ".join(str(int(s)) for s in shared[:5]) + (" ..." if len(shared) > 5 else "")
@@ -27,15 +27,16 @@ def check_disjoint(found, fresh, what: str) -> None:
 
 
 def found_setting(study: pd.DataFrame) -> str:
-    """The setting of a claim measured on the seeds where the findings were made (and the committed draw)."""
+    """The setting of a claim measured on the seeds where the findings were made (and the committed
+    draw)."""
     return f"{LAB_SETTING}; {seed_range(study)} {_COMMITTED}"
 
 
 class SeedSets:
-    """Two :func:`~replication.study.lab.seed_study` frames side by side: ``study`` (the seeds where the findings
-    were made) and ``fresh`` (where each is checked again), their findings ``found`` and ``confirmed``, and
-    ``sets``: ``{label: (frame, findings)}``, labelled as the checks name them (``"seeds 1-20"``,
-    ``"fresh seeds 21-40"``)."""
+    """Two :func:`~replication.study.lab.seed_study` frames side by side: ``study`` (the seeds where
+    the findings were made) and ``fresh`` (where each is checked again), their findings ``found``
+    and ``confirmed``, and ``sets``: ``{label: (frame, findings)}``, labelled as the checks name
+    them (``"seeds 1-20"``, ``"fresh seeds 21-40"``)."""
 
     def __init__(self, study: pd.DataFrame, fresh: pd.DataFrame):
         check_disjoint(study.index, fresh.index, "the seed study")
@@ -48,7 +49,8 @@ class SeedSets:
         self.setting = f"{LAB_SETTING}; found on {found_seeds}, confirmed on fresh {fresh_seeds} {_COMMITTED}"
 
     def both(self, key: str, unit: str = "") -> str:
-        """``"<found><unit> on the first and <fresh><unit> on the fresh seeds"``: one finding's text on both sets."""
+        """``"<found><unit> on the first and <fresh><unit> on the fresh seeds"``: one finding's text
+        on both sets."""
         return f"{self.found.loc[key, 'text']}{unit} on the first and {self.confirmed.loc[key, 'text']}{unit} on the " \
                "fresh seeds"
 
@@ -57,5 +59,6 @@ class SeedSets:
         return self.both(key, " deg")
 
     def spread(self, which: str, column: str, digits: int = 2) -> str:
-        """:func:`~replication.study.lab.seed_spread` of ``column`` of ``"study"`` or ``"fresh"``."""
+        """:func:`~replication.study.lab.seed_spread` of ``column`` of ``"study"`` or
+        ``"fresh"``."""
         return seed_spread(getattr(self, which)[column], digits)

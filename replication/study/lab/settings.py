@@ -52,8 +52,8 @@ SOURCES = {
     "lever-arm acceleration": ("lever_arm_m",),
 }
 
-#: Parts of an error source, for finer interventions (:meth:`LabSettings.without` takes these names too):
-#: the magnetometer's random noise apart from its residual calibration errors.
+#: Parts of an error source, for finer interventions (:meth:`LabSettings.without` takes these names
+#: too): the magnetometer's random noise apart from its residual calibration errors.
 PARTS = {
     "magnetometer noise": ("mag_noise_ut",),
     "magnetometer calibration errors": ("mag_hard_iron_ut", "mag_soft_iron", "mag_misalignment_deg"),
@@ -189,7 +189,8 @@ class LabSettings:
     mount_error_deg: float = 3.0
 
     def without(self, *sources: str) -> LabSettings:
-        """These settings with the named error sources (keys of :data:`SOURCES` or :data:`PARTS`) switched off."""
+        """These settings with the named error sources (keys of :data:`SOURCES` or :data:`PARTS`)
+        switched off."""
         known = {**SOURCES, **PARTS}
         unknown = [s for s in sources if s not in known]
         if unknown:

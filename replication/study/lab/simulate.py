@@ -1,5 +1,5 @@
-"""The simulated lab of Sec. III-B from first principles: camera, wand, IMU and the protocol. Theory and measured
-numbers: ``docs/studies.md``, section ``replication.study.lab.simulate``."""
+"""The simulated lab of Sec. III-B from first principles: camera, wand, IMU and the protocol. Theory
+and measured numbers: ``docs/studies.md``, section ``replication.study.lab.simulate``."""
 from __future__ import annotations
 
 import cv2
@@ -28,7 +28,8 @@ def _sensor_error_matrix(rng, scale_error, misalignment_deg):
 
 
 def _look_at(position, target, roll_deg):
-    """``camera_from_wand`` of a camera at ``position`` looking at ``target``, rolled about its axis."""
+    """``camera_from_wand`` of a camera at ``position`` looking at ``target``, rolled about its
+    axis."""
     z = target - position
     z = z / np.linalg.norm(z, axis=-1, keepdims=True)
     x = np.cross(z, np.array([0.0, 1.0, 0.0]))
@@ -39,7 +40,8 @@ def _look_at(position, target, roll_deg):
 
 
 def _project(settings, C, position, rng, n_frames):
-    """Marker pixels of ``n_frames`` frames of each pose (``C``, ``position``): shape (P, F, N, 2)."""
+    """Marker pixels of ``n_frames`` frames of each pose (``C``, ``position``): shape (P, F, N,
+    2)."""
     w, h = settings.image_size
     K = np.array([[settings.focal_px, 0, w / 2], [0, settings.focal_px, h / 2], [0, 0, 1.0]])
     dist = np.array(settings.distortion, dtype=float)
@@ -82,7 +84,8 @@ class _IMU:
         self.acc_sigma = np.array(s.acc_noise_density_ug) * 1e-6 * GRAVITY * np.sqrt(s.imu_rate_hz / 2)
 
     def measure(self, rng, specific_force, rate, field):
-        """Raw samples ``(n, 9)``: acc (m/s^2), gyr (rad/s), mag (uT) from true signals in the sensor frame."""
+        """Raw samples ``(n, 9)``: acc (m/s^2), gyr (rad/s), mag (uT) from true signals in the
+        sensor frame."""
         n = len(specific_force)
         s = self.s
         acc = specific_force @ self.acc_M.T + self.acc_bias + rng.normal(0.0, 1.0, (n, 3)) * self.acc_sigma
@@ -109,7 +112,8 @@ def _marker_frame(uv):
 
 
 def _static_poses(settings, rng, n):
-    """``n`` random camera poses facing the wand (camera_from_wand, position), all markers in view."""
+    """``n`` random camera poses facing the wand (camera_from_wand, position), all markers in
+    view."""
     C, P = [], []
     while len(C) < n:
         m = 4 * n
@@ -182,7 +186,8 @@ def simulate_lab(settings: LabSettings = LabSettings()) -> LabRecording:
 
     def camera_from_wand(t):
         angles = amp * np.sin(2 * np.pi * np.asarray(t)[:, None] / period)
-        # body-fixed pan (camera y), tilt (camera x), roll (camera z): world_from_camera = C0^T Ry Rx Rz
+        # body-fixed pan (camera y), tilt (camera x), roll (camera z): world_from_camera = C0^T Ry
+        # Rx Rz
         motion = matrix_from_euler("YXZ", angles)
         return np.swapaxes(C0.T @ motion, -1, -2)
 

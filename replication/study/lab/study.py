@@ -1,4 +1,5 @@
-"""Studies of the simulated lab: summaries, error-source ablation, sensitivity, the experiment over many seeds.
+"""Studies of the simulated lab: summaries, error-source ablation, sensitivity, the experiment over
+many seeds.
 
 Support of ``notebooks/05_table2_experiment.ipynb``: a statement about the lab is about the
 distribution of its seeds and about interventions (an error source switched off, the true
@@ -25,8 +26,9 @@ __all__ = ["summarize", "ablation", "sensitivity", "seed_study", "seed_spread", 
            "RESOLVE_DEG"]
 
 
-#: The declared bound (deg) of the change of the two-step error with every sample instead of each orientation's mean,
-#: and its margin: the change is -0.0019 on both sets of seeds here and moves by up to 0.0005 deg between machines.
+#: The declared bound (deg) of the change of the two-step error with every sample instead of each
+#: orientation's mean, and its margin: the change is -0.0019 on both sets of seeds here and moves by
+#: up to 0.0005 deg between machines.
 ALL_MINUS_MEAN_BOUND = (-0.005, 0.0)
 ALL_MINUS_MEAN_MARGIN = 0.0008
 
@@ -58,10 +60,11 @@ def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict 
              fast: bool = False) -> pd.DataFrame:
     """Rerun the whole simulated experiment with error sources switched off.
 
-    Cases: ``all sources``; ``without <source>`` (one switched off at a time);
-    ``only <source>`` (all others off); ``no sources``. Every other random draw stays
-    the same (see :func:`simulate_lab`). ``fast``: :func:`run_lab`'s faster equivalents for the dynamic trial (the
-    same numbers to about 1e-6 deg; where the filter's chatter sets them, see below, to rounding either way).
+    Cases: ``all sources``; ``without <source>`` (one switched off at a time); ``only <source>``
+    (all others off); ``no sources``. Every other random draw stays the same (see
+    :func:`simulate_lab`). ``fast``: :func:`run_lab`'s faster equivalents for the dynamic trial (the
+    same numbers to about 1e-6 deg; where the filter's chatter sets them, see below, to rounding
+    either way).
 
     Returns
     -------
@@ -82,7 +85,8 @@ def ablation(settings: LabSettings = LabSettings(), sources=None, solvers: dict 
 
 def sensitivity(name: str, values, settings: LabSettings = LabSettings(), solvers: dict = TABLE2_SOLVERS, *,
                 fast: bool = False):
-    """Rerun the experiment for each value of one :class:`LabSettings` field (``fast``: as in :func:`ablation`).
+    """Rerun the experiment for each value of one :class:`LabSettings` field (``fast``: as in
+    :func:`ablation`).
 
     Returns
     -------
@@ -101,14 +105,16 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
                fast: bool = True) -> pd.DataFrame:
     """The simulated experiment once per seed: one row of numbers per seed.
 
-    Columns: per method (``ours_right``, ``ours_left``, ``optimization``) ``shared_bias_<m>`` (angle of the
-    chordal mean of its 10 estimates to the true ``R0``: what every data set shares), ``true_<m>`` (mean angle of
-    the 10 estimates to the true ``R0``), ``spread_<m>`` (mean angle of the estimates to their mean: Fig. 6's
-    consistency), ``failed_<m>`` (data sets more than ``failure_deg`` off), ``rms_<m>`` (Table II's RMS averaged
-    over roll, pitch, yaw), ``corr_<m>`` (smallest correlation over the three angles; ``corr_<angle>_ours_right``
-    per angle); ``pitch_bias_true_R0`` / ``rms_true_R0``: Table II's pitch mean and average RMS when the true
-    ``R0`` is used for the projection; ``rms_reversed_ours_right``: the same with the two-step (``R^r``) chordal
-    mean's error reversed (``E^T R0`` for the estimate ``E R0``: an error of the same size and axis, opposite sign).
+    Columns: per method (``ours_right``, ``ours_left``, ``optimization``) ``shared_bias_<m>`` (angle
+    of the chordal mean of its 10 estimates to the true ``R0``: what every data set shares),
+    ``true_<m>`` (mean angle of the 10 estimates to the true ``R0``), ``spread_<m>`` (mean angle of
+    the estimates to their mean: Fig. 6's consistency), ``failed_<m>`` (data sets more than
+    ``failure_deg`` off), ``rms_<m>`` (Table II's RMS averaged over roll, pitch, yaw), ``corr_<m>``
+    (smallest correlation over the three angles; ``corr_<angle>_ours_right`` per angle);
+    ``pitch_bias_true_R0`` / ``rms_true_R0``: Table II's pitch mean and average RMS when the true
+    ``R0`` is used for the projection; ``rms_reversed_ours_right``: the same with the two-step
+    (``R^r``) chordal mean's error reversed (``E^T R0`` for the estimate ``E R0``: an error of the
+    same size and axis, opposite sign).
 
     Parameters
     ----------
@@ -118,28 +124,30 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
     failure_deg : float
         A data set whose estimate is farther than this from the true ``R0`` has failed.
     sqp_runs : dict, optional
-        ``{name: options of replication.core.solvers.sqp}``: also run SQP from the identity so configured on every
-        data set: ``failed_sqp_<name>`` (data sets more than ``failure_deg`` off) and ``limit_sqp_<name>`` (of
-        those, stopped by the iteration limit, ``max_iterations``, default 100).
+        ``{name: options of replication.core.solvers.sqp}``: also run SQP from the identity so
+        configured on every data set: ``failed_sqp_<name>`` (data sets more than ``failure_deg``
+        off) and ``limit_sqp_<name>`` (of those, stopped by the iteration limit, ``max_iterations``,
+        default 100).
     turned_deg : iterable of float
-        Also project with the true ``R0`` turned by these angles (about the camera's x, y and z axis in turn):
-        ``rms_turned_<angle>`` is Table II's RMS averaged over the three angles and the three axes, i.e. the
-        RMS a calibration that far off would show.
+        Also project with the true ``R0`` turned by these angles (about the camera's x, y and z axis
+        in turn): ``rms_turned_<angle>`` is Table II's RMS averaged over the three angles and the
+        three axes, i.e. the RMS a calibration that far off would show.
     single_sample : bool
         Also calibrate with the first sample of each static orientation instead of the mean
         (:func:`replication.study.lab.static_motions`): ``true_single_ours_right``.
     all_samples : bool
-        Also calibrate with every sample of each static orientation (``static_motions(..., sample="all")``, the
-        alternative the paper names): ``true_all_ours_right``.
+        Also calibrate with every sample of each static orientation (``static_motions(...,
+        sample="all")``, the alternative the paper names): ``true_all_ours_right``.
     without : iterable of str
-        Error sources or parts (:data:`SOURCES`, :data:`PARTS`) to switch off one at a time, on the same seed (every
-        other draw unchanged): the two-step (``R^r``) calibration and the dynamic trial rerun, with the camera's
-        dynamic attitudes reused (the marker pixels are checked to be the same). Columns
-        ``<column>_without_<source>`` (spaces as ``_``) for ``shared_bias_ours_right``, ``true_ours_right``,
-        ``rms_ours_right``, ``pitch_bias_true_R0`` and ``rms_true_R0``.
+        Error sources or parts (:data:`SOURCES`, :data:`PARTS`) to switch off one at a time, on the
+        same seed (every other draw unchanged): the two-step (``R^r``) calibration and the dynamic
+        trial rerun, with the camera's dynamic attitudes reused (the marker pixels are checked to be
+        the same). Columns ``<column>_without_<source>`` (spaces as ``_``) for
+        ``shared_bias_ours_right``, ``true_ours_right``, ``rms_ours_right``, ``pitch_bias_true_R0``
+        and ``rms_true_R0``.
     fast : bool
-        :func:`replication.study.lab.run_lab`'s faster equivalents for the dynamic trial (its ``fast``): the same
-        numbers to about 1e-6 deg, in half the time.
+        :func:`replication.study.lab.run_lab`'s faster equivalents for the dynamic trial (its
+        ``fast``): the same numbers to about 1e-6 deg, in half the time.
     """
     without = list(without)
     right = {"ours_right": TABLE2_SOLVERS["ours_right"]}
@@ -201,18 +209,21 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
     return pd.DataFrame(rows).set_index("seed")
 
 
-#: The share (deg of |pitch bias|) the magnetometer intervention must resolve: its 95 % interval on each
-#: set of seeds must be narrower than this on either side of its mean, or no verdict is drawn from it.
+#: The share (deg of |pitch bias|) the magnetometer intervention must resolve: its 95 % interval on
+#: each set of seeds must be narrower than this on either side of its mean, or no verdict is drawn
+#: from it.
 RESOLVE_DEG = 0.1
 
 
 def pitch_bias_intervention(seeds, part: str, settings: LabSettings = LabSettings()) -> pd.DataFrame:
-    """Table II's pitch bias with the true ``R0`` per seed, as it is and with one error source or part switched off.
+    """Table II's pitch bias with the true ``R0`` per seed, as it is and with one error source or
+    part switched off.
 
-    The same numbers as :func:`seed_study`'s ``pitch_bias_true_R0`` and ``pitch_bias_true_R0_without_<part>``
-    (``tests/study/test_lab_claims.py``), without the calibrations: the projection uses the true ``R0``, so only the
-    dynamic trial is run (the camera's attitudes once, the AHRS filter on both recordings), about a third of the
-    time, for the many seeds that resolving a small share needs.
+    The same numbers as :func:`seed_study`'s ``pitch_bias_true_R0`` and
+    ``pitch_bias_true_R0_without_<part>`` (``tests/study/test_lab_claims.py``), without the
+    calibrations: the projection uses the true ``R0``, so only the dynamic trial is run (the
+    camera's attitudes once, the AHRS filter on both recordings), about a third of the time, for the
+    many seeds that resolving a small share needs.
 
     Returns
     -------
@@ -238,12 +249,13 @@ def pitch_bias_intervention(seeds, part: str, settings: LabSettings = LabSetting
 
 
 def intervention_finding(frame: pd.DataFrame, *, resolve: float = RESOLVE_DEG) -> dict:
-    """The change of ``|pitch bias|`` with the part switched off (:func:`pitch_bias_intervention`), paired per seed.
+    """The change of ``|pitch bias|`` with the part switched off (:func:`pitch_bias_intervention`),
+    paired per seed.
 
-    Returns ``dict`` with ``value`` (mean change, deg), ``se``, ``low`` / ``high`` (its 95 % interval, mean ± 1.96
-    SE), ``n``, ``abs_pitch_bias`` (mean ``|pitch bias|`` as it is), ``resolved`` (the interval excludes 0),
-    ``fine`` (the interval's half-width below ``resolve``: a share of that size would be resolved) and ``text``
-    (``"mean ± SE [low, high]"``).
+    Returns ``dict`` with ``value`` (mean change, deg), ``se``, ``low`` / ``high`` (its 95 %
+    interval, mean ± 1.96 SE), ``n``, ``abs_pitch_bias`` (mean ``|pitch bias|`` as it is),
+    ``resolved`` (the interval excludes 0), ``fine`` (the interval's half-width below ``resolve``: a
+    share of that size would be resolved) and ``text`` (``"mean ± SE [low, high]"``).
     """
     change = frame["pitch_bias_without"].abs() - frame["pitch_bias"].abs()
     m, se = mean_se(change.to_numpy(dtype=float))
@@ -254,17 +266,19 @@ def intervention_finding(frame: pd.DataFrame, *, resolve: float = RESOLVE_DEG) -
 
 
 def seed_spread(values: pd.Series, digits: int = 2) -> str:
-    """``"<mean> (SD <sd>; <min>-<max>)"``: a quantity over the seeds (a column of :func:`seed_study`).
+    """``"<mean> (SD <sd>; <min>-<max>)"``: a quantity over the seeds (a column of
+    :func:`seed_study`).
 
-    Notebook 05, "The lab over 20 seeds" (its seed table) and its claims (:mod:`replication.study.lab.claims`);
-    ``digits`` decimals, the SD with ``ddof=1``.
+    Notebook 05, "The lab over 20 seeds" (its seed table) and its claims
+    (:mod:`replication.study.lab.claims`); ``digits`` decimals, the SD with ``ddof=1``.
     """
     return (f"{values.mean():.{digits}f} (SD {values.std(ddof=1):.{digits}f}; "
             f"{values.min():.{digits}f}-{values.max():.{digits}f})")
 
 
 def seed_range(study: pd.DataFrame) -> str:
-    """``"seeds 1-20"``: the seeds of a :func:`seed_study` frame (its index), which must be consecutive."""
+    """``"seeds 1-20"``: the seeds of a :func:`seed_study` frame (its index), which must be
+    consecutive."""
     seeds = list(study.index)
     if not seeds or seeds != list(range(seeds[0], seeds[0] + len(seeds))):
         raise ValueError(f"the seeds must be consecutive integers, got {seeds}")
@@ -284,20 +298,22 @@ def _parts(study):
 
 
 def seed_findings(study: pd.DataFrame) -> pd.DataFrame:
-    """The seed study's findings on one set of seeds: counts of seeds with their Wilson 95 % interval, paired
-    differences and means with their standard errors.
+    """The seed study's findings on one set of seeds: counts of seeds with their Wilson 95 %
+    interval, paired differences and means with their standard errors.
 
-    Notebook 05, "The lab over fresh seeds": each finding on the seeds it was found on beside the fresh ones
-    (:mod:`replication.study.lab.claims` builds the records from them). Which findings there are follows
-    the columns of ``study`` (:func:`seed_study`): the turned ``R0`` (``rms_turned_<a>``), the parts switched off
-    (``..._without_<part>``), the single and all-sample calibrations.
+    Notebook 05, "The lab over fresh seeds": each finding on the seeds it was found on beside the
+    fresh ones (:mod:`replication.study.lab.claims` builds the records from them). Which findings
+    there are follows the columns of ``study`` (:func:`seed_study`): the turned ``R0``
+    (``rms_turned_<a>``), the parts switched off (``..._without_<part>``), the single and all-sample
+    calibrations.
 
     Returns
     -------
     pandas.DataFrame
-        Index ``finding`` (an id); columns ``what`` (its text), ``kind`` (``"count"``: ``value`` seeds of ``n``,
-        ``low``-``high`` its Wilson interval; ``"mean"``: ``value`` ± ``se`` over the ``n`` seeds; ``"median"``),
-        and ``text`` (``"k of n (low-high %)"``, ``"mean ± se"`` or the median), deg where a quantity has a unit.
+        Index ``finding`` (an id); columns ``what`` (its text), ``kind`` (``"count"``: ``value``
+        seeds of ``n``, ``low``-``high`` its Wilson interval; ``"mean"``: ``value`` ± ``se`` over
+        the ``n`` seeds; ``"median"``), and ``text`` (``"k of n (low-high %)"``, ``"mean ± se"`` or
+        the median), deg where a quantity has a unit.
     """
     n = len(study)
     rows = {}
@@ -358,8 +374,9 @@ def seed_findings(study: pd.DataFrame) -> pd.DataFrame:
     if "true_all_ours_right" in study:
         mean("all_minus_mean", "its change with every sample of each orientation instead (deg)",
              study["true_all_ours_right"] - study["true_ours_right"], 4)
-        # a change of thousandths of a degree whose last digit moves between machines (by up to 0.0005 deg over
-        # the variants of scripts/spread.py, as large as its SE): shown as a bound declared in advance
+        # a change of thousandths of a degree whose last digit moves between machines (by up to
+        # 0.0005 deg over the variants of scripts/spread.py, as large as its SE): shown as a bound
+        # declared in advance
         rows["all_minus_mean"]["text"] = declared_bound(
             rows["all_minus_mean"]["value"], *ALL_MINUS_MEAN_BOUND, margin=ALL_MINUS_MEAN_MARGIN,
             what="the change with every sample of each orientation (deg)")
@@ -374,9 +391,10 @@ def seed_findings(study: pd.DataFrame) -> pd.DataFrame:
 
 
 def sqp_shares(study: pd.DataFrame, runs) -> dict:
-    """SQP's failures over a :func:`seed_study` frame run with ``sqp_runs`` named ``runs``: ``"failed, <name>"``
-    (share of the data sets more than 10 deg off), ``"at limit"`` (share of the 100-iteration failures stopped by
-    the iteration limit; the run named ``"100 iterations"``) and ``"seeds"`` (share of seeds with a failed set)."""
+    """SQP's failures over a :func:`seed_study` frame run with ``sqp_runs`` named ``runs``:
+    ``"failed, <name>"`` (share of the data sets more than 10 deg off), ``"at limit"`` (share of the
+    100-iteration failures stopped by the iteration limit; the run named ``"100 iterations"``) and
+    ``"seeds"`` (share of seeds with a failed set)."""
     n_sets = 10 * len(study)
     out = {f"failed, {name}": study[f"failed_sqp_{name}"].sum() / n_sets for name in runs}
     failed = study["failed_sqp_100 iterations"]
@@ -387,10 +405,11 @@ def sqp_shares(study: pd.DataFrame, runs) -> dict:
 
 
 def check_sqp_shares(shares: dict, bounds: dict, label: str) -> bool:
-    """SQP's failure shares (:func:`sqp_shares`) against the bounds notebook 05 declares, each kept with a margin of
-    :data:`~replication.core.stats.ROUNDING_RUNS` data sets (seeds, failed sets): which data sets SLSQP finishes
-    within its cap changes with the machine's rounding, so a share is shown only as a declared bound
-    (:func:`~replication.core.stats.declared_bound`; ``ValueError`` naming it if one does not hold). Returns True."""
+    """SQP's failure shares (:func:`sqp_shares`) against the bounds notebook 05 declares, each kept
+    with a margin of :data:`~replication.core.stats.ROUNDING_RUNS` data sets (seeds, failed sets):
+    which data sets SLSQP finishes within its cap changes with the machine's rounding, so a share is
+    shown only as a declared bound (:func:`~replication.core.stats.declared_bound`; ``ValueError``
+    naming it if one does not hold). Returns True."""
     n = shares["counts"]
     margin = {key: ROUNDING_RUNS / max(count, 1) for key, count in n.items()}
     what = f"table2_methods_agree, {label}: SQP's share of"

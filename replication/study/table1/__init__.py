@@ -1,14 +1,15 @@
 """Table I (Sec. III-A) and the studies of ``notebooks/03_table1_monte_carlo.ipynb``.
 
-:mod:`.table`: per-iteration errors of each method, the table, the comparison with the paper in standard
-errors (its three printed decimals taken as a bound), convergence measures with bootstrap intervals.
-:mod:`.grid`: the grid over the unstated settings (section 2). :mod:`.study`: the notebook's other studies, section
-by section. :mod:`.claims`, :mod:`.sqp_claims` and :mod:`.cell_claims`: the ledger records, one function per
-claim, called from the cells that measure their numbers. :mod:`.minimum`: SQP's failures at the paper's and SLSQP's
-default caps, the two-step iterates against the certified minimum.
-SQP appears once per named variant (:data:`replication.core.solvers.SQP_VARIANTS`), as columns
-``"optimization (analytic)"`` etc.; each is compared with the paper's single "Optimization" column.
-Table II sits beside it in :mod:`replication.study.table2`.
+:mod:`.table`: per-iteration errors of each method, the table, the comparison with the paper in
+standard errors (its three printed decimals taken as a bound), convergence measures with bootstrap
+intervals. :mod:`.grid`: the grid over the unstated settings (section 2). :mod:`.study`: the
+notebook's other studies, section by section. :mod:`.claims`, :mod:`.sqp_claims` and
+:mod:`.cell_claims`: the ledger records, one function per claim, called from the cells that measure
+their numbers. :mod:`.minimum`: SQP's failures at the paper's and SLSQP's default caps, the two-step
+iterates against the certified minimum. SQP appears once per named variant
+(:data:`replication.core.solvers.SQP_VARIANTS`), as columns ``"optimization (analytic)"`` etc.; each
+is compared with the paper's single "Optimization" column. Table II sits beside it in
+:mod:`replication.study.table2`.
 """
 from .cell_claims import *  # noqa: F403
 from .cell_claims import __all__ as _cell_claims_names

@@ -1,13 +1,15 @@
-"""The ledger records of ``notebooks/03_table1_monte_carlo.ipynb`` on the two-step method (section 5, "The paper's
-claims about Table I and Fig. 3-4, checked"): one function per claim, each taking only the numbers its verdict rests
-on and called from the notebook cell that measures them; and :class:`Runs`, the run counts, seeds and paper's table
-every record of the notebook names. SQP's records are in :mod:`.sqp_claims`, Table I's cells in :mod:`.cell_claims`.
+"""The ledger records of ``notebooks/03_table1_monte_carlo.ipynb`` on the two-step method (section
+5, "The paper's claims about Table I and Fig. 3-4, checked"): one function per claim, each taking
+only the numbers its verdict rests on and called from the notebook cell that measures them; and
+:class:`Runs`, the run counts, seeds and paper's table every record of the notebook names. SQP's
+records are in :mod:`.sqp_claims`, Table I's cells in :mod:`.cell_claims`.
 
-Each function checks its numbers first (:func:`replication.study.ledger.check_evidence`: a check that fails raises a
-``ValueError`` naming the claim and the condition, and no record is returned) and returns the keyword arguments of
-:func:`replication.study.ledger.record`. Counts of runs are given with their 95 % Wilson intervals and checked again
-on fresh seeds (``confirm``: :func:`replication.study.table1.fresh_seed_counts`); comparisons with the paper's Table I
-take its three printed decimals as a bound (:func:`replication.study.table1.printed_z`).
+Each function checks its numbers first (:func:`replication.study.ledger.check_evidence`: a check
+that fails raises a ``ValueError`` naming the claim and the condition, and no record is returned)
+and returns the keyword arguments of :func:`replication.study.ledger.record`. Counts of runs are
+given with their 95 % Wilson intervals and checked again on fresh seeds (``confirm``:
+:func:`replication.study.table1.fresh_seed_counts`); comparisons with the paper's Table I take its
+three printed decimals as a bound (:func:`replication.study.table1.printed_z`).
 """
 from __future__ import annotations
 
@@ -32,8 +34,8 @@ SECTIONS = {
     "sqp_diverts": _S5, "converge_15_vs_30": _S5, "sqp_30_iterations": _SCALE, "table1_final": _S2,
     "table1_early": _S2, "table1_sqp": _SCALE,
 }
-#: The three settings of section 5 (labels of ``settings``, ``conv`` and ``cost_ratio``), in the notebook's order,
-#: each with its short label in the evidence texts.
+#: The three settings of section 5 (labels of ``settings``, ``conv`` and ``cost_ratio``), in the
+#: notebook's order, each with its short label in the evidence texts.
 SECTION5_SETTINGS = {"defaults": "defaults", "0-90 deg, identity start": "0-90 deg, identity",
                      "matched (fresh seeds)": "matched"}
 #: The uncertainty of an iteration count.
@@ -44,10 +46,11 @@ WILSON = "95 % Wilson intervals over runs (in brackets)"
 
 @dataclass(frozen=True, eq=False)
 class Runs:
-    """What notebook 03's records name about how they were measured: ``n_runs`` runs per setting, ``n_slow`` for
-    the slow SQP variants (finite-difference and capped), ``n_grid`` per setting of the grid, of the cost scale study
-    and of the absolute-bar shares; the root ``seeds = (first, fresh)`` (the two identity-start settings and the
-    grid; the matched setting and the closest settings again); ``reference``, the paper's Table I."""
+    """What notebook 03's records name about how they were measured: ``n_runs`` runs per setting,
+    ``n_slow`` for the slow SQP variants (finite-difference and capped), ``n_grid`` per setting of
+    the grid, of the cost scale study and of the absolute-bar shares; the root ``seeds = (first,
+    fresh)`` (the two identity-start settings and the grid; the matched setting and the closest
+    settings again); ``reference``, the paper's Table I."""
     n_runs: int
     n_slow: int
     n_grid: int
@@ -59,8 +62,9 @@ class Runs:
             raise ValueError(f"Runs: seeds must be two different root seeds (first, fresh), got {list(self.seeds)}")
 
     def setting(self, confirm: dict) -> str:
-        """The setting of section 5's records, with the confirmation runs ``confirm`` (:func:`fresh_seed_counts`):
-        ``ValueError`` if their root seed is one of :attr:`seeds` (a count is confirmed only on fresh seeds)."""
+        """The setting of section 5's records, with the confirmation runs ``confirm``
+        (:func:`fresh_seed_counts`): ``ValueError`` if their root seed is one of :attr:`seeds` (a
+        count is confirmed only on fresh seeds)."""
         seeds = self.seeds
         if confirm["seed"] in seeds:
             raise ValueError(f"the counts are confirmed on root seed {confirm['seed']}, one of the seeds they were "
@@ -75,12 +79,14 @@ class Runs:
 
 
 def ledger_kwargs(claim: str, verdict: str, **fields) -> dict:
-    """The keyword arguments of :func:`replication.study.ledger.record`, with the claim's section."""
+    """The keyword arguments of :func:`replication.study.ledger.record`, with the claim's
+    section."""
     return dict(claim=claim, verdict=verdict, **fields, section=SECTIONS[claim])
 
 
 def by_setting(conv: pd.DataFrame) -> tuple:
-    """``((short label, conv.loc[label]), ...)`` for :data:`SECTION5_SETTINGS`; ``ValueError`` naming a missing one."""
+    """``((short label, conv.loc[label]), ...)`` for :data:`SECTION5_SETTINGS`; ``ValueError``
+    naming a missing one."""
     missing = [label for label in SECTION5_SETTINGS if label not in conv.index.get_level_values("setting")]
     if missing:
         raise ValueError(f"the convergence table has no setting {missing}; section 5 needs {list(SECTION5_SETTINGS)}")
@@ -88,11 +94,13 @@ def by_setting(conv: pd.DataFrame) -> tuple:
 
 
 def two_step_10_iterations(settings: dict, conv: pd.DataFrame, runs: Runs, confirm: dict, *, caps: dict) -> dict:
-    """``two_step_10_iterations`` holds only if the motions are Haar-random (or 'very close' is the paper's own).
+    """``two_step_10_iterations`` holds only if the motions are Haar-random (or 'very close' is the
+    paper's own).
 
-    ``settings``: label -> ``(problems, errors, costs)`` (the notebook's ``SETTINGS``; the errors give the mean
-    ``R^r`` error at iteration 10); ``conv``: :func:`~replication.study.table1.convergence_by_setting`;
-    ``caps``: iteration caps by column (:func:`~replication.study.table1.interval_text`).
+    ``settings``: label -> ``(problems, errors, costs)`` (the notebook's ``SETTINGS``; the errors
+    give the mean ``R^r`` error at iteration 10); ``conv``:
+    :func:`~replication.study.table1.convergence_by_setting`; ``caps``: iteration caps by column
+    (:func:`~replication.study.table1.interval_text`).
     """
     three = by_setting(conv)
     (_, defaults), (_, identity), (_, far) = three
@@ -123,10 +131,11 @@ def two_step_10_iterations(settings: dict, conv: pd.DataFrame, runs: Runs, confi
 def cost_to_zero(cost_ratio: dict, min_cost, fresh_minimum: dict, runs: Runs, confirm: dict) -> dict:
     """``cost_to_zero`` holds only if '0' is the noise floor and the motions are large.
 
-    ``cost_ratio``: :func:`~replication.study.table1.cost_against_minimum`'s ratios per setting label;
-    ``min_cost``: mean and SE of the certified minimum of (8) at our defaults; ``fresh_minimum``: ``{"seed": root
-    seed, "0-90 deg, identity start": ...}``, :func:`~replication.study.table1.minimum_study` of that setting on new
-    problems (the lower end again, with its interval).
+    ``cost_ratio``: :func:`~replication.study.table1.cost_against_minimum`'s ratios per setting
+    label; ``min_cost``: mean and SE of the certified minimum of (8) at our defaults;
+    ``fresh_minimum``: ``{"seed": root seed, "0-90 deg, identity start": ...}``,
+    :func:`~replication.study.table1.minimum_study` of that setting on new problems (the lower end
+    again, with its interval).
     """
     r_def = cost_ratio["defaults"]
     at50 = [v["@50 / minimum"][0] for v in cost_ratio.values()]
@@ -159,14 +168,14 @@ def cost_to_zero(cost_ratio: dict, min_cost, fresh_minimum: dict, runs: Runs, co
 
 
 def _shares(frame: pd.DataFrame, key: str, n: int) -> str:
-    """``"<setting> <share> [<low>, <high>], ..."``: one column of a convergence table (index: setting), each share of
-    ``n`` runs with its 95 % Wilson interval."""
+    """``"<setting> <share> [<low>, <high>], ..."``: one column of a convergence table (index:
+    setting), each share of ``n`` runs with its 95 % Wilson interval."""
     return ", ".join(f"{k} {share_ci(v, n)}" for k, v in frame[key].items())
 
 
 def smoother_monotone(conv: pd.DataFrame, runs: Runs, confirm: dict) -> dict:
-    """``smoother_monotone`` holds only if read as 'until the noise floor': shares of runs whose two-step error or
-    cost rises, on both seed sets (``conv`` and ``confirm["conv"]``)."""
+    """``smoother_monotone`` holds only if read as 'until the noise floor': shares of runs whose
+    two-step error or cost rises, on both seed sets (``conv`` and ``confirm["conv"]``)."""
     two = conv.xs("ours_right", level="method")
     c_conv, c_n, c_sqp = confirm["conv"], confirm["n_runs"], confirm["n_sqp"]
     two_c = c_conv.xs("ours_right", level="method")
@@ -199,10 +208,11 @@ def smoother_monotone(conv: pd.DataFrame, runs: Runs, confirm: dict) -> dict:
 
 def faster_than_sqp(conv: pd.DataFrame, scales: pd.DataFrame, runs: Runs, confirm: dict, *, sqp_names, caps: dict,
                     scale_names) -> dict:
-    """``faster_than_sqp``: which settles first depends on the motions, SQP's start and its cost scale.
+    """``faster_than_sqp``: which settles first depends on the motions, SQP's start and its cost
+    scale.
 
-    ``scales``: :func:`~replication.study.table1.cost_scale_study` (index ``(setting, "eq. (8) times")``) over
-    ``scale_names``; ``sqp_names``: SQP's columns, ``"optimization (<variant>)"``.
+    ``scales``: :func:`~replication.study.table1.cost_scale_study` (index ``(setting, "eq. (8)
+    times")``) over ``scale_names``; ``sqp_names``: SQP's columns, ``"optimization (<variant>)"``.
     """
     three = by_setting(conv)
     (_, defaults), (_, identity), (_, far) = three

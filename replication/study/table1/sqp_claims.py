@@ -1,8 +1,10 @@
-"""The ledger records of ``notebooks/03_table1_monte_carlo.ipynb`` on SQP and on where each method settles: one
-function per claim (``sqp_diverts``, ``sqp_30_iterations``, ``table1_sqp``, ``converge_15_vs_30``), each taking only
-the numbers its verdict rests on, checking them first (:func:`replication.study.ledger.check_evidence`) on the first
-seeds and on the fresh ones (``confirm``: :func:`replication.study.table1.fresh_seed_counts`), and returning the
-keyword arguments of :func:`replication.study.ledger.record`. The run counts and seeds they name: :class:`.Runs`.
+"""The ledger records of ``notebooks/03_table1_monte_carlo.ipynb`` on SQP and on where each method
+settles: one function per claim (``sqp_diverts``, ``sqp_30_iterations``, ``table1_sqp``,
+``converge_15_vs_30``), each taking only the numbers its verdict rests on, checking them first
+(:func:`replication.study.ledger.check_evidence`) on the first seeds and on the fresh ones
+(``confirm``: :func:`replication.study.table1.fresh_seed_counts`), and returning the keyword
+arguments of :func:`replication.study.ledger.record`. The run counts and seeds they name:
+:class:`.Runs`.
 """
 from __future__ import annotations
 
@@ -45,10 +47,12 @@ def _check_diverts(label: str, sqp_share, two_share, table: pd.DataFrame, col: s
 
 
 def sqp_diverts(conv: pd.DataFrame, div: pd.DataFrame, runs: Runs, confirm: dict, *, bar: float) -> dict:
-    """``sqp_diverts`` holds: SQP's error rises while its cost (8) falls, the two-step method's does not.
+    """``sqp_diverts`` holds: SQP's error rises while its cost (8) falls, the two-step method's does
+    not.
 
-    ``div``: :func:`~replication.study.table1.diverting_table` of the identity-start settings (its first index
-    level), with SQP's scales ``"as printed"`` and ``"/ 2J"`` and the error bar ``bar``, on ``runs.n_grid`` runs.
+    ``div``: :func:`~replication.study.table1.diverting_table` of the identity-start settings (its
+    first index level), with SQP's scales ``"as printed"`` and ``"/ 2J"`` and the error bar ``bar``,
+    on ``runs.n_grid`` runs.
     """
     near = list(div.index.unique(level=0))  # the identity-start settings: SQP converges there
     two = conv.xs("ours_right", level="method")
@@ -90,8 +94,9 @@ def sqp_diverts(conv: pd.DataFrame, div: pd.DataFrame, runs: Runs, confirm: dict
 
 
 def _check_far_start(far_fail: float, far_scaled: pd.Series, cap_shares: dict, confirm: dict) -> None:
-    """The far-start checks of :func:`sqp_30_iterations`: as printed SQP fails in most runs, scaled by 100J in none
-    but late, on both seed sets; at SLSQP's default cap of 100 still in most, fewer than at 50."""
+    """The far-start checks of :func:`sqp_30_iterations`: as printed SQP fails in most runs, scaled
+    by 100J in none but late, on both seed sets; at SLSQP's default cap of 100 still in most, fewer
+    than at 50."""
     c_scales = confirm["scales"]
     c_printed, c_scaled = c_scales.loc[("matched", "as printed")], c_scales.loc[("matched", "/ 100J")]
     for label, printed, scaled in (("", far_fail, far_scaled),
@@ -112,12 +117,14 @@ def _check_far_start(far_fail: float, far_scaled: pd.Series, cap_shares: dict, c
 
 def sqp_30_iterations(conv: pd.DataFrame, far_fail: float, far_scaled: pd.Series, cap_shares: dict, runs: Runs,
                       confirm: dict, *, sqp_names, caps: dict) -> dict:
-    """``sqp_30_iterations``: it depends on SQP's start and the scale of its objective, neither stated.
+    """``sqp_30_iterations``: it depends on SQP's start and the scale of its objective, neither
+    stated.
 
-    ``far_fail``: the far start's failure share of analytic SQP (section 4's failure table, the matched setting);
-    ``far_scaled``: :func:`~replication.study.table1.cost_scale_study`'s row for the far start on eq. (8) / 100J;
-    ``cap_shares``: ``{"found": ..., "fresh": ..., "seeds": (found, fresh)}``,
-    :func:`~replication.study.table1.sqp_cap_shares` at caps 50 and 100 on new root seeds.
+    ``far_fail``: the far start's failure share of analytic SQP (section 4's failure table, the
+    matched setting); ``far_scaled``: :func:`~replication.study.table1.cost_scale_study`'s row for
+    the far start on eq. (8) / 100J; ``cap_shares``: ``{"found": ..., "fresh": ..., "seeds": (found,
+    fresh)}``, :func:`~replication.study.table1.sqp_cap_shares` at caps 50 and 100 on new root
+    seeds.
     """
     three = by_setting(conv)
     below = {label: [f.loc[n, "below_1pct"] for n in sqp_names] for label, f in three}
@@ -153,9 +160,9 @@ def sqp_30_iterations(conv: pd.DataFrame, far_fail: float, far_scaled: pd.Series
 
 
 def table1_sqp(cmp_default: pd.DataFrame, far_scaled: pd.Series, runs: Runs, confirm: dict, *, sqp_names) -> dict:
-    """``table1_sqp``: the paper's SQP column is matched by none of our SQP configurations. ``cmp_default``:
-    :func:`~replication.study.table1.versus_paper` at our defaults; ``far_scaled``: the far start on eq. (8) / 100J
-    (:func:`~replication.study.table1.cost_scale_study`'s row)."""
+    """``table1_sqp``: the paper's SQP column is matched by none of our SQP configurations.
+    ``cmp_default``: :func:`~replication.study.table1.versus_paper` at our defaults; ``far_scaled``:
+    the far start on eq. (8) / 100J (:func:`~replication.study.table1.cost_scale_study`'s row)."""
     sqp_late = {n: cmp_default.loc[(50, n), "z"] for n in sqp_names}
     paper_sqp = {n: runs.reference.loc[(n, "optimization"), "mean"] for n in (15, 30, 50)}
     check_evidence(min(abs(z) for z in sqp_late.values()) > 3, "table1_sqp",
@@ -176,8 +183,9 @@ def table1_sqp(cmp_default: pd.DataFrame, far_scaled: pd.Series, runs: Runs, con
 
 def converge_15_vs_30(conv: pd.DataFrame, scales: pd.DataFrame, runs: Runs, confirm: dict, *, sqp_names, caps: dict,
                       scale_names) -> dict:
-    """``converge_15_vs_30``: where each method settles depends on the unstated motions, start and cost scale.
-    ``scales``: :func:`~replication.study.table1.cost_scale_study` over ``scale_names``."""
+    """``converge_15_vs_30``: where each method settles depends on the unstated motions, start and
+    cost scale. ``scales``: :func:`~replication.study.table1.cost_scale_study` over
+    ``scale_names``."""
     three = by_setting(conv)
     two_m = three[2][1].loc["ours_right"]
     check_evidence(two_m["settled_low"] > 15 or two_m["settled_high"] < 15, "converge_15_vs_30",

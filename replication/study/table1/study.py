@@ -1,6 +1,7 @@
-"""The studies of ``notebooks/03_table1_monte_carlo.ipynb``, section by section (the grid over the unstated
-settings of its section 2 is :mod:`.grid`): SQP's failures, the scale of eq. (8), convergence per setting, the counts
-of runs again on fresh seeds, the cost against its minimum, and the texts of the notebook's verdicts.
+"""The studies of ``notebooks/03_table1_monte_carlo.ipynb``, section by section (the grid over the
+unstated settings of its section 2 is :mod:`.grid`): SQP's failures, the scale of eq. (8),
+convergence per setting, the counts of runs again on fresh seeds, the cost against its minimum, and
+the texts of the notebook's verdicts.
 """
 from __future__ import annotations
 
@@ -26,20 +27,23 @@ FAIL = 0.05
 
 
 def compact(cmp: pd.DataFrame, reference: pd.DataFrame | None = None) -> pd.DataFrame:
-    """One row per iteration: each column's "ours" with its ``z`` (or "infeasible"), beside the paper's values.
+    """One row per iteration: each column's "ours" with its ``z`` (or "infeasible"), beside the
+    paper's values.
 
     Parameters
     ----------
     cmp : DataFrame
-        Output of :func:`versus_paper` (index ``(iteration, method)``; it must hold ``"ours_right"``).
+        Output of :func:`versus_paper` (index ``(iteration, method)``; it must hold
+        ``"ours_right"``).
     reference : DataFrame, optional
         The paper's Table I (:func:`replication.study.paper.load_table1`, the default).
 
     Returns
     -------
     DataFrame
-        Index: iteration. Columns ``"paper ours_right"``, ``"paper optimization"`` (``"mean ± std"``), then one
-        column per method: ``"<ours> (z <z>)"`` with ``z`` rounded to an integer, or ``cmp``'s "infeasible" text.
+        Index: iteration. Columns ``"paper ours_right"``, ``"paper optimization"`` (``"mean ±
+        std"``), then one column per method: ``"<ours> (z <z>)"`` with ``z`` rounded to an integer,
+        or ``cmp``'s "infeasible" text.
     """
     reference = paper.load_table1() if reference is None else reference
     shown = cmp.apply(lambda r: r["ours"] if r["verdict"] == "infeasible" else f"{r['ours']} (z {r['z']:+.0f})",
@@ -53,17 +57,19 @@ def compact(cmp: pd.DataFrame, reference: pd.DataFrame | None = None) -> pd.Data
 
 
 def share_ci(p, n: int, digits: int = 0) -> str:
-    """``"<p>% [<low>, <high>]"``: a share of ``n`` runs with its 95 % Wilson interval, in percent."""
+    """``"<p>% [<low>, <high>]"``: a share of ``n`` runs with its 95 % Wilson interval, in
+    percent."""
     low, high = wilson_interval(int(round(float(p) * n)), n)
     return f"{100 * p:.{digits}f}% [{100 * low:.{digits}f}, {100 * high:.{digits}f}]"
 
 
 def bracket_ci(p, n: int, step: float = 0.05, *, margin_runs: int = ROUNDING_RUNS) -> str:
     """A share of ``n`` runs that moves with the machine's rounding: its ``step``-wide bracket
-    (:func:`~replication.core.stats.share_range`, a bound on this machine's share) and, in brackets, a 95 % Wilson
-    interval covering every count in that bracket (the lower end of the smallest, the upper of the largest).
-    ``none`` and ``all``: ``"none of <n> [0, <high>]"``, ``"all of <n> [<low>, 100]"``. The share must keep
-    ``margin_runs`` runs from the bracket's edges (``ValueError`` otherwise: :func:`share_range`'s guard)."""
+    (:func:`~replication.core.stats.share_range`, a bound on this machine's share) and, in brackets,
+    a 95 % Wilson interval covering every count in that bracket (the lower end of the smallest, the
+    upper of the largest). ``none`` and ``all``: ``"none of <n> [0, <high>]"``, ``"all of <n>
+    [<low>, 100]"``. The share must keep ``margin_runs`` runs from the bracket's edges
+    (``ValueError`` otherwise: :func:`share_range`'s guard)."""
     p = float(p)
     if p in (0.0, 1.0):
         low, high = wilson_interval(int(round(p * n)), n)
@@ -82,14 +88,15 @@ def failure_table(rows: dict, *, fail: float = FAIL) -> pd.DataFrame:
     Parameters
     ----------
     rows : dict
-        row label -> ``{method: errors}``; ``errors`` is (n, iterations) (the last column is the final error, as
-        :func:`iterate_errors` returns) or (n,) final errors.
+        row label -> ``{method: errors}``; ``errors`` is (n, iterations) (the last column is the
+        final error, as :func:`iterate_errors` returns) or (n,) final errors.
     fail : float
 
     Returns
     -------
     DataFrame
-        Index: row labels; columns: the methods in order of first appearance (NaN where a row lacks one).
+        Index: row labels; columns: the methods in order of first appearance (NaN where a row lacks
+        one).
     """
     out = {}
     for label, errors in rows.items():
@@ -99,12 +106,13 @@ def failure_table(rows: dict, *, fail: float = FAIL) -> pd.DataFrame:
 
 
 def failure_display(fails: pd.DataFrame, runs) -> pd.DataFrame:
-    """:func:`failure_table` as text: each share with its 95 % Wilson interval; SQP's strictly between 0 and 1 as
-    brackets.
+    """:func:`failure_table` as text: each share with its 95 % Wilson interval; SQP's strictly
+    between 0 and 1 as brackets.
 
-    Far-start SQP failures depend on where runs stop at their iteration limit (the machine's rounding), so an SQP
-    share ``0 < p < 1`` is shown as :func:`bracket_ci` (a bound on this machine's share, with an interval covering
-    the bracket); every other share as :func:`share_ci` with one decimal, ``n = runs(row, column)``.
+    Far-start SQP failures depend on where runs stop at their iteration limit (the machine's
+    rounding), so an SQP share ``0 < p < 1`` is shown as :func:`bracket_ci` (a bound on this
+    machine's share, with an interval covering the bracket); every other share as :func:`share_ci`
+    with one decimal, ``n = runs(row, column)``.
 
     Parameters
     ----------
@@ -119,7 +127,8 @@ def failure_display(fails: pd.DataFrame, runs) -> pd.DataFrame:
 
 
 def sqp_failures(A, B, R0, *, init=None, max_iterations: int = 50, fail: float = FAIL):
-    """Run SQP (analytic gradients) and flag the runs that fail and the runs that stopped at the iteration limit.
+    """Run SQP (analytic gradients) and flag the runs that fail and the runs that stopped at the
+    iteration limit.
 
     Returns
     -------
@@ -135,10 +144,11 @@ def sqp_failures(A, B, R0, *, init=None, max_iterations: int = 50, fail: float =
 
 def at_other_minimum(result, A, B, *, max_iterations: int = 50, min_angle_deg: float = 90.0,
                      rotation_tol: float = 1e-6) -> np.ndarray:
-    """Runs where SQP converged to a rotation far from the certified minimiser of eq. (8): another local minimum.
+    """Runs where SQP converged to a rotation far from the certified minimiser of eq. (8): another
+    local minimum.
 
-    A run counts when SLSQP stopped before ``max_iterations``, its last raw iterate ``X`` is a rotation
-    (``||X^T X - I||_F < rotation_tol``) and its answer is more than ``min_angle_deg`` from
+    A run counts when SLSQP stopped before ``max_iterations``, its last raw iterate ``X`` is a
+    rotation (``||X^T X - I||_F < rotation_tol``) and its answer is more than ``min_angle_deg`` from
     :func:`replication.core.solvers.chordal_optimal`'s.
 
     Returns
@@ -153,7 +163,8 @@ def at_other_minimum(result, A, B, *, max_iterations: int = 50, min_angle_deg: f
 
 def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, n_runs: int = 300,
                      max_iterations: int = 50, fail: float = FAIL, at=(15, 30, 50)):
-    """SQP (analytic) on eq. (8) times each factor, per setting: failures, convergence, mean error curve.
+    """SQP (analytic) on eq. (8) times each factor, per setting: failures, convergence, mean error
+    curve.
 
     SLSQP is not invariant to the scale of its objective; ``cost=s`` minimises ``s`` times eq. (8).
 
@@ -175,9 +186,9 @@ def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, 
     Returns
     -------
     (table, runs)
-        ``table``: index ``(setting, "eq. (8) times")``; columns ``failed`` (share), ``below_1pct`` and
-        ``settled`` with their ``_low``/``_high`` bootstrap bounds, ``mean @<n>``. ``runs``: ``(setting, scale)
-        -> (SQP result, (n_runs, iterations) raw-iterate errors)``.
+        ``table``: index ``(setting, "eq. (8) times")``; columns ``failed`` (share), ``below_1pct``
+        and ``settled`` with their ``_low``/``_high`` bootstrap bounds, ``mean @<n>``. ``runs``:
+        ``(setting, scale) -> (SQP result, (n_runs, iterations) raw-iterate errors)``.
     """
     rows, runs = {}, {}
     with warnings.catch_warnings():  # SQP stops at its iteration limit on purpose; failures are counted
@@ -201,18 +212,21 @@ def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, 
 def fresh_seed_counts(seed: int, n_runs: int, n_sqp: int, scales: dict, rng: np.random.Generator, *,
                       motions_deg, far_start, near_scales=("as printed", "/ 2J"), far_scales=("as printed", "/ 100J"),
                       bar: float = FAIL, fail: float = FAIL) -> dict:
-    """Section 5's counts of runs again, on new problems (root seed ``seed``): the confirmation of its shares.
+    """Section 5's counts of runs again, on new problems (root seed ``seed``): the confirmation of
+    its shares.
 
     Two identity-start settings, our defaults (``"defaults"``) and motion angles ``motions_deg``
-    (``"0-90 deg, identity start"``): the two-step method on ``n_runs`` runs, SQP (analytic gradients) on eq. (8)
-    times each of ``near_scales`` on the first ``n_sqp``; and the matched setting (``"matched"``: the same
-    motions from ``far_start``), SQP at each of ``far_scales`` on ``n_sqp`` runs.
+    (``"0-90 deg, identity start"``): the two-step method on ``n_runs`` runs, SQP (analytic
+    gradients) on eq. (8) times each of ``near_scales`` on the first ``n_sqp``; and the matched
+    setting (``"matched"``: the same motions from ``far_start``), SQP at each of ``far_scales`` on
+    ``n_sqp`` runs.
 
     Parameters
     ----------
     seed, n_runs, n_sqp : int
     scales : dict
-        name -> factor (the notebook's ``SCALES``); ``near_scales`` and ``far_scales`` name some of them.
+        name -> factor (the notebook's ``SCALES``); ``near_scales`` and ``far_scales`` name some of
+        them.
     rng : numpy.random.Generator
         Bootstrap intervals (:func:`cost_scale_study`, :func:`convergence_summary`).
     motions_deg : (float, float)
@@ -226,10 +240,11 @@ def fresh_seed_counts(seed: int, n_runs: int, n_sqp: int, scales: dict, rng: np.
     Returns
     -------
     dict
-        ``seed``, ``n_runs``, ``n_sqp``; ``conv``: :func:`convergence_summary` per identity-start setting (index
-        ``(setting, method)``, methods ``"ours_right"`` and ``"optimization (analytic)"``: SQP on eq. (8) as
-        printed, ``near_scales[0]``); ``div``: :func:`diverting_table` of those settings; ``scales``:
-        :func:`cost_scale_study` of all three settings (index ``(setting, "eq. (8) times")``).
+        ``seed``, ``n_runs``, ``n_sqp``; ``conv``: :func:`convergence_summary` per identity-start
+        setting (index ``(setting, method)``, methods ``"ours_right"`` and ``"optimization
+        (analytic)"``: SQP on eq. (8) as printed, ``near_scales[0]``); ``div``:
+        :func:`diverting_table` of those settings; ``scales``: :func:`cost_scale_study` of all three
+        settings (index ``(setting, "eq. (8) times")``).
     """
     sims = {"defaults": simulate(seed, n_runs),
             "0-90 deg, identity start": simulate(seed, n_runs, motion_angle_range_deg=motions_deg)}
@@ -247,16 +262,19 @@ def fresh_seed_counts(seed: int, n_runs: int, n_sqp: int, scales: dict, rng: np.
 
 
 def interval_text(row, key: str, caps: dict | None = None, *, iterations: int = 50) -> str:
-    """``"<value> [<low>, <high>]"`` of a convergence measure (iterations, bootstrap bounds), or "never".
+    """``"<value> [<low>, <high>]"`` of a convergence measure (iterations, bootstrap bounds), or
+    "never".
 
     Parameters
     ----------
     row : Series
-        A row of :func:`convergence_summary` or :func:`cost_scale_study` (``key``, ``key_low``, ``key_high``).
+        A row of :func:`convergence_summary` or :func:`cost_scale_study` (``key``, ``key_low``,
+        ``key_high``).
     key : str
     caps : dict, optional
-        Given: "never" also names the iteration budget, ``"never (<caps[method]> iterations)"``, with the method the
-        row's name (its last part for a tuple) and ``iterations`` for a method not in ``caps``.
+        Given: "never" also names the iteration budget, ``"never (<caps[method]> iterations)"``,
+        with the method the row's name (its last part for a tuple) and ``iterations`` for a method
+        not in ``caps``.
     """
     v = row[key]
     if v is None or pd.isna(v):
@@ -267,11 +285,12 @@ def interval_text(row, key: str, caps: dict | None = None, *, iterations: int = 
 
 
 def share_text(row, key: str) -> str:
-    """A share as a percentage; far-start SQP (setting "matched...", method "optimization...") as a bracket.
+    """A share as a percentage; far-start SQP (setting "matched...", method "optimization...") as a
+    bracket.
 
-    Far-start SLSQP paths change with the machine's rounding: there a share strictly between 0 and 1 is
-    ``"varies †"`` and 0 or 1 goes through :func:`replication.core.stats.share_range`. ``row.name`` is
-    ``(setting, method)``.
+    Far-start SLSQP paths change with the machine's rounding: there a share strictly between 0 and 1
+    is ``"varies †"`` and 0 or 1 goes through :func:`replication.core.stats.share_range`.
+    ``row.name`` is ``(setting, method)``.
     """
     far_sqp = row.name[0].startswith("matched") and row.name[1].startswith("optimization")
     if far_sqp and 0 < row[key] < 1:
@@ -316,7 +335,8 @@ def convergence_by_setting(settings: dict, rng: np.random.Generator, *, caps=Non
 
 
 def shown_convergence(conv: pd.DataFrame, caps=None) -> pd.DataFrame:
-    """:func:`convergence_by_setting` as text: final error ± SE, iteration intervals, shares of runs.
+    """:func:`convergence_by_setting` as text: final error ± SE, iteration intervals, shares of
+    runs.
 
     Final mean errors above :data:`DIVERGED` are "infeasible"; the iteration measures go through
     :func:`interval_text` (with ``caps``), the shares through :func:`share_text`.
@@ -343,8 +363,9 @@ def cost_against_minimum(settings: dict, rng: np.random.Generator, *, method: st
     settings : dict
         label -> ``(problems, errors, costs)``; ``costs[method]`` is (n, iterations).
     rng : numpy.random.Generator
-        Paired bootstrap (:func:`replication.core.stats.paired_ratio_ci`, 2000 draws) of ``mean(cost@10) /
-        mean(minimum)`` and then ``mean(cost@last) / mean(minimum)``, per setting in order.
+        Paired bootstrap (:func:`replication.core.stats.paired_ratio_ci`, 2000 draws) of
+        ``mean(cost@10) / mean(minimum)`` and then ``mean(cost@last) / mean(minimum)``, per setting
+        in order.
     method : str
     at : sequence of int
         Iterations shown as ``"mean ± SE"``.
@@ -352,10 +373,10 @@ def cost_against_minimum(settings: dict, rng: np.random.Generator, *, method: st
     Returns
     -------
     (shown, ratios, minima)
-        ``shown``: one text row per setting (cost at ``at``, the certified minimum, the two ratios with their
-        intervals). ``ratios``: label -> ``{"@10 / @1": mean(cost@10) / mean(cost@1), "@10 / minimum":
-        (ratio, low, high), "@50 / minimum": (ratio, low, high)}``. ``minima``: label -> the
-        :func:`replication.core.solvers.chordal_optimal` result.
+        ``shown``: one text row per setting (cost at ``at``, the certified minimum, the two ratios
+        with their intervals). ``ratios``: label -> ``{"@10 / @1": mean(cost@10) / mean(cost@1),
+        "@10 / minimum": (ratio, low, high), "@50 / minimum": (ratio, low, high)}``. ``minima``:
+        label -> the :func:`replication.core.solvers.chordal_optimal` result.
     """
     rows, ratios, minima = {}, {}, {}
     for label, (s, _, c) in settings.items():
@@ -373,12 +394,14 @@ def cost_against_minimum(settings: dict, rng: np.random.Generator, *, method: st
 
 def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("as printed", "/ 2J"),
                     bar: float = 0.05, n_runs: int = 300, method: str = "ours_right") -> pd.DataFrame:
-    """Share of runs that "divert" (:func:`diverting_runs`) with one absolute error bar for every method.
+    """Share of runs that "divert" (:func:`diverting_runs`) with one absolute error bar for every
+    method.
 
-    Per setting label: SQP at each cost scale (its raw iterates; second column: only iterations whose raw
-    iterate is within :data:`FEASIBLE_TOL` of a rotation, where a lower cost (8) means a better rotation; third: the
-    error read on the projected iterates, the nearest rotations, against the raw iterates' cost), then the two-step
-    method on its first ``n_runs`` runs (always a rotation: the columns equal).
+    Per setting label: SQP at each cost scale (its raw iterates; second column: only iterations
+    whose raw iterate is within :data:`FEASIBLE_TOL` of a rotation, where a lower cost (8) means a
+    better rotation; third: the error read on the projected iterates, the nearest rotations, against
+    the raw iterates' cost), then the two-step method on its first ``n_runs`` runs (always a
+    rotation: the columns equal).
 
     Parameters
     ----------
@@ -396,8 +419,8 @@ def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("a
     Returns
     -------
     DataFrame
-        Index ``(label, "SQP, eq. (8) <scale>" | "two-step R^r")``; columns ``"diverts, error > <bar>"``,
-        ``"... and on a rotation"`` and ``"... read on projected iterates"`` (shares).
+        Index ``(label, "SQP, eq. (8) <scale>" | "two-step R^r")``; columns ``"diverts, error >
+        <bar>"``, ``"... and on a rotation"`` and ``"... read on projected iterates"`` (shares).
     """
     rows = {}
     col, col_rot, col_proj = f"diverts, error > {bar:g}", "... and on a rotation", "... read on projected iterates"
@@ -417,7 +440,8 @@ def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("a
 
 
 def per_setting_text(frames, name: str, key: str, caps=None) -> str:
-    """``"<label> <interval>; ..."``: one method's convergence measure in each setting (:func:`interval_text`).
+    """``"<label> <interval>; ..."``: one method's convergence measure in each setting
+    (:func:`interval_text`).
 
     ``frames`` is a sequence of ``(label, convergence_summary frame)``.
     """
@@ -425,11 +449,13 @@ def per_setting_text(frames, name: str, key: str, caps=None) -> str:
 
 
 def sqp_per_setting_text(frames, sqp_names, key: str, caps=None) -> str:
-    """``"<label>: <variant> <interval>, ...; ..."`` for SQP columns ``"optimization (<variant>)"``."""
+    """``"<label>: <variant> <interval>, ...; ..."`` for SQP columns ``"optimization
+    (<variant>)"``."""
     return "; ".join(f"{label}: " + ", ".join(f"{n[14:-1]} {interval_text(f.loc[n], key, caps)}" for n in sqp_names)
                      for label, f in frames)
 
 
 def scales_text(scales: pd.DataFrame, label: str, scale_names, key: str = "settled") -> str:
-    """``"<scale> <interval>, ..."``: a measure of :func:`cost_scale_study` at each scale for one setting."""
+    """``"<scale> <interval>, ..."``: a measure of :func:`cost_scale_study` at each scale for one
+    setting."""
     return ", ".join(f"{name} {interval_text(scales.loc[(label, name)], key)}" for name in scale_names)

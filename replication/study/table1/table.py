@@ -1,10 +1,11 @@
-"""Table I itself: per-iteration errors of each method, the table, the comparison with the paper, convergence measures.
+"""Table I itself: per-iteration errors of each method, the table, the comparison with the paper,
+convergence measures.
 
 SQP appears once per named variant (:data:`replication.core.solvers.SQP_VARIANTS`), as columns
 ``"optimization (analytic)"`` etc.; each is compared with the paper's single "Optimization" column.
-Cells are compared in standard errors: ours ``mean ± std/sqrt(n)``, the paper's ``mean ± std/sqrt(1000)``, the
-paper's values taken as what its three printed decimals allow (:func:`printed_z`): a printed 0.009 is anything in
-``[0.0085, 0.0095)``.
+Cells are compared in standard errors: ours ``mean ± std/sqrt(n)``, the paper's ``mean ±
+std/sqrt(1000)``, the paper's values taken as what its three printed decimals allow
+(:func:`printed_z`): a printed 0.009 is anything in ``[0.0085, 0.0095)``.
 """
 from __future__ import annotations
 
@@ -29,17 +30,20 @@ ONE_PERCENT = 0.01 * np.sqrt(3.0)
 
 #: Two means "agree" when they differ by at most this many standard errors of their difference.
 Z_AGREE = 3.0
-#: The paper prints Table I to 3 decimals: a printed value ``v`` stands for anything in ``[v - h, v + h)``.
+#: The paper prints Table I to 3 decimals: a printed value ``v`` stands for anything in ``[v - h, v
+#: + h)``.
 PRINTED_HALF_UNIT = 0.0005
 #: Table I's early iterations (the two-step method still far from its floor).
 EARLY = (2, 5, 10)
-#: A mean error above this is reported as "infeasible": between rotations ``||R - R0||_F <= 2 sqrt 2``, so
-#: only infeasible SQP iterates exceed it, and their values (10^5 and more) depend on rounding.
+#: A mean error above this is reported as "infeasible": between rotations ``||R - R0||_F <= 2 sqrt
+#: 2``, so only infeasible SQP iterates exceed it, and their values (10^5 and more) depend on
+#: rounding.
 DIVERGED = 10.0
 
 
 def paper_method(column: str) -> str:
-    """The paper's column a column of ours is compared with (``"optimization (x)"`` -> ``"optimization"``)."""
+    """The paper's column a column of ours is compared with (``"optimization (x)"`` ->
+    ``"optimization"``)."""
     return "optimization" if column.startswith("optimization") else column
 
 
@@ -63,18 +67,19 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
     with_sqp : bool
         ``False``: the two-step method only.
     sqp_runs : dict, optional
-        ``{variant: k}``: run that variant on the first ``k`` problems only (the slow finite-difference
-        variants); its column then has ``k`` rows.
+        ``{variant: k}``: run that variant on the first ``k`` problems only (the slow
+        finite-difference variants); its column then has ``k`` rows.
 
     return_costs : bool
         Also return the cost (8) at every iterate (raw iterates for SQP), in the same layout.
     reversed_halves : bool
-        Run the two half-steps of each two-step iteration in the other order: eq. (15) first (``R^l_n`` from
-        ``R^r_{n-1}``, the start standing for ``R^r_0``), then eq. (14) (``R^r_n`` from ``R^l_n``). That is
-        :func:`~replication.core.solvers.two_step` on the transposed motions, whose eq. (14) is our eq. (15) (its
-        operator is the adjoint) and whose ``R0`` and cost (8) are ours, with ``right`` and ``left`` swapped.
-        The paper prints the order (14) then (15); its Table I has ``R^l`` the farther from ``R0``, as in our runs
-        only the other order gives (notebook 03, section 2).
+        Run the two half-steps of each two-step iteration in the other order: eq. (15) first
+        (``R^l_n`` from ``R^r_{n-1}``, the start standing for ``R^r_0``), then eq. (14) (``R^r_n``
+        from ``R^l_n``). That is :func:`~replication.core.solvers.two_step` on the transposed
+        motions, whose eq. (14) is our eq. (15) (its operator is the adjoint) and whose ``R0`` and
+        cost (8) are ours, with ``right`` and ``left`` swapped. The paper prints the order (14) then
+        (15); its Table I has ``R^l`` the farther from ``R0``, as in our runs only the other order
+        gives (notebook 03, section 2).
 
     Returns
     -------
@@ -111,7 +116,8 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
 
 
 def table1(errors: dict, iterations=paper.TABLE1_ITERATIONS) -> pd.DataFrame:
-    """Mean, std and standard error over runs of each column's error at the given (1-based) iterations.
+    """Mean, std and standard error over runs of each column's error at the given (1-based)
+    iterations.
 
     Columns are ``(column, "mean" | "std" | "se")``, the index is the iteration.
     """
@@ -126,19 +132,21 @@ def table1(errors: dict, iterations=paper.TABLE1_ITERATIONS) -> pd.DataFrame:
 
 def printed_z(ours_mean, ours_se, printed_mean, printed_std, *, n_paper: int = 1000,
               half_unit: float = PRINTED_HALF_UNIT):
-    """A mean of ours against a printed (rounded) mean ± std of ``n_paper`` runs, in standard errors, three ways.
+    """A mean of ours against a printed (rounded) mean ± std of ``n_paper`` runs, in standard
+    errors, three ways.
 
-    The printed digits say only that the paper's mean lies in ``[m - h, m + h)`` and its std in ``[s - h, s + h)``
-    (``h = half_unit``).
+    The printed digits say only that the paper's mean lies in ``[m - h, m + h)`` and its std in ``[s
+    - h, s + h)`` (``h = half_unit``).
 
     Returns
     -------
     (bound, uniform, as_printed) : floats
-        ``bound``: ``z`` against the value the rounding allows that is nearest to ours, with the paper's std at the
-        top of its rounding interval: ``sign(d) max(|d| - h, 0) / sqrt(se^2 + ((s + h) / sqrt(n_paper))^2)``,
-        ``d = ours - m``; the smallest ``|z|`` consistent with the printed digits (a bound: ``|z|`` is at least
-        this). ``uniform``: the rounding error taken as uniform on ``[-h, h]``, its variance ``h^2 / 3`` added
-        to the denominator. ``as_printed``: the printed digits taken as exact (``h = 0``).
+        ``bound``: ``z`` against the value the rounding allows that is nearest to ours, with the
+        paper's std at the top of its rounding interval: ``sign(d) max(|d| - h, 0) / sqrt(se^2 + ((s
+        + h) / sqrt(n_paper))^2)``, ``d = ours - m``; the smallest ``|z|`` consistent with the
+        printed digits (a bound: ``|z|`` is at least this). ``uniform``: the rounding error taken as
+        uniform on ``[-h, h]``, its variance ``h^2 / 3`` added to the denominator. ``as_printed``:
+        the printed digits taken as exact (``h = 0``).
     """
     d = float(ours_mean) - float(printed_mean)
     se_paper = float(printed_std) / np.sqrt(n_paper)
@@ -149,17 +157,18 @@ def printed_z(ours_mean, ours_se, printed_mean, printed_std, *, n_paper: int = 1
 
 
 def versus_paper(ours: pd.DataFrame, *, n_paper: int = 1000, half_unit: float = PRINTED_HALF_UNIT) -> pd.DataFrame:
-    """Our Table I beside the paper's, cell by cell, compared in standard errors (:func:`printed_z`).
+    """Our Table I beside the paper's, cell by cell, compared in standard errors
+    (:func:`printed_z`).
 
-    ``z`` is the rounding-aware bound of :func:`printed_z`: the difference, in standard errors of the
-    difference (ours ``se``, the paper's ``std / sqrt(n_paper)`` with its std at the top of its rounding
-    interval), from the nearest value the paper's printed digits allow; a cell "agrees" when
-    ``|z| <= Z_AGREE``, so it "differs" only if it differs from every value the printed digits allow.
-    ``z uniform`` (the rounding's uniform variance added) and ``z as printed`` (the printed digits taken as
-    exact) are given beside it. ``ratio`` (ours / paper) gives the order of magnitude.
-    A mean above :data:`DIVERGED` is printed as "infeasible" with no ``z``: such values come from SQP
-    iterates far off SO(3) (early iterations, diverging runs) and change with the machine's rounding.
-    ``ours`` is the output of :func:`table1` with the paper's iterations.
+    ``z`` is the rounding-aware bound of :func:`printed_z`: the difference, in standard errors of
+    the difference (ours ``se``, the paper's ``std / sqrt(n_paper)`` with its std at the top of its
+    rounding interval), from the nearest value the paper's printed digits allow; a cell "agrees"
+    when ``|z| <= Z_AGREE``, so it "differs" only if it differs from every value the printed digits
+    allow. ``z uniform`` (the rounding's uniform variance added) and ``z as printed`` (the printed
+    digits taken as exact) are given beside it. ``ratio`` (ours / paper) gives the order of
+    magnitude. A mean above :data:`DIVERGED` is printed as "infeasible" with no ``z``: such values
+    come from SQP iterates far off SO(3) (early iterations, diverging runs) and change with the
+    machine's rounding. ``ours`` is the output of :func:`table1` with the paper's iterations.
     """
     reference = paper.load_table1()
     methods = list(dict.fromkeys(c[0] for c in ours.columns))
@@ -184,13 +193,15 @@ def versus_paper(ours: pd.DataFrame, *, n_paper: int = 1000, half_unit: float = 
 
 
 def first_below(mean_error, threshold):
-    """First (1-based) iteration at which a mean error curve is below ``threshold``, else ``None``."""
+    """First (1-based) iteration at which a mean error curve is below ``threshold``, else
+    ``None``."""
     hit = np.flatnonzero(np.asarray(mean_error) < threshold)
     return int(hit[0]) + 1 if hit.size else None
 
 
 def converged_at(mean_error, rel: float = 0.05, atol: float = 0.0):
-    """First (1-based) iteration from which a mean error curve stays within ``rel * last + atol`` of its last value.
+    """First (1-based) iteration from which a mean error curve stays within ``rel * last + atol`` of
+    its last value.
 
     ``None`` if that is only the last iteration: the curve has not settled within its length.
     """
@@ -202,33 +213,37 @@ def converged_at(mean_error, rel: float = 0.05, atol: float = 0.0):
     return None if n >= len(e) else n
 
 
-#: A rise of the error ``||R_n - R0||_F`` from one iteration to the next smaller than this is not counted (1e-6
-#: is 4e-5 deg: invisible in any figure). Below it the rises are rounding and solver jitter, which differ
-#: between machines: converged two-step runs wobble by 1e-16 to 1e-10, and SLSQP's last steps (its ``ftol`` is
-#: 1e-12) move by up to about 1e-8 along paths that change with the machine's rounding.
+#: A rise of the error ``||R_n - R0||_F`` from one iteration to the next smaller than this is not
+#: counted (1e-6 is 4e-5 deg: invisible in any figure). Below it the rises are rounding and solver
+#: jitter, which differ between machines: converged two-step runs wobble by 1e-16 to 1e-10, and
+#: SLSQP's last steps (its ``ftol`` is 1e-12) move by up to about 1e-8 along paths that change with
+#: the machine's rounding.
 RISE_TOL = 1e-6
 #: The same for the cost (8), relative to its value.
 COST_RISE_RTOL = 1e-6
 
 #: An SQP iterate counts as (nearly) a rotation when ``||X^T X - I||_F`` is below this (see
-#: :func:`replication.core.so3.orthonormality_residual`); off it, a lower cost (8) need not mean a better rotation.
+#: :func:`replication.core.so3.orthonormality_residual`); off it, a lower cost (8) need not mean a
+#: better rotation.
 FEASIBLE_TOL = 0.1
 
 
 def diverting_runs(errors, costs, *, min_error: float = 0.0, feasible=None) -> np.ndarray:
-    """Per run: an iteration at which the error rises while the cost (8) falls (the paper: SQP "may divert").
+    """Per run: an iteration at which the error rises while the cost (8) falls (the paper: SQP "may
+    divert").
 
     Parameters
     ----------
     errors, costs : array_like, shape (n, iterations)
         Per-iteration error ``||R_n - R0||_F`` and cost (8).
     min_error : float
-        Count only iterations whose new error is above this (absolute: the same bar for every method).
+        Count only iterations whose new error is above this (absolute: the same bar for every
+        method).
     feasible : array_like of bool, shape (n, iterations), optional
         Count only iterations whose new iterate is (nearly) a rotation.
 
-    A rise smaller than :data:`RISE_TOL` (error) or a fall smaller than :data:`COST_RISE_RTOL` (relative cost)
-    is rounding and not counted.
+    A rise smaller than :data:`RISE_TOL` (error) or a fall smaller than :data:`COST_RISE_RTOL`
+    (relative cost) is rounding and not counted.
     """
     err, cost = np.asarray(errors, dtype=float), np.asarray(costs, dtype=float)
     if err.shape != cost.shape or err.ndim != 2:
@@ -243,8 +258,9 @@ def diverting_runs(errors, costs, *, min_error: float = 0.0, feasible=None) -> n
     return step.any(axis=1)
 
 
-#: "Negligible error" (Sec. III-A) read as: within this of the final mean error. On the paper's own Table I it
-#: puts the two-step method's convergence at iteration 15 and SQP's at 50, as the text says.
+#: "Negligible error" (Sec. III-A) read as: within this of the final mean error. On the paper's own
+#: Table I it puts the two-step method's convergence at iteration 15 and SQP's at 50, as the text
+#: says.
 NEGLIGIBLE = 0.005
 
 
@@ -253,18 +269,19 @@ def convergence_summary(errors: dict, rng: np.random.Generator, *, n_boot: int =
     """How fast and how smoothly each column's mean error curve converges, with bootstrap intervals.
 
     Columns: ``final`` (mean error at the last iteration) and ``final_se``; ``below_1pct`` (first
-    iteration whose mean error is below :data:`ONE_PERCENT`) and ``converged`` (first iteration from which
-    the mean error stays within 5 % of its last value), each with a 95 % percentile bootstrap interval over
-    runs (``*_low``, ``*_high``; ``None`` if never); ``left_SO3`` (share of runs whose iterate is farther than
-    ``2 sqrt 2`` from ``R0`` at some iteration: off SO(3)) and ``rises_above_floor`` (share of runs whose error
-    increases at some iteration while still above twice its final value), each with its standard error;
-    ``settled`` (first iteration from which the mean stays within :data:`NEGLIGIBLE` of its last value), with
-    its interval. A column in ``caps`` (``{column: iterations}``, a solver stopped on a budget and padded)
-    that "settles" only at its cap has not settled (``None``). With ``costs`` (``{column: (n, iterations)}``),
-    also ``error_rises`` and ``cost_rises`` (share of runs whose error, or cost (8), increases at some
-    iteration, by more than :data:`RISE_TOL`, or :data:`COST_RISE_RTOL` relative), ``diverts`` (share of runs with
-    an iteration at which the error rises while the cost falls) and ``diverts_above_floor`` (the same while the
-    error is above twice its final value).
+    iteration whose mean error is below :data:`ONE_PERCENT`) and ``converged`` (first iteration from
+    which the mean error stays within 5 % of its last value), each with a 95 % percentile bootstrap
+    interval over runs (``*_low``, ``*_high``; ``None`` if never); ``left_SO3`` (share of runs whose
+    iterate is farther than ``2 sqrt 2`` from ``R0`` at some iteration: off SO(3)) and
+    ``rises_above_floor`` (share of runs whose error increases at some iteration while still above
+    twice its final value), each with its standard error; ``settled`` (first iteration from which
+    the mean stays within :data:`NEGLIGIBLE` of its last value), with its interval. A column in
+    ``caps`` (``{column: iterations}``, a solver stopped on a budget and padded) that "settles" only
+    at its cap has not settled (``None``). With ``costs`` (``{column: (n, iterations)}``), also
+    ``error_rises`` and ``cost_rises`` (share of runs whose error, or cost (8), increases at some
+    iteration, by more than :data:`RISE_TOL`, or :data:`COST_RISE_RTOL` relative), ``diverts``
+    (share of runs with an iteration at which the error rises while the cost falls) and
+    ``diverts_above_floor`` (the same while the error is above twice its final value).
     """
     caps = dict(caps or {})
     rows = {}
