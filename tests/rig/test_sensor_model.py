@@ -563,3 +563,22 @@ def test_a_misalignment_beyond_any_gyro_s_holds_every_term_and_says_so():
     m = sm.estimate_sensor_model(camera, GyroStream(gyro.t, (gyro.omega - bench.MISALIGNMENT_BIAS) @ T.T, "g"))
     assert m.scale_note is not None and "no gyro's scale error" in m.scale_note
     assert np.all(m.misalignment == 0.0) and not m.misalignment_resolved.any()
+
+
+def test_the_terms_of_an_axis_whose_scale_is_held_are_held_at_0_and_said():
+    """z never turns: its scale is held at 1, and so are its terms xz, yz (left free they took up a changing bias)."""
+    _, camera, gyro = _two_axis_rig()
+    r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
+    report = r.to_dict()
+    jsonschema.validate(report, SCHEMA)
+    assert report["sensor_model"]["misalignment_resolved"] == [True, False, False]
+    assert report["gyro_misalignment"][1:] == [0.0, 0.0] and report["gyro_misalignment_ci95"][1:] == [None, None]
+    line = next(x for x in r.summary().splitlines() if x.startswith("gyro misalignment"))
+    assert line.count("0 (held: not resolved)") == 2
+
+
+def test_a_bias_that_changes_half_way_is_not_taken_for_a_misalignment():
+    _, camera, gyro = _rig(seed=4, bias=BIAS)
+    w = gyro.omega + np.where(gyro.t[:, None] > 15.0, np.array([0.0, 0.0, 0.02]), 0.0)
+    m = sm.estimate_sensor_model(camera, GyroStream(gyro.t, w, "warming"))
+    assert m.bias_changes and not _misalignment_reasons(m)
