@@ -11,7 +11,7 @@ import pytest
 from replication.core.so3 import angle_between_deg, matrix_from_rotation_vector, rotation_vector_from_matrix
 from replication.rig import sensor_model as sm
 from replication.rig.calibration import calibrate
-from replication.rig.gyro_model import critical_value
+from replication.rig.gyro_model import axes_matrix, critical_value
 from replication.rig.sensor_verdict import SENSOR_THRESHOLDS, sensor_reasons
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.testing import RIG_R0, rig_streams
@@ -499,7 +499,7 @@ def test_a_2_percent_misalignment_is_estimated_removed_and_named(two_percent_mis
 def test_the_model_s_corrected_rates_undo_the_axes(two_percent_misaligned):
     _, _, gyro, mu, r = two_percent_misaligned
     m = r.diagnostics["sensor_model"]
-    T = sm.axes_matrix(np.log(m.scale), m.misalignment)
+    T = axes_matrix(np.log(m.scale), m.misalignment)
     true = np.array([[0.3, -0.2, 0.5], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])
     back = m.corrected(GyroStream(gyro.t[:3], true @ T.T + m.bias_rad_s, "g"))  # it reads T omega + b
     assert np.allclose(back.omega, true) and abs(T[0, 1] - mu[0]) < 1e-3
@@ -559,7 +559,7 @@ def test_the_misalignment_resolution_rule_at_its_boundary(monkeypatch):
 
 def test_a_misalignment_beyond_any_gyro_s_holds_every_term_and_says_so():
     _, camera, gyro, _ = _misaligned(0.0, 72003)
-    T = sm.axes_matrix(np.zeros(3), [0.3, 0.0, 0.0])
+    T = axes_matrix(np.zeros(3), [0.3, 0.0, 0.0])
     m = sm.estimate_sensor_model(camera, GyroStream(gyro.t, (gyro.omega - bench.MISALIGNMENT_BIAS) @ T.T, "g"))
     assert m.scale_note is not None and "no gyro's scale error" in m.scale_note
     assert np.all(m.misalignment == 0.0) and not m.misalignment_resolved.any()
