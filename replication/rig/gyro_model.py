@@ -1,14 +1,18 @@
 """The numerical core of the gyro's sensor model (:mod:`replication.rig.sensor_model`): the rates integrated with
 their Jacobians' sums, the pairs inside the gyro stream, the pair residuals and their Jacobian in the eleven
-parameters ``(theta, b, d, k, sigma)``, Huber's weights, the Newey-West sandwich, the block jackknife, the weighted
+parameters ``(theta, b, d, k, sigma, mu)``, Huber's weights, the Newey-West sandwich, the block jackknife, the weighted
 Gauss-Newton, and the critical value of its intervals (:func:`critical_value`).
 
-The rates used are ``(omega - b) / s`` per axis, ``s = exp(sigma)`` the gyro's scale (it reads ``s omega + b``, the
-diagonal of Kalibr's and OpenVINS's ``T_g``), so that with ``R0 <- R0 exp(theta)``:
+The rates used are ``T^-1 (omega - b)``, ``T = diag(exp(sigma)) + N(mu)`` the gyro's axes (it reads
+``T omega + b``: Kalibr's and OpenVINS's ``T_g``), ``s = exp(sigma)`` the scale per axis and ``N(mu)`` the symmetric
+off-diagonal part, ``mu = (xy, xz, yz)`` (the misalignment: the antisymmetric part of ``T_g`` is a rotation of the
+sensor's frame, which ``R0`` absorbs, so only the symmetric part is identifiable), so that with
+``R0 <- R0 exp(theta)``:
 
-* ``d r / d b = M_j^T J_j diag(1 / s)`` with ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` (the first-order bias Jacobian),
-* ``d r / d sigma = -M_j^T Q(t_k)^T sum_s Q_{s+1} diag(w_s) dt_s`` (``w_s`` the step's rate as used: a change of
-  ``sigma`` changes each step's rate by ``-w_s dsigma``, axis by axis).
+* ``d r / d b = M_j^T J_j T^-1`` with ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` (the first-order bias Jacobian),
+* ``d r / d (sigma, mu) = -M_j^T Q(t_k)^T sum_s Q_{s+1} T^-1 D(w_s) dt_s`` (``w_s`` the step's rate as used: a change
+  ``dT`` of the axes changes each step's rate by ``-T^-1 dT w_s``; ``D(w) = [diag(s w), (w_y, w_x, 0), (w_z, 0, w_x),
+  (0, w_z, w_y)]``, the columns of ``dT w`` per parameter).
 """
 from __future__ import annotations
 
@@ -16,10 +20,12 @@ import numpy as np
 
 from ..core.so3 import cumulative_product, matrix_from_rotation_vector, rotation_vector_from_matrix
 
-__all__ = ["critical_value", "N_PARAMETERS"]
+__all__ = ["critical_value", "N_PARAMETERS", "MISALIGNMENT_AXES", "axes_matrix"]
 
-#: theta (3), b (3), d, k, sigma (3).
-N_PARAMETERS = 11
+#: theta (3), b (3), d, k, sigma (3), mu (3: xy, xz, yz).
+N_PARAMETERS = 14
+#: The pairs of axes of ``mu``.
+MISALIGNMENT_AXES = ((0, 1), (0, 2), (1, 2))
 _HUBER = 2.5
 _Z95 = 1.959963984540054
 
@@ -33,18 +39,38 @@ def critical_value(n_blocks: int) -> float:
     return float(t.ppf(0.975, max(1, int(n_blocks) - 1)))
 
 
-def _integrate(t, w, b, sigma):
-    """``Q`` (world_from_body, ``Q_0 = I``) of the rates ``(w - b) / exp(sigma)`` (trapezoidal, as
+def axes_matrix(sigma, mu) -> np.ndarray:
+    """``T = diag(exp(sigma)) + N(mu)``: the gyro reads ``T omega + b`` (``mu`` the symmetric off-diagonal terms
+    ``xy, xz, yz``)."""
+    T = np.diag(np.exp(np.asarray(sigma, float)))
+    for m, (a, c) in zip(np.asarray(mu, float), MISALIGNMENT_AXES):
+        T[a, c] = T[c, a] = m
+    return T
+
+
+def _integrate(t, w, b, sigma, mu=None):
+    """``Q`` (world_from_body, ``Q_0 = I``) of the rates ``T^-1 (w - b)`` (trapezoidal, as
     :func:`replication.rig.streams.integrate_gyro`), ``S_n = sum_{s<n} Q_{s+1} dt_s`` (the bias Jacobian's sums),
-    ``U_n = sum_{s<n} Q_{s+1} diag(w_s) dt_s`` (the scale's) and the steps' rates ``w_s``."""
+    ``U_n = sum_{s<n} Q_{s+1} T^-1 D(w_s) dt_s`` (the axes' six: scale and misalignment), the steps' rates ``w_s`` and
+    ``T^-1``."""
     dt = np.diff(t)
-    rates = (0.5 * (w[:-1] + w[1:]) - b) * np.exp(-sigma)
+    if np.max(np.abs(sigma)) > 30.0:  # a scale of 1e13: no gyro (and exp overflows further on)
+        raise np.linalg.LinAlgError("the gyro's axes' matrix is out of range")
+    T = axes_matrix(sigma, np.zeros(3) if mu is None else mu)
+    if not np.linalg.cond(T) < 1e12:
+        raise np.linalg.LinAlgError("the gyro's axes' matrix is singular")
+    Ti = np.linalg.inv(T)
+    rates = (0.5 * (w[:-1] + w[1:]) - b) @ Ti.T
     Q = np.concatenate([np.eye(3)[None], cumulative_product(matrix_from_rotation_vector(rates * dt[:, None]))])
     Qdt = Q[1:] * dt[:, None, None]
-    zero = np.zeros((1, 3, 3))
-    S = np.concatenate([zero, np.cumsum(Qdt, axis=0)])
-    U = np.concatenate([zero, np.cumsum(Qdt * rates[:, None, :], axis=0)])
-    return Q, S, U, rates
+    zero = np.zeros((1, 3, 6))
+    S = np.concatenate([zero[:, :, :3], np.cumsum(Qdt, axis=0)])
+    D = np.zeros((len(rates), 3, 6))
+    D[:, [0, 1, 2], [0, 1, 2]] = rates * np.diag(T)
+    for j, (a, c) in enumerate(MISALIGNMENT_AXES):
+        D[:, a, 3 + j], D[:, c, 3 + j] = rates[:, c], rates[:, a]
+    U = np.concatenate([zero, np.cumsum((Qdt @ Ti) @ D, axis=0)])
+    return Q, S, U, rates, Ti
 
 
 def _at(times, t, Q, S, U, rates):
@@ -80,11 +106,11 @@ def _pairs(camera, t_gyro, interval, offset, max_offset):
     return i, k
 
 
-def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None):
-    """Residuals ``(J, 3)`` and Jacobians ``(J, 3, 11)`` (theta, b, d, k, sigma) of the pairs at the parameters
-    (``sigma`` the log-scales, 0 by default)."""
+def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None, mu=None):
+    """Residuals ``(J, 3)`` and Jacobians ``(J, 3, 14)`` (theta, b, d, k, sigma, mu) of the pairs at the parameters
+    (``sigma`` the log-scales and ``mu`` the misalignment, 0 by default)."""
     sigma = np.zeros(3) if sigma is None else np.asarray(sigma, float)
-    Q, S, U, rates = _integrate(t_g, w_g, b, sigma)
+    Q, S, U, rates, Ti = _integrate(t_g, w_g, b, sigma, mu)
     si, sk = ti + d + kappa * (ti - t_mid), tk + d + kappa * (tk - t_mid)
     (Qi, Si, Ui, wi), (Qk, Sk, Uk, wk) = _at(si, t_g, Q, S, U, rates), _at(sk, t_g, Q, S, U, rates)
     Delta = np.swapaxes(Qi, -1, -2) @ Qk
@@ -95,7 +121,7 @@ def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None):
     wi_in_k = np.einsum("jba,jb->ja", Delta, wi)  # Delta^T omega_i
     jac = np.empty((len(A), 3, N_PARAMETERS))
     jac[:, :, :3] = np.eye(3) - Delta
-    jac[:, :, 3:6] = -(Mt @ QkT @ (Sk - Si)) * np.exp(-sigma)
+    jac[:, :, 3:6] = -(Mt @ QkT @ (Sk - Si)) @ Ti
     jac[:, :, 6] = np.einsum("jab,jb->ja", Mt, wk - wi_in_k)
     jac[:, :, 7] = np.einsum("jab,jb->ja", Mt, wk * (tk - t_mid)[:, None] - wi_in_k * (ti - t_mid)[:, None])
     jac[:, :, 8:] = -(Mt @ QkT @ (Uk - Ui))
@@ -146,20 +172,22 @@ def _block_jackknife(r, jac, wts, block, cols):
     return (m - 1.0) / m * (d.T @ d), m
 
 
-def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8, sigma=None):
-    """Weighted Gauss-Newton on the parameters ``cols`` (indices into theta, b, d, k, sigma), step halving on the
+def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8, sigma=None, mu=None):
+    """Weighted Gauss-Newton on the parameters ``cols`` (indices into theta, b, d, k, sigma, mu), step halving on the
     cost (at most 3 halvings); stops when a step lowers the cost by less than 1e-8 of it. Returns the parameters
-    ``[X, b, d, k, sigma]``, the residuals, the Jacobians, the weights and the iterations done."""
-    params = [X, np.array(b, float), float(d), float(kappa), np.zeros(3) if sigma is None else np.array(sigma, float)]
+    ``[X, b, d, k, sigma, mu]``, the residuals, the Jacobians, the weights and the iterations done."""
+    params = [X, np.array(b, float), float(d), float(kappa), np.zeros(3) if sigma is None else np.array(sigma, float),
+              np.zeros(3) if mu is None else np.array(mu, float)]
 
     def unpack(p, step):
-        X, b, d, k, s = p
+        X, b, d, k, s, m = p
         full = np.zeros(N_PARAMETERS)
         full[cols] = step
-        return [X @ matrix_from_rotation_vector(full[:3]), b + full[3:6], d + full[6], k + full[7], s + full[8:]]
+        return [X @ matrix_from_rotation_vector(full[:3]), b + full[3:6], d + full[6], k + full[7], s + full[8:11],
+                m + full[11:]]
 
     def linearise(p):
-        return _linearise(*p[:4], A, ti, tk, t_mid, t_g, w_g, p[4])
+        return _linearise(*p[:4], A, ti, tk, t_mid, t_g, w_g, p[4], p[5])
 
     r, jac = linearise(params)
     done = 0
@@ -174,8 +202,11 @@ def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8
         step = -np.linalg.lstsq(H / np.outer(scale, scale), g / scale, rcond=None)[0] / scale
         for _ in range(4):
             trial = unpack(params, step)
-            r2, jac2 = linearise(trial)
-            new = float(np.sum(wts * np.sum(r2 * r2, axis=-1)))
+            try:
+                r2, jac2 = linearise(trial)
+                new = float(np.sum(wts * np.sum(r2 * r2, axis=-1)))
+            except np.linalg.LinAlgError:  # the step made the axes' matrix singular: halved as a costlier one
+                new = np.inf
             if new <= cost:
                 break
             step = 0.5 * step

@@ -46,7 +46,7 @@ def json_safe(value):
 
 
 _SENSOR_KEYS = ("gyro_bias_rad_s", "gyro_bias_ci95_rad_s", "clock_drift_ppm", "clock_drift_ci95_ppm", "gyro_scale",
-                "gyro_scale_ci95", "sensor_model")
+                "gyro_scale_ci95", "gyro_misalignment", "gyro_misalignment_ci95", "sensor_model")
 
 
 def _sensor_fields(model) -> dict:
@@ -80,7 +80,13 @@ def _scale_lines(model) -> list:
                      for s, ci in zip(model["gyro_scale"], model["gyro_scale_ci95"]))
     note = model["sensor_model"].get("scale_note")
     applied = "removed" if model["sensor_model"]["bias_applied"] else "measured, not removed"
-    return [f"gyro scale (x, y, z) with 95 % intervals: {axes} ({applied}" + (f"; {note})" if note else ")")]
+    lines = [f"gyro scale (x, y, z) with 95 % intervals: {axes} ({applied}" + (f"; {note})" if note else ")")]
+    if model.get("gyro_misalignment") is not None:
+        terms = ", ".join(f"{m:+.4f} [{ci[0]:+.4f}, {ci[1]:+.4f}]" if ci is not None else "0 (held: not resolved)"
+                          for m, ci in zip(model["gyro_misalignment"], model["gyro_misalignment_ci95"]))
+        lines.append(f"gyro misalignment (xy, xz, yz; T_g's symmetric off-diagonal) with 95 % intervals: {terms} "
+                     f"({applied})")
+    return lines
 
 
 def _segment_lines(s) -> list:

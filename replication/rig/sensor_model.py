@@ -23,7 +23,13 @@ camera poses do not pull the bias.
 The gyro's scale per axis ``s`` (it reads ``s omega + b``; the diagonal of Kalibr's and OpenVINS's ``T_g``) is
 refined with them (:mod:`replication.rig.gyro_model`: its Jacobian): 5 % on one axis, left at 1, moved ``R0`` by
 0.67-1.2 deg with the verdict ``ok`` (issue 34). An axis the motion does not turn about enough (its interval's
-half-width above :data:`SCALE_RESOLUTION`) is held at 1 and the report says so (``scale_resolved``).
+half-width above :data:`SCALE_RESOLUTION`) is held at 1 and the report says so (``scale_resolved``). The
+symmetric off-diagonal part of ``T_g`` (the misalignment ``mu = (xy, xz, yz)``: the gyro reads ``T omega + b``,
+``T = diag(s) + N(mu)``) is refined with them, each term held at 0 where its interval's half-width is above
+:data:`MISALIGNMENT_RESOLUTION` or where the scale of one of its two axes is held (``misalignment_resolved``;
+left free there, the terms took up a bias that changed half way: 1.2 % with intervals excluding 0). 2 % terms, left
+at 0, gave ``ok`` with ``R0`` up to 1.8 deg off. Its antisymmetric part is a rotation of the sensor's axes: ``R0``
+absorbs it (it is the mounting).
 
 Intervals: overlapping pairs share noise (a camera pose, a stretch of gyro samples), so the covariance is the
 delete-a-block jackknife over consecutive blocks of two pairing intervals of pairs (each block's removal re-fitted
@@ -53,18 +59,21 @@ import numpy as np
 from ..core.so3 import rotation_vector_from_matrix
 from .gyro_model import (
     _Z95,
+    MISALIGNMENT_AXES,
     N_PARAMETERS,
     _block_jackknife,
     _gauss_newton,
     _linearise,  # noqa: F401 (the tests' Jacobian checks read it here)
     _pairs,
     _sandwich,
+    axes_matrix,
     critical_value,
 )
 from .streams import GyroStream, OrientationStream
 
 __all__ = ["SensorModel", "estimate_sensor_model", "rest_periods", "BIAS_CHANGE_LEVEL", "MIN_CORRELATION",
-           "MAX_FIT_RATIO", "INTERVAL_INFLATION", "SCALE_RESOLUTION", "MAX_SCALE_ERROR"]
+           "MAX_FIT_RATIO", "INTERVAL_INFLATION", "SCALE_RESOLUTION", "MAX_SCALE_ERROR",
+           "MISALIGNMENT_RESOLUTION"]
 
 #: The level of the test of the two halves' biases (chi-square, 3 degrees of freedom).
 BIAS_CHANGE_LEVEL = 0.01
@@ -86,6 +95,13 @@ INTERVAL_INFLATION = 1.2
 #: An axis's scale is estimated where its 95 % interval's half-width is at most this (the motion turns about the
 #: axis enough); elsewhere it is held at 1 and the report says so (``scale_resolved``).
 SCALE_RESOLUTION = 0.01
+#: A misalignment term (``T_g``'s symmetric off-diagonal ``xy``, ``xz``, ``yz``) is estimated where its 95 %
+#: interval's half-width is at most this; elsewhere it is held at 0 and the report says so
+#: (``misalignment_resolved``). The reason's bound (``gyro_misalignment_error``): a term moves ``R0`` by up to 74 deg
+#: per unit (0.30 deg at 0.4 %), so one estimated more loosely moves ``R0`` by its noise as much as it corrects: at
+#: 1 % the terms fitted to a recording with a re-mount (half-widths 0.2-0.6 %, the truth 0) moved the halves' ``R0``
+#: by 0.05-0.07 deg (0.02-0.03 held).
+MISALIGNMENT_RESOLUTION = 0.004
 #: A fitted scale further than this from 1 on any axis is no scale error (a MEMS gyro's is within a few per cent;
 #: 57.3 is deg/s read as rad/s): every scale is then held at 1, so that the units' mistake stays visible (the
 #: model's pairs fit no rig and the calibration's diagnosis names the units) and the report says why.
@@ -132,7 +148,15 @@ class SensorModel:
     critical : float
         The critical value of the 95 % intervals.
     scale_note : str or None
-        Why every scale was held at 1 (a fitted scale beyond :data:`MAX_SCALE_ERROR`), None otherwise.
+        Why every scale and misalignment term was held (a fitted one beyond :data:`MAX_SCALE_ERROR`), None otherwise.
+    misalignment, misalignment_ci95 : ndarray (3,), (3, 2)
+        The symmetric off-diagonal terms ``(xy, xz, yz)`` of the gyro's axes ``T = diag(scale) + N(mu)`` (it reads
+        ``T omega + b``; the rates used are ``T^-1 (omega - b)``) and their 95 % intervals (NaN where not resolved).
+    misalignment_resolved : ndarray (3,) of bool
+        The terms the motion resolves (half-width at most :data:`MISALIGNMENT_RESOLUTION`, both axes' scales
+        resolved); the others are held at 0.
+    misalignment_R0_deg : float
+        How far ``R0`` moves (deg, first order) were the misalignment left at 0.
     n_pairs, iterations : int
     span_s : float
         The pairs' span (s, camera time).
@@ -166,6 +190,10 @@ class SensorModel:
     scale_R0_deg: float = 0.0
     critical: float = _Z95
     scale_note: str | None = None
+    misalignment: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    misalignment_ci95: np.ndarray = field(default_factory=lambda: np.full((3, 2), np.nan))
+    misalignment_resolved: np.ndarray = field(default_factory=lambda: np.zeros(3, bool))
+    misalignment_R0_deg: float = 0.0
 
     @property
     def bias_changes(self) -> bool:
@@ -179,13 +207,15 @@ class SensorModel:
         return bool(lo > 0 or hi < 0)
 
     def corrected(self, gyro: GyroStream) -> GyroStream:
-        """``gyro`` with the bias removed from its rates and divided by the scale (times unchanged)."""
-        return GyroStream(gyro.t, (gyro.omega - self.bias_rad_s) / self.scale, gyro.source)
+        """``gyro`` with the bias removed from its rates and the axes' ``T^-1`` applied (times unchanged)."""
+        T = axes_matrix(np.log(self.scale), self.misalignment)
+        return GyroStream(gyro.t, (gyro.omega - self.bias_rad_s) @ np.linalg.inv(T).T, gyro.source)
 
     def report(self) -> dict:
         """The report's fields (``gyro_bias_rad_s``, ``gyro_bias_ci95_rad_s``, ``clock_drift_ppm``,
-        ``clock_drift_ci95_ppm``, ``gyro_scale``, ``gyro_scale_ci95``: null per axis where not resolved) and the
-        model's details under ``sensor_model``."""
+        ``clock_drift_ci95_ppm``, ``gyro_scale``, ``gyro_scale_ci95``, ``gyro_misalignment``,
+        ``gyro_misalignment_ci95``: null per axis or term where not resolved) and the model's details under
+        ``sensor_model``."""
         return {
             "gyro_bias_rad_s": self.bias_rad_s.tolist(),
             "gyro_bias_ci95_rad_s": self.bias_ci95_rad_s.tolist(),
@@ -194,6 +224,9 @@ class SensorModel:
             "gyro_scale": [float(v) for v in self.scale],
             "gyro_scale_ci95": [[float(v) for v in ci] if ok else None
                                 for ci, ok in zip(self.scale_ci95, self.scale_resolved)],
+            "gyro_misalignment": [float(v) for v in self.misalignment],
+            "gyro_misalignment_ci95": [[float(v) for v in ci] if ok else None
+                                       for ci, ok in zip(self.misalignment_ci95, self.misalignment_resolved)],
             "sensor_model": {
                 "bias_applied": bool(self.applied), "start": self.start, "n_pairs": int(self.n_pairs),
                 "iterations": int(self.iterations), "span_s": float(self.span_s),
@@ -208,6 +241,9 @@ class SensorModel:
                 "scale_resolved": [bool(v) for v in self.scale_resolved], "scale_R0_deg": float(self.scale_R0_deg),
                 "scale_resolution": SCALE_RESOLUTION, "interval_critical_value": float(self.critical),
                 "scale_note": self.scale_note,
+                "misalignment_resolved": [bool(v) for v in self.misalignment_resolved],
+                "misalignment_R0_deg": float(self.misalignment_R0_deg),
+                "misalignment_resolution": MISALIGNMENT_RESOLUTION,
             },
         }
 
@@ -289,14 +325,14 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     applied : bool
         Recorded in the result: whether the caller removes the bias.
     scale : bool
-        Estimate the gyro's scale per axis (default); False: held at 1 on every axis.
+        Estimate the gyro's scale per axis and its misalignment (default); False: held at 1 and 0.
     critical : float, optional
         The intervals' critical value (default: Student's t of the jackknife's blocks, :func:`critical_value`).
 
     Raises
     ------
     ValueError
-        Too few pairs (fewer than 20) to estimate eleven parameters with an interval.
+        Too few pairs (fewer than 20) to estimate fourteen parameters with an interval.
     """
     if not isinstance(camera, OrientationStream) or not isinstance(gyro, GyroStream):
         raise ValueError("the sensor model needs a camera OrientationStream and a GyroStream")
@@ -310,25 +346,30 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     lags = int(lags) if lags is not None else max(1, int(round(2 * interval / np.median(np.diff(camera.t)))))
     z = critical_value(max(2, len(A) // lags)) if critical is None else float(critical)
     cols = np.arange(N_PARAMETERS if scale else 8)
-    sigma = np.zeros(3)
-    (X, b, d, kappa, sigma), r, jac, wts, its = _gauss_newton(R_start, b0, d0, 0.0, A, ti, tk, t_mid, gyro.t,
-                                                              gyro.omega, cols, sigma=sigma)
-    resolved, implausible = np.zeros(3, bool), None
-    if scale:  # an axis the motion barely turns about does not resolve its scale: held at 1, and said
-        resolved = np.ones(3, bool)
-        while resolved.any():  # the least resolved axis first: an unresolved one blurs the others' jackknife
+    sigma, mu = np.zeros(3), np.zeros(3)
+    (X, b, d, kappa, sigma, mu), r, jac, wts, its = _gauss_newton(R_start, b0, d0, 0.0, A, ti, tk, t_mid, gyro.t,
+                                                                  gyro.omega, cols, sigma=sigma, mu=mu)
+    resolved, implausible = np.zeros(6, bool), None
+    if scale:  # a scale or term the motion does not resolve: held at 1 or 0, and said
+        resolved, bound = np.ones(6, bool), np.repeat([SCALE_RESOLUTION, MISALIGNMENT_RESOLUTION], 3)
+        while resolved.any():  # the least resolved first: an unresolved one blurs the others' jackknife
             half = z * np.sqrt(np.maximum(np.diag(_block_jackknife(r, jac, wts, lags, cols)[0])[8:], 0.0))
-            if half.max() <= SCALE_RESOLUTION:
+            over = half / bound[resolved]  # the free ones' in order
+            if over.max() <= 1.0:
                 break
-            resolved[np.flatnonzero(resolved)[np.argmax(half)]] = False  # half: the free axes' in order
+            worst = np.flatnonzero(resolved)[np.argmax(over)]
+            resolved[worst] = False
+            if worst < 3:  # an axis's scale unresolved: so are its terms (they pair its reading with another axis's)
+                resolved[3:] &= [worst not in pair for pair in MISALIGNMENT_AXES]
             cols = np.concatenate([np.arange(8), 8 + np.flatnonzero(resolved)])
-            (X, b, d, kappa, sigma), r, jac, wts, more = _gauss_newton(
-                X, b, d, kappa, A, ti, tk, t_mid, gyro.t, gyro.omega, cols, sigma=np.where(resolved, sigma, 0.0))
+            (X, b, d, kappa, sigma, mu), r, jac, wts, more = _gauss_newton(
+                X, b, d, kappa, A, ti, tk, t_mid, gyro.t, gyro.omega, cols, sigma=np.where(resolved[:3], sigma, 0.0),
+                mu=np.where(resolved[3:], mu, 0.0))
             its += more
-        if np.any(np.abs(np.expm1(sigma[resolved])) > MAX_SCALE_ERROR):  # no scale error: all held at 1, afresh
-            implausible, resolved, cols = np.exp(sigma), np.zeros(3, bool), np.arange(8)
-            (X, b, d, kappa, sigma), r, jac, wts, more = _gauss_newton(R_start, b0, d0, 0.0, A, ti, tk, t_mid, gyro.t,
-                                                                       gyro.omega, cols, sigma=np.zeros(3))
+        if np.any(np.abs(np.concatenate([np.expm1(sigma), mu])[resolved]) > MAX_SCALE_ERROR):  # all held, afresh
+            implausible, resolved, cols = (np.exp(sigma), mu), np.zeros(6, bool), np.arange(8)
+            (X, b, d, kappa, sigma, mu), r, jac, wts, more = _gauss_newton(
+                R_start, b0, d0, 0.0, A, ti, tk, t_mid, gyro.t, gyro.omega, cols, sigma=np.zeros(3), mu=np.zeros(3))
             its += more
     cov = np.zeros((N_PARAMETERS, N_PARAMETERS))
     cov[np.ix_(cols, cols)] = _block_jackknife(r, jac, wts, lags, cols)[0]
@@ -347,7 +388,8 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     sensitivity = -np.linalg.solve(H[:3, :3], H[:3, 3:])  # R0's rotation (rad) per bias and scale change, re-fit
     halves = np.array(halves)
     hsd = np.sqrt(np.maximum(np.array([np.diag(c) for c in halves_cov]), 0.0))
-    scale_ci = np.where(resolved[:, None], np.exp(sigma[:, None] + np.outer(sd[8:], [-z, z])), np.nan)
+    scale_ci = np.where(resolved[:3, None], np.exp(sigma[:, None] + np.outer(sd[8:11], [-z, z])), np.nan)
+    mu_ci = np.where(resolved[3:, None], mu[:, None] + np.outer(sd[11:], [-z, z]), np.nan)
     return SensorModel(
         bias_rad_s=b, bias_ci95_rad_s=np.stack([b - z * sd[3:6], b + z * sd[3:6]], axis=-1),
         drift_ppm=1e6 * kappa, drift_ci95_ppm=(1e6 * (kappa - z * sd[7]), 1e6 * (kappa + z * sd[7])),
@@ -359,8 +401,11 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
         change_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, :3] @ (0.5 * diff)))),
         fit_ratio=float(np.median(np.linalg.norm(r, axis=-1))
                         / max(np.median(np.linalg.norm(rotation_vector_from_matrix(A), axis=-1)), 1e-12)),
-        scale=np.exp(sigma), scale_ci95=scale_ci, scale_resolved=resolved,
+        scale=np.exp(sigma), scale_ci95=scale_ci, scale_resolved=resolved[:3],
         scale_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 5:8] @ sigma))), critical=float(z),
         scale_note=None if implausible is None else (
-            "a scale of [" + ", ".join(f"{v:.3g}" for v in implausible) + f"] fitted, more than {MAX_SCALE_ERROR:g} "
-            "off 1: no gyro's scale error (units? deg/s read as rad/s is 57.3): every scale held at 1"))
+            "a scale of [" + ", ".join(f"{v:.3g}" for v in implausible[0]) + "] and misalignment [" + ", ".join(
+                f"{v:.3g}" for v in implausible[1]) + f"] fitted, more than {MAX_SCALE_ERROR:g} off 1 or 0: no "
+            "gyro's scale error (units? deg/s read as rad/s is 57.3): every scale held at 1 and term at 0"),
+        misalignment=mu, misalignment_ci95=mu_ci, misalignment_resolved=resolved[3:],
+        misalignment_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 8:11] @ mu))))

@@ -36,6 +36,13 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #:   synthetic rigs (``scale_R0_deg``, first order; seeds 60000-60029 of the red team's 60 s generator), below
 #:   EuRoC's reference floor (0.343 deg), and a 2 % error by twice that (0.27-0.49 deg), beyond it on some; a 5 % error
 #:   by 0.67-1.20 deg: a scale more than 1 % off is one the calibration had to remove to stay within the floor.
+#: * ``gyro_misalignment_error``: where a misalignment term (``T_g``'s symmetric off-diagonal) is resolved and its
+#:   interval excludes 0, ``|mu|`` (the largest term), above: the gyro's axes are not orthogonal, which the model
+#:   removes but a reader of the raw rates (a VIO with ``T_g = I``) does not. Left at 0, terms of 0.5 % on all three
+#:   pairs (random signs) move R0 by 0.06-0.37 deg (``misalignment_R0_deg``, first order; 24 40 s rigs, seeds
+#:   72000-72023 of ``benchmarks/bench_sensor_model.py --misalignment-runs``), of 2 % by 0.25-1.49 deg: terms at the
+#:   0.4 % bound move it by at most 0.30 deg, below EuRoC's reference floor (0.343 deg), as the scale's 1 % does
+#:   (0.13-0.25 deg); a term beyond it is one the calibration had to remove to stay within the floor.
 SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
@@ -43,6 +50,7 @@ SENSOR_THRESHOLDS = {
     "offset_disagreement_share": (0.005, None),
     "gyro_bias_change_R0_deg": (0.05, None),
     "gyro_scale_error": (0.01, None),
+    "gyro_misalignment_error": (0.004, None),
 }
 
 
@@ -55,7 +63,8 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
     * the bias of the two halves differs beyond their noise (warning: it drifts, with temperature);
     * the clock drift resolved (its interval excludes 0) and half its change over the recording large against the
       pairing interval (warning);
-    * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound (warning).
+    * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound (warning);
+    * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
     """
@@ -108,8 +117,7 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    scale_reason = _scale_reason(model)
-    return out + ([scale_reason] if scale_reason else [])
+    return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None]
 
 
 def _scale_reason(model):
@@ -130,6 +138,26 @@ def _scale_reason(model):
                   f"{100 * bound:g} %; {what}: left at 1 it moves R0 by about {model.scale_R0_deg:.2g} deg; the "
                   f"gyro's scale factors (its intrinsics, e.g. Kalibr's or OpenVINS's T_g) are off: whatever reads "
                   f"its raw rates with scale 1 inherits the error")
+
+
+def _misalignment_reason(model):
+    """A warning where a resolved misalignment term departs from 0 beyond its interval and by more than the bound
+    (:data:`SENSOR_THRESHOLDS` ``gyro_misalignment_error``), naming the terms and what they did to ``R0``."""
+    from .quality import Reason
+
+    bound = SENSOR_THRESHOLDS["gyro_misalignment_error"][0]
+    mu, lo, hi = model.misalignment, model.misalignment_ci95[:, 0], model.misalignment_ci95[:, 1]
+    off = model.misalignment_resolved & ((lo > 0.0) | (hi < 0.0)) & (np.abs(mu) > bound)
+    if not off.any():
+        return None
+    terms = ", ".join(f"{('xy', 'xz', 'yz')[i]} {mu[i]:+.4f} [{lo[i]:+.4f}, {hi[i]:+.4f}]" for i in np.flatnonzero(off))
+    worst = float(np.max(np.abs(mu[off])))
+    what = "removed from the rates" if model.applied else "measured, not removed"
+    return Reason("gyro_misalignment", "warning", worst, bound,
+                  f"gyro axes misaligned: symmetric off-diagonal term {terms} (95 % intervals) of {100 * worst:.3g} % "
+                  f"> {100 * bound:g} %; {what}: left at 0 it moves R0 by about {model.misalignment_R0_deg:.2g} deg; "
+                  f"the gyro's axes are not orthogonal (the off-diagonal of Kalibr's or OpenVINS's T_g): whatever "
+                  f"reads its raw rates with T_g = I inherits the error")
 
 
 def model_or_note(camera, gyro, interval, max_offset):
@@ -163,6 +191,7 @@ def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval,
     if model is None:
         fields = {"gyro_bias_rad_s": None, "gyro_bias_ci95_rad_s": None, "clock_drift_ppm": None,
                   "clock_drift_ci95_ppm": None, "gyro_scale": None, "gyro_scale_ci95": None,
+                  "gyro_misalignment": None, "gyro_misalignment_ci95": None,
                   "sensor_model": {"bias_applied": False, "note": note or "gyro bias model off (gyro_bias=False)"}}
         result = dataclasses.replace(result, sensor_model=fields)
         if note and not off:

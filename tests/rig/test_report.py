@@ -81,7 +81,7 @@ def test_to_dict_holds_every_field():
         "reference_disagreement_deg": 0.3,
         "reference_reading": "r",
         "gyro_bias_rad_s": None, "gyro_bias_ci95_rad_s": None, "clock_drift_ppm": None, "clock_drift_ci95_ppm": None,
-        "gyro_scale": None, "gyro_scale_ci95": None,
+        "gyro_scale": None, "gyro_scale_ci95": None, "gyro_misalignment": None, "gyro_misalignment_ci95": None,
         "sensor_model": None,
     }
     json.dumps(d, allow_nan=False)

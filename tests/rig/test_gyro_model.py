@@ -1,0 +1,38 @@
+"""The numerical core of the gyro's sensor model: the axes' matrix and the misalignment's Jacobian."""
+import numpy as np
+
+from replication.rig import gyro_model as gm
+from replication.rig.sensor_model import _pairs, estimate_sensor_model
+from replication.rig.streams import GyroStream
+from replication.testing import rig_streams
+
+
+def test_the_axes_matrix_is_the_scale_on_the_diagonal_and_the_terms_symmetric():
+    T = gm.axes_matrix(np.log([1.01, 0.99, 1.02]), [0.003, -0.004, 0.005])
+    assert np.allclose(np.diag(T), [1.01, 0.99, 1.02]) and np.allclose(T, T.T)
+    assert (T[0, 1], T[0, 2], T[1, 2]) == (0.003, -0.004, 0.005)
+    assert gm.N_PARAMETERS == 14 and gm.MISALIGNMENT_AXES == ((0, 1), (0, 2), (1, 2))
+
+
+def test_the_bias_scale_and_misalignment_jacobians_match_finite_differences():
+    """With scale and misalignment away from 1 and 0 (the Jacobians use T^-1 exactly, not I)."""
+    rng = np.random.default_rng(12)
+    R0, camera, gyro, _ = rig_streams(20.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    sigma, mu = np.log([1.03, 0.98, 1.01]), np.array([0.02, -0.015, 0.01])
+    raw = GyroStream(gyro.t, gyro.omega @ gm.axes_matrix(sigma, mu).T + [0.03, -0.02, 0.04], "gyro")
+    m = estimate_sensor_model(camera, raw)
+    i, k = _pairs(camera, raw.t, 1.0, m.offset_mid_s, 0.2)
+    i, k = i[::30], k[::30]
+    A = np.swapaxes(camera.R[k], -1, -2) @ camera.R[i]
+    args = (A, camera.t[i], camera.t[k], 10.0, raw.t, raw.omega)
+    s0, m0 = np.log(m.scale), m.misalignment
+    r0, jac = gm._linearise(m.R, m.bias_rad_s, m.offset_mid_s, 1e-5, *args, s0, m0)
+    assert jac.shape[-1] == 14
+    for col in (3, 5, 8, 10, 11, 12, 13):
+        step = np.zeros(14)
+        step[col] = 1e-6
+        moved = gm._linearise(m.R, m.bias_rad_s + step[3:6], m.offset_mid_s, 1e-5, *args, s0 + step[8:11],
+                              m0 + step[11:])[0]
+        numeric = (moved - r0) / 1e-6
+        assert np.abs(numeric - jac[:, :, col]).max() < 0.02 * np.abs(jac[:, :, col]).max() + 1e-9, col
+    assert np.abs(jac[:, :, 11:]).max() > 0.1  # the terms move the residuals: a zero column would pass the above
