@@ -198,3 +198,30 @@ def test_a_scale_not_resolved_on_a_short_first_window_makes_the_rig_wait_for_mor
     assert rig.bias is not None and rig.bias.scale_resolved.all() and rig.bias.span_s > 10.0  # 6 s: none resolved
     assert not any(r.check == "gyro_scale" for r in rig.verdict().reasons)
     assert rig.scale_effect_deg < 0.1 and rig.calibrator.error_deg(R0) < 0.1
+
+
+def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchanged():
+    import warnings
+
+    import replication.rig.realdata as rd
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    tum = rd.data_root() / "tumvi_room1_orbslam3mono"
+    cam = rd.load_tum_trajectory(tum / "orbslam3_mono_cam0_traj.txt")
+    imu, ref = rd.load_euroc_imu(tum / "imu0_data.csv"), rd.load_reference(tum / "camchain.yaml")
+    keep, near = cam.t < cam.t[0] + 50.0, (imu.t > cam.t[0] - 1.0) & (imu.t < cam.t[0] + 51.0)  # 50 s: ready at 22
+    cam = OrientationStream(cam.t[keep], cam.world_from_body[keep], "camera")
+    runs = {}
+    for name, scale in (("recorded", np.ones(3)), ("x 3 % high", SCALE)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            rows = replay(cam, GyroStream(imu.t[near], imu.omega[near] * scale, "gyro"), OnlineCalibrator(),
+                          reference=ref)
+        runs[name] = (rows["error_deg"].iloc[-1], rows.attrs["summary"])
+    (err, plain), (err_x, scaled) = runs["recorded"], runs["x 3 % high"]
+    assert plain["ready"] and scaled["ready"] and err < 0.1 and abs(err_x - err) < 0.01
+    assert all(lo <= 1.0 <= hi for lo, hi in plain["gyro_scale_ci95"])  # TUM-VI's gyro: scale 1 on every axis
+    lo, hi = scaled["gyro_scale_ci95"][0]
+    assert lo <= 1.03 <= hi and scaled["gyro_scale"][0] == pytest.approx(1.03 * plain["gyro_scale"][0], abs=1e-3)
+    assert not any(r["check"] == "gyro_scale" for r in scaled["verdict"]["reasons"])
