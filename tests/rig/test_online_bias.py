@@ -225,3 +225,22 @@ def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchan
     lo, hi = scaled["gyro_scale_ci95"][0]
     assert lo <= 1.03 <= hi and scaled["gyro_scale"][0] == pytest.approx(1.03 * plain["gyro_scale"][0], abs=1e-3)
     assert not any(r["check"] == "gyro_scale" for r in scaled["verdict"]["reasons"])
+
+
+def test_the_live_rig_names_the_scale_in_not_ready_after_waiting_for_more_data():
+    from replication.rig.live import LiveRig
+
+    _, camera, gyro = _scaled_rig(seconds=30.0)
+    found = {}
+    for target in (0.01, 0.05):  # the joint radius: 0.023 deg on the first 20 s, 0.011 deg on all 30 s
+        rig = LiveRig(OnlineCalibrator(target_deg=target), diagnose=False)
+        samples = [(t, 1, k) for k, t in enumerate(camera.t)] + [(t, 0, k) for k, t in enumerate(gyro.t)]
+        for t, kind, k in sorted(samples):
+            rig.add_camera(t, camera.world_from_body[k]) if kind else rig.add_gyro(t, gyro.omega[k])
+        rig.finish()
+        found[target] = (rig.bias.span_s, [why for why in rig.calibrator.status()["not_ready"] if "gyro scale" in why],
+                         [r for r in rig.verdict().reasons if r.check == "gyro_scale"], rig.pairs_formed)
+    (span, named, reasons, pairs), (span_ok, named_ok, reasons_ok, pairs_ok) = found[0.01], found[0.05]
+    assert span > 25.0 and span_ok < 21.0 and pairs == pairs_ok  # waited to the end, every held pair formed
+    assert len(named) == 1 and "leaves R0 uncertain" in named[0] and len(reasons) == 1 and reasons[0].level == "fail"
+    assert not named_ok and not reasons_ok
