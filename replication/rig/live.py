@@ -16,7 +16,7 @@ from .._extras import require
 from ..core import so3
 from ..core.checks import check_number, check_rotation_matrices
 from .online import OnlineCalibrator
-from .online_bias import exp3, hold_raw, start_rig_bias
+from .online_bias import bias_fields, exp3, hold_raw, start_rig_bias
 from .quality import Verdict
 from .report import RADIUS_COVERS
 
@@ -118,7 +118,8 @@ class LiveRig:
         self._diagnosis = None
         self._finished = False
         self._no_offset = False      # the offset search found no overlap: no pairs
-        self.bias, self.bias_effect_deg, self._b = None, None, (0.0, 0.0, 0.0)  # the gyro bias: model, its R0 radius
+        self.bias, self.bias_effect_deg, self.scale_effect_deg = None, None, None  # the gyro model, its R0 radii
+        self._b, self._s = (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)  # its bias and scale, removed from every rate
         self._raw = deque() if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, done)
         self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
 
@@ -147,7 +148,8 @@ class LiveRig:
         self._sensor_kind("gyro")
         if self._raw is not None:
             hold_raw(self._raw, t, (wx, wy, wz), self.offset_window)
-        wx, wy, wz = wx - self._b[0], wy - self._b[1], wz - self._b[2]
+        (bx, by, bz), (sx, sy, sz) = self._b, self._s
+        wx, wy, wz = (wx - bx) / sx, (wy - by) / sy, (wz - bz) / sz
         if self._last_gyro is None:
             Q = np.eye(3)
         else:
@@ -435,9 +437,7 @@ class LiveRig:
             "clock_offset_s": self.offset, "clock_offset_given": self.offset_given,
             "clock_offset_correlation": self.offset_correlation, "clock_offset_applied": self.used_offset is not None
             and self.used_offset != 0.0 if not self.offset_given else True,
-            "gyro_bias_rad_s": None if self.bias is None else self.bias.bias_rad_s.tolist(),
-            "gyro_bias_ci95_rad_s": None if self.bias is None else self.bias.bias_ci95_rad_s.tolist(),
-            "gyro_bias_R0_deg": None if self.bias is None else float(self.bias_effect_deg),
+            **bias_fields(self),
             "note": self.offset_note,
             "events": events,
             "not_ready": status["not_ready"],

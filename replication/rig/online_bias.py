@@ -1,20 +1,25 @@
-"""The gyro's bias for the live front end (:class:`replication.rig.live.LiveRig`; issue 34, point 1,
-online half).
+"""The gyro's bias and scale for the live front end (:class:`replication.rig.live.LiveRig`; issue
+34, point 1, online half).
 
-A raw gyro reports ``omega + b``; integrated over a pairing interval ``T`` the bias turns every
+A raw gyro reports ``s omega + b``; integrated over a pairing interval ``T`` the bias turns every
 sensor motion by about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb: left in, it moves ``R0``
-(by degrees at 0.1 rad/s). The live rig holds its first ``offset_window`` seconds anyway (for the
-clock offset); on them the bias is estimated with ``R0`` as the batch does
+(by degrees at 0.1 rad/s); a scale off 1 on one axis does too (3 % on x: 0.5 deg median, the
+red team's reproducer). The live rig holds its first ``offset_window`` seconds anyway (for the
+clock offset); on them the bias and the scale per axis are estimated with ``R0`` as the batch does
 (:func:`replication.rig.sensor_model.estimate_sensor_model`: a centred or rest start, then
-Gauss-Newton on the pair residuals), removed from every rate (the held samples integrated again),
-and published with its 95 % interval. What its interval leaves in ``R0`` is measured
-(:func:`bias_effect_deg`: the chordal minimiser's response to the bias, by finite differences on the
-window's pairs, through the bias's covariance); ``ready`` is withheld, naming the bias (a
-``gyro_bias`` reason at level ``fail``), where the bias could not be estimated or where its interval
-leaves ``R0`` uncertain by the target or more.
+Gauss-Newton on the pair residuals), removed from every rate (``(omega - b) / s``, the held samples
+integrated again), and published with their 95 % intervals (:func:`bias_fields`). What their
+intervals leave in ``R0`` is measured (:func:`bias_effect_deg`: the chordal minimiser's response to
+the bias and the log scale, by finite differences on the window's pairs, through their covariance;
+an axis whose scale the window does not resolve is taken as within :data:`SCALE_PRIOR`); ``ready``
+is withheld, naming the bias or the scale (a ``gyro_bias`` or ``gyro_scale`` reason at level
+``fail``, whichever leaves more), where the bias could not be estimated or where the intervals
+leave ``R0`` uncertain by the target or more. Where the scale is what leaves it uncertain, the
+rig first waits for more data (up to :data:`BIAS_WAIT_WINDOWS` windows), as for a bias it could
+not estimate.
 
-Not done online: a bias that changes later (temperature) is not followed; the window's estimate is
-kept.
+Not done online: a bias or scale that changes later (temperature) is not followed; the window's
+estimate is kept.
 """
 from __future__ import annotations
 
@@ -23,8 +28,8 @@ from collections import deque
 
 import numpy as np
 
-__all__ = ["exp3", "start_bias", "start_rig_bias", "hold_raw", "bias_effect_deg", "reintegrate", "BIAS_STEP_RAD_S",
-           "BIAS_WAIT_WINDOWS"]
+__all__ = ["exp3", "start_bias", "start_rig_bias", "hold_raw", "bias_effect_deg", "reintegrate", "bias_fields",
+           "BIAS_STEP_RAD_S", "BIAS_WAIT_WINDOWS", "SCALE_PRIOR"]
 
 #: Where the bias cannot be estimated on the first window, the live rig waits for more data up to
 #: this many windows.
@@ -33,6 +38,12 @@ BIAS_WAIT_WINDOWS = 4
 #: The finite-difference step of :func:`bias_effect_deg` (rad/s): small against any bias that
 #: matters, large against the solver's convergence (1e-10 in the gradient).
 BIAS_STEP_RAD_S = 1e-3
+
+#: The 95 % half-width given to the scale of an axis the first window's motion does not resolve (held at 1,
+#: ``scale_resolved`` False): a MEMS gyro's scale factor is within a few per cent of 1 (the red team's reproducer: one
+#: axis 3 % high moved R0 by 0.55 deg median, ``ready`` 20/20). What such a scale can do to ``R0`` enters
+#: :func:`bias_effect_deg`; the finite-difference step on the log scale is :data:`BIAS_STEP_RAD_S` too.
+SCALE_PRIOR = 0.03
 
 
 def exp3(x: float, y: float, z: float) -> np.ndarray:
@@ -50,51 +61,71 @@ def exp3(x: float, y: float, z: float) -> np.ndarray:
                      [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
 
 
-def reintegrate(samples, bias) -> list:
+def reintegrate(samples, bias, scale=(1.0, 1.0, 1.0)) -> list:
     """``[(t, Q), ...]``: the raw gyro ``samples`` ``[(t, (wx, wy, wz)), ...]`` integrated from the
-    identity with ``omega - bias`` (the trapezoidal rule of
+    identity with ``(omega - bias) / scale`` (the trapezoidal rule of
     :meth:`replication.rig.live.LiveRig.add_gyro`)."""
     bx, by, bz = (float(v) for v in bias)
+    sx, sy, sz = (float(v) for v in scale)
     out, Q, last = [], np.eye(3), None
     for t, (wx, wy, wz) in samples:
         if last is not None:
             h = 0.5 * (t - last[0])
             vx, vy, vz = last[1]
-            Q = Q @ exp3(h * (vx + wx - 2 * bx), h * (vy + wy - 2 * by), h * (vz + wz - 2 * bz))
+            Q = Q @ exp3(h * (vx + wx - 2 * bx) / sx, h * (vy + wy - 2 * by) / sy, h * (vz + wz - 2 * bz) / sz)
         out.append((t, Q))
         last = (t, (wx, wy, wz))
     return out
 
 
-def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95) -> float:
-    """The radius (deg, at ``level``) of ``R0``'s uncertainty that the bias's own uncertainty
-    leaves: ``S C_b S^T`` with ``C_b`` the bias's covariance (``model.covariance[3:6, 3:6]``) and
-    ``S`` the chordal minimiser's rotation per unit bias on the window's pairs (finite differences
-    of :data:`BIAS_STEP_RAD_S` per axis)."""
+def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95, parts: bool = False):
+    """The radius (deg, at ``level``) of ``R0``'s uncertainty that the gyro model's own uncertainty
+    leaves: ``S C S^T`` with ``C`` the covariance of the bias and the log scale
+    (``model.covariance`` rows 3-5 and 8-10; an axis whose scale is not resolved, held at 1, is
+    given :data:`SCALE_PRIOR` as its 95 % half-width) and ``S`` the chordal minimiser's rotation per
+    unit bias and log scale on the window's pairs (finite differences of :data:`BIAS_STEP_RAD_S`).
+    ``parts``: ``(joint, bias's alone, scale's alone)``."""
     from ..core.so3 import rotation_vector_from_matrix
     from ..core.solvers.optimal import chordal_optimal
     from ..core.stats import radius_deg
     from .association import motion_pairs
     from .streams import GyroStream, integrate_gyro
 
-    def solved(b):
-        A, B, _ = motion_pairs(camera, integrate_gyro(GyroStream(gyro.t, gyro.omega - b)), interval,
-                               offset=model.offset_mid_s)
+    def solved(p):
+        rates = GyroStream(gyro.t, (gyro.omega - p[:3]) / np.exp(p[3:]))
+        A, B, _ = motion_pairs(camera, integrate_gyro(rates), interval, offset=model.offset_mid_s)
         return chordal_optimal(A, B).R
 
-    b = np.asarray(model.bias_rad_s, dtype=float)
-    R = solved(b)
-    S = np.stack([rotation_vector_from_matrix(R.T @ solved(b + BIAS_STEP_RAD_S * e)) / BIAS_STEP_RAD_S
-                  for e in np.eye(3)], axis=-1)
-    cov = S @ model.covariance[3:6, 3:6] @ S.T
-    return radius_deg(cov, level) if np.all(np.isfinite(cov)) else math.inf
+    p = np.concatenate([np.asarray(model.bias_rad_s, float), np.log(np.asarray(model.scale, float))])
+    R = solved(p)
+    S = np.stack([rotation_vector_from_matrix(R.T @ solved(p + BIAS_STEP_RAD_S * e)) / BIAS_STEP_RAD_S
+                  for e in np.eye(6)], axis=-1)
+    rows = np.array([3, 4, 5, 8, 9, 10])
+    C = np.array(model.covariance, float)[np.ix_(rows, rows)]
+    held = np.flatnonzero(~np.asarray(model.scale_resolved, bool))
+    C[3 + held, :], C[:, 3 + held] = 0.0, 0.0
+    C[3 + held, 3 + held] = (SCALE_PRIOR / 1.959963984540054) ** 2  # a 95 % half-width of SCALE_PRIOR
+
+    def radius(cols):
+        cov = S[:, cols] @ C[np.ix_(cols, cols)] @ S[:, cols].T
+        return radius_deg(cov, level) if np.all(np.isfinite(cov)) else math.inf
+
+    joint = radius(np.arange(6))
+    return (joint, radius(np.arange(3)), radius(np.arange(3, 6))) if parts else joint
 
 
 def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: float):
-    """The bias on the first window (``camera``: an OrientationStream, ``gyro``: the raw
+    """The bias and scale on the first window (``camera``: an OrientationStream, ``gyro``: the raw
     GyroStream): ``(model, effect_deg, reason)``; ``model`` None where it could not be estimated
-    (``reason`` says why); ``reason`` (a :class:`replication.rig.quality.Reason`, check
-    ``gyro_bias``) or None where the bias is known well enough."""
+    (``reason`` says why); ``effect_deg`` the joint radius of :func:`bias_effect_deg`; ``reason`` (a
+    :class:`replication.rig.quality.Reason`, check ``gyro_bias``, or ``gyro_scale`` where the scale's
+    share of the radius is the larger) or None where the gyro is known well enough."""
+    model, effects, reason = _start(camera, gyro, interval, max_offset, target_deg)
+    return model, effects[0], reason
+
+
+def _start(camera, gyro, interval, max_offset, target_deg):
+    """:func:`start_bias` with the effects ``(joint, bias's, scale's)``."""
     from .quality import Reason
     from .sensor_verdict import model_or_note
 
@@ -105,24 +136,41 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
     except ValueError as err:  # streams too short for any pair
         model, note = None, str(err)
     if model is None:
-        return None, math.inf, Reason("gyro_bias", "fail", None, None, (
+        return None, (math.inf,) * 3, Reason("gyro_bias", "fail", None, None, (
             f"the gyro bias could not be estimated on the first {span:.3g} s ({note}): a bias left in the rates "
             f"turns every sensor motion and R0 with it, so R0 is not trusted; give gyro_bias=False if the rates are "
             f"already corrected"))
     try:
-        effect = bias_effect_deg(camera, gyro, model, interval)
+        effects = bias_effect_deg(camera, gyro, model, interval, parts=True)
     except (ValueError, np.linalg.LinAlgError) as err:
-        effect, why = math.inf, f" ({err})"
+        effects, why = (math.inf,) * 3, f" ({err})"
     else:
         why = ""
+    effect = effects[0]
     if effect < target_deg:
-        return model, effect, None
+        return model, effects, None
+    if effects[2] >= effects[1]:
+        return model, effects, Reason("gyro_scale", "fail", effect, target_deg, _scale_words(model, span, effects, why,
+                                                                                            target_deg))
     lo, hi = model.bias_ci95_rad_s[:, 0], model.bias_ci95_rad_s[:, 1]
-    return model, effect, Reason("gyro_bias", "fail", effect, target_deg, (
+    return model, effects, Reason("gyro_bias", "fail", effect, target_deg, (
         f"the gyro bias {np.round(model.bias_rad_s, 4).tolist()} rad/s, estimated on the first {span:.3g} s, is "
         f"known only to within [{', '.join(f'{a:.3g}..{b:.3g}' for a, b in zip(lo, hi))}] rad/s: that leaves R0 "
         f"uncertain by {effect:.3g} deg (95 %){why} >= the target {target_deg:g} deg; move more (about every "
         f"axis) in the first window, or give a longer offset_window"))
+
+
+def _scale_words(model, span, effects, why, target_deg) -> str:
+    """Why the gyro's scale leaves ``R0`` uncertain: each axis's scale, its interval or that it was held at 1."""
+    axes = []
+    for i, (s, (lo, hi), ok) in enumerate(zip(model.scale, model.scale_ci95, model.scale_resolved)):
+        axes.append(f"{'xyz'[i]} {s:.4f} [{lo:.4f}, {hi:.4f}]" if ok else
+                    f"{'xyz'[i]} not resolved (held at 1, taken as within +-{100 * SCALE_PRIOR:g} %)")
+    note = f"; {model.scale_note}" if model.scale_note else ""
+    return (f"the gyro scale per axis, estimated on the first {span:.3g} s and removed from the rates "
+            f"({'; '.join(axes)}{note}), leaves R0 uncertain by {effects[2]:.3g} deg (95 %; with the bias "
+            f"{effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about every axis in the first window, "
+            f"or give a longer offset_window")
 
 
 def hold_raw(raw, t: float, omega, window: float) -> None:
@@ -139,7 +187,8 @@ def start_rig_bias(rig) -> bool:
     """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias`
     on every camera pose and raw rate held so far), removed from its rates (its buffer integrated
     again from the raw samples) and any reason named. False while it waits: for the first window,
-    and, where the bias could not be estimated on it (a rig at rest at the start), for more data,
+    and, where the bias could not be estimated on it (a rig at rest at the start) or its scale leaves
+    ``R0`` uncertain beyond the target (an axis not yet resolved: a short window), for more data,
     every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are held meanwhile; at the end
     of the streams: whatever arrived)."""
     from .streams import GyroStream, OrientationStream
@@ -150,17 +199,34 @@ def start_rig_bias(rig) -> bool:
         return False
     camera = OrientationStream(np.array([c[0] for c in cam]), np.array([c[1] for c in cam]), "camera (live)")
     raw = GyroStream(np.array([g[0] for g in rig._raw]), np.array([g[1] for g in rig._raw]), "gyro (live)")
-    model, effect, reason = start_bias(camera, raw, interval=rig.interval, max_offset=rig.max_offset,
-                                       target_deg=rig.calibrator.target_deg)
-    if model is None and not rig._finished and span < BIAS_WAIT_WINDOWS * rig.offset_window:
+    model, effects, reason = _start(camera, raw, rig.interval, rig.max_offset, rig.calibrator.target_deg)
+    waits = model is None or (reason is not None and reason.check == "gyro_scale")  # more data may resolve it
+    if waits and not rig._finished and span < BIAS_WAIT_WINDOWS * rig.offset_window:
         rig._bias_next = span + 0.5 * rig.offset_window
         return False
-    rig.bias, rig.bias_effect_deg = model, effect
+    rig.bias, rig.bias_effect_deg, rig.scale_effect_deg = model, effects[0], effects[2]
     rig._b = b = (0.0, 0.0, 0.0) if model is None else tuple(float(v) for v in model.bias_rad_s)
-    rebuilt = reintegrate(rig._raw, b)  # every held pose covered again (the buffer keeps a window only)
+    rig._s = s = (1.0, 1.0, 1.0) if model is None else tuple(float(v) for v in model.scale)
+    rebuilt = reintegrate(rig._raw, b, s)  # every held pose covered again (the buffer keeps a window only)
     rig._gyro = deque(rebuilt)
-    rig._last_gyro = (rebuilt[-1][0], tuple(w - c for w, c in zip(rig._raw[-1][1], b)), rebuilt[-1][1])
+    rig._last_gyro = (rebuilt[-1][0], tuple((w - c) / k for w, c, k in zip(rig._raw[-1][1], b, s)), rebuilt[-1][1])
     rig._raw = None
     if reason is not None:
         rig._name(reason)
     return True
+
+
+def bias_fields(rig) -> dict:
+    """The live rig's summary keys of its gyro model (None where none was estimated): the bias and
+    its interval, the scale per axis and its interval (None on an axis held at 1, as the batch
+    report's), the joint radius they leave in ``R0`` and the scale's share of it."""
+    m = rig.bias
+    return {
+        "gyro_bias_rad_s": None if m is None else m.bias_rad_s.tolist(),
+        "gyro_bias_ci95_rad_s": None if m is None else m.bias_ci95_rad_s.tolist(),
+        "gyro_bias_R0_deg": None if m is None else float(rig.bias_effect_deg),
+        "gyro_scale": None if m is None else [float(v) for v in m.scale],
+        "gyro_scale_ci95": None if m is None else [[float(v) for v in ci] if ok else None
+                                                   for ci, ok in zip(m.scale_ci95, m.scale_resolved)],
+        "gyro_scale_R0_deg": None if m is None else float(rig.scale_effect_deg),
+    }

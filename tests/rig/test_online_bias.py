@@ -64,7 +64,7 @@ def test_a_bias_interval_that_leaves_r0_beyond_the_target_withholds_ready(factor
     model, again, found = start_bias(camera, gyro, interval=1.0, max_offset=0.2, target_deg=effect * factor)
     assert model is not None and again == effect and (found is not None) is reason
     if reason:
-        assert found.check == "gyro_bias" and found.level == "fail" and "leaves R0" in found.message
+        assert found.check in ("gyro_bias", "gyro_scale") and found.level == "fail" and "leaves R0" in found.message
 
 
 def test_gyro_bias_must_be_a_bool():
@@ -128,3 +128,119 @@ def test_pairs_held_while_the_bias_waits_are_all_formed_when_it_gives_up():
     assert any(r["check"] == "gyro_bias" and "could not be estimated" in r["message"]
                for r in summary["verdict"]["reasons"])
     assert rows["t_seen"].iloc[0] >= 80.0
+
+
+SCALE = np.array([1.03, 1.0, 1.0])  # one gyro axis reads 3 % high: left at 1, R0 about 0.5 deg off (red team 5)
+
+
+def _scaled_rig(seconds=40.0, seed=5):
+    from replication.rig.streams import GyroStream
+
+    R0, camera, gyro = _biased_rig(seconds, seed)
+    return R0, camera, GyroStream(gyro.t, (gyro.omega - BIAS) * SCALE + BIAS, "gyro")
+
+
+def test_the_live_rig_removes_a_gyro_scale_error_and_publishes_it_with_its_interval():
+    R0, camera, gyro = _scaled_rig()
+    rig = _live(camera, gyro)
+    model = rig.bias
+    lo, hi = model.scale_ci95[:, 0], model.scale_ci95[:, 1]
+    assert model.scale_resolved.all() and np.all(lo <= SCALE) and np.all(SCALE <= hi) and np.all(hi - lo < 0.01)
+    assert rig._s == tuple(model.scale)  # the scale divides every rate after the window
+    assert rig.calibrator.error_deg(R0) < 0.1 and rig.calibrator.ready  # left at 1: about 0.5 deg off
+    summary = rig.summary()
+    assert summary["gyro_scale"] == model.scale.tolist() and summary["gyro_scale_ci95"] == model.scale_ci95.tolist()
+    assert 0 < summary["gyro_scale_R0_deg"] <= summary["gyro_bias_R0_deg"] < rig.calibrator.target_deg
+
+
+def test_the_held_samples_are_integrated_again_with_the_bias_and_the_scale():
+    from replication.rig.online_bias import reintegrate
+
+    samples = [(0.1 * k, (1.03 * 0.5 + 0.02, 0.01, -0.04)) for k in range(11)]
+    out = reintegrate(samples, (0.02, 0.01, -0.04), (1.03, 1.0, 1.0))
+    assert out[0][1] == pytest.approx(np.eye(3)) and out[-1][0] == pytest.approx(1.0)
+    assert so3.rotation_vector_from_matrix(out[-1][1]) == pytest.approx([0.5, 0.0, 0.0], abs=1e-12)
+
+
+@pytest.mark.parametrize("factor, named", [(1.01, False), (0.99, True)])
+def test_a_scale_interval_that_leaves_r0_beyond_the_target_withholds_ready_naming_the_scale(factor, named):
+    from replication.rig.online_bias import _start
+
+    _, camera, gyro = _scaled_rig(seconds=20.0)
+    model, (joint, bias, scale), _ = _start(camera, gyro, 1.0, 0.2, 1.0)
+    assert scale > bias  # on this rig the scale's interval leaves more in R0 than the bias's
+    again, effects, found = _start(camera, gyro, 1.0, 0.2, joint * factor)
+    assert effects == (joint, bias, scale) and (found is not None) is named
+    if named:
+        assert found.check == "gyro_scale" and found.level == "fail"
+        assert "gyro scale" in found.message and "leaves R0" in found.message and "x 1.03" in found.message
+
+
+def test_an_axis_whose_scale_is_held_at_1_is_taken_as_within_the_prior():
+    from dataclasses import replace
+
+    from replication.rig.online_bias import SCALE_PRIOR, bias_effect_deg, start_bias
+
+    _, camera, gyro = _scaled_rig(seconds=20.0)
+    model, _, _ = start_bias(camera, gyro, interval=1.0, max_offset=0.2, target_deg=1.0)
+    _, _, resolved = bias_effect_deg(camera, gyro, model, 1.0, parts=True)
+    held = replace(model, scale_resolved=np.array([True, True, False]))
+    joint, bias, scale = bias_effect_deg(camera, gyro, held, 1.0, parts=True)
+    assert SCALE_PRIOR == 0.03 and scale > 5 * resolved and joint >= scale  # z's scale unknown: R0 much less certain
+
+
+def test_a_scale_not_resolved_on_a_short_first_window_makes_the_rig_wait_for_more_data():
+    from replication.rig.streams import GyroStream
+
+    R0, camera, gyro = _scaled_rig(seconds=60.0)
+    late = GyroStream(gyro.t + 3.0, gyro.omega, "gyro")  # 3 s clock offset: the first window's pairs span 6 s only
+    rig = _live(camera, late, max_offset=4.0)
+    assert rig.bias is not None and rig.bias.scale_resolved.all() and rig.bias.span_s > 10.0  # 6 s: none resolved
+    assert not any(r.check == "gyro_scale" for r in rig.verdict().reasons)
+    assert rig.scale_effect_deg < 0.1 and rig.calibrator.error_deg(R0) < 0.1
+
+
+def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchanged():
+    import warnings
+
+    import replication.rig.realdata as rd
+    from replication.rig.live import replay
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    tum = rd.data_root() / "tumvi_room1_orbslam3mono"
+    cam = rd.load_tum_trajectory(tum / "orbslam3_mono_cam0_traj.txt")
+    imu, ref = rd.load_euroc_imu(tum / "imu0_data.csv"), rd.load_reference(tum / "camchain.yaml")
+    keep, near = cam.t < cam.t[0] + 50.0, (imu.t > cam.t[0] - 1.0) & (imu.t < cam.t[0] + 51.0)  # 50 s: ready at 22
+    cam = OrientationStream(cam.t[keep], cam.world_from_body[keep], "camera")
+    runs = {}
+    for name, scale in (("recorded", np.ones(3)), ("x 3 % high", SCALE)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            rows = replay(cam, GyroStream(imu.t[near], imu.omega[near] * scale, "gyro"), OnlineCalibrator(),
+                          reference=ref)
+        runs[name] = (rows["error_deg"].iloc[-1], rows.attrs["summary"])
+    (err, plain), (err_x, scaled) = runs["recorded"], runs["x 3 % high"]
+    assert plain["ready"] and scaled["ready"] and err < 0.1 and abs(err_x - err) < 0.01
+    assert all(lo <= 1.0 <= hi for lo, hi in plain["gyro_scale_ci95"])  # TUM-VI's gyro: scale 1 on every axis
+    lo, hi = scaled["gyro_scale_ci95"][0]
+    assert lo <= 1.03 <= hi and scaled["gyro_scale"][0] == pytest.approx(1.03 * plain["gyro_scale"][0], abs=1e-3)
+    assert not any(r["check"] == "gyro_scale" for r in scaled["verdict"]["reasons"])
+
+
+def test_the_live_rig_names_the_scale_in_not_ready_after_waiting_for_more_data():
+    from replication.rig.live import LiveRig
+
+    _, camera, gyro = _scaled_rig(seconds=30.0)
+    found = {}
+    for target in (0.01, 0.05):  # the joint radius: 0.023 deg on the first 20 s, 0.011 deg on all 30 s
+        rig = LiveRig(OnlineCalibrator(target_deg=target), diagnose=False)
+        samples = [(t, 1, k) for k, t in enumerate(camera.t)] + [(t, 0, k) for k, t in enumerate(gyro.t)]
+        for t, kind, k in sorted(samples):
+            rig.add_camera(t, camera.world_from_body[k]) if kind else rig.add_gyro(t, gyro.omega[k])
+        rig.finish()
+        found[target] = (rig.bias.span_s, [why for why in rig.calibrator.status()["not_ready"] if "gyro scale" in why],
+                         [r for r in rig.verdict().reasons if r.check == "gyro_scale"], rig.pairs_formed)
+    (span, named, reasons, pairs), (span_ok, named_ok, reasons_ok, pairs_ok) = found[0.01], found[0.05]
+    assert span > 25.0 and span_ok < 21.0 and pairs == pairs_ok  # waited to the end, every held pair formed
+    assert len(named) == 1 and "leaves R0 uncertain" in named[0] and len(reasons) == 1 and reasons[0].level == "fail"
+    assert not named_ok and not reasons_ok
