@@ -4,23 +4,29 @@ Synthetic rigs (:func:`biased_rig`: the smooth three-axis motion of ``rig_stream
 noise 0.05 deg, gyro noise 0.2 deg/s per sample at 200 Hz, a clock offset drawn in +-20 ms), over
 ``--runs`` seeded runs per set (seeds ``[SEED, set, run]``):
 
-* bias: each axis drawn in +-0.1 rad/s, half the runs with a 3 s rest at the start; the bias error per axis (median and
-  95th percentile of its absolute value), how often each axis's 95 % interval holds the truth (3 axes per run; Wilson
-  95 % interval), how often the halves' test fires (false alarms: the bias is constant) and the reason with it, how
-  often the drift (0 here) is resolved, and R0's error with and without the bias model (``calibrate``);
-* drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's drift reason fires;
-* time: ``calibrate`` with and without the model on the same input (median of the runs of the first set);
-* scale (``--scale-runs``): the x axis reading 5 %, 1 % and 0 % high (60 s): the verdict, the ``gyro_scale`` reason,
-  R0's error and how far R0 would move with the scale left at 1 (seeds ``[SEED, 10 + set, run]``);
-* misalignment (``--misalignment-runs``): the gyro reading ``T omega + b``, ``T = I + N(mu)`` with the three
-  symmetric off-diagonal terms ``mu`` of 2 %, 0.5 % and 0 % (random signs; 40 s; seeds ``--misalignment-seed`` + run,
-  each a ``default_rng(seed)``): the verdict, the ``gyro_misalignment`` reason, any false reason, R0's error and how
-  far R0 would move with the terms left at 0;
-* drift coverage (``--coverage-runs``): no drift, 15, 40 and 60 s: how often the drift's 95 % interval excludes 0
-  (nominal 0.05; seeds ``[SEED, 20 + set, run]``);
-* real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned into rates with the
-  issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in the shared data), against the
-  monocular ORB-SLAM3 camera: R0 with and without the model against both published calibrations.
+* bias: each axis drawn in +-0.1 rad/s, half the runs with a 3 s rest at the start; the bias error
+  per axis (median and 95th percentile of its absolute value), how often each axis's 95 % interval
+  holds the truth (3 axes per run; Wilson 95 % interval), how often the halves' test fires (false
+  alarms: the bias is constant) and the reason with it, how often the drift (0 here) is resolved,
+  and R0's error with and without the bias model (``calibrate``);
+* drift: 0, 50 and 200 ppm with a bias: how often the drift is resolved, how often the verdict's
+  drift reason fires;
+* time: ``calibrate`` with and without the model on the same input (median of the runs of the first
+  set);
+* scale (``--scale-runs``): the x axis reading 5 %, 1 % and 0 % high (60 s): the verdict, the
+  ``gyro_scale`` reason, R0's error and how far R0 would move with the scale left at 1 (seeds
+  ``[SEED, 10 + set, run]``);
+* misalignment (``--misalignment-runs``): the gyro reading ``T omega + b``, ``T = I + N(mu)`` with
+  the three symmetric off-diagonal terms ``mu`` of 2 %, 0.5 % and 0 % (random signs; 40 s; seeds
+  ``--misalignment-seed`` + run, each a ``default_rng(seed)``): the verdict, the
+  ``gyro_misalignment`` reason, any false reason, R0's error and how far R0 would move with the
+  terms left at 0;
+* drift coverage (``--coverage-runs``): no drift, 15, 40 and 60 s: how often the drift's 95 %
+  interval excludes 0 (nominal 0.05; seeds ``[SEED, 20 + set, run]``);
+* real (``--real``): TUM-VI room1's raw gyro and EuRoC MH01's ground-truth body orientation turned
+  into rates with the issue's bias [-0.001, 0.020, 0.079] rad/s added (the raw imu0 file is not in
+  the shared data), against the monocular ORB-SLAM3 camera: R0 with and without the model against
+  both published calibrations.
 
 Usage: python benchmarks/bench_sensor_model.py [--runs 200] [--seed 3400] [--real] [--scale-runs 30]
 [--coverage-runs 150] [--misalignment-runs 24 --misalignment-seed 72000]
@@ -139,9 +145,9 @@ MISALIGNMENT_BIAS = np.array([0.03, -0.02, 0.04])
 
 
 def misaligned_rig(seed, size, seconds=40.0):
-    """``(R0, camera, gyro, mu)``: :func:`biased_rig` from ``default_rng(seed)`` (its phases drawn), the gyro reading
-    ``T omega + MISALIGNMENT_BIAS`` with ``T = I + N(mu)``, ``mu`` the terms ``xy, xz, yz`` of ``size`` with random
-    signs."""
+    """``(R0, camera, gyro, mu)``: :func:`biased_rig` from ``default_rng(seed)`` (its phases drawn),
+    the gyro reading ``T omega + MISALIGNMENT_BIAS`` with ``T = I + N(mu)``, ``mu`` the terms ``xy,
+    xz, yz`` of ``size`` with random signs."""
     from replication.rig.gyro_model import axes_matrix
 
     rng = np.random.default_rng(seed)

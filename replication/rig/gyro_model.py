@@ -1,18 +1,21 @@
-"""The numerical core of the gyro's sensor model (:mod:`replication.rig.sensor_model`): the rates integrated with
-their Jacobians' sums, the pairs inside the gyro stream, the pair residuals and their Jacobian in the eleven
-parameters ``(theta, b, d, k, sigma, mu)``, Huber's weights, the Newey-West sandwich, the block jackknife, the weighted
-Gauss-Newton, and the critical value of its intervals (:func:`critical_value`).
+"""The numerical core of the gyro's sensor model (:mod:`replication.rig.sensor_model`): the rates
+integrated with their Jacobians' sums, the pairs inside the gyro stream, the pair residuals and
+their Jacobian in the eleven parameters ``(theta, b, d, k, sigma, mu)``, Huber's weights, the
+Newey-West sandwich, the block jackknife, the weighted Gauss-Newton, and the critical value of its
+intervals (:func:`critical_value`).
 
 The rates used are ``T^-1 (omega - b)``, ``T = diag(exp(sigma)) + N(mu)`` the gyro's axes (it reads
-``T omega + b``: Kalibr's and OpenVINS's ``T_g``), ``s = exp(sigma)`` the scale per axis and ``N(mu)`` the symmetric
-off-diagonal part, ``mu = (xy, xz, yz)`` (the misalignment: the antisymmetric part of ``T_g`` is a rotation of the
-sensor's frame, which ``R0`` absorbs, so only the symmetric part is identifiable), so that with
-``R0 <- R0 exp(theta)``:
+``T omega + b``: Kalibr's and OpenVINS's ``T_g``), ``s = exp(sigma)`` the scale per axis and
+``N(mu)`` the symmetric off-diagonal part, ``mu = (xy, xz, yz)`` (the misalignment: the
+antisymmetric part of ``T_g`` is a rotation of the sensor's frame, which ``R0`` absorbs, so only the
+symmetric part is identifiable), so that with ``R0 <- R0 exp(theta)``:
 
-* ``d r / d b = M_j^T J_j T^-1`` with ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` (the first-order bias Jacobian),
-* ``d r / d (sigma, mu) = -M_j^T Q(t_k)^T sum_s Q_{s+1} T^-1 D(w_s) dt_s`` (``w_s`` the step's rate as used: a change
-  ``dT`` of the axes changes each step's rate by ``-T^-1 dT w_s``; ``D(w) = [diag(s w), (w_y, w_x, 0), (w_z, 0, w_x),
-  (0, w_z, w_y)]``, the columns of ``dT w`` per parameter).
+* ``d r / d b = M_j^T J_j T^-1`` with ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` (the first-order bias
+  Jacobian),
+* ``d r / d (sigma, mu) = -M_j^T Q(t_k)^T sum_s Q_{s+1} T^-1 D(w_s) dt_s`` (``w_s`` the step's rate
+  as used: a change ``dT`` of the axes changes each step's rate by ``-T^-1 dT w_s``; ``D(w) =
+  [diag(s w), (w_y, w_x, 0), (w_z, 0, w_x), (0, w_z, w_y)]``, the columns of ``dT w`` per
+  parameter).
 """
 from __future__ import annotations
 
@@ -31,17 +34,18 @@ _Z95 = 1.959963984540054
 
 
 def critical_value(n_blocks: int) -> float:
-    """The two-sided 95 % critical value of a parameter over its jackknife standard deviation from ``n_blocks``
-    blocks: Student's t with ``n_blocks - 1`` degrees of freedom (2.45 at 7 blocks, a 15 s recording; 2.10 at 19,
-    40 s; 2.05 at 29, 60 s): the variance is itself estimated from that many blocks."""
+    """The two-sided 95 % critical value of a parameter over its jackknife standard deviation from
+    ``n_blocks`` blocks: Student's t with ``n_blocks - 1`` degrees of freedom (2.45 at 7 blocks, a
+    15 s recording; 2.10 at 19, 40 s; 2.05 at 29, 60 s): the variance is itself estimated from that
+    many blocks."""
     from scipy.stats import t
 
     return float(t.ppf(0.975, max(1, int(n_blocks) - 1)))
 
 
 def axes_matrix(sigma, mu) -> np.ndarray:
-    """``T = diag(exp(sigma)) + N(mu)``: the gyro reads ``T omega + b`` (``mu`` the symmetric off-diagonal terms
-    ``xy, xz, yz``)."""
+    """``T = diag(exp(sigma)) + N(mu)``: the gyro reads ``T omega + b`` (``mu`` the symmetric
+    off-diagonal terms ``xy, xz, yz``)."""
     T = np.diag(np.exp(np.asarray(sigma, float)))
     for m, (a, c) in zip(np.asarray(mu, float), MISALIGNMENT_AXES):
         T[a, c] = T[c, a] = m
@@ -50,9 +54,9 @@ def axes_matrix(sigma, mu) -> np.ndarray:
 
 def _integrate(t, w, b, sigma, mu=None):
     """``Q`` (world_from_body, ``Q_0 = I``) of the rates ``T^-1 (w - b)`` (trapezoidal, as
-    :func:`replication.rig.streams.integrate_gyro`), ``S_n = sum_{s<n} Q_{s+1} dt_s`` (the bias Jacobian's sums),
-    ``U_n = sum_{s<n} Q_{s+1} T^-1 D(w_s) dt_s`` (the axes' six: scale and misalignment), the steps' rates ``w_s`` and
-    ``T^-1``."""
+    :func:`replication.rig.streams.integrate_gyro`), ``S_n = sum_{s<n} Q_{s+1} dt_s`` (the bias
+    Jacobian's sums), ``U_n = sum_{s<n} Q_{s+1} T^-1 D(w_s) dt_s`` (the axes' six: scale and
+    misalignment), the steps' rates ``w_s`` and ``T^-1``."""
     dt = np.diff(t)
     if np.max(np.abs(sigma)) > 30.0:  # a scale of 1e13: no gyro (and exp overflows further on)
         raise np.linalg.LinAlgError("the gyro's axes' matrix is out of range")
@@ -74,8 +78,9 @@ def _integrate(t, w, b, sigma, mu=None):
 
 
 def _at(times, t, Q, S, U, rates):
-    """``Q``, ``S``, ``U`` and the rate at ``times`` inside ``t``: ``Q_n exp(rate_n (tau - t_n))`` (the geodesic
-    between the samples, i.e. their slerp), ``S`` and ``U`` linearly, the step's rate."""
+    """``Q``, ``S``, ``U`` and the rate at ``times`` inside ``t``: ``Q_n exp(rate_n (tau - t_n))``
+    (the geodesic between the samples, i.e. their slerp), ``S`` and ``U`` linearly, the step's
+    rate."""
     n = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
     h = times - t[n]
     f = (h / (t[n + 1] - t[n]))[:, None, None]
@@ -84,8 +89,9 @@ def _at(times, t, Q, S, U, rates):
 
 
 def _pairs(camera, t_gyro, interval, offset, max_offset):
-    """Camera index pairs ``(i, k)`` about ``interval`` apart whose sensor times (shifted by up to ``max_offset``
-    besides ``offset``) stay inside the gyro stream and cross none of its gaps (5 median steps without a sample)."""
+    """Camera index pairs ``(i, k)`` about ``interval`` apart whose sensor times (shifted by up to
+    ``max_offset`` besides ``offset``) stay inside the gyro stream and cross none of its gaps (5
+    median steps without a sample)."""
     t = camera.t
     margin = abs(offset) + max_offset
     inside = np.flatnonzero((t - margin >= t_gyro[0]) & (t + margin <= t_gyro[-1]))
@@ -107,8 +113,8 @@ def _pairs(camera, t_gyro, interval, offset, max_offset):
 
 
 def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None, mu=None):
-    """Residuals ``(J, 3)`` and Jacobians ``(J, 3, 14)`` (theta, b, d, k, sigma, mu) of the pairs at the parameters
-    (``sigma`` the log-scales and ``mu`` the misalignment, 0 by default)."""
+    """Residuals ``(J, 3)`` and Jacobians ``(J, 3, 14)`` (theta, b, d, k, sigma, mu) of the pairs at
+    the parameters (``sigma`` the log-scales and ``mu`` the misalignment, 0 by default)."""
     sigma = np.zeros(3) if sigma is None else np.asarray(sigma, float)
     Q, S, U, rates, Ti = _integrate(t_g, w_g, b, sigma, mu)
     si, sk = ti + d + kappa * (ti - t_mid), tk + d + kappa * (tk - t_mid)
@@ -129,15 +135,16 @@ def _linearise(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, sigma=None, mu=None):
 
 
 def _weights(r):
-    """Huber weights of the pairs' residual norms: 1 up to :data:`_HUBER` times their median (3.8 standard
-    deviations of a component for Gaussian residuals), then falling as 1 / norm."""
+    """Huber weights of the pairs' residual norms: 1 up to :data:`_HUBER` times their median (3.8
+    standard deviations of a component for Gaussian residuals), then falling as 1 / norm."""
     n = np.linalg.norm(r, axis=-1)
     c = _HUBER * np.median(n) + 1e-15  # the norm's median is 1.54 standard deviations of a component
     return np.where(n <= c, 1.0, c / np.maximum(n, 1e-300))
 
 
 def _sandwich(r, jac, wts, lags, cols):
-    """The Newey-West sandwich covariance of the parameters ``cols`` (Bartlett weights, ``lags`` pairs)."""
+    """The Newey-West sandwich covariance of the parameters ``cols`` (Bartlett weights, ``lags``
+    pairs)."""
     Jc = jac[:, :, cols]
     H = np.einsum("j,jai,jak->ik", wts, Jc, Jc)
     g = np.einsum("j,jai,ja->ji", wts, Jc, r)
@@ -150,13 +157,14 @@ def _sandwich(r, jac, wts, lags, cols):
 
 
 def _block_jackknife(r, jac, wts, block, cols):
-    """The delete-a-block jackknife covariance of the parameters ``cols`` and its number of blocks: the pairs cut
-    into consecutive blocks of ``block`` pairs, each block's removal re-fitted by one Gauss-Newton step from the
-    solution (``(H - H_B)^-1 g_B``), the spread of the re-fits times ``(m - 1) / m``. Unlike the sandwich, whose
-    residuals are those of the fit, it sees how much each block pulls the fit (its leverage): the drift is a slope
-    carried by the blocks at the recording's ends, which the fit follows, so the sandwich's residuals there are too
-    small; with few blocks the sandwich's drift deviation was 1.7 times too small (15 s: 7 blocks), 1.3 times at 40 s
-    (19 blocks)."""
+    """The delete-a-block jackknife covariance of the parameters ``cols`` and its number of blocks:
+    the pairs cut into consecutive blocks of ``block`` pairs, each block's removal re-fitted by one
+    Gauss-Newton step from the solution (``(H - H_B)^-1 g_B``), the spread of the re-fits times ``(m
+    - 1) / m``. Unlike the sandwich, whose residuals are those of the fit, it sees how much each
+    block pulls the fit (its leverage): the drift is a slope carried by the blocks at the
+    recording's ends, which the fit follows, so the sandwich's residuals there are too small; with
+    few blocks the sandwich's drift deviation was 1.7 times too small (15 s: 7 blocks), 1.3 times at
+    40 s (19 blocks)."""
     Jc = jac[:, :, cols]
     Hj = np.einsum("j,jai,jak->jik", wts, Jc, Jc)
     g = np.einsum("j,jai,ja->ji", wts, Jc, r)
@@ -173,9 +181,10 @@ def _block_jackknife(r, jac, wts, block, cols):
 
 
 def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8, sigma=None, mu=None):
-    """Weighted Gauss-Newton on the parameters ``cols`` (indices into theta, b, d, k, sigma, mu), step halving on the
-    cost (at most 3 halvings); stops when a step lowers the cost by less than 1e-8 of it. Returns the parameters
-    ``[X, b, d, k, sigma, mu]``, the residuals, the Jacobians, the weights and the iterations done."""
+    """Weighted Gauss-Newton on the parameters ``cols`` (indices into theta, b, d, k, sigma, mu),
+    step halving on the cost (at most 3 halvings); stops when a step lowers the cost by less than
+    1e-8 of it. Returns the parameters ``[X, b, d, k, sigma, mu]``, the residuals, the Jacobians,
+    the weights and the iterations done."""
     params = [X, np.array(b, float), float(d), float(kappa), np.zeros(3) if sigma is None else np.array(sigma, float),
               np.zeros(3) if mu is None else np.array(mu, float)]
 

@@ -39,10 +39,11 @@ BIAS_WAIT_WINDOWS = 4
 #: matters, large against the solver's convergence (1e-10 in the gradient).
 BIAS_STEP_RAD_S = 1e-3
 
-#: The 95 % half-width given to the scale of an axis the first window's motion does not resolve (held at 1,
-#: ``scale_resolved`` False): a MEMS gyro's scale factor is within a few per cent of 1 (the red team's reproducer: one
-#: axis 3 % high moved R0 by 0.55 deg median, ``ready`` 20/20). What such a scale can do to ``R0`` enters
-#: :func:`bias_effect_deg`; the finite-difference step on the log scale is :data:`BIAS_STEP_RAD_S` too.
+#: The 95 % half-width given to the scale of an axis the first window's motion does not resolve
+#: (held at 1, ``scale_resolved`` False): a MEMS gyro's scale factor is within a few per cent of 1
+#: (the red team's reproducer: one axis 3 % high moved R0 by 0.55 deg median, ``ready`` 20/20). What
+#: such a scale can do to ``R0`` enters :func:`bias_effect_deg`; the finite-difference step on the
+#: log scale is :data:`BIAS_STEP_RAD_S` too.
 SCALE_PRIOR = 0.03
 
 
@@ -118,8 +119,8 @@ def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: 
     """The bias and scale on the first window (``camera``: an OrientationStream, ``gyro``: the raw
     GyroStream): ``(model, effect_deg, reason)``; ``model`` None where it could not be estimated
     (``reason`` says why); ``effect_deg`` the joint radius of :func:`bias_effect_deg`; ``reason`` (a
-    :class:`replication.rig.quality.Reason`, check ``gyro_bias``, or ``gyro_scale`` where the scale's
-    share of the radius is the larger) or None where the gyro is known well enough."""
+    :class:`replication.rig.quality.Reason`, check ``gyro_bias``, or ``gyro_scale`` where the
+    scale's share of the radius is the larger) or None where the gyro is known well enough."""
     model, effects, reason = _start(camera, gyro, interval, max_offset, target_deg)
     return model, effects[0], reason
 
@@ -161,7 +162,8 @@ def _start(camera, gyro, interval, max_offset, target_deg):
 
 
 def _scale_words(model, span, effects, why, target_deg) -> str:
-    """Why the gyro's scale leaves ``R0`` uncertain: each axis's scale, its interval or that it was held at 1."""
+    """Why the gyro's scale leaves ``R0`` uncertain: each axis's scale, its interval or that it was
+    held at 1."""
     axes = []
     for i, (s, (lo, hi), ok) in enumerate(zip(model.scale, model.scale_ci95, model.scale_resolved)):
         axes.append(f"{'xyz'[i]} {s:.4f} [{lo:.4f}, {hi:.4f}]" if ok else
@@ -187,10 +189,10 @@ def start_rig_bias(rig) -> bool:
     """The gyro bias on the window a :class:`replication.rig.live.LiveRig` holds (:func:`start_bias`
     on every camera pose and raw rate held so far), removed from its rates (its buffer integrated
     again from the raw samples) and any reason named. False while it waits: for the first window,
-    and, where the bias could not be estimated on it (a rig at rest at the start) or its scale leaves
-    ``R0`` uncertain beyond the target (an axis not yet resolved: a short window), for more data,
-    every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are held meanwhile; at the end
-    of the streams: whatever arrived)."""
+    and, where the bias could not be estimated on it (a rig at rest at the start) or its scale
+    leaves ``R0`` uncertain beyond the target (an axis not yet resolved: a short window), for more
+    data, every half window up to :data:`BIAS_WAIT_WINDOWS` windows (pairs are held meanwhile; at
+    the end of the streams: whatever arrived)."""
     from .streams import GyroStream, OrientationStream
 
     gyro, cam = rig._gyro, rig._camera

@@ -1,9 +1,10 @@
-"""What a calibration returns (:class:`CalibrationResult`): the estimate, its evidence, its verdict, its report.
+"""What a calibration returns (:class:`CalibrationResult`): the estimate, its evidence, its verdict,
+its report.
 
-``to_dict()`` is the self-describing JSON report (strict JSON: ``null`` where a number is undefined; schema:
-``docs/calibration_report.schema.json``); ``summary()`` the human-readable one; ``plot()`` the diagnostic
-figure. Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw / pitch / roll):
-``docs/conventions.md``.
+``to_dict()`` is the self-describing JSON report (strict JSON: ``null`` where a number is undefined;
+schema: ``docs/calibration_report.schema.json``); ``summary()`` the human-readable one; ``plot()``
+the diagnostic figure. Conventions (``R0 = camera_from_sensor``, quaternions ``(w, x, y, z)``, yaw /
+pitch / roll): ``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -23,13 +24,15 @@ OFFSET_CONVENTION = ("time_offset_s = d means the sensor sample stamped t + d ma
                      "(d > 0: the sensor clock runs d ahead of the camera's; d < 0: behind by |d|); Kalibr's "
                      "timeshift_cam_imu (t_imu = t_cam + shift) is d; the pairs use sensor times t + d when the offset "
                      "is applied")
-#: What every radius of this package covers, and what it does not (stated in reports, summaries and figures).
+#: What every radius of this package covers, and what it does not (stated in reports, summaries and
+#: figures).
 RADIUS_COVERS = ("the pairs' own noise only (their scatter about the estimate); errors every pair shares (a "
                  "trajectory's bias, a clock or scale error, the reference's own error) are not in it")
 
 
 def json_safe(value):
-    """``value`` with NumPy types made native and every NaN or infinity made ``None`` (strict JSON)."""
+    """``value`` with NumPy types made native and every NaN or infinity made ``None`` (strict
+    JSON)."""
     if isinstance(value, dict):
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -55,8 +58,8 @@ def _sensor_fields(model) -> dict:
 
 
 def _sensor_lines(model) -> list:
-    """The summary's (and the figure's) lines on a gyro's bias and the clock's drift, from a report's
-    ``sensor_model`` fields (none for an orientation sensor)."""
+    """The summary's (and the figure's) lines on a gyro's bias and the clock's drift, from a
+    report's ``sensor_model`` fields (none for an orientation sensor)."""
     if model is None:
         return []
     if model.get("gyro_bias_rad_s") is None:
@@ -73,7 +76,8 @@ def _sensor_lines(model) -> list:
 
 
 def _scale_lines(model) -> list:
-    """The summary's line on the gyro's scale per axis (held at 1 where the motion does not resolve it)."""
+    """The summary's line on the gyro's scale per axis (held at 1 where the motion does not resolve
+    it)."""
     if model.get("gyro_scale") is None:
         return []
     axes = ", ".join(f"{s:.4f} [{ci[0]:.4f}, {ci[1]:.4f}]" if ci is not None else "1 (held: not resolved)"
@@ -90,7 +94,8 @@ def _scale_lines(model) -> list:
 
 
 def _segment_lines(s) -> list:
-    """The summary's lines on the segment test and the clock jumps (:mod:`replication.rig.segments`)."""
+    """The summary's lines on the segment test and the clock jumps
+    (:mod:`replication.rig.segments`)."""
     if s is None:
         return []
     if not s["run"]:
@@ -129,50 +134,58 @@ class CalibrationResult:
         Pairing interval (NaN for static pose sets).
     n_pairs : int
     time_offset_s, time_offset_correlation : float
-        Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the angular speeds
-        there; both NaN (``null`` in the report) for static pose sets, which have no clock: no offset was measured,
-        so an export leaves a file's own offset as it was.
+        Estimated sensor-clock offset (see :data:`OFFSET_CONVENTION`) and the correlation of the
+        angular speeds there; both NaN (``null`` in the report) for static pose sets, which have no
+        clock: no offset was measured, so an export leaves a file's own offset as it was.
     time_offset_applied : bool
     time_offset_ci95_s : (float, float)
-        95 % block-bootstrap interval of the offset (:func:`replication.rig.association.offset_analysis`; NaN without a
-        bootstrap, infinite at an end where the replicates leave the offsets searched).
+        95 % block-bootstrap interval of the offset
+        (:func:`replication.rig.association.offset_analysis`; NaN without a bootstrap, infinite at
+        an end where the replicates leave the offsets searched).
     time_offset_peak_margin : float
-        Correlation at the offset minus that at the best other peak (NaN: no other peak in the search).
+        Correlation at the offset minus that at the best other peak (NaN: no other peak in the
+        search).
     residual_deg : dict
         Per-pair residual angle (angle of ``R^T A_j R B_j^T``): mean, median, rms, p95, max.
     bootstrap_ci95_deg : float
-        95th percentile of the angle between bootstrap estimates and ``R``; NaN without a bootstrap or with
-        too few independent blocks for one to mean anything (see :mod:`replication.rig.quality`).
+        95th percentile of the angle between bootstrap estimates and ``R``; NaN without a bootstrap
+        or with too few independent blocks for one to mean anything (see
+        :mod:`replication.rig.quality`).
     observability : MotionObservability
     reference_error_deg : float or None
         Angle to a reference rotation, when one was given (with two: to the first).
     reference_errors_deg, reference_disagreement_deg, reference_reading : tuple, float, str or None
-        With two references (e.g. two published calibrations): the angle to each, the angle between them (the
-        reference floor: an error below it is agreement, not accuracy) and which reading applies.
+        With two references (e.g. two published calibrations): the angle to each, the angle between
+        them (the reference floor: an error below it is agreement, not accuracy) and which reading
+        applies.
     bootstrap_resamples : str
         What the bootstrap resampled ("pairs in moving blocks of N", "stations", or "none").
     bootstrap_covers : str
-        What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair shares.
+        What the radius covers (:data:`RADIUS_COVERS`): the pairs' own noise, not errors every pair
+        shares.
     pose_residual_median_deg : list of float or None
         Static pose sets: each station's median pair residual (0-based station order).
     station_repeats : dict or None
-        Static pose sets with stations that repeat others (:func:`replication.rig.poses.repeated_stations`):
-        ``stations`` given, ``distinct``, and the ``groups`` of repeats (0-based); each group is one station in the
-        bootstrap. None otherwise.
+        Static pose sets with stations that repeat others
+        (:func:`replication.rig.poses.repeated_stations`): ``stations`` given, ``distinct``, and the
+        ``groups`` of repeats (0-based); each group is one station in the bootstrap. None otherwise.
     change_test : dict or None
-        Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0`` change during the
-        recording? times since the camera's first sample), or why it was not run; None for static pose sets.
+        Streams: the change test (:func:`replication.rig.changepoint.two_segment_test`; did ``R0``
+        change during the recording? times since the camera's first sample), or why it was not run;
+        None for static pose sets.
     segments : dict or None
         Streams: R0 per segment of the recording and whether the segments agree
-        (:func:`replication.rig.segments.segment_test`; times since the camera's first sample), the two radii (from
-        the pairs, from the spread between segments), the consistent part and what ``use="consistent"`` kept; or
-        why it was not run; None for static pose sets.
+        (:func:`replication.rig.segments.segment_test`; times since the camera's first sample), the
+        two radii (from the pairs, from the spread between segments), the consistent part and what
+        ``use="consistent"`` kept; or why it was not run; None for static pose sets.
     online : dict or None
-        ``calibrate --online``: what the online replay found (:meth:`replication.rig.live.LiveRig.summary`).
+        ``calibrate --online``: what the online replay found
+        (:meth:`replication.rig.live.LiveRig.summary`).
     sensor_model : dict or None
-        A gyro sensor: its bias and the clock's drift estimated with ``R0`` (:mod:`replication.rig.sensor_model`):
-        ``gyro_bias_rad_s`` (3), ``gyro_bias_ci95_rad_s`` (3 x 2), ``clock_drift_ppm``, ``clock_drift_ci95_ppm``
-        (None where not estimated) and the details under ``sensor_model``; None for an orientation sensor.
+        A gyro sensor: its bias and the clock's drift estimated with ``R0``
+        (:mod:`replication.rig.sensor_model`): ``gyro_bias_rad_s`` (3), ``gyro_bias_ci95_rad_s`` (3
+        x 2), ``clock_drift_ppm``, ``clock_drift_ci95_ppm`` (None where not estimated) and the
+        details under ``sensor_model``; None for an orientation sensor.
     verdict : Verdict
         ``ok`` / ``warning`` / ``fail`` and every reason with its measured number and threshold
         (:mod:`replication.rig.quality`).
@@ -181,11 +194,13 @@ class CalibrationResult:
     parameters : dict
         Every parameter of the call.
     inputs : dict
-        The streams: kind, source, samples, span (s), and their overlap; the reference matrix if any.
+        The streams: kind, source, samples, span (s), and their overlap; the reference matrix if
+        any.
     diagnostics : dict
-        Arrays for :meth:`plot`: ``pair_times`` (s), ``residuals_deg``, ``bootstrap_rotvec_deg`` (bootstrap
-        estimates as rotation vectors of ``R_boot R^T``), ``offset_curve`` (offsets, correlations),
-        ``speeds`` (times, camera and aligned sensor angular speed, deg/s). Not in the JSON report.
+        Arrays for :meth:`plot`: ``pair_times`` (s), ``residuals_deg``, ``bootstrap_rotvec_deg``
+        (bootstrap estimates as rotation vectors of ``R_boot R^T``), ``offset_curve`` (offsets,
+        correlations), ``speeds`` (times, camera and aligned sensor angular speed, deg/s). Not in
+        the JSON report.
     """
 
     R: np.ndarray
@@ -221,7 +236,8 @@ class CalibrationResult:
     diagnostics: dict = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict:
-        """The JSON report: strict JSON (``null``, never NaN), conventions and the offset's sign in words."""
+        """The JSON report: strict JSON (``null``, never NaN), conventions and the offset's sign in
+        words."""
         from .._version import __version__
 
         obs = self.observability
@@ -309,10 +325,11 @@ class CalibrationResult:
         return "\n".join(lines)
 
     def plot(self, path=None, *, name: str | None = None, reference_name: str | None = None):
-        """The diagnostic figure (:func:`replication.rig.figure.calibration_figure`; ``name``: the recording, in its
-        title; ``reference_name``: where the reference came from); saved to ``path`` if given, in the
-        format its extension names (``.png``, ``.pdf``, ``.svg``; another extension is refused with a
-        ``ValueError`` before the figure is drawn), written atomically."""
+        """The diagnostic figure (:func:`replication.rig.figure.calibration_figure`; ``name``: the
+        recording, in its title; ``reference_name``: where the reference came from); saved to
+        ``path`` if given, in the format its extension names (``.png``, ``.pdf``, ``.svg``; another
+        extension is refused with a ``ValueError`` before the figure is drawn), written
+        atomically."""
         from .._io import figure_bytes, figure_format, write_atomic
         from .figure import calibration_figure
 

@@ -1,52 +1,57 @@
-"""A raw gyro's bias and the sensor clock's drift, estimated with ``R0`` (issue 34, points 1 and 3's drift half).
+"""A raw gyro's bias and the sensor clock's drift, estimated with ``R0`` (issue 34, points 1 and 3's
+drift half).
 
-A raw gyro reports ``omega + b``: integrated over a pairing interval ``T`` its bias turns every sensor motion by
-about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb. :func:`estimate_sensor_model` refines ``(R0, b)``, the clock
-offset ``d`` and its drift ``k`` (the sensor sample stamped ``t + d + k (t - t_mid)`` matches the camera sample
-stamped ``t``) jointly, by Gauss-Newton on the pair residuals ``r_j = log(Delta_j R0^T A_j R0)`` (``Delta_j = B_j^T``,
-the sensor's relative rotation integrated from ``omega - b``), with
+A raw gyro reports ``omega + b``: integrated over a pairing interval ``T`` its bias turns every
+sensor motion by about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb.
+:func:`estimate_sensor_model` refines ``(R0, b)``, the clock offset ``d`` and its drift ``k`` (the
+sensor sample stamped ``t + d + k (t - t_mid)`` matches the camera sample stamped ``t``) jointly, by
+Gauss-Newton on the pair residuals ``r_j = log(Delta_j R0^T A_j R0)`` (``Delta_j = B_j^T``, the
+sensor's relative rotation integrated from ``omega - b``), with
 
 * ``d r / d theta = I - Delta_j`` (``R0 <- R0 exp(theta)``),
-* ``d r / d b = M_j^T J_j`` with ``M_j = R0^T A_j R0`` and the first-order bias Jacobian of the integrated
-  rotation ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` over the gyro steps of the pair (``Q`` the integrated
-  ``world_from_body``; the steps' right Jacobians are taken as ``I``: a step turns by ``|omega| dt``, 0.005 rad at
-  1 rad/s and 200 Hz),
-* ``d r / d d = M_j^T (omega_k - Delta_j^T omega_i)`` and ``d r / d k`` the same with ``omega_k (t_k - t_mid)``
-  and ``omega_i (t_i - t_mid)``.
+* ``d r / d b = M_j^T J_j`` with ``M_j = R0^T A_j R0`` and the first-order bias Jacobian of the
+  integrated rotation ``J_j = -Q(t_k)^T sum_s Q_{s+1} dt_s`` over the gyro steps of the pair (``Q``
+  the integrated ``world_from_body``; the steps' right Jacobians are taken as ``I``: a step turns by
+  ``|omega| dt``, 0.005 rad at 1 rad/s and 200 Hz),
+* ``d r / d d = M_j^T (omega_k - Delta_j^T omega_i)`` and ``d r / d k`` the same with ``omega_k (t_k
+  - t_mid)`` and ``omega_i (t_i - t_mid)``.
 
-The start needs no bias: the candidates are zero, the mean rate (the rates centred) and, where the gyro rests
-(:func:`rest_periods`), the mean rate at rest; each is integrated, paired and solved by ``chordal_optimal``, and the
-one whose pairs fit best (median residual) starts the iteration. A rest period is used where present, never
-required. Pairs are weighted by Huber's rule (at 2.5 robust standard deviations) so that a few badly tracked
-camera poses do not pull the bias.
+The start needs no bias: the candidates are zero, the mean rate (the rates centred) and, where the
+gyro rests (:func:`rest_periods`), the mean rate at rest; each is integrated, paired and solved by
+``chordal_optimal``, and the one whose pairs fit best (median residual) starts the iteration. A rest
+period is used where present, never required. Pairs are weighted by Huber's rule (at 2.5 robust
+standard deviations) so that a few badly tracked camera poses do not pull the bias.
 
-The gyro's scale per axis ``s`` (it reads ``s omega + b``; the diagonal of Kalibr's and OpenVINS's ``T_g``) is
-refined with them (:mod:`replication.rig.gyro_model`: its Jacobian): 5 % on one axis, left at 1, moved ``R0`` by
-0.67-1.2 deg with the verdict ``ok`` (issue 34). An axis the motion does not turn about enough (its interval's
-half-width above :data:`SCALE_RESOLUTION`) is held at 1 and the report says so (``scale_resolved``). The
-symmetric off-diagonal part of ``T_g`` (the misalignment ``mu = (xy, xz, yz)``: the gyro reads ``T omega + b``,
-``T = diag(s) + N(mu)``) is refined with them, each term held at 0 where its interval's half-width is above
-:data:`MISALIGNMENT_RESOLUTION` or where the scale of one of its two axes is held (``misalignment_resolved``;
-left free there, the terms took up a bias that changed half way: 1.2 % with intervals excluding 0). 2 % terms, left
-at 0, gave ``ok`` with ``R0`` up to 1.8 deg off. Its antisymmetric part is a rotation of the sensor's axes: ``R0``
-absorbs it (it is the mounting).
+The gyro's scale per axis ``s`` (it reads ``s omega + b``; the diagonal of Kalibr's and OpenVINS's
+``T_g``) is refined with them (:mod:`replication.rig.gyro_model`: its Jacobian): 5 % on one axis,
+left at 1, moved ``R0`` by 0.67-1.2 deg with the verdict ``ok`` (issue 34). An axis the motion does
+not turn about enough (its interval's half-width above :data:`SCALE_RESOLUTION`) is held at 1 and
+the report says so (``scale_resolved``). The symmetric off-diagonal part of ``T_g`` (the
+misalignment ``mu = (xy, xz, yz)``: the gyro reads ``T omega + b``, ``T = diag(s) + N(mu)``) is
+refined with them, each term held at 0 where its interval's half-width is above
+:data:`MISALIGNMENT_RESOLUTION` or where the scale of one of its two axes is held
+(``misalignment_resolved``; left free there, the terms took up a bias that changed half way: 1.2 %
+with intervals excluding 0). 2 % terms, left at 0, gave ``ok`` with ``R0`` up to 1.8 deg off. Its
+antisymmetric part is a rotation of the sensor's axes: ``R0`` absorbs it (it is the mounting).
 
-Intervals: overlapping pairs share noise (a camera pose, a stretch of gyro samples), so the covariance is the
-delete-a-block jackknife over consecutive blocks of two pairing intervals of pairs (each block's removal re-fitted
-by one Gauss-Newton step, :func:`replication.rig.gyro_model._block_jackknife`), and the 95 % intervals are +-t
-standard deviations, ``t`` Student's with one fewer degrees of freedom than blocks
-(:func:`replication.rig.gyro_model.critical_value`: 2.45 at 15 s, 2.05 at 60 s). The Newey-West sandwich of the
-residuals, used before, is too narrow where the blocks are few: the fit follows the blocks that carry a parameter
-(the drift is a slope, carried by the recording's ends), so their residuals understate its noise; a zero drift was
-excluded by 31 of 300 15 s runs with it (issue 34) and by 4/150 and 6/150 with the jackknife (coverage:
-``benchmarks/bench_sensor_model.py``, environment.md). The bias of each half of the recording is estimated with
-the sandwich (times :data:`INTERVAL_INFLATION`; the other parameters held; one linearised step from the whole's
-solution): halves that differ beyond their
-noise (a chi-square test at level :data:`BIAS_CHANGE_LEVEL`) mean the bias drifts (with temperature) and one bias
-does not describe the recording. The bias absorbs a slow turn of the camera trajectory's frame (a SLAM's rotation
+Intervals: overlapping pairs share noise (a camera pose, a stretch of gyro samples), so the
+covariance is the delete-a-block jackknife over consecutive blocks of two pairing intervals of pairs
+(each block's removal re-fitted by one Gauss-Newton step,
+:func:`replication.rig.gyro_model._block_jackknife`), and the 95 % intervals are +-t standard
+deviations, ``t`` Student's with one fewer degrees of freedom than blocks
+(:func:`replication.rig.gyro_model.critical_value`: 2.45 at 15 s, 2.05 at 60 s). The Newey-West
+sandwich of the residuals, used before, is too narrow where the blocks are few: the fit follows the
+blocks that carry a parameter (the drift is a slope, carried by the recording's ends), so their
+residuals understate its noise; a zero drift was excluded by 31 of 300 15 s runs with it (issue 34)
+and by 4/150 and 6/150 with the jackknife (coverage: ``benchmarks/bench_sensor_model.py``,
+environment.md). The bias of each half of the recording is estimated with the sandwich (times
+:data:`INTERVAL_INFLATION`; the other parameters held; one linearised step from the whole's
+solution): halves that differ beyond their noise (a chi-square test at level
+:data:`BIAS_CHANGE_LEVEL`) mean the bias drifts (with temperature) and one bias does not describe
+the recording. The bias absorbs a slow turn of the camera trajectory's frame (a SLAM's rotation
 drift), which every pair sees the same way. The verdict's reasons and what
-:func:`replication.rig.calibration.calibrate` does with the model: :mod:`replication.rig.sensor_verdict`.
-Conventions: ``docs/conventions.md``.
+:func:`replication.rig.calibration.calibrate` does with the model:
+:mod:`replication.rig.sensor_verdict`. Conventions: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -78,39 +83,44 @@ __all__ = ["SensorModel", "estimate_sensor_model", "rest_periods", "BIAS_CHANGE_
 #: The level of the test of the two halves' biases (chi-square, 3 degrees of freedom).
 BIAS_CHANGE_LEVEL = 0.01
 _CHI2_3 = {0.01: 11.344866730144373}
-#: A rest: at least this long (s) with the rates' spread (norm of the per-axis standard deviations) below
-#: :data:`REST_SPREAD_RAD_S` and their mean below :data:`REST_MEAN_RAD_S` (a gyro's bias is well below it) in every
-#: window of :data:`REST_WINDOW_S`.
+#: A rest: at least this long (s) with the rates' spread (norm of the per-axis standard deviations)
+#: below :data:`REST_SPREAD_RAD_S` and their mean below :data:`REST_MEAN_RAD_S` (a gyro's bias is
+#: well below it) in every window of :data:`REST_WINDOW_S`.
 REST_MIN_S, REST_SPREAD_RAD_S, REST_MEAN_RAD_S, REST_WINDOW_S = 1.0, 0.02, 0.3, 0.25
-#: The sensor model is not estimated where the angular speeds correlate less (the verdict's fail bound): the streams
-#: do not show one motion. Its reasons are not given where its pairs fit worse than :data:`MAX_FIT_RATIO` of the
-#: median motion (the residual check's fail bound): its numbers then describe no rig.
+#: The sensor model is not estimated where the angular speeds correlate less (the verdict's fail
+#: bound): the streams do not show one motion. Its reasons are not given where its pairs fit worse
+#: than :data:`MAX_FIT_RATIO` of the median motion (the residual check's fail bound): its numbers
+#: then describe no rig.
 MIN_CORRELATION, MAX_FIT_RATIO = 0.5, 0.3
-#: The halves' sandwich standard deviations are multiplied by this (the halves' bias test). Without it the 95 %
-#: bias intervals of the whole's sandwich held the truth on 550 of 600 axes (0.917 [0.892, 0.936], seeds [3400, 0, k])
-#: and 560 of 600 on fresh seeds (0.933 [0.910, 0.951], [3401, 0, k]): the estimate varies about 1.13 times more than
-#: the pairs' residuals say. The whole's intervals come from the block jackknife and need no factor (bias intervals
-#: holding the truth on 435/450 axes at 15 s, 230/240 at 40 s; ``benchmarks/bench_sensor_model.py``).
+#: The halves' sandwich standard deviations are multiplied by this (the halves' bias test). Without
+#: it the 95 % bias intervals of the whole's sandwich held the truth on 550 of 600 axes (0.917
+#: [0.892, 0.936], seeds [3400, 0, k]) and 560 of 600 on fresh seeds (0.933 [0.910, 0.951], [3401,
+#: 0, k]): the estimate varies about 1.13 times more than the pairs' residuals say. The whole's
+#: intervals come from the block jackknife and need no factor (bias intervals holding the truth on
+#: 435/450 axes at 15 s, 230/240 at 40 s; ``benchmarks/bench_sensor_model.py``).
 INTERVAL_INFLATION = 1.2
-#: An axis's scale is estimated where its 95 % interval's half-width is at most this (the motion turns about the
-#: axis enough); elsewhere it is held at 1 and the report says so (``scale_resolved``).
+#: An axis's scale is estimated where its 95 % interval's half-width is at most this (the motion
+#: turns about the axis enough); elsewhere it is held at 1 and the report says so
+#: (``scale_resolved``).
 SCALE_RESOLUTION = 0.01
-#: A misalignment term (``T_g``'s symmetric off-diagonal ``xy``, ``xz``, ``yz``) is estimated where its 95 %
-#: interval's half-width is at most this; elsewhere it is held at 0 and the report says so
-#: (``misalignment_resolved``). The reason's bound (``gyro_misalignment_error``): a term moves ``R0`` by up to 74 deg
-#: per unit (0.30 deg at 0.4 %), so one estimated more loosely moves ``R0`` by its noise as much as it corrects: at
-#: 1 % the terms fitted to a recording with a re-mount (half-widths 0.2-0.6 %, the truth 0) moved the halves' ``R0``
-#: by 0.05-0.07 deg (0.02-0.03 held).
+#: A misalignment term (``T_g``'s symmetric off-diagonal ``xy``, ``xz``, ``yz``) is estimated where
+#: its 95 % interval's half-width is at most this; elsewhere it is held at 0 and the report says so
+#: (``misalignment_resolved``). The reason's bound (``gyro_misalignment_error``): a term moves
+#: ``R0`` by up to 74 deg per unit (0.30 deg at 0.4 %), so one estimated more loosely moves ``R0``
+#: by its noise as much as it corrects: at 1 % the terms fitted to a recording with a re-mount
+#: (half-widths 0.2-0.6 %, the truth 0) moved the halves' ``R0`` by 0.05-0.07 deg (0.02-0.03 held).
 MISALIGNMENT_RESOLUTION = 0.004
-#: A fitted scale further than this from 1 on any axis is no scale error (a MEMS gyro's is within a few per cent;
-#: 57.3 is deg/s read as rad/s): every scale is then held at 1, so that the units' mistake stays visible (the
-#: model's pairs fit no rig and the calibration's diagnosis names the units) and the report says why.
+#: A fitted scale further than this from 1 on any axis is no scale error (a MEMS gyro's is within a
+#: few per cent; 57.3 is deg/s read as rad/s): every scale is then held at 1, so that the units'
+#: mistake stays visible (the model's pairs fit no rig and the calibration's diagnosis names the
+#: units) and the report says why.
 MAX_SCALE_ERROR = 0.2
 
 
 @dataclass(frozen=True, eq=False)
 class SensorModel:
-    """The gyro's bias and the sensor clock's drift, estimated with ``R0`` (:func:`estimate_sensor_model`).
+    """The gyro's bias and the sensor clock's drift, estimated with ``R0``
+    (:func:`estimate_sensor_model`).
 
     Attributes
     ----------
@@ -129,32 +139,35 @@ class SensorModel:
     halves_rad_s, halves_ci95_rad_s : ndarray (2, 3), (2, 3, 2)
         The bias of the first and of the second half of the pairs, each with its interval.
     change_statistic, change_threshold : float
-        The chi-square statistic of the halves' difference and its bound at :data:`BIAS_CHANGE_LEVEL`.
+        The chi-square statistic of the halves' difference and its bound at
+        :data:`BIAS_CHANGE_LEVEL`.
     bias_R0_deg : float
-        How far ``R0`` moves (deg) when the bias is left in the rates (first order: ``R0``'s rows of the normal
-        equations re-fit with the bias at 0).
+        How far ``R0`` moves (deg) when the bias is left in the rates (first order: ``R0``'s rows of
+        the normal equations re-fit with the bias at 0).
     change_R0_deg : float
         How far ``R0`` moves (deg) when the bias is off by half the halves' difference.
     fit_ratio : float
         The refined pairs' median residual over their median motion.
     scale, scale_ci95 : ndarray (3,), (3, 2)
-        The gyro's scale ``s`` per axis (it reads ``s omega + b``; the rates used are ``(omega - b) / s``) and its
-        95 % interval (NaN where not resolved).
+        The gyro's scale ``s`` per axis (it reads ``s omega + b``; the rates used are ``(omega - b)
+        / s``) and its 95 % interval (NaN where not resolved).
     scale_resolved : ndarray (3,) of bool
-        The axes whose scale the motion resolves (its 95 % interval's half-width at most :data:`SCALE_RESOLUTION`);
-        the others are held at 1.
+        The axes whose scale the motion resolves (its 95 % interval's half-width at most
+        :data:`SCALE_RESOLUTION`); the others are held at 1.
     scale_R0_deg : float
         How far ``R0`` moves (deg, first order) were the scale left at 1.
     critical : float
         The critical value of the 95 % intervals.
     scale_note : str or None
-        Why every scale and misalignment term was held (a fitted one beyond :data:`MAX_SCALE_ERROR`), None otherwise.
+        Why every scale and misalignment term was held (a fitted one beyond
+        :data:`MAX_SCALE_ERROR`), None otherwise.
     misalignment, misalignment_ci95 : ndarray (3,), (3, 2)
-        The symmetric off-diagonal terms ``(xy, xz, yz)`` of the gyro's axes ``T = diag(scale) + N(mu)`` (it reads
-        ``T omega + b``; the rates used are ``T^-1 (omega - b)``) and their 95 % intervals (NaN where not resolved).
+        The symmetric off-diagonal terms ``(xy, xz, yz)`` of the gyro's axes ``T = diag(scale) +
+        N(mu)`` (it reads ``T omega + b``; the rates used are ``T^-1 (omega - b)``) and their 95 %
+        intervals (NaN where not resolved).
     misalignment_resolved : ndarray (3,) of bool
-        The terms the motion resolves (half-width at most :data:`MISALIGNMENT_RESOLUTION`, both axes' scales
-        resolved); the others are held at 0.
+        The terms the motion resolves (half-width at most :data:`MISALIGNMENT_RESOLUTION`, both
+        axes' scales resolved); the others are held at 0.
     misalignment_R0_deg : float
         How far ``R0`` moves (deg, first order) were the misalignment left at 0.
     n_pairs, iterations : int
@@ -197,7 +210,8 @@ class SensorModel:
 
     @property
     def bias_changes(self) -> bool:
-        """The halves' biases differ beyond their noise (the chi-square test at :data:`BIAS_CHANGE_LEVEL`)."""
+        """The halves' biases differ beyond their noise (the chi-square test at
+        :data:`BIAS_CHANGE_LEVEL`)."""
         return bool(self.change_statistic > self.change_threshold)
 
     @property
@@ -207,15 +221,16 @@ class SensorModel:
         return bool(lo > 0 or hi < 0)
 
     def corrected(self, gyro: GyroStream) -> GyroStream:
-        """``gyro`` with the bias removed from its rates and the axes' ``T^-1`` applied (times unchanged)."""
+        """``gyro`` with the bias removed from its rates and the axes' ``T^-1`` applied (times
+        unchanged)."""
         T = axes_matrix(np.log(self.scale), self.misalignment)
         return GyroStream(gyro.t, (gyro.omega - self.bias_rad_s) @ np.linalg.inv(T).T, gyro.source)
 
     def report(self) -> dict:
         """The report's fields (``gyro_bias_rad_s``, ``gyro_bias_ci95_rad_s``, ``clock_drift_ppm``,
         ``clock_drift_ci95_ppm``, ``gyro_scale``, ``gyro_scale_ci95``, ``gyro_misalignment``,
-        ``gyro_misalignment_ci95``: null per axis or term where not resolved) and the model's details under
-        ``sensor_model``."""
+        ``gyro_misalignment_ci95``: null per axis or term where not resolved) and the model's
+        details under ``sensor_model``."""
         return {
             "gyro_bias_rad_s": self.bias_rad_s.tolist(),
             "gyro_bias_ci95_rad_s": self.bias_ci95_rad_s.tolist(),
@@ -249,9 +264,9 @@ class SensorModel:
 
 
 def rest_periods(gyro: GyroStream, *, min_s: float = REST_MIN_S) -> list:
-    """``(start, end)`` (s) of the stretches of at least ``min_s`` where the gyro rests: in every window of
-    :data:`REST_WINDOW_S` the rates' spread is below :data:`REST_SPREAD_RAD_S` and their mean below
-    :data:`REST_MEAN_RAD_S`."""
+    """``(start, end)`` (s) of the stretches of at least ``min_s`` where the gyro rests: in every
+    window of :data:`REST_WINDOW_S` the rates' spread is below :data:`REST_SPREAD_RAD_S` and their
+    mean below :data:`REST_MEAN_RAD_S`."""
     t, w = gyro.t, gyro.omega
     n = max(2, int(round(REST_WINDOW_S / np.median(np.diff(t)))))
     k = len(t) // n
@@ -327,7 +342,8 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     scale : bool
         Estimate the gyro's scale per axis and its misalignment (default); False: held at 1 and 0.
     critical : float, optional
-        The intervals' critical value (default: Student's t of the jackknife's blocks, :func:`critical_value`).
+        The intervals' critical value (default: Student's t of the jackknife's blocks,
+        :func:`critical_value`).
 
     Raises
     ------

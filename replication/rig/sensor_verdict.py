@@ -1,6 +1,7 @@
 """The verdict on a gyro's sensor model (:mod:`replication.rig.sensor_model`) and its place in
-:func:`replication.rig.calibration.calibrate`: estimated before everything else (:func:`model_or_note`), its fields
-and reasons added to the result (:func:`with_sensor_model`, :func:`sensor_reasons`, :data:`SENSOR_THRESHOLDS`).
+:func:`replication.rig.calibration.calibrate`: estimated before everything else
+(:func:`model_or_note`), its fields and reasons added to the result (:func:`with_sensor_model`,
+:func:`sensor_reasons`, :data:`SENSOR_THRESHOLDS`).
 """
 from __future__ import annotations
 
@@ -12,37 +13,50 @@ from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimat
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
 
-#: ``(warning, fail)`` bounds of the checks on the sensor model (the reasoning in :func:`sensor_reasons`):
+#: ``(warning, fail)`` bounds of the checks on the sensor model (the reasoning in
+#: :func:`sensor_reasons`):
 #:
-#: * ``gyro_bias_to_motion`` (bias modelled): ``|b| T`` (the rotation the bias adds to a pair of interval ``T``)
-#:   over the median motion per pair, above: ``R0`` rests on the bias estimate, and the radius of ``R0`` (the pairs'
-#:   noise) does not hold the bias estimate's error, which every pair shares;
-#: * ``gyro_bias_left`` (bias not modelled): the same ratio, above: the pairs carry the bias (the residual checks'
+#: * ``gyro_bias_to_motion`` (bias modelled): ``|b| T`` (the rotation the bias adds to a pair of
+#: interval ``T``)
+#: over the median motion per pair, above: ``R0`` rests on the bias estimate, and the radius of
+#: ``R0`` (the pairs' noise) does not hold the bias estimate's error, which every pair shares;
+#: * ``gyro_bias_left`` (bias not modelled): the same ratio, above: the pairs carry the bias (the
+#: residual checks'
 #:   own bounds, 0.1 and 0.3 of the motion);
-#: * ``clock_drift_share``: half the offset's change over the overlap (the pairs' timing error at its ends, one offset
-#:   being applied) over the pairing interval, above, where the drift's interval excludes 0: 0.005 is 5 ms at 1 s
-#:   (the bound on an offset left in, ``offset_left_ms``), 200 ppm over 60 s at 1 s;
-#: * ``offset_disagreement_share``: the offset the pairs fit best (the model's, at the middle) minus the one applied
-#:   (the speeds' correlation) over the pairing interval, above, where outside the pairs' interval: the drift's bound
-#:   (a rig turning steadily about one axis while it rocks: 7.5-9.8 ms against 0.2 ms, R0 0.23-0.30 deg off, ok);
-#: * ``gyro_bias_change_R0_deg``: where the halves' biases differ beyond their noise, how far half the difference
-#:   moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real recordings, where
-#:   the slow turn of a SLAM trajectory's frame is indistinguishable from a bias: chi-square 13 and 20 > 11.3, but
-#:   0.006 deg on TUM-VI room1 and 0.0002 deg on EuRoC MH01 with a synthetic constant bias); 0.05 deg is 8 times
-#:   the larger and a seventh of EuRoC's reference floor (0.343 deg);
-#: * ``gyro_scale_error``: where an axis's scale is resolved and its interval excludes 1, ``|s - 1|`` (the largest
-#:   axis), above: the gyro's scale factor is off (its intrinsics), which the model removes but a reader of the raw
-#:   rates (a VIO with scale 1) does not. Left at 1, a 1 % error on the x axis moves R0 by 0.13-0.25 deg on 30
-#:   synthetic rigs (``scale_R0_deg``, first order; seeds 60000-60029 of the red team's 60 s generator), below
-#:   EuRoC's reference floor (0.343 deg), and a 2 % error by twice that (0.27-0.49 deg), beyond it on some; a 5 % error
-#:   by 0.67-1.20 deg: a scale more than 1 % off is one the calibration had to remove to stay within the floor.
-#: * ``gyro_misalignment_error``: where a misalignment term (``T_g``'s symmetric off-diagonal) is resolved and its
-#:   interval excludes 0, ``|mu|`` (the largest term), above: the gyro's axes are not orthogonal, which the model
-#:   removes but a reader of the raw rates (a VIO with ``T_g = I``) does not. Left at 0, terms of 0.5 % on all three
-#:   pairs (random signs) move R0 by 0.06-0.37 deg (``misalignment_R0_deg``, first order; 24 40 s rigs, seeds
-#:   72000-72023 of ``benchmarks/bench_sensor_model.py --misalignment-runs``), of 2 % by 0.25-1.49 deg: terms at the
-#:   0.4 % bound move it by at most 0.30 deg, below EuRoC's reference floor (0.343 deg), as the scale's 1 % does
-#:   (0.13-0.25 deg); a term beyond it is one the calibration had to remove to stay within the floor.
+#: * ``clock_drift_share``: half the offset's change over the overlap (the pairs' timing error at
+#: its ends, one offset
+#: being applied) over the pairing interval, above, where the drift's interval excludes 0: 0.005 is
+#: 5 ms at 1 s (the bound on an offset left in, ``offset_left_ms``), 200 ppm over 60 s at 1 s;
+#: * ``offset_disagreement_share``: the offset the pairs fit best (the model's, at the middle) minus
+#: the one applied
+#: (the speeds' correlation) over the pairing interval, above, where outside the pairs' interval:
+#: the drift's bound (a rig turning steadily about one axis while it rocks: 7.5-9.8 ms against 0.2
+#: ms, R0 0.23-0.30 deg off, ok);
+#: * ``gyro_bias_change_R0_deg``: where the halves' biases differ beyond their noise, how far half
+#: the difference
+#: moves ``R0`` (deg), above: the test alone flags differences too small to matter (the real
+#: recordings, where the slow turn of a SLAM trajectory's frame is indistinguishable from a bias:
+#: chi-square 13 and 20 > 11.3, but 0.006 deg on TUM-VI room1 and 0.0002 deg on EuRoC MH01 with a
+#: synthetic constant bias); 0.05 deg is 8 times the larger and a seventh of EuRoC's reference floor
+#: (0.343 deg);
+#: * ``gyro_scale_error``: where an axis's scale is resolved and its interval excludes 1, ``|s -
+#: 1|`` (the largest
+#: axis), above: the gyro's scale factor is off (its intrinsics), which the model removes but a
+#: reader of the raw rates (a VIO with scale 1) does not. Left at 1, a 1 % error on the x axis moves
+#: R0 by 0.13-0.25 deg on 30 synthetic rigs (``scale_R0_deg``, first order; seeds 60000-60029 of the
+#: red team's 60 s generator), below EuRoC's reference floor (0.343 deg), and a 2 % error by twice
+#: that (0.27-0.49 deg), beyond it on some; a 5 % error by 0.67-1.20 deg: a scale more than 1 % off
+#: is one the calibration had to remove to stay within the floor.
+#: * ``gyro_misalignment_error``: where a misalignment term (``T_g``'s symmetric off-diagonal) is
+#: resolved and its
+#: interval excludes 0, ``|mu|`` (the largest term), above: the gyro's axes are not orthogonal,
+#: which the model removes but a reader of the raw rates (a VIO with ``T_g = I``) does not. Left at
+#: 0, terms of 0.5 % on all three pairs (random signs) move R0 by 0.06-0.37 deg
+#: (``misalignment_R0_deg``, first order; 24 40 s rigs, seeds 72000-72023 of
+#: ``benchmarks/bench_sensor_model.py --misalignment-runs``), of 2 % by 0.25-1.49 deg: terms at the
+#: 0.4 % bound move it by at most 0.30 deg, below EuRoC's reference floor (0.343 deg), as the
+#: scale's 1 % does (0.13-0.25 deg); a term beyond it is one the calibration had to remove to stay
+#: within the floor.
 SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
@@ -55,15 +69,16 @@ SENSOR_THRESHOLDS = {
 
 
 def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: float) -> list:
-    """The verdict's reasons on the sensor model (:class:`replication.rig.quality.Reason`), thresholds in
-    :data:`SENSOR_THRESHOLDS`:
+    """The verdict's reasons on the sensor model (:class:`replication.rig.quality.Reason`),
+    thresholds in :data:`SENSOR_THRESHOLDS`:
 
-    * the bias large against the motion: modelled, ``R0`` rests on its estimate (warning); not modelled, the pairs
-      carry it (warning, fail), named as a gyro bias with what to do;
+    * the bias large against the motion: modelled, ``R0`` rests on its estimate (warning); not
+      modelled, the pairs carry it (warning, fail), named as a gyro bias with what to do;
     * the bias of the two halves differs beyond their noise (warning: it drifts, with temperature);
-    * the clock drift resolved (its interval excludes 0) and half its change over the recording large against the
-      pairing interval (warning);
-    * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound (warning);
+    * the clock drift resolved (its interval excludes 0) and half its change over the recording
+      large against the pairing interval (warning);
+    * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound
+      (warning);
     * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
@@ -121,8 +136,9 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
 
 
 def _scale_reason(model):
-    """A warning where a resolved axis's scale departs from 1 beyond its interval and by more than the bound
-    (:data:`SENSOR_THRESHOLDS` ``gyro_scale_error``), naming the axes, their scales and what it did to ``R0``."""
+    """A warning where a resolved axis's scale departs from 1 beyond its interval and by more than
+    the bound (:data:`SENSOR_THRESHOLDS` ``gyro_scale_error``), naming the axes, their scales and
+    what it did to ``R0``."""
     from .quality import Reason
 
     bound = SENSOR_THRESHOLDS["gyro_scale_error"][0]
@@ -141,8 +157,9 @@ def _scale_reason(model):
 
 
 def _misalignment_reason(model):
-    """A warning where a resolved misalignment term departs from 0 beyond its interval and by more than the bound
-    (:data:`SENSOR_THRESHOLDS` ``gyro_misalignment_error``), naming the terms and what they did to ``R0``."""
+    """A warning where a resolved misalignment term departs from 0 beyond its interval and by more
+    than the bound (:data:`SENSOR_THRESHOLDS` ``gyro_misalignment_error``), naming the terms and
+    what they did to ``R0``."""
     from .quality import Reason
 
     bound = SENSOR_THRESHOLDS["gyro_misalignment_error"][0]
@@ -161,8 +178,8 @@ def _misalignment_reason(model):
 
 
 def model_or_note(camera, gyro, interval, max_offset):
-    """``(model, None)`` (:func:`estimate_sensor_model`), or ``(None, why it could not be estimated or does not
-    fit)``."""
+    """``(model, None)`` (:func:`estimate_sensor_model`), or ``(None, why it could not be estimated
+    or does not fit)``."""
     try:
         model = estimate_sensor_model(camera, gyro, interval=interval, max_offset=max_offset)
     except ValueError as err:
@@ -174,9 +191,10 @@ def model_or_note(camera, gyro, interval, max_offset):
 
 
 def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval, max_offset):
-    """``result`` (of :func:`replication.rig.calibration.calibrate`, a gyro sensor) with the sensor model's fields
-    and reasons; with the model off (``model`` None and no ``note``) the bias is measured where the verdict is not
-    ``ok`` (unless ``skip_measure``: no diagnosis asked), and named if it is large."""
+    """``result`` (of :func:`replication.rig.calibration.calibrate`, a gyro sensor) with the sensor
+    model's fields and reasons; with the model off (``model`` None and no ``note``) the bias is
+    measured where the verdict is not ``ok`` (unless ``skip_measure``: no diagnosis asked), and
+    named if it is large."""
     import dataclasses
 
     from .quality import Reason
@@ -206,9 +224,9 @@ def with_sensor_model(result, camera, gyro, model, note, skip_measure, interval,
 
 
 def _offsets_disagree(model, result, interval):
-    """A warning where the offset applied (the angular speeds' correlation) lies outside the pairs' 95 % interval for
-    it (the model's offset at the middle) and by more than the drift's bound share of the pairing interval
-    (:data:`SENSOR_THRESHOLDS` ``offset_disagreement_share``)."""
+    """A warning where the offset applied (the angular speeds' correlation) lies outside the pairs'
+    95 % interval for it (the model's offset at the middle) and by more than the drift's bound share
+    of the pairing interval (:data:`SENSOR_THRESHOLDS` ``offset_disagreement_share``)."""
     from .quality import Reason
 
     if not model.fit_ratio <= MAX_FIT_RATIO or not result.time_offset_applied or model.covariance is None:

@@ -1,9 +1,9 @@
-"""calibrate judges its own answer: bad input across the API and the command line ends in a clear error, a correct
-answer, or a warning / fail verdict naming the cause. None is silent.
+"""calibrate judges its own answer: bad input across the API and the command line ends in a clear
+error, a correct answer, or a warning / fail verdict naming the cause. None is silent.
 
-Most cases use a synthetic rig whose R0 is known: a camera trajectory at 20 Hz and, rigidly attached, a gyro at
-200 Hz (or an orientation sensor at 100 Hz), 60 s of smooth three-axis motion. The real recordings (TUM-VI,
-EuRoC, Tabb) check the command line end to end.
+Most cases use a synthetic rig whose R0 is known: a camera trajectory at 20 Hz and, rigidly
+attached, a gyro at 200 Hz (or an orientation sensor at 100 Hz), 60 s of smooth three-axis motion.
+The real recordings (TUM-VI, EuRoC, Tabb) check the command line end to end.
 """
 import dataclasses
 import json
@@ -36,7 +36,8 @@ R0 = RIG_R0
 
 
 def _rig(seconds=60.0, phase=0.0):
-    """``(camera, gyro, sensor)`` of the synthetic rig (:func:`replication.testing.rig_streams`), noise-free."""
+    """``(camera, gyro, sensor)`` of the synthetic rig (:func:`replication.testing.rig_streams`),
+    noise-free."""
     return rig_streams(seconds, phase=phase)[1:]
 
 
@@ -58,7 +59,8 @@ def _reasons(result):
     return {r.check: r for r in result.verdict.reasons}
 
 
-# ------------------------------------------------------------------------------------------- the good case and cases
+# ------------------------------------------------------------------------------------------- the
+# good case and cases
 
 def test_clean_rig_is_ok_and_right(rig):
     camera, gyro, sensor = rig
@@ -193,7 +195,8 @@ def test_static_pose_sets_get_a_verdict_and_name_their_pairs(rig):
     assert "pairs of static poses" in r.summary() and "nan" not in r.summary()
 
 
-# ------------------------------------------------------------------------------------------- time units
+# ------------------------------------------------------------------------------------------- time
+# units
 
 @pytest.mark.parametrize("side, factor", [("sensor", 1e3), ("camera", 1e3), ("sensor", 1e9)])
 def test_time_unit_mistakes_on_absolute_clocks_are_named(rig, side, factor):
@@ -226,7 +229,8 @@ def test_lab_recording_with_times_in_ms_is_refused(lab_dir):
     assert err.value.column == "t"
 
 
-# ------------------------------------------------------------------------------------------- bad parameters
+# ------------------------------------------------------------------------------------------- bad
+# parameters
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"interval": 0.0}, "interval must be > 0"),
@@ -262,7 +266,8 @@ def test_streams_of_the_wrong_type_are_refused(rig, camera, sensor):
                   streams.get(sensor, sensor) if isinstance(sensor, str) else sensor)
 
 
-# ------------------------------------------------------------------------------------------- the verdict itself
+# ------------------------------------------------------------------------------------------- the
+# verdict itself
 
 def test_judge_levels_and_thresholds():
     good = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1,
@@ -298,7 +303,8 @@ def test_diagnostic_figure_has_every_panel(rig, tmp_path):
     assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
 
 
-# ------------------------------------------------------------------------------------------- the command line
+# ------------------------------------------------------------------------------------------- the
+# command line
 
 
 
@@ -370,7 +376,8 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
     assert not list(tmp_path.glob("*.part")) and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
-# ------------------------------------------------------------------------------------------- the campaign's cases
+# ------------------------------------------------------------------------------------------- the
+# campaign's cases
 
 def test_inverted_pose_sets_are_named(rig):
     camera, _, sensor = rig
@@ -382,8 +389,8 @@ def test_inverted_pose_sets_are_named(rig):
         r = calibrate_poses(c, s, n_bootstrap=0)
         assert r.verdict.level == "fail" and name in _reasons(r)["input_mistake"].message, name
     assert calibrate_poses(C, S, n_bootstrap=0, reference=R0).verdict.level == "ok"
-    # both inverted is a consistent problem for another unknown (the world-to-world rotation): the rotations alone
-    # cannot show it; a reference does
+    # both inverted is a consistent problem for another unknown (the world-to-world rotation): the
+    # rotations alone cannot show it; a reference does
     both = calibrate_poses(np.swapaxes(C, -1, -2), np.swapaxes(S, -1, -2), n_bootstrap=0, reference=R0)
     assert both.verdict.level == "fail" and "reference_error_deg" in _reasons(both)
 
@@ -408,8 +415,9 @@ def test_the_camera_stream_as_sensor_is_refused(rig):
 
 
 def test_a_copy_of_the_camera_stream_as_sensor_is_refused_at_its_tolerances(rig):
-    """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad apart: the same
-    recording, refused naming how many samples coincide; a little more than the tolerances: a sensor of its own."""
+    """A line dropped, times shifted by a nanosecond, orientations a little less than 1e-4 rad
+    apart: the same recording, refused naming how many samples coincide; a little more than the
+    tolerances: a sensor of its own."""
     from replication.core.so3 import matrix_from_rotation_vector
     from replication.rig.calibration import SAME_SAMPLE_ANGLE_RAD, SAME_SAMPLE_TIME_S
 
@@ -475,7 +483,8 @@ def test_an_offset_kept_in_is_said(rig):
     assert _reasons(r)["offset_left_ms"].measured == pytest.approx(100.0, abs=2.0)
 
 
-# ------------------------------------------------------------------------------------------- real recordings
+# ------------------------------------------------------------------------------------------- real
+# recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
@@ -516,8 +525,9 @@ def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsy
 
 @needs_real
 def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_warning(tmp_path, capsys):
-    """Issue 35.3: README's former example. The verdict says why the iteration hit its cap (sigma_2 / sigma_1 of K
-    0.9975 > 0.9863 at axis spread 3.2 deg) and what to do; the class stays in the report's warnings."""
+    """Issue 35.3: README's former example. The verdict says why the iteration hit its cap (sigma_2
+    / sigma_1 of K 0.9975 > 0.9863 at axis spread 3.2 deg) and what to do; the class stays in the
+    report's warnings."""
     d = data_root() / "euroc_mh01_orbslam3"
     out = tmp_path / "euroc.json"
     code = _cli("--camera", d / "orbslam3_mono_cam0_traj_runA.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
@@ -534,12 +544,14 @@ def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_wa
 
 
 
-# ------------------------------------------------------------------- one door for every solver answer
+# ------------------------------------------------------------------- one door for every solver
+# answer
 
 @pytest.fixture
 def door_solver(monkeypatch):
-    """``make(answer) -> name``: registers a solver whose core returns ``answer(R, call)`` (``R`` the certified
-    minimiser, ``call`` 0 for the calibration's own solve, then 1, 2, ... for each later call: the replicates)."""
+    """``make(answer) -> name``: registers a solver whose core returns ``answer(R, call)`` (``R``
+    the certified minimiser, ``call`` 0 for the calibration's own solve, then 1, 2, ... for each
+    later call: the replicates)."""
     from replication.core.solvers import _registry, register, solver_info
 
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
@@ -591,7 +603,8 @@ def test_a_solver_returning_2R_on_replicates_is_refused_naming_it_at_every_door(
 @pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
 def test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius(
         rig, door_solver, what, answer, words, bad_calls, counted):
-    """No bad replicate: a radius and no such reason; one bad replicate of 20 (the boundary) already fails."""
+    """No bad replicate: a radius and no such reason; one bad replicate of 20 (the boundary) already
+    fails."""
     name, r, reason = _bad_replicates(rig, door_solver, lambda R, call: answer(R), bad_calls, counted)
     if reason is not None:
         assert re.search(rf"solver '{name}' {words} on {counted} of 20 bootstrap replicates", reason.message)
@@ -599,9 +612,10 @@ def test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_rad
 
 
 def _bad_replicates(rig, door_solver, answer, bad_calls, counted):
-    """A pose-set calibration with a solver giving ``answer(R, call)`` on the calls ``bad_calls`` (the first call is
-    the calibration's own solve): without bad calls a radius and no reason; else a ``bootstrap_answers`` fail counting
-    them, and no radius. Returns the solver's name, the result and the reason (None without bad calls)."""
+    """A pose-set calibration with a solver giving ``answer(R, call)`` on the calls ``bad_calls``
+    (the first call is the calibration's own solve): without bad calls a radius and no reason; else
+    a ``bootstrap_answers`` fail counting them, and no radius. Returns the solver's name, the result
+    and the reason (None without bad calls)."""
     C, S = _poses(rig)
     name = door_solver(lambda R, call: answer(R, call) if call in bad_calls else R)
     r = calibrate_poses(C, S, method=name, n_bootstrap=20, diagnose=False)
@@ -660,7 +674,8 @@ def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(
         calibrate(early, slow, n_bootstrap=0)
 
 
-# ------------------------------------------------------------- replicates that are rotations but no solutions (33.1)
+# ------------------------------------------------------------- replicates that are rotations but no
+# solutions (33.1)
 
 def _random_rotation(R, call):
     return so3.random_rotations(np.random.default_rng(call), 1)[0] if R.ndim == 2 else so3.random_rotations(
@@ -670,8 +685,9 @@ def _random_rotation(R, call):
 @pytest.mark.parametrize("bad_calls, counted", [((), 0), ((1,), 1), ((1, 5, 7), 3)])
 def test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_radius(rig, door_solver, bad_calls,
                                                                                     counted):
-    """Right on the calibration's own solve, random rotations on some replicates (rotations, so the registry's
-    checks pass them): without one, a radius; one of 20 (the boundary) already fails, naming the solver."""
+    """Right on the calibration's own solve, random rotations on some replicates (rotations, so the
+    registry's checks pass them): without one, a radius; one of 20 (the boundary) already fails,
+    naming the solver."""
     name, r, reason = _bad_replicates(rig, door_solver, _random_rotation, bad_calls, counted)
     if reason is None:
         return
@@ -690,13 +706,15 @@ def test_batched_replicates_that_are_no_solutions_fail_naming_the_solver(rig, do
 
 
 def _rms(residual_deg):
-    """Cost (8) of the pairs as an angle: the angle whose chordal distance is their root-mean-square one."""
+    """Cost (8) of the pairs as an angle: the angle whose chordal distance is their root-mean-square
+    one."""
     return float(np.degrees(2 * np.arcsin(np.sqrt(np.mean(np.sin(np.radians(residual_deg) / 2) ** 2)))))
 
 
 def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solution(rig):
-    """A resample that draws an outlying station several times pulls the least-squares answer off the other
-    stations (their median residual grows 6-fold here): it is still the resample's optimum, and not blamed."""
+    """A resample that draws an outlying station several times pulls the least-squares answer off
+    the other stations (their median residual grows 6-fold here): it is still the resample's
+    optimum, and not blamed."""
     C, S = _poses(rig)
     rng = np.random.default_rng(2)
     C = C @ so3.matrix_from_rotation_vector(rng.normal(scale=np.radians(0.3), size=(len(C), 3)))
@@ -708,8 +726,9 @@ def test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solutio
 
 @pytest.mark.parametrize("side", [-1, 1])
 def test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs(rig, side):
-    """The boundary: a replicate turned from the answer by just less / more than the angle at which its root-mean-square
-    residual reaches REPLICATE_FIT_FACTOR times the answer's on the same pairs (noisy poses) is a solution / is not."""
+    """The boundary: a replicate turned from the answer by just less / more than the angle at which
+    its root-mean-square residual reaches REPLICATE_FIT_FACTOR times the answer's on the same pairs
+    (noisy poses) is a solution / is not."""
     import replication.rig.solve_and_judge as est
     from replication.core.handeye import pair_residual_deg
     from replication.core.motions import prepare_motions
@@ -758,9 +777,9 @@ def test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solve
 
 
 def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it(rig, door_solver):
-    """A solver that ignores its input (its first answer cached) would give a radius of zero: it fails, named; the
-    same pose set with an honest solver keeps its radius, and noise-free data (replicates all equal to the answer,
-    as they should be) name nothing."""
+    """A solver that ignores its input (its first answer cached) would give a radius of zero: it
+    fails, named; the same pose set with an honest solver keeps its radius, and noise-free data
+    (replicates all equal to the answer, as they should be) name nothing."""
     C, S = _poses(rig)
     noisy = C @ so3.matrix_from_rotation_vector(np.random.default_rng(3).normal(scale=np.radians(0.3), size=(len(C),
                                                                                                              3)))
@@ -780,7 +799,8 @@ def test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_
 
 @pytest.mark.parametrize("turn, frozen", [(0.5, True), (2.0, False)])
 def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
-    """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned unchanged, or not."""
+    """Replicates all turned from the answer by half / twice FROZEN_DEG: the answer returned
+    unchanged, or not."""
     import replication.rig.solve_and_judge as est
 
     C, S = _poses(rig)
@@ -792,15 +812,17 @@ def test_replicates_frozen_at_the_bound(rig, door_solver, turn, frozen):
     r = calibrate_poses(noisy, S, method=name, n_bootstrap=20, diagnose=False)
     assert ("bootstrap_answers" in _reasons(r)) is frozen
 
-# ----------------------------------------------------------------------------------------------------
-# The batch verdict's new words: pose sets judged by station (bootstrap over stations, per-station residuals, an
-# outlying station named), every radius saying what it covers, the offset's sign in words, ties among input mistakes
-# named together in a fixed order, and each new threshold at its boundary.
+# --------------------------------------------------------------------------------------------------
+# The batch verdict's new words: pose sets judged by station (bootstrap over stations, per-station
+# residuals, an outlying station named), every radius saying what it covers, the offset's sign in
+# words, ties among input mistakes named together in a fixed order, and each new threshold at its
+# boundary.
 
 
 def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
-    """Static stations of a robot and a camera rigidly linked by R0 (``C_k = R0 S_k``, both ``body_from_world``), each
-    station's two attitudes with independent noise (``bad``: one station's camera attitude turned by ``bad_deg``)."""
+    """Static stations of a robot and a camera rigidly linked by R0 (``C_k = R0 S_k``, both
+    ``body_from_world``), each station's two attitudes with independent noise (``bad``: one
+    station's camera attitude turned by ``bad_deg``)."""
     R0 = so3.random_rotations(rng, ())
     W = so3.random_rotations(rng, ())  # the target's frame in the robot base's
     S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
@@ -821,7 +843,8 @@ def test_pose_sets_resample_stations_not_pairs(rng):
     assert r.bootstrap_resamples == "stations"
     pairs = calibrate_poses(C, S, n_bootstrap=100, seed=1, pairs="consecutive")
     assert pairs.bootstrap_resamples == "pairs in moving blocks of 2"
-    # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations' information
+    # the pairs share their stations' noise: 435 pairs from 30 stations carry about 30 stations'
+    # information
     import replication.rig.solve_and_judge as est
 
     J = r.n_pairs
@@ -834,7 +857,8 @@ def test_pose_sets_resample_stations_not_pairs(rng):
 
 
 def test_station_bootstrap_covers_the_error_about_95_percent(rng):
-    """40 problems: the error within the station radius in most (the 95 % level, 40 draws: at least 32)."""
+    """40 problems: the error within the station radius in most (the 95 % level, 40 draws: at least
+    32)."""
     hits = 0
     for _ in range(40):
         R0, C, S = _stations(rng, N=20)
@@ -904,7 +928,8 @@ def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
     R0, camera, gyro, _ = rig_streams(40.0, rng=rng, camera_noise_deg=0.02)
     from replication.rig.streams import GyroStream
 
-    # the rates as recorded (bias-free): the bias model moves the offset within its noise, here by 0.01 ms
+    # the rates as recorded (bias-free): the bias model moves the offset within its noise, here by
+    # 0.01 ms
     r = calibrate(camera, GyroStream(gyro.t + offset, gyro.omega, "gyro"), n_bootstrap=20, gyro_bias=False)
     line = next(x for x in r.summary().splitlines() if x.startswith("time offset"))
     side = "ahead of" if offset > 0 else "behind"
@@ -914,7 +939,8 @@ def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
 
 
 def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
-    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever is smaller."""
+    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever
+    is smaller."""
     R = np.eye(3)
     a, b = (0, 0.2 + 1e-15, "first", R, 0.9), (3, 0.2, "second", R, 0.9)
     one = _one_finding([a, b], 1.0, lambda f: f[2], None)[1]
@@ -943,8 +969,8 @@ def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
     R0, C, S = _stations(rng)
     r = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0)
     message = _reasons(r)["input_mistake"].message
-    # both fit equally: named together (the branch this test is about was conditional; it always holds here),
-    # camera first, and the reference decides
+    # both fit equally: named together (the branch this test is about was conditional; it always
+    # holds here), camera first, and the reference decides
     assert "camera poses inverted" in message and "robot poses inverted" in message and "cannot tell" in message
     assert message.index("camera poses") < message.index("robot poses")
     decided = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0, reference=R0)
@@ -958,7 +984,8 @@ def test_judge_tolerates_missing_residuals():
     assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
 
 
-# ----------------------------------------------------------------------------------------- a change inside a recording
+# ----------------------------------------------------------------------------------------- a change
+# inside a recording
 
 def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
     from replication.rig.changepoint import remounted
@@ -1004,8 +1031,8 @@ def test_remount_threshold_boundaries(angle, significant, level):
 
 @pytest.mark.parametrize("fit, reported", [(0.29, True), (0.31, False)])
 def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, reported):
-    """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount (the residual
-    reasons say what it is); the bound is residual_to_motion's fail bound."""
+    """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount
+    (the residual reasons say what it is); the bound is residual_to_motion's fail bound."""
     e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
                  axis_spread_deg=10.0, change=_Change(2.0), change_sides_fit=fit)
     assert ("remount_deg" in {r.check for r in judge(e).reasons}) is reported
@@ -1022,10 +1049,12 @@ def test_an_input_mistake_is_not_called_a_remount(rng):
     assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
 
 
-# ------------------------------------------------------------------------------------------------ handedness
+# ------------------------------------------------------------------------------------------------
+# handedness
 
 def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40.0):
-    """A camera turning about its x and y axes (and ``out_of_plane`` rad/s about z), a gyro on the same body."""
+    """A camera turning about its x and y axes (and ``out_of_plane`` rad/s about z), a gyro on the
+    same body."""
     from replication.rig.streams import GyroStream, OrientationStream
 
     rng = np.random.default_rng(seed)
@@ -1045,8 +1074,9 @@ def _rig_from_body_rates(out_of_plane: float, seed: int = 0, seconds: float = 40
 
 
 def test_rates_in_one_plane_cannot_show_a_flipped_gyro_axis_and_the_verdict_says_so():
-    """Red team: a gyro with one axis's sign flipped and rates in one plane gave ok, radius 0.02 deg, R0 126 deg off.
-    The flipped gyro is exactly a right-handed one mounted otherwise; both now warn, naming the unturned axis."""
+    """Red team: a gyro with one axis's sign flipped and rates in one plane gave ok, radius 0.02
+    deg, R0 126 deg off. The flipped gyro is exactly a right-handed one mounted otherwise; both now
+    warn, naming the unturned axis."""
     from replication.rig.streams import GyroStream
 
     R0, camera, gyro = _rig_from_body_rates(0.0)
@@ -1117,8 +1147,8 @@ def test_a_stream_report_keeps_its_measured_clock_offset(rng):
 # -------------------------------------------------------------------- stations counted once
 
 def test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap(rng):
-    """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the same radius (it
-    was 0.68 -> 0.44 deg, ok, nothing said)."""
+    """The same 10 stations given twice: the same estimate and, drawn as 10 distinct stations, the
+    same radius (it was 0.68 -> 0.44 deg, ok, nothing said)."""
     R0, C, S = _stations(rng, N=10)
     once = calibrate_poses(C, S, n_bootstrap=100, seed=3)
     twice = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), n_bootstrap=100, seed=3)
@@ -1153,8 +1183,9 @@ def test_stations_remeasured_within_the_noise_are_repeats_too(rng):
 
 @pytest.mark.parametrize("apart_deg, same", [(1.99, True), (2.01, False)])
 def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg, same):
-    """The boundary is min_motion_deg (2 deg by default): closer on both sides, a pair of them is noise, not motion,
-    and they are one station; a station apart on one side only is no repeat (a bad measurement, not the same pose)."""
+    """The boundary is min_motion_deg (2 deg by default): closer on both sides, a pair of them is
+    noise, not motion, and they are one station; a station apart on one side only is no repeat (a
+    bad measurement, not the same pose)."""
     from replication.rig.poses import repeated_stations
 
     R0, C, S = _stations(rng, N=6, station_noise_deg=0.0)
@@ -1171,8 +1202,9 @@ def test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides(rng, apart_deg
 
 @pytest.mark.parametrize("step_deg", [1.5, 1.0])
 def test_a_chain_of_close_stations_is_not_one_station(step_deg):
-    """Each station step_deg from the next (under the 2 deg of a repeat), 30 of them spanning tens of degrees: no group
-    may hold two stations further apart than 2 deg (a case once found: a linked chain was read as one station)."""
+    """Each station step_deg from the next (under the 2 deg of a repeat), 30 of them spanning tens
+    of degrees: no group may hold two stations further apart than 2 deg (a case once found: a linked
+    chain was read as one station)."""
     from replication.rig.poses import repeated_stations
 
     axis = np.array([0.0, 0.6, 0.8])
@@ -1214,8 +1246,9 @@ def _blamed(result):
 @pytest.mark.parametrize("bad_deg", [3.0, 6.0])
 @pytest.mark.parametrize("bad", [[7], [7, 8], [7, 9], [3, 12]], ids=["one", "two-adjacent", "two-one-apart", "apart"])
 def test_with_consecutive_pairs_only_the_bad_stations_are_blamed(bad, bad_deg):
-    """Their neighbours share a bad pair each; their own residual does not. The pairs' median (the rule before) named
-    a neighbour in 7 of these 8 cases (and nothing for two adjacent stations 3 deg off)."""
+    """Their neighbours share a bad pair each; their own residual does not. The pairs' median (the
+    rule before) named a neighbour in 7 of these 8 cases (and nothing for two adjacent stations 3
+    deg off)."""
     C, S = _bad_stations(bad, bad_deg=bad_deg)
     r = calibrate_poses(C, S, pairs="consecutive", n_bootstrap=0)
     assert _blamed(r) == set(bad)
@@ -1248,10 +1281,10 @@ def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
     r = calibrate_poses(np.concatenate([C, C]), np.concatenate([S, S]), min_motion_deg=0.0, n_bootstrap=20)
     assert r.station_repeats["distinct"] == 10 and "repeated_stations" in _reasons(r)
 
-# ----------------------------------------------------------------------------------------------------
-# Two references: ``calibrate(reference=<two>)`` and ``calibrate --reference A --reference B`` report
-# the error to each, their disagreement (the reference floor) and which reading applies; one reference works as
-# before.
+# --------------------------------------------------------------------------------------------------
+# Two references: ``calibrate(reference=<two>)`` and ``calibrate --reference A --reference B``
+# report the error to each, their disagreement (the reference floor) and which reading applies; one
+# reference works as before.
 
 
 SCHEMA_TR = json.loads((Path(__file__).resolve().parents[2] / "docs" / "calibration_report.schema.json").read_text())

@@ -1,4 +1,5 @@
-"""The numerical core of the gyro's sensor model: the axes' matrix and the misalignment's Jacobian."""
+"""The numerical core of the gyro's sensor model: the axes' matrix and the misalignment's
+Jacobian."""
 import numpy as np
 
 from replication.rig import gyro_model as gm

@@ -1,6 +1,7 @@
-"""What a calibration reports (:mod:`replication.rig.report`): strict JSON (``json_safe``), every field of ``to_dict``
-and every line of ``summary``, for streams and static poses, with and without a change test, a reference, an offset.
-Mutation testing (scripts/mutation) found these unguarded by the fast tests."""
+"""What a calibration reports (:mod:`replication.rig.report`): strict JSON (``json_safe``), every
+field of ``to_dict`` and every line of ``summary``, for streams and static poses, with and without a
+change test, a reference, an offset. Mutation testing (scripts/mutation) found these unguarded by
+the fast tests."""
 import json
 import math
 

@@ -22,7 +22,8 @@ BIAS = np.array([0.1, -0.1, 0.07])
 
 
 def _rig(seed=0, **kw):
-    """``(R0, camera, gyro)`` of the synthetic rig (:func:`replication.testing.rig_streams`): 30 s, noise on both."""
+    """``(R0, camera, gyro)`` of the synthetic rig (:func:`replication.testing.rig_streams`): 30 s,
+    noise on both."""
     rng = np.random.default_rng(seed)
     kw = {"seconds": 30.0, "camera_noise_deg": 0.05, "gyro_noise_deg_s": 0.2, "rng": rng, **kw}
     return rig_streams(**kw)[:3]
@@ -233,7 +234,8 @@ def test_the_figure_states_the_bias_and_the_drift(biased):
 
 
 def _steady_turn(seed=2):
-    """A rig turning steadily about z (0.35 rad/s) while it rocks about x and y: the angular speeds barely vary."""
+    """A rig turning steadily about z (0.35 rad/s) while it rocks about x and y: the angular speeds
+    barely vary."""
     R0, rng = RIG_R0, np.random.default_rng(seed)
 
     def world_from_camera(t):
@@ -250,8 +252,9 @@ def _steady_turn(seed=2):
 
 
 def test_an_offset_the_pairs_refuse_is_named():
-    """The speeds' correlation puts the offset 7.5 ms off on a steady turn (R0 0.23 deg off, ok before); the pairs
-    put it within 1 ms of the truth (0; 0.6 ms with the gyro's scale estimated, its standard deviation 0.45 ms)."""
+    """The speeds' correlation puts the offset 7.5 ms off on a steady turn (R0 0.23 deg off, ok
+    before); the pairs put it within 1 ms of the truth (0; 0.6 ms with the gyro's scale estimated,
+    its standard deviation 0.45 ms)."""
     R0, camera, gyro = _steady_turn()
     r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
     reason = {x.check: x for x in r.verdict.reasons}["offset_disagreement"]
@@ -273,7 +276,7 @@ def test_offset_disagreement_at_its_boundary(biased):
                                                      time_offset_applied=False), 1.0) is None
 
 
-# ----------------------------------------------------------------------------------------------------
+# --------------------------------------------------------------------------------------------------
 # A gyro axis's scale error estimated and named; the intervals' block jackknife.
 
 
@@ -298,7 +301,8 @@ def _scale_reasons(model):
 
 
 def _scaled(scale, seed=0, seconds=30.0):
-    """``(R0, camera, gyro)``: the benchmark's noisy rig, its gyro reading ``scale * omega + SCALE_RIG_BIAS``."""
+    """``(R0, camera, gyro)``: the benchmark's noisy rig, its gyro reading ``scale * omega +
+    SCALE_RIG_BIAS``."""
     R0, camera, gyro = bench.biased_rig(seconds, camera_noise_deg=0.05, gyro_noise_deg_s=0.2,
                                         rng=np.random.default_rng(seed))
     return R0, camera, GyroStream(gyro.t, gyro.omega * np.asarray(scale, float) + SCALE_RIG_BIAS, "gyro")
@@ -336,8 +340,8 @@ def test_clean_gyro_scales_hold_1_and_give_no_reason():
 
 
 def _two_axis_rig(seed=5):
-    """A sensor whose rates lie in its x-y plane (its z axis never turns): R0 is determined (the axes vary in that
-    plane), z's scale is not."""
+    """A sensor whose rates lie in its x-y plane (its z axis never turns): R0 is determined (the
+    axes vary in that plane), z's scale is not."""
     from replication.rig.streams import integrate_gyro
 
     R0, rng = bench.R0_TRUE, np.random.default_rng(seed)
@@ -368,7 +372,8 @@ def test_the_critical_value_is_student_s_t_of_the_blocks():
 
 
 def test_the_jackknife_sees_a_block_that_pulls_the_fit():
-    """Doubling one block's residuals along a parameter's gradient widens that parameter's jackknife deviation."""
+    """Doubling one block's residuals along a parameter's gradient widens that parameter's jackknife
+    deviation."""
     from replication.rig.gyro_model import _block_jackknife
 
     rng = np.random.default_rng(9)
@@ -413,7 +418,8 @@ def test_a_gyro_in_deg_per_s_is_not_taken_for_a_scale():
 
 
 def test_the_resolution_rule_at_its_boundary(monkeypatch):
-    """An axis's scale is estimated up to a 95 % half-width of SCALE_RESOLUTION, held at 1 just beyond it."""
+    """An axis's scale is estimated up to a 95 % half-width of SCALE_RESOLUTION, held at 1 just
+    beyond it."""
     _, camera, gyro = _scaled([1.0, 1.0, 1.0], seed=10, seconds=15.0)
     m = sm.estimate_sensor_model(camera, gyro)
     half = np.log(m.scale_ci95[:, 1] / m.scale_ci95[:, 0]) / 2  # the intervals are exp(sigma +- t sd)
@@ -467,7 +473,8 @@ def test_the_reason_needs_the_interval_to_exclude_1_and_the_bound_exceeded():
 
 
 def _misaligned(size, seed):
-    """The benchmark's misaligned rig (40 s): the gyro reads ``(I + N(mu)) omega + b``, terms of ``size``."""
+    """The benchmark's misaligned rig (40 s): the gyro reads ``(I + N(mu)) omega + b``, terms of
+    ``size``."""
     return bench.misaligned_rig(seed, size)
 
 
@@ -543,7 +550,8 @@ def test_the_misalignment_reason_needs_the_interval_to_exclude_0_and_the_bound_e
 
 
 def test_the_misalignment_resolution_rule_at_its_boundary(monkeypatch):
-    """A term is estimated up to a 95 % half-width of MISALIGNMENT_RESOLUTION, held at 0 just beyond it."""
+    """A term is estimated up to a 95 % half-width of MISALIGNMENT_RESOLUTION, held at 0 just beyond
+    it."""
     _, camera, gyro = _scaled([1.0, 1.0, 1.0], seed=10, seconds=15.0)
     m = sm.estimate_sensor_model(camera, gyro)
     half = (m.misalignment_ci95[:, 1] - m.misalignment_ci95[:, 0]) / 2
@@ -566,7 +574,8 @@ def test_a_misalignment_beyond_any_gyro_s_holds_every_term_and_says_so():
 
 
 def test_the_terms_of_an_axis_whose_scale_is_held_are_held_at_0_and_said():
-    """z never turns: its scale is held at 1, and so are its terms xz, yz (left free they took up a changing bias)."""
+    """z never turns: its scale is held at 1, and so are its terms xz, yz (left free they took up a
+    changing bias)."""
     _, camera, gyro = _two_axis_rig()
     r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
     report = r.to_dict()
