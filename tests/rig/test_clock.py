@@ -227,3 +227,15 @@ def test_a_drift_that_stops_is_no_step():
     p = r.segments["clock_profile"]
     assert r.segments["clock_jumps"] == [] and p["choice"] == "drift" and p["steps"] == []
     assert p["chi2"]["drift that bends"] < p["chi2"]["step"] < p["chi2"]["drift"]  # the step only beat the one ramp
+
+
+def test_the_bend_share_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8004)
+    gyro = lost(gyro, 30.0, 2)  # a 10 ms step: it beats the drift that bends by far less than the one ramp
+    p = _profile(camera, gyro)
+    share = (p.chi2["drift that bends"] - p.chi2["step"]) / (p.scale * clock.STEP_LR)
+    assert p.step is not None and share < 1.0
+    monkeypatch.setattr(clock, "BEND_SHARE", 1.01 * share)
+    assert _profile(camera, gyro).step is None
+    monkeypatch.setattr(clock, "BEND_SHARE", 0.99 * share)
+    assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.002)
