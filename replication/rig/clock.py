@@ -13,7 +13,8 @@ from .segments import SEGMENT_S
 from .streams import OrientationStream
 
 __all__ = ["ClockJump", "clock_segments", "jump_candidates", "clock_report", "clock_reasons", "JUMP_MIN_S", "JUMP_Z",
-           "OffsetProfile", "offset_profile", "corrected_sensor", "PROFILE_WINDOW_S", "STEP_LR"]
+           "OffsetProfile", "offset_profile", "corrected_sensor", "PROFILE_WINDOW_S", "STEP_LR", "BEND_SHARE",
+           "TWO_STEPS_VS_DRIFT", "TWO_STEPS_MIN_S", "SKIP_MATCH"]
 
 #: A clock jump is at least this large (s; four times the offset search's resolution) and beyond the
 #: two parts' offset intervals.
@@ -35,6 +36,20 @@ PROFILE_WINDOW_S = 5.0
 #: and drifting rigs (maximum 30.0), 5 ms found in 20 of 40, 10-50 ms in 40 of 40 each
 #: (bench_clock.py's notes).
 STEP_LR = 40.0
+#: A stamp interval shorter than ``JUMP_GAP_FACTOR`` median intervals is a clock's skip where its
+#: excess over the median is the step's size to within this share of it (a 20 ms jump of a 20 Hz
+#: camera's clock: a 70 ms interval; the profile's size is within 1-2 ms of the jump's).
+SKIP_MATCH = 0.25
+#: A step is named where it also beats a drift that stops or changes (a ramp that bends once) by
+#: this share of :data:`STEP_LR`: on seeds 96000-96039 (bench_clock.py) a share of 1 lost 12 of 24
+#: 5 ms steps and 4 of 39 10 ms steps, 0.25 lost one 5 ms step; a 500 ppm drift that stops at 30 s,
+#: named a step in 5 of 30 rigs (the red team's seeds) without this rival, in none with it.
+BEND_SHARE = 0.25
+#: Two steps are named where they beat one offset, the ramps and one step by :data:`STEP_LR`, a step with a drift
+#: by this share of it, and each exceeds :data:`TWO_STEPS_MIN_S` (s). On tuning seeds 7000-7019 (60 s, steps of
+#: 20 and 30 ms at 20 and 40 s) the gain over a step with a drift was 20.6-399; on one 30 ms step it reached 39.9
+#: (its second "step" 1.6 ms) and on a 30 ms step with a 200 ppm drift 12.3 (second step 3.9 ms).
+TWO_STEPS_VS_DRIFT, TWO_STEPS_MIN_S = 0.5, 4e-3
 #: Fewest windows the profile runs with (the step model has 4 parameters).
 PROFILE_MIN_WINDOWS = 6
 _H = 1e-3  # the offset's finite difference (s)
@@ -158,17 +173,22 @@ class OffsetProfile:
         The step model's excess scatter ``max(1, chi2_step / (W - 4))`` the likelihood ratios are
         divided by.
     ratio_drift, ratio_one : float
-        The step's scaled chi-square improvement over the ramp and over one offset.
+        The step's scaled chi-square improvement over the ramp (or over a ramp that bends once, a
+        drift that stops, divided by :data:`BEND_SHARE`, where less) and over one offset.
     choice : str
-        ``"step"`` where both ratios exceed :data:`STEP_LR` and the step exceeds :data:`JUMP_MIN_S`;
+        ``"step"`` where both ratios exceed :data:`STEP_LR` and the step exceeds :data:`JUMP_MIN_S`
+        (two steps where their chi-square, scaled by ``max(1, chi2 / (W - 6))``, is below every
+        other model's, the one step's too, by more than :data:`STEP_LR`, each over the floor);
         else ``"drift"`` where the ramp fits better than one offset by more than :data:`STEP_LR`;
         else ``"one offset"``.
     step : ClockJump or None
-        The step (where chosen).
+        The (first) step, where chosen.
     drift_ppm : float
         The ramp's slope (1e-6 s per s).
     windows_left_out : int
         Windows without enough pairs or motion, or whose offset left :data:`PROFILE_REACH_S`.
+    steps : tuple of ClockJump
+        Every step chosen (one or two), in time order.
     """
 
     t_s: np.ndarray
@@ -183,13 +203,15 @@ class OffsetProfile:
     drift_ppm: float
     threshold: float = STEP_LR
     windows_left_out: int = 0
+    steps: tuple = ()
 
     def to_dict(self, t0: float = 0.0) -> dict:
         return {"t_s": (self.t_s - t0).tolist(), "offset_s": self.offset_s.tolist(), "se_s": self.se_s.tolist(),
                 "chi2": dict(self.chi2), "scale": self.scale, "ratio_drift": self.ratio_drift,
                 "ratio_one": self.ratio_one, "threshold": self.threshold, "choice": self.choice,
                 "drift_ppm": self.drift_ppm, "windows_left_out": self.windows_left_out,
-                "step": None if self.step is None else self.step.to_dict(t0)}
+                "step": None if self.step is None else self.step.to_dict(t0),
+                "steps": [j.to_dict(t0) for j in self.steps]}
 
 
 def _residuals(Ai, sensor, ti, tk, d, R):
@@ -225,29 +247,43 @@ def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
 
 
 def _fits(t, d, w):
-    """The chi-squares of one offset, a ramp and the best step (and where: boundary ``b``, left-out
-    window ``x``)."""
+    """The chi-squares of one offset, a ramp, a ramp that bends once (a drift that stops or
+    changes), the best step and the best two steps (each at a boundary ``b`` or inside window
+    ``b``, left out), a step with a drift: ``c0, c1, slope, ck, csr, (c2, (cuts, means)), (c3, (cuts,
+    means))``."""
     def mean_chi(k):
         if not k.any():
             return 0.0, 0.0
         m = float(np.sum(w[k] * d[k]) / np.sum(w[k]))
         return m, float(np.sum(w[k] * (d[k] - m) ** 2))
 
-    _, c0 = mean_chi(np.ones(len(d), bool))
-    X = np.stack([np.ones_like(t), t - t.mean()], axis=1)
-    coef = np.linalg.lstsq(X * np.sqrt(w)[:, None], d * np.sqrt(w), rcond=None)[0]
-    c1 = float(np.sum(w * (d - X @ coef) ** 2))
-    best = (math.inf, None)
-    idx = np.arange(len(d))
-    for b in range(1, len(d)):
-        for x in (None, b):  # a step at the boundary before window b, or inside window b (left out)
-            if x is not None and b == len(d) - 1:
-                continue
-            lo, hi = (idx < b), (idx > b) if x is not None else (idx >= b)
-            (m0, ca), (m1, cb) = mean_chi(lo), mean_chi(hi)
-            if ca + cb < best[0]:
-                best = (ca + cb, (b, x, m0, m1))
-    return c0, c1, coef[1], best
+    def lsq(X, u=w):
+        coef = np.linalg.lstsq(X * np.sqrt(u)[:, None], d * np.sqrt(u), rcond=None)[0]
+        return coef, float(np.sum(u * (d - X @ coef) ** 2))
+
+    n, idx = len(d), np.arange(len(d))
+    _, c0 = mean_chi(np.ones(n, bool))
+    coef, c1 = lsq(np.stack([np.ones_like(t), t - t.mean()], axis=1))
+    knots = np.concatenate([t[1:-1], 0.5 * (t[1:] + t[:-1])])
+    ck = min(lsq(np.stack([np.ones_like(t), np.minimum(t - k, 0), np.maximum(t - k, 0)], axis=1))[1] for k in knots)
+    cuts = [(b, x) for b in range(1, n) for x in (None, b) if x is None or b < n - 1]
+
+    def pieces(cs, ramp=False):  # the parts' means and chi-square between the cuts (a window cut inside: left out)
+        parts, lo = [], 0
+        for b, x in cs:
+            parts.append((idx >= lo) & (idx < b))
+            lo = b + (x is not None)
+        parts.append(idx >= lo)
+        fits = [mean_chi(k) for k in parts]
+        if ramp:  # the parts' offsets and one drift through them (a step and a drift)
+            return lsq(np.stack(parts + [t - t.mean()], axis=1).astype(float), w * np.any(parts, axis=0))[1]
+        return sum(c for _, c in fits), (cs, [m for m, _ in fits])
+
+    one = min((pieces([c]) for c in cuts), key=lambda f: f[0])
+    two = min((pieces([c, e]) for c in cuts for e in cuts if e[0] > c[0] + (c[1] is not None)),
+              key=lambda f: f[0], default=(math.inf, None))
+    csr = min(pieces([c], True) for c in cuts)
+    return c0, c1, coef[1], ck, csr, one, two
 
 
 def _split(Ai, sensor, ti, tk, m0, m1, R, m):
@@ -263,12 +299,15 @@ def _split(Ai, sensor, ti, tk, m0, m1, R, m):
     return float(ti[min(best, len(ti) - 1)])
 
 
-def _skip(t, near, width):
-    """The largest stamp skip (``> JUMP_GAP_FACTOR`` median intervals) of ``t`` within ``width`` of
-    ``near``, or None: ``(time, skipped beyond one interval)``."""
+def _skip(t, near, width, expect=0.0):
+    """The largest stamp skip of ``t`` within ``width`` of ``near``, or None: ``(time, skipped beyond
+    one interval)``; a skip is an interval over ``JUMP_GAP_FACTOR`` median intervals or one whose
+    excess over the median is ``expect`` (s, the step's size with the clock's sign; within
+    :data:`SKIP_MATCH` of it, and over :data:`JUMP_MIN_S`)."""
     dt = np.diff(t)
     step = float(np.median(dt))
-    k = np.flatnonzero((dt > JUMP_GAP_FACTOR * step) & (np.abs(t[:-1] - near) <= width))
+    fits = (dt - step > JUMP_MIN_S) & (np.abs(dt - step - expect) <= SKIP_MATCH * abs(expect))
+    k = np.flatnonzero(((dt > JUMP_GAP_FACTOR * step) | fits) & (np.abs(t[:-1] - near) <= width))
     if not len(k):
         return None
     k = k[int(np.argmax(dt[k]))]
@@ -324,36 +363,50 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     left_out = int(W - good.sum())
     tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
     W = len(tw)
-    c0, c1, slope, (c2, (b, x, m0, m1)) = _fits(tw, dw, 1.0 / sw ** 2)
+    c0, c1, slope, ck, csr, (c2, (cuts, means)), (c3, two) = _fits(tw, dw, 1.0 / sw ** 2)
     scale = max(1.0, c2 / max(W - 4, 1))
-    r_drift, r_one = (c1 - c2) / scale, (c0 - c2) / scale
-    step = None
-    if min(r_drift, r_one) > STEP_LR and abs(m1 - m0) > JUMP_MIN_S:
-        j = (tc[i] >= edges[max(b - 1, 0)]) & (tc[i] < edges[min(b + 2, W)])  # the step's time from its pairs
-        at = _split(Ai[j], sensor, tc[i[j]], tc[k[j]], m0, m1, R, m)
-        res = 2.0 * interval  # the split's error reached 1.4 s for 5 ms steps (bench_clock.py, seeds 0-39)
-        width = res + interval
-        cam, sen = _skip(tc, at, width), _skip(ts, at + m0, width)
-        clock = "camera" if cam is not None else "sensor" if sen is not None else "unknown"
-        if cam is not None:
-            at, res = cam[0], dt
-        elif sen is not None:
-            at, res = sen[0] - m0, float(np.median(sdt))
-        step = ClockJump(time_s=float(at), size_s=float(m1 - m0), offset_before_s=float(m0), offset_after_s=float(m1),
-                         at_gap=sen is not None, clock=clock, time_resolution_s=float(res), found_by="profile")
-    choice = "step" if step is not None else "drift" if (c0 - c1) / scale > STEP_LR else "one offset"
-    return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, chi2={"one offset": c0, "drift": c1, "step": c2},
-                         scale=float(scale), ratio_drift=float(r_drift), ratio_one=float(r_one), choice=choice,
-                         step=step, drift_ppm=float(1e6 * slope), windows_left_out=left_out,
-                         threshold=STEP_LR)
+    r_drift, r_one = min(c1 - c2, (ck - c2) / BEND_SHARE) / scale, (c0 - c2) / scale
+    if two is not None:  # two steps: beyond one offset, either ramp and one step, half as far beyond a step and a drift
+        s2 = max(1.0, c3 / max(W - 6, 1))
+        if (min(c0, c1, ck, c2) - c3) / s2 > STEP_LR and (csr - c3) / s2 > TWO_STEPS_VS_DRIFT * STEP_LR and np.all(
+                np.abs(np.diff(two[1])) > TWO_STEPS_MIN_S):
+            (cuts, means), scale = two, s2
+            r_drift, r_one = (min(c1, ck) - c3) / scale, (c0 - c3) / scale
+    steps = ()
+    if min(r_drift, r_one) > STEP_LR and np.all(np.abs(np.diff(means)) > JUMP_MIN_S):
+        steps = tuple(_step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1)
+                      for cut, m0, m1 in zip(cuts, means[:-1], means[1:]))
+    choice = "step" if steps else "drift" if (c0 - c1) / scale > STEP_LR else "one offset"
+    return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, scale=float(scale), ratio_drift=float(r_drift),
+                         chi2={"one offset": c0, "drift": c1, "drift that bends": ck, "step": c2,
+                               "step and drift": csr, "two steps": c3},
+                         ratio_one=float(r_one), choice=choice, step=steps[0] if steps else None, steps=steps,
+                         drift_ppm=float(1e6 * slope), windows_left_out=left_out, threshold=STEP_LR)
+
+
+def _step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1):
+    """The :class:`ClockJump` of a step from ``m0`` to ``m1`` at ``cut`` (its time from its pairs,
+    its clock from the stamps that skip there)."""
+    tc, b = camera.t, cut[0]
+    j = (tc[i] >= edges[max(b - 1, 0)]) & (tc[i] < edges[min(b + 2, W)])  # the step's time from its pairs
+    at = _split(Ai[j], sensor, tc[i[j]], tc[k[j]], m0, m1, R, m)
+    res = 2.0 * interval  # the split's error reached 1.4 s for 5 ms steps (bench_clock.py, seeds 0-39)
+    width = res + interval
+    cam, sen = _skip(tc, at, width, m0 - m1), _skip(ts, at + m0, width, m1 - m0)
+    clock = "camera" if cam is not None else "sensor" if sen is not None else "unknown"
+    if cam is not None:
+        at, res = cam[0], float(np.median(np.diff(tc)))
+    elif sen is not None:
+        at, res = sen[0] - m0, float(np.median(np.diff(ts)))
+    return ClockJump(time_s=float(at), size_s=float(m1 - m0), offset_before_s=float(m0), offset_after_s=float(m1),
+                     at_gap=sen is not None, clock=clock, time_resolution_s=float(res), found_by="profile")
 
 
 def merged_jumps(jumps, profile, window_s: float = PROFILE_WINDOW_S) -> list:
     """The jumps found at the sensor's gaps and the profile's step, once each (the gap's where both
     found one)."""
     out = list(jumps)
-    if profile is not None and profile.step is not None:
-        s = profile.step
+    for s in () if profile is None else profile.steps:
         if not any(abs(j.time_s - s.time_s) <= window_s for j in out):
             out.append(s)
     return sorted(out, key=lambda j: j.time_s)
@@ -420,10 +473,12 @@ def _where(j, t0):
     at = f"at {j.time_s - t0:.1f} s" + (f" (+-{j.time_resolution_s:.1f} s)" if j.time_resolution_s >= 0.05 else "")
     who = {"sensor": "the sensor's clock jumped",
            "camera": f"the camera's stamps skip there: its clock jumped by {-1e3 * j.size_s:+.1f} ms",
-           "unknown": "no skip in either clock's stamps: one of them lost samples and stamped on evenly (which one "
-                      "cannot be told from the data)"}[j.clock]
+           "unknown": f"no skip in either clock's stamps near it (no interval over {JUMP_GAP_FACTOR:g} median "
+                      f"intervals or over the median by about the step): one of them lost samples and stamped on "
+                      "evenly (which one cannot be told from the data)"}[j.clock]
     how = ("where the sensor stream has a gap" if j.at_gap and j.found_by == "gap" else
-           "found in the offset per window: a step fits it better than one offset and than a steady drift"
+           "found in the offset per window: a step fits it better than one offset and than a steady drift or one "
+           "that stops"
            if j.found_by == "profile" else "")
     return (f"{at} by {1e3 * j.size_s:+.1f} ms (offset {1e3 * j.offset_before_s:+.1f} ms before, "
             f"{1e3 * j.offset_after_s:+.1f} ms after; {who}" + (f"; {how})" if how else ")"))

@@ -145,3 +145,98 @@ def test_a_step_beyond_the_first_search_is_found_and_one_beyond_the_reach_is_not
     assert p.step is not None and p.step.size_s == pytest.approx(-0.150, abs=0.003)
     far = _profile(camera, lost(gyro, 30.0, 80))  # 400 ms: beyond PROFILE_REACH_S, its windows left out
     assert far is not None and far.windows_left_out >= 4
+
+
+def _two_steps(seed, bias=0.0):
+    camera, gyro = _rig(seed, bias=bias)
+    return camera, lost(lost(gyro, 40.0, 6), 20.0, 4)  # -20 ms at 20 s, then -30 ms more at 40 s: no stamp skip
+
+
+def test_two_steps_without_a_stamp_skip_are_two_clock_jumps_not_a_drift():
+    r = _cal(*_two_steps(8010, bias=0.05))
+    checks = {x.check: x for x in r.verdict.reasons}
+    assert "clock_drift" not in checks and checks["clock_jump"].level == "fail"
+    assert checks["clock_jump"].message.count(" ms (offset ") == 2
+    first, second = r.segments["clock_jumps"]
+    for j, at, size in ((first, 20.0, -0.020), (second, 40.0, -0.030)):
+        assert abs(j["time_s"] - at) <= j["time_resolution_s"] and j["size_s"] == pytest.approx(size, abs=0.002)
+    assert r.segments["clock_profile"]["steps"] == [first, second]
+
+
+def test_the_two_steps_threshold_at_its_boundary(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    p = _profile(camera, gyro)
+    c, n = p.chi2, len(p.t_s)
+    rivals = min(c["one offset"], c["drift"], c["drift that bends"], c["step"])
+    s2 = max(1.0, c["two steps"] / (n - 6))
+    gain = min(rivals - c["two steps"], (c["step and drift"] - c["two steps"]) / clock.TWO_STEPS_VS_DRIFT) / s2
+    monkeypatch.setattr(clock, "STEP_LR", 1.01 * gain)
+    assert len(_profile(camera, gyro).steps) <= 1
+    monkeypatch.setattr(clock, "STEP_LR", 0.99 * gain)
+    assert [round(s.size_s, 2) for s in _profile(camera, gyro).steps] == [-0.02, -0.03]
+
+
+def test_the_two_steps_size_floor_at_its_boundary(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    least = min(abs(s.size_s) for s in _profile(camera, gyro).steps)
+    monkeypatch.setattr(clock, "TWO_STEPS_MIN_S", 1.01 * least)
+    assert len(_profile(camera, gyro).steps) <= 1
+    monkeypatch.setattr(clock, "TWO_STEPS_MIN_S", 0.99 * least)
+    assert len(_profile(camera, gyro).steps) == 2
+
+
+def test_one_step_and_a_slow_drift_are_not_two_steps():
+    camera, gyro = _rig(8000, bias=0.05)  # a 30 ms step; the offsets after it creep by 3 ms (one step and a drift)
+    p = _cal(camera, lost(gyro, 30.0, 6)).segments["clock_profile"]
+    (step,) = p["steps"]
+    assert step["size_s"] == pytest.approx(-0.030, abs=0.002) and p["chi2"]["two steps"] < p["chi2"]["step"]
+
+
+def test_a_20_ms_jump_of_the_camera_clock_is_named_the_camera_s_though_its_skip_is_short():
+    camera, gyro = _rig(8012, bias=0.05)
+    r = _cal(camera_jump(camera, 30.0, 0.02), gyro)  # a 70 ms frame interval among 50 ms ones (under 1.5 intervals)
+    (j,) = r.segments["clock_jumps"]
+    assert j["clock"] == "camera" and abs(j["time_s"] - 30.0) < 0.1 and j["size_s"] == pytest.approx(-0.02, abs=0.002)
+    (why,) = [x for x in r.verdict.reasons if x.check == "clock_jump"]
+    assert "the camera's stamps skip there" in why.message and "no skip" not in why.message
+
+
+def test_a_short_skip_is_the_clock_s_at_the_match_boundary(monkeypatch):
+    t = np.concatenate([np.arange(0.0, 30.0, 0.05), np.arange(30.02, 60.0, 0.05)])  # one 70 ms interval
+    share = abs(0.020 - 0.025) / 0.025  # a 20 ms skip read against a 25 ms step
+    monkeypatch.setattr(clock, "SKIP_MATCH", 1.01 * share)
+    assert clock._skip(t, 30.0, 3.0, 0.025)[1] == pytest.approx(0.02)
+    monkeypatch.setattr(clock, "SKIP_MATCH", 0.99 * share)
+    assert clock._skip(t, 30.0, 3.0, 0.025) is None
+    assert clock._skip(t, 30.0, 3.0, -0.02) is None  # the skip says the other clock's sign
+    assert clock._skip(t, 40.0, 3.0, 0.02) is None  # not near the step
+
+
+def test_the_no_skip_words_say_how_far_the_stamps_were_searched():
+    camera, gyro = _rig(8000, bias=0.05)
+    (why,) = [x for x in _cal(camera, lost(gyro, 30.0, 6)).verdict.reasons if x.check == "clock_jump"]
+    assert "no skip in either clock's stamps near it (no interval over 1.5 median intervals" in why.message
+
+
+def _drift_stops(gyro, ppm, stop):
+    return GyroStream(gyro.t + ppm * 1e-6 * (np.minimum(gyro.t, stop) - stop), gyro.omega, gyro.source)
+
+
+def test_a_drift_that_stops_is_no_step():
+    camera, gyro = _rig(8039, bias=0.05)  # before the drift that bends was a rival: a false 11 ms step at 17.6 s
+    r = _cal(camera, _drift_stops(gyro, 500.0, 30.0))
+    p = r.segments["clock_profile"]
+    assert r.segments["clock_jumps"] == [] and p["choice"] == "drift" and p["steps"] == []
+    assert p["chi2"]["drift that bends"] < p["chi2"]["step"] < p["chi2"]["drift"]  # the step only beat the one ramp
+
+
+def test_the_bend_share_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8004)
+    gyro = lost(gyro, 30.0, 2)  # a 10 ms step: it beats the drift that bends by far less than the one ramp
+    p = _profile(camera, gyro)
+    share = (p.chi2["drift that bends"] - p.chi2["step"]) / (p.scale * clock.STEP_LR)
+    assert p.step is not None and share < 1.0
+    monkeypatch.setattr(clock, "BEND_SHARE", 1.01 * share)
+    assert _profile(camera, gyro).step is None
+    monkeypatch.setattr(clock, "BEND_SHARE", 0.99 * share)
+    assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.002)
