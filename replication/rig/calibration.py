@@ -1,5 +1,5 @@
-"""Calibrate a real rig: ``R0`` from a camera orientation stream and a sensor stream. Theory and measured numbers:
-``docs/judging.md``, section ``replication.rig.calibration``."""
+"""Calibrate a real rig: ``R0`` from a camera orientation stream and a sensor stream. Theory and
+measured numbers: ``docs/judging.md``, section ``replication.rig.calibration``."""
 from __future__ import annotations
 
 import dataclasses
@@ -38,14 +38,17 @@ from .streams import (  # integrate_gyro re-exported: a public name
 __all__ = ["calibrate", "OverlapError"]
 
 
-#: A stream has a gap where more than this many of its median sample intervals pass without a sample.
+#: A stream has a gap where more than this many of its median sample intervals pass without a
+#: sample.
 GAP_FACTOR = 5.0
-#: Resolution of the clock-offset search (s), as :func:`replication.rig.association.estimate_time_offset` uses.
+#: Resolution of the clock-offset search (s), as
+#: :func:`replication.rig.association.estimate_time_offset` uses.
 OFFSET_RESOLUTION = 0.5e-3
 
 
 def _gaps(t) -> np.ndarray:
-    """``(start, end)`` of every gap of a stream: more than :data:`GAP_FACTOR` median intervals without a sample."""
+    """``(start, end)`` of every gap of a stream: more than :data:`GAP_FACTOR` median intervals
+    without a sample."""
     dt = np.diff(t)
     k = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
     return np.stack([t[k], t[k + 1]], axis=-1)
@@ -60,8 +63,8 @@ def _span(stream) -> dict:
 class OverlapError(ValueError):
     """The streams overlap in too few camera samples for the clock-offset search.
 
-    The message names the option that sets the search (``max_offset`` from the API; the command line shows its own
-    ``--max-offset`` with :meth:`named`) and gives the spans as durations.
+    The message names the option that sets the search (``max_offset`` from the API; the command line
+    shows its own ``--max-offset`` with :meth:`named`) and gives the spans as durations.
     """
 
     def __init__(self, template: str, option: str = "max_offset"):
@@ -84,15 +87,17 @@ def _duration(seconds: float) -> str:
 
 
 def _overlap_samples(camera, sensor, max_offset) -> int:
-    """Camera samples inside the sensor's span shrunk by ``max_offset`` at each end (what the search compares)."""
+    """Camera samples inside the sensor's span shrunk by ``max_offset`` at each end (what the search
+    compares)."""
     lo, hi = max(camera.t[0], sensor.t[0] + max_offset), min(camera.t[-1], sensor.t[-1] - max_offset)
     return int(np.sum((camera.t >= lo) & (camera.t <= hi)))
 
 
 def _check_overlap(camera, sensor, max_offset):
-    """Refuse streams that overlap in fewer than 10 camera samples once the offset search (+-max_offset) is allowed
-    for: :class:`OverlapError` with the spans as durations, the largest ``max_offset`` that would do where the streams
-    do overlap, and the likely time-unit mistake (with the absolute start times that show it) where there is one."""
+    """Refuse streams that overlap in fewer than 10 camera samples once the offset search
+    (+-max_offset) is allowed for: :class:`OverlapError` with the spans as durations, the largest
+    ``max_offset`` that would do where the streams do overlap, and the likely time-unit mistake
+    (with the absolute start times that show it) where there is one."""
     if _overlap_samples(camera, sensor, max_offset) >= 10:
         return
     cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
@@ -129,9 +134,9 @@ def _check_overlap(camera, sensor, max_offset):
 
 
 def _gap_free_window(camera, sensor, max_offset):
-    """The camera samples inside the sensor stream's longest stretch without a gap (the whole stream if it has none):
-    across a gap the sensor's orientation is interpolated or integrated through missing data, and its angular speed
-    there would bias the clock-offset search."""
+    """The camera samples inside the sensor stream's longest stretch without a gap (the whole stream
+    if it has none): across a gap the sensor's orientation is interpolated or integrated through
+    missing data, and its angular speed there would bias the clock-offset search."""
     gaps = _gaps(sensor.t)
     if not len(gaps):
         return camera
@@ -143,7 +148,8 @@ def _gap_free_window(camera, sensor, max_offset):
 
 def _time_unit_reason(camera, sensor):
     """A ``fail`` reason when the two streams' spans differ by about 1e3, 1e6 or 1e9
-    (:func:`replication.rig.streams.time_unit_mismatch`, which names the units and the stream to blame)."""
+    (:func:`replication.rig.streams.time_unit_mismatch`, which names the units and the stream to
+    blame)."""
     from .quality import Reason
 
     found = time_unit_mismatch(camera, sensor)
@@ -153,18 +159,20 @@ def _time_unit_reason(camera, sensor):
     return Reason("time_unit", "fail", ratio, factor, text)
 
 
-#: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of one recording
-#: (a copy re-saved with fewer digits, a line dropped, times shifted by rounding); real camera and sensor streams
-#: never agree to 0.006 deg sample after sample.
+#: Two orientation samples closer than this in time (s) and in angle (rad) are the same sample of
+#: one recording (a copy re-saved with fewer digits, a line dropped, times shifted by rounding);
+#: real camera and sensor streams never agree to 0.006 deg sample after sample.
 SAME_SAMPLE_TIME_S, SAME_SAMPLE_ANGLE_RAD = 1e-6, 1e-4
 
 
 def _same_stream(camera, sensor) -> str | None:
-    """Whether the 'sensor' is the camera stream itself: a sentence saying how many samples coincide, or None.
+    """Whether the 'sensor' is the camera stream itself: a sentence saying how many samples
+    coincide, or None.
 
-    A copy counts too: at least half of the sensor's samples (and 10) lie within :data:`SAME_SAMPLE_TIME_S` of a
-    camera sample and within :data:`SAME_SAMPLE_ANGLE_RAD` of its orientation (a line dropped, times shifted by a
-    nanosecond, orientations re-saved with 5 decimals)."""
+    A copy counts too: at least half of the sensor's samples (and 10) lie within
+    :data:`SAME_SAMPLE_TIME_S` of a camera sample and within :data:`SAME_SAMPLE_ANGLE_RAD` of its
+    orientation (a line dropped, times shifted by a nanosecond, orientations re-saved with 5
+    decimals)."""
     if not isinstance(sensor, OrientationStream):
         return None
     j = np.clip(np.searchsorted(camera.t, sensor.t), 1, len(camera.t) - 1)
@@ -180,21 +188,23 @@ def _same_stream(camera, sensor) -> str | None:
             f"{SAME_SAMPLE_TIME_S:g} s, orientation within {math.degrees(SAME_SAMPLE_ANGLE_RAD):.2g} deg)")
 
 
-#: The residual level the handedness test divides by is at least this (deg): noise-free pairs fit exactly either way.
+#: The residual level the handedness test divides by is at least this (deg): noise-free pairs fit
+#: exactly either way.
 MIRROR_FLOOR_DEG = 0.01
 
 
 def _mirror_fit(camera, gyro, A, B, interval, offset, stride, keep) -> dict:
-    """How much worse the pairs ``A, B`` fit with the gyro's frame mirrored about the axis it turns about least:
-    ``{"mirror_fit_ratio": ratio of the median residuals, "mirror_normal": that axis}``, each fit by
-    ``chordal_optimal``; empty where the pairs themselves fit poorly (the verdict fails them already, and the
-    diagnosis names a sign-flipped axis) or are too few.
+    """How much worse the pairs ``A, B`` fit with the gyro's frame mirrored about the axis it turns
+    about least: ``{"mirror_fit_ratio": ratio of the median residuals, "mirror_normal": that
+    axis}``, each fit by ``chordal_optimal``; empty where the pairs themselves fit poorly (the
+    verdict fails them already, and the diagnosis names a sign-flipped axis) or are too few.
 
     A gyro with one axis's sign flipped (a left-handed frame, e.g. in a driver) reports ``D omega``
-    (``D = diag(1, 1, -1)``). Where the rates stay in one plane (normal ``n``), ``D omega = (D P) omega`` with the
-    mirror ``P = I - 2 n n^T``, which leaves them unchanged, and ``D P`` is a rotation: the flipped gyro is exactly
-    a right-handed one mounted otherwise, and both fit with different R0. Mirroring the rates about the least-turned
-    axis and fitting again measures how far the data are from that case (three-axis motion fits far worse)."""
+    (``D = diag(1, 1, -1)``). Where the rates stay in one plane (normal ``n``), ``D omega = (D P)
+    omega`` with the mirror ``P = I - 2 n n^T``, which leaves them unchanged, and ``D P`` is a
+    rotation: the flipped gyro is exactly a right-handed one mounted otherwise, and both fit with
+    different R0. Mirroring the rates about the least-turned axis and fitting again measures how far
+    the data are from that case (three-axis motion fits far worse)."""
     from ..core.solvers import solve
 
     def median_residual(A, B):
@@ -214,8 +224,8 @@ def _mirror_fit(camera, gyro, A, B, interval, offset, stride, keep) -> dict:
 
 
 def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) -> np.ndarray:
-    """Mask of pairs to drop: an end in a gap of the sensor stream (interpolated across it), or, for an integrated
-    gyro, any gap within the pair (the integration across it is wrong)."""
+    """Mask of pairs to drop: an end in a gap of the sensor stream (interpolated across it), or, for
+    an integrated gyro, any gap within the pair (the integration across it is wrong)."""
     gaps = _gaps(sensor_t)
     s, e = t_start + offset, t_start + interval + offset
     drop = np.zeros(len(t_start), bool)
@@ -226,8 +236,8 @@ def _pairs_across_gaps(t_start, interval, offset, sensor_t, integrated: bool) ->
 
 
 def _speeds(camera, sensor, offset, lo, hi):
-    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by ``offset``, in the
-    overlap."""
+    """Angular speed (deg/s) of the camera and of the sensor at the camera times shifted by
+    ``offset``, in the overlap."""
     t = camera.t[(camera.t >= lo) & (camera.t <= hi)]
     if len(t) < 2:
         return None
@@ -239,18 +249,20 @@ def _speeds(camera, sensor, offset, lo, hi):
     return 0.5 * (t[1:] + t[:-1]), speed[0], speed[1]
 
 
-#: The change test's splits leave at least this share of the pairs (and 5 blocks) on each side. 0.15 missed
-#: re-mounts in the last 8 % of a recording (a verdict ok 4.6 deg off); 0.05 found a 2 or 5 deg re-mount at 92 %
-#: of 60 s rigs in 20/20 each (0.15: 8/20 and 4/20); false alarms on rigs without a change 1 of 320 (0.15: 2 of
-#: 320), two disjoint sets of 160 seeds (benchmarks/bench_change_ends.py).
+#: The change test's splits leave at least this share of the pairs (and 5 blocks) on each side. 0.15
+#: missed re-mounts in the last 8 % of a recording (a verdict ok 4.6 deg off); 0.05 found a 2 or 5
+#: deg re-mount at 92 % of 60 s rigs in 20/20 each (0.15: 8/20 and 4/20); false alarms on rigs
+#: without a change 1 of 320 (0.15: 2 of 320), two disjoint sets of 160 seeds
+#: (benchmarks/bench_change_ends.py).
 CHANGE_MIN_SHARE = 0.05
 
 
 def _change_test(A, B, t_start, block, t0):
-    """The change test on the pairs (:func:`replication.rig.changepoint.two_segment_test`), its times since ``t0``, and
-    how well each side fits its own estimate (the larger median residual / median motion of the two sides: a
-    re-mount leaves each side fitting, an input mistake neither); or ``(None, why)`` where it cannot run (too short
-    a recording, one side's motions about one axis)."""
+    """The change test on the pairs (:func:`replication.rig.changepoint.two_segment_test`), its
+    times since ``t0``, and how well each side fits its own estimate (the larger median residual /
+    median motion of the two sides: a re-mount leaves each side fitting, an input mistake neither);
+    or ``(None, why)`` where it cannot run (too short a recording, one side's motions about one
+    axis)."""
 
     from .changepoint import two_segment_test
 
@@ -265,9 +277,10 @@ def _change_test(A, B, t_start, block, t0):
 
 
 def _analysis_pairs(camera, oriented, offset, integrated, A, B, t_start, interval, stride, block):
-    """The pairs the change and segment tests run on: at :data:`replication.rig.segments.ANALYSIS_INTERVAL_S`, every
-    camera time, those across a sensor gap dropped (the calibration's own pairs where they are these; ``stride`` 0:
-    never, the sensor having been re-stamped)."""
+    """The pairs the change and segment tests run on: at
+    :data:`replication.rig.segments.ANALYSIS_INTERVAL_S`, every camera time, those across a sensor
+    gap dropped (the calibration's own pairs where they are these; ``stride`` 0: never, the sensor
+    having been re-stamped)."""
     from .segments import ANALYSIS_INTERVAL_S
 
     if interval == ANALYSIS_INTERVAL_S and stride == 1:
@@ -320,19 +333,23 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     seed : int
         Seeds the bootstrap.
     reference : None or array_like (3, 3) or (2, 3, 3)
-        A reference ``R0``; the result then reports the angle to it. Two references (e.g. two published
-        calibrations): the angle to each, their disagreement (the reference floor) and which reading applies.
+        A reference ``R0``; the result then reports the angle to it. Two references (e.g. two
+        published calibrations): the angle to each, their disagreement (the reference floor) and
+        which reading applies.
     diagnose : bool
-        Where the verdict is not ``ok``, look for the usual input mistakes (:mod:`replication.rig.diagnose`).
+        Where the verdict is not ``ok``, look for the usual input mistakes
+        (:mod:`replication.rig.diagnose`).
     progress : bool
         Show a progress bar over the bootstrap (on standard error).
     gyro_bias : bool
-        A gyro sensor: estimate its bias (and the clock's drift) with ``R0`` and remove the bias from the rates
-        before everything else (:mod:`replication.rig.sensor_model`); False: the rates as recorded (the bias is then
-        estimated only where the verdict is not ``ok``, and named if it is large).
+        A gyro sensor: estimate its bias (and the clock's drift) with ``R0`` and remove the bias
+        from the rates before everything else (:mod:`replication.rig.sensor_model`); False: the
+        rates as recorded (the bias is then estimated only where the verdict is not ``ok``, and
+        named if it is large).
     use : {"all", "consistent"}
         ``"consistent"``: fit R0 on the pairs of the segments that agree with each other only
-        (:mod:`replication.rig.segments`), reported (the seconds used and why); ``"all"``: every pair.
+        (:mod:`replication.rig.segments`), reported (the seconds used and why); ``"all"``: every
+        pair.
     **options
         Passed to the solver.
 
@@ -344,8 +361,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     Raises
     ------
     ValueError
-        A bad parameter (named), streams of the wrong type, or streams that do not overlap (:class:`OverlapError`,
-        naming ``max_offset``, with the spans as durations and the likely
+        A bad parameter (named), streams of the wrong type, or streams that do not overlap
+        (:class:`OverlapError`, naming ``max_offset``, with the spans as durations and the likely
         time-unit mistake when their spans show one).
     """
     references = check_common(method, n_bootstrap, seed, reference)  # one, or two (2, 3, 3)
@@ -393,7 +410,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     inputs = {"camera": _span(camera), "sensor": _span(sensor), "overlap_s": float(hi - lo),
               "reference_camera_from_sensor": reference}
     rate = float(1.0 / np.median(np.diff(gyro.t))) if gyro is not None else None
-    # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the interval
+    # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the
+    # interval
     from . import clock as clock_mod
     from . import segments as seg_mod
     clock_parts, jumps, profile, fixed = clock_mod.clock_analysis(  # a clock's step or drift removed for the tests

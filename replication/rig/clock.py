@@ -45,10 +45,11 @@ SKIP_MATCH = 0.25
 #: 5 ms steps and 4 of 39 10 ms steps, 0.25 lost one 5 ms step; a 500 ppm drift that stops at 30 s,
 #: named a step in 5 of 30 rigs (the red team's seeds) without this rival, in none with it.
 BEND_SHARE = 0.25
-#: Two steps are named where they beat one offset, the ramps and one step by :data:`STEP_LR`, a step with a drift
-#: by this share of it, and each exceeds :data:`TWO_STEPS_MIN_S` (s). On tuning seeds 7000-7019 (60 s, steps of
-#: 20 and 30 ms at 20 and 40 s) the gain over a step with a drift was 20.6-399; on one 30 ms step it reached 39.9
-#: (its second "step" 1.6 ms) and on a 30 ms step with a 200 ppm drift 12.3 (second step 3.9 ms).
+#: Two steps are named where they beat one offset, the ramps and one step by :data:`STEP_LR`, a step
+#: with a drift by this share of it, and each exceeds :data:`TWO_STEPS_MIN_S` (s). On tuning seeds
+#: 7000-7019 (60 s, steps of 20 and 30 ms at 20 and 40 s) the gain over a step with a drift was
+#: 20.6-399; on one 30 ms step it reached 39.9 (its second "step" 1.6 ms) and on a 30 ms step with a
+#: 200 ppm drift 12.3 (second step 3.9 ms).
 TWO_STEPS_VS_DRIFT, TWO_STEPS_MIN_S = 0.5, 4e-3
 #: Fewest windows the profile runs with (the step model has 4 parameters).
 PROFILE_MIN_WINDOWS = 6
@@ -248,8 +249,8 @@ def _window_offset(Ai, sensor, ti, tk, d, R, lags, bound):
 
 def _fits(t, d, w):
     """The chi-squares of one offset, a ramp, a ramp that bends once (a drift that stops or
-    changes), the best step and the best two steps (each at a boundary ``b`` or inside window
-    ``b``, left out), a step with a drift: ``c0, c1, slope, ck, csr, (c2, (cuts, means)), (c3, (cuts,
+    changes), the best step and the best two steps (each at a boundary ``b`` or inside window ``b``,
+    left out), a step with a drift: ``c0, c1, slope, ck, csr, (c2, (cuts, means)), (c3, (cuts,
     means))``."""
     def mean_chi(k):
         if not k.any():
@@ -300,9 +301,9 @@ def _split(Ai, sensor, ti, tk, m0, m1, R, m):
 
 
 def _skip(t, near, width, expect=0.0):
-    """The largest stamp skip of ``t`` within ``width`` of ``near``, or None: ``(time, skipped beyond
-    one interval)``; a skip is an interval over ``JUMP_GAP_FACTOR`` median intervals or one whose
-    excess over the median is ``expect`` (s, the step's size with the clock's sign; within
+    """The largest stamp skip of ``t`` within ``width`` of ``near``, or None: ``(time, skipped
+    beyond one interval)``; a skip is an interval over ``JUMP_GAP_FACTOR`` median intervals or one
+    whose excess over the median is ``expect`` (s, the step's size with the clock's sign; within
     :data:`SKIP_MATCH` of it, and over :data:`JUMP_MIN_S`)."""
     dt = np.diff(t)
     step = float(np.median(dt))
