@@ -40,3 +40,39 @@ def lab_dir(lab_recording, tmp_path):
     """A private copy of :func:`lab_recording` that a test may corrupt."""
     shutil.copytree(lab_recording, tmp_path / "rec")
     return tmp_path / "rec"
+
+
+def exact_problem(seed=0, J=8):
+    """``(R0, A, B)``: ``J`` random camera motions and the sensor motions ``R0^T A R0`` they imply
+    (no noise)."""
+    rng = np.random.default_rng(seed)
+    R0 = random_rotations(rng, ())
+    A = random_rotations(rng, J)
+    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
+
+
+def noisy_problem(seed=2, J=30, noise_deg=0.2):
+    """:func:`exact_problem` with ``noise_deg`` (deg per axis) of noise on each sensor motion."""
+    from replication.core.so3 import matrix_from_rotation_vector
+
+    rng = np.random.default_rng(seed)
+    R0, A, B = exact_problem(seed, J)
+    B = B @ matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
+    return R0, A, B
+
+
+def drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
+    """Pairs of :func:`replication.study.live_study.pair_stream`: ``n_before`` at a random ``R0``,
+    then ``n_drift`` whose ``R0`` turns ``rate_deg`` a pair about a random axis."""
+    from replication.core import so3
+    from replication.study.live_study import pair_stream
+
+    rng = np.random.default_rng([seed, 7])
+    R0 = so3.random_rotations(rng, ())
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    A, B = pair_stream(rng, n_before, R0, noise_deg=noise_deg)
+    more = [pair_stream(rng, 1, R0 @ so3.matrix_from_rotation_vector(np.radians(rate_deg * (k + 1)) * axis),
+                        noise_deg=noise_deg)
+            for k in range(n_drift)]
+    return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])

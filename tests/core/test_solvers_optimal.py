@@ -3,33 +3,15 @@
 import numpy as np
 import pytest
 
+from conftest import noisy_problem
 from replication.core import solvers
-from replication.core.so3 import random_rotations
 from replication.core.solvers import solve
-
-
-def _problem(seed=0, J=8):
-    rng = np.random.default_rng(seed)
-    R0 = random_rotations(rng, ())
-    A = random_rotations(rng, J)
-    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
-
-
-def _noisy_pairs(seed=2, J=30, noise_deg=0.2):
-    from replication.core.so3 import matrix_from_rotation_vector
-
-    rng = np.random.default_rng(seed)
-    R0, A, B = _problem(seed, J)
-    B = B @ matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
-    return R0, A, B
-
-
 
 
 def test_chordal_optimal_returns_the_same_type_as_solve_full_output():
     from replication.core.solvers import Solution, chordal_optimal
 
-    R0, A, B = _noisy_pairs(5, J=12)
+    R0, A, B = noisy_problem(5, J=12)
     best = chordal_optimal(A, B)
     sol = solve("chordal_optimal", A, B, full_output=True)
     assert type(best) is Solution and type(sol) is Solution
@@ -46,7 +28,7 @@ def test_chordal_optimal_returns_the_same_type_as_solve_full_output():
 def test_every_full_output_says_how_its_lower_bound_was_certified(method):
     from replication.core.motions import motion_observability
 
-    R0, A, B = _noisy_pairs(6, J=12)
+    R0, A, B = noisy_problem(6, J=12)
     sol = solve(method, A, B, full_output=True, **({"init": R0} if method == "sqp" else {}))
     assert sol.method == method and sol.certificate == "lagrangian" and not sol.sdp_used
     expected = motion_observability(A, B)  # computed when read, the same numbers
@@ -58,7 +40,7 @@ def test_every_full_output_says_how_its_lower_bound_was_certified(method):
 def test_an_uncertified_newton_run_says_so():
     from replication.core.solvers import chordal_optimal
 
-    R0, A, B = _noisy_pairs(7, J=12)
+    R0, A, B = noisy_problem(7, J=12)
     bare = chordal_optimal(A, B, certify=False)
     assert bare.certificate == "none" and bare.sdp_used and not bare.global_optimum
     assert np.isnan(bare.lower_bound) and np.isnan(bare.duality_gap)

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from conftest import exact_problem
 from replication.core import checks, so3, solvers
 from replication.core.handeye import handeye_cost, relative_rotations
 from replication.core.motions import Motions, prepare_motions
-from replication.core.so3 import random_rotations
 from replication.core.solvers import AccuracyWarning, _registry, available, certificate, register, solve, solver_info
 from replication.core.solvers._warnings import ConvergenceWarning, LocalMinimumWarning
 from replication.core.solvers.certificate import relaxed_rotation
@@ -783,13 +783,6 @@ def test_degenerate_motion_is_refused(method, rng):
 EXPORTED_DOORS = ["park_martin", "horaud_dornaika", "andreff", "tsai_lenz", "robust"]
 
 
-def _problem(seed=0, J=8):
-    rng = np.random.default_rng(seed)
-    R0 = random_rotations(rng, ())
-    A = random_rotations(rng, J)
-    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
-
-
 @pytest.mark.parametrize("name", EXPORTED_DOORS)
 def test_a_registered_door_shows_the_doors_signature_not_the_cores(name):
     door = getattr(solvers, name)
@@ -803,7 +796,7 @@ def test_a_registered_door_shows_the_doors_signature_not_the_cores(name):
 
 
 def test_the_signature_binds_what_the_door_accepts_and_refuses_what_it_does_not():
-    R0, A, B = _problem()
+    R0, A, B = exact_problem()
     sig = inspect.signature(solvers.robust)
     sig.bind(A, B, threshold_deg=3.0, seed=1, full_output=True)  # what a caller may write
     with pytest.raises(TypeError):
@@ -838,7 +831,7 @@ def test_solve_decomposes_sym_k_once_for_a_relaxed_start_solver(monkeypatch, rel
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
     name = f"relaxed_{relaxed_start}"
     register(name, reference="test", relaxed_start=relaxed_start)(lambda motions: relaxed_rotation(motions.K))
-    m = Motions(*_problem(1)[1:])
+    m = Motions(*exact_problem(1)[1:])
     solve(name, m)
     # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the
     # same array)

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from conftest import drift_pairs
 from replication.core import so3
 from replication.core.handeye import kronecker_operator
 from replication.core.solvers import chordal_optimal
@@ -15,20 +16,6 @@ from replication.rig.online_events import DUPLICATE_DEG, SMALL_MOTION_DEG, Repea
 from replication.study.live_study import pair_stream
 from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close
-
-
-def _drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
-    rng = np.random.default_rng([seed, 7])
-    R0 = so3.random_rotations(rng, ())
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    A, B = pair_stream(rng, n_before, R0, noise_deg=noise_deg)
-    more = [pair_stream(rng, 1, R0 @ so3.matrix_from_rotation_vector(np.radians(rate_deg * (k + 1)) * axis),
-                        noise_deg=noise_deg)
-            for k in range(n_drift)]
-    return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
-
-
 
 
 def _noisy_pairs(rng, J, R0, *, noise_deg=0.2, max_motion_deg=60.0):
@@ -1137,7 +1124,7 @@ def test_a_complex_pair_is_refused_by_update_as_by_update_many():
 
 
 def test_the_centroid_is_the_weighted_mean_pair_index():
-    A, B = _drift_pairs(1, n_before=40, n_drift=0)
+    A, B = drift_pairs(1, n_before=40, n_drift=0)
     cal = OnlineCalibrator()
     cal.update_many(A[:33], B[:33])
     cal.K  # noqa: B018  (flushes the buffer)

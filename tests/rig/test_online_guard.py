@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from conftest import drift_pairs
 from replication.core import so3
 from replication.rig.live import replay
 from replication.rig.online import OnlineCalibrator
@@ -695,22 +696,10 @@ def test_the_report_schema_names_every_kind():
 TRACK_AXIS = np.array([0.6, -0.48, 0.64])
 
 
-def _drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
-    rng = np.random.default_rng([seed, 7])
-    R0 = so3.random_rotations(rng, ())
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    A, B = pair_stream(rng, n_before, R0, noise_deg=noise_deg)
-    more = [pair_stream(rng, 1, R0 @ so3.matrix_from_rotation_vector(np.radians(rate_deg * (k + 1)) * axis),
-                        noise_deg=noise_deg)
-            for k in range(n_drift)]
-    return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
-
-
 def test_a_steady_drift_is_not_said_to_end():
     """0.002 deg per pair for 1500 pairs at 0.3 deg of pair noise (seed 20000 of a reproducer said
     ``drift_end`` 220 pairs after the drift was recognised): followed, never ended."""
-    A, B = _drift_pairs(20000)
+    A, B = drift_pairs(20000)
     cal = OnlineCalibrator()
     cal.update_many(A, B)
     kinds = [e.kind for e in cal.events]

@@ -5,25 +5,7 @@ import inspect
 import numpy as np
 import pytest
 
-from replication.core import so3
-
-
-def _problem(seed=0, J=8):
-    rng = np.random.default_rng(seed)
-    R0 = so3.random_rotations(rng, ())
-    A = so3.random_rotations(rng, J)
-    return R0, A, np.swapaxes(R0, -1, -2) @ A @ R0
-
-
-
-
-def _noisy_pairs(seed=2, J=30, noise_deg=0.2):
-    from replication.core.so3 import matrix_from_rotation_vector
-
-    rng = np.random.default_rng(seed)
-    R0, A, B = _problem(seed, J)
-    B = B @ matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal((J, 3)))
-    return R0, A, B
+from conftest import noisy_problem
 
 
 def test_solve_pairs_takes_the_pairs_and_six_named_groups():
@@ -52,7 +34,7 @@ def test_the_groups_are_frozen():
 def test_solve_pairs_reports_its_provenance_and_resamples_as_told():
     from replication.rig.solve_and_judge import Provenance, Resampling, solve_pairs
 
-    R0, A, B = _noisy_pairs()
+    R0, A, B = noisy_problem()
     times = np.arange(len(A)) * 0.5
     kw = dict(method="chordal_optimal", options={}, reference=R0, evidence={})
     provenance = Provenance(interval=0.5, time_offset=(0.01, 0.9, True), parameters={"method": "chordal_optimal"},
