@@ -37,6 +37,7 @@ import warnings
 
 import numpy as np
 
+from replication import testing
 from replication.core.so3 import angle_between_deg, rotation_vector_from_matrix
 from replication.core.stats import wilson_interval
 from replication.rig.calibration import calibrate
@@ -145,17 +146,8 @@ MISALIGNMENT_BIAS = np.array([0.03, -0.02, 0.04])
 
 
 def misaligned_rig(seed, size, seconds=40.0):
-    """``(R0, camera, gyro, mu)``: :func:`biased_rig` from ``default_rng(seed)`` (its phases drawn),
-    the gyro reading ``T omega + MISALIGNMENT_BIAS`` with ``T = I + N(mu)``, ``mu`` the terms ``xy,
-    xz, yz`` of ``size`` with random signs."""
-    from replication.rig.gyro_model import axes_matrix
-
-    rng = np.random.default_rng(seed)
-    phase = rng.uniform(0, 2 * np.pi, 3)
-    mu = size * rng.choice([-1.0, 1.0], 3)
-    R0, camera, gyro = biased_rig(seconds, camera_noise_deg=0.05, gyro_noise_deg_s=0.2, rng=rng, phase=phase)
-    T = axes_matrix(np.zeros(3), mu)
-    return R0, camera, GyroStream(gyro.t, gyro.omega @ T.T + MISALIGNMENT_BIAS, "gyro"), mu
+    """:func:`replication.testing.misaligned_rig` with the gyro bias :data:`MISALIGNMENT_BIAS`."""
+    return testing.misaligned_rig(seed, size, seconds, bias=MISALIGNMENT_BIAS)
 
 
 def misalignment_set(runs, seed):

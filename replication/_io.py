@@ -102,8 +102,7 @@ def png_bytes(fig, dpi=None) -> bytes:
     return figure_bytes(fig, "png", dpi)
 
 
-# ----------------------------------------------------------------------------- checks before any
-# work
+# --------------------------------------------------------------------------- checks before any work
 
 def same_file(a, b) -> bool:
     """Whether two paths name one file: equal after resolving links (``os.path.realpath``), or,

@@ -15,8 +15,8 @@ from .core.so3 import (
 )
 
 __all__ = ["RIG_R0", "rig_motion", "rig_streams", "noisy_rig", "rig_pairs", "camera_lost", "clock_jumped",
-           "samples_lost", "clock_stepped", "clock_drifting", "camera_clock_jumped", "assert_rotations_close",
-           "write_tum_trajectory", "write_euroc_imu"]
+           "samples_lost", "clock_stepped", "clock_drifting", "camera_clock_jumped", "misaligned_rig",
+           "assert_rotations_close", "write_tum_trajectory", "write_euroc_imu"]
 
 #: The synthetic rig's ``camera_from_sensor``: 40, -70, 125 deg as a rotation vector's components (a
 #: generic mounting, about 150 deg).
@@ -215,6 +215,23 @@ def camera_clock_jumped(camera, at: float, size: float):
     from .rig.streams import OrientationStream
 
     return OrientationStream(np.where(camera.t >= at, camera.t + size, camera.t), camera.world_from_body, "camera")
+
+
+def misaligned_rig(seed: int, size: float, seconds: float = 40.0, bias=(0.03, -0.02, 0.04)):
+    """``(R0, camera, gyro, mu)``: :func:`rig_streams` from ``default_rng(seed)`` (its phases drawn,
+    camera noise 0.05 deg, gyro noise 0.2 deg/s), the gyro reading ``T omega + bias`` with ``T = I +
+    N(mu)``, ``mu`` the symmetric off-diagonal terms ``xy, xz, yz`` of ``size`` with random
+    signs."""
+    from .rig.gyro_model import axes_matrix
+    from .rig.streams import GyroStream
+
+    rng = np.random.default_rng(seed)
+    phase = rng.uniform(0, 2 * np.pi, 3)
+    mu = size * rng.choice([-1.0, 1.0], 3)
+    R0, camera, gyro, _ = rig_streams(seconds, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2, phase=phase,
+                                      bias=(0.0, 0.0, 0.0))
+    T = axes_matrix(np.zeros(3), mu)
+    return R0, camera, GyroStream(gyro.t, gyro.omega @ T.T + np.asarray(bias, float), "gyro"), mu
 
 
 def assert_rotations_close(R, R_ref, atol_deg: float, *, name: str = "R") -> None:

@@ -137,8 +137,7 @@ def test_require_names_the_extra():
     assert isinstance(info.value, ImportError) and info.value.name == "no_such_module_x"
 
 
-# ------------------------------------------------------------------------------------ the
-# distribution and a wheel
+# --------------------------------------------------------------------- the distribution and a wheel
 
 def test_the_distribution_is_not_pypis_unrelated_replication_and_ships_what_commands_cite():
     """Issue 35: ``replication`` on PyPI is another project; the name is checked free with ``pip

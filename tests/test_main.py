@@ -397,8 +397,7 @@ def test_the_api_plot_honours_the_extension_or_refuses_before_drawing(rig, tmp_p
     assert not (tmp_path / "f.jpeg").exists()
 
 
-# ------------------------------------------------------------------------------------------- pipes
-# and special files
+# -------------------------------------------------------------------------- pipes and special files
 
 class _Feeder:
     """Write ``data`` into the FIFO ``path`` once, from a thread (a writer blocks until the reader
@@ -687,8 +686,7 @@ def test_reproduce_refuses_a_results_folder_that_clashes_or_cannot_be_made(noteb
     assert _snapshot(notebook_folder) == before
 
 
-# ------------------------------------------------------------------------------------------- the
-# overlap message
+# ------------------------------------------------------------------------------ the overlap message
 
 def test_a_max_offset_beyond_the_overlap_is_named_with_durations(rig):
     _, camera, gyro, _ = rig

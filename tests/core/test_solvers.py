@@ -81,8 +81,7 @@ def _rvec_error(R, X):
     return float(np.linalg.norm(so3.rotation_vector_from_matrix(R) - so3.rotation_vector_from_matrix(X)))
 
 
-# ----------------------------------------------------------------------------------------- OpenCV
-# protocol
+# ---------------------------------------------------------------------------------- OpenCV protocol
 
 @pytest.fixture(scope="module")
 def opencv_problems():
@@ -260,8 +259,7 @@ def test_two_step_auto_matches_the_paper_protocol_once_converged(rng):
     assert_rotations_close(auto.R_left, two_step_fixed_point(sim.A, sim.B)[1], 5e-10, name="auto.R_left")
 
 
-# ----------------------------------------------------------------------------------------- global
-# certificate
+# ------------------------------------------------------------------------------- global certificate
 
 @pytest.fixture(scope="module")
 def outlier_problems():
@@ -353,8 +351,7 @@ def test_uncertified_answers_warn(monkeypatch, outlier_problems):
     assert not res.global_optimum.all() and set(res.certificate[~res.global_optimum]) == {"none"}
 
 
-# ----------------------------------------------------------------------------------------- the
-# public doors
+# --------------------------------------------------------------------------------- the public doors
 
 EXPORTED = {
     "two_step": two_step, "two_step_fixed_point": two_step_fixed_point, "sqp": sqp,
@@ -499,8 +496,7 @@ def test_chordal_observability_is_computed_when_read(rng, monkeypatch):
 MIN_BATCH_SOLVE = 300
 
 
-# ----------------------------------------------------------------------------------------- from the
-# referee's report
+# ------------------------------------------------------------------------ from the referee's report
 
 def _half_turn(n):
     n = np.asarray(n, dtype=float)

@@ -69,8 +69,7 @@ def test_solve_refuses_degenerate_motion(rng):
         solve("two_step_right", A, R0.T @ A @ R0)
 
 
-# ------------------------------------------------------------------ what a core returns is checked
-# at the door
+# ------------------------------------------------------- what a core returns is checked at the door
 
 @pytest.fixture
 def bad_core():
@@ -176,8 +175,7 @@ def test_a_core_answer_is_returned_as_floats(bad_core, two_noisy):
     assert R.dtype == float and np.array_equal(R, np.broadcast_to(np.eye(3), (2, 3, 3)))
 
 
-# ------------------------------------------------------------------ the tolerance of the rotation
-# test is checked
+# ---------------------------------------------------- the tolerance of the rotation test is checked
 
 @pytest.mark.parametrize("atol, match", [
     (float("nan"), r"atol must be a finite number, got nan"),
@@ -206,8 +204,7 @@ def test_motions_accept_an_atol_in_range(problem, atol):
         Motions(2 * A, B, atol=atol)
 
 
-# ------------------------------------------------------------------ the same checks for every
-# re-solve
+# --------------------------------------------------------------- the same checks for every re-solve
 
 @pytest.mark.parametrize("answer, match", [
     (lambda X: 2 * X, r"returned a matrix that is not a rotation on replicates at batch index \(0,\): .*det R = 8"),
@@ -521,8 +518,7 @@ def test_a_singular_answer_is_flagged_and_said_not_an_error():
     assert caught == [(AccuracyWarning, "fake returned a singular matrix (det 0), not a rotation, in 1 of 3 problems")]
 
 
-# ------------------------------------------------------------------ what solve() accepts from a
-# core, at the door
+# ---------------------------------------------------- what solve() accepts from a core, at the door
 
 @pytest.fixture
 def core(monkeypatch):

@@ -102,8 +102,7 @@ def test_the_offset_does_not_depend_on_the_block_size(monkeypatch):
     np.testing.assert_allclose(blocked.ci95_s, default.ci95_s, rtol=0, atol=1e-12)  # BLAS rounds by shape
 
 
-# ------------------------------------------------------------------------------------------- the
-# interval
+# ------------------------------------------------------------------------------------- the interval
 
 def test_the_interval_holds_the_truth_when_clean_and_widens_with_noise():
     truth = 0.37e-3
@@ -143,8 +142,7 @@ def test_an_unrelated_sensor_has_an_interval_beyond_the_offsets_evaluated(seed):
     assert math.inf in np.abs(found.ci95_s) and found.correlation < 0.2
 
 
-# ------------------------------------------------------------------------------------------- an
-# ambiguous peak
+# -------------------------------------------------------------------------------- an ambiguous peak
 
 def test_periodic_motion_has_a_small_peak_margin():
     found = offset_analysis(*_periodic(), n_bootstrap=0)
@@ -171,8 +169,7 @@ def test_three_axis_motion_has_a_large_peak_margin():
     assert math.isnan(default.peak_margin) and math.isnan(default.second_peak_offset_s)  # no other peak in +-0.2 s
 
 
-# ------------------------------------------------------------------------------------------- the
-# sign in words
+# -------------------------------------------------------------------------------- the sign in words
 
 KALIBR = "Kalibr's timeshift_cam_imu, t_imu = t_cam + shift"
 
@@ -248,8 +245,7 @@ def test_offset_in_words_refuses_bad_arguments(kw):
         offset_in_words(**kw)
 
 
-# ------------------------------------------------------------------------------------------- real
-# recordings
+# ---------------------------------------------------------------------------------- real recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
@@ -426,8 +422,7 @@ def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_t
         stream_pairs(cam, omega)
 
 
-# ------------------------------------------------------------------ offset_analysis: parameters,
-# block, interval
+# ----------------------------------------------------- offset_analysis: parameters, block, interval
 
 def _turning_rig(n_cam=61, dt=0.05, offset=0.0):
     """A camera at 20 Hz (3 s) and a 200 Hz orientation sensor over a wider span, turning at a
@@ -558,8 +553,7 @@ def test_the_replicates_do_not_depend_on_the_speeds_scale():
     assert np.allclose(small, out, rtol=0, atol=1e-12)
 
 
-# ------------------------------------------------------------------ motion_pairs: which samples
-# pair
+# ----------------------------------------------------------------- motion_pairs: which samples pair
 
 def _dyadic_streams(tc, w=(0.4, 0.9, -0.3), sensor_t=None):
     """A camera at times ``tc`` and a sensor (at ``sensor_t``, default the camera's own stamps)

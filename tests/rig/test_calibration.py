@@ -59,8 +59,7 @@ def _reasons(result):
     return {r.check: r for r in result.verdict.reasons}
 
 
-# ------------------------------------------------------------------------------------------- the
-# good case and cases
+# -------------------------------------------------------------------------- the good case and cases
 
 def test_clean_rig_is_ok_and_right(rig):
     camera, gyro, sensor = rig
@@ -195,8 +194,7 @@ def test_static_pose_sets_get_a_verdict_and_name_their_pairs(rig):
     assert "pairs of static poses" in r.summary() and "nan" not in r.summary()
 
 
-# ------------------------------------------------------------------------------------------- time
-# units
+# --------------------------------------------------------------------------------------- time units
 
 @pytest.mark.parametrize("side, factor", [("sensor", 1e3), ("camera", 1e3), ("sensor", 1e9)])
 def test_time_unit_mistakes_on_absolute_clocks_are_named(rig, side, factor):
@@ -229,8 +227,7 @@ def test_lab_recording_with_times_in_ms_is_refused(lab_dir):
     assert err.value.column == "t"
 
 
-# ------------------------------------------------------------------------------------------- bad
-# parameters
+# ----------------------------------------------------------------------------------- bad parameters
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"interval": 0.0}, "interval must be > 0"),
@@ -266,8 +263,7 @@ def test_streams_of_the_wrong_type_are_refused(rig, camera, sensor):
                   streams.get(sensor, sensor) if isinstance(sensor, str) else sensor)
 
 
-# ------------------------------------------------------------------------------------------- the
-# verdict itself
+# ------------------------------------------------------------------------------- the verdict itself
 
 def test_judge_levels_and_thresholds():
     good = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1,
@@ -303,9 +299,7 @@ def test_diagnostic_figure_has_every_panel(rig, tmp_path):
     assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
 
 
-# ------------------------------------------------------------------------------------------- the
-# command line
-
+# --------------------------------------------------------------------------------- the command line
 
 
 @pytest.fixture(scope="module")
@@ -376,8 +370,7 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
     assert not list(tmp_path.glob("*.part")) and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
-# ------------------------------------------------------------------------------------------- the
-# campaign's cases
+# ----------------------------------------------------------------------------- the campaign's cases
 
 def test_inverted_pose_sets_are_named(rig):
     camera, _, sensor = rig
@@ -483,8 +476,7 @@ def test_an_offset_kept_in_is_said(rig):
     assert _reasons(r)["offset_left_ms"].measured == pytest.approx(100.0, abs=2.0)
 
 
-# ------------------------------------------------------------------------------------------- real
-# recordings
+# ---------------------------------------------------------------------------------- real recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
@@ -543,9 +535,7 @@ def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_wa
     assert reason["measured"] > reason["threshold"] == pytest.approx(0.98627, abs=1e-5)
 
 
-
-# ------------------------------------------------------------------- one door for every solver
-# answer
+# ----------------------------------------------------------------- one door for every solver answer
 
 @pytest.fixture
 def door_solver(monkeypatch):
@@ -674,8 +664,7 @@ def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(
         calibrate(early, slow, n_bootstrap=0)
 
 
-# ------------------------------------------------------------- replicates that are rotations but no
-# solutions (33.1)
+# -------------------------------------------- replicates that are rotations but no solutions (33.1)
 
 def _random_rotation(R, call):
     return so3.random_rotations(np.random.default_rng(call), 1)[0] if R.ndim == 2 else so3.random_rotations(
@@ -835,8 +824,6 @@ def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
     return R0, C, S
 
 
-
-
 def test_pose_sets_resample_stations_not_pairs(rng):
     R0, C, S = _stations(rng)
     r = calibrate_poses(C, S, n_bootstrap=100, seed=1)
@@ -984,8 +971,7 @@ def test_judge_tolerates_missing_residuals():
     assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
 
 
-# ----------------------------------------------------------------------------------------- a change
-# inside a recording
+# ---------------------------------------------------------------------- a change inside a recording
 
 def test_a_remount_inside_a_recording_fails_naming_the_time_and_both_estimates(rng):
     from replication.rig.changepoint import remounted
@@ -1390,8 +1376,6 @@ def _camchain(path, R):
     T[:3, :3] = R
     path.write_text("cam0:\n  T_cam_imu:\n" + "".join(f"  - {row.tolist()}\n" for row in T))
     return path
-
-
 
 
 def test_cli_takes_reference_twice_not_three_times(rig_tr, tmp_path, capsys):

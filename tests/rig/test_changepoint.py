@@ -193,8 +193,7 @@ def test_too_few_pairs_are_refused(pairs):
     two_segment_test(A[:500], B[:500], t[:500], block=BLOCK)  # 25 s: enough
 
 
-# ------------------------------------------------------------------------------------------- real
-# recordings
+# ---------------------------------------------------------------------------------- real recordings
 
 needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 

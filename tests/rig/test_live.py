@@ -379,8 +379,6 @@ def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
     assert pairs == []
 
 
-
-
 def _motion(t):
     return so3.matrix_from_rotation_vector(np.array([math.sin(1.3 * t), math.cos(0.7 * t),
                                                      0.8 * math.sin(0.5 * t + 1.0)]))
@@ -514,8 +512,7 @@ def test_the_rigs_options_are_checked():
     assert rig.correct_offset is True and rig.on_pair is None and rig.GAP_FACTOR == 5.0
 
 
-# ------------------------------------------------------------------ pairing boundaries, gaps and
-# the buffer
+# ---------------------------------------------------------- pairing boundaries, gaps and the buffer
 def _feed_orientations(rig, cam_times, sen_times, offset=0.0):
     """The constant-rate rig: camera poses at ``cam_times``, sensor orientations stamped ``t`` (true
     time ``t - offset``) at ``sen_times``, merged in time order (a sensor sample before a camera
@@ -719,8 +716,7 @@ def test_the_summary_says_whether_an_estimated_offset_was_applied():
     assert s["clock_offset_s"] is None and s["clock_offset_applied"] is False and s["note"] == short.offset_note
 
 
-# ------------------------------------------------------------------ replay's options, columns and
-# re-mount
+# ----------------------------------------------------------- replay's options, columns and re-mount
 def test_replay_passes_its_options_to_the_rig():
     cam, sen = _streams(3.0)
     seen = []

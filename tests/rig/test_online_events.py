@@ -456,8 +456,7 @@ def test_a_remount_needs_the_window_to_misfit_the_old_estimate_at_its_level():
     assert kinds[0] == "remount" and kinds[1] != "remount"
 
 
-# ------------------------------------------------------------------------------------ classify at
-# its boundaries
+# ----------------------------------------------------------------------- classify at its boundaries
 def _classify_m(R_old, A, B, m, *, cap=CAP, cov_deg=0.05, s2=1.5 * math.radians(0.2) ** 2):
     cov = np.eye(3) * np.radians(cov_deg) ** 2
     return classify(R_old, cov, s2, m, A, B, cap=cap, min_excitation_deg=1.0, d2_floor=FLOOR)
@@ -567,8 +566,7 @@ def test_classify_a_misfit_exactly_at_the_fit_quantile_is_no_remount():
     assert info["undecided"] is True  # beyond the threshold but fitting the old estimate: more pairs may decide
 
 
-# ------------------------------------------------------------------------------------ the drift
-# test's numbers
+# ------------------------------------------------------------------------- the drift test's numbers
 def test_drift_test_measures_a_drift_about_each_axis():
     rng = np.random.default_rng(43)
     R = _rot(30.0)
@@ -621,8 +619,7 @@ def test_drift_test_no_alarm_when_the_window_agrees_exactly_at_zero_noise():
     assert (alarm, angle, thr) == (False, 0.0, 0.0)
 
 
-# ------------------------------------------------------------------------------------ the repeat
-# filter's edges
+# ------------------------------------------------------------------------ the repeat filter's edges
 def _turn_z(deg):
     c, s = math.cos(math.radians(deg)), math.sin(math.radians(deg))
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
@@ -691,8 +688,7 @@ def test_solve_window_takes_an_excitation_exactly_at_the_minimum():
     assert solve_window(A, B, min_excitation_deg=exc, s2_floor=1e-12, d2_floor=1e-12)[2] is not None
 
 
-# ------------------------------------------------------------------------------------ decide on
-# each kind
+# ------------------------------------------------------------------------------ decide on each kind
 def _fill(d, R_old, A, B, cov, s2):
     """The first four pairs reported far off (held out: the CUSUM rises by cap - k = 8 each, above h
     at the fourth) raise the alarm; the next fill the confirmation window. Returns the index of the

@@ -552,8 +552,7 @@ def test_the_memory_is_never_shorter_than_the_distinct_pairs_allow():
     assert follow_forgetting(1e-15, 0.5, 0.8, 10) == 1.0 - 1e-9
 
 
-# ------------------------------------------------------------------------------------------------ a
-# drift followed
+# --------------------------------------------------------------------------------- a drift followed
 def _cubic(seed, n=1800, total_deg=6.0, noise_deg=0.1):
     """A drift that speeds up: ``total_deg (j / n)^3`` about AXIS (rate at the end ``3 total_deg /
     n``)."""

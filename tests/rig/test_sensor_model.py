@@ -1,6 +1,5 @@
 """A raw gyro's bias and the clock's drift estimated with R0."""
 import dataclasses
-import importlib.util
 import json
 from pathlib import Path
 
@@ -14,7 +13,7 @@ from replication.rig.calibration import calibrate
 from replication.rig.gyro_model import axes_matrix, critical_value
 from replication.rig.sensor_verdict import SENSOR_THRESHOLDS, sensor_reasons
 from replication.rig.streams import GyroStream, OrientationStream
-from replication.testing import RIG_R0, rig_streams
+from replication.testing import RIG_R0, misaligned_rig, rig_streams
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA = json.loads((ROOT / "docs" / "calibration_report.schema.json").read_text())
@@ -279,21 +278,7 @@ def test_offset_disagreement_at_its_boundary(biased):
 # --------------------------------------------------------------------------------------------------
 # A gyro axis's scale error estimated and named; the intervals' block jackknife.
 
-
-
-
-
-
-_spec = importlib.util.spec_from_file_location("bench_sensor_model", ROOT / "benchmarks" / "bench_sensor_model.py")
-
-
-bench = importlib.util.module_from_spec(_spec)
-
-
-_spec.loader.exec_module(bench)
-
-
-SCALE_RIG_BIAS = np.array([0.03, -0.02, 0.04])
+SCALE_RIG_BIAS = MISALIGNMENT_BIAS = np.array([0.03, -0.02, 0.04])
 
 
 def _scale_reasons(model):
@@ -301,10 +286,9 @@ def _scale_reasons(model):
 
 
 def _scaled(scale, seed=0, seconds=30.0):
-    """``(R0, camera, gyro)``: the benchmark's noisy rig, its gyro reading ``scale * omega +
+    """``(R0, camera, gyro)``: the noisy rig of :func:`_rig`, its gyro reading ``scale * omega +
     SCALE_RIG_BIAS``."""
-    R0, camera, gyro = bench.biased_rig(seconds, camera_noise_deg=0.05, gyro_noise_deg_s=0.2,
-                                        rng=np.random.default_rng(seed))
+    R0, camera, gyro = _rig(seed, seconds=seconds)
     return R0, camera, GyroStream(gyro.t, gyro.omega * np.asarray(scale, float) + SCALE_RIG_BIAS, "gyro")
 
 
@@ -344,7 +328,7 @@ def _two_axis_rig(seed=5):
     axes vary in that plane), z's scale is not."""
     from replication.rig.streams import integrate_gyro
 
-    R0, rng = bench.R0_TRUE, np.random.default_rng(seed)
+    R0, rng = RIG_R0, np.random.default_rng(seed)
     t = np.arange(-1, 31, 0.005)
     w = np.stack([0.6 * np.sin(0.7 * t), 0.5 * np.sin(0.45 * t + 1.0), 0 * t], -1)
     Q = integrate_gyro(GyroStream(t, w, "truth")).R
@@ -475,7 +459,7 @@ def test_the_reason_needs_the_interval_to_exclude_1_and_the_bound_exceeded():
 def _misaligned(size, seed):
     """The benchmark's misaligned rig (40 s): the gyro reads ``(I + N(mu)) omega + b``, terms of
     ``size``."""
-    return bench.misaligned_rig(seed, size)
+    return misaligned_rig(seed, size, bias=MISALIGNMENT_BIAS)
 
 
 @pytest.fixture(scope="module")
@@ -568,7 +552,7 @@ def test_the_misalignment_resolution_rule_at_its_boundary(monkeypatch):
 def test_a_misalignment_beyond_any_gyro_s_holds_every_term_and_says_so():
     _, camera, gyro, _ = _misaligned(0.0, 72003)
     T = axes_matrix(np.zeros(3), [0.3, 0.0, 0.0])
-    m = sm.estimate_sensor_model(camera, GyroStream(gyro.t, (gyro.omega - bench.MISALIGNMENT_BIAS) @ T.T, "g"))
+    m = sm.estimate_sensor_model(camera, GyroStream(gyro.t, (gyro.omega - MISALIGNMENT_BIAS) @ T.T, "g"))
     assert m.scale_note is not None and "no gyro's scale error" in m.scale_note
     assert np.all(m.misalignment == 0.0) and not m.misalignment_resolved.any()
 

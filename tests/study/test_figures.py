@@ -39,8 +39,7 @@ def _texts(fig) -> str:
     return "\n".join(out)
 
 
-# ------------------------------------------------------------------------------------------- one
-# colour per solver
+# ---------------------------------------------------------------------------- one colour per solver
 
 def test_every_registered_solver_has_its_own_colour_and_the_papers_names_share_their_solvers():
     colours = {name: to_rgba(METHOD_STYLE[name]["color"]) for name in available()}  # KeyError: a solver without one
@@ -130,8 +129,7 @@ def test_live_figure_labels_its_target_lines_and_names_each_recording():
     plt.close(fig)
 
 
-# ----------------------------------------------------------------------------------------- the
-# calibration figure
+# --------------------------------------------------------------------------- the calibration figure
 
 @pytest.fixture(scope="module")
 def rig():
@@ -198,8 +196,6 @@ def test_headline_without_a_finite_radius_or_a_reference_matrix(rig):
     _, lines = headline(dataclasses.replace(r, bootstrap_ci95_deg=math.nan, inputs={}))
     assert lines[1].startswith("95 % bootstrap radius: not available")
     assert lines[2] == f"reference; angle between R0 and it: {r.reference_error_deg:.3f} deg"
-
-
 
 
 def test_cli_names_the_recording_and_the_reference_file_in_the_figure(rig, tmp_path, monkeypatch):

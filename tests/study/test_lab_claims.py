@@ -113,8 +113,7 @@ def test_fast_run_is_the_default_run(small_recording):
         lab.run_lab(small_recording, dynamic_camera=fast.dynamic["camera_from_world"][1:])
 
 
-# ----------------------------------------------------------------------------- every sample of each
-# orientation
+# ----------------------------------------------------------------- every sample of each orientation
 
 def test_every_sample_gives_one_motion_per_sample_pair(small_recording):
     mean, every = lab.static_motions(small_recording), lab.static_motions(small_recording, sample="all")
@@ -156,8 +155,7 @@ def test_seed_study_with_every_sample_and_parts_switched_off():
         lab.seed_study([1], SMALL_LAB, without=["pixel noise"])
 
 
-# ----------------------------------------------------------------------------- findings and their
-# intervals
+# --------------------------------------------------------------------- findings and their intervals
 
 def test_count_text_and_seed_range():
     low, high = wilson_interval(15, 20)
@@ -457,8 +455,7 @@ def test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin(mea
             seed_findings(study)
 
 
-# ----------------------------------------------------------------------------- the calibration
-# errors' share of the
+# ------------------------------------------------------------- the calibration errors' share of the
 # pitch bias: resolved to 0.1 deg, many seeds, the words follow the intervals
 
 def test_pitch_bias_intervention_is_the_seed_studys():

@@ -707,8 +707,6 @@ def test_update_readme_writes_between_the_markers_and_checks(tmp_path, two_noteb
             ledger.update_readme(got, readme)
 
 
-
-
 def test_a_section_that_is_no_heading_of_the_notebook_is_refused_naming_the_close_ones(tmp_path, claims_path):
     nb = _notebook_ml(tmp_path / "01_a.ipynb", [[_out(_record("alpha", section="T"))]])
     with pytest.raises(ValueError, match=r"01_a\.ipynb: cell 0: claim 'alpha': the section 'T' is not a heading of "
