@@ -135,6 +135,14 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
     return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None]
 
 
+def _off(value, ci95, resolved, nominal: float, bound: float):
+    """The resolved terms whose 95 % interval excludes ``nominal`` and which depart from it by more
+    than ``bound``: their mask and the largest departure (None where none does)."""
+    lo, hi = ci95[:, 0], ci95[:, 1]
+    off = resolved & ((lo > nominal) | (hi < nominal)) & (np.abs(value - nominal) > bound)
+    return off, (float(np.max(np.abs(value[off] - nominal))) if off.any() else None)
+
+
 def _scale_reason(model):
     """A warning where a resolved axis's scale departs from 1 beyond its interval and by more than
     the bound (:data:`SENSOR_THRESHOLDS` ``gyro_scale_error``), naming the axes, their scales and
@@ -142,12 +150,11 @@ def _scale_reason(model):
     from .quality import Reason
 
     bound = SENSOR_THRESHOLDS["gyro_scale_error"][0]
-    lo, hi = model.scale_ci95[:, 0], model.scale_ci95[:, 1]
-    off = model.scale_resolved & ((lo > 1.0) | (hi < 1.0)) & (np.abs(model.scale - 1.0) > bound)
-    if not off.any():
+    off, worst = _off(model.scale, model.scale_ci95, model.scale_resolved, 1.0, bound)
+    if worst is None:
         return None
+    lo, hi = model.scale_ci95[:, 0], model.scale_ci95[:, 1]
     axes = ", ".join(f"{'xyz'[i]} {model.scale[i]:.4f} [{lo[i]:.4f}, {hi[i]:.4f}]" for i in np.flatnonzero(off))
-    worst = float(np.max(np.abs(model.scale[off] - 1.0)))
     what = "removed from the rates" if model.applied else "measured, not removed"
     return Reason("gyro_scale", "warning", worst, bound,
                   f"gyro scale error: axis {axes} (95 % intervals) reads {100 * worst:.3g} % off 1 > "
@@ -164,11 +171,10 @@ def _misalignment_reason(model):
 
     bound = SENSOR_THRESHOLDS["gyro_misalignment_error"][0]
     mu, lo, hi = model.misalignment, model.misalignment_ci95[:, 0], model.misalignment_ci95[:, 1]
-    off = model.misalignment_resolved & ((lo > 0.0) | (hi < 0.0)) & (np.abs(mu) > bound)
-    if not off.any():
+    off, worst = _off(mu, model.misalignment_ci95, model.misalignment_resolved, 0.0, bound)
+    if worst is None:
         return None
     terms = ", ".join(f"{('xy', 'xz', 'yz')[i]} {mu[i]:+.4f} [{lo[i]:+.4f}, {hi[i]:+.4f}]" for i in np.flatnonzero(off))
-    worst = float(np.max(np.abs(mu[off])))
     what = "removed from the rates" if model.applied else "measured, not removed"
     return Reason("gyro_misalignment", "warning", worst, bound,
                   f"gyro axes misaligned: symmetric off-diagonal term {terms} (95 % intervals) of {100 * worst:.3g} % "
