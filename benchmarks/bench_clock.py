@@ -38,33 +38,20 @@ from bench_changepoint import rig, wilson
 
 from replication.rig.calibration import calibrate
 from replication.rig.clock import STEP_LR
-from replication.rig.streams import GyroStream, OrientationStream
 from replication.testing import camera_clock_jumped, clock_drifting, clock_stepped
 
 STEPS_MS = (5, 10, 20, 30, 50)
 SECONDS, AT = 60.0, 30.0
 
 
-def lost(gyro: GyroStream, at: float, n: int) -> GyroStream:
-    return clock_stepped(gyro, at, n)
-
-
-def drifting(gyro: GyroStream, ppm: float, mid: float = AT) -> GyroStream:
-    return clock_drifting(gyro, ppm, mid)
-
-
-def camera_jump(camera: OrientationStream, at: float, size: float) -> OrientationStream:
-    return camera_clock_jumped(camera, at, size)
-
-
 def case(name: str, seed: int):
     camera, gyro = rig(seed, SECONDS, 0.05, 0.005, bias_rad_s=0.05)
     if name.startswith("step"):
-        gyro = lost(gyro, AT, int(name[4:]) // 5)
+        gyro = clock_stepped(gyro, AT, int(name[4:]) // 5)
     elif name.startswith("ppm"):
-        gyro = drifting(gyro, float(name[3:]))
+        gyro = clock_drifting(gyro, float(name[3:]), AT)
     elif name == "camera50":
-        camera = camera_jump(camera, AT, 0.05)
+        camera = camera_clock_jumped(camera, AT, 0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, seed=seed)
