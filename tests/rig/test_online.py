@@ -814,7 +814,10 @@ def test_outliers_decided_online_count_as_dropped_once_and_the_refinement_schedu
     assert c.n_pairs == c.n_total == 180
     c2 = OnlineCalibrator()
     c2.update_many(A[:k + 1], B[:k + 1])
-    assert c2._next_refine == c2.n_pairs + max(c2.refine_every, c2.n_pairs // 10)
+    n, R = c2.n_pairs, c2.R
+    states = c2.update_many(A[k + 1:], B[k + 1:])
+    refined = [s.n_pairs for s, before in zip(states, [R] + [s.R for s in states]) if not np.array_equal(s.R, before)]
+    assert refined[0] == n + max(c2.refine_every, n // 10)  # the next refinement: the usual gap after the decision
 
 
 def test_a_remount_online_starts_over_from_the_new_estimate():
