@@ -27,30 +27,29 @@ def _stretched(eps):
 def test_atol_is_a_positive_number_up_to_the_maximum():
     assert check_atol(MAX_ROTATION_ATOL) == MAX_ROTATION_ATOL
     assert check_atol(1e-300) == 1e-300
-    with pytest.raises(ValueError, match=r"^atol must be <= 0\.01 \(MAX_ROTATION_ATOL: looser matrices are not "
-                                         r"rotations\), got 0\.010000000000000002$"):
+    with pytest.raises(ValueError, match=r"atol must be <= 0\.01 \(MAX_ROTATION_ATOL.*got 0\.010000000000000002"):
         check_atol(float(np.nextafter(MAX_ROTATION_ATOL, 1.0)))
-    with pytest.raises(ValueError, match=r"^atol must be > 0, got 0$"):
+    with pytest.raises(ValueError, match=r"atol must be > 0\b.*got 0"):
         check_atol(0)
-    with pytest.raises(ValueError, match=r"^tol must be > 0, got -1\.0$"):
+    with pytest.raises(ValueError, match=r"\btol must be > 0\b.*got -1\.0"):
         check_atol(-1.0, "tol")
-    with pytest.raises(ValueError, match=r"^atol must be a finite number, got nan$"):
+    with pytest.raises(ValueError, match=r"atol must be a finite number.*got nan"):
         check_atol(math.nan)
 
 
 def test_check_number_strict_and_not_and_integers():
     assert check_number("x", 1.5, minimum=1.0) == 1.5
-    with pytest.raises(ValueError, match=r"^x must be > 1, got 1\.0$"):
+    with pytest.raises(ValueError, match=r"x must be > 1\b.*got 1\.0"):
         check_number("x", 1.0, minimum=1.0)
     assert check_number("x", 1.0, minimum=1.0, strict=False) == 1.0
-    with pytest.raises(ValueError, match=r"^x must be >= 1, got 0\.5$"):
+    with pytest.raises(ValueError, match=r"x must be >= 1\b.*got 0\.5"):
         check_number("x", 0.5, minimum=1.0, strict=False)
     assert check_number("n", 3, integer=True) == 3 and check_number("n", np.int64(3), integer=True) == 3
     for bad in (3.0, True, "3"):
-        with pytest.raises(ValueError, match=r"^n must be a finite integer, got "):
+        with pytest.raises(ValueError, match=r"\bn must be a finite integer"):
             check_number("n", bad, integer=True)
     for bad in (True, math.inf, -math.inf, math.nan, "1", None, 1j):
-        with pytest.raises(ValueError, match=r"^x must be a finite number, got "):
+        with pytest.raises(ValueError, match=r"x must be a finite number"):
             check_number("x", bad)
     assert check_number("x", np.float32(2.5)) == 2.5 and check_number("x", -7) == -7
     assert check_number("x", 0.0, minimum=None) == 0.0
@@ -61,8 +60,8 @@ def test_orthonormality_at_exactly_atol_passes_and_beyond_fails():
     ok = np.stack([np.eye(3), _stretched(atol * (1 - 1e-6))])
     assert check_rotation_matrices(ok, atol=atol) is not None
     bad = np.stack([np.eye(3), np.eye(3), _stretched(atol * 1.01), _stretched(atol * 2)])
-    with pytest.raises(ValueError, match=r"^Q is not a rotation matrix at index \(2,\): "
-                                         r"\|\|R\^T R - I\|\|_F = 0\.000101 > 0\.0001 \(2 bad of 4\)$"):
+    with pytest.raises(ValueError, match=r"Q is not a rotation matrix at index \(2,\).* 0\.000101 > 0\.0001"
+                                         r".*2 bad of 4"):
         check_rotation_matrices(bad, "Q", atol=atol)
     # the default tolerance
     check_rotation_matrices(_stretched(ROTATION_ATOL * 0.99))
@@ -72,8 +71,7 @@ def test_orthonormality_at_exactly_atol_passes_and_beyond_fails():
 
 def test_a_reflection_is_named_with_its_index_and_determinant():
     R = np.stack([[np.eye(3), np.eye(3)], [np.eye(3), np.diag([1.0, 1.0, -1.0])]])
-    with pytest.raises(ValueError, match=r"^R is not a rotation matrix at index \(1, 1\): det = -1 \(a reflection; "
-                                         r"a rotation has det = \+1\)$"):
+    with pytest.raises(ValueError, match=r"R is not a rotation matrix at index \(1, 1\).*det = -1\b.*reflection"):
         check_rotation_matrices(R)
 
 
@@ -103,7 +101,7 @@ def test_flat_rotation_check_at_its_tolerance():
         M = np.eye(3)
         M[col, col] = math.sqrt(1.0 + eps)
         check_rotation_flat("R", _flat(M), atol=eps * (1 + 1e-9))
-        with pytest.raises(ValueError, match=r"^R is not a rotation matrix: max \|R\^T R - I\| = 1e-06$"):
+        with pytest.raises(ValueError, match=r"R is not a rotation matrix.*\|R\^T R - I\| = 1e-06"):
             check_rotation_flat("R", _flat(M), atol=eps * (1 - 1e-6))
     # off-diagonal entries of R^T R: columns not orthogonal
     for a, b in ((0, 1), (0, 2), (1, 2)):
@@ -112,12 +110,12 @@ def test_flat_rotation_check_at_its_tolerance():
         with pytest.raises(ValueError, match="max \\|R\\^T R - I\\| = 1e-05"):
             check_rotation_flat("R", _flat(M), atol=1e-6)
         check_rotation_flat("R", _flat(M), atol=2e-5)
-    with pytest.raises(ValueError, match=r"^R is a reflection \(det -1\), not a rotation$"):
+    with pytest.raises(ValueError, match=r"R is a reflection \(det -1\)"):
         check_rotation_flat("R", _flat(np.diag([1.0, -1.0, 1.0])))
     for k in range(9):
         bad = _flat(np.eye(3))
         bad[k] = math.nan
-        with pytest.raises(ValueError, match=r"^R is not a rotation matrix: it holds NaN or inf$"):
+        with pytest.raises(ValueError, match=r"R is not a rotation matrix.*NaN or inf"):
             check_rotation_flat("R", bad)
     bad = _flat(np.eye(3))
     bad[3] = math.inf
@@ -158,15 +156,15 @@ def test_a_finite_matrix_whose_entries_cancel_is_judged_by_its_orthogonality_not
     # entries +-1e308: finite, their sum 0; the squares overflow, so |R^T R - I| is inf
     flat = [0.0] * 9
     flat[0], flat[k] = 1e308, -1e308
-    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: max \|R\^T R - I\| = inf$"):
+    with pytest.raises(ValueError, match=r"R is not a rotation matrix.*\|R\^T R - I\| = inf"):
         check_rotation_flat("R", flat)
 
 
 def test_finite_entries_whose_sum_overflows_are_said_as_magnitudes_not_nan():
     flat = [1e308, 1e308] + [0.0] * 7
-    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: entries of magnitude 1e\+308$"):
+    with pytest.raises(ValueError, match=r"R is not a rotation matrix.*entries of magnitude 1e\+308"):
         check_rotation_flat("R", flat)
-    with pytest.raises(ValueError, match=r"^R is not a rotation matrix: it holds NaN or inf$"):
+    with pytest.raises(ValueError, match=r"R is not a rotation matrix.*NaN or inf"):
         check_rotation_flat("R", [math.inf] + [0.0] * 8)
 
 

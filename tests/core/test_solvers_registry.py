@@ -11,8 +11,17 @@ from conftest import exact_problem
 from replication.core import checks, so3, solvers
 from replication.core.handeye import handeye_cost, relative_rotations
 from replication.core.motions import Motions, prepare_motions
-from replication.core.solvers import AccuracyWarning, _registry, available, certificate, register, solve, solver_info
-from replication.core.solvers._warnings import ConvergenceWarning, LocalMinimumWarning
+from replication.core.solvers import (
+    AccuracyWarning,
+    ConvergenceWarning,
+    LocalMinimumWarning,
+    _registry,
+    available,
+    certificate,
+    register,
+    solve,
+    solver_info,
+)
 from replication.core.solvers.certificate import relaxed_rotation
 from replication.study.simulation import simulate
 from replication.testing import assert_rotations_close

@@ -266,48 +266,55 @@ def _pairs_mc(J, rng, noise_deg=0.2, change_at=None, change_deg=0.0):
 def test_parameters_and_inputs_are_checked():
     rng = np.random.default_rng(0)
     A, B, t = _pairs_mc(40, rng)
-    with pytest.raises(ValueError, match=r"^block must be >= 1, got 0$"):
+    with pytest.raises(ValueError, match=r"block must be >= 1\b.*got 0"):
         two_segment_test(A, B, t, block=0)
-    with pytest.raises(ValueError, match=r"^min_share must be > 0, got 0$"):
+    with pytest.raises(ValueError, match=r"min_share must be > 0\b.*got 0"):
         two_segment_test(A, B, t, min_share=0)
-    with pytest.raises(ValueError, match=r"^min_share must be < 0\.5 \(a share of the pairs on each side\), got 0\.5$"):
+    with pytest.raises(ValueError, match=r"min_share must be < 0\.5.*share of the pairs on each side.*got 0\.5"):
         two_segment_test(A, B, t, min_share=0.5)
-    with pytest.raises(ValueError, match=r"^level must be > 0, got 0$"):
+    with pytest.raises(ValueError, match=r"level must be > 0\b.*got 0"):
         two_segment_test(A, B, t, level=0)
-    with pytest.raises(ValueError, match=r"^level must be < 0\.5 \(the false-alarm probability\), got 0\.5$"):
+    with pytest.raises(ValueError, match=r"level must be < 0\.5.*false-alarm probability.*got 0\.5"):
         two_segment_test(A, B, t, level=0.5)
-    with pytest.raises(ValueError, match=r"^A and B must have shape \(J, 3, 3\), got \(2, 20, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"A and B must have shape \(J, 3, 3\).*got \(2, 20, 3, 3\)"):
         two_segment_test(A.reshape(2, 20, 3, 3), B.reshape(2, 20, 3, 3), t)
-    with pytest.raises(ValueError, match=r"^t must hold one start time per pair: got shape \(39,\) for 40 pairs$"):
+    with pytest.raises(ValueError, match=r"t must hold one start time per pair.*shape \(39,\) for 40 pairs"):
         two_segment_test(A, B, t[:-1])
-    with pytest.raises(ValueError, match=r"^t must hold one start time per pair: got shape \(1, 40\) for 40 pairs$"):
+    with pytest.raises(ValueError, match=r"t must hold one start time per pair.*shape \(1, 40\) for 40 pairs"):
         two_segment_test(A, B, t[None])
-    with pytest.raises(ValueError, match=r"^t must be a 1-D array of pair start times: "):
+    with pytest.raises(ValueError, match=r"t must be a 1-D array of pair start times"):
         two_segment_test(A, B, ["x"] * 40)
     for bad in (np.r_[t[:-1], np.nan], np.r_[t[:10], t[9] - 1e-9, t[11:]]):
-        with pytest.raises(ValueError, match=r"^t must be finite and non-decreasing \(pairs in time order\)$"):
+        with pytest.raises(ValueError, match=r"t must be finite and non-decreasing"):
             two_segment_test(A, B, bad)
     two_segment_test(A, B, np.r_[t[:10], t[9], t[11:]])  # equal times are in order
 
 
+def _splits(J, block=1, min_share=0.15):
+    """The candidate splits of the change test on J pairs started at 0, 1, 2 ... s: a split's time
+    is its index."""
+    A, B, t = _pairs_mc(J, np.random.default_rng(J))
+    return two_segment_test(A, B, t, block=block, min_share=min_share).split_times
+
+
 def test_candidate_splits_and_the_fewest_pairs():
     # J = 60, block 1: n_min = max(ceil(0.15 * 60), 5, 10) = 10; splits k = 11 .. 50
-    assert np.array_equal(changepoint._sides(60, 1, 0.15), np.arange(11, 51))
-    assert np.array_equal(changepoint._sides(100, 1, 0.2), np.arange(21, 81))
+    assert np.array_equal(_splits(60), np.arange(11, 51))
+    assert np.array_equal(_splits(100, min_share=0.2), np.arange(21, 81))
     # block 8: n_min = 40; every 2nd split
-    assert np.array_equal(changepoint._sides(200, 8, 0.15), np.arange(48, 161, 2))
+    assert np.array_equal(_splits(200, block=8), np.arange(48, 161, 2))
     # block 2: every split (max(1, 2 // 4))
-    assert np.array_equal(changepoint._sides(100, 2, 0.15), np.arange(17, 86))
+    assert np.array_equal(_splits(100, block=2), np.arange(17, 86))
     # the least pairs: (J - block) / (2 block + 1) >= 10
     J = int(MIN_EFFECTIVE_BLOCKS * 3 + 1)  # 31 at block 1: exactly 10 stretches
-    assert np.array_equal(changepoint._sides(J, 1, 0.15), np.arange(11, 22))
-    with pytest.raises(ValueError, match=r"^too few pairs for a change test: 30 pairs at 1 per block are 9\.7 "
-                                         r"independent stretches, fewer than 10 \(need 31 pairs\)$"):
-        changepoint._sides(30, 1, 0.15)
-    with pytest.raises(ValueError, match=r"^too few pairs for a change test: 60 pairs cannot leave 30 \(min_share "
-                                         r"0\.49, and 5 blocks of 1\) on each side of a split$"):
-        changepoint._sides(60, 1, 0.49)
-    assert len(changepoint._sides(55, 1, 0.49)) == 1  # 55 - 1 - 2 * 27 = 0: one split left
+    assert np.array_equal(_splits(J), np.arange(11, 22))
+    with pytest.raises(ValueError, match=r"too few pairs.*30 pairs at 1 per block.*9\.7 independent stretches"
+                                         r".*fewer than 10.*need 31 pairs"):
+        _splits(30)
+    with pytest.raises(ValueError, match=r"too few pairs.*60 pairs cannot leave 30.*min_share 0\.49"
+                                         r".*5 blocks of 1.*on each side"):
+        _splits(60, min_share=0.49)
+    assert len(_splits(55, min_share=0.49)) == 1  # 55 - 1 - 2 * 27 = 0: one split left
 
 
 def test_a_remount_is_found_at_its_time_with_each_sides_counts():
@@ -322,7 +329,7 @@ def test_a_remount_is_found_at_its_time_with_each_sides_counts():
     assert so3.angle_between_deg(res.R_before, R0_MC) < 0.3
     assert res.p_value < res.level == 0.01 and res.inflation >= 1.0
     assert res.effective_blocks == pytest.approx(119 / 3)
-    assert np.array_equal(res.split_times, t[changepoint._sides(120, 1, 0.15)] + 5.0)
+    assert np.array_equal(res.split_times, np.arange(19, 103) + 5.0)  # n_min = ceil(0.15 * 120) = 18 a side
     assert res.statistics.shape == res.split_times.shape and res.statistic == res.statistics.max()
     assert 0 < res.difference_radius_deg < 1.0
 
@@ -334,12 +341,13 @@ def test_no_change_is_not_significant_and_the_threshold_follows_the_level():
     assert not res.significant and res.statistic <= res.threshold and res.p_value > 0.01
     loose = two_segment_test(A, B, t, level=0.2)
     assert loose.threshold < res.threshold and loose.level == 0.2
-    assert res.p_value == pytest.approx(p_value(res.statistic, res.effective_blocks, *_lams(120, 1, 0.15)))
-    assert res.threshold == pytest.approx(threshold(0.01, res.effective_blocks, *_lams(120, 1, 0.15)), abs=1e-5)
+    assert res.p_value == pytest.approx(p_value(res.statistic, res.effective_blocks, *_lams(res.split_times, 120, 1)))
+    assert res.threshold == pytest.approx(threshold(0.01, res.effective_blocks, *_lams(res.split_times, 120, 1)),
+                                          abs=1e-5)
 
 
-def _lams(J, m, share):
-    ks = changepoint._sides(J, m, share)
+def _lams(ks, J, m):
+    """The span of the candidate splits ``ks`` (pair indices) as shares of J, blocks of m."""
     return (ks[0] - m / 2) / J, (ks[-1] - m / 2) / J
 
 
@@ -359,7 +367,9 @@ def test_single_axis_motion_on_one_side_is_refused():
     A, B, t = _pairs_mc(60, rng)
     A[:30] = so3.matrix_from_rotation_vector(np.radians(rng.uniform(10, 50, 30))[:, None] * np.array([0.0, 0.0, 1.0]))
     B[:30] = R0_MC.T @ A[:30] @ R0_MC
-    with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split: the sensor turns about one axis"):
+    with pytest.raises(ValueError, match=r"degenerate motion on one side of a split.*sensor turns about one axis"
+                                         r".*R0 is not determined on that side"
+                                         r".*a change test needs motions about other axes"):
         two_segment_test(A, B, t)
 
 
@@ -385,11 +395,11 @@ def test_remounted_changes_the_samples_from_exactly_the_time_on():
     o = remounted(OrientationStream(t, Q, "o"), 1.0, R)
     assert np.array_equal(o.world_from_body[:2], Q[:2]) and np.allclose(o.world_from_body[2:], Q[2:] @ R)
     assert o.source == "o"
-    with pytest.raises(ValueError, match=r"^sensor must be a GyroStream or OrientationStream, got ndarray$"):
+    with pytest.raises(ValueError, match=r"sensor must be a GyroStream or OrientationStream.*got ndarray"):
         remounted(w, 1.0, R)
     with pytest.raises(ValueError, match="R is not a rotation matrix"):
         remounted(g, 1.0, 2 * R)
-    with pytest.raises(ValueError, match=r"^time must be a finite number"):
+    with pytest.raises(ValueError, match=r"time must be a finite number"):
         remounted(g, math.nan, R)
 
 
@@ -452,7 +462,7 @@ def test_a_side_tilted_off_one_axis_by_microradians_is_still_degenerate():
     axes = np.stack([delta * (-1.0) ** np.arange(J), np.zeros(J), np.ones(J)], axis=1)
     axes /= np.linalg.norm(axes, axis=1, keepdims=True)
     B = so3.matrix_from_rotation_vector(rng.uniform(0.3, 1.0, J)[:, None] * axes)
-    with pytest.raises(ValueError, match=r"^degenerate motion on one side of a split"):
+    with pytest.raises(ValueError, match=r"degenerate motion on one side of a split"):
         two_segment_test(B, B.copy(), np.arange(J) * 0.5)
 
 
@@ -466,6 +476,6 @@ def test_the_p_value_never_exceeds_one():
 def test_too_few_pairs_at_two_per_block_says_how_many_are_needed():
     A, B, t = _pairs_mc(40, np.random.default_rng(2))
     # (40 - 2) / 5 = 7.6 stretches; 10 need 10 (2 x 2 + 1) + 2 = 52 pairs
-    with pytest.raises(ValueError, match=r"^too few pairs for a change test: 40 pairs at 2 per block are 7\.6 "
-                                         r"independent stretches, fewer than 10 \(need 52 pairs\)$"):
+    with pytest.raises(ValueError, match=r"too few pairs.*40 pairs at 2 per block.*7\.6 independent stretches"
+                                         r".*fewer than 10.*need 52 pairs"):
         two_segment_test(A, B, t, block=2)

@@ -261,10 +261,10 @@ def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_ba
     assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
     assert rig._evidence()["gyro_rate_hz"] == pytest.approx(1 / (0.99 * 0.5 + 0.01 * 0.25))
     for t in (1.75, 1.5):
-        with pytest.raises(ValueError, match=rf"^gyro time going backwards or repeated: {t!r} after 1\.75$"):
+        with pytest.raises(ValueError, match=rf"gyro time going backwards.*{t!r} after 1\.75"):
             rig.add_gyro(t, w0)
     for t, w in ((2.0, [0.0, 0.0]), (2.0, [0.0, math.nan, 0.0]), (math.inf, [0.0, 0.0, 0.0]), (2.0, [1j, 0.0, 0.0])):
-        with pytest.raises(ValueError, match=r"^a gyro sample is a finite time and 3 finite rates, got t="):
+        with pytest.raises(ValueError, match=r"a gyro sample is a finite time and 3 finite rates.*got t="):
             rig.add_gyro(t, w)  # a complex rate is refused, not cast to its real part
     assert len(rig._gyro) == 3
     rig.add_gyro(2.0, [[0.5, -0.1, 0.1]])  # 3 rates in any shape: a 1 x 3 row
@@ -275,20 +275,20 @@ def test_orientation_samples_are_refused_when_not_later_or_not_one_rotation():
     rig, _ = _rig()
     rig.add_orientation(1.0, R0)
     for t in (1.0, 0.5):
-        with pytest.raises(ValueError, match=rf"^sensor time going backwards or repeated: {t!r} after 1\.0$"):
+        with pytest.raises(ValueError, match=rf"sensor time going backwards.*{t!r} after 1\.0"):
             rig.add_orientation(t, R0)
-    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=2\.0, shape "
-                                         r"\(2, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"a sensor pose is a finite time and one 3x3 rotation.*t=2\.0, shape "
+                                         r"\(2, 3, 3\)"):
         rig.add_orientation(2.0, np.stack([R0, R0]))
-    with pytest.raises(ValueError, match=r"^a sensor pose is a finite time and one 3x3 rotation, got t=nan"):
+    with pytest.raises(ValueError, match=r"a sensor pose is a finite time and one 3x3 rotation.*t=nan"):
         rig.add_orientation(math.nan, R0)
     with pytest.raises(ValueError, match="world_from_sensor is not a rotation matrix"):
         rig.add_orientation(2.0, 2 * R0)
-    with pytest.raises(ValueError, match=r"^this rig's sensor gives orientation samples; got a gyro sample$"):
+    with pytest.raises(ValueError, match=r"sensor gives orientation samples.*got a gyro sample"):
         rig.add_gyro(3.0, np.zeros(3))
     rig2, _ = _rig()
     rig2.add_gyro(0.0, np.zeros(3))
-    with pytest.raises(ValueError, match=r"^this rig's sensor gives gyro samples; got a orientation sample$"):
+    with pytest.raises(ValueError, match=r"sensor gives gyro samples.*orientation sample"):
         rig2.add_orientation(1.0, R0)
 
 
@@ -483,23 +483,22 @@ def test_the_offset_search_spans_the_rigs_max_offset():
 
 def test_the_rigs_options_are_checked():
     cal = OnlineCalibrator()
-    with pytest.raises(ValueError, match=r"^calibrator must be an OnlineCalibrator, got dict$"):
+    with pytest.raises(ValueError, match=r"calibrator must be an OnlineCalibrator.*got dict"):
         LiveRig({})
-    for kw, msg in (({"interval": 0}, r"^interval must be > 0, got 0$"),
-                    ({"max_offset": 0}, r"^max_offset must be > 0, got 0$"),
-                    ({"offset": math.nan}, r"^offset must be a finite number, got nan$"),
-                    ({"offset": 0.0, "offset_window": 0}, r"^offset_window must be > 0, got 0$"),
-                    ({"stride": 0}, r"^stride must be >= 1, got 0$"),
-                    ({"stride": 1.5}, r"^stride must be a finite integer, got 1\.5$"),
-                    ({"correct_offset": 1}, r"^correct_offset must be True or False, got 1$"),
-                    ({"diagnose": "yes"}, r"^diagnose must be True or False, got 'yes'$"),
-                    ({"on_pair": 5}, r"^on_pair must be callable or None, got 5$")):
+    for kw, msg in (({"interval": 0}, r"\binterval must be > 0\b.*got 0"),
+                    ({"max_offset": 0}, r"max_offset must be > 0\b.*got 0"),
+                    ({"offset": math.nan}, r"\boffset must be a finite number.*got nan"),
+                    ({"offset": 0.0, "offset_window": 0}, r"offset_window must be > 0\b.*got 0"),
+                    ({"stride": 0}, r"stride must be >= 1\b.*got 0"),
+                    ({"stride": 1.5}, r"stride must be a finite integer.*got 1\.5"),
+                    ({"correct_offset": 1}, r"correct_offset must be True or False.*got 1"),
+                    ({"diagnose": "yes"}, r"diagnose must be True or False.*got 'yes'"),
+                    ({"on_pair": 5}, r"on_pair must be callable or None.*got 5")):
         with pytest.raises(ValueError, match=msg):
             LiveRig(cal, **kw)
     # the offset window must exceed the search both ways plus a second, only when the offset is
     # estimated
-    with pytest.raises(ValueError, match=r"^offset_window must exceed 2 max_offset \+ 1 s = 1\.6 s \(the offset search "
-                                         r"shifts the window by up to max_offset both ways\), got 1\.6$"):
+    with pytest.raises(ValueError, match=r"offset_window must exceed 2 max_offset \+ 1 s = 1\.6 s.*got 1\.6"):
         LiveRig(cal, max_offset=0.3, offset_window=1.6)
     assert LiveRig(cal, max_offset=0.3, offset_window=1.6000001).offset_window == 1.6000001
     assert LiveRig(cal, offset=0.1, max_offset=0.3, offset_window=1.0).offset_window == 1.0
@@ -636,15 +635,15 @@ def test_camera_poses_are_refused_when_not_later_or_not_one_rotation():
     rig, _ = _rig()
     rig.add_camera(1.0, R0)
     for t in (1.0, 0.5):
-        with pytest.raises(ValueError, match=rf"^camera time going backwards or repeated: {t!r} after 1\.0$"):
+        with pytest.raises(ValueError, match=rf"camera time going backwards.*{t!r} after 1\.0"):
             rig.add_camera(t, R0)
-    with pytest.raises(ValueError, match=r"^a camera pose is a finite time and one 3x3 rotation, got t=2\.0, shape "
-                                         r"\(2, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"a camera pose is a finite time and one 3x3 rotation.*t=2\.0, shape "
+                                         r"\(2, 3, 3\)"):
         rig.add_camera(2.0, np.stack([R0, R0]))
-    with pytest.raises(ValueError, match=r"^a camera pose is a finite time and one 3x3 rotation, got t=nan, shape "
-                                         r"\(3, 3\)$"):
+    with pytest.raises(ValueError, match=r"a camera pose is a finite time and one 3x3 rotation.*t=nan, shape "
+                                         r"\(3, 3\)"):
         rig.add_camera(math.nan, R0)
-    with pytest.raises(ValueError, match="^world_from_camera is not a rotation matrix"):
+    with pytest.raises(ValueError, match="world_from_camera is not a rotation matrix"):
         rig.add_camera(2.0, 2 * R0)
     assert [c[0] for c in rig._early_camera] == [1.0]
 
@@ -726,7 +725,7 @@ def test_replay_passes_its_options_to_the_rig():
                                  "checking", "qw", "qx", "qy", "qz"]  # no reference, no error column
     assert seen == list(out["t"]) and out.attrs["summary"]["pairs_formed"] in (2 * len(out) - 1, 2 * len(out))
     assert out.attrs["summary"]["clock_offset_applied"] is False
-    with pytest.raises(ValueError, match=r"^offset_window must exceed 2 max_offset \+ 1 s = 3 s"):
+    with pytest.raises(ValueError, match=r"offset_window must exceed 2 max_offset \+ 1 s = 3 s"):
         replay(cam, sen, OnlineCalibrator(), max_offset=1.0, offset_window=2.5)
     out = replay(cam, sen, OnlineCalibrator(), interval=0.25, offset_window=1.5)  # > 2 x 0.2 s (the default) + 1 s
     assert out.attrs["offset_s"] == pytest.approx(0.0, abs=2 * OFFSET_RESOLUTION)

@@ -205,8 +205,9 @@ def test_cli_online_writes_the_track(tmp_path, capsys):
     assert {"t", "n_pairs", "radius_deg", "ready", "alarm", "qw"} <= set(rows.columns) and rows["ready"].iloc[-1]
     assert "online:" in capsys.readouterr().out
     capsys.readouterr()
-    with pytest.raises(SystemExit, match="^2$"):  # a usage error
+    with pytest.raises(SystemExit) as exit_:
         main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--target", "0"])
+    assert exit_.value.code == 2  # a usage error
     assert "--target" in capsys.readouterr().err
     assert main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--track", str(track)]) == 2
 
@@ -644,32 +645,31 @@ def test_defaults():
 @pytest.mark.parametrize("name", ["target_deg", "cusum_h", "cusum_k", "noise_floor_deg", "min_excitation_deg"])
 def test_positive_options(name):
     OnlineCalibrator(**{name: 1e-9})
-    with pytest.raises(ValueError, match=rf"^{name} must be > 0, got 0$"):
+    with pytest.raises(ValueError, match=rf"\b{name} must be > 0\b.*got 0"):
         OnlineCalibrator(**{name: 0})
 
 
 def test_duplicate_tolerance_may_be_zero():
     assert OnlineCalibrator(duplicate_deg=0.0).duplicate_deg == 0.0
-    with pytest.raises(ValueError, match=r"^duplicate_deg must be >= 0, got -0\.001$"):
+    with pytest.raises(ValueError, match=r"duplicate_deg must be >= 0\b.*got -0\.001"):
         OnlineCalibrator(duplicate_deg=-0.001)
 
 
 def test_the_cusum_cap_must_exceed_k():
     OnlineCalibrator(cusum_k=2.0, cusum_cap=2.0000001)
-    with pytest.raises(ValueError, match=r"^cusum_cap must be above cusum_k \(else the detector's sum never rises\), "
-                                         r"got cusum_cap=2\.0, cusum_k=2\.0$"):
+    with pytest.raises(ValueError, match=r"cusum_cap must be above cusum_k.*got cusum_cap=2\.0, cusum_k=2\.0"):
         OnlineCalibrator(cusum_k=2.0, cusum_cap=2.0)
-    with pytest.raises(ValueError, match=r"^cusum_cap must be a finite number"):
+    with pytest.raises(ValueError, match=r"cusum_cap must be a finite number"):
         OnlineCalibrator(cusum_cap=math.inf)
 
 
 def test_level_and_reference_rate_ranges():
     assert OnlineCalibrator(level=0.5).level == 0.5
     for bad in (0.0, 1.0):
-        with pytest.raises(ValueError, match=rf"^level must be in \(0, 1\), got {bad}$"):
+        with pytest.raises(ValueError, match=rf"\blevel must be in \(0, 1\).*got {bad}"):
             OnlineCalibrator(level=bad)
     assert OnlineCalibrator(reference_rate=1.0).reference_rate == 1.0
-    with pytest.raises(ValueError, match=r"^reference_rate must be in \(0, 1\], got 0\.0$"):
+    with pytest.raises(ValueError, match=r"reference_rate must be in \(0, 1\].*got 0\.0"):
         OnlineCalibrator(reference_rate=0.0)
 
 
@@ -681,17 +681,17 @@ def test_integer_options_and_their_least_values(name, least):
         kw["max_confirm_pairs"] = least
     c = OnlineCalibrator(**kw)
     assert getattr(c, name) == least and type(getattr(c, name)) is int
-    with pytest.raises(ValueError, match=rf"^{name} must be >= {least}, got {least - 1}$"):
+    with pytest.raises(ValueError, match=rf"\b{name} must be >= {least}\b.*got {least - 1}"):
         OnlineCalibrator(**{name: least - 1})
-    with pytest.raises(ValueError, match=rf"^{name} must be a finite integer, got {least}\.0$"):
+    with pytest.raises(ValueError, match=rf"\b{name} must be a finite integer.*got {least}\.0"):
         OnlineCalibrator(**{name: float(least)})
 
 
 def test_the_confirmation_window_bounds():
     assert OnlineCalibrator(confirm_pairs=7, max_confirm_pairs=7).max_confirm_pairs == 7
-    with pytest.raises(ValueError, match=r"^max_confirm_pairs must be at least confirm_pairs = 7, got 6$"):
+    with pytest.raises(ValueError, match=r"max_confirm_pairs must be at least confirm_pairs = 7.*got 6"):
         OnlineCalibrator(confirm_pairs=7, max_confirm_pairs=6)
-    with pytest.raises(ValueError, match=r"^max_confirm_pairs must be >= 5, got 4$"):
+    with pytest.raises(ValueError, match=r"max_confirm_pairs must be >= 5\b.*got 4"):
         OnlineCalibrator(max_confirm_pairs=4)
 
 
@@ -699,9 +699,9 @@ def test_forgetting_is_bounded_by_the_pairs_it_needs():
     lowest = (10 - 1) / (10 + 1)
     assert OnlineCalibrator(forgetting=lowest).forgetting == lowest
     assert OnlineCalibrator(forgetting=1.0).forgetting == 1.0
-    with pytest.raises(ValueError, match=r"^forgetting must be in \[0\.818182, 1\], got 0\.8$"):
+    with pytest.raises(ValueError, match=r"forgetting must be in \[0\.818182, 1\].*got 0\.8"):
         OnlineCalibrator(forgetting=0.8)
-    with pytest.raises(ValueError, match=r"^forgetting must be in \[0\.818182, 1\], got 1\.01$"):
+    with pytest.raises(ValueError, match=r"forgetting must be in \[0\.818182, 1\].*got 1\.01"):
         OnlineCalibrator(forgetting=1.01)
     assert OnlineCalibrator(min_pairs=4, forgetting=0.6).forgetting == 0.6  # (4 - 1) / (4 + 1)
 
@@ -709,7 +709,7 @@ def test_forgetting_is_bounded_by_the_pairs_it_needs():
 def test_the_start_rotation():
     c = OnlineCalibrator(init=R0_MO)
     assert np.array_equal(c.R, R0_MO)
-    with pytest.raises(ValueError, match=r"^init must be one 3x3 rotation, got shape \(2, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"init must be one 3x3 rotation.*shape \(2, 3, 3\)"):
         OnlineCalibrator(init=np.stack([R0_MO, R0_MO]))
     with pytest.raises(ValueError, match="init is not a rotation matrix"):
         OnlineCalibrator(init=2 * R0_MO)
@@ -788,16 +788,15 @@ def test_not_ready_sentences():
 
 def test_pairs_are_refused_unless_two_rotations():
     c = OnlineCalibrator()
-    with pytest.raises(ValueError, match=r"^a pair is two 3x3 rotations, got shapes \(2, 3, 3\) and \(2, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"a pair is two 3x3 rotations.*shapes \(2, 3, 3\) and \(2, 3, 3\)"):
         c.update(np.stack([R0_MO, R0_MO]), np.stack([R0_MO, R0_MO]))
-    with pytest.raises(ValueError, match=r"^a pair is two 3x3 rotations: "):
+    with pytest.raises(ValueError, match=r"a pair is two 3x3 rotations: "):
         c.update(np.stack([R0_MO, R0_MO]), R0_MO)
-    with pytest.raises(ValueError, match=r"^A \(camera motion\) is not a rotation matrix"):
+    with pytest.raises(ValueError, match=r"A \(camera motion\) is not a rotation matrix"):
         c.update(2 * R0_MO, R0_MO)
-    with pytest.raises(ValueError, match=r"^B \(sensor motion\) is a reflection"):
+    with pytest.raises(ValueError, match=r"B \(sensor motion\) is a reflection"):
         c.update(R0_MO, -R0_MO)
-    with pytest.raises(ValueError, match=r"^need two \(J, 3, 3\) arrays of the same J, "
-                                         r"got \(2, 3, 3\) and \(3, 3, 3\)$"):
+    with pytest.raises(ValueError, match=r"need two \(J, 3, 3\) arrays of the same J.*got \(2, 3, 3\) and \(3, 3, 3\)"):
         c.update_many(np.stack([R0_MO] * 2), np.stack([R0_MO] * 3))
     assert c.n_total == 0
 
@@ -815,7 +814,10 @@ def test_outliers_decided_online_count_as_dropped_once_and_the_refinement_schedu
     assert c.n_pairs == c.n_total == 180
     c2 = OnlineCalibrator()
     c2.update_many(A[:k + 1], B[:k + 1])
-    assert c2._next_refine == c2.n_pairs + max(c2.refine_every, c2.n_pairs // 10)
+    n, R = c2.n_pairs, c2.R
+    states = c2.update_many(A[k + 1:], B[k + 1:])
+    refined = [s.n_pairs for s, before in zip(states, [R] + [s.R for s in states]) if not np.array_equal(s.R, before)]
+    assert refined[0] == n + max(c2.refine_every, n // 10)  # the next refinement: the usual gap after the decision
 
 
 def test_a_remount_online_starts_over_from_the_new_estimate():
@@ -1005,9 +1007,9 @@ def test_update_takes_the_same_array_likes_as_update_many():
 
 def test_update_many_names_the_camera_or_the_sensor_motions():
     A = np.stack([R0_MO, R0_MO])
-    with pytest.raises(ValueError, match=r"^A \(camera motions\) is not a rotation"):
+    with pytest.raises(ValueError, match=r"A \(camera motions\) is not a rotation"):
         OnlineCalibrator().update_many(2 * A, A)
-    with pytest.raises(ValueError, match=r"^B \(sensor motions\) "):
+    with pytest.raises(ValueError, match=r"B \(sensor motions\) "):
         OnlineCalibrator().update_many(A, -A)
 
 

@@ -634,7 +634,7 @@ def test_a_motion_of_exactly_the_small_motion_bound_is_not_at_rest():
 
 def test_a_tolerance_of_one_radian_takes_near_repeats():
     f = RepeatFilter(math.degrees(1.0))
-    assert f._tol == 1.0
+    assert f.tolerance_deg == math.degrees(1.0)  # one radian
     A, B = _rot(20.0), _rot(15.0, (1, 0, 0))
     assert f.seen(_flat(A), _flat(B)) is False
     assert f.seen(_flat(A @ _rot(5.0)), _flat(B)) is True  # 5 deg: every entry within 1 (radian) of the first's

@@ -295,17 +295,23 @@ def test_a_window_withdrawal_holds_until_a_window_fits_as_usual(rng):
     stat = misfit_test(R, None, s2, A, B)[0]
     guard = MisfitGuard(64)
     assert guard.clear_threshold == pytest.approx(chi2_quantile(GUARD_CLEAR_LEVEL, 3)) and GUARD_CLEAR_LEVEL == 0.95
+
+    def scan():  # GUARD_EVERY pairs of residual 0 (no run): the window is tested once, at the last
+        assert GUARD_EVERY == GUARD_WINDOW
+        for a, b in recent:
+            guard.add(a, b, 0.0, R, None, s2, recent)
+
     guard.threshold = stat * (1 + 1e-9)
-    guard._scan(R, None, s2, recent)
+    scan()
     assert guard.window_misfit is None
     guard.threshold = stat * (1 - 1e-9)
-    guard._scan(R, None, s2, recent)
+    scan()
     assert guard.window_misfit is not None and guard.window_misfit[2] == pytest.approx(stat)
     guard.threshold, guard.clear_threshold = 2 * stat, stat * (1 - 1e-9)  # between the two levels: still withdrawn
-    guard._scan(R, None, s2, recent)
+    scan()
     assert guard.window_misfit is not None
     guard.clear_threshold = stat  # at the clearing level: it fits as usual
-    guard._scan(R, None, s2, recent)
+    scan()
     assert guard.window_misfit is None
 
 
@@ -384,9 +390,20 @@ def test_a_decision_keeps_the_long_windows_and_a_remount_forgets_them(rng):
         guard.add(a, b, 0.0, R, None, s2)
     assert guard.long_misfit is not None and guard.long_misfit[0] == 80
     guard.clear()  # an outliers / noise decision: the pairs are still in the estimate
-    assert guard.long_misfit is not None and guard.misfit == guard.long_misfit and guard._count == 80
+    assert guard.long_misfit is not None and guard.misfit == guard.long_misfit
+    levels = guard.threshold, guard.clear_threshold
+    guard.threshold = guard.clear_threshold = math.inf  # every window tested from now on fits
+    for a, b in zip(A[:20], B[:20]):  # 20 more (GUARD_LONG_EVERY): the 80-pair window is tested again, which it
+        guard.add(a, b, 0.0, R, None, s2)  # is only if the ring kept its pairs through clear()
+    assert guard.long_misfit is None
+    guard.threshold, guard.clear_threshold = levels
     guard.forget()
-    assert guard.long_misfit is None and guard.misfit is None and guard._count == 0
+    assert guard.long_misfit is None and guard.misfit is None
+    for a, b in zip(A[:-1], B[:-1]):  # the ring starts empty: 79 pairs are too few for the first window
+        guard.add(a, b, 0.0, R, None, s2)
+    assert guard.long_misfit is None
+    guard.add(A[-1], B[-1], 0.0, R, None, s2)
+    assert guard.long_misfit is not None and guard.long_misfit[0] == 80
 
 
 @pytest.mark.parametrize("just, withdrawn", [(1 - 1e-9, True), (1 + 1e-9, False)])

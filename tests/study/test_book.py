@@ -192,7 +192,7 @@ def test_a_report_field_without_a_description_fails_the_book(description):
     schema = copy.deepcopy(SCHEMA)
     field = schema["definitions"]["online"]["properties"]["events"]["items"]["properties"]["kind"]
     field.pop("description") if description is None else field.update(description=description)
-    with pytest.raises(ValueError, match=r"1 field\(s\) without a description: #online\.events\[\]\.kind$"):
+    with pytest.raises(ValueError, match=r"1 field\(s\) without a description.*#online\.events\[\]\.kind"):
         book.schema_fields(schema)
 
 

@@ -108,7 +108,7 @@ def test_fig5_figure_draws_two_step_with_error_bars_and_every_sqp_variant():
     assert sqp_a.get_marker() != sqp_c.get_marker()
     assert [t.get_text() for t in left.get_legend().get_texts()] == ["SQP (analytic), all runs",
                                                                      "SQP (capped), all runs", "ours, $R^r$"]
-    assert fig._suptitle.get_text() == "Fig. 5 (replicated)"
+    assert fig.get_suptitle() == "Fig. 5 (replicated)"
     plt.close(fig)
 
 
@@ -270,7 +270,7 @@ def test_fig5_figure_leaves_out_variants_that_did_not_run_in_a_panel():
     a, b, c = fig.axes
     assert [t.get_text() for t in a.get_legend().get_texts()] == ["SQP (analytic), all runs", "ours, $R^r$"]
     assert [t.get_text() for t in b.get_legend().get_texts()] == ["SQP (stopped), all runs", "ours, $R^r$"]
-    assert fig._suptitle.get_text() == "t" and fig.get_size_inches()[0] == pytest.approx(13.5)
+    assert fig.get_suptitle() == "t" and fig.get_size_inches()[0] == pytest.approx(13.5)
     plt.close(fig)
 
 

@@ -31,7 +31,7 @@ def _drawn(ax) -> int:
 def _texts(fig) -> str:
     """Every text of a figure: its title, each axes' title, labels, texts, annotations and legend
     entries."""
-    out = [fig._suptitle.get_text() if fig._suptitle else ""] + [t.get_text() for t in fig.texts]
+    out = [fig.get_suptitle()] + [t.get_text() for t in fig.texts]
     for ax in fig.axes:
         out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
         if ax.get_legend():
@@ -146,8 +146,8 @@ def test_calibration_figure_names_the_recording_and_states_r0_the_radius_and_the
     r = calibrate(camera, gyro, n_bootstrap=20, reference=R0)
     fig = r.plot(name="my rig, run 3", reference_name="camchain.yaml")
     text = _texts(fig)
-    assert fig._suptitle.get_text() == (f"my rig, run 3: R0 (camera_from_sensor) by chordal_optimal, {r.n_pairs} "
-                                        f"pairs 1 s apart")
+    assert fig.get_suptitle() == (f"my rig, run 3: R0 (camera_from_sensor) by chordal_optimal, {r.n_pairs} "
+                                  f"pairs 1 s apart")
     q = ", ".join(f"{v:+.6f}" for v in r.quaternion_wxyz)
     assert f"R0: quaternion (w, x, y, z) = ({q}); yaw / pitch / roll (intrinsic z-y'-x'') = " in text
     assert " / ".join(f"{v:.3f}" for v in r.euler_zyx_deg) + " deg" in text
@@ -169,8 +169,8 @@ def test_calibration_figure_of_a_pose_set_has_no_empty_panel_and_says_what_it_la
     r = calibrate_poses(C, S, n_bootstrap=0)
     fig = r.plot()
     text = _texts(fig)
-    assert fig._suptitle.get_text().startswith(f"calibration: R0 (camera_from_sensor) by chordal_optimal, {r.n_pairs} "
-                                               "pairs of static poses")
+    assert fig.get_suptitle().startswith(f"calibration: R0 (camera_from_sensor) by chordal_optimal, {r.n_pairs} "
+                                         "pairs of static poses")
     assert "reference: none given" in text and "95 % bootstrap radius: not available" in text
     assert "clock offset" not in text and "angular speed" not in text and "bootstrap estimates" not in text
     titles = [ax.get_title() for ax in fig.axes if ax.get_title()]

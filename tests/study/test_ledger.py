@@ -604,7 +604,7 @@ def test_record_displays_the_condition_and_prints_without_ipython(monkeypatch, c
 @pytest.mark.parametrize("field", ["evidence", "uncertainty", "setting", "section"])
 def test_record_names_the_empty_field(field):
     kwargs = {"evidence": "e", "uncertainty": "u", "setting": "s", "section": "S", field: "  "}
-    with pytest.raises(ValueError, match=rf"^claim 'theorem1': {field} is blank \(empty or white space only\)$"):
+    with pytest.raises(ValueError, match=rf"claim 'theorem1'.*\b{field} is blank"):
         ledger.record("theorem1", "holds", **kwargs)
 
 
@@ -636,7 +636,7 @@ def test_collect_refuses_unknown_and_missing_claims(tmp_path, two_notebooks, cla
     with pytest.raises(ValueError, match=r"04_x\.ipynb.*cell 0: unknown claim 'ghost'"):
         ledger.collect(two_notebooks + [extra], claims_path=claims_path)
     partial = [two_notebooks[1]]  # mid has no record there
-    with pytest.raises(ValueError, match=r"^claims without a verdict and evidence: \['mid'\]$"):
+    with pytest.raises(ValueError, match=r"claims without a verdict and evidence.*\['mid'\]"):
         ledger.collect(partial, claims_path=claims_path)
     got = ledger.collect(partial, claims_path=claims_path, complete=False)
     assert list(got["claim"]) == ["zeta", "alpha"]
