@@ -8,6 +8,7 @@ import pytest
 
 from replication.core import so3
 from replication.rig.online import OnlineCalibrator
+from replication.rig.realdata import real_data_available
 
 BIAS = np.array([0.06, -0.08, 0.04])
 
@@ -203,6 +204,10 @@ def test_a_scale_not_resolved_on_a_short_first_window_makes_the_rig_wait_for_mor
     assert rig.scale_effect_deg < 0.1 and rig.calibrator.error_deg(R0) < 0.1
 
 
+needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
+
+
+@needs_real
 def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchanged():
     import warnings
 
