@@ -168,6 +168,7 @@ def test_the_answer_is_the_solution_solve_gives_for_two_step_right():
         assert np.array_equal(getattr(res, name), getattr(full, name)), name
     assert np.array_equal(res.history.R_left, solve("two_step_left", A, B, iterations=50))
     assert np.array_equal(res.R, res.history.right[-1]) and int(res.iterations) == 50
+    assert full.history is None and full.iterations is None  # solve returns the answer, not how it ran
     assert res.observability.spectral_ratio.shape == ()
     # with noise the fixed point is not the minimiser of (8), and the certificate says so
     assert not res.global_optimum and res.duality_gap > 1e-8 * 30
