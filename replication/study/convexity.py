@@ -343,9 +343,9 @@ def fixed_point_against_minimiser(A, B, R0, *, iterations: int = 50) -> pd.DataF
     res = two_step(A, B, iterations=iterations)
     best = chordal_optimal(A, B)
     return pd.DataFrame({
-        "excess cost R^r": handeye_cost(res.R_right, A, B) - best.cost,
-        "excess cost R^l": handeye_cost(res.R_left, A, B) - best.cost,
-        "angle R^r": angle_between_deg(res.R_right, R0), "angle R^l": angle_between_deg(res.R_left, R0),
+        "excess cost R^r": handeye_cost(res.R, A, B) - best.cost,
+        "excess cost R^l": handeye_cost(res.history.R_left, A, B) - best.cost,
+        "angle R^r": angle_between_deg(res.R, R0), "angle R^l": angle_between_deg(res.history.R_left, R0),
         "angle minimiser": angle_between_deg(best.R, R0), "certified": best.global_optimum,
     })
 

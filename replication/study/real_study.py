@@ -128,9 +128,9 @@ def protocol_table(streams: dict, references: dict, intervals) -> pd.DataFrame:
                 limit = two_step(A, B)
             rows[(name, interval)] = {
                 "sigma2/sigma1 of K": round(float(limit.observability.spectral_ratio), 5),
-                "50 iterations: error (deg)": float(rotation_angle_deg(fifty.R_left.T @ references[ref])),
-                "default: error (deg)": float(rotation_angle_deg(limit.R_left.T @ references[ref])),
-                "default: iterations": "closed form" if limit.closed_form else int(limit.n_iterations),
+                "50 iterations: error (deg)": float(rotation_angle_deg(fifty.history.R_left.T @ references[ref])),
+                "default: error (deg)": float(rotation_angle_deg(limit.history.R_left.T @ references[ref])),
+                "default: iterations": "closed form" if limit.history.closed_form else int(limit.iterations),
                 "50 iterations warned": any(issubclass(w.category, ConvergenceWarning) for w in caught),
             }
     out = pd.DataFrame(rows).T

@@ -41,7 +41,7 @@ def small_motion_study(seed: int, n_runs: int, ranges: dict, *, iterations: int 
             warnings.simplefilter("ignore", ReplicationWarning)
             short = two_step(sim.A, sim.B, iterations=iterations, history=False)
             limit = two_step(sim.A, sim.B, history=False)
-        a, b = (angle_between_deg(r.R_right, sim.R0) for r in (short, limit))
+        a, b = (angle_between_deg(r.R, sim.R0) for r in (short, limit))
         (ma, sa), (mb, sb) = mean_se(a), mean_se(b)
         rows[label] = {f"at {iterations}": ma, f"at {iterations}_se": sa, "limit": mb, "limit_se": sb,
                        "ratio": ma / mb}

@@ -119,7 +119,8 @@ def test_opencv_protocol_two_step_reaches_opencv_threshold_by_default(method, op
     assert max(errs) < 1e-8
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
-        fifty = [_rvec_error(two_step(c.A, c.B, iterations=50).R_left, c.R_cam2gripper) for c, _ in opencv_problems]
+        fifty = [_rvec_error(two_step(c.A, c.B, iterations=50).history.R_left, c.R_cam2gripper)
+                 for c, _ in opencv_problems]
     assert np.mean(np.array(fifty) > 1e-8) > 0.5 and caught  # the paper's 50 misses, and says so
 
 
@@ -170,10 +171,10 @@ def test_opencv_regression_24871_orthogonal_start():
     # the paper's iteration from the identity cannot leave the orthogonal complement: 50 iterations
     # end far off
     with pytest.warns(ConvergenceWarning, match=r"two_step stopped 90 deg from its fixed point after 50 iterations"):
-        assert so3.angle_between_deg(two_step(A, B, iterations=50).R_left, X) > 45
+        assert so3.angle_between_deg(two_step(A, B, iterations=50).history.R_left, X) > 45
     with pytest.warns(IterationCapWarning, match="started orthogonal to the limit"):
         res = two_step(A, B)
-    assert res.closed_form and so3.frobenius_error(res.R_left, X) < 1e-12
+    assert res.history.closed_form and so3.frobenius_error(res.history.R_left, X) < 1e-12
 
 
 # -----------------------------------------------------------------------------------------
@@ -213,7 +214,7 @@ def test_two_step_with_two_pairs_is_refused_with_the_reason(rng):
     starts = so3.random_rotations(rng, 2)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        ends = [two_step(A, B, iterations=300, init=s).R_left for s in starts]
+        ends = [two_step(A, B, iterations=300, init=s).history.R_left for s in starts]
     assert so3.angle_between_deg(ends[0], ends[1]) > 1e-3
     # solvers that need only two non-parallel motions recover it
     for method in ("chordal_optimal", "park_martin", "andreff"):
@@ -239,24 +240,24 @@ def test_two_step_slow_motions_finish_from_the_closed_form_and_say_why(rng):
     B = R0.T @ A @ R0
     with pytest.warns(IterationCapWarning, match=r"sigma_2 / sigma_1 of K up to 0\.9"):
         res = two_step(A, B, cap=200)
-    assert res.closed_form and res.n_iterations == 200
-    assert_rotations_close(res.R_right, R0, 1e-7)
+    assert res.history.closed_form and res.iterations == 200
+    assert_rotations_close(res.R, R0, 1e-7)
     # with a larger cap the iteration itself gets there
     with warnings.catch_warnings():
         warnings.simplefilter("error", IterationCapWarning)
         res = two_step(A, B, cap=100_000)
-    assert not res.closed_form and 200 < res.n_iterations < 100_000
-    assert_rotations_close(res.R_right, R0, 1e-7)
+    assert not res.history.closed_form and 200 < res.iterations < 100_000
+    assert_rotations_close(res.R, R0, 1e-7)
 
 
 def test_two_step_auto_matches_the_paper_protocol_once_converged(rng):
     sim = simulate(3, 50)
     auto = two_step(sim.A, sim.B)
-    long = two_step(sim.A, sim.B, iterations=int(auto.n_iterations.max()) + 20)
-    assert not auto.closed_form.any() and auto.right.shape == (50, 1, 3, 3)
-    assert_rotations_close(auto.R_right, long.R_right, 5e-10, name="auto.R_right")
-    assert_rotations_close(auto.R_left, long.R_left, 5e-10, name="auto.R_left")
-    assert_rotations_close(auto.R_left, two_step_fixed_point(sim.A, sim.B)[1], 5e-10, name="auto.R_left")
+    long = two_step(sim.A, sim.B, iterations=int(auto.iterations.max()) + 20)
+    assert not auto.history.closed_form.any() and auto.history.right.shape == (50, 1, 3, 3)
+    assert_rotations_close(auto.R, long.R, 5e-10, name="auto.R")
+    assert_rotations_close(auto.history.R_left, long.history.R_left, 5e-10, name="auto.R_left")
+    assert_rotations_close(auto.history.R_left, two_step_fixed_point(sim.A, sim.B)[1], 5e-10, name="auto.R_left")
 
 
 # ------------------------------------------------------------------------------- global certificate
@@ -630,11 +631,12 @@ def test_sqp_cost_scale_keeps_the_minimiser_but_changes_the_path():
     sim = simulate(3, 5)
     as_printed, per_pair = sqp(sim.A, sim.B), sqp(sim.A, sim.B, cost="per-pair")
     assert_rotations_close(as_printed.R, per_pair.R, 1e-3)
-    # SQPResult.cost is eq. (8) as printed either way: the same at the common minimiser ...
-    assert np.allclose(as_printed.cost[..., -1], per_pair.cost[..., -1], rtol=1e-4)
+    # the cost is eq. (8) as printed either way: the same at the common minimiser ...
+    assert np.allclose(as_printed.cost, per_pair.cost, rtol=1e-4)
+    assert np.allclose(as_printed.history.cost[..., -1], per_pair.history.cost[..., -1], rtol=1e-4)
     # ... but the first step differs by orders of magnitude (the identity Hessian guess meets
     # another scale)
-    assert (as_printed.cost[..., 0] > 100 * per_pair.cost[..., 0]).all()
+    assert (as_printed.history.cost[..., 0] > 100 * per_pair.history.cost[..., 0]).all()
     for bad in ("mean", 0.0, -1.0, float("nan")):
         with pytest.raises(ValueError, match="cost must be"):
             sqp(sim.A, sim.B, cost=bad)
@@ -670,7 +672,7 @@ def test_chordal_optimal_minimises_eq8_better_than_the_closed_forms(paper_sim):
     res = chordal_optimal(A, B)
     assert res.local_minimum.all()
     np.testing.assert_allclose(res.cost, handeye.handeye_cost(res.R, A, B), rtol=1e-8, atol=1e-12)
-    two = two_step(A, B, iterations=50).R_left
+    two = two_step(A, B, iterations=50).history.R_left
     for other in (two, andreff(A, B), park_martin(A, B)):
         assert np.all(res.cost <= handeye.handeye_cost(other, A, B) + 1e-12)
     # the paper's fixed point is strictly worse on its own cost in every run

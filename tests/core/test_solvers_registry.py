@@ -461,7 +461,7 @@ def _gross_case():
     cert = certificate.global_certificate(m)
     far = _rotated(cert.R, 120.0, (1.0, 2.0, 0.5))
     bound = _registry.GROSS_FACTOR * float(cert.cost) + _registry.LOCAL_ATOL * J
-    return m, cert, far, bound, lambda R: float(_registry.handeye_cost(R, m.A, m.B))
+    return m, cert, far, bound, lambda R: float(handeye_cost(R, m.A, m.B))
 
 
 def _bisect(cert, far, cost, target):

@@ -272,7 +272,7 @@ def test_sqp_failures_and_other_minimum():
     R = np.stack([far, far, far, R0])
     last = R.copy()
     last[2] = 2.0 * far
-    fake = SimpleNamespace(R=R, iterates=last[:, None], n_iterations=np.array([10, 50, 10, 10]))
+    fake = SimpleNamespace(R=R, history=SimpleNamespace(iterates=last[:, None]), iterations=np.array([10, 50, 10, 10]))
     A, B = np.repeat(sim.A[:1], 4, axis=0), np.repeat(sim.B[:1], 4, axis=0)
     assert at_other_minimum(fake, A, B).tolist() == [True, False, False, False]
 
@@ -365,7 +365,8 @@ def test_diverting_table_with_fake_runs():
     proj_err = np.array([[1.0, 0.5, 0.4, 0.01], [1.0, 0.5, 0.6, 0.7]])
     angles = 2 * np.arcsin(proj_err / (2 * np.sqrt(2)))
     projected = matrix_from_rotation_vector(angles[..., None] * np.array([0.0, 0.0, 1.0]))
-    scale_runs = {("s", "as printed"): (SimpleNamespace(iterates=iterates, cost=cost, projected=projected), err)}
+    history = SimpleNamespace(iterates=iterates, cost=cost, projected=projected)
+    scale_runs = {("s", "as printed"): (SimpleNamespace(history=history), err)}
     settings = {"s": (SimpleNamespace(R0=np.broadcast_to(np.eye(3), (2, 3, 3))), {"ours_right": err[::-1]},
                       {"ours_right": cost[::-1]})}
     div = diverting_table(scale_runs, settings, ["s"], scale_names=("as printed",), bar=0.05, n_runs=1)

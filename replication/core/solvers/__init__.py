@@ -27,13 +27,13 @@ from ._warnings import (
 )
 from .certificate import GAP_TOL, global_certificate
 from .classic import andreff, horaud_dornaika, park_martin, tsai_lenz
-from .iteration import TwoStepResult, two_step
+from .iteration import TwoStepHistory, two_step
 from .limit import two_step_fixed_point
 from .msac import robust
 from .opencv import calibrate_hand_eye
 from .optimal import chordal_optimal
 from .result import Solution
-from .slsqp import SQP_VARIANTS, SQPResult, sqp
+from .slsqp import SQP_VARIANTS, SQPHistory, sqp
 
 __all__ = [
     "Motions",
@@ -61,9 +61,9 @@ __all__ = [
     "SolverAnswerError",
     "two_step",
     "two_step_fixed_point",
-    "TwoStepResult",
+    "TwoStepHistory",
     "sqp",
-    "SQPResult",
+    "SQPHistory",
     "SQP_VARIANTS",
     "park_martin",
     "horaud_dornaika",

@@ -16,12 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..checks import _first_index, det3
-from ..handeye import handeye_cost, vec
+from ..handeye import vec
 from ..motions import Motions, prepare_motions
 from ..so3 import angle_between_deg
 from ._warnings import AccuracyWarning, ConvergenceWarning, LocalMinimumWarning, ObservabilityWarning
-from .certificate import GAP_TOL, _derivatives, global_certificate
-from .result import Solution
+from .certificate import _derivatives, _gap_to_global, certified_solution, global_certificate
 
 __all__ = ["SolverInfo", "register", "available", "solver_info", "solve",
            "LOCAL_RTOL", "LOCAL_ATOL", "LOCAL_ANGLE_TOL_DEG", "WRONG_POINT_DEG", "GROSS_FACTOR", "WEAK_GAP_FACTOR",
@@ -239,18 +238,6 @@ def warn_if_weak(motions: Motions, warn_axis_spread_deg: float = 1.0, stacklevel
             ObservabilityWarning,
             stacklevel=stacklevel,
         )
-
-
-def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
-    """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
-    cert = global_certificate(motions) if cert is None else cert
-    J = motions.J
-    x = vec(R)
-    g = np.einsum("...a,...ab,...b->...", x, motions.sym, x)
-    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J *
-    # 3
-    gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
-    return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
 
 
 def check_local_answer(motions: Motions, R: np.ndarray, method: str, stacklevel: int = 3) -> np.ndarray:
@@ -491,8 +478,4 @@ def solve(method: str, A, B=None, *, full_output: bool = False, warn_axis_spread
     if not full_output:
         return R
 
-    cost, lower, gap = _gap_to_global(motions, R)
-    gap = np.where(failed | reflection, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
-    return Solution(R=R, method=method, cost=cost, lower_bound=lower, duality_gap=gap,
-                    global_optimum=gap <= GAP_TOL * motions.J, certificate=global_certificate(motions).certificate,
-                    _motions=motions)
+    return certified_solution(method, motions, R)

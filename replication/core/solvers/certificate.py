@@ -7,8 +7,8 @@ import warnings
 
 import numpy as np
 
-from ..checks import check_init
-from ..handeye import unvec, vec
+from ..checks import check_init, det3
+from ..handeye import handeye_cost, unvec, vec
 from ..kernels import eigvalsh3, solve3
 from ..motions import Motions
 from ..so3 import matrix_from_rotation_vector, nearest_rotation_up_to_sign, skew
@@ -16,7 +16,7 @@ from ._sdp import relaxation, upper_bound
 from ._warnings import CertificateWarning
 from .result import Solution
 
-__all__ = ["chordal_newton", "global_certificate", "relaxed_rotation", "GAP_TOL"]
+__all__ = ["chordal_newton", "global_certificate", "certified_solution", "relaxed_rotation", "GAP_TOL"]
 
 #: Duality gap, per motion pair, below which an answer is certified globally optimal: the cost (8)
 #: of the answer exceeds the certified lower bound by at most ``GAP_TOL * J``.
@@ -187,6 +187,42 @@ def global_certificate(motions: Motions) -> Solution:
     """
     motions.require()
     return motions._cached("chordal_optimal", lambda: _chordal_core(motions))
+
+
+def _gap_to_global(motions: Motions, R: np.ndarray, cert=None):
+    """``(cost, lower_bound, gap)`` of estimates ``R`` against the certified minimum of eq. (8)."""
+    cert = global_certificate(motions) if cert is None else cert
+    J = motions.J
+    x = vec(R)
+    g = np.einsum("...a,...ab,...b->...", x, motions.sym, x)
+    # gap = f(R) - lower bound, computed as 2J (g_upper - g) to avoid cancelling two costs near 2J *
+    # 3
+    gap = np.clip(2.0 * J * (3.0 - g) - cert.lower_bound, 0.0, None)
+    return handeye_cost(R, motions.A, motions.B), cert.lower_bound, gap
+
+
+def certified_solution(method: str, motions: Motions, R: np.ndarray, *, certify: bool = True,
+                       **fields) -> Solution:
+    """``method``'s answer ``R`` on ``motions`` as a :class:`Solution`: its cost (8) and its gap to
+    the certified global minimum (what :func:`replication.core.solvers.solve` returns with
+    ``full_output=True``); ``fields`` fills the rest (``iterations``, ``history``).
+
+    No gap where ``R`` is not in SO(3) (a NaN block, a declared failure, or a reflection): the
+    minimum is over SO(3). ``certify=False``: no certificate (``lower_bound`` and ``duality_gap``
+    NaN, ``certificate`` ``"none"``, ``global_optimum`` False), as ``chordal_optimal(...,
+    certify=False)``.
+    """
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    outside = ~finite | (det3(np.where(finite[..., None, None], R, np.eye(3))) < 0)
+    if certify:
+        cost, lower, gap = _gap_to_global(motions, R)
+        how = global_certificate(motions).certificate
+    else:
+        cost, lower, gap = handeye_cost(R, motions.A, motions.B), np.full(finite.shape, np.nan), np.nan
+        how = np.full(finite.shape, "none")
+    gap = np.where(outside, np.nan, gap)  # no gap to the minimum over SO(3) from outside it: not certified
+    return Solution(R=R, method=method, cost=cost, lower_bound=lower, duality_gap=gap,
+                    global_optimum=gap <= GAP_TOL * motions.J, certificate=how, _motions=motions, **fields)
 
 
 def relaxed_rotation(K) -> np.ndarray:

@@ -10,13 +10,15 @@ import numpy as np
 from ..checks import check_init, det3
 from ..handeye import handeye_cost_kron, unvec, vec
 from ..kernels import eigvalsh3
-from ..motions import MotionObservability, Motions, prepare_motions
+from ..motions import Motions, prepare_motions
 from ..so3 import angle_deg_from_chordal, frobenius_error
 from ._registry import register, warn_if_weak
 from ._warnings import AccuracyWarning, ConvergenceWarning, IterationCapWarning
+from .certificate import certified_solution
 from .limit import REPEATED_TOL, _check_unique_limit, _check_variant, _fixed_point, _project
+from .result import Solution
 
-__all__ = ["TwoStepResult", "two_step"]
+__all__ = ["TwoStepHistory", "two_step"]
 
 REFERENCE = (
     "Z.-Q. Zhang, 'Cameras and Inertial/Magnetic Sensor Units Alignment Calibration', "
@@ -27,11 +29,12 @@ ORTHOGONAL_TOL = 1e-8
 
 
 @dataclass(frozen=True)
-class TwoStepResult:
-    """Output of :func:`two_step`; iteration ``n = 1 .. N`` is index ``n - 1``.
+class TwoStepHistory:
+    """The per-iteration history of :func:`two_step` (its :class:`Solution`'s ``history``);
+    iteration ``n = 1 .. N`` is index ``n - 1``.
 
     With ``iterations="auto"`` only the final estimate is kept (``N`` axis of length 1)
-    and ``n_iterations`` says how many iterations each problem took.
+    and the solution's ``iterations`` says how many iterations each problem took.
 
     Attributes
     ----------
@@ -46,10 +49,7 @@ class TwoStepResult:
         ``R^l_{0,0}``.
     fixed_point_right, fixed_point_left : ndarray, shape (..., 3, 3)
         Where the projected iterates converge (from the top singular vectors of ``K``).
-    observability : MotionObservability
     variant : str
-    n_iterations : ndarray of int, shape (...)
-        Iterations run per problem.
     closed_form : ndarray of bool, shape (...)
         ``"auto"`` only: the estimate is the closed-form limit (the iteration would have
         needed more than its cap); always False for a fixed ``N``.
@@ -64,9 +64,7 @@ class TwoStepResult:
     init: np.ndarray
     fixed_point_right: np.ndarray
     fixed_point_left: np.ndarray
-    observability: MotionObservability
     variant: str
-    n_iterations: np.ndarray
     closed_form: np.ndarray
 
     @property
@@ -222,8 +220,8 @@ def _warn_closed_form(m: Motions, closed, orthogonal, cap: int, tol: float, stac
 
 def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "corrected",
                    convergence_tol_deg: float = 1e-3, tol: float = 1e-12, cap: int = 1000, history: bool = True,
-                   stacklevel: int = 3) -> TwoStepResult:
-    """:func:`two_step` on validated motions."""
+                   stacklevel: int = 3) -> tuple[TwoStepHistory, np.ndarray]:
+    """:func:`two_step` on validated motions: its history and the iterations run per problem."""
     _check_variant(variant)
     auto = isinstance(iterations, str)
     if auto and iterations != "auto":
@@ -251,7 +249,7 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
         its = np.full(m.batch_shape, iterations)
         closed = np.zeros(m.batch_shape, dtype=bool)
     K_it, J = m.K[..., None, :, :], m.J
-    result = TwoStepResult(
+    result = TwoStepHistory(
         right=right,
         left=left,
         right_raw=raw_r,
@@ -261,9 +259,7 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
         init=init,
         fixed_point_right=fp_r,
         fixed_point_left=fp_l,
-        observability=observability,
         variant=variant,
-        n_iterations=its,
         closed_form=closed,
     )
     if not auto:
@@ -280,7 +276,7 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
                     f"unique: the top singular value of K is repeated (J = {m.J}; sigma_2 / sigma_1 = {ratio:.6g}), "
                     f"so the iteration settles on a start-dependent point",
                     ConvergenceWarning, stacklevel=stacklevel)
-                return result
+                return result, its
             warnings.warn(
                 f"two_step stopped {float(np.max(gap)):.3g} deg from its fixed point after {iterations} "
                 f"iterations ({int(np.sum(late))} of {gap.size} problems); the motions need about {need:.3g} "
@@ -289,7 +285,7 @@ def _two_step_core(m: Motions, *, iterations="auto", init=None, variant: str = "
                 ConvergenceWarning,
                 stacklevel=stacklevel,
             )
-    return result
+    return result, its
 
 
 def two_step(
@@ -303,7 +299,8 @@ def two_step(
     tol: float = 1e-12,
     cap: int = 1000,
     history: bool = True,
-) -> TwoStepResult:
+    certify: bool = True,
+) -> Solution:
     """The paper's two-step iteration (eqs. (11)-(19)), run to its limit or for a fixed count.
 
     Solves ``A_j R0 = R0 B_j`` (eq. (7)) for ``R0`` = camera_from_sensor, with
@@ -342,10 +339,22 @@ def two_step(
     history : bool
         Fixed ``N`` only: record (and project) every iterate (default), or only the last one
         (the lean run the paper's timing claim is about; the ``N`` axis then has length 1).
+    certify : bool
+        Compare the estimate with the certified global minimum of eq. (8) (default; as
+        :func:`replication.core.solvers.solve` does with ``full_output=True``). ``False``: no
+        certificate (``lower_bound`` and ``duality_gap`` NaN, ``global_optimum`` False), the lean
+        run timed against SQP. With ``variant="paper"`` a batch holding degenerate motion is not
+        certified (its minimum is not unique): ``certificate`` is ``"none"``.
 
     Returns
     -------
-    TwoStepResult
+    Solution
+        ``R`` is the final ``R^r`` (eq. (18)), what ``two_step_right`` returns (``method``
+        ``"two_step_right"``); its cost (8), its gap to the certified global minimum (the
+        two-step fixed point is not that minimum once there is noise), the observability
+        diagnostic, ``iterations`` (run per problem) and ``history``, a :class:`TwoStepHistory`
+        (both estimates of every recorded iteration; the final ``R^l`` of eq. (19), what
+        ``two_step_left`` returns, is ``history.R_left``).
 
     Raises
     ------
@@ -364,19 +373,19 @@ def two_step(
     >>> A = random_rotations(rng, 20)
     >>> B = R0.T @ A @ R0            # Delta R_i = R0^T Delta R_c R0
     >>> res = two_step(A, B)         # iterations="auto": run to the limit
-    >>> bool(np.linalg.norm(res.R_right - R0) < 1e-9), int(res.n_iterations) < 50
+    >>> bool(np.linalg.norm(res.R - R0) < 1e-9), int(res.iterations) < 50
     (True, True)
-    >>> len(two_step(A, B, iterations=30).right)   # the paper's protocol: every iterate
+    >>> len(two_step(A, B, iterations=30).history.right)   # the paper's protocol: every iterate
     30
     """
     m = prepare_motions(A, B, require_observable=False)
     if variant == "corrected":
         m.require()
         warn_if_weak(m)
-    result = _two_step_core(m, iterations=iterations, init=init, variant=variant,
-                            convergence_tol_deg=convergence_tol_deg, tol=tol, cap=cap, history=history)
+    steps, its = _two_step_core(m, iterations=iterations, init=init, variant=variant,
+                                convergence_tol_deg=convergence_tol_deg, tol=tol, cap=cap, history=history)
     if variant == "paper":
-        for R in (result.R_right, result.R_left):
+        for R in (steps.R_right, steps.R_left):
             if np.any(det3(R) < 0):
                 warnings.warn(
                     f"two_step (variant='paper') returned a reflection (det -1), not a rotation, in "
@@ -384,14 +393,19 @@ def two_step(
                     f"start more than 120 deg from R0; variant='corrected' (the default) does not",
                     AccuracyWarning, stacklevel=2)
                 break
-    return result
+        if certify:
+            try:
+                m.require()
+            except ValueError:  # degenerate motion: no unique minimum to certify
+                certify = False
+    return certified_solution("two_step_right", m, steps.R_right, certify=certify, iterations=its, history=steps)
 
 
 @register("two_step_right", reference=REFERENCE + ", estimate R^r (eq. (18))", min_motions=3)
 def _solve_two_step_right(motions, **options):
-    return _two_step_core(motions, stacklevel=4, **options).R_right
+    return _two_step_core(motions, stacklevel=4, **options)[0].R_right
 
 
 @register("two_step_left", reference=REFERENCE + ", estimate R^l (eq. (19))", min_motions=3)
 def _solve_two_step_left(motions, **options):
-    return _two_step_core(motions, stacklevel=4, **options).R_left
+    return _two_step_core(motions, stacklevel=4, **options)[0].R_left

@@ -154,7 +154,8 @@ def _calibrate_hand_eye(motions, method: str, *, on_failure: str = "raise",
     identity = np.all(out == np.eye(3), axis=(-2, -1))
     if identity.any():
         from ..motions import Motions
-        from ._registry import LOCAL_ATOL, LOCAL_RTOL, _gap_to_global
+        from ._registry import LOCAL_ATOL, LOCAL_RTOL
+        from .certificate import _gap_to_global
 
         sub = Motions._trusted(flatA[identity], flatB[identity])
         _, lower, gap = _gap_to_global(sub, np.broadcast_to(np.eye(3), sub.batch_shape + (3, 3)))

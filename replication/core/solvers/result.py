@@ -1,9 +1,8 @@
 """The one answer type of the solvers: what :func:`replication.core.solvers.solve` returns with
-``full_output=True`` and what :func:`replication.core.solvers.chordal_optimal` returns: the answer
-with its cost (8), the certificate of the global minimum of eq. (8) and the observability
-diagnostic. (The paper's protocol functions ``two_step`` and ``sqp`` return their per-iteration
-histories, :class:`~replication.core.solvers.TwoStepResult` and
-:class:`~replication.core.solvers.SQPResult`, whose final estimates are this type's ``R``.)"""
+``full_output=True`` and what :func:`replication.core.solvers.chordal_optimal`,
+:func:`replication.core.solvers.two_step` and :func:`replication.core.solvers.sqp` return: the
+answer with its cost (8), the certificate of the global minimum of eq. (8), the observability
+diagnostic and, from the paper's protocol functions, their per-iteration history."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -47,12 +46,22 @@ class Solution:
         How ``lower_bound`` was certified: ``"lagrangian"`` (the fast O(3) dual at the Newton
         solution), ``"sdp"`` (the semidefinite relaxation), ``"none"`` (not certified; see
         ``duality_gap``).
-    iterations, gradient_norm, hessian_min_eigenvalue, local_minimum : ndarray, shape (...), or None
-        How ``chordal_optimal``'s Riemannian Newton ended (``None`` from :func:`solve`): Newton
-        iterations from the relaxed start (the fallback's polish not counted); the norm of the
+    iterations : ndarray of int, shape (...), or None
+        Iterations the solver ran (``None`` from :func:`solve`): ``chordal_optimal``'s Newton
+        iterations from the relaxed start (the fallback's polish not counted); ``two_step``'s
+        iterations (the fixed ``N``, or those run to the limit with ``iterations="auto"``);
+        ``sqp``'s SLSQP major iterations.
+    gradient_norm, hessian_min_eigenvalue, local_minimum : ndarray, shape (...), or None
+        How ``chordal_optimal``'s Riemannian Newton ended (``None`` otherwise): the norm of the
         Riemannian gradient of eq. (8) at ``R`` and the smallest eigenvalue of its Riemannian
         Hessian, both divided by ``J``; ``gradient_norm <= 2 gradient_tol`` and
         ``hessian_min_eigenvalue > hessian_tol`` (a strict local minimum).
+    history : TwoStepHistory, SQPHistory or None
+        The per-iteration history of the paper's protocol functions:
+        :class:`~replication.core.solvers.TwoStepHistory` from ``two_step`` (both estimates
+        ``R^r`` and ``R^l`` of every iteration, their costs, the fixed points),
+        :class:`~replication.core.solvers.SQPHistory` from ``sqp`` (every SLSQP iterate, raw and
+        projected, and SLSQP's own counts and flag); ``None`` from the other solvers.
     observability : MotionObservability
         How well the motions determine ``R0``
         (:class:`replication.core.motions.MotionObservability`), computed on first access (the
@@ -71,6 +80,7 @@ class Solution:
     gradient_norm: np.ndarray | None = None
     hessian_min_eigenvalue: np.ndarray | None = None
     local_minimum: np.ndarray | None = None
+    history: object | None = None
     _motions: Motions | None = field(default=None, repr=False, compare=False)
 
     @property

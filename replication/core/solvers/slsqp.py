@@ -14,8 +14,10 @@ from ..motions import Motions, prepare_motions
 from ..so3 import nearest_rotation
 from ._registry import check_local_answer, register, warn_if_weak
 from ._warnings import ConvergenceWarning
+from .certificate import certified_solution
+from .result import Solution
 
-__all__ = ["SQPResult", "sqp", "SQP_VARIANTS"]
+__all__ = ["SQPHistory", "sqp", "SQP_VARIANTS"]
 
 #: Named SQP settings (options of :func:`sqp`); see the module notes.
 SQP_VARIANTS = {
@@ -34,8 +36,9 @@ _UPPER = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)]
 
 
 @dataclass(frozen=True)
-class SQPResult:
-    """History of :func:`sqp`; iteration ``n = 1 .. N`` is index ``n - 1``.
+class SQPHistory:
+    """The per-iteration history of :func:`sqp` (its :class:`Solution`'s ``history``); iteration
+    ``n = 1 .. N`` is index ``n - 1``.
 
     Attributes
     ----------
@@ -46,8 +49,8 @@ class SQPResult:
         ``nearest_rotation(iterates)``.
     cost : ndarray, shape (..., N)
         Eq. (8) at the raw iterates.
-    n_iterations, n_evaluations : ndarray of int, shape (...)
-        Major iterations and objective evaluations SLSQP used.
+    n_evaluations : ndarray of int, shape (...)
+        Objective evaluations SLSQP used (its major iterations: the solution's ``iterations``).
     success : ndarray of bool, shape (...)
         SLSQP's own convergence flag.
     message : ndarray of str, shape (...)
@@ -57,15 +60,9 @@ class SQPResult:
     iterates: np.ndarray
     projected: np.ndarray
     cost: np.ndarray
-    n_iterations: np.ndarray
     n_evaluations: np.ndarray
     success: np.ndarray
     message: np.ndarray
-
-    @property
-    def R(self) -> np.ndarray:
-        """Final estimate, projected onto SO(3), shape (..., 3, 3)."""
-        return self.projected[..., -1, :, :]
 
 
 def _constraints(kind: str, analytic: bool = True):
@@ -127,7 +124,7 @@ def _sqp_one(K, J, init, max_iterations, ftol, cons, analytic, scale):
 
 
 def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
-        constraints: str = "orthonormal", gradient: str = "analytic", cost="sum") -> SQPResult:
+        constraints: str = "orthonormal", gradient: str = "analytic", cost="sum") -> Solution:
     """Solve problem (8)-(10) by SLSQP from ``init``, recording every iteration.
 
     SQP is a local method: from a start far from ``R0`` it can reach its iteration
@@ -161,12 +158,16 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
         by ``2J`` (``"per-pair"``), or multiplied by a positive number; the minimiser is the same.
         SLSQP is not invariant to the objective's scale (its first Hessian estimate is the identity,
         ``ftol`` is absolute), so its path, speed and failures change with it (notebook 03); the
-        paper does not say which scale its SQP saw. ``SQPResult.cost`` is eq. (8) as printed either
-        way.
+        paper does not say which scale its SQP saw. The solution's ``cost`` and its history's are
+        eq. (8) as printed either way.
 
     Returns
     -------
-    SQPResult
+    Solution
+        ``R`` is the last iterate projected onto SO(3), what ``solve("sqp", ...)`` returns; its cost
+        (8) and gap to the certified global minimum, the observability diagnostic,
+        ``iterations`` (SLSQP's major iterations) and ``history``, an :class:`SQPHistory` (every
+        iterate, raw and projected, SLSQP's evaluations, flag and message).
 
     Raises
     ------
@@ -176,16 +177,18 @@ def sqp(A, B=None, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
     """
     m = prepare_motions(A, B)
     warn_if_weak(m)
-    res = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints,
-                    gradient=gradient, cost=cost)
-    check_local_answer(m, res.R, "sqp", stacklevel=3)
-    return res
+    steps, its = _sqp_core(m, init=init, max_iterations=max_iterations, ftol=ftol, constraints=constraints,
+                           gradient=gradient, cost=cost)
+    R = steps.projected[..., -1, :, :]
+    check_local_answer(m, R, "sqp", stacklevel=3)
+    return certified_solution("sqp", m, R, iterations=its, history=steps)
 
 
 def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float = 1e-12,
               constraints: str = "orthonormal", gradient: str = "analytic", cost="sum",
-              stacklevel: int = 3) -> SQPResult:
-    """:func:`sqp` on validated motions (without the global-minimum check, which the door does)."""
+              stacklevel: int = 3) -> tuple[SQPHistory, np.ndarray]:
+    """:func:`sqp` on validated motions (without the global-minimum check, which the door does): its
+    history and SLSQP's major iterations per problem."""
     if isinstance(cost, str):
         if cost not in ("sum", "per-pair"):
             raise ValueError(f"cost must be 'sum', 'per-pair' or a positive number, got {cost!r}")
@@ -211,11 +214,10 @@ def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float =
     runs = [_sqp_one(flat_K[n], J, flat_init[n], max_iterations, ftol, cons, analytic, scale)
             for n in range(len(flat_K))]
     iterates = unvec(np.stack([r[0] for r in runs])).reshape(batch + (max_iterations, 3, 3))
-    res = SQPResult(
+    res = SQPHistory(
         iterates=iterates,
         projected=nearest_rotation(iterates),
         cost=handeye_cost_kron(iterates, K[..., None, :, :], J),
-        n_iterations=np.array([r[1] for r in runs]).reshape(batch),
         n_evaluations=np.array([r[2] for r in runs]).reshape(batch),
         success=np.array([r[3] for r in runs]).reshape(batch),
         message=np.array([r[4] for r in runs]).reshape(batch),
@@ -228,9 +230,9 @@ def _sqp_core(m: Motions, *, init=None, max_iterations: int = 100, ftol: float =
             f"({'; '.join(reasons)}; max_iterations = {max_iterations})",
             ConvergenceWarning, stacklevel=stacklevel,
         )
-    return res
+    return res, np.array([r[1] for r in runs]).reshape(batch)
 
 
 @register("sqp", reference=REFERENCE, local=True)
 def _solve_sqp(motions, **options):
-    return _sqp_core(motions, stacklevel=4, **options).R
+    return _sqp_core(motions, stacklevel=4, **options)[0].projected[..., -1, :, :]

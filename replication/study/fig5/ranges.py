@@ -76,7 +76,7 @@ def range_sweep(levels, n_runs: int, seed: int, rng: np.random.Generator, *, ran
                 best = chordal_optimal(sim.A, sim.B)  # small motions: R0 poorly determined, said once per sweep here
             at_min = angle_between_deg(opt.R, best.R) <= AT_MINIMUM_DEG
             for v, res in ours.items():
-                sweeps[v][float(level)] = {"two_step": frobenius_error(res.R_right, sim.R0),
+                sweeps[v][float(level)] = {"two_step": frobenius_error(res.R, sim.R0),
                                            "sqp": frobenius_error(opt.R, sim.R0), "sqp_at_minimum": at_min}
         for v in variants:
             results[(label, v)] = resilience(sweeps[v], rng, n_boot=n_boot)

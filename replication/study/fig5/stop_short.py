@@ -79,7 +79,7 @@ def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, sta
                     warnings.simplefilter("ignore", ReplicationWarning)
                     if knob == "max_iterations":
                         res = sqp(sim.A, sim.B, max_iterations=int(max(grid)), init=init, **options)
-                        errors = [frobenius_error(res.projected[:, int(k) - 1], sim.R0) for k in grid]
+                        errors = [frobenius_error(res.history.projected[:, int(k) - 1], sim.R0) for k in grid]
                     else:
                         errors = [frobenius_error(sqp(sim.A, sim.B, max_iterations=iterations, init=init,
                                                       **{**options, knob: value}).R, sim.R0) for value in grid]
@@ -94,7 +94,7 @@ def match_to_table1(seed: int, n_runs: int, target: float, *, motions: dict, sta
                     "knob": knob, "value": value, "SQP mean": m, "SQP SE": se, "SQP SD": errors[best].std(ddof=1),
                     "mean below": means[best - 1] if best > 0 else np.nan,
                     "mean above": means[best + 1] if best + 1 < len(grid) else np.nan,
-                    "two-step mean": frobenius_error(ours.R_right, sim.R0).mean(), "matched": matched, "label": label}
+                    "two-step mean": frobenius_error(ours.R, sim.R0).mean(), "matched": matched, "label": label}
                 if matched:
                     configs[label] = ("analytic", {**options, knob: value})
                     keys.append((m_name, fam["start"], n_name, label))

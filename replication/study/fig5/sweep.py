@@ -50,7 +50,7 @@ def noise_sweep(levels, n_runs: int, seed: int, *, motions=None, init=None, nois
             opt = sqp(sim.A, sim.B, max_iterations=cap, init=init, **options)
         best = chordal_optimal(sim.A, sim.B)
         out[float(level)] = {
-            "two_step": frobenius_error(ours.R_right, sim.R0),
+            "two_step": frobenius_error(ours.R, sim.R0),
             "sqp": frobenius_error(opt.R, sim.R0),
             "sqp_at_minimum": angle_between_deg(opt.R, best.R) <= AT_MINIMUM_DEG,
         }

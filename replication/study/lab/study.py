@@ -186,7 +186,7 @@ def seed_study(seeds, settings: LabSettings = LabSettings(), *, failure_deg: flo
                 runs = [sqp(A, B, **options) for A, B in motions.values()]
             off = [angle_between_deg(r.R, result.truth) > failure_deg for r in runs]
             row[f"failed_sqp_{name}"] = int(sum(off))
-            row[f"limit_sqp_{name}"] = int(sum(o and int(r.n_iterations) >= cap for o, r in zip(off, runs)))
+            row[f"limit_sqp_{name}"] = int(sum(o and int(r.iterations) >= cap for o, r in zip(off, runs)))
         for sample, wanted in (("single", single_sample), ("all", all_samples)):
             if wanted:
                 with warnings.catch_warnings():

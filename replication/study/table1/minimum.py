@@ -43,7 +43,7 @@ def sqp_cap_shares(problems, *, init=None, caps=(50, 100), fail: float = FAIL) -
     with warnings.catch_warnings():  # the failures are what is counted
         warnings.simplefilter("ignore", ReplicationWarning)
         res = sqp(problems.A, problems.B, max_iterations=caps[-1], init=init)
-    out = {cap: float((frobenius_error(res.projected[:, cap - 1], problems.R0) > fail).mean()) for cap in caps}
+    out = {cap: float((frobenius_error(res.history.projected[:, cap - 1], problems.R0) > fail).mean()) for cap in caps}
     out["n"] = len(problems.R0)
     return out
 
@@ -95,8 +95,8 @@ def minimum_study(seed: int, n_runs: int, rng: np.random.Generator, *, motions_d
         warnings.simplefilter("ignore", ReplicationWarning)
         ours = two_step(s.A, s.B, iterations=iterations, init=init)
     floor = chordal_optimal(s.A, s.B)
-    return {"@10 / minimum": paired_ratio_ci(ours.cost_right[:, 9], floor.cost, rng),
-            "cheaper": int(minimiser_cheaper(ours.cost_right, ours.cost_left, floor.cost).sum()),
+    return {"@10 / minimum": paired_ratio_ci(ours.history.cost_right[:, 9], floor.cost, rng),
+            "cheaper": int(minimiser_cheaper(ours.history.cost_right, ours.history.cost_left, floor.cost).sum()),
             "certified": int(np.asarray(floor.global_optimum).sum()), "n": n_runs}
 
 

@@ -133,13 +133,13 @@ def sqp_failures(A, B, R0, *, init=None, max_iterations: int = 50, fail: float =
     Returns
     -------
     (result, failed, at_limit)
-        The SQP result; ``failed``: final (projected) error ``||R - R0||_F > fail``; ``at_limit``:
-        ``n_iterations >= max_iterations``. Both (n,) bool.
+        SQP's :class:`~replication.core.solvers.Solution`; ``failed``: final (projected) error
+        ``||R - R0||_F > fail``; ``at_limit``: ``iterations >= max_iterations``. Both (n,) bool.
     """
     with warnings.catch_warnings():  # failures are what is being counted
         warnings.simplefilter("ignore", ReplicationWarning)
         res = sqp(A, B, max_iterations=max_iterations, init=init)
-    return res, frobenius_error(res.R, R0) > fail, res.n_iterations >= max_iterations
+    return res, frobenius_error(res.R, R0) > fail, res.iterations >= max_iterations
 
 
 def at_other_minimum(result, A, B, *, max_iterations: int = 50, min_angle_deg: float = 90.0,
@@ -155,10 +155,10 @@ def at_other_minimum(result, A, B, *, max_iterations: int = 50, min_angle_deg: f
     -------
     ndarray of bool, shape (n,)
     """
-    final = result.iterates[..., -1, :, :]
+    final = result.history.iterates[..., -1, :, :]
     on_rotation = np.linalg.norm(np.swapaxes(final, -1, -2) @ final - np.eye(3), axis=(-2, -1)) < rotation_tol
     far_from_min = angle_between_deg(result.R, chordal_optimal(A, B).R) > min_angle_deg
-    return (result.n_iterations < max_iterations) & on_rotation & far_from_min
+    return (result.iterations < max_iterations) & on_rotation & far_from_min
 
 
 def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, n_runs: int = 300,
@@ -196,7 +196,7 @@ def cost_scale_study(settings: dict, scales: dict, rng: np.random.Generator, *, 
         for label, (s, init) in settings.items():
             for name, scale in scales.items():
                 r = sqp(s.A[:n_runs], s.B[:n_runs], max_iterations=max_iterations, init=init, cost=scale)
-                e = frobenius_error(r.iterates, s.R0[:n_runs, None])
+                e = frobenius_error(r.history.iterates, s.R0[:n_runs, None])
                 runs[(label, name)] = (r, e)
                 failed, curve = float(np.mean(e[:, -1] > fail)), e.mean(axis=0)
                 cs = convergence_summary({"sqp": e}, rng).loc["sqp"]
@@ -255,7 +255,8 @@ def fresh_seed_counts(seed: int, n_runs: int, n_sqp: int, scales: dict, rng: np.
                               {k: scales[k] for k in far_scales}, rng, n_runs=n_sqp, fail=fail)
     conv = pd.concat({label: convergence_summary(
         {"ours_right": e["ours_right"], "optimization (analytic)": runs[(label, near_scales[0])][1]}, rng,
-        costs={"ours_right": c["ours_right"], "optimization (analytic)": runs[(label, near_scales[0])][0].cost})
+        costs={"ours_right": c["ours_right"],
+               "optimization (analytic)": runs[(label, near_scales[0])][0].history.cost})
         for label, (_, e, c) in settings.items()}, names=["setting", "method"])
     div = diverting_table(runs, settings, list(settings), scale_names=near_scales, bar=bar, n_runs=n_sqp)
     return dict(seed=seed, n_runs=n_runs, n_sqp=n_sqp, conv=conv, div=div, scales=pd.concat([near, far]))
@@ -427,12 +428,12 @@ def diverting_table(scale_runs: dict, settings: dict, labels, *, scale_names=("a
     for label in labels:
         for name in scale_names:
             r, e = scale_runs[(label, name)]
-            feasible = orthonormality_residual(r.iterates) < FEASIBLE_TOL
-            proj = frobenius_error(r.projected, settings[label][0].R0[:len(e), None])
+            feasible = orthonormality_residual(r.history.iterates) < FEASIBLE_TOL
+            proj = frobenius_error(r.history.projected, settings[label][0].R0[:len(e), None])
             rows[(label, f"SQP, eq. (8) {name}")] = {
-                col: diverting_runs(e, r.cost, min_error=bar).mean(),
-                col_rot: diverting_runs(e, r.cost, min_error=bar, feasible=feasible).mean(),
-                col_proj: diverting_runs(proj, r.cost, min_error=bar).mean()}
+                col: diverting_runs(e, r.history.cost, min_error=bar).mean(),
+                col_rot: diverting_runs(e, r.history.cost, min_error=bar, feasible=feasible).mean(),
+                col_proj: diverting_runs(proj, r.history.cost, min_error=bar).mean()}
         e, c = settings[label][1][method][:n_runs], settings[label][2][method][:n_runs]
         share = diverting_runs(e, c, min_error=bar).mean()
         rows[(label, "two-step R^r")] = {col: share, col_rot: share, col_proj: share}

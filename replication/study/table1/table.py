@@ -92,10 +92,12 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
         if reversed_halves:
             flip = two_step(np.swapaxes(problems.A, -1, -2), np.swapaxes(problems.B, -1, -2), iterations=iterations,
                             init=init)
-            two = dict(right=flip.left, left=flip.right, cost_right=flip.cost_left, cost_left=flip.cost_right)
+            h = flip.history
+            two = dict(right=h.left, left=h.right, cost_right=h.cost_left, cost_left=h.cost_right)
         else:
             ours = two_step(problems.A, problems.B, iterations=iterations, init=init)
-            two = dict(right=ours.right, left=ours.left, cost_right=ours.cost_right, cost_left=ours.cost_left)
+            h = ours.history
+            two = dict(right=h.right, left=h.left, cost_right=h.cost_right, cost_left=h.cost_left)
     errors, costs = {}, {}
     pad = lambda v, cap: v if cap >= iterations else np.concatenate([v, np.repeat(v[:, -1:], iterations - cap, axis=1)],
                                                                    axis=1)
@@ -107,8 +109,8 @@ def iterate_errors(problems: SimulatedProblems, *, iterations: int = 50, init=No
         with warnings.catch_warnings():  # the protocol stops at the cap on purpose; failures are counted
             warnings.simplefilter("ignore", ReplicationWarning)
             res = sqp(problems.A[:k], problems.B[:k], max_iterations=cap, init=start, **options)
-        errors[f"optimization ({name})"] = pad(frobenius_error(res.iterates, R0[:k]), cap)
-        costs[f"optimization ({name})"] = pad(res.cost, cap)
+        errors[f"optimization ({name})"] = pad(frobenius_error(res.history.iterates, R0[:k]), cap)
+        costs[f"optimization ({name})"] = pad(res.history.cost, cap)
     errors["ours_right"] = frobenius_error(two["right"], R0)
     errors["ours_left"] = frobenius_error(two["left"], R0)
     costs["ours_right"], costs["ours_left"] = two["cost_right"], two["cost_left"]
