@@ -61,6 +61,20 @@ def noisy_problem(seed=2, J=30, noise_deg=0.2):
     return R0, A, B
 
 
+def turning_streams(n_cam=40, dt=0.05, sensor_span=(-1.0, 3.0), rate=(0.4, 0.9, -0.3)):
+    """``(camera, sensor)`` orientation streams turning at the constant ``rate`` (rad/s): ``n_cam``
+    camera samples ``dt`` apart from 0, the sensor at 100 Hz over ``sensor_span``."""
+    from replication.core import so3
+    from replication.rig.streams import OrientationStream
+
+    w = np.array(rate)
+    tc = np.arange(n_cam) * dt
+    ts = np.arange(sensor_span[0], sensor_span[1], 0.01)
+    cam = OrientationStream(tc, so3.matrix_from_rotation_vector(tc[:, None] * w), "cam")
+    sen = OrientationStream(ts, so3.matrix_from_rotation_vector(ts[:, None] * w), "sen")
+    return cam, sen
+
+
 def drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
     """Pairs of :func:`replication.study.live_study.pair_stream`: ``n_before`` at a random ``R0``,
     then ``n_drift`` whose ``R0`` turns ``rate_deg`` a pair about a random axis."""
