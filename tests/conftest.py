@@ -90,3 +90,118 @@ def drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3)
                         noise_deg=noise_deg)
             for k in range(n_drift)]
     return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
+
+
+# --------------------------------------------------------------------------------------------------
+# The command line's synthetic rig as files: the rig (:func:`replication.testing.rig_streams`)
+# written as a TUM trajectory and an EuRoC IMU CSV on Unix-like absolute times (1.52e9 s, the scale
+# at which an overlap message once printed ``1.52053e+09..1.52053e+09``) and a Kalibr camchain;
+# a run of ``python -m replication``, a snapshot of a folder's bytes, a calibration that must not be
+# reached, a folder this user cannot write in, a full disk.
+
+T0 = 1.52053e9  # absolute times, as a real recording has
+MAGIC = {".png": (b"\x89PNG",), ".pdf": (b"%PDF",), ".svg": (b"<?xml", b"<svg")}
+
+
+def _run(*args, cwd=None):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "replication", *map(str, args)], capture_output=True, text=True,
+                          timeout=300, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def cli_rig():
+    from replication.testing import rig_streams
+
+    return rig_streams(40.0, rng=np.random.default_rng(11), camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
+
+
+def _tum_bytes(camera) -> bytes:
+    from replication.core import so3
+
+    q = so3.quaternion_from_matrix(camera.R)
+    rows = np.column_stack([camera.t + T0, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]])
+    return "".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows).encode()
+
+
+def _imu_bytes(gyro) -> bytes:
+    ns = np.round(gyro.t * 1e9).astype(np.int64) + int(T0 * 1e9)
+    return "".join(f"{n}," + ",".join(f"{v:.9f}" for v in (*w, 0.0, 0.0, 9.81)) + "\n"
+                   for n, w in zip(ns, gyro.omega)).encode()
+
+
+def _camchain_text(R0) -> str:
+    T = np.eye(4)
+    T[:3, :3] = R0
+    return "cam0:\n  T_cam_imu:\n" + "".join(f"  - [{', '.join(f'{v:.12f}' for v in row)}]\n" for row in T)
+
+
+@pytest.fixture(scope="module")
+def rig_bytes(cli_rig):
+    R0, camera, gyro, _ = cli_rig
+    return {"cam.txt": _tum_bytes(camera), "imu.csv": _imu_bytes(gyro), "camchain.yaml": _camchain_text(R0).encode()}
+
+
+@pytest.fixture
+def files(tmp_path, rig_bytes):
+    """A private copy of the rig's files (tests may link, chmod or replace them)."""
+    d = tmp_path / "in"
+    d.mkdir()
+    for name, data in rig_bytes.items():
+        (d / name).write_bytes(data)
+    return d
+
+
+def _snapshot(folder) -> dict:
+    """Every file under ``folder`` (links followed) and the SHA-256 of its bytes; folders as
+    ``None``."""
+    import hashlib
+
+    return {str(p.relative_to(folder)): (hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None)
+            for p in sorted(folder.rglob("*"))}
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Make the calibration fail the test if it is reached."""
+    import replication.rig.calibration as cal
+    import replication.rig.poses as poses
+
+    def reached(*args, **kwargs):
+        pytest.fail("the calibration ran: the check must come before any work")
+
+    monkeypatch.setattr(cal, "calibrate", reached)
+    monkeypatch.setattr(poses, "calibrate_poses", reached)
+
+
+def _calibrate(files, *extra):
+    from replication.cli import main
+
+    return main(["calibrate", "--camera", str(files / "cam.txt"), "--sensor", str(files / "imu.csv"),
+                 "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", *map(str, extra)])
+
+
+@pytest.fixture
+def locked(tmp_path):
+    """A folder this user cannot write in (skipped where permissions are not enforced: root),
+    restored afterwards."""
+    import os
+
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        if os.access(folder, os.W_OK):
+            pytest.skip("folder permissions are not enforced for this user (root)")
+        yield folder
+    finally:
+        folder.chmod(0o700)
+
+
+def _disk_full(*args, **kwargs):
+    import errno
+    import os
+
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))

@@ -15,10 +15,12 @@ import jsonschema
 import numpy as np
 import pytest
 
+import replication.rig.calibration as cal
+from conftest import T0
 from replication.cli import main
 from replication.core import so3
 from replication.rig.association import offset_in_words
-from replication.rig.calibration import _same_stream, calibrate
+from replication.rig.calibration import OverlapError, _same_stream, calibrate
 from replication.rig.datafile import DataFileError
 from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
 from replication.rig.poses import calibrate_poses
@@ -1418,3 +1420,43 @@ def test_figure_states_both_references_and_the_reading(rig_tr):
     assert f"angle between R0 and it: {r.reference_errors_deg[1]:.3f} deg" in text
     assert "reading: agreement, not accuracy" in text
     plt.close(fig)
+
+
+# ------------------------------------------------------------------------------ the overlap message
+# (the command line's synthetic rig, 40 s on absolute times: tests/conftest.py)
+
+def test_a_max_offset_beyond_the_overlap_is_named_with_durations(cli_rig):
+    _, camera, gyro, _ = cli_rig
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    cam = OrientationStream(camera.t + T0, camera.R, "camera")
+    imu = GyroStream(gyro.t + T0, gyro.omega, "imu")
+    with pytest.raises(OverlapError, match=r"the streams overlap by 40\.0 s \(camera 40\.0 s, sensor 42\.0 s long\)"
+                       r".*max_offset 30 s is larger than the overlap allows.*\(above [\d.]+ s;") as err:
+        calibrate(cam, imu, max_offset=30.0, n_bootstrap=0)
+    assert "e+09" not in str(err.value) and "1520" not in str(err.value)  # durations, no absolute times
+    bound = float(re.search(r"\(above ([\d.]+) s;", str(err.value)).group(1))
+    cal._check_overlap(cam, imu, bound)  # the bound said is the bound: 10 samples at it, fewer just above
+    with pytest.raises(OverlapError, match="max_offset"):
+        cal._check_overlap(cam, imu, bound + 1.0)
+    assert calibrate(cam, imu, max_offset=2.0, n_bootstrap=0).n_pairs > 0
+
+
+def test_streams_on_different_clocks_keep_the_start_times_that_show_it(cli_rig):
+    _, camera, gyro, _ = cli_rig
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    cam = OrientationStream(camera.t, camera.R, "camera")  # relative times
+    imu = GyroStream(gyro.t + T0, gyro.omega, "imu")  # absolute times
+    with pytest.raises(OverlapError, match=r"the sensor starts 15205\d+\.\d s after the camera ends.*the camera starts "
+                       r"at t = 0\.000 s, the sensor at t = 1520529999\.00\d s: their clocks differ"):
+        calibrate(cam, imu, n_bootstrap=0)
+
+
+def test_the_overlap_error_survives_pickling_and_renaming():
+    import pickle
+
+    err = OverlapError("{option} 2 s is larger than the overlap")
+    assert str(pickle.loads(pickle.dumps(err))) == "max_offset 2 s is larger than the overlap"
+    assert str(err.named("--max-offset")) == "--max-offset 2 s is larger than the overlap"
+    assert isinstance(err, ValueError)
