@@ -1,10 +1,12 @@
 import dataclasses
+import re
 import shutil
 
 import numpy as np
 import pytest
 
 from replication.core.so3 import random_rotations
+from replication.rig.realdata import real_data_available
 from replication.study.lab.settings import LabSettings
 
 
@@ -23,6 +25,9 @@ def problem(rng):
 
 #: A small simulated lab (2 data sets of 4 poses, a 4 s dynamic trial) for the loader and chain
 #: tests.
+#: numpy's reprs: never in a message
+NUMPY_REPR = re.compile(r"np\.(float|int|bool|str)|array\(")
+
 SMALL_LAB = dataclasses.replace(LabSettings(), n_sets=2, poses_per_set=(4, 4), dynamic_seconds=4.0)
 
 
@@ -205,3 +210,41 @@ def _disk_full(*args, **kwargs):
     import os
 
     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+# --------------------------------------------------------------------------------------------------
+# Real recordings and dataset files: the marker of the tests that need the shared recordings, a
+# TUM trajectory's lines, EuRoC's 17-column ground truth header and a writer of its rows.
+
+HAVE_REAL = real_data_available()
+
+needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
+                                "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST (or provide ../shared/data/real)")
+
+TUM_LINES = [
+    "# t tx ty tz qx qy qz qw",
+    "1520530313249735680.0 0 0 0 0 0 0 1",
+    "1520530313299737600.0 0 0 0 0.0087265 0 0 0.9999619",
+    "1520530313349738752.0 0 0 0 0.0174524 0 0 0.9998477",
+]
+
+
+def write(tmp_path, name, lines):
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+#: EuRoC's state_groundtruth_estimate0/data.csv header, as shipped.
+GT_HEADER = ("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+             "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+             "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]")
+
+
+def _line(row):
+    return ",".join(str(int(v)) if i == 0 else f"{v:.9f}" for i, v in enumerate(row))
+
+
+def _write(path, header, rows):
+    path.write_text("\n".join([header] + [r if isinstance(r, str) else _line(r) for r in rows]) + "\n")
+    return path

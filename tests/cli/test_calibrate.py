@@ -1,14 +1,20 @@
 """The ``calibrate`` command (``replication/cli/calibrate.py``): its options reach the library, its
 help shows every default, its outputs are written in the format asked or a disk error is a message,
 and the overlap error names its option."""
+import json
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
-from conftest import MAGIC, _calibrate, _disk_full, _run
+from conftest import GT_HEADER, MAGIC, TUM_LINES, _calibrate, _disk_full, _run, _write, needs_real, write
 from replication import _io
 from replication.cli import main
 from replication.core import so3
 from replication.rig import live
+from replication.rig import realdata as rd
+from replication.testing import rig_motion
 
 
 @pytest.mark.parametrize("flag, expected", [([], True), (["--no-gyro-bias"], False)])
@@ -103,3 +109,75 @@ def test_the_cli_names_its_max_offset_option(files, capsys):
     err = capsys.readouterr().err
     assert "--max-offset 100 s is larger than the overlap allows" in err and "camera 40.0 s" in err, err
     assert "e+09" not in err and "max_offset" not in err
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "replication", "calibrate", *map(str, args)],
+                          capture_output=True, text=True, timeout=120)
+
+
+@needs_real
+def test_cli_round_trip_on_the_shared_files(tmp_path):
+    d = rd.data_root() / "tumvi_room1_orbslam3mono"
+    out = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",
+               "gyro", "--method", "two_step_left", "--bootstrap", "20", "--reference", d / "camchain.yaml",
+               "--out", tmp_path / "report.json")
+    assert out.returncode == 0, out.stderr
+    assert "angle to the reference" in out.stdout
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["method"] == "two_step_left" and report["reference_error_deg"] < 0.2
+    R = np.array(report["R0_camera_from_sensor"])
+    assert so3.angle_between_deg(R, rd.load_reference(d / "camchain.yaml")) < 0.2
+
+
+def test_cli_rejects_a_malformed_file_and_writes_nothing(tmp_path):
+    cam = write(tmp_path, "cam.txt", TUM_LINES + ["1520530313399738752.0 0 0 0 0 0 0"])
+    out = _cli("--camera", cam, "--sensor", cam, "--out", tmp_path / "report.json")
+    assert out.returncode == 2
+    assert "cam.txt, line 5: expected 8 columns" in out.stderr
+    assert not (tmp_path / "report.json").exists()
+
+
+def test_cli_help_explains_the_formats():
+    out = _cli("--help")
+    assert out.returncode == 0 and "t tx ty tz qx qy qz qw" in out.stdout and "T_cam_imu" in out.stdout
+
+
+def _cli_files(tmp_path, angle_deg):
+    """A camera TUM trajectory and a 17-column ground truth of the same rig, the latter with one
+    time stamp repeated with a pose ``angle_deg`` away."""
+    t = 1403636580.0 + np.arange(0.0, 40.0, 0.05)
+    R = rig_motion(t)  # the synthetic rig's motion
+    q = so3.quaternion_from_matrix(R)
+    cam = tmp_path / "cam.txt"
+    np.savetxt(cam, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
+    Q = R @ so3.matrix_from_rotation_vector(np.array([0.3, -0.2, 0.5]))  # world_from_sensor
+    rows = [[int(round(tk * 1e9)), 0.0, 0.0, 0.0, *qk, *([0.0] * 9)] for tk, qk in zip(t,
+                                                                                       so3.quaternion_from_matrix(Q))]
+    twin = list(rows[100])
+    twin[4:8] = so3.quaternion_from_matrix(so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, angle_deg])) @ Q[100])
+    gt = _write(tmp_path / "data.csv", GT_HEADER, rows[:101] + [twin] + rows[101:])
+    return cam, gt
+
+
+def test_cli_refuses_repeats_naming_repeated_and_counts_them_when_read(tmp_path, capsys):
+    cam, gt = _cli_files(tmp_path, 3.0)
+    base = ["calibrate", "--camera", str(cam), "--sensor", str(gt), "--bootstrap", "10", "--quiet"]
+    assert main(base) == 2
+    err = capsys.readouterr().err
+    assert "data.csv, line 103" in err and "--repeated keep-first|keep-last|mean" in err
+    out = tmp_path / "r.json"
+    assert main(base + ["--repeated", "keep-first", "--out", str(out)]) == 0
+    assert "--sensor: 1 lines repeat an earlier line's time stamp (1 time stamps, poses up to 3 deg apart)" in (
+        capsys.readouterr().out)
+    cli = json.loads(out.read_text())["cli"]
+    assert cli["repeated"] == "keep-first"
+    assert cli["repeats"]["sensor"]["repeated_timestamps"] == 1
+    assert cli["repeats"]["sensor"]["repeated_max_deg"] == pytest.approx(3.0, abs=1e-4)
+    assert cli["repeats"]["camera"]["repeated_timestamps"] == 0
+
+
+def test_cli_names_a_ground_truth_given_as_gyro(tmp_path, capsys):
+    cam, gt = _cli_files(tmp_path, 0.0)
+    assert main(["calibrate", "--camera", str(cam), "--sensor", str(gt), "--sensor-kind", "gyro", "--quiet"]) == 2
+    assert "looks like an orientation stream" in capsys.readouterr().err

@@ -19,6 +19,7 @@ import replication.rig.calibration as cal
 from conftest import T0
 from replication.cli import main
 from replication.core import so3
+from replication.rig import realdata as rd
 from replication.rig.association import offset_in_words
 from replication.rig.calibration import OverlapError, _same_stream, calibrate
 from replication.rig.datafile import DataFileError
@@ -28,7 +29,7 @@ from replication.rig.quality import EXIT_FAIL, THRESHOLDS, Evidence, judge
 from replication.rig.realdata import data_root, real_data_available
 from replication.rig.report import RADIUS_COVERS
 from replication.rig.solve_and_judge import reference_reading
-from replication.rig.streams import GyroStream, OrientationStream
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.study import lab
 from replication.testing import RIG_R0, rig_streams, write_euroc_imu, write_tum_trajectory
 
@@ -1460,3 +1461,40 @@ def test_the_overlap_error_survives_pickling_and_renaming():
     assert str(pickle.loads(pickle.dumps(err))) == "max_offset 2 s is larger than the overlap"
     assert str(err.named("--max-offset")) == "--max-offset 2 s is larger than the overlap"
     assert isinstance(err, ValueError)
+
+
+def _synthetic_rig(offset, rng):
+    """Camera at 20 Hz and a 200 Hz gyro whose clock reads ``true time + offset``; R0 random."""
+    R0 = so3.random_rotations(rng, ())
+    fine = np.arange(0.0, 60.0, 1e-3)
+    freqs, phases = rng.uniform(0.1, 0.7, (3, 3)), rng.uniform(0, 2 * np.pi, (3, 3))
+    w_cam = sum(np.sin(2 * np.pi * freqs[k] * fine[:, None] + phases[k]) for k in range(3))  # rad/s, body frame
+    Qc = integrate_gyro(GyroStream(fine, w_cam)).R
+    cam_idx = np.arange(0, len(fine), 50)
+    camera = OrientationStream(fine[cam_idx], Qc[cam_idx])
+    imu_idx = np.arange(0, len(fine), 5)
+    gyro = GyroStream(fine[imu_idx] + offset, w_cam[imu_idx] @ R0)  # omega_sensor = R0^T omega_camera
+    return R0, camera, gyro
+
+
+def test_calibrate_recovers_R0_and_the_clock_offset(rng):
+    R0, camera, gyro = _synthetic_rig(0.030, rng)
+    res = calibrate(camera, gyro, method="chordal_optimal", reference=R0, n_bootstrap=20)
+    assert abs(res.time_offset_s - 0.030) <= 1e-3
+    assert res.reference_error_deg < 0.02
+    uncorrected = calibrate(camera, gyro, correct_offset=False, reference=R0, n_bootstrap=0)
+    assert uncorrected.reference_error_deg > 5 * res.reference_error_deg
+    report = res.to_dict()
+    json.dumps(report)
+    assert report["euler_zyx_deg"].keys() == {"yaw", "pitch", "roll"}
+    np.testing.assert_allclose(so3.matrix_from_quaternion(res.quaternion_wxyz), res.R, atol=1e-12)
+
+
+@needs_real
+@pytest.mark.parametrize("method", ["two_step_left", "two_step_right", "chordal_optimal"])
+def test_tumvi_raw_gyro_within_0_2_deg_of_kalibr(method):
+    d = rd.data_root() / "tumvi_room1_orbslam3mono"
+    res = calibrate(rd.load_tum_trajectory(d / "orbslam3_mono_cam0_traj.txt"), rd.load_euroc_imu(d / "imu0_data.csv"),
+                    method=method, reference=rd.load_reference(d / "camchain.yaml"), n_bootstrap=20)
+    assert res.reference_error_deg < 0.2
+    assert abs(res.time_offset_s) < 0.005
