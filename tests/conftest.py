@@ -1,6 +1,7 @@
 import dataclasses
 import re
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -248,3 +249,17 @@ def _line(row):
 def _write(path, header, rows):
     path.write_text("\n".join([header] + [r if isinstance(r, str) else _line(r) for r in rows]) + "\n")
     return path
+
+
+# --------------------------------------------------------------------------------------------------
+# The ledger's claims file, and every record valid against it.
+
+CLAIMS_CSV = Path(__file__).resolve().parents[1] / "data" / "paper" / "claims.csv"
+
+
+def _valid(records):
+    from replication.study import ledger, paper
+
+    claims = paper.load_claim_table(CLAIMS_CSV)
+    for rec in records:
+        ledger.check_record(**rec, claims=claims, claims_path=CLAIMS_CSV)

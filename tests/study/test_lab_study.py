@@ -1,5 +1,5 @@
 """The lab's studies (replication.study.lab.study) on small inputs: summarize's counts and
-averages, and the ablation's cases."""
+averages, the ablation's cases, and a seed study's spread in words."""
 import dataclasses
 
 import numpy as np
@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from replication.study import lab
+from replication.study.lab.study import seed_spread
 
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
 
@@ -48,3 +49,8 @@ def test_ablation_runs_every_case_and_switches_sources_off():
     pd.testing.assert_series_equal(out.loc["only magnetometer errors"], out.loc["without pixel noise"],
                                    check_names=False)
     assert out.loc["no sources", "true_ours_right"] != out.loc["all sources", "true_ours_right"]
+
+
+def test_seed_spread_gives_mean_sd_and_range():
+    assert seed_spread(pd.Series([1.0, 2.0, 3.0])) == "2.00 (SD 1.00; 1.00-3.00)"
+    assert seed_spread(pd.Series([0.5, 0.25]), digits=4) == "0.3750 (SD 0.1768; 0.2500-0.5000)"
