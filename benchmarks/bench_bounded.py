@@ -41,7 +41,7 @@ def tumvi_like(seconds: float = 140.0, camera_hz: float = 20.0, gyro_hz: float =
     """``(R0, camera, sensor)``: camera stream and integrated gyro of one rig, sensor clock late by
     ``offset``.
 
-    The attitude follows smooth sines as in ``tests/study/test_baselines.py::synthetic_rig`` plus
+    The attitude follows smooth sines as in ``tests/study/test_real_study.py::synthetic_rig`` plus
     faster terms; the gyro's body rates are central differences of the sensor attitude, integrated
     by :func:`replication.rig.streams.integrate_gyro`.
     """

@@ -24,7 +24,7 @@ import time
 import numpy as np
 
 from replication.core import so3
-from replication.rig import association, realdata
+from replication.rig import offset_search, realdata
 from replication.rig.association import estimate_time_offset, offset_analysis
 from replication.rig.calibration import _gap_free_window
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
@@ -36,11 +36,11 @@ ISSUE_MS = (0.13, 0.37, 1.71, 2.29, -3.43)
 def old_search(camera, sensor, max_offset=0.2, resolution=0.5e-3):
     """The search of before (10 ms grid, then the ``resolution`` grid; its maximum), for timing and
     'before'."""
-    t, cam = association._overlap(camera, sensor, max_offset)
+    t, cam = offset_search._overlap(camera, sensor, max_offset)
     coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
-    best = coarse[np.argmax(association._correlations(cam, sensor, t, coarse))]
+    best = coarse[np.argmax(offset_search._correlations(cam, sensor, t, coarse))]
     fine = np.clip(np.arange(best - 0.01, best + 0.01 + 1e-12, resolution), -max_offset, max_offset)
-    return float(fine[np.argmax(association._correlations(cam, sensor, t, fine))])
+    return float(fine[np.argmax(offset_search._correlations(cam, sensor, t, fine))])
 
 
 def recordings():
@@ -150,7 +150,8 @@ def margins():
         "periodic 3 Hz times 2.0 x the rig's motion": periodic(3.0, aperiodic=2.0),
     }
     print(f"\npeak margin (correlation at the peak - highest coarse local maximum farther than "
-          f"{1e3 * association.PEAK_SEPARATION_S:.0f} ms, refined if within {association.RIVAL_REFINED_WITHIN:g} on "
+          f"{1e3 * offset_search.PEAK_SEPARATION_S:.0f} ms, refined if within "
+          f"{offset_search.RIVAL_REFINED_WITHIN:g} on "
           "the coarse curve; NaN: none in the search):")
     for name, (camera, sensor) in cases.items():
         row = []

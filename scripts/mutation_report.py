@@ -25,7 +25,8 @@ ROOT = Path(__file__).resolve().parent.parent
 TARGETS = [
     "replication.rig.quality.*", "replication.rig.diagnose.*", "replication.rig.online.*",
     "replication.rig.online_events.*", "replication.rig.live.*", "replication.study.ledger.*",
-    "replication.rig.association.*", "replication.rig.report.*", "replication.rig.changepoint.*",
+    "replication.rig.association.*", "replication.rig.offset_search.*", "replication.rig.report.*",
+    "replication.rig.changepoint.*",
     "replication.core.solvers._registry.x_check_answer__mutmut_*",
     "replication.core.solvers._registry.x__checked_answer__mutmut_*",
     "replication.core.solvers._registry.x__screen_gross__mutmut_*",

@@ -1,10 +1,13 @@
 import dataclasses
+import re
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from replication.core.so3 import random_rotations
+from replication.rig.realdata import real_data_available
 from replication.study.lab.settings import LabSettings
 
 
@@ -23,6 +26,9 @@ def problem(rng):
 
 #: A small simulated lab (2 data sets of 4 poses, a 4 s dynamic trial) for the loader and chain
 #: tests.
+#: numpy's reprs: never in a message
+NUMPY_REPR = re.compile(r"np\.(float|int|bool|str)|array\(")
+
 SMALL_LAB = dataclasses.replace(LabSettings(), n_sets=2, poses_per_set=(4, 4), dynamic_seconds=4.0)
 
 
@@ -61,6 +67,20 @@ def noisy_problem(seed=2, J=30, noise_deg=0.2):
     return R0, A, B
 
 
+def turning_streams(n_cam=40, dt=0.05, sensor_span=(-1.0, 3.0), rate=(0.4, 0.9, -0.3)):
+    """``(camera, sensor)`` orientation streams turning at the constant ``rate`` (rad/s): ``n_cam``
+    camera samples ``dt`` apart from 0, the sensor at 100 Hz over ``sensor_span``."""
+    from replication.core import so3
+    from replication.rig.streams import OrientationStream
+
+    w = np.array(rate)
+    tc = np.arange(n_cam) * dt
+    ts = np.arange(sensor_span[0], sensor_span[1], 0.01)
+    cam = OrientationStream(tc, so3.matrix_from_rotation_vector(tc[:, None] * w), "cam")
+    sen = OrientationStream(ts, so3.matrix_from_rotation_vector(ts[:, None] * w), "sen")
+    return cam, sen
+
+
 def drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3):
     """Pairs of :func:`replication.study.live_study.pair_stream`: ``n_before`` at a random ``R0``,
     then ``n_drift`` whose ``R0`` turns ``rate_deg`` a pair about a random axis."""
@@ -76,3 +96,170 @@ def drift_pairs(seed, n_before=400, n_drift=1500, rate_deg=0.002, noise_deg=0.3)
                         noise_deg=noise_deg)
             for k in range(n_drift)]
     return np.concatenate([A] + [m[0] for m in more]), np.concatenate([B] + [m[1] for m in more])
+
+
+# --------------------------------------------------------------------------------------------------
+# The command line's synthetic rig as files: the rig (:func:`replication.testing.rig_streams`)
+# written as a TUM trajectory and an EuRoC IMU CSV on Unix-like absolute times (1.52e9 s, the scale
+# at which an overlap message once printed ``1.52053e+09..1.52053e+09``) and a Kalibr camchain;
+# a run of ``python -m replication``, a snapshot of a folder's bytes, a calibration that must not be
+# reached, a folder this user cannot write in, a full disk.
+
+T0 = 1.52053e9  # absolute times, as a real recording has
+MAGIC = {".png": (b"\x89PNG",), ".pdf": (b"%PDF",), ".svg": (b"<?xml", b"<svg")}
+
+
+def _run(*args, cwd=None):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "replication", *map(str, args)], capture_output=True, text=True,
+                          timeout=300, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def cli_rig():
+    from replication.testing import rig_streams
+
+    return rig_streams(40.0, rng=np.random.default_rng(11), camera_noise_deg=0.05, gyro_noise_deg_s=0.05)
+
+
+def _tum_bytes(camera) -> bytes:
+    from replication.core import so3
+
+    q = so3.quaternion_from_matrix(camera.R)
+    rows = np.column_stack([camera.t + T0, np.zeros((len(camera.t), 3)), q[:, 1:], q[:, :1]])
+    return "".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows).encode()
+
+
+def _imu_bytes(gyro) -> bytes:
+    ns = np.round(gyro.t * 1e9).astype(np.int64) + int(T0 * 1e9)
+    return "".join(f"{n}," + ",".join(f"{v:.9f}" for v in (*w, 0.0, 0.0, 9.81)) + "\n"
+                   for n, w in zip(ns, gyro.omega)).encode()
+
+
+def _camchain_text(R0) -> str:
+    T = np.eye(4)
+    T[:3, :3] = R0
+    return "cam0:\n  T_cam_imu:\n" + "".join(f"  - [{', '.join(f'{v:.12f}' for v in row)}]\n" for row in T)
+
+
+@pytest.fixture(scope="module")
+def rig_bytes(cli_rig):
+    R0, camera, gyro, _ = cli_rig
+    return {"cam.txt": _tum_bytes(camera), "imu.csv": _imu_bytes(gyro), "camchain.yaml": _camchain_text(R0).encode()}
+
+
+@pytest.fixture
+def files(tmp_path, rig_bytes):
+    """A private copy of the rig's files (tests may link, chmod or replace them)."""
+    d = tmp_path / "in"
+    d.mkdir()
+    for name, data in rig_bytes.items():
+        (d / name).write_bytes(data)
+    return d
+
+
+def _snapshot(folder) -> dict:
+    """Every file under ``folder`` (links followed) and the SHA-256 of its bytes; folders as
+    ``None``."""
+    import hashlib
+
+    return {str(p.relative_to(folder)): (hashlib.sha256(p.read_bytes()).hexdigest() if p.is_file() else None)
+            for p in sorted(folder.rglob("*"))}
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Make the calibration fail the test if it is reached."""
+    import replication.rig.calibration as cal
+    import replication.rig.poses as poses
+
+    def reached(*args, **kwargs):
+        pytest.fail("the calibration ran: the check must come before any work")
+
+    monkeypatch.setattr(cal, "calibrate", reached)
+    monkeypatch.setattr(poses, "calibrate_poses", reached)
+
+
+def _calibrate(files, *extra):
+    from replication.cli import main
+
+    return main(["calibrate", "--camera", str(files / "cam.txt"), "--sensor", str(files / "imu.csv"),
+                 "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", *map(str, extra)])
+
+
+@pytest.fixture
+def locked(tmp_path):
+    """A folder this user cannot write in (skipped where permissions are not enforced: root),
+    restored afterwards."""
+    import os
+
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        if os.access(folder, os.W_OK):
+            pytest.skip("folder permissions are not enforced for this user (root)")
+        yield folder
+    finally:
+        folder.chmod(0o700)
+
+
+def _disk_full(*args, **kwargs):
+    import errno
+    import os
+
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+# --------------------------------------------------------------------------------------------------
+# Real recordings and dataset files: the marker of the tests that need the shared recordings, a
+# TUM trajectory's lines, EuRoC's 17-column ground truth header and a writer of its rows.
+
+HAVE_REAL = real_data_available()
+
+needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
+                                "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST (or provide ../shared/data/real)")
+
+TUM_LINES = [
+    "# t tx ty tz qx qy qz qw",
+    "1520530313249735680.0 0 0 0 0 0 0 1",
+    "1520530313299737600.0 0 0 0 0.0087265 0 0 0.9999619",
+    "1520530313349738752.0 0 0 0 0.0174524 0 0 0.9998477",
+]
+
+
+def write(tmp_path, name, lines):
+    path = tmp_path / name
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+#: EuRoC's state_groundtruth_estimate0/data.csv header, as shipped.
+GT_HEADER = ("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+             "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
+             "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]")
+
+
+def _line(row):
+    return ",".join(str(int(v)) if i == 0 else f"{v:.9f}" for i, v in enumerate(row))
+
+
+def _write(path, header, rows):
+    path.write_text("\n".join([header] + [r if isinstance(r, str) else _line(r) for r in rows]) + "\n")
+    return path
+
+
+# --------------------------------------------------------------------------------------------------
+# The ledger's claims file, and every record valid against it.
+
+CLAIMS_CSV = Path(__file__).resolve().parents[1] / "data" / "paper" / "claims.csv"
+
+
+def _valid(records):
+    from replication.study import ledger, paper
+
+    claims = paper.load_claim_table(CLAIMS_CSV)
+    for rec in records:
+        ledger.check_record(**rec, claims=claims, claims_path=CLAIMS_CSV)

@@ -1,11 +1,14 @@
-"""The command line in its own room (``replication/cli``): one module per command with
-``add_parser`` and ``run``, ``__main__`` only the entry."""
+"""The command line's top parser (``replication/cli/__init__.py``): one module per command with
+``add_parser`` and ``run``, each command dispatched to its module, the version, and the warnings
+of a command said once on one line, only while it runs (``__main__``, only the entry:
+tests/test_main.py)."""
 import argparse
 import importlib
 import subprocess
 import sys
 from pathlib import Path
 
+from conftest import _run
 from replication.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -43,16 +46,58 @@ def test_the_top_parser_dispatches_each_command_to_its_module(monkeypatch):
         assert main(argv[command]) == 40 + i, command
 
 
-def test_the_entry_is_two_lines_of_code_and_defines_nothing():
-    import ast
+def test_version_prints_the_package_version():
+    from replication._version import __version__
 
-    tree = ast.parse((ROOT / "replication" / "__main__.py").read_text(encoding="utf-8"))
-    body = [n for n in tree.body if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant))]
-    assert not [n for n in body if isinstance(n, (ast.FunctionDef, ast.ClassDef, ast.Assign))]
-    assert len(body) <= 3  # import sys, the import of the entry, the ``if __name__`` guard
+    out = _run("--version")
+    assert out.returncode == 0 and out.stdout == f"replication {__version__}\n"
 
 
-def test_importing_the_entry_runs_nothing():
-    code = "import replication.__main__; print('imported')"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
-    assert (out.returncode, out.stdout) == (0, "imported\n"), out.stderr
+def test_a_solver_warning_reaches_the_terminal_once_on_one_line(tmp_path):
+    """Nearly single-axis motion: the solver's ObservabilityWarning, as ``warning: <Class>:
+    <message>``."""
+    import numpy as np
+
+    from replication.core import so3
+
+    t = np.arange(0.0, 30.0, 0.05)
+    Q = so3.matrix_from_rotation_vector(np.stack([np.sin(0.7 * t), 0.003 * np.sin(0.45 * t), 0.003 * np.cos(0.3 * t)],
+                                                 axis=-1))
+    from replication.testing import RIG_R0 as R0
+    for name, R in [("cam.txt", Q), ("sensor.txt", Q @ R0)]:
+        q = so3.quaternion_from_matrix(R)
+        np.savetxt(tmp_path / name, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
+    out = _run("calibrate", "--camera", tmp_path / "cam.txt", "--sensor", tmp_path / "sensor.txt", "--bootstrap", 20)
+    assert out.returncode == 0, out.stderr
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1, out.stderr
+    assert lines[0].startswith("warning: ObservabilityWarning: 1 of 1 problems have nearly single-axis motion: axis "
+                               "spread down to ")
+    assert ".py" not in out.stderr and "warn" not in out.stderr.replace("warning:", "").replace("Warning:", "")
+
+
+def test_the_warning_formatter_says_each_warning_once_on_one_line():
+    import io
+
+    from replication.cli import _one_line_warnings
+    from replication.core.solvers import AccuracyWarning, ObservabilityWarning
+
+    show, file = _one_line_warnings(), io.StringIO()
+    show(ObservabilityWarning("a  weak\n  motion"), ObservabilityWarning, "/x/_registry.py", 212, file=file)
+    show(ObservabilityWarning("a weak motion"), ObservabilityWarning, "/x/estimate.py", 139, file=file)  # the same
+    show(AccuracyWarning("a weak motion"), AccuracyWarning, "/x/_registry.py", 212, file=file)  # another class
+    assert file.getvalue() == ("warning: ObservabilityWarning: a weak motion\n"
+                               "warning: AccuracyWarning: a weak motion\n")
+
+
+def test_the_warning_formatter_is_installed_only_while_a_command_runs(tmp_path):
+    import warnings
+
+    from replication.cli import main
+
+    before = warnings.showwarning
+    assert main(["fetch-data", str(tmp_path), "--check"]) == 1
+    assert warnings.showwarning is before
+    code = ("import warnings; before = warnings.showwarning; import replication.__main__, "
+            "replication.cli.calibrate; print(warnings.showwarning is before)")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout == "True\n"

@@ -299,11 +299,20 @@ def _snake(name: str) -> str:
     return "".join(f"_{c.lower()}" if c.isupper() and i else c.lower() for i, c in enumerate(name))
 
 
+def _commands(path: Path) -> list:
+    """The names of the commands a module of the command line adds (``sub.add_parser("fetch-data",
+    ...)``), with ``_`` for ``-``."""
+    calls = [n for n in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if isinstance(n, ast.Call)
+             and getattr(n.func, "attr", None) == "add_parser" and n.args and isinstance(n.args[0], ast.Constant)]
+    return [c.args[0].value.replace("-", "_") for c in calls]
+
+
 def unit_names(room: str) -> set:
     """The names a test file of ``room`` may take: each module's path below the room, its parts
     joined by ``_`` without their leading underscores (``core/solvers/_registry.py``:
-    ``solvers_registry``; a package: its own name), and each public class of the room in snake case
-    (``OnlineCalibrator``: ``online_calibrator``)."""
+    ``solvers_registry``; a package: its own name), each public class of the room in snake case
+    (``OnlineCalibrator``: ``online_calibrator``), and in ``cli`` each command's name
+    (``fetch-data``: ``fetch_data``; test files need names unique across the folders)."""
     names = set()
     for module, path in MODULES.items():
         parts = module.split(".")
@@ -316,6 +325,8 @@ def unit_names(room: str) -> set:
         if len(parts) < 3 or parts[1] != room:
             continue
         names.add("_".join(p.lstrip("_") for p in parts[2:]))
+        if room == "cli":  # a command by its name (``fetch-data``: ``fetch_data``)
+            names |= set(_commands(path))
         tree = ast.parse(path.read_text(encoding="utf-8"))
         names |= {_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
     return names
@@ -357,6 +368,9 @@ def test_the_test_file_rule_refuses_history_and_missing_units(tmp_path):
     assert misnamed_test_file(TESTS / "core" / "test_solvers_registry.py") is None  # core/solvers/_registry.py
     assert misnamed_test_file(TESTS / "rig" / "test_online_calibrator.py") is None  # the public class
     assert misnamed_test_file(TESTS / "test_main.py") is None  # replication/__main__.py
+    assert misnamed_test_file(TESTS / "cli" / "test_fetch_data.py") is None  # the command fetch-data
+    assert misnamed_test_file(TESTS / "cli" / "test_calibrate_inputs.py") is None  # a module of cli/
+    assert "no module or public class 'fetch_dat'" in misnamed_test_file(TESTS / "cli" / "test_fetch_dat.py")
     assert "no module or public class 'mutants_online'" in misnamed_test_file(TESTS / "rig" / "test_mutants_online.py")
     assert "no module or public class 'online_judging'" in misnamed_test_file(TESTS / "rig" / "test_online_judging.py")
     assert "no module or public class 'so3'" in misnamed_test_file(TESTS / "rig" / "test_so3.py")  # another room's

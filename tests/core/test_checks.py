@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from conftest import NUMPY_REPR
+from replication.core import so3
 from replication.core.checks import (
     MAX_ROTATION_ATOL,
     ROTATION_ATOL,
@@ -16,6 +18,9 @@ from replication.core.checks import (
     check_rotation_flat,
     check_rotation_matrices,
 )
+from replication.rig.live import LiveRig
+from replication.rig.online import OnlineCalibrator
+from replication.rig.streams import OrientationStream
 
 
 def _stretched(eps):
@@ -173,3 +178,35 @@ def test_the_flat_check_validates_its_tolerance_like_the_array_check(atol):
     with pytest.raises(ValueError, match="atol"):
         check_rotation_flat("R", [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0], atol=atol)
     check_rotation_flat("R", [1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0], atol=MAX_ROTATION_ATOL)
+
+
+def _rig_streams():
+    t = np.arange(0.0, 20.0, 0.05)
+    R = so3.matrix_from_rotation_vector(np.stack([np.sin(t), np.cos(0.7 * t), 0.3 * t], axis=-1))
+    return OrientationStream(t, R, "c"), OrientationStream(t, R @ so3.matrix_from_rotation_vector(np.array([0.1, 0.2,
+                                                                                                            0.3])), "s")
+
+
+def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
+    """Parameters given as NumPy scalars (read from an array, a config parsed by NumPy): the refusal
+    shows the number (``-1.0``), never ``np.float64(-1.0)``."""
+    from replication.core.checks import check_number, check_range
+    from replication.rig.calibration import calibrate
+    from replication.rig.poses import calibrate_poses
+    from replication.study.vins_rule import VinsExRotation
+
+    cam, sen = _rig_streams()
+    cases = [
+        (lambda: check_number("x", np.float64(-1), minimum=0), "x must be > 0, got -1.0"),
+        (lambda: check_number("x", np.float64(1.5), integer=True), "got 1.5"),
+        (lambda: check_range("x", np.float64(2.0), low=0.0, high=1.0), "got 2.0"),
+        (lambda: calibrate(cam, sen, interval=np.float64(-1)), "interval must be > 0, got -1.0"),
+        (lambda: calibrate(cam, sen, n_bootstrap=np.int64(-1)), "n_bootstrap must be >= 0, got -1"),
+        (lambda: calibrate_poses(cam.R[:8], sen.R[:8], pairs=np.str_("x")), "got 'x'"),
+        (lambda: LiveRig(OnlineCalibrator(), max_offset=0.3, offset_window=np.float64(1.5)), "got 1.5"),
+        (lambda: VinsExRotation(huber_deg=np.float64(0.0)), "got 0.0"),
+    ]
+    for build, phrase in cases:
+        with pytest.raises(ValueError) as err:
+            build()
+        assert phrase in str(err.value) and not NUMPY_REPR.search(str(err.value)), str(err.value)

@@ -296,3 +296,12 @@ def test_rotation_vector_from_matrix_half_turns_with_signed_zero_entries_give_no
     R = np.array([[1.0, -0.0, -0.0], [-0.0, -1.0, -0.0], [-0.0, -0.0, -1.0]])
     w = so3.rotation_vector_from_matrix(R)
     assert np.array_equal(w, [np.pi, 0.0, 0.0]) and not np.signbit(w).any()
+
+
+def test_cumulative_product_matches_a_loop(rng):
+    R = so3.random_rotations(rng, 37)
+    expected, P = [], np.eye(3)
+    for r in R:
+        P = P @ r
+        expected.append(P)
+    np.testing.assert_allclose(so3.cumulative_product(R), expected, atol=1e-13)

@@ -8,14 +8,13 @@ noise on both streams. The truth is the shift: without it the rig's correlation 
 """
 import dataclasses
 import math
-import tracemalloc
-import warnings
 
 import numpy as np
 import pytest
 
+from conftest import turning_streams
 from replication.core import so3
-from replication.rig import association
+from replication.rig import association, offset_search
 from replication.rig.association import (
     OffsetEstimate,
     estimate_time_offset,
@@ -96,7 +95,7 @@ def test_the_refined_offset_is_the_analysis_offset_and_on_the_curve():
 def test_the_offset_does_not_depend_on_the_block_size(monkeypatch):
     camera, sensor = _rig(-1.71e-3, camera_noise_deg=0.05, gyro_noise=0.01)
     default = offset_analysis(camera, sensor, n_bootstrap=50)
-    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 3000)  # five offsets, eight replicates per block
+    monkeypatch.setattr(offset_search, "OFFSET_BLOCK_SAMPLES", 3000)  # five offsets, eight replicates per block
     blocked = offset_analysis(camera, sensor, n_bootstrap=50)
     assert (blocked.offset_s, blocked.correlation) == (default.offset_s, default.correlation)
     np.testing.assert_allclose(blocked.ci95_s, default.ci95_s, rtol=0, atol=1e-12)  # BLAS rounds by shape
@@ -291,65 +290,10 @@ def test_the_offset_search_names_stamps_in_different_units():
         estimate_time_offset(OrientationStream(t, Q, "c"), OrientationStream(t + 500.0, Q, "s"))  # no unit mistake
 
 # --------------------------------------------------------------------------------------------------
-# The clock-offset search's pieces and the pairing (:mod:`replication.rig.association`) at their
-# boundaries: the parabola's vertex, which maxima count, the overlap's ten samples, the offset in
-# words, which camera samples pair at an interval and offset, and ``stream_pairs``. Mutation testing
-# (scripts/mutation) found these unguarded by the fast tests.
-
-
-def test_vertex_of_the_parabola_through_the_maximum_and_its_neighbours():
-    x = np.array([0.0, 1.0, 2.0, 4.0, 5.0])
-    y = -(x - 2.3) ** 2  # a parabola: its vertex exactly, though the points are unequally spaced
-    assert association._vertex(x, y) == pytest.approx(2.3, abs=1e-12)
-    ys = np.stack([y, -(x - 0.8) ** 2, -(x - 4.4) ** 2])
-    assert association._vertex(x, ys) == pytest.approx([2.3, 0.8, 4.4], abs=1e-12)
-    # a maximum at either end is not refined; nor a flat (non-concave) top; no finite value: NaN
-    assert association._vertex(x, x) == 5.0 and association._vertex(x, -x) == 0.0
-    lone = np.array([np.nan, 1.0, np.nan, 0.0, 0.0])  # no finite neighbours: no parabola
-    assert association._vertex(x, lone) == 1.0
-    assert math.isnan(association._vertex(x, np.full(5, np.nan)))
-    with_nan = np.array([np.nan, 1.0, 3.0, 2.0, np.nan])
-    assert 1.0 < association._vertex(x, with_nan) < 4.0
-    # the vertex is clipped to the three points' span
-    skew = np.array([0.0, 0.0, 1.0, 0.999, 0.0])
-    v = association._vertex(x, skew)
-    assert 1.0 <= v <= 4.0 and v == pytest.approx(
-        0.5 * (1 + 2) - (1.0 / 1.0) / (2 * ((0.999 - 1.0) / 2.0 - 1.0) / 3.0))
-
-
-def test_local_maxima_are_interior_strict_on_the_left():
-    c = np.array([0.0, 1.0, 0.5, 0.5, 0.7, 0.7, 0.2, 0.9])
-    assert association._local_maxima(c).tolist() == [1, 4]  # 5 ties 4 from the left: not a maximum; 7 is an end
-    assert association._local_maxima(np.array([3.0, 2.0, 1.0])).tolist() == []
-
-
-def _streams(n_cam=40, dt=0.05, sensor_span=(-1.0, 3.0), rate=(0.4, 0.9, -0.3)):
-    w = np.array(rate)
-    tc = np.arange(n_cam) * dt
-    ts = np.arange(sensor_span[0], sensor_span[1], 0.01)
-    cam = OrientationStream(tc, so3.matrix_from_rotation_vector(tc[:, None] * w), "cam")
-    sen = OrientationStream(ts, so3.matrix_from_rotation_vector(ts[:, None] * w), "sen")
-    return cam, sen
-
-
-def test_the_overlap_needs_ten_camera_samples_inside_the_shifted_sensor_stream():
-    cam, sen = _streams(n_cam=40)
-    t, speed = association._overlap(cam, sen, 0.2)
-    assert np.array_equal(t, cam.t) and speed.shape == (39,)
-    assert np.allclose(speed, np.linalg.norm([0.4, 0.9, -0.3]))
-    # the sensor covers camera times 0 .. 0.45 + 0.2 exactly: ten samples (0 .. 0.45), inclusive at
-    # both ends
-    sen10 = OrientationStream(np.linspace(-0.2, 0.65, 86), so3.matrix_from_rotation_vector(np.linspace(-0.2, 0.65,
-                                                                                                       86)[:, None]
-                                                                         * np.array([0.4, 0.9, -0.3])))
-    t, _ = association._overlap(cam, sen10, 0.2)
-    assert len(t) == 10 and t[0] == 0.0 and t[-1] == pytest.approx(0.45)
-    sen9 = OrientationStream(np.linspace(-0.2, 0.6, 81), so3.matrix_from_rotation_vector(np.linspace(-0.2, 0.6,
-                                                                                                     81)[:, None]
-                                                                        * np.array([0.4, 0.9, -0.3])))
-    with pytest.raises(ValueError, match=r"^the streams overlap in fewer than 10 camera samples \(overlap "
-                                         r"0\.000\.\.0\.400 s\)$"):
-        association._overlap(cam, sen9, 0.2)
+# The association's doors (:mod:`replication.rig.association`) at their boundaries: the offset in
+# words, which camera samples pair at an interval and offset, and ``stream_pairs`` (the search's
+# pieces: tests/rig/test_offset_search.py). Mutation testing (scripts/mutation) found these
+# unguarded by the fast tests.
 
 
 def test_offset_in_words_association():
@@ -371,7 +315,7 @@ def test_offset_in_words_association():
 
 
 def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
-    cam, sen = _streams(n_cam=40, dt=0.05)
+    cam, sen = turning_streams(n_cam=40, dt=0.05)
     A, B, t = motion_pairs(cam, sen, 0.25)
     assert np.allclose(t, np.arange(35) * 0.05)  # 0.25 s = 5 samples later, for every sample with one
     w = np.array([0.4, 0.9, -0.3])
@@ -507,52 +451,6 @@ def test_offset_analysis_defaults_and_its_returned_fields():
     assert np.array_equal(found.curve[0], x) and np.array_equal(found.curve[1], y)
 
 
-# ------------------------------------------------------------------ the bootstrap's replicates
-
-def _spike(n=10, seed=1):
-    """Camera speeds with a spike at sample 0 (and an exact 0 at sample 1), and sensor rows at three
-    offsets: the first matches the spike only, the last matches the rest only, the middle
-    neither."""
-    rng = np.random.default_rng(seed)
-    p = np.concatenate([[0.0, 0.0], rng.standard_normal(n - 2)])
-    e0 = np.eye(n)[0]
-    a = 10.0 * e0 + p
-    rows = np.stack([10.0 * e0 + 0.3, 0.5 * p + rng.standard_normal(n), p])
-    return a, rows, np.array([-0.01, 0.0, 0.01])
-
-
-def test_a_replicate_peaking_at_the_first_or_last_offset_is_minus_or_plus_infinity():
-    a, rows, x = _spike()
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # a replicate without the spike has a constant first row: 0/0, silently
-        out = association._bootstrap_offsets(a, rows, x, 200, 1, np.random.default_rng(0))
-    # with the spike drawn the first offset matches best (-inf), without it the last (+inf); every
-    # sample, the first too, is drawn with probability 1 - 0.9^10 = 65 % per replicate
-    assert np.all(np.isinf(out))
-    assert 110 <= np.sum(out == -np.inf) <= 150 and np.sum(out == np.inf) == 200 - np.sum(out == -np.inf)
-
-
-def test_a_replicate_peaking_inside_is_refined_near_that_offset():
-    rng = np.random.default_rng(2)
-    a = rng.standard_normal(40)
-    z = rng.standard_normal(40)
-    x = np.arange(5) * 0.001
-    for k in (1, 2, 3):
-        rows = np.stack([a + 0.2 * abs(j - k) * z for j in range(5)])
-        out = association._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
-        assert np.all(np.abs(out - x[k]) < 0.001), (k, out)
-
-
-def test_the_replicates_do_not_depend_on_the_speeds_scale():
-    rng = np.random.default_rng(3)
-    a = rng.standard_normal(40)
-    x = np.arange(5) * 0.001
-    rows = np.stack([a + 0.3 * abs(j - 2.4) * rng.standard_normal(40) for j in range(5)])
-    out = association._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
-    small = association._bootstrap_offsets(1e-3 * a, 1e-3 * rows, x, 30, 4, np.random.default_rng(0))
-    assert np.allclose(small, out, rtol=0, atol=1e-12)
-
-
 # ----------------------------------------------------------------- motion_pairs: which samples pair
 
 def _dyadic_streams(tc, w=(0.4, 0.9, -0.3), sensor_t=None):
@@ -616,85 +514,3 @@ def test_orientations_off_orthogonal_by_a_few_millionths_still_pair():
     sen = OrientationStream(tc, R.copy(), "sen")
     A, B, t = motion_pairs(cam, sen, 0.25)
     assert len(t) == 16 and np.allclose(A, B)
-
-
-# --------------------------------------------------------------------------------------------------
-# The offset search in blocks: bounded memory, bit-identical to the search over all offsets at once
-# (figures behind the block size: benchmarks/bench_bounded.py).
-
-
-def _offset_streams(seconds=30.0, offset=0.0123):
-    rng = np.random.default_rng(8)
-    R0 = so3.random_rotations(rng, ())
-
-    def attitude(t):
-        return so3.matrix_from_rotation_vector(np.stack([np.sin(0.7 * t) + 0.2 * np.sin(3.1 * t),
-                                                         np.sin(0.45 * t + 1.0),
-                                     np.cos(0.3 * t) + 0.1 * np.sin(4.1 * t)], axis=-1))
-
-    tc, tg = np.arange(0.0, seconds, 0.05), np.arange(-1.0, seconds + 1.0, 0.005)
-    Q = attitude(np.concatenate([tg[:1] - 0.005, tg, tg[-1:] + 0.005]) - offset) @ R0
-    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-2], -1, -2) @ Q[2:]) / 0.01
-    return OrientationStream(tc, attitude(tc), "camera"), integrate_gyro(GyroStream(tg, omega, "gyro"))
-
-
-def _correlations_before(cam, sensor, t, offsets):
-    """The correlation of before (all offsets in one array)."""
-    Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
-    sen = association._speed(Qs, t)
-    a = cam - cam.mean()
-    b = sen - sen.mean(axis=1, keepdims=True)
-    return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
-
-
-@pytest.fixture(scope="module")
-def offset_problem():
-    camera, sensor = _offset_streams()
-    keep = (camera.t >= sensor.t[0] + 1.0) & (camera.t <= sensor.t[-1] - 1.0)
-    t = camera.t[keep]
-    return camera, sensor, t, association._speed(camera.R[keep], t)
-
-
-def test_offset_blocks_are_bit_identical(offset_problem):
-    _, sensor, t, cam = offset_problem
-    offsets = np.arange(-0.3, 0.3 + 1e-12, 0.01)  # 61 offsets
-    one = association._correlations(cam, sensor, t, offsets, block_samples=len(offsets) * len(t))
-    np.testing.assert_array_equal(one, _correlations_before(cam, sensor, t, offsets))  # one block: as before
-    blocked = [association._correlations(cam, sensor, t, offsets, block_samples=per * len(t)) for per in (1, 4, 7, 60)]
-    for other in blocked[1:]:
-        np.testing.assert_array_equal(other, blocked[0])  # the block size does not touch an offset's arithmetic
-    np.testing.assert_allclose(blocked[0], one, rtol=0, atol=1e-14)  # sum(b * a) vs BLAS's b @ a: a few ulp
-
-
-def test_offset_search_in_small_blocks_finds_the_same_offset(offset_problem, monkeypatch):
-    camera, sensor, _, _ = offset_problem
-    default = association.estimate_time_offset(camera, sensor)
-    assert abs(default[0] - 0.0123) < 0.5e-3
-    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 3000)  # about 5 offsets per block
-    blocked = association.estimate_time_offset(camera, sensor)
-    assert blocked[0] == default[0] and abs(blocked[1] - default[1]) < 1e-14
-
-
-def test_offset_search_memory_does_not_grow_with_max_offset(offset_problem, monkeypatch):
-    camera, sensor, _, _ = offset_problem
-    monkeypatch.setattr(association, "OFFSET_BLOCK_SAMPLES", 2 ** 14)
-    peaks = []
-    for max_offset in (0.3, 3.0):  # 61 and 601 candidate offsets
-        tracemalloc.start()
-        try:
-            association.estimate_time_offset(camera, sensor, max_offset=max_offset)
-            peaks.append(tracemalloc.get_traced_memory()[1])
-        finally:
-            tracemalloc.stop()
-    # in one array, 601 offsets x ~480 camera times x ~150 bytes would take ~40 MB
-    assert peaks[1] < 1.3 * peaks[0] + 0.5e6 and peaks[1] < 10e6, peaks
-
-
-@pytest.mark.parametrize("name, value", [("max_offset", 0), ("max_offset", -0.1), ("max_offset", np.nan),
-                                         ("max_offset", np.inf), ("max_offset", "0.2"), ("max_offset", True),
-                                         ("resolution", 0.0), ("resolution", -1e-3), ("resolution", np.inf),
-                                         ("resolution", np.nan), ("resolution", None)])
-def test_offset_search_refuses_bad_arguments(offset_problem, name, value):
-    camera, sensor, _, _ = offset_problem
-    with pytest.raises(ValueError, match=name):
-        association.estimate_time_offset(camera, sensor, **{name: value})

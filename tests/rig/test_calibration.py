@@ -1,11 +1,12 @@
-"""calibrate judges its own answer: bad input across the API and the command line ends in a clear
-error, a correct answer, or a warning / fail verdict naming the cause. None is silent.
+"""calibrate judges its own answer (``replication/rig/calibration.py``, end to end through
+``calibrate`` and ``calibrate_poses``): bad input ends in a clear error, a correct answer, or a
+warning / fail verdict naming the cause. None is silent. The command line's own tests:
+tests/cli/test_calibrate.py.
 
 Most cases use a synthetic rig whose R0 is known: a camera trajectory at 20 Hz and, rigidly
 attached, a gyro at 200 Hz (or an orientation sensor at 100 Hz), 60 s of smooth three-axis motion.
-The real recordings (TUM-VI, EuRoC, Tabb) check the command line end to end.
+The real recordings (TUM-VI) check ``calibrate`` end to end.
 """
-import dataclasses
 import json
 import math
 import re
@@ -15,18 +16,18 @@ import jsonschema
 import numpy as np
 import pytest
 
+import replication.rig.calibration as cal
+from conftest import T0, needs_real
 from replication.cli import main
 from replication.core import so3
+from replication.rig import realdata as rd
 from replication.rig.association import offset_in_words
-from replication.rig.calibration import _same_stream, calibrate
+from replication.rig.calibration import OverlapError, _same_stream, calibrate
 from replication.rig.datafile import DataFileError
-from replication.rig.diagnose import HYPOTHESES, TIE_SHARE, _one_finding
 from replication.rig.poses import calibrate_poses
-from replication.rig.quality import EXIT_FAIL, THRESHOLDS, Evidence, judge
-from replication.rig.realdata import data_root, real_data_available
+from replication.rig.quality import THRESHOLDS, Evidence, judge
 from replication.rig.report import RADIUS_COVERS
-from replication.rig.solve_and_judge import reference_reading
-from replication.rig.streams import GyroStream, OrientationStream
+from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.study import lab
 from replication.testing import RIG_R0, rig_streams, write_euroc_imu, write_tum_trajectory
 
@@ -265,18 +266,6 @@ def test_streams_of_the_wrong_type_are_refused(rig, camera, sensor):
 
 # ------------------------------------------------------------------------------- the verdict itself
 
-def test_judge_levels_and_thresholds():
-    good = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1,
-                    axis_spread_deg=10.0, offset_s=0.0, offset_correlation=0.99, max_offset_s=0.2,
-                    offset_resolution_s=5e-4, blocks=100, overlap_s=100.0, interval_s=1.0)
-    assert judge(good).level == "ok" and judge(good).reasons == ()
-    import dataclasses
-
-    warn = judge(dataclasses.replace(good, offset_correlation=0.8))
-    assert warn.level == "warning" and warn.reasons[0].threshold == 0.9
-    fail = judge(dataclasses.replace(good, bootstrap_deg=7.0, warnings=("AccuracyWarning",)))
-    assert fail.level == "fail" and {r.check for r in fail.reasons} == {"bootstrap_deg", "solver_warning"}
-
 
 def test_report_is_strict_json_and_valid_against_the_schema(rig):
     camera, gyro, _ = rig
@@ -297,77 +286,6 @@ def test_diagnostic_figure_has_every_panel(rig, tmp_path):
     for key in ("(a) angular speed", "(b) clock offset", "(c) per-pair residual", "(e) bootstrap", "(f) verdict"):
         assert any(t.startswith(key) for t in titles), titles
     assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
-
-
-# --------------------------------------------------------------------------------- the command line
-
-
-@pytest.fixture(scope="module")
-def rig_files(rig, tmp_path_factory):
-    d = tmp_path_factory.mktemp("cli")
-    camera, gyro, _ = rig
-    shifted = OrientationStream(camera.t + 1e3, camera.R, "c")  # EuRoC-like absolute times
-    write_tum_trajectory(d / "cam.txt", shifted)
-    write_euroc_imu(d / "imu.csv", GyroStream(gyro.t + 1e3, gyro.omega, "g"))
-    write_euroc_imu(d / "imu_deg.csv", GyroStream(gyro.t + 1e3, np.degrees(gyro.omega) / 10, "g"))  # slow deg/s
-    return d
-
-
-def _cli(*args):
-    return main(["calibrate", *map(str, args), "--bootstrap", "20", "--quiet"])
-
-
-def test_cli_ok_writes_a_valid_report_and_figure(rig_files, tmp_path):
-    out, fig = tmp_path / "new" / "deeper" / "r.json", tmp_path / "new" / "r.png"
-    assert _cli("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu.csv", "--sensor-kind", "gyro",
-                "--out", out, "--plot", fig, "--stride", 2, "--seed", 3) == 0
-    report = json.loads(out.read_text())
-    jsonschema.validate(report, SCHEMA)
-    assert report["files"]["camera"]["sha256"] and report["parameters"]["stride"] == 2
-    assert report["parameters"]["seed"] == 3 and fig.stat().st_size > 1000
-
-
-def test_cli_fail_exits_3_unless_accepted(rig_files, tmp_path, capsys):
-    args = ("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu_deg.csv", "--sensor-kind", "gyro")
-    assert _cli(*args, "--out", tmp_path / "r.json") == EXIT_FAIL
-    captured = capsys.readouterr()
-    assert "verdict: FAIL" in captured.out and "exit code 3" in captured.err
-    assert json.loads((tmp_path / "r.json").read_text())["verdict"]["level"] == "fail"  # the report is still written
-    assert _cli(*args, "--accept") == 0
-
-
-@pytest.mark.parametrize("extra, message", [
-    (("--interval", "0"), "must be > 0"),
-    (("--interval", "nan"), "not finite"),
-    (("--stride", "0"), "must be >= 1"),
-    (("--stride", "1.5"), "not an integer"),
-    (("--bootstrap", "-1"), "must be >= 0"),
-    (("--max-offset", "-0.1"), "must be > 0"),
-    (("--seed", "x"), "not an integer"),
-])
-def test_cli_bad_numbers_exit_2_naming_the_option(rig_files, extra, message, capsys):
-    with pytest.raises(SystemExit, match="^2$"):  # a usage error
-        main(["calibrate", "--camera", str(rig_files / "cam.txt"), "--sensor", str(rig_files / "imu.csv"), *extra])
-    stderr = capsys.readouterr().err
-    assert extra[0] in stderr and message in stderr
-
-
-@pytest.mark.parametrize("case", ["directory", "under a file", "unknown method", "csv time unit", "empty",
-                                  "trailing slash"])
-def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_files, tmp_path, case, capsys,
-                                                                          monkeypatch):
-    import replication.rig.calibration as cal
-
-    monkeypatch.setattr(cal, "offset_analysis", lambda *a, **k: pytest.fail("work started"))
-    blocker = tmp_path / "file"
-    blocker.write_text("x")
-    extra = {"directory": ("--out", tmp_path), "under a file": ("--out", blocker / "r.json"),
-             "unknown method": ("--method", "nope"), "csv time unit": ("--sensor-time-unit", "ms"),
-             "empty": ("--out", ""), "trailing slash": ("--out", str(tmp_path / "newdir") + "/")}[case]
-    sensor_kind = ("--sensor-kind", "gyro")
-    assert _cli("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu.csv", *sensor_kind, *extra) == 2
-    assert "error:" in capsys.readouterr().err
-    assert not list(tmp_path.glob("*.part")) and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
 # ----------------------------------------------------------------------------- the campaign's cases
@@ -474,65 +392,6 @@ def test_an_offset_kept_in_is_said(rig):
     camera, gyro, _ = rig
     r = calibrate(camera, GyroStream(gyro.t + 0.1, gyro.omega, "gyro"), correct_offset=False, n_bootstrap=0)
     assert _reasons(r)["offset_left_ms"].measured == pytest.approx(100.0, abs=2.0)
-
-
-# ---------------------------------------------------------------------------------- real recordings
-
-needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
-
-
-@needs_real
-def test_cli_robot_pose_sets_calibrate(tmp_path):
-    d = data_root() / "tabb_rwhe_ds1"
-    out = tmp_path / "tabb.json"
-    assert _cli("--poses", "--camera", d / "cali.txt", "--sensor", d / "robot_cali.txt", "--reference",
-                d / "transformations.txt", "--out", out) == 0
-    report = json.loads(out.read_text())
-    jsonschema.validate(report, SCHEMA)
-    assert report["reference_error_deg"] < 1.0 and report["interval_s"] is None
-    assert report["inputs"]["camera"]["kind"] == "static poses"
-
-
-@needs_real
-def test_cli_euroc_with_repeated_lines(tmp_path):
-    d = data_root() / "euroc_mh01_orbslam3"
-    out = tmp_path / "euroc.json"
-    args = ("--camera", d / "orbslam3_mono_cam0_traj_runB.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
-            "--reference", d / "euroc_cam0_sensor.yaml", "--out", out)
-    assert _cli(*args) == 2  # repeated lines are an error unless dropped
-    assert _cli(*args, "--drop-repeated") == 0
-    assert json.loads(out.read_text())["reference_error_deg"] < 0.5
-
-
-@needs_real
-@pytest.mark.filterwarnings("ignore::replication.core.solvers.ConvergenceWarning")
-def test_cli_sqp_on_tumvi_fails_instead_of_answering_170_deg_off(tmp_path, capsys):
-    d = data_root() / "tumvi_room1_orbslam3mono"
-    code = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",
-                "gyro", "--method", "sqp", "--bootstrap", "0", "--no-gyro-bias")  # the rates as recorded: SQP's trap
-    out = capsys.readouterr().out
-    assert code == EXIT_FAIL and "away from the certified optimum of eq. (8)" in out
-    assert "use the default method chordal_optimal" in out and "LocalMinimumWarning" not in out.split("R0 (")[0]
-
-
-@needs_real
-def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_warning(tmp_path, capsys):
-    """Issue 35.3: README's former example. The verdict says why the iteration hit its cap (sigma_2
-    / sigma_1 of K 0.9975 > 0.9863 at axis spread 3.2 deg) and what to do; the class stays in the
-    report's warnings."""
-    d = data_root() / "euroc_mh01_orbslam3"
-    out = tmp_path / "euroc.json"
-    code = _cli("--camera", d / "orbslam3_mono_cam0_traj_runA.txt", "--sensor", d / "gt_body_MH_01_easy_tum.txt",
-                "--method", "two_step_left", "--bootstrap", "0", "--out", out)
-    text = capsys.readouterr().out
-    verdict = text.split("R0 (")[0]
-    assert code == 0 and "IterationCapWarning" not in verdict
-    assert "sigma_2 / sigma_1 of K 0.997" in verdict and "> 0.9863" in verdict and "camera axis spread 3.2" in verdict
-    assert "use the default method chordal_optimal" in verdict
-    report = json.loads(out.read_text())
-    assert any(w.startswith("IterationCapWarning") for w in report["warnings"])
-    (reason,) = [r for r in report["verdict"]["reasons"] if r["check"] == "solver_warning"]
-    assert reason["measured"] > reason["threshold"] == pytest.approx(0.98627, abs=1e-5)
 
 
 # ----------------------------------------------------------------- one door for every solver answer
@@ -925,33 +784,6 @@ def test_the_offset_sign_in_words_in_the_summary(rng, offset, words):
     assert lo <= offset <= hi and hi - lo < 2e-3
 
 
-def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
-    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever
-    is smaller."""
-    R = np.eye(3)
-    a, b = (0, 0.2 + 1e-15, "first", R, 0.9), (3, 0.2, "second", R, 0.9)
-    one = _one_finding([a, b], 1.0, lambda f: f[2], None)[1]
-    two = _one_finding([b, a], 1.0, lambda f: f[2], None)[1]
-    flipped = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 + 1e-15, "second", R, 0.9)], 1.0, lambda f: f[2],
-                           None)[1]
-    assert one == two and "first, or second: the data cannot tell which; a reference can" in one
-    assert flipped.split(";")[0] == one.split(";")[0]
-    outside = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 * TIE_SHARE * 1.01, "second", R, 0.9)], 1.0,
-                           lambda f: f[2], None)[1]
-    assert "second" not in outside
-
-
-def test_a_reference_tells_tied_hypotheses_apart():
-    R_right = so3.matrix_from_rotation_vector(np.radians([10.0, 0.0, 0.0]))
-    fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
-    message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
-    assert message.startswith("likely input mistake: second; the reference tells them apart")
-
-
-def test_hypotheses_are_listed_once_each():
-    assert len(set(HYPOTHESES)) == len(HYPOTHESES)
-
-
 def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
     R0, C, S = _stations(rng)
     r = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0)
@@ -962,13 +794,6 @@ def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
     assert message.index("camera poses") < message.index("robot poses")
     decided = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0, reference=R0)
     assert "robot poses inverted" not in _reasons(decided)["input_mistake"].message.split(";")[0]
-
-
-def test_judge_tolerates_missing_residuals():
-    e = dataclasses.replace(Evidence(n_pairs=12, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None),
-                            radius_kind="curvature")
-    # nothing to judge but the count of pairs: no error, and only that warning
-    assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
 
 
 # ---------------------------------------------------------------------- a change inside a recording
@@ -1274,7 +1099,6 @@ def test_identical_stations_are_repeats_even_with_no_motion_threshold(rng):
 
 
 SCHEMA_TR = json.loads((Path(__file__).resolve().parents[2] / "docs" / "calibration_report.schema.json").read_text())
-EPS = 1e-9
 
 
 def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
@@ -1285,34 +1109,6 @@ def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
 def rig_tr():
     R0, camera, gyro, _ = rig_streams(40.0, rng=np.random.default_rng(35), camera_noise_deg=0.02)
     return R0, camera, gyro
-
-
-@pytest.mark.parametrize("errors, floor, reading", [
-    ((0.169, 0.234), 0.343, "agreement, not accuracy: both errors (0.169, 0.234 deg)"),  # EuRoC MH01, measured
-    ((0.3, 0.3), 0.3, "agreement, not accuracy"),                      # at the floor: within it
-    ((0.3 + EPS, 0.1), 0.3, "closer to reference 2: its error (0.100 deg) is within"),  # one just above
-    ((0.1, 0.3 + EPS), 0.3, "closer to reference 1"),
-    ((0.3 + EPS, 0.3 + EPS), 0.3, "a difference beyond the floor: both errors"),
-])
-def test_the_reading_of_two_references_at_the_floor(errors, floor, reading):
-    text = reference_reading(errors, floor)
-    assert text.startswith(reading)
-    assert f"the references' own disagreement {floor:.3f} deg (the reference floor)" in text
-
-
-@pytest.mark.parametrize("errors, floor, radius, reading", [
-    ((0.0, 10.0), 10.0, 0.1, "closer to reference 1: its error (0.000 deg) is the smaller, by more than R0's"),
-    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # was "agreement, not accuracy"
-    ((0.05, 0.05), 0.0, 0.1, "agreement within R0's radius"),           # the same reference twice: was "beyond"
-    ((0.1, 0.1), 0.0, 0.1, "agreement within R0's radius"),             # at the radius: within it
-    ((0.1 + EPS, 0.1 + EPS), 0.0, 0.1, "a difference beyond the floor"),
-    ((0.169, 0.234), 0.343, 0.09, "agreement, not accuracy"),           # EuRoC: 0.065 apart, within the radius
-    ((0.169, 0.234), 0.343, 0.064, "closer to reference 1"),            # ... and just beyond a smaller radius
-    ((0.2, 0.4), 0.3, 0.5, "agreement within R0's radius"),
-    ((0.2, 0.55), 0.35, 0.5, "not resolved: the errors (0.200, 0.550 deg) differ by no more than"),
-])
-def test_the_reading_weighs_the_difference_of_the_errors_against_r0s_radius(errors, floor, radius, reading):
-    assert reference_reading(errors, floor, radius).startswith(reading)
 
 
 def test_two_references_in_the_result_the_report_and_the_summary(rig_tr):
@@ -1418,3 +1214,80 @@ def test_figure_states_both_references_and_the_reading(rig_tr):
     assert f"angle between R0 and it: {r.reference_errors_deg[1]:.3f} deg" in text
     assert "reading: agreement, not accuracy" in text
     plt.close(fig)
+
+
+# ------------------------------------------------------------------------------ the overlap message
+# (the command line's synthetic rig, 40 s on absolute times: tests/conftest.py)
+
+def test_a_max_offset_beyond_the_overlap_is_named_with_durations(cli_rig):
+    _, camera, gyro, _ = cli_rig
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    cam = OrientationStream(camera.t + T0, camera.R, "camera")
+    imu = GyroStream(gyro.t + T0, gyro.omega, "imu")
+    with pytest.raises(OverlapError, match=r"the streams overlap by 40\.0 s \(camera 40\.0 s, sensor 42\.0 s long\)"
+                       r".*max_offset 30 s is larger than the overlap allows.*\(above [\d.]+ s;") as err:
+        calibrate(cam, imu, max_offset=30.0, n_bootstrap=0)
+    assert "e+09" not in str(err.value) and "1520" not in str(err.value)  # durations, no absolute times
+    bound = float(re.search(r"\(above ([\d.]+) s;", str(err.value)).group(1))
+    cal._check_overlap(cam, imu, bound)  # the bound said is the bound: 10 samples at it, fewer just above
+    with pytest.raises(OverlapError, match="max_offset"):
+        cal._check_overlap(cam, imu, bound + 1.0)
+    assert calibrate(cam, imu, max_offset=2.0, n_bootstrap=0).n_pairs > 0
+
+
+def test_streams_on_different_clocks_keep_the_start_times_that_show_it(cli_rig):
+    _, camera, gyro, _ = cli_rig
+    from replication.rig.streams import GyroStream, OrientationStream
+
+    cam = OrientationStream(camera.t, camera.R, "camera")  # relative times
+    imu = GyroStream(gyro.t + T0, gyro.omega, "imu")  # absolute times
+    with pytest.raises(OverlapError, match=r"the sensor starts 15205\d+\.\d s after the camera ends.*the camera starts "
+                       r"at t = 0\.000 s, the sensor at t = 1520529999\.00\d s: their clocks differ"):
+        calibrate(cam, imu, n_bootstrap=0)
+
+
+def test_the_overlap_error_survives_pickling_and_renaming():
+    import pickle
+
+    err = OverlapError("{option} 2 s is larger than the overlap")
+    assert str(pickle.loads(pickle.dumps(err))) == "max_offset 2 s is larger than the overlap"
+    assert str(err.named("--max-offset")) == "--max-offset 2 s is larger than the overlap"
+    assert isinstance(err, ValueError)
+
+
+def _synthetic_rig(offset, rng):
+    """Camera at 20 Hz and a 200 Hz gyro whose clock reads ``true time + offset``; R0 random."""
+    R0 = so3.random_rotations(rng, ())
+    fine = np.arange(0.0, 60.0, 1e-3)
+    freqs, phases = rng.uniform(0.1, 0.7, (3, 3)), rng.uniform(0, 2 * np.pi, (3, 3))
+    w_cam = sum(np.sin(2 * np.pi * freqs[k] * fine[:, None] + phases[k]) for k in range(3))  # rad/s, body frame
+    Qc = integrate_gyro(GyroStream(fine, w_cam)).R
+    cam_idx = np.arange(0, len(fine), 50)
+    camera = OrientationStream(fine[cam_idx], Qc[cam_idx])
+    imu_idx = np.arange(0, len(fine), 5)
+    gyro = GyroStream(fine[imu_idx] + offset, w_cam[imu_idx] @ R0)  # omega_sensor = R0^T omega_camera
+    return R0, camera, gyro
+
+
+def test_calibrate_recovers_R0_and_the_clock_offset(rng):
+    R0, camera, gyro = _synthetic_rig(0.030, rng)
+    res = calibrate(camera, gyro, method="chordal_optimal", reference=R0, n_bootstrap=20)
+    assert abs(res.time_offset_s - 0.030) <= 1e-3
+    assert res.reference_error_deg < 0.02
+    uncorrected = calibrate(camera, gyro, correct_offset=False, reference=R0, n_bootstrap=0)
+    assert uncorrected.reference_error_deg > 5 * res.reference_error_deg
+    report = res.to_dict()
+    json.dumps(report)
+    assert report["euler_zyx_deg"].keys() == {"yaw", "pitch", "roll"}
+    np.testing.assert_allclose(so3.matrix_from_quaternion(res.quaternion_wxyz), res.R, atol=1e-12)
+
+
+@needs_real
+@pytest.mark.parametrize("method", ["two_step_left", "two_step_right", "chordal_optimal"])
+def test_tumvi_raw_gyro_within_0_2_deg_of_kalibr(method):
+    d = rd.data_root() / "tumvi_room1_orbslam3mono"
+    res = calibrate(rd.load_tum_trajectory(d / "orbslam3_mono_cam0_traj.txt"), rd.load_euroc_imu(d / "imu0_data.csv"),
+                    method=method, reference=rd.load_reference(d / "camchain.yaml"), n_bootstrap=20)
+    assert res.reference_error_deg < 0.2
+    assert abs(res.time_offset_s) < 0.005

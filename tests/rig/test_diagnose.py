@@ -14,10 +14,12 @@ from replication.rig import diagnose
 from replication.rig.diagnose import (
     FIT_SHARE,
     FIT_TO_MOTION,
+    HYPOTHESES,
     IMU_AS_CAMERA_DEG,
     POSE_FIT_SHARE,
     TIE_ATOL,
     TIE_SHARE,
+    _one_finding,
     reference_mistakes,
 )
 from replication.rig.quality import THRESHOLDS
@@ -312,3 +314,30 @@ def test_pose_direction_tries_each_side_inverted_and_fits_below_the_share():
     assert r.message.startswith("likely input mistake: camera poses inverted (target_from_camera where "
                                 "camera_from_target belongs), or robot poses inverted")
     assert r.measured == 1.0
+
+
+def test_tied_hypotheses_are_one_finding_in_a_fixed_order():
+    """Residuals that differ in the last bits name the same hypotheses in the same order, whichever
+    is smaller."""
+    R = np.eye(3)
+    a, b = (0, 0.2 + 1e-15, "first", R, 0.9), (3, 0.2, "second", R, 0.9)
+    one = _one_finding([a, b], 1.0, lambda f: f[2], None)[1]
+    two = _one_finding([b, a], 1.0, lambda f: f[2], None)[1]
+    flipped = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 + 1e-15, "second", R, 0.9)], 1.0, lambda f: f[2],
+                           None)[1]
+    assert one == two and "first, or second: the data cannot tell which; a reference can" in one
+    assert flipped.split(";")[0] == one.split(";")[0]
+    outside = _one_finding([(0, 0.2, "first", R, 0.9), (3, 0.2 * TIE_SHARE * 1.01, "second", R, 0.9)], 1.0,
+                           lambda f: f[2], None)[1]
+    assert "second" not in outside
+
+
+def test_a_reference_tells_tied_hypotheses_apart():
+    R_right = so3.matrix_from_rotation_vector(np.radians([10.0, 0.0, 0.0]))
+    fits = [(0, 0.2, "first", np.eye(3), 0.9), (3, 0.2, "second", R_right, 0.9)]
+    message = _one_finding(fits, 1.0, lambda f: f[2], R_right)[1]
+    assert message.startswith("likely input mistake: second; the reference tells them apart")
+
+
+def test_hypotheses_are_listed_once_each():
+    assert len(set(HYPOTHESES)) == len(HYPOTHESES)

@@ -564,3 +564,23 @@ def test_a_p_value_is_printed_with_the_tests_level(p, level, significant, words)
     from replication.rig.quality import p_with_level
 
     assert p_with_level(p, level, significant) == words
+
+
+def test_judge_levels_and_thresholds():
+    good = Evidence(n_pairs=100, residual_median_deg=0.2, motion_median_deg=30.0, bootstrap_deg=0.1,
+                    axis_spread_deg=10.0, offset_s=0.0, offset_correlation=0.99, max_offset_s=0.2,
+                    offset_resolution_s=5e-4, blocks=100, overlap_s=100.0, interval_s=1.0)
+    assert judge(good).level == "ok" and judge(good).reasons == ()
+    import dataclasses
+
+    warn = judge(dataclasses.replace(good, offset_correlation=0.8))
+    assert warn.level == "warning" and warn.reasons[0].threshold == 0.9
+    fail = judge(dataclasses.replace(good, bootstrap_deg=7.0, warnings=("AccuracyWarning",)))
+    assert fail.level == "fail" and {r.check for r in fail.reasons} == {"bootstrap_deg", "solver_warning"}
+
+
+def test_judge_tolerates_missing_residuals():
+    e = dataclasses.replace(Evidence(n_pairs=12, residual_median_deg=None, motion_median_deg=None, bootstrap_deg=None),
+                            radius_kind="curvature")
+    # nothing to judge but the count of pairs: no error, and only that warning
+    assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]

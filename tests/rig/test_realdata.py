@@ -1,39 +1,14 @@
-"""Loaders, calibrate() and the calibrate CLI; the shared real recordings are used where present."""
-import json
-import re
-import subprocess
-import sys
-
+"""The loaders of real recordings and references (``replication/rig/realdata.py``): formats,
+malformed lines named, dataset files as shipped (EuRoC's 17 columns, repeated time stamps by
+policy); the shared real recordings are used where present (``needs_real``, which the command's
+end-to-end tests in tests/cli/test_calibrate.py import with the files below)."""
 import numpy as np
 import pytest
 
-from replication import calibrate
-from replication.cli import main
+from conftest import GT_HEADER, NUMPY_REPR, TUM_LINES, _write, needs_real, write
 from replication.core import so3
 from replication.rig import realdata as rd
 from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError, read_table
-from replication.rig.live import LiveRig
-from replication.rig.online import OnlineCalibrator
-from replication.rig.poses import calibrate_poses
-from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
-from replication.testing import rig_motion
-
-HAVE_REAL = rd.real_data_available()
-needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
-                                "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST (or provide ../shared/data/real)")
-
-TUM_LINES = [
-    "# t tx ty tz qx qy qz qw",
-    "1520530313249735680.0 0 0 0 0 0 0 1",
-    "1520530313299737600.0 0 0 0 0.0087265 0 0 0.9999619",
-    "1520530313349738752.0 0 0 0 0.0174524 0 0 0.9998477",
-]
-
-
-def write(tmp_path, name, lines):
-    path = tmp_path / name
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 def test_tum_trajectory_reads_nanoseconds_and_world_from_body(tmp_path):
@@ -79,68 +54,6 @@ def test_missing_files_and_entries(tmp_path):
         rd.data_root(tmp_path / "nowhere")
 
 
-def test_cumulative_product_matches_a_loop(rng):
-    R = so3.random_rotations(rng, 37)
-    expected, P = [], np.eye(3)
-    for r in R:
-        P = P @ r
-        expected.append(P)
-    np.testing.assert_allclose(so3.cumulative_product(R), expected, atol=1e-13)
-
-
-def test_integrate_gyro_constant_rate():
-    t = np.linspace(0.0, 1.0, 201)
-    g = GyroStream(t, np.tile([0.0, 0.0, 0.5], (201, 1)))
-    Q = integrate_gyro(g).R
-    np.testing.assert_allclose(so3.rotation_angle_deg(Q[-1]), np.degrees(0.5), atol=1e-9)
-    np.testing.assert_allclose(Q[-1][:2, :2], [[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]], atol=1e-12)
-
-
-def _synthetic_rig(offset, rng):
-    """Camera at 20 Hz and a 200 Hz gyro whose clock reads ``true time + offset``; R0 random."""
-    R0 = so3.random_rotations(rng, ())
-    fine = np.arange(0.0, 60.0, 1e-3)
-    freqs, phases = rng.uniform(0.1, 0.7, (3, 3)), rng.uniform(0, 2 * np.pi, (3, 3))
-    w_cam = sum(np.sin(2 * np.pi * freqs[k] * fine[:, None] + phases[k]) for k in range(3))  # rad/s, body frame
-    Qc = integrate_gyro(GyroStream(fine, w_cam)).R
-    cam_idx = np.arange(0, len(fine), 50)
-    camera = OrientationStream(fine[cam_idx], Qc[cam_idx])
-    imu_idx = np.arange(0, len(fine), 5)
-    gyro = GyroStream(fine[imu_idx] + offset, w_cam[imu_idx] @ R0)  # omega_sensor = R0^T omega_camera
-    return R0, camera, gyro
-
-
-def test_calibrate_recovers_R0_and_the_clock_offset(rng):
-    R0, camera, gyro = _synthetic_rig(0.030, rng)
-    res = calibrate(camera, gyro, method="chordal_optimal", reference=R0, n_bootstrap=20)
-    assert abs(res.time_offset_s - 0.030) <= 1e-3
-    assert res.reference_error_deg < 0.02
-    uncorrected = calibrate(camera, gyro, correct_offset=False, reference=R0, n_bootstrap=0)
-    assert uncorrected.reference_error_deg > 5 * res.reference_error_deg
-    report = res.to_dict()
-    json.dumps(report)
-    assert report["euler_zyx_deg"].keys() == {"yaw", "pitch", "roll"}
-    np.testing.assert_allclose(so3.matrix_from_quaternion(res.quaternion_wxyz), res.R, atol=1e-12)
-
-
-def test_calibrate_poses_recovers_R0(rng):
-    R0 = so3.random_rotations(rng, ())
-    S = so3.random_rotations(rng, 15)  # sensor_from_world
-    C = R0 @ S  # camera_from_world = camera_from_sensor sensor_from_world
-    res = calibrate_poses(C, S, reference=R0, n_bootstrap=0)
-    assert res.reference_error_deg < 1e-10 and res.n_pairs == 105  # noise-free: measured 5e-14
-
-
-@needs_real
-@pytest.mark.parametrize("method", ["two_step_left", "two_step_right", "chordal_optimal"])
-def test_tumvi_raw_gyro_within_0_2_deg_of_kalibr(method):
-    d = rd.data_root() / "tumvi_room1_orbslam3mono"
-    res = calibrate(rd.load_tum_trajectory(d / "orbslam3_mono_cam0_traj.txt"), rd.load_euroc_imu(d / "imu0_data.csv"),
-                    method=method, reference=rd.load_reference(d / "camchain.yaml"), n_bootstrap=20)
-    assert res.reference_error_deg < 0.2
-    assert abs(res.time_offset_s) < 0.005
-
-
 @needs_real
 def test_reference_loaders_match_the_published_numbers():
     root = rd.data_root()
@@ -151,50 +64,13 @@ def test_reference_loaders_match_the_published_numbers():
     assert len(rd.load_tabb_camera_poses(root / "tabb_rwhe_ds1" / "cali.txt")) == 88
 
 
-def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "replication", "calibrate", *map(str, args)],
-                          capture_output=True, text=True, timeout=120)
-
-
-@needs_real
-def test_cli_round_trip_on_the_shared_files(tmp_path):
-    d = rd.data_root() / "tumvi_room1_orbslam3mono"
-    out = _cli("--camera", d / "orbslam3_mono_cam0_traj.txt", "--sensor", d / "imu0_data.csv", "--sensor-kind",
-               "gyro", "--method", "two_step_left", "--bootstrap", "20", "--reference", d / "camchain.yaml",
-               "--out", tmp_path / "report.json")
-    assert out.returncode == 0, out.stderr
-    assert "angle to the reference" in out.stdout
-    report = json.loads((tmp_path / "report.json").read_text())
-    assert report["method"] == "two_step_left" and report["reference_error_deg"] < 0.2
-    R = np.array(report["R0_camera_from_sensor"])
-    assert so3.angle_between_deg(R, rd.load_reference(d / "camchain.yaml")) < 0.2
-
-
-def test_cli_rejects_a_malformed_file_and_writes_nothing(tmp_path):
-    cam = write(tmp_path, "cam.txt", TUM_LINES + ["1520530313399738752.0 0 0 0 0 0 0"])
-    out = _cli("--camera", cam, "--sensor", cam, "--out", tmp_path / "report.json")
-    assert out.returncode == 2
-    assert "cam.txt, line 5: expected 8 columns" in out.stderr
-    assert not (tmp_path / "report.json").exists()
-
-
-def test_cli_help_explains_the_formats():
-    out = _cli("--help")
-    assert out.returncode == 0 and "t tx ty tz qx qy qz qw" in out.stdout and "T_cam_imu" in out.stdout
-
 # --------------------------------------------------------------------------------------------------
 # Dataset files as shipped: EuRoC's 17-column ground truth, time stamps repeated with another pose
 # (refused naming the option that reads them, or kept first / last / averaged and counted), messages
 # with plain numbers (never numpy's ``np.float64(...)``).
 
 
-#: EuRoC's state_groundtruth_estimate0/data.csv header, as shipped.
-GT_HEADER = ("#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
-             "v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], b_w_RS_S_y [rad s^-1], "
-             "b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], b_a_RS_S_z [m s^-2]")
 MOCAP_HEADER = "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []"
-#: numpy's reprs: never in a message
-NUMPY_REPR = re.compile(r"np\.(float|int|bool|str)|array\(")
 
 
 def _rotations(n, step_deg=1.0):
@@ -208,15 +84,6 @@ def _gt_rows(n=6, columns=17, t0=1403636580838555648, step=5_000_000):
         extra = [0.1 * k, -0.2, 0.8, -0.003172, 0.021267, 0.078502, -0.025266, 0.136696, 0.075593][:columns - 8]
         rows.append([t0 + k * step, 4.6 + 0.01 * k, -1.7, 0.7, *q[k], *extra])
     return rows
-
-
-def _line(row):
-    return ",".join(str(int(v)) if i == 0 else f"{v:.9f}" for i, v in enumerate(row))
-
-
-def _write(path, header, rows):
-    path.write_text("\n".join([header] + [r if isinstance(r, str) else _line(r) for r in rows]) + "\n")
-    return path
 
 
 def test_euroc_ground_truth_17_columns_is_read_as_shipped_and_equals_its_first_8(tmp_path):
@@ -333,104 +200,6 @@ def test_going_back_in_time_is_not_a_repeat_and_says_so_with_plain_numbers(tmp_p
     with pytest.raises(DataFileError) as err:
         rd.load_euroc_mocap(_write(tmp_path / "b.csv", GT_HEADER, rows), repeated="mean")
     assert "go back in time" in str(err.value) and not NUMPY_REPR.search(str(err.value))
-
-
-def _cli_files(tmp_path, angle_deg):
-    """A camera TUM trajectory and a 17-column ground truth of the same rig, the latter with one
-    time stamp repeated with a pose ``angle_deg`` away."""
-    t = 1403636580.0 + np.arange(0.0, 40.0, 0.05)
-    R = rig_motion(t)  # the synthetic rig's motion
-    q = so3.quaternion_from_matrix(R)
-    cam = tmp_path / "cam.txt"
-    np.savetxt(cam, np.column_stack([t, np.zeros((len(t), 3)), q[:, 1:], q[:, :1]]), fmt="%.9f")
-    Q = R @ so3.matrix_from_rotation_vector(np.array([0.3, -0.2, 0.5]))  # world_from_sensor
-    rows = [[int(round(tk * 1e9)), 0.0, 0.0, 0.0, *qk, *([0.0] * 9)] for tk, qk in zip(t,
-                                                                                       so3.quaternion_from_matrix(Q))]
-    twin = list(rows[100])
-    twin[4:8] = so3.quaternion_from_matrix(so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, angle_deg])) @ Q[100])
-    gt = _write(tmp_path / "data.csv", GT_HEADER, rows[:101] + [twin] + rows[101:])
-    return cam, gt
-
-
-def test_cli_refuses_repeats_naming_repeated_and_counts_them_when_read(tmp_path, capsys):
-    cam, gt = _cli_files(tmp_path, 3.0)
-    base = ["calibrate", "--camera", str(cam), "--sensor", str(gt), "--bootstrap", "10", "--quiet"]
-    assert main(base) == 2
-    err = capsys.readouterr().err
-    assert "data.csv, line 103" in err and "--repeated keep-first|keep-last|mean" in err
-    out = tmp_path / "r.json"
-    assert main(base + ["--repeated", "keep-first", "--out", str(out)]) == 0
-    assert "--sensor: 1 lines repeat an earlier line's time stamp (1 time stamps, poses up to 3 deg apart)" in (
-        capsys.readouterr().out)
-    cli = json.loads(out.read_text())["cli"]
-    assert cli["repeated"] == "keep-first"
-    assert cli["repeats"]["sensor"]["repeated_timestamps"] == 1
-    assert cli["repeats"]["sensor"]["repeated_max_deg"] == pytest.approx(3.0, abs=1e-4)
-    assert cli["repeats"]["camera"]["repeated_timestamps"] == 0
-
-
-def test_cli_names_a_ground_truth_given_as_gyro(tmp_path, capsys):
-    cam, gt = _cli_files(tmp_path, 0.0)
-    assert main(["calibrate", "--camera", str(cam), "--sensor", str(gt), "--sensor-kind", "gyro", "--quiet"]) == 2
-    assert "looks like an orientation stream" in capsys.readouterr().err
-
-
-def test_refusals_of_time_stamps_carry_no_numpy_reprs():
-    """Streams and the live front end refuse time going back; the numbers in their messages are
-    plain."""
-    t = np.array([0.0, 0.5, 0.5, 1.0])
-    messages = []
-    for build in (lambda: OrientationStream(t, np.tile(np.eye(3), (4, 1, 1)), "s"),
-                  lambda: GyroStream(t, np.zeros((4, 3)), "g")):
-        with pytest.raises(ValueError) as err:
-            build()
-        messages.append(str(err.value))
-    live = LiveRig(OnlineCalibrator(), interval=1.0)
-    live.add_camera(np.float64(1.0), np.eye(3))
-    with pytest.raises(ValueError) as err:
-        live.add_camera(np.float64(0.5), np.eye(3))
-    messages.append(str(err.value))
-    live.add_orientation(np.float64(1.0), np.eye(3))
-    with pytest.raises(ValueError) as err:
-        live.add_orientation(np.float64(1.0), np.eye(3))
-    messages.append(str(err.value))
-    with pytest.raises(ValueError) as err:
-        live.add_gyro(2.0, np.array([np.nan, 0.0]))
-    messages.append(str(err.value))
-    assert all(not NUMPY_REPR.search(m) for m in messages), messages
-    assert "0.5 after 1.0" in messages[2] and "1.0 after 1.0" in messages[3]
-
-
-def _rig_streams():
-    t = np.arange(0.0, 20.0, 0.05)
-    R = so3.matrix_from_rotation_vector(np.stack([np.sin(t), np.cos(0.7 * t), 0.3 * t], axis=-1))
-    return OrientationStream(t, R, "c"), OrientationStream(t, R @ so3.matrix_from_rotation_vector(np.array([0.1, 0.2,
-                                                                                                            0.3])), "s")
-
-
-def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
-    """Parameters given as NumPy scalars (read from an array, a config parsed by NumPy): the refusal
-    shows the number (``-1.0``), never ``np.float64(-1.0)``."""
-    from replication.core.checks import check_number, check_range
-    from replication.rig.calibration import calibrate
-    from replication.rig.poses import calibrate_poses
-    from replication.study.vins_rule import VinsExRotation
-
-    cam, sen = _rig_streams()
-    cases = [
-        (lambda: check_number("x", np.float64(-1), minimum=0), "x must be > 0, got -1.0"),
-        (lambda: check_number("x", np.float64(1.5), integer=True), "got 1.5"),
-        (lambda: check_range("x", np.float64(2.0), low=0.0, high=1.0), "got 2.0"),
-        (lambda: calibrate(cam, sen, interval=np.float64(-1)), "interval must be > 0, got -1.0"),
-        (lambda: calibrate(cam, sen, n_bootstrap=np.int64(-1)), "n_bootstrap must be >= 0, got -1"),
-        (lambda: calibrate_poses(cam.R[:8], sen.R[:8], pairs=np.str_("x")), "got 'x'"),
-        (lambda: LiveRig(OnlineCalibrator(), max_offset=0.3, offset_window=np.float64(1.5)), "got 1.5"),
-        (lambda: VinsExRotation(huber_deg=np.float64(0.0)), "got 0.0"),
-    ]
-    for build, phrase in cases:
-        with pytest.raises(ValueError) as err:
-            build()
-        assert phrase in str(err.value) and not NUMPY_REPR.search(str(err.value)), str(err.value)
 
 
 def test_a_sign_flipped_quaternion_under_one_stamp_is_the_same_pose_and_dropped_on_request(tmp_path):

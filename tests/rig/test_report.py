@@ -6,9 +6,12 @@ import json
 import math
 
 import numpy as np
+import pytest
 
+from conftest import MAGIC
 from replication import __version__
 from replication.core.motions import MotionObservability
+from replication.rig.calibration import calibrate
 from replication.rig.quality import Reason, Verdict
 from replication.rig.report import OFFSET_CONVENTION, RADIUS_COVERS, CalibrationResult, json_safe
 
@@ -181,3 +184,17 @@ def test_plot_returns_the_figure_and_writes_it_at_110_dpi_only_when_asked(tmp_pa
     assert _result().plot(tmp_path / "f.png") is fig
     data = (tmp_path / "f.png").read_bytes()
     assert data == png_bytes(fig, dpi=110) and data != png_bytes(fig, dpi=100)
+
+
+def test_the_api_plot_honours_the_extension_or_refuses_before_drawing(cli_rig, tmp_path, monkeypatch):
+    _, camera, gyro, _ = cli_rig
+    result = calibrate(camera, gyro, n_bootstrap=0)
+    for suffix, magic in MAGIC.items():
+        result.plot(tmp_path / f"f{suffix}")
+        assert (tmp_path / f"f{suffix}").read_bytes().startswith(magic)
+    import replication.rig.figure as figures
+
+    monkeypatch.setattr(figures, "calibration_figure", lambda *a: pytest.fail("drawn before the format was checked"))
+    with pytest.raises(ValueError, match=r"f\.jpeg: unknown figure format \.jpeg; supported: \.png, \.pdf, \.svg"):
+        result.plot(tmp_path / "f.jpeg")
+    assert not (tmp_path / "f.jpeg").exists()

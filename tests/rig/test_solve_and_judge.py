@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from conftest import noisy_problem
+from replication.rig.solve_and_judge import reference_reading
 
 
 def test_solve_pairs_takes_the_pairs_and_six_named_groups():
@@ -50,3 +51,34 @@ def test_solve_pairs_reports_its_provenance_and_resamples_as_told():
     assert other.bootstrap_ci95_deg != res.bootstrap_ci95_deg
     none = solve_pairs(A, B, resampling=Resampling(n_bootstrap=0, seed=3), provenance=Provenance(), **kw)
     assert none.bootstrap_resamples == "none" and np.isnan(none.bootstrap_ci95_deg) and np.isnan(none.interval_s)
+
+
+EPS = 1e-9
+
+
+@pytest.mark.parametrize("errors, floor, reading", [
+    ((0.169, 0.234), 0.343, "agreement, not accuracy: both errors (0.169, 0.234 deg)"),  # EuRoC MH01, measured
+    ((0.3, 0.3), 0.3, "agreement, not accuracy"),                      # at the floor: within it
+    ((0.3 + EPS, 0.1), 0.3, "closer to reference 2: its error (0.100 deg) is within"),  # one just above
+    ((0.1, 0.3 + EPS), 0.3, "closer to reference 1"),
+    ((0.3 + EPS, 0.3 + EPS), 0.3, "a difference beyond the floor: both errors"),
+])
+def test_the_reading_of_two_references_at_the_floor(errors, floor, reading):
+    text = reference_reading(errors, floor)
+    assert text.startswith(reading)
+    assert f"the references' own disagreement {floor:.3f} deg (the reference floor)" in text
+
+
+@pytest.mark.parametrize("errors, floor, radius, reading", [
+    ((0.0, 10.0), 10.0, 0.1, "closer to reference 1: its error (0.000 deg) is the smaller, by more than R0's"),
+    ((0.5, 9.5), 10.0, 0.1, "closer to reference 1"),                   # was "agreement, not accuracy"
+    ((0.05, 0.05), 0.0, 0.1, "agreement within R0's radius"),           # the same reference twice: was "beyond"
+    ((0.1, 0.1), 0.0, 0.1, "agreement within R0's radius"),             # at the radius: within it
+    ((0.1 + EPS, 0.1 + EPS), 0.0, 0.1, "a difference beyond the floor"),
+    ((0.169, 0.234), 0.343, 0.09, "agreement, not accuracy"),           # EuRoC: 0.065 apart, within the radius
+    ((0.169, 0.234), 0.343, 0.064, "closer to reference 1"),            # ... and just beyond a smaller radius
+    ((0.2, 0.4), 0.3, 0.5, "agreement within R0's radius"),
+    ((0.2, 0.55), 0.35, 0.5, "not resolved: the errors (0.200, 0.550 deg) differ by no more than"),
+])
+def test_the_reading_weighs_the_difference_of_the_errors_against_r0s_radius(errors, floor, radius, reading):
+    assert reference_reading(errors, floor, radius).startswith(reading)

@@ -8,8 +8,11 @@ import numpy as np
 import pytest
 import scipy.spatial.transform as sst
 
+from conftest import NUMPY_REPR
 from replication.core import so3
 from replication.rig import streams
+from replication.rig.live import LiveRig
+from replication.rig.online import OnlineCalibrator
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 
 
@@ -86,3 +89,37 @@ def test_importing_streams_loads_no_solver_and_no_optimiser():
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
     assert streams.__name__ == "replication.rig.streams"
+
+
+def test_integrate_gyro_constant_rate():
+    t = np.linspace(0.0, 1.0, 201)
+    g = GyroStream(t, np.tile([0.0, 0.0, 0.5], (201, 1)))
+    Q = integrate_gyro(g).R
+    np.testing.assert_allclose(so3.rotation_angle_deg(Q[-1]), np.degrees(0.5), atol=1e-9)
+    np.testing.assert_allclose(Q[-1][:2, :2], [[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]], atol=1e-12)
+
+
+def test_refusals_of_time_stamps_carry_no_numpy_reprs():
+    """Streams and the live front end refuse time going back; the numbers in their messages are
+    plain."""
+    t = np.array([0.0, 0.5, 0.5, 1.0])
+    messages = []
+    for build in (lambda: OrientationStream(t, np.tile(np.eye(3), (4, 1, 1)), "s"),
+                  lambda: GyroStream(t, np.zeros((4, 3)), "g")):
+        with pytest.raises(ValueError) as err:
+            build()
+        messages.append(str(err.value))
+    live = LiveRig(OnlineCalibrator(), interval=1.0)
+    live.add_camera(np.float64(1.0), np.eye(3))
+    with pytest.raises(ValueError) as err:
+        live.add_camera(np.float64(0.5), np.eye(3))
+    messages.append(str(err.value))
+    live.add_orientation(np.float64(1.0), np.eye(3))
+    with pytest.raises(ValueError) as err:
+        live.add_orientation(np.float64(1.0), np.eye(3))
+    messages.append(str(err.value))
+    with pytest.raises(ValueError) as err:
+        live.add_gyro(2.0, np.array([np.nan, 0.0]))
+    messages.append(str(err.value))
+    assert all(not NUMPY_REPR.search(m) for m in messages), messages
+    assert "0.5 after 1.0" in messages[2] and "1.0 after 1.0" in messages[3]

@@ -745,7 +745,7 @@ ROOT = Path(__file__).resolve().parents[2]
 CLAIM_MODULES = ["replication/study/lab/claims.py", "replication/study/lab/seed_sets.py",
                  "replication/study/table1/claims.py", "replication/study/table1/sqp_claims.py",
                  "replication/study/table1/cell_claims.py", "replication/study/fig5/claims.py",
-                 "replication/study/convexity.py"]
+                 "replication/study/convexity/claims.py"]
 
 
 MAX_LINES, MAX_PARAMS = 62, 8

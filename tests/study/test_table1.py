@@ -4,15 +4,22 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from replication.core.so3 import matrix_from_rotation_vector
+from replication.core.handeye import handeye_cost, operator_T, operator_T_adjoint
+from replication.core.so3 import frobenius_error, matrix_from_rotation_vector, nearest_rotation
 from replication.core.solvers import chordal_optimal
-from replication.core.stats import share_range
+from replication.core.stats import share_range, wilson_interval
 from replication.study import paper
-from replication.study.simulation import simulate
+from replication.study.simulation import MATCHED_MOTIONS_DEG, matched_start, simulate
 from replication.study.table1 import (
+    EARLY,
+    HALF_STEP_ORDERS,
     ONE_PERCENT,
+    PRINTED_HALF_UNIT,
+    PRINTED_ORDER,
     RISE_TOL,
+    Z_AGREE,
     at_other_minimum,
+    bracket_ci,
     compact,
     converged_at,
     convergence_by_setting,
@@ -25,12 +32,17 @@ from replication.study.table1 import (
     failure_table,
     first_below,
     fresh_mismatch,
+    fresh_seed_counts,
     interval_text,
     iterate_errors,
+    paper_left_farther,
+    paper_settled,
     paper_two_step_means,
     per_setting_text,
+    printed_z,
     scales_text,
     sensitivity_grid,
+    share_ci,
     share_text,
     shown_convergence,
     shown_cost_scales,
@@ -373,3 +385,137 @@ def test_diverting_table_with_fake_runs():
     assert list(div.columns) == ["diverts, error > 0.05", "... and on a rotation", "... read on projected iterates"]
     assert div.loc[("s", "SQP, eq. (8) as printed")].tolist() == [0.5, 0.0, 0.5]
     assert div.loc[("s", "two-step R^r")].tolist() == [0.0, 0.0, 0.0]   # its first run rises to 0.03 only
+
+
+# --------------------------------------------------------------------------------------------------
+# Comparisons with Table I that take its three printed decimals as a bound, shares of runs with
+# Wilson intervals, the half-steps in either order, and the counts again on fresh seeds.
+
+# ---- the paper's rounding
+# -----------------------------------------------------------------------------------------
+
+def test_printed_z_takes_the_nearest_value_the_rounding_allows():
+    h, n = PRINTED_HALF_UNIT, 1000
+    se_top = (0.004 + h) / np.sqrt(n)  # the paper's std at the top of its rounding interval
+    bound, uniform, as_printed = printed_z(0.0065, 1e-4, 0.009, 0.004)
+    assert bound == pytest.approx(-(0.0025 - h) / np.hypot(1e-4, se_top))
+    assert uniform == pytest.approx(-0.0025 / np.sqrt(1e-8 + 0.004 ** 2 / n + h ** 2 / 3))
+    assert as_printed == pytest.approx(-0.0025 / np.hypot(1e-4, 0.004 / np.sqrt(n)))
+    assert abs(uniform) < abs(bound) < abs(as_printed)  # at the noise floor the rounding dominates the SE
+    assert printed_z(0.0094, 1e-4, 0.009, 0.004)[0] == 0.0 and printed_z(0.0086, 1e-4, 0.009, 0.004)[0] == 0.0
+    assert printed_z(0.0125, 1e-4, 0.009, 0.004)[0] > 0 > printed_z(0.0055, 1e-4, 0.009, 0.004)[0]
+    assert printed_z(0.0125, 1e-4, 0.009, 0.004, half_unit=0.0)[0] == pytest.approx(as_printed * -1.4, rel=1e-12)
+
+
+def _at_iteration_50(offset: float):
+    """Our Table I equal to the paper's but R^r at iteration 50 moved by ``offset``, SE 1e-4."""
+    ref = paper.load_table1().xs("ours_right", level="method")
+    tab = pd.DataFrame({("ours_right", "mean"): ref["mean"].to_numpy(), ("ours_right", "std"): 0.0,
+                        ("ours_right", "se"): 1e-4}, index=pd.Index(paper.TABLE1_ITERATIONS, name="iteration"))
+    tab.loc[50, ("ours_right", "mean")] += offset
+    return versus_paper(tab).loc[(50, "ours_right")]
+
+
+def test_versus_paper_agrees_up_to_three_rounding_aware_standard_errors():
+    # |z| = 3 at h + 3 sqrt(se^2 + ((0.004 + h) / sqrt(1000))^2) from the printed 0.009
+    edge = PRINTED_HALF_UNIT + Z_AGREE * np.hypot(1e-4, 0.0045 / np.sqrt(1000))
+    inside, outside = _at_iteration_50(edge - 2e-6), _at_iteration_50(edge + 2e-6)
+    assert inside["verdict"] == "agrees" and outside["verdict"] == "differs"
+    assert inside["z as printed"] > 5  # the printed digits taken as exact would have said "differs"
+    assert list(outside.index) == ["ours", "paper", "ratio", "z", "z uniform", "z as printed", "verdict"]
+
+
+def test_two_step_means_mismatch_is_against_the_nearest_rounded_value():
+    sim = simulate(3, 3)
+    means, _, _ = two_step_means(sim, None, paper_two_step_means())
+    ours = means[["ours_right", "ours_left"]]
+    assert two_step_means(sim, None, ours + 0.9 * PRINTED_HALF_UNIT)[1] == 0.0  # within the rounding
+    beyond = two_step_means(sim, None, ours + 1.1 * PRINTED_HALF_UNIT)[1]
+    assert beyond == pytest.approx(np.mean(np.abs(np.log(ours / (ours + 0.1 * PRINTED_HALF_UNIT)))), rel=1e-9)
+
+
+def test_paper_left_farther_whatever_the_rounding():
+    ref = paper.load_table1()
+    assert paper_left_farther(ref)
+    for gap, expected in ((2 * PRINTED_HALF_UNIT + 1e-6, True), (2 * PRINTED_HALF_UNIT - 1e-6, False)):
+        changed = ref.copy()
+        changed.loc[(5, "ours_left"), "mean"] = changed.loc[(5, "ours_right"), "mean"] + gap
+        assert paper_left_farther(changed) is expected
+
+
+def test_paper_settled_at_both_ends_of_the_rounding():
+    ref = paper.load_table1()
+    assert paper_settled(ref, "ours_right") == (15, 15) and paper_settled(ref, "optimization") == (50, 50)
+    assert paper_settled(ref, "ours_left") == (15, 20)  # R^l's 0.016 at 15 is 0.006 from 0.010: 0.004-0.008
+    for value, expected in ((0.0129, (15, 15)), (0.0131, (15, 20)), (0.0151, (20, 20))):
+        changed = ref.copy()
+        changed.loc[(15, "ours_right"), "mean"] = value  # 0.009 at 20-50: within 0.005 by 0.0039, 0.0041, 0.0061
+        assert paper_settled(changed, "ours_right") == expected
+
+
+# ---- shares of runs
+# ------------------------------------------------------------------------------------------------
+
+def test_share_ci_gives_the_wilson_interval():
+    low, high = wilson_interval(25, 100)
+    assert share_ci(0.25, 100, 1) == f"25.0% [{100 * low:.1f}, {100 * high:.1f}]" == "25.0% [17.5, 34.3]"
+    assert share_ci(0.5, 1000) == "50% [47, 53]" and share_ci(0.0, 300, 1) == "0.0% [0.0, 1.3]"
+
+
+def test_bracket_ci_covers_every_count_in_the_bracket():
+    # 0.82 of 1000: the bracket 80-85 % holds 800 ... 849 runs
+    assert bracket_ci(0.82, 1000) == (f"80-85 % [{100 * wilson_interval(800, 1000)[0]:.0f}, "
+                                      f"{100 * wilson_interval(849, 1000)[1]:.0f}]") == "80-85 % [77, 87]"
+    assert bracket_ci(0.84, 300) == "80-85 % [75, 88]"  # 240 ... 254 of 300
+    assert bracket_ci(0.0, 300) == "none of 300 [0, 1.3]" and bracket_ci(1.0, 300) == "all of 300 [98.7, 100]"
+    assert bracket_ci(0.97, 100) == "95-100 % [89, 100]"  # the last bracket stops at n - 1 runs: 95 ... 99
+
+
+# ---- the half-steps in the other order
+# ---------------------------------------------------------------------------
+
+def test_reversed_half_steps_start_with_eq_15():
+    sim = simulate(4, 3, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
+    start = np.eye(3)  # <start, R0> > 0: the corrected and the printed projections agree
+    (e, c), (e_rev, c_rev) = (iterate_errors(sim, iterations=3, init=start, with_sqp=False, return_costs=True,
+                                             reversed_halves=flip) for flip in (False, True))
+    # printed: R^r_1 from the start by eq. (14); reversed: R^l_1 from the start by eq. (15), R^r_1
+    # from its raw iterate by (14) (the iteration carries raw iterates, projected only to be
+    # reported)
+    r1 = nearest_rotation(operator_T(sim.A, sim.B, start))
+    raw_l1 = operator_T_adjoint(sim.A, sim.B, start)
+    l1_rev, r1_rev = nearest_rotation(raw_l1), nearest_rotation(operator_T(sim.A, sim.B, raw_l1))
+    assert np.allclose(e["ours_right"][:, 0], frobenius_error(r1, sim.R0), atol=1e-12)
+    assert np.allclose(e_rev["ours_left"][:, 0], frobenius_error(l1_rev, sim.R0), atol=1e-12)
+    assert np.allclose(e_rev["ours_right"][:, 0], frobenius_error(r1_rev, sim.R0), atol=1e-12)
+    assert np.allclose(c_rev["ours_right"][:, 0], handeye_cost(r1_rev, sim.A, sim.B), rtol=1e-10)  # cost (8) as ours
+    assert not np.allclose(e["ours_left"], e_rev["ours_left"])
+
+
+def test_the_half_step_order_decides_which_estimate_leads():
+    sim = simulate(5, 50, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
+    for flip, left_closer in ((False, True), (True, False)):
+        means = table1(iterate_errors(sim, init=matched_start(), with_sqp=False, reversed_halves=flip))
+        right, left = (means.loc[list(EARLY), (side, "mean")] for side in ("ours_right", "ours_left"))
+        assert ((left < right) == left_closer).all()
+    assert list(HALF_STEP_ORDERS) == [PRINTED_ORDER, "(15) then (14)"] and not HALF_STEP_ORDERS[PRINTED_ORDER]
+
+
+# ---- the counts again on fresh seeds
+# -----------------------------------------------------------------------------
+
+def test_fresh_seed_counts_layout():
+    scales = {"as printed": 1.0, "/ 2J": 0.025, "/ 100J": 0.0005}
+    out = fresh_seed_counts(7, 12, 6, scales, np.random.default_rng(0), motions_deg=MATCHED_MOTIONS_DEG,
+                            far_start=matched_start())
+    assert (out["seed"], out["n_runs"], out["n_sqp"]) == (7, 12, 6)
+    assert list(out["conv"].index) == [(s, m) for s in ("defaults", "0-90 deg, identity start")
+                                       for m in ("ours_right", "optimization (analytic)")]
+    shares = out["conv"][["error_rises", "cost_rises", "rises_above_floor", "diverts_above_floor"]].to_numpy(float)
+    assert ((shares >= 0) & (shares <= 1)).all()
+    assert list(out["div"].index.get_level_values(1)) == ["SQP, eq. (8) as printed", "SQP, eq. (8) / 2J",
+                                                          "two-step R^r"] * 2
+    assert list(out["scales"].index) == [("defaults", "as printed"), ("defaults", "/ 2J"),
+                                         ("0-90 deg, identity start", "as printed"),
+                                         ("0-90 deg, identity start", "/ 2J"), ("matched", "as printed"),
+                                         ("matched", "/ 100J")]

@@ -1,52 +1,33 @@
-"""Notebook 03 after the referee's points 4 and 7: comparisons with Table I that take its three
-printed decimals as a bound, the half-steps in either order, shares of runs with Wilson intervals
-and their confirmation on fresh seeds, and the checks of the records built on them (each raising
-just past its threshold, not just before it)."""
+"""Table I's ledger records (notebook 03: ``replication.study.table1``'s claims, sqp_claims and
+cell_claims, built in the notebook's order from one set of synthetic measurements, and the ``Runs``
+their settings name): the claim ids and verdicts, the numbers in the evidence, every record valid
+for the ledger, and each check raising just past its threshold, not just before it. The functions
+the records rest on (the paper's rounding, shares of runs, the half-step order, the fresh seeds'
+counts): tests/study/test_table1.py; SQP's failures at two caps: test_table1_minimum.py."""
 import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from test_lab_claims import lab_claims, lab_claims_inputs
 
-from replication.core.handeye import handeye_cost, operator_T, operator_T_adjoint
-from replication.core.so3 import frobenius_error, nearest_rotation
-from replication.core.stats import wilson_interval
+from conftest import _valid
 from replication.study import ledger, paper
 from replication.study import table1 as t1
-from replication.study.lab import seed_spread
-from replication.study.simulation import MATCHED_MOTIONS_DEG, matched_start, simulate
 from replication.study.table1 import (
-    EARLY,
-    HALF_STEP_ORDERS,
-    PRINTED_HALF_UNIT,
-    PRINTED_ORDER,
     SECTION5_SETTINGS,
     SECTIONS,
-    Z_AGREE,
     Runs,
-    bracket_ci,
-    fresh_seed_counts,
-    iterate_errors,
-    paper_left_farther,
-    paper_settled,
-    paper_two_step_means,
-    printed_z,
-    share_ci,
-    table1,
-    two_step_means,
-    versus_paper,
 )
 
 # --------------------------------------------------------------------------------------------------
-# The ledger records of notebooks 03 (Table I, section 5) and 05 (the lab's claims), built from
-# small synthetic measurements: the claim ids and verdicts in the notebooks' order, the numbers in
-# the evidence formatted as the notebooks print them, every record valid for the ledger, and each
-# sanity check raising just past its threshold and not just before it.
+# The ledger records of notebook 03 (Table I, sections 2 and 5), built from small synthetic
+# measurements: the claim ids and verdicts in the notebook's order, the numbers in the evidence
+# formatted as the notebook prints them, every record valid for the ledger, and each sanity check
+# raising just past its threshold and not just before it (the lab's claims of notebook 05:
+# tests/study/test_lab_claims.py).
 
 
-CLAIMS_CSV = Path(__file__).resolve().parents[2] / "data" / "paper" / "claims.csv"
 DEF, IDENT, FAR = SECTION5_SETTINGS  # "defaults", "0-90 deg, identity start", "matched (fresh seeds)"
 SQP = ["optimization (analytic)", "optimization (capped)"]
 CAPS = {"optimization (capped)": 30}
@@ -54,8 +35,6 @@ SCALES = {"as printed": 1.0, "/ 2J": 0.025, "/ 100J": 0.0005}
 TWO_STEP_IDS = ["two_step_10_iterations", "cost_to_zero", "faster_than_sqp", "smoother_monotone"]
 SQP_TABLE_IDS = ["sqp_diverts", "sqp_30_iterations", "table1_final", "table1_early", "table1_sqp", "converge_15_vs_30"]
 ORDERS = ["(14) then (15)", "(15) then (14)"]  # the half-step orders of the grid
-LAB_IDS = ["lab_protocol", "lab_averaging", "fig6_consistency", "fig6_accuracy", "table2_reduction",
-           "table2_correlation", "table2_methods_agree", "table2_measures_calibration", "table2_rms", "fig7_projection"]
 
 
 # ---- notebook 03: synthetic measurements that pass every check
@@ -202,12 +181,6 @@ def sqp_and_table_claims(conv, div, fails, scales, far_scaled, cmp_default, cmp_
             t1.table1_sqp(cmp_default, far_scaled, runs, confirm, sqp_names=sqp_names),
             t1.converge_15_vs_30(conv, scales, runs, confirm, sqp_names=sqp_names, caps=caps,
                                  scale_names=scale_names)]
-
-
-def _valid(records):
-    claims = paper.load_claim_table(CLAIMS_CSV)
-    for rec in records:
-        ledger.check_record(**rec, claims=claims, claims_path=CLAIMS_CSV)
 
 
 def test_check_evidence_names_the_claim_and_condition_and_passes_what_holds():
@@ -434,257 +407,7 @@ def test_a_missing_setting_is_named():
         two_step_claims(**first)
 
 
-# ---- notebook 05
-# ---------------------------------------------------------------------------------------------
-
-def _lab_inputs():
-    """Synthetic seed studies (seeds 1-20, fresh 21-40) and committed-draw quantities passing every
-    check."""
-    return lab_claims_inputs()
-
-
-def test_seed_spread_gives_mean_sd_and_range():
-    assert seed_spread(pd.Series([1.0, 2.0, 3.0])) == "2.00 (SD 1.00; 1.00-3.00)"
-    assert seed_spread(pd.Series([0.5, 0.25]), digits=4) == "0.3750 (SD 0.1768; 0.2500-0.5000)"
-
-
-def test_lab_claims_ids_verdicts_and_numbers():
-    inputs = _lab_inputs()
-    records = lab_claims(**inputs)
-    assert [r["claim"] for r in records] == LAB_IDS
-    assert [r["verdict"] for r in records] == [
-        "undecidable from the text", "fails", "undecidable from the text", "holds only if", "holds",
-        "undecidable from the text", "holds only if", "fails", "undecidable from the text", "holds"]
-    _valid(records)
-    rec = {r["claim"]: r for r in records}
-    study, fresh = inputs["study"], inputs["fresh"]
-    spread = seed_spread(study["spread_ours_right"])
-    assert "(3 data sets of 10-20 orientations, each held 5.0 s or more" in rec["lab_protocol"]["evidence"]
-    assert rec["lab_protocol"]["setting"].endswith("documented); the committed recordings")
-    assert "is 2.40 and 2.40 deg with the means" in rec["lab_averaging"]["evidence"]
-    assert "grows by 0.35 ± 0.02 deg on the first and 0.35 ± 0.02 deg on the fresh seeds" \
-        in rec["lab_averaging"]["evidence"]
-    assert (f"lie on average {spread} deg from their mean (20 seeds; committed draw 1.23 deg, 0.46 deg without"
-            in rec["fig6_consistency"]["evidence"])
-    accuracy = rec["fig6_accuracy"]["evidence"]
-    assert f"is {seed_spread(study['shared_bias_ours_right'])} deg from the true R0 on the first seeds" in accuracy
-    assert "falls from 2.05 ± 0.03 to 0.70 ± 0.01 deg on the first seeds" in accuracy
-    assert "(paired changes -1.350 ± 0.028 and -1.350 ± 0.028 deg)" in accuracy
-    sensor_frame = seed_spread(fresh["rms_sensor_frame"])
-    assert f"vs {sensor_frame} deg on the fresh ones" in rec["table2_reduction"]["evidence"]
-    corr = rec["table2_correlation"]["evidence"]
-    assert f"roll {seed_spread(study['corr_roll_ours_right'], 4)}; pitch" in corr
-    assert "reached for roll in 0 of 20 (0-16 %) on the first and 0 of 20 (0-16 %) on the fresh seeds" in corr
-    assert ("stops short (> 10 deg off) on more than 10% of the 200 data sets (more than 75% of them at the iteration "
-            "limit), in more than 50% of the 20 seeds; with 1000 iterations on fewer than 15%, with its objective "
-            "divided by 2J on fewer than 5%") in rec["table2_methods_agree"]["condition"]
-    assert "differ by at most 0.012 deg" in rec["table2_methods_agree"]["evidence"]
-    measures = rec["table2_measures_calibration"]["evidence"]
-    assert "(its chordal mean, 2.05 and 2.05 deg off the true R0 on average)" in measures
-    assert "differs from the truth's by -0.010 ± 0.002 deg on the first" in measures
-    assert "smaller RMS does not replicate (the estimate in 10 of 20 (30-70 %) on the first" in measures
-    assert "5 deg: 20 of 20 (84-100 %) on the first and 20 of 20 (84-100 %) on the fresh seeds; 10 deg:" in measures
-    assert "it is -4.09 deg on the committed draw and changes sign as the reference frame moves (-4.09 to 1.43 deg)" \
-        in measures
-    assert "(0.81 deg at 0 to 2.71 deg at 1.4 uT)" in rec["table2_rms"]["evidence"]
-    assert "sensor-frame correlations 0.40 to 0.93, committed draw)" in rec["fig7_projection"]["evidence"]
-    assert rec["fig7_projection"]["setting"] == (
-        "simulated lab (LabSettings defaults: datasheet noise, residual calibration errors as documented); seeds "
-        "1-20 (and the committed draw, seed 20130501)")
-    assert rec["table2_measures_calibration"]["setting"].startswith(
-        "simulated lab (LabSettings defaults: datasheet noise, residual calibration errors as documented); found on "
-        "seeds 1-20, confirmed on fresh seeds 21-40 (and the committed draw, seed 20130501)")
-
-
-@pytest.mark.parametrize("column, inside, outside", [
-    ("corr_pitch_ours_right", 0.95001, 0.95),  # every correlation above 0.95
-    ("corr_roll_ours_right", 0.9989, 0.999),   # the paper's 0.999 reached for roll in no seed
-])
-def test_each_lab_check_raises_just_past_its_threshold(column, inside, outside):
-    for value, raises in ((inside, False), (outside, True)):
-        inputs = _lab_inputs()
-        inputs["study"].loc[7, column] = value
-        if raises:
-            with pytest.raises(ValueError, match="^claim 'table2_correlation': the evidence does not bear the verdict"):
-                lab_claims(**inputs)
-        else:
-            assert len(lab_claims(**inputs)) == 10
-
-
-# ---- online_recalibration (notebook 02)
-# --------------------------------------------------------------------------
-
-def _small(ratio_small=15.0, ratio_large=1.0):
-    from replication.study.recalibration import small_motion_study  # noqa: F401 (the frame's producer)
-
-    return pd.DataFrame({"at 50": [45.0, 6.5, 0.42 * ratio_large], "at 50_se": [0.2, 0.3, 0.01],
-                         "limit": [45.0 / ratio_small, 1.1, 0.42], "limit_se": [0.1, 0.04, 0.01],
-                         "ratio": [ratio_small, 6.5 / 1.1, ratio_large]},
-                        index=pd.Index(["0-10 deg", "0-30 deg", "0-90 deg"], name="motions"))
-
-
-def test_online_recalibration_record_and_its_checks_at_their_thresholds():
-    from replication.study.recalibration import online_recalibration_record
-
-    rec = online_recalibration_record(_small(), _small(), section="s", setting="t")
-    _valid([rec])
-    assert rec["verdict"] == "undecidable from the text"
-    assert "motions 0-10 deg: 45.00 ± 0.20 deg at 50 iterations against 3.00 ± 0.10 at its limit" in rec["evidence"]
-    assert "With motions 0-10 deg, 0-30 deg the protocol's estimate is several times farther" in rec["evidence"]
-    for which in (0, 1):
-        for small, large, raises in ((2.001, 1.0, False), (2.0, 1.0, True), (15.0, 1.099, False),
-                                     (15.0, 1.1001, True)):
-            frames = [_small(), _small()]
-            frames[which] = _small(small, large)
-            if raises:
-                with pytest.raises(ValueError, match="^claim 'online_recalibration'.*50 iterations leave"):
-                    online_recalibration_record(*frames, section="s", setting="t")
-            else:
-                assert online_recalibration_record(*frames, section="s", setting="t")["claim"] == \
-                    "online_recalibration"
-
-
-def test_small_motion_study_stops_short_only_with_small_motions():
-    from replication.study.recalibration import small_motion_study
-
-    f = small_motion_study(44000, 20, {"0-10 deg": (0.0, 10.0), "0-90 deg": (0.0, 90.0)})
-    assert f.loc["0-10 deg", "ratio"] > 5 and abs(f.loc["0-90 deg", "ratio"] - 1) < 0.2
-
-
-# ==================================================================================================
-
-
 NOTEBOOK = Path(__file__).resolve().parents[2] / "notebooks" / "03_table1_monte_carlo.ipynb"
-
-
-# ---- the paper's rounding
-# -----------------------------------------------------------------------------------------
-
-def test_printed_z_takes_the_nearest_value_the_rounding_allows():
-    h, n = PRINTED_HALF_UNIT, 1000
-    se_top = (0.004 + h) / np.sqrt(n)  # the paper's std at the top of its rounding interval
-    bound, uniform, as_printed = printed_z(0.0065, 1e-4, 0.009, 0.004)
-    assert bound == pytest.approx(-(0.0025 - h) / np.hypot(1e-4, se_top))
-    assert uniform == pytest.approx(-0.0025 / np.sqrt(1e-8 + 0.004 ** 2 / n + h ** 2 / 3))
-    assert as_printed == pytest.approx(-0.0025 / np.hypot(1e-4, 0.004 / np.sqrt(n)))
-    assert abs(uniform) < abs(bound) < abs(as_printed)  # at the noise floor the rounding dominates the SE
-    assert printed_z(0.0094, 1e-4, 0.009, 0.004)[0] == 0.0 and printed_z(0.0086, 1e-4, 0.009, 0.004)[0] == 0.0
-    assert printed_z(0.0125, 1e-4, 0.009, 0.004)[0] > 0 > printed_z(0.0055, 1e-4, 0.009, 0.004)[0]
-    assert printed_z(0.0125, 1e-4, 0.009, 0.004, half_unit=0.0)[0] == pytest.approx(as_printed * -1.4, rel=1e-12)
-
-
-def _at_iteration_50(offset: float):
-    """Our Table I equal to the paper's but R^r at iteration 50 moved by ``offset``, SE 1e-4."""
-    ref = paper.load_table1().xs("ours_right", level="method")
-    tab = pd.DataFrame({("ours_right", "mean"): ref["mean"].to_numpy(), ("ours_right", "std"): 0.0,
-                        ("ours_right", "se"): 1e-4}, index=pd.Index(paper.TABLE1_ITERATIONS, name="iteration"))
-    tab.loc[50, ("ours_right", "mean")] += offset
-    return versus_paper(tab).loc[(50, "ours_right")]
-
-
-def test_versus_paper_agrees_up_to_three_rounding_aware_standard_errors():
-    # |z| = 3 at h + 3 sqrt(se^2 + ((0.004 + h) / sqrt(1000))^2) from the printed 0.009
-    edge = PRINTED_HALF_UNIT + Z_AGREE * np.hypot(1e-4, 0.0045 / np.sqrt(1000))
-    inside, outside = _at_iteration_50(edge - 2e-6), _at_iteration_50(edge + 2e-6)
-    assert inside["verdict"] == "agrees" and outside["verdict"] == "differs"
-    assert inside["z as printed"] > 5  # the printed digits taken as exact would have said "differs"
-    assert list(outside.index) == ["ours", "paper", "ratio", "z", "z uniform", "z as printed", "verdict"]
-
-
-def test_two_step_means_mismatch_is_against_the_nearest_rounded_value():
-    sim = simulate(3, 3)
-    means, _, _ = two_step_means(sim, None, paper_two_step_means())
-    ours = means[["ours_right", "ours_left"]]
-    assert two_step_means(sim, None, ours + 0.9 * PRINTED_HALF_UNIT)[1] == 0.0  # within the rounding
-    beyond = two_step_means(sim, None, ours + 1.1 * PRINTED_HALF_UNIT)[1]
-    assert beyond == pytest.approx(np.mean(np.abs(np.log(ours / (ours + 0.1 * PRINTED_HALF_UNIT)))), rel=1e-9)
-
-
-def test_paper_left_farther_whatever_the_rounding():
-    ref = paper.load_table1()
-    assert paper_left_farther(ref)
-    for gap, expected in ((2 * PRINTED_HALF_UNIT + 1e-6, True), (2 * PRINTED_HALF_UNIT - 1e-6, False)):
-        changed = ref.copy()
-        changed.loc[(5, "ours_left"), "mean"] = changed.loc[(5, "ours_right"), "mean"] + gap
-        assert paper_left_farther(changed) is expected
-
-
-def test_paper_settled_at_both_ends_of_the_rounding():
-    ref = paper.load_table1()
-    assert paper_settled(ref, "ours_right") == (15, 15) and paper_settled(ref, "optimization") == (50, 50)
-    assert paper_settled(ref, "ours_left") == (15, 20)  # R^l's 0.016 at 15 is 0.006 from 0.010: 0.004-0.008
-    for value, expected in ((0.0129, (15, 15)), (0.0131, (15, 20)), (0.0151, (20, 20))):
-        changed = ref.copy()
-        changed.loc[(15, "ours_right"), "mean"] = value  # 0.009 at 20-50: within 0.005 by 0.0039, 0.0041, 0.0061
-        assert paper_settled(changed, "ours_right") == expected
-
-
-# ---- shares of runs
-# ------------------------------------------------------------------------------------------------
-
-def test_share_ci_gives_the_wilson_interval():
-    low, high = wilson_interval(25, 100)
-    assert share_ci(0.25, 100, 1) == f"25.0% [{100 * low:.1f}, {100 * high:.1f}]" == "25.0% [17.5, 34.3]"
-    assert share_ci(0.5, 1000) == "50% [47, 53]" and share_ci(0.0, 300, 1) == "0.0% [0.0, 1.3]"
-
-
-def test_bracket_ci_covers_every_count_in_the_bracket():
-    # 0.82 of 1000: the bracket 80-85 % holds 800 ... 849 runs
-    assert bracket_ci(0.82, 1000) == (f"80-85 % [{100 * wilson_interval(800, 1000)[0]:.0f}, "
-                                      f"{100 * wilson_interval(849, 1000)[1]:.0f}]") == "80-85 % [77, 87]"
-    assert bracket_ci(0.84, 300) == "80-85 % [75, 88]"  # 240 ... 254 of 300
-    assert bracket_ci(0.0, 300) == "none of 300 [0, 1.3]" and bracket_ci(1.0, 300) == "all of 300 [98.7, 100]"
-    assert bracket_ci(0.97, 100) == "95-100 % [89, 100]"  # the last bracket stops at n - 1 runs: 95 ... 99
-
-
-# ---- the half-steps in the other order
-# ---------------------------------------------------------------------------
-
-def test_reversed_half_steps_start_with_eq_15():
-    sim = simulate(4, 3, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
-    start = np.eye(3)  # <start, R0> > 0: the corrected and the printed projections agree
-    (e, c), (e_rev, c_rev) = (iterate_errors(sim, iterations=3, init=start, with_sqp=False, return_costs=True,
-                                             reversed_halves=flip) for flip in (False, True))
-    # printed: R^r_1 from the start by eq. (14); reversed: R^l_1 from the start by eq. (15), R^r_1
-    # from its raw iterate by (14) (the iteration carries raw iterates, projected only to be
-    # reported)
-    r1 = nearest_rotation(operator_T(sim.A, sim.B, start))
-    raw_l1 = operator_T_adjoint(sim.A, sim.B, start)
-    l1_rev, r1_rev = nearest_rotation(raw_l1), nearest_rotation(operator_T(sim.A, sim.B, raw_l1))
-    assert np.allclose(e["ours_right"][:, 0], frobenius_error(r1, sim.R0), atol=1e-12)
-    assert np.allclose(e_rev["ours_left"][:, 0], frobenius_error(l1_rev, sim.R0), atol=1e-12)
-    assert np.allclose(e_rev["ours_right"][:, 0], frobenius_error(r1_rev, sim.R0), atol=1e-12)
-    assert np.allclose(c_rev["ours_right"][:, 0], handeye_cost(r1_rev, sim.A, sim.B), rtol=1e-10)  # cost (8) as ours
-    assert not np.allclose(e["ours_left"], e_rev["ours_left"])
-
-
-def test_the_half_step_order_decides_which_estimate_leads():
-    sim = simulate(5, 50, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
-    for flip, left_closer in ((False, True), (True, False)):
-        means = table1(iterate_errors(sim, init=matched_start(), with_sqp=False, reversed_halves=flip))
-        right, left = (means.loc[list(EARLY), (side, "mean")] for side in ("ours_right", "ours_left"))
-        assert ((left < right) == left_closer).all()
-    assert list(HALF_STEP_ORDERS) == [PRINTED_ORDER, "(15) then (14)"] and not HALF_STEP_ORDERS[PRINTED_ORDER]
-
-
-# ---- the counts again on fresh seeds
-# -----------------------------------------------------------------------------
-
-def test_fresh_seed_counts_layout():
-    scales = {"as printed": 1.0, "/ 2J": 0.025, "/ 100J": 0.0005}
-    out = fresh_seed_counts(7, 12, 6, scales, np.random.default_rng(0), motions_deg=MATCHED_MOTIONS_DEG,
-                            far_start=matched_start())
-    assert (out["seed"], out["n_runs"], out["n_sqp"]) == (7, 12, 6)
-    assert list(out["conv"].index) == [(s, m) for s in ("defaults", "0-90 deg, identity start")
-                                       for m in ("ours_right", "optimization (analytic)")]
-    shares = out["conv"][["error_rises", "cost_rises", "rises_above_floor", "diverts_above_floor"]].to_numpy(float)
-    assert ((shares >= 0) & (shares <= 1)).all()
-    assert list(out["div"].index.get_level_values(1)) == ["SQP, eq. (8) as printed", "SQP, eq. (8) / 2J",
-                                                          "two-step R^r"] * 2
-    assert list(out["scales"].index) == [("defaults", "as printed"), ("defaults", "/ 2J"),
-                                         ("0-90 deg, identity start", "as printed"),
-                                         ("0-90 deg, identity start", "/ 2J"), ("matched", "as printed"),
-                                         ("matched", "/ 100J")]
 
 
 # ---- the records: sections, and the checks added with the points 4 and 7
@@ -829,60 +552,6 @@ def test_the_early_iterations_are_undecidable_and_say_what_they_depend_on():
     assert ledger.VERDICTS[-1] == early["verdict"]
     assert "depends on the start, the motions and the order of the two half-steps" in early["evidence"]
     assert f"{FAR}" not in early["evidence"]  # the settings are named by their parts, not by section 5's labels
-
-
-# ---- SQP's failures at two caps, the two-step iterates against the certified minimum
-# -------------------
-
-def test_sqp_cap_shares_reads_one_run_at_each_cap():
-    from replication.study.table1 import sqp_cap_shares
-
-    s = simulate(41000, 12, motion_angle_range_deg=MATCHED_MOTIONS_DEG)
-    shares = sqp_cap_shares(s, init=matched_start(), caps=(100, 50))
-    assert set(shares) == {50, 100, "n"} and shares["n"] == 12
-    assert 0 <= shares[100] <= 1 and 0 <= shares[50] <= 1
-    with pytest.raises(ValueError, match="caps must be positive"):
-        sqp_cap_shares(s, caps=(0, 50))
-
-
-@pytest.mark.parametrize("p100, ok", [(62 / 300, None), (0.6 + 2 / 300, True), (0.6 + 1.9 / 300, False),
-                                      (0.75 - 2 / 300, True), (0.75 - 1.9 / 300, False)])
-def test_cap_shares_text_keeps_its_declared_bound_two_runs_inside(p100, ok):
-    from replication.study.table1 import cap_shares_text
-
-    shares = {50: 0.8433, 100: p100, "n": 300}
-    if ok is None:
-        with pytest.raises(ValueError, match="not at least .* inside its declared bound"):
-            cap_shares_text(shares)
-    elif ok:
-        assert cap_shares_text(shares) == "80-90 % [75, 93] of 300 at 50 iterations, 60-75 % [54, 80] at 100"
-    else:
-        with pytest.raises(ValueError, match="failure share at 100 iterations"):
-            cap_shares_text(shares)
-
-
-def test_minimiser_cheaper_counts_only_beyond_rounding():
-    from replication.study.table1 import COST_RTOL, minimiser_cheaper
-
-    right, left = np.array([[2.0, 1.0], [2.0, 1.0], [2.0, 1.0]]), np.array([1.0, 1.0, 0.5])
-    minimum = np.array([1.0 - 2 * COST_RTOL, 1.0 - 0.5 * COST_RTOL, 0.9])
-    assert minimiser_cheaper(right, left, minimum).tolist() == [True, False, False]
-
-
-def test_minimum_study_and_the_either_minimises_record():
-    from replication.study.table1 import either_minimises_record, minimum_study
-
-    fresh = {"defaults": minimum_study(43000, 30, np.random.default_rng(0))}
-    assert fresh["defaults"]["cheaper"] == fresh["defaults"]["certified"] == 30
-    ratio, low, high = fresh["defaults"]["@10 / minimum"]
-    assert 1 < low <= ratio <= high
-    rec = either_minimises_record({"defaults": (1000, 1000, 1000)}, fresh, section="s", setting="t")
-    assert rec["verdict"] == "fails" and "1000 of 1000 [99.6, 100.0] %" in rec["evidence"]
-    assert "on fresh problems defaults (fresh) 30 of 30" in rec["evidence"]
-    ledger.check_record(**rec)  # its claim is in data/paper/claims.csv
-    for found in ({"defaults": (999, 1000, 1000)}, {"defaults": (1000, 999, 1000)}):
-        with pytest.raises(ValueError, match="^claim 'either_minimises'.*costs less than both R\\^r and R\\^l"):
-            either_minimises_record(found, fresh, section="s", setting="t")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -1,14 +1,22 @@
 """What Table II measures (replication.study.table2): re-projection with any R0 and reference frame,
-the seed study and its interventions, and the single-sample protocol of lab.static_motions."""
+the seed study and its interventions, the single-sample protocol of lab.static_motions, and Table
+II beside the paper's."""
 import dataclasses
 
 import numpy as np
 import pytest
 
+from replication.core import so3
 from replication.core.so3 import matrix_from_rotation_vector
 from replication.study import lab
 from replication.study.lab import seed_study
-from replication.study.table2 import attitude_statistics, projection_statistics, reference_frame_dependence
+from replication.study.paper import TABLE2_ANGLES, TABLE2_METHODS
+from replication.study.table2 import (
+    attitude_statistics,
+    projection_statistics,
+    reference_frame_dependence,
+    table2_versus_paper,
+)
 
 SMALL = dataclasses.replace(lab.LabSettings(), n_sets=2, poses_per_set=(5, 5), dynamic_seconds=6.0)
 
@@ -89,3 +97,14 @@ def test_attitude_statistics_wraps_and_adds_up():
     np.testing.assert_allclose(s.loc["roll", ["mean_deg", "rms_deg"]], [0.5, np.sqrt(1.5)])
     np.testing.assert_allclose(s["rms_deg"] ** 2, s["mean_deg"] ** 2 + s["sd_deg"] ** 2)
     assert s.loc["pitch", "sd_deg"] == 0 and s.loc["yaw", "correlation"] == pytest.approx(1.0)
+
+
+def test_table2_versus_paper_sits_beside_the_paper_in_its_order():
+    result = lab.run_lab(lab.simulate_lab(SMALL))
+    out = table2_versus_paper(result)
+    assert list(out.index) == [(a, m) for a in TABLE2_ANGLES for m in TABLE2_METHODS]
+    assert {"paper_rms_deg", "ours_rms_deg", "true_r0_error_deg"} <= set(out.columns)
+    np.testing.assert_allclose(out.xs("sensor_frame", level="method")["true_r0_error_deg"],
+                               float(so3.rotation_angle_deg(result.truth)))
+    np.testing.assert_allclose(out.loc[("pitch", "ours_right"), "ours_rms_deg"],
+                               result.table2.loc[("pitch", "ours_right"), "rms_deg"])

@@ -1,8 +1,8 @@
 """The ledger records of Table I's two-step cells (``table1_final``, ``table1_early``) of
-``notebooks/03_table1_monte_carlo.ipynb``: our Table I against the paper's, the paper's three printed decimals taken
-as a bound (:func:`replication.study.table1.printed_z`), over the grid of unstated settings of its section 2. One
-function per claim, called from the notebook cell that measures its numbers; the run counts and seeds they name:
-:class:`~replication.study.table1.Runs`.
+``notebooks/03_table1_monte_carlo.ipynb``: our Table I against the paper's, the paper's three
+printed decimals taken as a bound (:func:`replication.study.table1.printed_z`), over the grid of
+unstated settings of its section 2. One function per claim, called from the notebook cell that
+measures its numbers; the run counts and seeds they name: :class:`~replication.study.table1.Runs`.
 """
 from __future__ import annotations
 
@@ -17,12 +17,14 @@ GRID_SECTION = "2. Sensitivity to the unstated settings"
 
 __all__ = ["ROUNDED", "table1_final", "table1_early"]
 
-#: How a comparison with the paper's Table I takes its rounding (the ``uncertainty`` of the records that make one).
+#: How a comparison with the paper's Table I takes its rounding (the ``uncertainty`` of the records
+#: that make one).
 ROUNDED = ("the paper's 3 printed decimals put each of its values within ±0.0005: a bound from rounding, so z is "
            "taken from the nearest value they allow (|z| at least that)")
 #: Table I's two-step columns (:func:`replication.study.table1.versus_paper`'s ``method``).
 _TWO_STEP = ["ours_right", "ours_left"]
-#: The grid's index levels (:func:`replication.study.table1.sensitivity_grid`), as the evidence names them.
+#: The grid's index levels (:func:`replication.study.table1.sensitivity_grid`), as the evidence
+#: names them.
 _GRID_LEVELS = {"motions": "motion ranges", "start": "starts", "noise": "noise distributions",
                 "half-steps": "half-step orders"}
 
@@ -30,9 +32,9 @@ _GRID_LEVELS = {"motions": "motion ranges", "start": "starts", "noise": "noise d
 def table1_final(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, sens: pd.DataFrame, runs) -> dict:
     """``table1_final``: iterations 20-50 are of the paper's order of magnitude, not its numbers.
 
-    ``cmp_default``, ``cmp_matched``: :func:`~replication.study.table1.versus_paper` at our defaults and at the matched
-    setting; ``sens``: :func:`~replication.study.table1.sensitivity_grid`'s table (its ``R^r @50`` per noise
-    distribution); ``runs``: :class:`~replication.study.table1.Runs`.
+    ``cmp_default``, ``cmp_matched``: :func:`~replication.study.table1.versus_paper` at our defaults
+    and at the matched setting; ``sens``: :func:`~replication.study.table1.sensitivity_grid`'s table
+    (its ``R^r @50`` per noise distribution); ``runs``: :class:`~replication.study.table1.Runs`.
     """
     reference, n_runs, n_grid, seeds = runs.reference, runs.n_runs, runs.n_grid, runs.seeds
     final_rows = cmp_default.loc[[20, 30, 50]].loc[(slice(None), _TWO_STEP), :]
@@ -70,9 +72,10 @@ def table1_final(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, sens: pd.
 
 
 def _left_closer_counts(left_closer: pd.Series, fresh: pd.DataFrame, reference: pd.DataFrame) -> tuple:
-    """Of the early cells above the floor, in how many our ``R^l`` is the closer to ``R0``, per half-step order, on
-    the grid and on fresh seeds (``(closer, fresh_closer, others)``); checked: the paper's ``R^l`` the farther
-    whatever its rounding, ours the closer in every such cell in the printed order and in none in the other."""
+    """Of the early cells above the floor, in how many our ``R^l`` is the closer to ``R0``, per
+    half-step order, on the grid and on fresh seeds (``(closer, fresh_closer, others)``); checked:
+    the paper's ``R^l`` the farther whatever its rounding, ours the closer in every such cell in the
+    printed order and in none in the other."""
     closer = left_closer.groupby(level="half-steps").agg(["sum", "size"])
     fresh_closer = fresh.groupby(level="half-steps")[["R^l closer", "early cells"]].sum()
     fresh_closer.columns = ["sum", "size"]
@@ -86,14 +89,37 @@ def _left_closer_counts(left_closer: pd.Series, fresh: pd.DataFrame, reference: 
     return closer, fresh_closer, others
 
 
+def _which_estimate_leads(left_closer: pd.Series, fresh: pd.DataFrame, reference: pd.DataFrame) -> str:
+    """The half-step order's part of ``table1_early``'s evidence: the argument that decides which
+    estimate leads, our counts that illustrate it (:func:`_left_closer_counts`, checked) and the two
+    explanations of Table I's order."""
+    closer, fresh_closer, others = _left_closer_counts(left_closer, fresh, reference)
+
+    def order_counts(counts):
+        return (f"{counts.loc[PRINTED_ORDER, 'sum']} of {counts.loc[PRINTED_ORDER, 'size']} in the printed order, "
+                + ", ".join(f"{counts.loc[o, 'sum']} of {counts.loc[o, 'size']}" for o in others if o in counts.index)
+                + " in the other")
+    return ("Which estimate leads follows from a one-line argument, not from a count: in the order eqs. "
+            "(14)-(15) print, R^l is computed from R^r within the same iteration, one half-step further, so it "
+            "leads whenever the iteration is still contracting; in the other order R^r has the extra half-step. "
+            "Our counts only illustrate it (of the early cells above the floor, our R^l is the closer to R0 in "
+            f"{order_counts(closer)}; on fresh seeds, in the closest settings: {order_counts(fresh_closer)}): "
+            "they are true by construction and no evidence beyond the argument. Table I's R^l trails its R^r at "
+            "iterations 2, 5 and 10, and two explanations fit it equally well: the paper's code ran the "
+            "half-steps in the other order, or its R^l and R^r column labels are swapped (the printed order "
+            "with the labels exchanged); the text decides neither.")
+
+
 def table1_early(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, matched: pd.DataFrame, sens: pd.DataFrame,
                  left_closer: pd.Series, fresh: pd.DataFrame, runs) -> dict:
-    """``table1_early``: whether iterations 2-10 are reproduced depends on settings the paper does not state.
+    """``table1_early``: whether iterations 2-10 are reproduced depends on settings the paper does
+    not state.
 
-    ``matched``: :func:`~replication.study.table1.table1` at the matched setting; ``sens``, ``left_closer``:
-    :func:`~replication.study.table1.sensitivity_grid` (the table, with ``early cells agreeing``; per early cell above
-    the floor, index level ``half-steps``, is our ``R^l`` closer to ``R0`` than ``R^r``?); ``fresh``:
-    :func:`~replication.study.table1.fresh_mismatch` of the closest settings; the rest as :func:`table1_final`.
+    ``matched``: :func:`~replication.study.table1.table1` at the matched setting; ``sens``,
+    ``left_closer``: :func:`~replication.study.table1.sensitivity_grid` (the table, with ``early
+    cells agreeing``; per early cell above the floor, index level ``half-steps``, is our ``R^l``
+    closer to ``R0`` than ``R^r``?); ``fresh``: :func:`~replication.study.table1.fresh_mismatch` of
+    the closest settings; the rest as :func:`table1_final`.
     """
     reference, n_runs, n_grid, seeds = runs.reference, runs.n_runs, runs.n_grid, runs.seeds
     early = cmp_matched.loc[list(EARLY)].loc[(slice(None), _TWO_STEP), :]
@@ -109,12 +135,7 @@ def table1_early(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, matched: 
     check_evidence(best < n_cells and best_fresh < n_cells, "table1_early",
                    f"no setting of the grid, nor of its closest on fresh seeds, has all {n_cells} early cells agreeing "
                    f"with the paper's (most: {best}, fresh {best_fresh})")
-    closer, fresh_closer, others = _left_closer_counts(left_closer, fresh, reference)
-
-    def order_counts(counts):
-        return (f"{counts.loc[PRINTED_ORDER, 'sum']} of {counts.loc[PRINTED_ORDER, 'size']} in the printed order, "
-                + ", ".join(f"{counts.loc[o, 'sum']} of {counts.loc[o, 'size']}" for o in others if o in counts.index)
-                + " in the other")
+    which_leads = _which_estimate_leads(left_closer, fresh, reference)
     n_settings = len(sens)
     levels = {_GRID_LEVELS.get(name, name): sens.index.unique(level=name).size for name in sens.index.names}
     return dict(
@@ -128,17 +149,8 @@ def table1_early(cmp_default: pd.DataFrame, cmp_matched: pd.DataFrame, matched: 
                  f"seeds in the closest settings; the matched setting (fresh seeds) "
                  f"{(early['verdict'] == 'agrees').sum()} of {len(early)} (iteration 2: "
                  f"{matched.loc[2, ('ours_right', 'mean')]:.3f} vs {reference.loc[(2, 'ours_right'), 'mean']:.3f}), "
-                 f"our defaults {(early_d['verdict'] == 'agrees').sum()}. "
-                 "Which estimate leads follows from a one-line argument, not from a count: in the order eqs. "
-                 "(14)-(15) print, R^l is computed from R^r within the same iteration, one half-step further, so it "
-                 "leads whenever the iteration is still contracting; in the other order R^r has the extra half-step. "
-                 "Our counts only illustrate it (of the early cells above the floor, our R^l is the closer to R0 in "
-                 f"{order_counts(closer)}; on fresh seeds, in the closest settings: {order_counts(fresh_closer)}): "
-                 "they are true by construction and no evidence beyond the argument. Table I's R^l trails its R^r at "
-                 "iterations 2, 5 and 10, and two explanations fit it equally well: the paper's code ran the "
-                 "half-steps in the other order, or its R^l and R^r column labels are swapped (the printed order "
-                 "with the labels exchanged); the text decides neither. Motion range and start vary continuously: "
-                 "settings between those tried are not excluded",
+                 f"our defaults {(early_d['verdict'] == 'agrees').sum()}. " + which_leads
+                 + " Motion range and start vary continuously: settings between those tried are not excluded",
         uncertainty=f"agreement per cell within 3 SE of the difference (ours std/sqrt(runs), the paper's "
                     f"std/sqrt(1000)); {ROUNDED}; the counts are over an enumerated grid of settings and cells, not "
                     "a random sample (no interval); z per cell in table1_matched_setting_vs_paper",
