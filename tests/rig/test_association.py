@@ -286,7 +286,7 @@ def test_the_offset_search_names_stamps_in_different_units():
                                          r"spans 6.075e\+10 s and the sensor stream 60.75 s, a factor of about 1e\+09: "
                                          r"the camera file's .* \(nanoseconds read as seconds\)"):
         estimate_time_offset(OrientationStream(t * 1e9, Q, "c"), OrientationStream(t, Q, "s"))
-    with pytest.raises(ValueError, match=r"fewer than 10 camera samples \(overlap [-0-9.]+\.\.[-0-9.]+ s\)$"):
+    with pytest.raises(ValueError, match=r"fewer than 10 camera samples \(overlap [-0-9.]+\.\.[-0-9.]+ s\)"):
         estimate_time_offset(OrientationStream(t, Q, "c"), OrientationStream(t + 500.0, Q, "s"))  # no unit mistake
 
 # --------------------------------------------------------------------------------------------------
@@ -308,9 +308,9 @@ def test_offset_in_words_association():
     assert offset_in_words(-0.00004, decimals=0).startswith("0 ms: the sensor sample stamped t matches the camera "
                                                             "sample stamped t (the clocks agree to 0.5 ms;")
     assert offset_in_words(0.00005, decimals=1).startswith("+0.1 ms")  # rounds half to even, away from 0 here
-    with pytest.raises(ValueError, match=r"^decimals must be >= 0, got -1$"):
+    with pytest.raises(ValueError, match=r"decimals must be >= 0, got -1"):
         offset_in_words(0.01, decimals=-1)
-    with pytest.raises(ValueError, match=r"^offset_s must be a finite number"):
+    with pytest.raises(ValueError, match=r"offset_s must be a finite number"):
         offset_in_words(math.nan)
 
 
@@ -334,9 +334,9 @@ def test_motion_pairs_pair_each_camera_sample_with_the_one_an_interval_later():
                                                                                                    0.01)[:, None] * w))
     _, _, t5 = motion_pairs(cam, short, 0.25, offset=0.1)
     assert t5[0] == 0.0 and t5[-1] == pytest.approx(0.85 - 0.25 + 1e-12, abs=1e-9)
-    with pytest.raises(ValueError, match=r"^interval must be positive, got 0$"):
+    with pytest.raises(ValueError, match=r"interval must be positive, got 0"):
         motion_pairs(cam, sen, 0)
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s "
+    with pytest.raises(ValueError, match=r"fewer than 2 motion pairs at interval 1\.95 s "
                                          r"\(streams overlap 1\.95 s\)$"):
         motion_pairs(cam, sen, 1.95)
     assert len(motion_pairs(cam, sen, 1.9)[2]) == 2
@@ -359,7 +359,7 @@ def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_t
     assert offset2 == offset and np.max(so3.angle_between_deg(A2, B2)) > 0.1
     _, _, offset3, _ = stream_pairs(cam, Q, interval=0.5, max_offset=0.1)
     assert offset3 == pytest.approx(offset, abs=1e-9)
-    with pytest.raises(ValueError, match=r"^camera must be an OrientationStream and sensor an OrientationStream or "
+    with pytest.raises(ValueError, match=r"camera must be an OrientationStream and sensor an OrientationStream or "
                                          r"GyroStream$"):
         stream_pairs(gyro, Q)
     with pytest.raises(ValueError, match="camera must be an OrientationStream"):
@@ -435,7 +435,7 @@ def test_the_overlap_must_hold_two_blocks():
     cam, sen = _turning_rig(n_cam=21)  # 21 camera samples: 20 speeds
     found = association.offset_analysis(cam, sen, n_bootstrap=4, block_s=0.5)  # blocks of 10: exactly two
     assert found.block_s == 0.5 and found.n_bootstrap == 4 and np.all(np.isfinite(found.ci95_s))
-    with pytest.raises(ValueError, match=r"^block_s=0\.55 s makes blocks of 11 camera speeds, more than half of the 20 "
+    with pytest.raises(ValueError, match=r"block_s=0\.55 s makes blocks of 11 camera speeds, more than half of the 20 "
                                          r"in the overlap: use a shorter block_s$"):
         association.offset_analysis(cam, sen, n_bootstrap=4, block_s=0.55)
 
@@ -480,7 +480,7 @@ def test_pairs_at_one_and_a_half_steps_take_the_later_sample_within_the_inclusiv
 
 def test_an_interval_nearer_the_sample_itself_pairs_nothing():
     cam, sen = _dyadic_streams(np.arange(20) * 0.0625)
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.01 s "
+    with pytest.raises(ValueError, match=r"fewer than 2 motion pairs at interval 0\.01 s "
                                          r"\(streams overlap 1\.19 s\)$"):
         motion_pairs(cam, sen, 0.01)
 
@@ -497,11 +497,11 @@ def test_the_first_sample_pairs_only_with_its_nearest_neighbour_at_the_interval(
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # no sample inside: NumPy's median of no steps warns first
 def test_too_few_pairs_says_the_overlap_of_the_streams():
     cam, sen = _dyadic_streams(1.0 + np.arange(40) * 0.05, sensor_t=np.arange(0.0, 4.0, 0.01))
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 1\.95 s "
+    with pytest.raises(ValueError, match=r"fewer than 2 motion pairs at interval 1\.95 s "
                                          r"\(streams overlap 1\.95 s\)$"):
         motion_pairs(cam, sen, 1.95)
     elsewhere = OrientationStream(np.arange(10.0, 11.0, 0.01), so3.matrix_from_rotation_vector(np.zeros((100, 3))))
-    with pytest.raises(ValueError, match=r"^fewer than 2 motion pairs at interval 0\.25 s "
+    with pytest.raises(ValueError, match=r"fewer than 2 motion pairs at interval 0\.25 s "
                                          r"\(streams overlap 0\.00 s\)$"):
         motion_pairs(cam, elsewhere, 0.25)
 
