@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import turning_streams
+from conftest import needs_real, turning_streams
 from replication.core import so3
 from replication.rig import association, offset_search
 from replication.rig.association import (
@@ -23,7 +23,7 @@ from replication.rig.association import (
     offset_in_words,
     stream_pairs,
 )
-from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory, real_data_available
+from replication.rig.realdata import data_root, load_euroc_imu, load_tum_trajectory
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import RIG_R0, rig_motion, rig_streams
 
@@ -245,8 +245,6 @@ def test_offset_in_words_refuses_bad_arguments(kw):
 
 
 # ---------------------------------------------------------------------------------- real recordings
-
-needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
 #: The shifts of the issue, none on the 0.5 ms grid.
 INJECTED_MS = (0.13, 0.37, 1.71, 2.29, -3.43)

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
+from conftest import needs_real
 from replication.core import so3
 from replication.core.solvers import chordal_optimal
 from replication.rig import changepoint
@@ -32,7 +33,6 @@ from replication.rig.realdata import (
     load_euroc_imu,
     load_euroc_mocap,
     load_tum_trajectory,
-    real_data_available,
 )
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import RIG_R0, assert_rotations_close, noisy_rig
@@ -194,9 +194,6 @@ def test_too_few_pairs_are_refused(pairs):
 
 
 # ---------------------------------------------------------------------------------- real recordings
-
-needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
-
 
 def _recording(name):
     root = data_root()

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 import yaml
 
+from conftest import needs_real
 from replication.cli.export import run as export_command
 from replication.core import so3
 from replication.rig.calibration import calibrate
@@ -35,7 +36,6 @@ from replication.rig.realdata import data_root, load_reference, real_data_availa
 from replication.rig.vioformats import format_number, read_vio_file
 from replication.testing import RIG_R0, rig_streams
 
-needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 R_TRUE = RIG_R0
 FILE_FORMATS = ("kalibr", "openvins", "basalt", "orbslam3")
 
@@ -742,7 +742,6 @@ def _angle(A, B):
 
 # ------------------------------------------------------------------ silent wrong numbers
 
-
 def test_anchor_alias_editing_cam1_leaves_cam0_untouched(tmp_path):
     """A row anchored in cam0 and aliased in cam1: exporting cam1 rewrites the anchor, i.e. cam0's
     row."""
@@ -858,7 +857,6 @@ def test_euroc_sensor_yaml_without_sensor_type_is_not_taken_for_a_camera(tmp_pat
 
 # ------------------------------------------------------------------ claims: warnings, byte for byte
 
-
 @pytest.mark.parametrize("to", ["ros2", "orbslam3"])
 def test_offset_against_an_orientation_stream_is_warned_for_every_target(tmp_path, to):
     """Claim (4): ros2 and orbslam3 tell the user to add d to the stamps, without the
@@ -888,7 +886,6 @@ def test_byte_for_byte_with_crlf_or_bom(tmp_path, variant):
 
 
 # ------------------------------------------------------------------ clear errors (no traceback)
-
 
 def _cli(tmp_path, report, to="kalibr", base=None, camera="cam0"):
     rpath = tmp_path / "report.json"

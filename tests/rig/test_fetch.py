@@ -16,13 +16,11 @@ from pathlib import Path
 
 import pytest
 
+from conftest import needs_real
 from replication.rig import fetch
 from replication.rig import realdata as rd
 
 ROOT = Path(__file__).resolve().parents[2]
-HAVE_REAL = rd.real_data_available()
-needs_real = pytest.mark.skipif(not HAVE_REAL, reason="real recordings absent: run 'python -m replication "
-                                "fetch-data DEST' and set REPLICATION_REAL_DATA=DEST")
 
 
 def _files_the_project_reads():

@@ -6,9 +6,9 @@ from collections import deque
 import numpy as np
 import pytest
 
+from conftest import needs_real
 from replication.core import so3
 from replication.rig.online import OnlineCalibrator
-from replication.rig.realdata import real_data_available
 
 BIAS = np.array([0.06, -0.08, 0.04])
 
@@ -202,9 +202,6 @@ def test_a_scale_not_resolved_on_a_short_first_window_makes_the_rig_wait_for_mor
     assert rig.bias is not None and rig.bias.scale_resolved.all() and rig.bias.span_s > 10.0  # 6 s: none resolved
     assert not any(r.check == "gyro_scale" for r in rig.verdict().reasons)
     assert rig.scale_effect_deg < 0.1 and rig.calibrator.error_deg(R0) < 0.1
-
-
-needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordings not available")
 
 
 @needs_real
