@@ -32,3 +32,33 @@ def test_calibrate_online_passes_the_gyro_bias_switch_to_the_live_rig(tmp_path, 
     main(["calibrate", "--camera", str(cam_file), "--sensor", str(imu_file), "--sensor-kind", "gyro", "--online",
           "--bootstrap", "0", "--quiet", *flag])
     assert seen["gyro_bias"] is expected
+
+
+def test_a_gyro_csv_in_seconds_is_refused_naming_the_option_that_then_reads_it(tmp_path, capsys):
+    """Float-second stamps in an EuRoC-format gyro CSV: refused as ns (exit 2) naming
+    ``--sensor-time-unit s``, which reads them to the R0 of the same file in ns."""
+    import json
+
+    from replication.rig.streams import GyroStream, OrientationStream
+    from replication.testing import rig_streams, write_euroc_imu, write_tum_trajectory
+
+    _, camera, gyro, _ = rig_streams(30.0, rng=np.random.default_rng(5), camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    epoch = 1520530308.0
+    write_tum_trajectory(tmp_path / "cam.txt", OrientationStream(camera.t + epoch, camera.R, "c"))
+    write_euroc_imu(tmp_path / "ns.csv", GyroStream(gyro.t + epoch, gyro.omega, "g"))
+    lines = (tmp_path / "ns.csv").read_text().splitlines()
+    seconds = [lines[0]] + [f"{int(t) // 10**9}.{int(t) % 10**9:09d},{rest}"
+                            for t, rest in (line.split(",", 1) for line in lines[1:])]
+    (tmp_path / "s.csv").write_text("\n".join(seconds) + "\n")
+
+    def run(sensor, *extra):
+        return main(["calibrate", "--camera", str(tmp_path / "cam.txt"), "--sensor", str(tmp_path / sensor),
+                     "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", "--out", str(tmp_path / f"{sensor}.json"),
+                     *extra])
+
+    assert run("s.csv") == 2
+    assert "the time stamp has a fraction: not nanoseconds" in capsys.readouterr().err
+    assert run("s.csv", "--sensor-time-unit", "s") == 0 and run("ns.csv") == 0
+    R = [np.array(json.loads((tmp_path / f"{name}.json").read_text())["R0_camera_from_sensor"])
+         for name in ("s.csv", "ns.csv")]
+    assert so3.rotation_angle_deg(R[0].T @ R[1]) < 1e-3
