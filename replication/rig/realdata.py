@@ -117,7 +117,8 @@ def _csv_seconds(path, t, lines, time_unit):
     if time_unit in ("auto", "ns"):
         frac = np.flatnonzero(t != np.round(t))
         if frac.size:
-            fail(path, "the time stamp has a fraction: not nanoseconds, the unit of EuRoC / TUM-VI CSV files; "
+            stamp = read_lines(path)[lines[frac[0]] - 1].split(",")[0].strip()  # as the file writes it
+            fail(path, f"the time stamp {stamp} has a fraction: not nanoseconds, the unit of EuRoC / TUM-VI CSV files; "
                  "in seconds (or ms, us)? time_unit='s' (calibrate --camera-time-unit / --sensor-time-unit s) "
                  "reads it", line=lines[frac[0]], column=1)
         time_unit = "ns"

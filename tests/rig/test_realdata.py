@@ -83,7 +83,7 @@ def test_a_csv_in_another_unit_is_read_with_its_unit(tmp_path, unit, digits):
     ns = rd.load_stream(write(tmp_path, "ns.csv", IMU_NS), "gyro")
     for read in (rd.load_stream(path, "gyro", time_unit=unit), rd.load_euroc_imu(path, time_unit=unit)):
         np.testing.assert_allclose(read.t, ns.t, rtol=0, atol=1e-6)
-    with pytest.raises(ValueError, match=r"imu.csv, line 2, column 1: the time stamp has a fraction: not "
+    with pytest.raises(ValueError, match=r"imu.csv, line 2, column 1: the time stamp [^ ]* has a fraction: not "
                                          r"nanoseconds.*--sensor-time-unit s\) reads it"):
         rd.load_stream(path, "gyro")
 
@@ -93,10 +93,10 @@ def test_a_csv_stamp_with_a_fraction_is_refused_as_ns_and_an_integral_one_is_not
     whole = [IMU_NS[0]] + [line.replace(",", ".0,", 1) for line in IMU_NS[1:]]
     assert len(rd.load_stream(write(tmp_path, "whole.csv", whole), "gyro", time_unit="ns").t) == 3
     half = [IMU_NS[0], "1000.0,0,0,0,0,0,9.8", "6000.5,0,0,0,0,0,9.8"]
-    with pytest.raises(ValueError, match="half.csv, line 3, column 1: the time stamp has a fraction"):
+    with pytest.raises(ValueError, match="half.csv, line 3, column 1: the time stamp [^ ]* has a fraction"):
         rd.load_stream(write(tmp_path, "half.csv", half), "gyro")
     mocap = write(tmp_path, "gt.csv", ["1.5,0,0,0,1,0,0,0", "1.55,0,0,0,1,0,0,0"])
-    with pytest.raises(ValueError, match="gt.csv, line 1, column 1: the time stamp has a fraction"):
+    with pytest.raises(ValueError, match="gt.csv, line 1, column 1: the time stamp [^ ]* has a fraction"):
         rd.load_stream(mocap, "orientation")
     np.testing.assert_allclose(rd.load_stream(mocap, "orientation", time_unit="s").t, [1.5, 1.55])
 
@@ -307,7 +307,7 @@ def test_a_repeated_time_stamp_with_another_pose_is_refused_naming_the_option(tm
     text = str(err.value)
     assert err.value.line == 5 and "repeated with a different pose, 2 deg away" in text
     assert "repeated='keep-first', 'keep-last' or 'mean'" in text and "--repeated" in text
-    assert "1403636580848555520 = 1403636580848555520" in text and not NUMPY_REPR.search(text)
+    assert "1403636580848555648 = 1403636580848555648" in text and not NUMPY_REPR.search(text)  # the file's digits
 
 
 def test_a_verbatim_repeat_is_refused_naming_drop_repeated_and_dropped_on_request(tmp_path):
