@@ -34,6 +34,7 @@ Formats (recognised by --sensor-kind and the file name):
   a time stamp repeated with another pose is refused unless --repeated keep-first|keep-last|mean
   gyro sensor (--sensor-kind gyro):
     *.csv  EuRoC / TUM-VI imu0/data.csv, "t[ns], wx, wy, wz [rad/s], ax, ay, az [m/s^2]"
+  a CSV whose stamps are not ns (e.g. seconds "1520530308.181901469"): --camera-time-unit / --sensor-time-unit
   static pose sets (--poses): Tabb & Ahmad Yousef's cali.txt (camera) and robot_cali.txt (robot hand)
   reference (optional; recognised by content, --reference-camera picks the camera):
     Kalibr camchain YAML (<cam>.T_cam_imu), OpenVINS %YAML:1.0 chain (<cam>.T_imu_cam), ORB-SLAM3 settings
@@ -135,9 +136,11 @@ def add_parser(sub) -> argparse.ArgumentParser:
                      help="time unit of both files when they are TUM trajectories (default: auto: ns above 1e12, "
                           "else s; EuRoC / TUM-VI CSVs are ns)")
     cal.add_argument("--camera-time-unit", choices=units, default=None,
-                     help="time unit of the camera file only (default: that of --time-unit)")
+                     help="time unit of the camera file only, a TUM trajectory or a CSV (default: that of "
+                          "--time-unit; a CSV's: ns)")
     cal.add_argument("--sensor-time-unit", choices=units, default=None,
-                     help="time unit of the sensor file only (default: that of --time-unit)")
+                     help="time unit of the sensor file only, a TUM trajectory or a CSV (default: that of "
+                          "--time-unit; a CSV's: ns, e.g. s for an IMU CSV whose stamps are seconds)")
     cal.add_argument("--drop-repeated", action="store_true",
                      help="skip lines of a trajectory or CSV that repeat the previous line verbatim")
     cal.add_argument("--repeated", choices=["refuse", "keep-first", "keep-last", "mean"], default="refuse",

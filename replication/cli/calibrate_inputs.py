@@ -142,8 +142,8 @@ def _stream(path, option: str, kind: str, **options):
 
 
 def time_unit(args, side: str) -> str:
-    """The time unit for one file: its own option, else ``--time-unit`` where it applies (TUM
-    files), else auto."""
+    """The time unit for one file: its own option (a TUM trajectory or a CSV), else ``--time-unit``
+    where it applies (TUM files), else auto."""
     own = getattr(args, f"{side}_time_unit")
     if own is not None:
         return own

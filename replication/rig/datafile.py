@@ -237,6 +237,7 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     n_columns = None
     what = what or ", ".join(names)
     groups, lines = [], []  # groups[k]: the rows that share kept row k's time stamp (one without repeats)
+    stamps = []  # each kept row's first field as the file writes it: messages quote it, not its float64
     verbatim = 0
     skip_header = header
     for lineno, line in enumerate(read_lines(path), 1):
@@ -268,13 +269,14 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
             continue
         if groups and increasing_first and values[0] == groups[-1][0][0]:
             if repeated == "refuse":
-                _refuse_repeat(path, values, groups[-1][0], lineno, names[0], quaternion)
+                _refuse_repeat(path, values, groups[-1][0], lineno, names[0], quaternion, (parts[0], stamps[-1]))
             groups[-1].append(values)
             if repeated == "keep-last":
-                lines[-1] = lineno
+                lines[-1], stamps[-1] = lineno, parts[0]
             continue
         groups.append([values])
         lines.append(lineno)
+        stamps.append(parts[0])
     if len(groups) < 2:
         fail(path, f"fewer than 2 data lines ({what})")
     data = np.array([_merged(path, g, repeated, quaternion, line) for g, line in zip(groups, lines)])
@@ -290,17 +292,10 @@ def read_table(path, names, *, delimiter=None, what: str | None = None, header: 
     step = np.diff(data[:, 0])
     if increasing_first and np.any(step <= 0):
         k = int(np.flatnonzero(step <= 0)[0])
-        fail(path, f"timestamp not after the previous line's ({_number(data[k + 1, 0])} < {_number(data[k, 0])}): "
+        fail(path, f"timestamp not after the previous line's ({_stamps(stamps[k + 1], stamps[k], '<')}): "
              "the lines go back in time (sort them by time, or split the file where the clock restarts)",
              line=lines[k + 1], column=1, column_name=names[0])
     return data, np.array(lines)
-
-
-def _number(x) -> str:
-    """A value in a message: a plain number (never numpy's ``np.float64(...)``), integral values
-    without ``.0``."""
-    x = float(x)
-    return str(int(x)) if x.is_integer() and abs(x) < 1e20 else repr(x)
 
 
 def _quaternion_angle_deg(q1, q2) -> float:
@@ -319,7 +314,16 @@ def _same_pose(values, other, quaternion) -> bool:
     return all(values[i] == other[i] for i in rest) and all(values[i] == -other[i] for i in quaternion)
 
 
-def _refuse_repeat(path, values, first, lineno, name, quaternion):
+def _stamps(stamp: str, previous: str, relation: str) -> str:
+    """Two time stamps of a message as the file writes them (its own digits: a 19-digit ns stamp
+    read as a double moves by up to 128 ns), said equal in float64 where their texts differ."""
+    stamp, previous = stamp.strip(), previous.strip()
+    if relation == "=" and stamp != previous:
+        return f"{stamp} and {previous}, one number once read as float64 (about 16 digits)"
+    return f"{stamp} {relation} {previous}"
+
+
+def _refuse_repeat(path, values, first, lineno, name, quaternion, texts):
     if _same_pose(values, first, quaternion):
         how = "exactly" if values == first else "with its quaternion's sign flipped (one rotation)"
         why = (f"the line repeats the previous one {how}; drop_repeated=True (calibrate --drop-repeated) skips such "
@@ -329,7 +333,7 @@ def _refuse_repeat(path, values, first, lineno, name, quaternion):
             f", {_quaternion_angle_deg([values[i] for i in quaternion], [first[i] for i in quaternion]):.3g} deg away")
         why = (f"the time stamp is repeated with a different pose{away}; repeated='keep-first', 'keep-last' or "
                f"'mean' (calibrate --repeated keep-first|keep-last|mean) reads it, keeping one pose per time stamp")
-    fail(path, f"timestamp not after the previous line's ({_number(values[0])} = {_number(first[0])}): {why}",
+    fail(path, f"timestamp not after the previous line's ({_stamps(*texts, '=')}): {why}",
          line=lineno, column=1, column_name=name)
 
 

@@ -110,7 +110,22 @@ def load_tum_trajectory(path, *, time_unit: str = "auto", drop_repeated: bool = 
     return OrientationStream(_seconds(data[:, 0], path, time_unit), R, str(path))
 
 
-def load_euroc_mocap(path, *, drop_repeated: bool = False, repeated: str = "refuse",
+def _csv_seconds(path, t, lines, time_unit):
+    """A EuRoC / TUM-VI CSV's time stamps in seconds: nanoseconds by format (``time_unit="ns"`` or
+    ``"auto"``), else the unit given. A stamp with a fraction is no count of nanoseconds: read as
+    ns it is refused, naming the unit option that reads it."""
+    if time_unit in ("auto", "ns"):
+        frac = np.flatnonzero(t != np.round(t))
+        if frac.size:
+            stamp = read_lines(path)[lines[frac[0]] - 1].split(",")[0].strip()  # as the file writes it
+            fail(path, f"the time stamp {stamp} has a fraction: not nanoseconds, the unit of EuRoC / TUM-VI CSV files; "
+                 "in seconds (or ms, us)? time_unit='s' (calibrate --camera-time-unit / --sensor-time-unit s) "
+                 "reads it", line=lines[frac[0]], column=1)
+        time_unit = "ns"
+    return _seconds(t, path, time_unit)
+
+
+def load_euroc_mocap(path, *, time_unit: str = "ns", drop_repeated: bool = False, repeated: str = "refuse",
                      tally: dict | None = None) -> OrientationStream:
     """EuRoC / TUM-VI ``mocap0/data.csv`` or ground truth, as shipped: ``t[ns], p_x, p_y, p_z, q_w,
     q_x, q_y, q_z``.
@@ -121,23 +136,25 @@ def load_euroc_mocap(path, *, drop_repeated: bool = False, repeated: str = "refu
     b_w_RS_S_x [rad s^-1], b_w_RS_S_y, b_w_RS_S_z, b_a_RS_S_x [m s^-2], b_a_RS_S_y, b_a_RS_S_z``):
     the first 8 are used, the velocity and the two biases are checked as numbers and left out; every
     line of a file has the same count. ``q_RS`` (scalar first) rotates body (sensor S) vectors into
-    the world R: ``world_from_body``. ``drop_repeated``, ``repeated`` and ``tally``: as
-    :func:`load_tum_trajectory`'s.
+    the world R: ``world_from_body``. ``time_unit``: the stamps' unit, nanoseconds by format
+    (``"s"``, ``"ms"``, ``"us"`` for files written otherwise; a stamp with a fraction read as ns
+    is refused). ``drop_repeated``, ``repeated`` and ``tally``: as :func:`load_tum_trajectory`'s.
     """
     data, lines = read_table(path, EUROC_POSE_COLUMNS, delimiter=",", what="t[ns], p_xyz, q_wxyz[, v_xyz, b_w_xyz, "
                              "b_a_xyz]", optional=EUROC_GROUNDTRUTH_EXTRA, drop_repeated=drop_repeated,
                              repeated=repeated, quaternion=(4, 5, 6, 7), tally=tally)
     R = unit_quaternion_rotations(path, data[:, 4:8], lines)
-    return OrientationStream(data[:, 0] * 1e-9, R, str(path))
+    return OrientationStream(_csv_seconds(path, data[:, 0], lines, time_unit), R, str(path))
 
 
-def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, drop_repeated: bool = False, repeated: str = "refuse",
-                   tally: dict | None = None) -> GyroStream:
+def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, time_unit: str = "ns", drop_repeated: bool = False,
+                   repeated: str = "refuse", tally: dict | None = None) -> GyroStream:
     """EuRoC / TUM-VI ``imu0/data.csv``: ``t[ns], w_x, w_y, w_z [rad/s], a_x, a_y, a_z [m/s^2]``.
 
     Angular rates above ``max_rate_rad_s`` (2000 deg/s, beyond common MEMS gyro ranges) are rejected
-    as a units error (deg/s stored as rad/s). ``drop_repeated``, ``repeated`` and ``tally``: as
-    :func:`load_tum_trajectory`'s (``"mean"`` averages the rates).
+    as a units error (deg/s stored as rad/s). ``time_unit``: as :func:`load_euroc_mocap`'s.
+    ``drop_repeated``, ``repeated`` and ``tally``: as :func:`load_tum_trajectory`'s (``"mean"``
+    averages the rates).
     """
     data, lines = read_table(path, EUROC_IMU_COLUMNS, delimiter=",", what="t[ns], w_xyz [rad/s], a_xyz [m/s^2]",
                              drop_repeated=drop_repeated, repeated=repeated, tally=tally)
@@ -146,7 +163,7 @@ def load_euroc_imu(path, *, max_rate_rad_s: float = 35.0, drop_repeated: bool = 
     if bad.size:
         fail(path, f"angular rate {float(np.abs(w[bad[0]]).max()):.4g} rad/s exceeds {max_rate_rad_s:g} rad/s; "
              "are the rates in deg/s?", line=lines[bad[0]])
-    return GyroStream(data[:, 0] * 1e-9, w, str(path))
+    return GyroStream(_csv_seconds(path, data[:, 0], lines, time_unit), w, str(path))
 
 
 def _rotation(path, M, what, atol):
@@ -241,20 +258,19 @@ def load_stream(path, kind: str = "orientation", *, time_unit: str = "auto", dro
     ``kind="gyro"``: an EuRoC/TUM-VI ``imu0/data.csv`` (:func:`load_euroc_imu`).
     ``kind="orientation"``: a ``.csv`` is read as EuRoC/TUM-VI mocap or ground truth, 8 or 17
     columns (:func:`load_euroc_mocap`), anything else as a TUM trajectory
-    (:func:`load_tum_trajectory`, which takes ``time_unit``). EuRoC CSVs are in nanoseconds by their
-    format: a ``time_unit`` other than ``"auto"`` or ``"ns"`` is refused for them.
+    (:func:`load_tum_trajectory`). ``time_unit`` goes to every loader: EuRoC CSVs are in
+    nanoseconds by their format (``"auto"``), a CSV written in another unit is read with it.
     ``drop_repeated``, ``repeated`` and ``tally`` go to the loader (:func:`load_tum_trajectory`).
     """
     if kind not in ("gyro", "orientation"):
         raise ValueError(f"kind must be 'gyro' or 'orientation', got {kind!r}")
+    if time_unit != "auto" and time_unit not in TIME_UNITS:
+        raise ValueError(f"time_unit must be one of {sorted(TIME_UNITS)} or 'auto', got {time_unit!r}")
     euroc = kind == "gyro" or Path(path).suffix.lower() == ".csv"
-    if euroc and time_unit not in ("auto", "ns"):
-        raise ValueError(f"{path}: EuRoC / TUM-VI CSV time stamps are nanoseconds by format; time_unit "
-                         f"{time_unit!r} applies to TUM trajectories only")
-    common = dict(drop_repeated=drop_repeated, repeated=repeated, tally=tally)
+    common = dict(time_unit=time_unit, drop_repeated=drop_repeated, repeated=repeated, tally=tally)
     if kind == "gyro":
         return load_euroc_imu(path, **common)
-    return load_euroc_mocap(path, **common) if euroc else load_tum_trajectory(path, time_unit=time_unit, **common)
+    return load_euroc_mocap(path, **common) if euroc else load_tum_trajectory(path, **common)
 
 
 def load_reference(path, camera: str = "cam0") -> np.ndarray:

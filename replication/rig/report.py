@@ -103,15 +103,22 @@ def _segment_lines(s) -> list:
     else:
         n, bad = len(s["segments"]), s["disagreeing"]
         named = ", ".join(f"{s['segments'][i]['start_s']:.1f}-{s['segments'][i]['end_s']:.1f} s" for i in bad)
-        lines = [f"segments: {n} of about 10 s (1 s pairs) " + (f"disagree: {named}" if bad else "agree") +
-                 f" (p = {s['p_value']:.2g}); 95 % radius from the pairs {s['pairs_radius_deg']:.3f} deg, from the "
+        own = ", ".join(f"{s['segments'][i]['p_value']:.2g}" for i in bad)
+        lines = [f"segments: {n} of about 10 s (1 s pairs) " + (
+                     f"disagree: {named} (each by its own test, p = {own}; all the segments together p = "
+                     f"{s['p_value']:.2g})" if bad else f"agree (p = {s['p_value']:.2g})") +
+                 f"; 95 % radius from the pairs {s['pairs_radius_deg']:.3f} deg, from the "
                  f"spread between segments {s['between_radius_deg']:.3f} deg"]
     used = s.get("use")
     if used is not None and used.get("kept_s") is not None:
         spans = ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in s.get("consistent_spans_s", []))
-        lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs; the majority, not known to be "
-                     f"right: {used.get('R0_moves_deg_if_left_out_part_is_right', math.nan):.2f} deg away if the part "
-                     f"left out is)")
+        if not used.get("left_out_spans_s"):
+            lines.append(f"use='consistent': every segment agrees, nothing left out: R0 from all of {spans} "
+                         f"({used['pairs_kept']} pairs)")
+        else:
+            lines.append(f"use='consistent': R0 from {spans} ({used['pairs_kept']} pairs; the majority, not known to "
+                         f"be right: {used.get('R0_moves_deg_if_left_out_part_is_right', math.nan):.2f} deg away if "
+                         f"the part left out is)")
     lines += [f"clock jump at {j['time_s']:.1f} s: {1e3 * j['size_s']:+.1f} ms (clock: {j.get('clock', 'sensor')})"
               for j in s.get("clock_jumps", [])]
     return lines

@@ -119,9 +119,10 @@ class SegmentTest:
         bad = self.disagreeing
         named = ", ".join(f"{self.segments[i].start_s:.1f}-{self.segments[i].end_s:.1f} s "
                           f"({self.segments[i].angle_deg:.2f} deg)" for i in bad)
-        head = (f"{len(self.segments)} segments " + ("disagree" if self.significant else "agree within their noise")
+        head = (f"{len(self.segments)} segments " + ("disagree" if self.significant else "agree within their noise"
+                                                     + (" as a whole" if bad else ""))
                 + f" (statistic {self.statistic:.2f}, threshold {self.threshold:.2f}, p = {self.p_value:.2g})")
-        return head + (f"; disagreeing: {named}" if bad else "") + (
+        return head + (f"; disagreeing by their own tests: {named}" if bad else "") + (
             f"; radius from the pairs {self.pairs_radius_deg:.3f} deg, between segments "
             f"{self.between_radius_deg:.3f} deg")
 
@@ -359,14 +360,20 @@ def reasons(test, t0: float, used=None, note=None) -> list:
     worst = max(test.segments[i].angle_deg for i in bad)
     level, bound = ("fail", fail) if worst > fail else ("warning", 0.0)
     named = "; ".join(f"{test.segments[i].start_s - t0:.1f}-{test.segments[i].end_s - t0:.1f} s by "
-                      f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f})"
-                      for i in bad)
+                      f"{test.segments[i].angle_deg:.2f} deg (its radius {test.segments[i].radius_deg:.2f}, its own "
+                      f"test p = {test.segments[i].p_value:.2g})" for i in bad)
+    S = len(test.segments)  # the words say which test carries the verdict: each segment's own
+    own = (f"each by its own test against {'the consistent part' if test.consistent else 'the others'}"
+           + (f", p below {test.level:g} / {S} segments = {test.level / S:.2g}"
+              if all(test.segments[i].p_value < test.level / S for i in bad) else ", left out of it one by one"))
+    whole = (f"the test of all the segments together: p = {test.p_value:.2g}"
+             + ("" if test.significant else f", not significant alone (level {test.level:g})"))
     keep = (f"the consistent part (the majority, whose segments agree; the pairs cannot tell whether it or the "
             f"rest is right) is {spans}: calibrate on it with use='consistent' (--use consistent) where its "
             f"tracking is known to be the good one" if test.consistent else "no half of the segments agrees")
     out.append(Reason("segments_disagree", level, worst, bound,
                       f"R0 differs along the recording: segments of {ANALYSIS_INTERVAL_S:g} s pairs disagree with "
-                      f"the rest beyond their noise ({named}; the segments' test p = {test.p_value:.2g}): a "
+                      f"the rest beyond their noise ({named}; {own}; {whole}): a "
                       f"trajectory whose frame wanders or is lost for a stretch, or a re-mount; the radius from the "
                       f"spread between segments is {test.between_radius_deg:.2f} deg (from the pairs "
                       f"{test.pairs_radius_deg:.2f}); {keep}"))

@@ -120,14 +120,26 @@ def integrate_gyro(gyro: GyroStream) -> OrientationStream:
 #: mistake puts one stream far outside, as does a first time stamp beyond 1e10 s (Unix seconds reach
 #: that in 2286).
 PLAUSIBLE_SPAN_S = (1.0, 1e4)
-_UNITS = {1e3: "milliseconds", 1e6: "microseconds", 1e9: "nanoseconds"}
+_UNITS = ("seconds", "milliseconds", "microseconds", "nanoseconds")
+_SHORT = {"seconds": "s", "milliseconds": "ms", "microseconds": "us", "nanoseconds": "ns"}
+
+
+def _misreadings(factor: float, finer: bool) -> list:
+    """The (file's unit, unit read in) pairs ``factor`` apart, the file's unit the finer one when
+    ``finer``: one read in s (a TUM trajectory) or ns (a CSV) first."""
+    step = round(np.log10(factor) / 3)
+    pairs = [(_UNITS[i + step], _UNITS[i]) if finer else (_UNITS[i], _UNITS[i + step])
+             for i in range(len(_UNITS) - step)]
+    return sorted(pairs, key=lambda pair: pair[1] not in ("seconds", "nanoseconds"))
 
 
 def time_unit_mismatch(camera, sensor):
     """``(ratio, factor, sentence)`` when the two streams' spans differ by about 1e3, 1e6 or 1e9
     (one file's time stamps in another unit than its loader read them in), else None. The sentence
-    names the units and blames the stream whose span (or first stamp, beyond 1e10 s) is implausible
-    for a recording (:data:`PLAUSIBLE_SPAN_S`)."""
+    blames the stream whose span (or first stamp, beyond 1e10 s) is implausible for a recording
+    (:data:`PLAUSIBLE_SPAN_S`), says whether its unit is finer or coarser than the one it was read
+    in, names the pairs of units that fit (the unit read in is not known here: microseconds read
+    as nanoseconds and seconds as milliseconds look alike) and the option that reads the file."""
     cs, ss = camera.t[-1] - camera.t[0], sensor.t[-1] - sensor.t[0]
     if not (cs > 0 and ss > 0):
         return None
@@ -140,13 +152,17 @@ def time_unit_mismatch(camera, sensor):
            if not lo <= span <= hi or abs(start) > 1e10]
     if len(odd) == 1:
         name, span = odd[0]
-        unit = _UNITS[factor]
-        how = f"{unit} read as seconds" if span == max(cs, ss) else f"seconds read as {unit}"
-        culprit = f"the {name} file's time stamps are likely in another unit than they were read in ({how})"
+        finer = span == max(cs, ss)
+        pairs = _misreadings(factor, finer)
+        how = ", or ".join(f"{unit} read as {read}" for unit, read in pairs)
+        culprit = (f"the {name} file's time stamps are likely in another unit than they were read in, one "
+                   f"{factor:.0e} times {'finer' if finer else 'coarser'} ({how})")
+        option = f"--{name}-time-unit " + (_SHORT[pairs[0][0]] if len(pairs) == 1 else "with the file's unit")
     else:
-        culprit = (f"one of the two files' time stamps are likely in another unit than they were read in "
-                   f"({_UNITS[factor]} read as seconds, or seconds as {_UNITS[factor]})")
+        culprit = (f"one of the two files' time stamps are likely in another unit than they were read in, one "
+                   f"{factor:.0e} times finer or coarser")
+        option = "--camera-time-unit / --sensor-time-unit with the file's unit"
     return float(ratio), factor, (
         f"the camera stream spans {cs:.4g} s and the sensor stream {ss:.4g} s, a factor of about {factor:.0e}: "
-        f"{culprit}; TUM trajectories: --camera-time-unit / --sensor-time-unit; EuRoC / TUM-VI CSV files are in ns "
-        f"by format")
+        f"{culprit}; {option} reads it (TUM trajectories and EuRoC / TUM-VI CSV files alike; a CSV's default is "
+        f"ns)")

@@ -2,6 +2,7 @@
 help shows every default, its outputs are written in the format asked or a disk error is a message,
 and the overlap error names its option."""
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -254,7 +255,7 @@ def test_cli_bad_numbers_exit_2_naming_the_option(rig_files, extra, message, cap
     assert extra[0] in stderr and message in stderr
 
 
-@pytest.mark.parametrize("case", ["directory", "under a file", "unknown method", "csv time unit", "empty",
+@pytest.mark.parametrize("case", ["directory", "under a file", "unknown method", "csv in a wrong unit", "empty",
                                   "trailing slash"])
 def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_files, tmp_path, case, capsys,
                                                                           monkeypatch):
@@ -264,7 +265,7 @@ def test_cli_bad_output_or_options_exit_2_before_the_work_leaving_nothing(rig_fi
     blocker = tmp_path / "file"
     blocker.write_text("x")
     extra = {"directory": ("--out", tmp_path), "under a file": ("--out", blocker / "r.json"),
-             "unknown method": ("--method", "nope"), "csv time unit": ("--sensor-time-unit", "ms"),
+             "unknown method": ("--method", "nope"), "csv in a wrong unit": ("--sensor-time-unit", "ms"),
              "empty": ("--out", ""), "trailing slash": ("--out", str(tmp_path / "newdir") + "/")}[case]
     sensor_kind = ("--sensor-kind", "gyro")
     assert _cli("--camera", rig_files / "cam.txt", "--sensor", rig_files / "imu.csv", *sensor_kind, *extra) == 2
@@ -324,3 +325,32 @@ def test_cli_two_step_left_on_euroc_names_the_near_single_axis_motion_not_the_wa
     assert any(w.startswith("IterationCapWarning") for w in report["warnings"])
     (reason,) = [r for r in report["verdict"]["reasons"] if r["check"] == "solver_warning"]
     assert reason["measured"] > reason["threshold"] == pytest.approx(0.98627, abs=1e-5)
+
+def test_a_gyro_csv_in_seconds_is_refused_naming_the_option_that_then_reads_it(tmp_path, capsys):
+    """Float-second stamps in an EuRoC-format gyro CSV: refused as ns (exit 2) naming
+    ``--sensor-time-unit s``, which reads them to the R0 of the same file in ns."""
+    import json
+
+    from replication.rig.streams import GyroStream, OrientationStream
+    from replication.testing import rig_streams, write_euroc_imu, write_tum_trajectory
+
+    _, camera, gyro, _ = rig_streams(30.0, rng=np.random.default_rng(5), camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    epoch = 1520530308.0
+    write_tum_trajectory(tmp_path / "cam.txt", OrientationStream(camera.t + epoch, camera.R, "c"))
+    write_euroc_imu(tmp_path / "ns.csv", GyroStream(gyro.t + epoch, gyro.omega, "g"))
+    lines = (tmp_path / "ns.csv").read_text().splitlines()
+    seconds = [lines[0]] + [f"{int(t) // 10**9}.{int(t) % 10**9:09d},{rest}"
+                            for t, rest in (line.split(",", 1) for line in lines[1:])]
+    (tmp_path / "s.csv").write_text("\n".join(seconds) + "\n")
+
+    def run(sensor, *extra):
+        return main(["calibrate", "--camera", str(tmp_path / "cam.txt"), "--sensor", str(tmp_path / sensor),
+                     "--sensor-kind", "gyro", "--bootstrap", "0", "--quiet", "--out", str(tmp_path / f"{sensor}.json"),
+                     *extra])
+
+    assert run("s.csv") == 2
+    assert re.search(r"the time stamp [0-9.]+ has a fraction: not nanoseconds", capsys.readouterr().err)
+    assert run("s.csv", "--sensor-time-unit", "s") == 0 and run("ns.csv") == 0
+    R = [np.array(json.loads((tmp_path / f"{name}.json").read_text())["R0_camera_from_sensor"])
+         for name in ("s.csv", "ns.csv")]
+    assert so3.rotation_angle_deg(R[0].T @ R[1]) < 1e-3

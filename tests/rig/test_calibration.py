@@ -507,19 +507,31 @@ def test_bootstrap_replicates_without_masks_refuse_non_rotations(rig, door_solve
     assert not reflection.any() and not failed.any()  # calls 4-7: the bad one (call 2) was in the first run
 
 
-@pytest.mark.parametrize("factor, unit", [(1e9, "nanoseconds"), (1e6, "microseconds"), (1e3, "milliseconds")])
-def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(rig, factor, unit):
+@pytest.mark.parametrize("factor, finer, coarser", [
+    (1e9, "nanoseconds read as seconds", "seconds read as nanoseconds"),
+    (1e6, "microseconds read as seconds, or nanoseconds read as milliseconds",
+     "milliseconds read as nanoseconds, or seconds read as microseconds"),
+    (1e3, "milliseconds read as seconds, or microseconds read as milliseconds, or nanoseconds read as microseconds",
+     "microseconds read as nanoseconds, or seconds read as milliseconds, or milliseconds read as microseconds")])
+def test_camera_and_gyro_stamps_in_different_units_are_refused_naming_the_units(rig, factor, finer, coarser):
+    """Every pair of units ``factor`` apart is named (a CSV's microseconds read as nanoseconds
+    look like seconds read as milliseconds), and the option that reads the file: with its unit where
+    one pair fits."""
     camera, gyro, _ = rig
     t0 = 1000.0  # absolute stamps, as a recording has: the camera's in another unit
     late = OrientationStream((camera.t + t0) * factor, camera.R, "c")
     gyro = GyroStream(gyro.t + t0, gyro.omega, "g")
     about = re.escape(f"{factor:.0e}")
+    option = "--camera-time-unit " + ("ns" if factor == 1e9 else "with the file's unit")
     with pytest.raises(ValueError, match=rf"a factor of about {about}: the camera file's time stamps are likely in "
-                                         rf"another unit than they were read in \({unit} read as seconds\)"):
+                                         rf"another unit than they were read in, one {about} times finer "
+                                         rf"\({finer}\); {option} reads it \(TUM trajectories and EuRoC"):
         calibrate(late, gyro, n_bootstrap=0)
     early = OrientationStream(camera.t + t0, camera.R, "c")  # and the other way round: the gyro's in seconds / unit
     slow = GyroStream((gyro.t + t0) / factor, gyro.omega * factor, "g")
-    with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* \(seconds read as {unit}\)"):
+    option = "--sensor-time-unit " + ("s" if factor == 1e9 else "with the file's unit")
+    with pytest.raises(ValueError, match=rf"the sensor file's time stamps .* {about} times coarser \({coarser}\); "
+                                         rf"{option} reads it"):
         calibrate(early, slow, n_bootstrap=0)
 
 

@@ -252,3 +252,33 @@ def test_read_table_is_the_loaders_parser_with_a_header_and_quaternion_check(tmp
         unit_quaternion_rotations(path, data[:, 1:], lines)
     assert err.value.line == 4
     np.testing.assert_allclose(unit_quaternion_rotations(path, data[:2, 1:], lines[:2])[1], np.diag([1.0, -1, -1]))
+
+
+IMU_HEAD = "#timestamp [ns],wx,wy,wz,ax,ay,az"
+
+
+@pytest.mark.parametrize("second, message", [
+    ("1520530321404060469", "(1520530321404060469 < 1520530321404065469)"),       # back in time
+    ("1520530321404065469", "(1520530321404065469 = 1520530321404065469)"),       # the same text
+    ("1520530321404065500", "(1520530321404065500 and 1520530321404065469, one number once read as float64"),
+])
+def test_time_stamps_in_messages_are_the_files_own_text(tmp_path, second, message):
+    """A 19-digit ns stamp moves by up to 128 ns as a double (...469 reads as ...536): a message
+    quotes the file's digits, and two texts that read as one double are said to be that, not
+    equal."""
+    path = tmp_path / "imu.csv"
+    path.write_text("\n".join([IMU_HEAD, "1520530321404065469,0,0,0,0,0,9.8", f"{second},0,0,0,0,0,9.8"]) + "\n")
+    with pytest.raises(DataFileError, match=r"imu.csv, line 3, column 1 \('t\[ns\]'\): timestamp not after the "
+                                            rf"previous line's {re.escape(message)}") as err:
+        rd.load_euroc_imu(path)
+    assert "065536" not in str(err.value)
+    path.write_text("\n".join([IMU_HEAD, "1520530321404065469,0,0,0,0,0,9.8", "1520530321404065725,0,0,0,0,0,9.8"])
+                    + "\n")  # the next double (256 ns on): read
+    assert len(rd.load_euroc_imu(path).t) == 2
+
+
+def test_a_fractional_csv_stamp_is_quoted_as_written(tmp_path):
+    path = tmp_path / "imu.csv"
+    path.write_text("\n".join([IMU_HEAD, "1520530308.181901469,0,0,0,0,0,9.8", "1520530308.186917469,0,0,0,0,0,9.8"]))
+    with pytest.raises(DataFileError, match=r"line 2, column 1: the time stamp 1520530308.181901469 has a fraction"):
+        rd.load_euroc_imu(path)

@@ -43,6 +43,44 @@ def test_imu_in_degrees_per_second_is_refused(tmp_path):
         rd.load_euroc_imu(write(tmp_path, "imu.csv", lines))
 
 
+IMU_NS = ["#timestamp [ns],wx,wy,wz,ax,ay,az", "1520530308181901469,0.1,0.2,0.3,0,0,9.8",
+          "1520530308186917469,0.1,0.2,0.3,0,0,9.8", "1520530308191933469,0.1,0.2,0.3,0,0,9.8"]
+
+
+@pytest.mark.parametrize("unit, digits", [("s", 9), ("ms", 6), ("us", 3)])
+def test_a_csv_in_another_unit_is_read_with_its_unit(tmp_path, unit, digits):
+    """A gyro CSV written in seconds (float stamps) or ms / us reads as the ns file does, given its
+    unit (the option the refusal names)."""
+    t_ns = [int(line.split(",")[0]) for line in IMU_NS[1:]]
+    lines = [IMU_NS[0]] + [f"{t // 10**digits}.{t % 10**digits:0{digits}d}," + line.split(",", 1)[1]
+                           for t, line in zip(t_ns, IMU_NS[1:])]
+    path = write(tmp_path, "imu.csv", lines)
+    ns = rd.load_stream(write(tmp_path, "ns.csv", IMU_NS), "gyro")
+    for read in (rd.load_stream(path, "gyro", time_unit=unit), rd.load_euroc_imu(path, time_unit=unit)):
+        np.testing.assert_allclose(read.t, ns.t, rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match=r"imu.csv, line 2, column 1: the time stamp [^ ]* has a fraction: not "
+                                         r"nanoseconds.*--sensor-time-unit s\) reads it"):
+        rd.load_stream(path, "gyro")
+
+
+def test_a_csv_stamp_with_a_fraction_is_refused_as_ns_and_an_integral_one_is_not(tmp_path):
+    """The fraction rule at its boundary: ``...469.0`` is a count of ns, ``...469.5`` is not."""
+    whole = [IMU_NS[0]] + [line.replace(",", ".0,", 1) for line in IMU_NS[1:]]
+    assert len(rd.load_stream(write(tmp_path, "whole.csv", whole), "gyro", time_unit="ns").t) == 3
+    half = [IMU_NS[0], "1000.0,0,0,0,0,0,9.8", "6000.5,0,0,0,0,0,9.8"]
+    with pytest.raises(ValueError, match="half.csv, line 3, column 1: the time stamp [^ ]* has a fraction"):
+        rd.load_stream(write(tmp_path, "half.csv", half), "gyro")
+    mocap = write(tmp_path, "gt.csv", ["1.5,0,0,0,1,0,0,0", "1.55,0,0,0,1,0,0,0"])
+    with pytest.raises(ValueError, match="gt.csv, line 1, column 1: the time stamp [^ ]* has a fraction"):
+        rd.load_stream(mocap, "orientation")
+    np.testing.assert_allclose(rd.load_stream(mocap, "orientation", time_unit="s").t, [1.5, 1.55])
+
+
+def test_an_unknown_time_unit_is_refused_for_any_file(tmp_path):
+    with pytest.raises(ValueError, match=r"time_unit must be one of .* got 'min'"):
+        rd.load_stream(write(tmp_path, "ns.csv", IMU_NS), "gyro", time_unit="min")
+
+
 def test_missing_files_and_entries(tmp_path):
     with pytest.raises(FileNotFoundError, match="no such file"):
         rd.load_euroc_mocap(tmp_path / "none.csv")
@@ -136,7 +174,7 @@ def test_a_repeated_time_stamp_with_another_pose_is_refused_naming_the_option(tm
     text = str(err.value)
     assert err.value.line == 5 and "repeated with a different pose, 2 deg away" in text
     assert "repeated='keep-first', 'keep-last' or 'mean'" in text and "--repeated" in text
-    assert "1403636580848555520 = 1403636580848555520" in text and not NUMPY_REPR.search(text)
+    assert "1403636580848555648 = 1403636580848555648" in text and not NUMPY_REPR.search(text)  # the file's digits
 
 
 def test_a_verbatim_repeat_is_refused_naming_drop_repeated_and_dropped_on_request(tmp_path):

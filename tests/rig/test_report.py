@@ -198,3 +198,36 @@ def test_the_api_plot_honours_the_extension_or_refuses_before_drawing(cli_rig, t
     with pytest.raises(ValueError, match=r"f\.jpeg: unknown figure format \.jpeg; supported: \.png, \.pdf, \.svg"):
         result.plot(tmp_path / "f.jpeg")
     assert not (tmp_path / "f.jpeg").exists()
+
+
+def _segments(p_whole, left_out):
+    """A segment test's report of 4 segments of 10 s, the second disagreeing by its own test
+    (p 1e-9) where ``left_out``, with ``use="consistent"``."""
+    from replication.rig.segments import Segment, SegmentTest, report
+
+    seg = tuple(Segment(10.0 * i, 10.0 * (i + 1), 180, R, 0.1, 1.0 if i == 1 and left_out else 0.05, 1.0,
+                        1e-9 if i == 1 and left_out else 0.5, i == 1 and left_out) for i in range(4))
+    keep = (0, 2, 3) if left_out else (0, 1, 2, 3)
+    test = SegmentTest(seg, p_whole < 0.01, 1.0, 2.0, p_whole, 0.01, 9, 1.0, 50.0, R, 0.05, 0.2, keep,
+                       1.0 if left_out else 0.0)
+    kept = 30.0 if left_out else 40.0
+    return report(test, None, 0.0, {"kept_s": kept, "dropped_s": 40.0 - kept, "pairs_kept": 7})
+
+
+def test_summary_names_each_segments_own_test_beside_the_test_of_all_together():
+    lines = _result(segments=_segments(0.87, True)).summary().split("\n")
+    line = next(x for x in lines if x.startswith("segments: "))
+    assert "disagree: 10.0-20.0 s (each by its own test, p = 1e-09; all the segments together p = 0.87)" in line
+    lines = _result(segments=_segments(0.87, False)).summary().split("\n")
+    assert "segments: 4 of about 10 s (1 s pairs) agree (p = 0.87); " in "\n".join(lines)
+
+
+def test_summary_of_use_consistent_says_when_nothing_was_left_out():
+    """Nothing left out: no 'majority, not known to be right' nor an angle 'if the part left out
+    is'; one segment left out: both."""
+    text = "\n".join(_result(segments=_segments(0.87, False)).summary().split("\n"))
+    assert "use='consistent': every segment agrees, nothing left out: R0 from all of 0.0-40.0 s (7 pairs)" in text
+    assert "not known to be right" not in text and "left out is" not in text
+    text = "\n".join(_result(segments=_segments(0.87, True)).summary().split("\n"))
+    assert "use='consistent': R0 from 0.0-10.0 s, 20.0-40.0 s (7 pairs; the majority, not known to be right" in text
+    assert "nothing left out" not in text

@@ -76,6 +76,30 @@ def test_the_verdict_follows_the_angle_of_the_disagreeing_segment(angle, level):
     assert r.threshold == (FAIL if level == "fail" else 0.0)
 
 
+@pytest.mark.parametrize("p_segment, bonferroni", [(0.01 / 4 * 0.96, True), (0.01 / 4 * 1.04, False)])
+@pytest.mark.parametrize("p_whole", [0.87, 1e-8])
+def test_segments_disagree_says_which_test_carries_the_verdict(p_whole, p_segment, bonferroni):
+    """A segment named by its own test while the test of all the segments together is not
+    significant (p 0.87) says so; the Bonferroni bound is said only where every named segment's own
+    p is below it (level 0.01 over 4 segments)."""
+    test = _fake(1.0)
+    segs = tuple(dataclasses.replace(s, p_value=p_segment) if s.disagrees else s for s in test.segments)
+    test = dataclasses.replace(test, segments=segs, significant=p_whole < 0.01, p_value=p_whole)
+    (r,) = reasons(test, 0.0)
+    assert f"10.0-20.0 s by 1.00 deg (its radius 0.10, its own test p = {p_segment:.2g})" in r.message
+    assert "each by its own test against the consistent part" in r.message
+    assert ("p below 0.01 / 4 segments = 0.0025" in r.message) == bonferroni
+    assert ("left out of it one by one" in r.message) == (not bonferroni)
+    assert f"the test of all the segments together: p = {p_whole:.2g}" in r.message
+    assert ("not significant alone (level 0.01)" in r.message) == (p_whole > 0.01)
+    assert "the segments' test p" not in r.message
+    summary = test.summary()
+    assert ("agree within their noise as a whole" in summary) == (p_whole > 0.01)
+    assert "disagreeing by their own tests: 10.0-20.0 s (1.00 deg)" in summary
+    (r,) = reasons(dataclasses.replace(test, consistent=()), 0.0)  # no half agrees: no consistent part
+    assert "each by its own test against the others" in r.message and "no half of the segments agrees" in r.message
+
+
 def test_segments_that_agree_give_no_reason():
     test = _fake(0.3)
     test = SegmentTest(tuple(dataclasses.replace(s, disagrees=False) for s in test.segments),
