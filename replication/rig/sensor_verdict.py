@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
+from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SCALE_RESOLUTION, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
 
@@ -57,6 +57,12 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #: 0.4 % bound move it by at most 0.30 deg, below EuRoC's reference floor (0.343 deg), as the
 #: scale's 1 % does (0.13-0.25 deg); a term beyond it is one the calibration had to remove to stay
 #: within the floor.
+#: * ``gyro_scale_held_R0_deg``: where an axis's scale is held at 1 (the motion does not resolve
+#: it), how far a scale anywhere in its 95 % interval moves ``R0`` (deg, first order, the free
+#: scales, bias, offset and drift re-fitted; the held axes' effects added), above: the bound the
+#: scale's 1 % and the misalignment's 0.4 % keep ``R0`` within (0.25 and 0.30 deg), below EuRoC's
+#: reference floor (0.343 deg). 15 s of motion about one axis, its scale 10 % high and held at 1,
+#: left ``R0`` 2.2-3.4 deg off, the error taken up by another axis's scale.
 SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
@@ -65,6 +71,7 @@ SENSOR_THRESHOLDS = {
     "gyro_bias_change_R0_deg": (0.05, None),
     "gyro_scale_error": (0.01, None),
     "gyro_misalignment_error": (0.004, None),
+    "gyro_scale_held_R0_deg": (0.3, None),
 }
 
 
@@ -132,7 +139,7 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None]
+    return out + [x for x in (_scale_reason(model), _held_reason(model), _misalignment_reason(model)) if x is not None]
 
 
 def _off(value, ci95, resolved, nominal: float, bound: float):
@@ -161,6 +168,27 @@ def _scale_reason(model):
                   f"{100 * bound:g} %; {what}: left at 1 it moves R0 by about {model.scale_R0_deg:.2g} deg; the "
                   f"gyro's scale factors (its intrinsics, e.g. Kalibr's or OpenVINS's T_g) are off: whatever reads "
                   f"its raw rates with scale 1 inherits the error")
+
+
+def _held_reason(model):
+    """A warning where the scales held at 1 could move ``R0`` by more than the bound
+    (:data:`SENSOR_THRESHOLDS` ``gyro_scale_held_R0_deg``): the motion does not separate the axes'
+    scales; the held axes with their intervals, and how far ``R0`` may be off."""
+    from .quality import Reason
+
+    bound = SENSOR_THRESHOLDS["gyro_scale_held_R0_deg"][0]
+    held = np.flatnonzero(~np.asarray(model.scale_resolved, bool))
+    if not model.scale_held_R0_deg > bound or not len(held):
+        return None
+    ci = model.scale_held_ci95
+    axes = ", ".join(f"{'xyz'[i]} [{ci[i, 0]:.4f}, {ci[i, 1]:.4f}]" for i in held)
+    free = "; the other axes' intervals include what it leaves unknown" if len(held) < 3 else ""
+    return Reason("gyro_scale_held", "warning", float(model.scale_held_R0_deg), bound,
+                  f"gyro scales not separable on this motion: axis {axes} (95 % intervals, held at 1) turned too "
+                  f"little to resolve its scale (half-width > {100 * SCALE_RESOLUTION:g} %); a scale anywhere in it "
+                  f"moves R0 by up to {model.scale_held_R0_deg:.2g} deg > {bound:g} deg{free}: R0 may be off by "
+                  f"that much; turn about every axis (the gyro's {', '.join('xyz'[i] for i in held)} too) while "
+                  f"recording")
 
 
 def _misalignment_reason(model):
