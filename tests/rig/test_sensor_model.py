@@ -416,9 +416,13 @@ def test_the_resolution_rule_at_its_boundary(monkeypatch):
     assert not held.scale_resolved[worst] and held.scale[worst] == 1.0 and np.isnan(held.scale_ci95[worst]).all()
 
 
+_BEYOND = np.log1p(sm.SCALE_DEPARTURE)
+
+
 @pytest.mark.parametrize("away, half, kept", [
-    (0.0101, 0.01, True), (0.0099, 0.01, False),  # its interval just excludes 1 / just holds it
-    (-0.05, 0.04, True), (0.05, 0.0499, True),
+    (0.02 + _BEYOND + 1e-4, 0.02, True), (0.02 + _BEYOND - 1e-4, 0.02, False),  # interval just beyond 1 +- 1 %
+    (-0.02 - _BEYOND - 1e-4, 0.02, True), (-0.02 - _BEYOND + 1e-4, 0.02, False),
+    (0.015, 0.01, False),  # excluding 1 but not 1 +- 1 %: a clean gyro's chance
     (np.log1p(sm.MAX_SCALE_ERROR) - 0.0301, 0.03, True),  # its interval's far end just inside the gyro's range
     (np.log1p(sm.MAX_SCALE_ERROR) - 0.0299, 0.03, False)])  # just beyond it
 def test_a_scale_departure_is_measured_at_its_boundaries(away, half, kept):
