@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.so3 import rotation_vector_from_matrix
+from ..core.stats import radius_deg
 from .gyro_model import (
     _Z95,
     MISALIGNMENT_AXES,
@@ -175,6 +176,11 @@ class SensorModel:
         How far ``R0`` may be off (deg, first order, the free parameters re-fitted) were each held
         axis's scale anywhere in its ``scale_held_ci95`` (the held axes' effects added); 0 where
         none is held.
+    scale_spread_R0_deg : float
+        The 95 % radius (deg) of the part of ``R0``'s spread that the estimated scales carry (the
+        joint covariance's ``R0`` block regressed on theirs, at the intervals' critical value): how
+        far the scales' own uncertainty may move ``R0``, which ``R0``'s bootstrap radius (the pairs
+        of the corrected rates) does not hold.
     scale_R0_deg : float
         How far ``R0`` moves (deg, first order) were the scale left at 1.
     critical : float
@@ -230,6 +236,7 @@ class SensorModel:
     misalignment_R0_deg: float = 0.0
     scale_held_ci95: np.ndarray = field(default_factory=lambda: np.full((3, 2), np.nan))
     scale_held_R0_deg: float = 0.0
+    scale_spread_R0_deg: float = 0.0
 
     @property
     def bias_changes(self) -> bool:
@@ -282,6 +289,7 @@ class SensorModel:
                 "scale_held_ci95": [[float(v) for v in ci] if not ok and np.isfinite(ci).all() else None
                                     for ci, ok in zip(self.scale_held_ci95, self.scale_resolved)],
                 "scale_held_R0_deg": float(self.scale_held_R0_deg),
+                "scale_spread_R0_deg": float(self.scale_spread_R0_deg),
                 "misalignment_resolved": [bool(v) for v in self.misalignment_resolved],
                 "misalignment_R0_deg": float(self.misalignment_R0_deg),
                 "misalignment_resolution": MISALIGNMENT_RESOLUTION,
@@ -431,6 +439,9 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
     scale_ci = np.where(resolved[:3, None], sigma[:, None] + np.outer(sd[8:11], [-z, z]), np.nan)
     held = np.flatnonzero(~resolved[:3]) if scale and implausible is None else np.empty(0, int)
     held_ci, held_R0 = np.full((3, 2), np.nan), 0.0
+    free = 8 + np.flatnonzero(resolved[:3])  # R0's spread that the free scales carry (its regression on them)
+    Ctf = cov[np.ix_(np.arange(3), free)]
+    spread = radius_deg(Ctf @ np.linalg.pinv(cov[np.ix_(free, free)]) @ Ctf.T * (z / _Z95) ** 2) if len(free) else 0.0
     if len(held):  # what the held scales leave unknown: their range, R0's and the free scales' share of it
         step, joint, moves = _held_account(r, jac, wts, lags, cols, 8 + held)
         jsd = np.sqrt(np.maximum(np.diag(joint), 0.0))
@@ -470,7 +481,7 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
         fit_ratio=float(np.median(np.linalg.norm(r, axis=-1))
                         / max(np.median(np.linalg.norm(rotation_vector_from_matrix(A), axis=-1)), 1e-12)),
         scale=np.exp(sigma), scale_ci95=np.exp(scale_ci), scale_resolved=resolved[:3], scale_held_ci95=np.exp(held_ci),
-        scale_held_R0_deg=held_R0,
+        scale_held_R0_deg=held_R0, scale_spread_R0_deg=float(spread),
         scale_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 5:8] @ sigma))), critical=float(z),
         scale_note=None if implausible is None else (
             "a scale of [" + ", ".join(f"{v:.3g}" for v in implausible[0]) + "] and misalignment [" + ", ".join(

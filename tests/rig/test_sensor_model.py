@@ -479,6 +479,18 @@ def test_a_clean_gyro_on_motion_about_one_axis_is_not_ok():
     assert [x.check for x in r.verdict.reasons] == ["gyro_scale_held"]
 
 
+def test_a_clean_gyro_on_motion_about_one_axis_with_every_scale_resolved_is_not_ok():
+    """No scale error, 15 s about one axis (seed 5604): every scale resolved, but their uncertainty
+    carries R0's (0.33 deg radius), beyond its bootstrap radius (0.17): R0 0.42 deg off was ok."""
+    camera, gyro = one_axis_rig((1.0, 1.0, 1.0), 5604)
+    r = calibrate(camera, gyro, n_bootstrap=20, diagnose=False)
+    m = r.diagnostics["sensor_model"]
+    assert m.scale_resolved.all() and m.scale_held_R0_deg == 0.0
+    assert angle_between_deg(r.R, RIG_R0) > 0.343 > r.bootstrap_ci95_deg
+    assert m.scale_spread_R0_deg > SENSOR_THRESHOLDS["gyro_scale_held_R0_deg"][0]
+    assert r.verdict.level == "warning" and [x.check for x in r.verdict.reasons] == ["gyro_scale_spread"]
+
+
 def test_the_two_axis_rig_s_held_axis_moves_r0_by_nothing():
     """z never turns: its scale is held, fitted free anywhere in the gyro's range, and moves R0 by
     nothing the verdict needs to say."""
