@@ -89,6 +89,8 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
       large against the pairing interval (warning);
     * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound
       (warning);
+    * the scales the motion does not separate: a held axis (``gyro_scale_held``) or the estimated
+      scales' uncertainty (``gyro_scale_spread``) that may move ``R0`` beyond the bound (warning);
     * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
