@@ -263,3 +263,30 @@ def _valid(records):
     claims = paper.load_claim_table(CLAIMS_CSV)
     for rec in records:
         ledger.check_record(**rec, claims=claims, claims_path=CLAIMS_CSV)
+
+
+def one_axis_rig(scale, seed, wobble=0.05, seconds=15.0, bias=(0.03, -0.02, 0.04)):
+    """``(camera, gyro)``: a rig turning about the camera's z axis (1.2 rad amplitude) and rocking
+    by ``wobble`` rad about the other two, camera 20 Hz (0.05 deg noise), gyro 200 Hz (0.2 deg/s)
+    reading ``scale * omega + bias`` in the frame of ``replication.testing.RIG_R0`` (the motion's
+    phases drawn from ``seed``): the motion that does not separate the gyro's scales."""
+    from replication.core.so3 import matrix_from_rotation_vector, rotation_vector_from_matrix
+    from replication.rig.streams import GyroStream, OrientationStream
+    from replication.testing import RIG_R0
+
+    rng = np.random.default_rng(seed)
+    phase = rng.uniform(0, 2 * np.pi, 3)
+
+    def motion(t):
+        v = np.stack([wobble * np.sin(0.9 * t + phase[1]), wobble * np.cos(0.5 * t + phase[2]),
+                      1.2 * np.sin(0.6 * t + phase[0])], axis=-1)
+        return matrix_from_rotation_vector(v)
+
+    t_cam = np.arange(0.0, seconds, 0.05)
+    noise = rng.normal(0.0, np.radians(0.05) / np.sqrt(3.0), (len(t_cam), 3))
+    C = motion(t_cam) @ matrix_from_rotation_vector(noise)
+    t = np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = motion(t) @ RIG_R0
+    omega = rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    omega = omega * np.asarray(scale, float) + np.asarray(bias, float) + rng.normal(0.0, np.radians(0.2), omega.shape)
+    return OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t[1:] + t[:-1]), omega, "gyro")

@@ -226,3 +226,19 @@ def _gauss_newton(X, b, d, kappa, A, ti, tk, t_mid, t_g, w_g, cols, iterations=8
             break
     return params, r, jac, _weights(r), done
 
+
+
+def _held_account(r, jac, wts, block, cols, held):
+    """What the parameters ``held`` (indices, held at their nominal value) leave unknown, from the
+    joint fit of ``cols`` and ``held``: one Gauss-Newton step from the solution (``step``, the
+    parameters of ``cols`` then of ``held``: the estimates had all been fitted), their joint
+    block-jackknife covariance (same order) and how each held one moves the free ones with them
+    re-fitted (``moves``, ``(len(cols), len(held))``: ``-H_FF^-1 H_FH``)."""
+    both = np.concatenate([cols, held])
+    Jc = jac[:, :, both]
+    H = np.einsum("j,jai,jak->ik", wts, Jc, Jc)
+    g = np.einsum("j,jai,ja->i", wts, Jc, r)
+    step = -np.linalg.lstsq(H, g, rcond=None)[0]
+    n = len(cols)
+    moves = -np.linalg.lstsq(H[:n, :n], H[:n, n:], rcond=None)[0]
+    return step, _block_jackknife(r, jac, wts, block, both)[0], moves

@@ -80,8 +80,10 @@ def _scale_lines(model) -> list:
     it)."""
     if model.get("gyro_scale") is None:
         return []
-    axes = ", ".join(f"{s:.4f} [{ci[0]:.4f}, {ci[1]:.4f}]" if ci is not None else "1 (held: not resolved)"
-                     for s, ci in zip(model["gyro_scale"], model["gyro_scale_ci95"]))
+    held = model["sensor_model"].get("scale_held_ci95") or [None] * 3
+    axes = ", ".join(f"{s:.4f} [{ci[0]:.4f}, {ci[1]:.4f}]" if ci is not None else "1 (held: not resolved" + (
+        f"; fitted free, it lies in [{h[0]:.4f}, {h[1]:.4f}])" if h is not None else ")")
+        for s, ci, h in zip(model["gyro_scale"], model["gyro_scale_ci95"], held))
     note = model["sensor_model"].get("scale_note")
     applied = "removed" if model["sensor_model"]["bias_applied"] else "measured, not removed"
     lines = [f"gyro scale (x, y, z) with 95 % intervals: {axes} ({applied}" + (f"; {note})" if note else ")")]

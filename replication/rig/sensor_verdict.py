@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
+from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SCALE_RESOLUTION, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
 
@@ -57,6 +57,15 @@ __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_
 #: 0.4 % bound move it by at most 0.30 deg, below EuRoC's reference floor (0.343 deg), as the
 #: scale's 1 % does (0.13-0.25 deg); a term beyond it is one the calibration had to remove to stay
 #: within the floor.
+#: * ``gyro_scale_held_R0_deg``: where an axis's scale is held at 1 (the motion does not resolve
+#: it), how far a scale anywhere in its 95 % interval moves ``R0`` (deg, first order, the free
+#: scales, bias, offset and drift re-fitted; the held axes' effects added), plus the 95 % radius of
+#: ``R0`` that the estimated scales' uncertainty carries (named ``gyro_scale_spread`` where no axis
+#: is held: 15 s about one axis, a clean gyro, every scale resolved, gave ``ok`` with ``R0`` 0.37
+#: and 0.42 deg off, that radius 0.30 and 0.33 deg), above: the bound the
+#: scale's 1 % and the misalignment's 0.4 % keep ``R0`` within (0.25 and 0.30 deg), below EuRoC's
+#: reference floor (0.343 deg). 15 s of motion about one axis, its scale 10 % high and held at 1,
+#: left ``R0`` 2.2-3.4 deg off, the error taken up by another axis's scale.
 SENSOR_THRESHOLDS = {
     "gyro_bias_to_motion": (1.0, None),
     "gyro_bias_left": (0.1, 0.3),
@@ -65,6 +74,7 @@ SENSOR_THRESHOLDS = {
     "gyro_bias_change_R0_deg": (0.05, None),
     "gyro_scale_error": (0.01, None),
     "gyro_misalignment_error": (0.004, None),
+    "gyro_scale_held_R0_deg": (0.3, None),
 }
 
 
@@ -79,6 +89,8 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
       large against the pairing interval (warning);
     * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound
       (warning);
+    * the scales the motion does not separate: a held axis (``gyro_scale_held``) or the estimated
+      scales' uncertainty (``gyro_scale_spread``) that may move ``R0`` beyond the bound (warning);
     * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
@@ -132,7 +144,7 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None]
+    return out + [x for x in (_scale_reason(model), _held_reason(model), _misalignment_reason(model)) if x is not None]
 
 
 def _off(value, ci95, resolved, nominal: float, bound: float):
@@ -161,6 +173,36 @@ def _scale_reason(model):
                   f"{100 * bound:g} %; {what}: left at 1 it moves R0 by about {model.scale_R0_deg:.2g} deg; the "
                   f"gyro's scale factors (its intrinsics, e.g. Kalibr's or OpenVINS's T_g) are off: whatever reads "
                   f"its raw rates with scale 1 inherits the error")
+
+
+def _held_reason(model):
+    """A warning where the scales could move ``R0`` by more than the bound
+    (:data:`SENSOR_THRESHOLDS` ``gyro_scale_held_R0_deg``): what the held ones may do to it plus the
+    radius that the estimated ones' uncertainty gives it. ``gyro_scale_held`` where an axis is held
+    (the axes with their intervals), ``gyro_scale_spread`` where none is."""
+    from .quality import Reason
+
+    bound = SENSOR_THRESHOLDS["gyro_scale_held_R0_deg"][0]
+    held = np.flatnonzero(~np.asarray(model.scale_resolved, bool))
+    effect = float(model.scale_held_R0_deg + model.scale_spread_R0_deg)
+    if not effect > bound:
+        return None
+    spread = (f"; the estimated scales' own uncertainty {model.scale_spread_R0_deg:.2g} deg (95 % radius of R0 "
+              f"they carry, not in R0's bootstrap radius)")
+    if not len(held):
+        return Reason("gyro_scale_spread", "warning", effect, bound,
+                      f"gyro scales poorly separated on this motion: their intervals are within the resolution, but "
+                      f"correlated with R0{spread} > {bound:g} deg: R0 may be off by that much; turn about every axis "
+                      f"while recording")
+    ci = model.scale_held_ci95
+    axes = ", ".join(f"{'xyz'[i]} [{ci[i, 0]:.4f}, {ci[i, 1]:.4f}]" for i in held)
+    free = "; the other axes' intervals include what it leaves unknown" if len(held) < 3 else ""
+    return Reason("gyro_scale_held", "warning", effect, bound,
+                  f"gyro scales not separable on this motion: axis {axes} (95 % intervals, held at 1) turned too "
+                  f"little to resolve its scale (half-width > {100 * SCALE_RESOLUTION:g} %); a scale anywhere in it "
+                  f"moves R0 by up to {model.scale_held_R0_deg:.2g} deg{spread}: together {effect:.2g} deg > "
+                  f"{bound:g} deg{free}: R0 may be off by that much; turn about every axis (the gyro's "
+                  f"{', '.join('xyz'[i] for i in held)} too) while recording")
 
 
 def _misalignment_reason(model):

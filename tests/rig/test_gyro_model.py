@@ -37,3 +37,20 @@ def test_the_bias_scale_and_misalignment_jacobians_match_finite_differences():
         numeric = (moved - r0) / 1e-6
         assert np.abs(numeric - jac[:, :, col]).max() < 0.02 * np.abs(jac[:, :, col]).max() + 1e-9, col
     assert np.abs(jac[:, :, 11:]).max() > 0.1  # the terms move the residuals: a zero column would pass the above
+
+
+def test_the_held_account_recovers_a_linear_problem_s_truth_and_moves():
+    """Residuals linear in the parameters, ``r = J (p - p*)``, at the free ones' optimum with the
+    last one held at 0: the joint step reaches ``p*``, and the free ones' optimum moved by ``moves``
+    times the held one's change is theirs at the truth."""
+    rng = np.random.default_rng(4)
+    jac = rng.normal(size=(300, 3, 4))
+    truth = np.array([0.3, -0.2, 0.1, 0.05])
+    F, h = np.arange(3), np.array([3])
+    Jf = jac[:, :, F].reshape(-1, 3)
+    free = np.linalg.lstsq(Jf, (jac.reshape(-1, 4) @ truth), rcond=None)[0]  # the free ones' fit, held at 0
+    p = np.concatenate([free, [0.0]])
+    r = np.einsum("jak,k->ja", jac, p - truth)
+    step, cov, moves = gm._held_account(r, jac, np.ones(300), 30, F, h)
+    assert np.allclose(p + step, truth) and cov.shape == (4, 4) and moves.shape == (3, 1)
+    assert np.allclose(free + moves[:, 0] * (truth[3] - 0.0), truth[:3])
