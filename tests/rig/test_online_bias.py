@@ -209,7 +209,7 @@ needs_real = pytest.mark.skipif(not real_data_available(), reason="real recordin
 
 
 @needs_real
-def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchanged():
+def test_tumvi_a_gyro_scale_and_a_misalignment_are_removed_online_with_r0_unchanged():
     import warnings
 
     import replication.rig.realdata as rd
@@ -222,18 +222,24 @@ def test_tumvi_a_3_percent_gyro_scale_is_named_and_removed_online_with_r0_unchan
     keep, near = cam.t < cam.t[0] + 50.0, (imu.t > cam.t[0] - 1.0) & (imu.t < cam.t[0] + 51.0)  # 50 s: ready at 22
     cam = OrientationStream(cam.t[keep], cam.world_from_body[keep], "camera")
     runs = {}
-    for name, scale in (("recorded", np.ones(3)), ("x 3 % high", SCALE)):
+    skew = np.eye(3) + _symmetric([0.015] * 3)  # 1.5 % on every term: left at 0, ready 1.1 deg off (red team 6)
+    for name, T in (("recorded", np.eye(3)), ("x 3 % high", np.diag(SCALE)), ("misaligned", skew)):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            rows = replay(cam, GyroStream(imu.t[near], imu.omega[near] * scale, "gyro"), OnlineCalibrator(),
+            rows = replay(cam, GyroStream(imu.t[near], imu.omega[near] @ T.T, "gyro"), OnlineCalibrator(),
                           reference=ref)
         runs[name] = (rows["error_deg"].iloc[-1], rows.attrs["summary"])
-    (err, plain), (err_x, scaled) = runs["recorded"], runs["x 3 % high"]
+    (err, plain), (err_x, scaled), (err_m, skewed) = runs["recorded"], runs["x 3 % high"], runs["misaligned"]
     assert plain["ready"] and scaled["ready"] and err < 0.1 and abs(err_x - err) < 0.01
     assert all(lo <= 1.0 <= hi for lo, hi in plain["gyro_scale_ci95"])  # TUM-VI's gyro: scale 1 on every axis
     lo, hi = scaled["gyro_scale_ci95"][0]
     assert lo <= 1.03 <= hi and scaled["gyro_scale"][0] == pytest.approx(1.03 * plain["gyro_scale"][0], abs=1e-3)
     assert not any(r["check"] == "gyro_scale" for r in scaled["verdict"]["reasons"])
+    assert skewed["ready"] and err_m < 0.1  # 0.047 deg (recorded 0.027); left at 0 (all 145 s): 1.1
+    assert all(lo <= 0.0 <= hi for lo, hi in plain["gyro_misalignment_ci95"])  # TUM-VI's gyro: orthogonal axes
+    terms = zip(skewed["gyro_misalignment_ci95"], skewed["gyro_misalignment"], plain["gyro_misalignment"])
+    for (lo, hi), m, m0 in terms:
+        assert lo <= 0.015 + m0 <= hi and m == pytest.approx(0.015 + m0, abs=1e-3)
 
 
 def test_the_live_rig_names_the_gyro_axes_in_not_ready_after_waiting_for_more_data():
