@@ -52,10 +52,10 @@ SCALE_PRIOR = 0.03
 #: The 95 % half-width given to a misalignment term (``T_g``'s symmetric off-diagonal ``xy``,
 #: ``xz``, ``yz``) the first window does not resolve (held at 0, ``misalignment_resolved`` False): a
 #: MEMS gyro's cross-axis sensitivity is within about 2 % (datasheets: 1-2 %); a term moves ``R0``
-#: by up to 74 deg per unit (the batch's note, :data:`replication.rig.sensor_model.
-#: MISALIGNMENT_RESOLUTION`), and 1.5 % on two terms, left at 0, moved it by 0.3-0.5 deg with
-#: ``ready`` (the red team's reproducer). What such a term can do to ``R0`` enters
-#: :func:`bias_effect_deg`, with the finite-difference step :data:`BIAS_STEP_RAD_S`.
+#: by up to 74 deg per unit (the batch's note on its resolution,
+#: :data:`replication.rig.sensor_model.MISALIGNMENT_RESOLUTION`), and 1.5 % on two terms, left at 0,
+#: moved it by 0.3-0.5 deg with ``ready`` (the red team's reproducer). What such a term can do to
+#: ``R0`` enters :func:`bias_effect_deg`, with the finite-difference step :data:`BIAS_STEP_RAD_S`.
 MISALIGNMENT_PRIOR = 0.02
 
 #: ``T^-1`` of a gyro read as it is (rows): the live rig's correction before any model.
