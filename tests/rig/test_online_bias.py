@@ -201,7 +201,8 @@ def test_a_scale_not_resolved_on_a_short_first_window_makes_the_rig_wait_for_mor
     late = GyroStream(gyro.t + 3.0, gyro.omega, "gyro")  # 3 s clock offset: the first window's pairs span 6 s only
     rig = _live(camera, late, max_offset=4.0)
     assert rig.bias is not None and rig.bias.scale_resolved.all() and rig.bias.span_s > 10.0  # 6 s: none resolved
-    assert not any(r.check == "gyro_scale" for r in rig.verdict().reasons)
+    assert rig.bias.misalignment_resolved.all()
+    assert not any(r.check in ("gyro_scale", "gyro_misalignment") for r in rig.verdict().reasons)
     assert rig.scale_effect_deg < 0.1 and rig.calibrator.error_deg(R0) < 0.1
 
 
