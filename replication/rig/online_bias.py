@@ -223,7 +223,7 @@ def _misalignment_words(model, span, effects, why, target_deg) -> str:
     note = f"; {model.scale_note}" if model.scale_note else ""
     return (f"the gyro axes' misalignment (T_g's symmetric off-diagonal), estimated on the first {span:.3g} s and "
             f"removed from the rates ({'; '.join(terms)}{note}), leaves R0 uncertain by {effects[3]:.3g} deg (95 %; "
-            f"with the bias and the scale {effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about "
+            f"with the bias and the scale: {effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about "
             f"every axis in the first window, or give a longer offset_window")
 
 
