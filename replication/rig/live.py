@@ -16,7 +16,7 @@ from .._extras import require
 from ..core import so3
 from ..core.checks import check_number, check_rotation_matrices
 from .online import OnlineCalibrator
-from .online_bias import bias_fields, exp3, hold_raw, start_rig_bias
+from .online_bias import IDENTITY3, bias_fields, exp3, hold_raw, start_rig_bias
 from .quality import Verdict
 from .report import RADIUS_COVERS
 
@@ -118,8 +118,8 @@ class LiveRig:
         self._diagnosis = None
         self._finished = False
         self._no_offset = False      # the offset search found no overlap: no pairs
-        self.bias, self.bias_effect_deg, self.scale_effect_deg = None, None, None  # the gyro model, its R0 radii
-        self._b, self._s = (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)  # its bias and scale, removed from every rate
+        self.bias = self.bias_effect_deg = self.scale_effect_deg = self.misalignment_effect_deg = None  # R0 radii
+        self._b, self._Ti = (0.0, 0.0, 0.0), IDENTITY3  # its bias and T^-1 (rows): T^-1 (omega - b) of every rate
         self._raw = deque() if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, done)
         self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
 
@@ -148,8 +148,9 @@ class LiveRig:
         self._sensor_kind("gyro")
         if self._raw is not None:
             hold_raw(self._raw, t, (wx, wy, wz), self.offset_window)
-        (bx, by, bz), (sx, sy, sz) = self._b, self._s
-        wx, wy, wz = (wx - bx) / sx, (wy - by) / sy, (wz - bz) / sz
+        (bx, by, bz), ((a, b, c), (d, e, f), (g, k, m)) = self._b, self._Ti
+        wx, wy, wz = wx - bx, wy - by, wz - bz
+        wx, wy, wz = a * wx + b * wy + c * wz, d * wx + e * wy + f * wz, g * wx + k * wy + m * wz
         if self._last_gyro is None:
             Q = np.eye(3)
         else:

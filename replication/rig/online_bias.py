@@ -1,22 +1,25 @@
-"""The gyro's bias and scale for the live front end (:class:`replication.rig.live.LiveRig`; issue
-34, point 1, online half).
+"""The gyro's bias, scale and axis misalignment for the live front end
+(:class:`replication.rig.live.LiveRig`).
 
-A raw gyro reports ``s omega + b``; integrated over a pairing interval ``T`` the bias turns every
-sensor motion by about ``|b| T``, which ``A_j R0 = R0 B_j`` cannot absorb: left in, it moves ``R0``
-(by degrees at 0.1 rad/s); a scale off 1 on one axis does too (3 % on x: 0.5 deg median, the
-red team's reproducer). The live rig holds its first ``offset_window`` seconds anyway (for the
-clock offset); on them the bias and the scale per axis are estimated with ``R0`` as the batch does
-(:func:`replication.rig.sensor_model.estimate_sensor_model`: a centred or rest start, then
-Gauss-Newton on the pair residuals), removed from every rate (``(omega - b) / s``, the held samples
-integrated again), and published with their 95 % intervals (:func:`bias_fields`). What their
-intervals leave in ``R0`` is measured (:func:`bias_effect_deg`: the chordal minimiser's response to
-the bias and the log scale, by finite differences on the window's pairs, through their covariance;
-an axis whose scale the window does not resolve is taken as within :data:`SCALE_PRIOR`); ``ready``
-is withheld, naming the bias or the scale (a ``gyro_bias`` or ``gyro_scale`` reason at level
-``fail``, whichever leaves more), where the bias could not be estimated or where the intervals
-leave ``R0`` uncertain by the target or more. Where the scale is what leaves it uncertain, the
-rig first waits for more data (up to :data:`BIAS_WAIT_WINDOWS` windows), as for a bias it could
-not estimate.
+A raw gyro reports ``T omega + b`` (``T = diag(s) + N(mu)``, the scale per axis and the symmetric
+misalignment, Kalibr's and OpenVINS's ``T_g``); integrated over a pairing interval the bias turns
+every sensor motion by about ``|b|`` times it, which ``A_j R0 = R0 B_j`` cannot absorb: left in, it
+moves ``R0`` (by degrees at 0.1 rad/s); a scale off 1 on one axis does too (3 % on x: 0.5 deg
+median, the red team's reproducer), and so does a misalignment (1.5 % on two terms: ``ready`` with
+``R0`` 0.3-0.5 deg off, beyond its radius). The live rig holds its first ``offset_window`` seconds
+anyway (for the clock offset); on them the bias, the scale per axis and the misalignment are
+estimated with ``R0`` as the batch does (:func:`replication.rig.sensor_model.estimate_sensor_model`:
+a centred or rest start, then Gauss-Newton on the pair residuals), removed from every rate (``T^-1
+(omega - b)``, the held samples integrated again), and published with their 95 % intervals
+(:func:`bias_fields`). What their intervals leave in ``R0`` is measured (:func:`bias_effect_deg`:
+the chordal minimiser's response to the bias, the log scale and the misalignment, by finite
+differences on the window's pairs, through their covariance; an axis whose scale the window does not
+resolve is taken as within :data:`SCALE_PRIOR`, a term held at 0 as within
+:data:`MISALIGNMENT_PRIOR`); ``ready`` is withheld, naming the bias, the scale or the misalignment
+(a ``gyro_bias``, ``gyro_scale`` or ``gyro_misalignment`` reason at level ``fail``, whichever leaves
+most), where the bias could not be estimated or where the intervals leave ``R0`` uncertain by the
+target or more. Where the scale or the misalignment is what leaves it uncertain, the rig first waits
+for more data (up to :data:`BIAS_WAIT_WINDOWS` windows), as for a bias it could not estimate.
 
 Not done online: a bias or scale that changes later (temperature) is not followed; the window's
 estimate is kept.
@@ -29,7 +32,7 @@ from collections import deque
 import numpy as np
 
 __all__ = ["exp3", "start_bias", "start_rig_bias", "hold_raw", "bias_effect_deg", "reintegrate", "bias_fields",
-           "BIAS_STEP_RAD_S", "BIAS_WAIT_WINDOWS", "SCALE_PRIOR"]
+           "rate_correction", "BIAS_STEP_RAD_S", "BIAS_WAIT_WINDOWS", "SCALE_PRIOR", "MISALIGNMENT_PRIOR", "IDENTITY3"]
 
 #: Where the bias cannot be estimated on the first window, the live rig waits for more data up to
 #: this many windows.
@@ -45,6 +48,18 @@ BIAS_STEP_RAD_S = 1e-3
 #: such a scale can do to ``R0`` enters :func:`bias_effect_deg`; the finite-difference step on the
 #: log scale is :data:`BIAS_STEP_RAD_S` too.
 SCALE_PRIOR = 0.03
+
+#: The 95 % half-width given to a misalignment term (``T_g``'s symmetric off-diagonal ``xy``,
+#: ``xz``, ``yz``) the first window does not resolve (held at 0, ``misalignment_resolved`` False): a
+#: MEMS gyro's cross-axis sensitivity is within about 2 % (datasheets: 1-2 %); a term moves ``R0``
+#: by up to 74 deg per unit (the batch's note on its resolution,
+#: :data:`replication.rig.sensor_model.MISALIGNMENT_RESOLUTION`), and 1.5 % on two terms, left at 0,
+#: moved it by 0.3-0.5 deg with ``ready`` (the red team's reproducer). What such a term can do to
+#: ``R0`` enters :func:`bias_effect_deg`, with the finite-difference step :data:`BIAS_STEP_RAD_S`.
+MISALIGNMENT_PRIOR = 0.02
+
+#: ``T^-1`` of a gyro read as it is (rows): the live rig's correction before any model.
+IDENTITY3 = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
 def exp3(x: float, y: float, z: float) -> np.ndarray:
@@ -62,18 +77,31 @@ def exp3(x: float, y: float, z: float) -> np.ndarray:
                      [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
 
 
-def reintegrate(samples, bias, scale=(1.0, 1.0, 1.0)) -> list:
+def rate_correction(model) -> tuple:
+    """``(b, T^-1)`` of a gyro model as plain tuples (``T^-1`` by rows; the live rig's per-sample
+    correction ``T^-1 (omega - b)``, :meth:`replication.rig.live.LiveRig.add_gyro`): zero and the
+    identity where ``model`` is None."""
+    if model is None:
+        return (0.0, 0.0, 0.0), IDENTITY3
+    from .gyro_model import axes_matrix
+
+    Ti = np.linalg.inv(axes_matrix(np.log(np.asarray(model.scale, float)), model.misalignment))
+    return tuple(float(v) for v in model.bias_rad_s), tuple(tuple(float(v) for v in row) for row in Ti)
+
+
+def reintegrate(samples, bias, axes_inverse=IDENTITY3) -> list:
     """``[(t, Q), ...]``: the raw gyro ``samples`` ``[(t, (wx, wy, wz)), ...]`` integrated from the
-    identity with ``(omega - bias) / scale`` (the trapezoidal rule of
-    :meth:`replication.rig.live.LiveRig.add_gyro`)."""
+    identity with ``T^-1 (omega - bias)`` (``axes_inverse``: ``T^-1`` by rows; the trapezoidal rule
+    of :meth:`replication.rig.live.LiveRig.add_gyro`)."""
     bx, by, bz = (float(v) for v in bias)
-    sx, sy, sz = (float(v) for v in scale)
+    (a, b, c), (d, e, f), (g, k, m) = ((float(v) for v in row) for row in axes_inverse)
     out, Q, last = [], np.eye(3), None
     for t, (wx, wy, wz) in samples:
         if last is not None:
             h = 0.5 * (t - last[0])
             vx, vy, vz = last[1]
-            Q = Q @ exp3(h * (vx + wx - 2 * bx) / sx, h * (vy + wy - 2 * by) / sy, h * (vz + wz - 2 * bz) / sz)
+            ux, uy, uz = vx + wx - 2 * bx, vy + wy - 2 * by, vz + wz - 2 * bz
+            Q = Q @ exp3(h * (a * ux + b * uy + c * uz), h * (d * ux + e * uy + f * uz), h * (g * ux + k * uy + m * uz))
         out.append((t, Q))
         last = (t, (wx, wy, wz))
     return out
@@ -81,52 +109,58 @@ def reintegrate(samples, bias, scale=(1.0, 1.0, 1.0)) -> list:
 
 def bias_effect_deg(camera, gyro, model, interval: float, level: float = 0.95, parts: bool = False):
     """The radius (deg, at ``level``) of ``R0``'s uncertainty that the gyro model's own uncertainty
-    leaves: ``S C S^T`` with ``C`` the covariance of the bias and the log scale
-    (``model.covariance`` rows 3-5 and 8-10; an axis whose scale is not resolved, held at 1, is
-    given :data:`SCALE_PRIOR` as its 95 % half-width) and ``S`` the chordal minimiser's rotation per
-    unit bias and log scale on the window's pairs (finite differences of :data:`BIAS_STEP_RAD_S`).
-    ``parts``: ``(joint, bias's alone, scale's alone)``."""
+    leaves: ``S C S^T`` with ``C`` the covariance of the bias, the log scale and the misalignment
+    (``model.covariance`` rows 3-5 and 8-13; an axis whose scale is not resolved, held at 1, is
+    given :data:`SCALE_PRIOR` as its 95 % half-width, a term held at 0 :data:`MISALIGNMENT_PRIOR`)
+    and ``S`` the chordal minimiser's rotation per unit bias, log scale and term on the window's
+    pairs (finite differences of :data:`BIAS_STEP_RAD_S`, the rates ``T^-1 (omega - b)``).
+    ``parts``: ``(joint, bias's alone, scale's alone, misalignment's alone)``."""
     from ..core.so3 import rotation_vector_from_matrix
     from ..core.solvers.optimal import chordal_optimal
     from ..core.stats import radius_deg
     from .association import motion_pairs
+    from .gyro_model import axes_matrix
     from .streams import GyroStream, integrate_gyro
 
     def solved(p):
-        rates = GyroStream(gyro.t, (gyro.omega - p[:3]) / np.exp(p[3:]))
+        rates = GyroStream(gyro.t, (gyro.omega - p[:3]) @ np.linalg.inv(axes_matrix(p[3:6], p[6:])).T)
         A, B, _ = motion_pairs(camera, integrate_gyro(rates), interval, offset=model.offset_mid_s)
         return chordal_optimal(A, B).R
 
-    p = np.concatenate([np.asarray(model.bias_rad_s, float), np.log(np.asarray(model.scale, float))])
+    p = np.concatenate([np.asarray(model.bias_rad_s, float), np.log(np.asarray(model.scale, float)),
+                        np.asarray(model.misalignment, float)])
     R = solved(p)
     S = np.stack([rotation_vector_from_matrix(R.T @ solved(p + BIAS_STEP_RAD_S * e)) / BIAS_STEP_RAD_S
-                  for e in np.eye(6)], axis=-1)
-    rows = np.array([3, 4, 5, 8, 9, 10])
+                  for e in np.eye(9)], axis=-1)
+    rows = np.array([3, 4, 5, 8, 9, 10, 11, 12, 13])
     C = np.array(model.covariance, float)[np.ix_(rows, rows)]
-    held = np.flatnonzero(~np.asarray(model.scale_resolved, bool))
-    C[3 + held, :], C[:, 3 + held] = 0.0, 0.0
-    C[3 + held, 3 + held] = (SCALE_PRIOR / 1.959963984540054) ** 2  # a 95 % half-width of SCALE_PRIOR
+    for first, resolved, prior in ((3, model.scale_resolved, SCALE_PRIOR),
+                                   (6, model.misalignment_resolved, MISALIGNMENT_PRIOR)):
+        held = first + np.flatnonzero(~np.asarray(resolved, bool))
+        C[held, :], C[:, held] = 0.0, 0.0
+        C[held, held] = (prior / 1.959963984540054) ** 2  # a 95 % half-width of the prior
 
     def radius(cols):
         cov = S[:, cols] @ C[np.ix_(cols, cols)] @ S[:, cols].T
         return radius_deg(cov, level) if np.all(np.isfinite(cov)) else math.inf
 
-    joint = radius(np.arange(6))
-    return (joint, radius(np.arange(3)), radius(np.arange(3, 6))) if parts else joint
+    joint = radius(np.arange(9))
+    return (joint, radius(np.arange(3)), radius(np.arange(3, 6)), radius(np.arange(6, 9))) if parts else joint
 
 
 def start_bias(camera, gyro, *, interval: float, max_offset: float, target_deg: float):
-    """The bias and scale on the first window (``camera``: an OrientationStream, ``gyro``: the raw
-    GyroStream): ``(model, effect_deg, reason)``; ``model`` None where it could not be estimated
-    (``reason`` says why); ``effect_deg`` the joint radius of :func:`bias_effect_deg`; ``reason`` (a
-    :class:`replication.rig.quality.Reason`, check ``gyro_bias``, or ``gyro_scale`` where the
-    scale's share of the radius is the larger) or None where the gyro is known well enough."""
+    """The bias, scale and misalignment on the first window (``camera``: an OrientationStream,
+    ``gyro``: the raw GyroStream): ``(model, effect_deg, reason)``; ``model`` None where it could
+    not be estimated (``reason`` says why); ``effect_deg`` the joint radius of
+    :func:`bias_effect_deg`; ``reason`` (a :class:`replication.rig.quality.Reason`, check
+    ``gyro_bias``, ``gyro_scale`` or ``gyro_misalignment``, whichever's share of the radius is the
+    largest) or None where the gyro is known well enough."""
     model, effects, reason = _start(camera, gyro, interval, max_offset, target_deg)
     return model, effects[0], reason
 
 
 def _start(camera, gyro, interval, max_offset, target_deg):
-    """:func:`start_bias` with the effects ``(joint, bias's, scale's)``."""
+    """:func:`start_bias` with the effects ``(joint, bias's, scale's, misalignment's)``."""
     from .quality import Reason
     from .sensor_verdict import model_or_note
 
@@ -137,19 +171,22 @@ def _start(camera, gyro, interval, max_offset, target_deg):
     except ValueError as err:  # streams too short for any pair
         model, note = None, str(err)
     if model is None:
-        return None, (math.inf,) * 3, Reason("gyro_bias", "fail", None, None, (
+        return None, (math.inf,) * 4, Reason("gyro_bias", "fail", None, None, (
             f"the gyro bias could not be estimated on the first {span:.3g} s ({note}): a bias left in the rates "
             f"turns every sensor motion and R0 with it, so R0 is not trusted; give gyro_bias=False if the rates are "
             f"already corrected"))
     try:
         effects = bias_effect_deg(camera, gyro, model, interval, parts=True)
     except (ValueError, np.linalg.LinAlgError) as err:
-        effects, why = (math.inf,) * 3, f" ({err})"
+        effects, why = (math.inf,) * 4, f" ({err})"
     else:
         why = ""
     effect = effects[0]
     if effect < target_deg:
         return model, effects, None
+    if effects[3] > max(effects[1], effects[2]):
+        return model, effects, Reason("gyro_misalignment", "fail", effect, target_deg,
+                                      _misalignment_words(model, span, effects, why, target_deg))
     if effects[2] >= effects[1]:
         return model, effects, Reason("gyro_scale", "fail", effect, target_deg, _scale_words(model, span, effects, why,
                                                                                             target_deg))
@@ -173,6 +210,21 @@ def _scale_words(model, span, effects, why, target_deg) -> str:
             f"({'; '.join(axes)}{note}), leaves R0 uncertain by {effects[2]:.3g} deg (95 %; with the bias "
             f"{effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about every axis in the first window, "
             f"or give a longer offset_window")
+
+
+def _misalignment_words(model, span, effects, why, target_deg) -> str:
+    """Why the gyro's axis misalignment leaves ``R0`` uncertain: each term, its interval or that it
+    was held at 0."""
+    terms = []
+    for name, m, (lo, hi), ok in zip(("xy", "xz", "yz"), model.misalignment, model.misalignment_ci95,
+                                     model.misalignment_resolved):
+        terms.append(f"{name} {m:+.4f} [{lo:+.4f}, {hi:+.4f}]" if ok else
+                     f"{name} not resolved (held at 0, taken as within +-{100 * MISALIGNMENT_PRIOR:g} %)")
+    note = f"; {model.scale_note}" if model.scale_note else ""
+    return (f"the gyro axes' misalignment (T_g's symmetric off-diagonal), estimated on the first {span:.3g} s and "
+            f"removed from the rates ({'; '.join(terms)}{note}), leaves R0 uncertain by {effects[3]:.3g} deg (95 %; "
+            f"with the bias and the scale: {effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about "
+            f"every axis in the first window, or give a longer offset_window")
 
 
 def hold_raw(raw, t: float, omega, window: float) -> None:
@@ -202,16 +254,17 @@ def start_rig_bias(rig) -> bool:
     camera = OrientationStream(np.array([c[0] for c in cam]), np.array([c[1] for c in cam]), "camera (live)")
     raw = GyroStream(np.array([g[0] for g in rig._raw]), np.array([g[1] for g in rig._raw]), "gyro (live)")
     model, effects, reason = _start(camera, raw, rig.interval, rig.max_offset, rig.calibrator.target_deg)
-    waits = model is None or (reason is not None and reason.check == "gyro_scale")  # more data may resolve it
+    waits = model is None or (reason is not None and reason.check in ("gyro_scale", "gyro_misalignment"))
     if waits and not rig._finished and span < BIAS_WAIT_WINDOWS * rig.offset_window:
         rig._bias_next = span + 0.5 * rig.offset_window
         return False
     rig.bias, rig.bias_effect_deg, rig.scale_effect_deg = model, effects[0], effects[2]
-    rig._b = b = (0.0, 0.0, 0.0) if model is None else tuple(float(v) for v in model.bias_rad_s)
-    rig._s = s = (1.0, 1.0, 1.0) if model is None else tuple(float(v) for v in model.scale)
-    rebuilt = reintegrate(rig._raw, b, s)  # every held pose covered again (the buffer keeps a window only)
+    rig.misalignment_effect_deg = effects[3]
+    rig._b, rig._Ti = b, Ti = rate_correction(model)
+    rebuilt = reintegrate(rig._raw, b, Ti)  # every held pose covered again (the buffer keeps a window only)
     rig._gyro = deque(rebuilt)
-    rig._last_gyro = (rebuilt[-1][0], tuple((w - c) / k for w, c, k in zip(rig._raw[-1][1], b, s)), rebuilt[-1][1])
+    u = [w - c for w, c in zip(rig._raw[-1][1], b)]
+    rig._last_gyro = (rebuilt[-1][0], tuple(sum(k * v for k, v in zip(row, u)) for row in Ti), rebuilt[-1][1])
     rig._raw = None
     if reason is not None:
         rig._name(reason)
@@ -221,7 +274,8 @@ def start_rig_bias(rig) -> bool:
 def bias_fields(rig) -> dict:
     """The live rig's summary keys of its gyro model (None where none was estimated): the bias and
     its interval, the scale per axis and its interval (None on an axis held at 1, as the batch
-    report's), the joint radius they leave in ``R0`` and the scale's share of it."""
+    report's), the misalignment terms and their intervals (None on a term held at 0), the joint
+    radius they leave in ``R0`` and the scale's and the misalignment's shares of it."""
     m = rig.bias
     return {
         "gyro_bias_rad_s": None if m is None else m.bias_rad_s.tolist(),
@@ -231,4 +285,8 @@ def bias_fields(rig) -> dict:
         "gyro_scale_ci95": None if m is None else [[float(v) for v in ci] if ok else None
                                                    for ci, ok in zip(m.scale_ci95, m.scale_resolved)],
         "gyro_scale_R0_deg": None if m is None else float(rig.scale_effect_deg),
+        "gyro_misalignment": None if m is None else [float(v) for v in m.misalignment],
+        "gyro_misalignment_ci95": None if m is None else [[float(v) for v in ci] if ok else None for ci, ok in
+                                                          zip(m.misalignment_ci95, m.misalignment_resolved)],
+        "gyro_misalignment_R0_deg": None if m is None else float(rig.misalignment_effect_deg),
     }
