@@ -1,5 +1,5 @@
-"""The clock's offset profile inside calibrate (replication.rig.clock): steps of the clock named as
-steps, drifts and clean rigs not, and what the segment test says on drifting rigs (issue 34).
+"""The clock's offset profile inside calibrate (replication.rig.clock_profile): steps of the clock
+named as steps, drifts and clean rigs not, and what the segment test says on drifting rigs.
 
 Rigs: bench_changepoint's (camera 20 Hz at 0.05 deg, gyro 200 Hz at 0.005 rad/s, smooth three-axis
 motion), 60 s, a gyro bias of 0.05 rad/s (the sensor model removes it), with one of:
@@ -13,7 +13,7 @@ motion), 60 s, a gyro bias of 0.05 rad/s (the sensor model removes it), with one
 Per case: the share of rigs with a ``clock_jump`` reason (Wilson 95 %), the found step's time and
 size errors, the share with a ``clock_drift`` reason and with ``segments_disagree``; the profile's
 ratios (the step's scaled chi-square gain over a ramp and over one offset) are printed so that
-clock.STEP_LR can be set on them.
+clock_profile.STEP_LR can be set on them.
 
 Measured (fresh seeds 90000-90039, STEP_LR = 40, set on seeds 0-39; Wilson 95 %): clock_jump on
 clean rigs 0/40 [0, 0.09], on 50 ppm 0/40, on 200 ppm 0/40 (120 rigs: 0/120 [0, 0.031]); steps of 5
@@ -27,8 +27,8 @@ and 17/40 [0.29, 0.58] of 40 s, with no false step in 40 clean and 40 50 ppm rig
 (seeds 95000-95039).
 
 Run: python benchmarks/bench_clock.py [N] [BASE] [cases] [raw]   (tuning seeds: 40 0; fresh: 40
-90000; ``raw``: the change and segment tests on the sensor as recorded, clock.corrected_sensor off,
-as before issue 34's point 2)
+90000; ``raw``: the change and segment tests on the sensor as recorded,
+clock_profile.corrected_sensor off)
 """
 import sys
 import warnings
@@ -37,7 +37,7 @@ import numpy as np
 from bench_changepoint import rig, wilson
 
 from replication.rig.calibration import calibrate
-from replication.rig.clock import STEP_LR
+from replication.rig.clock_profile import STEP_LR
 from replication.testing import camera_clock_jumped, clock_drifting, clock_stepped
 
 STEPS_MS = (5, 10, 20, 30, 50)
@@ -92,7 +92,7 @@ def main(n: int = 40, base: int = 0, cases=None):
 
 if __name__ == "__main__":
     if sys.argv[4:5] == ["raw"]:
-        import replication.rig.clock as _clock
+        import replication.rig.clock_profile as _clock
 
         _clock.corrected_sensor = lambda *a, **k: None
         print("raw: the change and segment tests on the sensor as recorded")

@@ -1,0 +1,155 @@
+"""The offset profile (replication.rig.clock_profile): a clean rig and a drift are no step, a step
+and two steps are; each model's decision at its thresholds; windows left out; a stamp skip told the
+clock's. Rigs: ``replication.testing``'s noisy rig (60 s, a gyro bias) and its clock edits."""
+import warnings
+
+import numpy as np
+import pytest
+
+from replication.rig import clock_profile
+from replication.rig.calibration import calibrate
+from replication.rig.streams import GyroStream, integrate_gyro
+from replication.testing import RIG_R0 as R0
+from replication.testing import clock_drifting
+from replication.testing import clock_stepped as lost
+from replication.testing import noisy_rig as rig
+
+
+def drifting(gyro, ppm):
+    return clock_drifting(gyro, ppm, 30.0)
+
+
+def _rig(seed, bias=0.0):
+    return rig(seed, 60.0, 0.05, 0.005, bias_rad_s=bias)
+
+
+def _cal(camera, gyro, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
+
+
+def _profile(camera, gyro):
+    return clock_profile.offset_profile(camera, integrate_gyro(gyro), R0, 0.0)
+
+
+@pytest.mark.parametrize("ppm, choice", [(0.0, "one offset"), (200.0, "drift")])
+def test_clean_and_drifting_clocks_are_no_step(ppm, choice):
+    camera, gyro = _rig(8003)
+    p = _profile(camera, drifting(gyro, ppm) if ppm else gyro)
+    assert p.step is None and p.choice == choice
+    if ppm:
+        assert p.drift_ppm == pytest.approx(ppm, rel=0.2)
+
+
+def test_the_step_threshold_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8004)
+    gyro = lost(gyro, 30.0, 2)  # a 10 ms step
+    ratio = min(_profile(camera, gyro).ratio_drift, _profile(camera, gyro).ratio_one)
+    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * ratio)
+    assert _profile(camera, gyro).step is None
+    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * ratio)
+    assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.002)
+
+
+def test_the_step_size_floor_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8005)
+    p = _profile(camera, lost(gyro, 30.0, 2))
+    size = abs(p.step.size_s)
+    monkeypatch.setattr(clock_profile, "JUMP_MIN_S", 1.01 * size)
+    assert _profile(camera, lost(gyro, 30.0, 2)).step is None
+    monkeypatch.setattr(clock_profile, "JUMP_MIN_S", 0.99 * size)
+    assert _profile(camera, lost(gyro, 30.0, 2)).step is not None
+
+
+def test_too_short_a_recording_has_no_profile():
+    camera, gyro = rig(8006, 29.0, 0.05, 0.005)
+    assert clock_profile.offset_profile(camera, integrate_gyro(gyro), R0, 0.0) is None
+    r = _cal(camera, gyro)
+    assert r.segments["clock_profile"] is None and r.segments["clock_jumps"] == []
+
+
+def test_a_window_without_pairs_is_left_out_not_the_profile():
+    camera, gyro = _rig(8007)
+    keep = (gyro.t < 27.0) | (gyro.t > 33.5)  # 6.5 s of gyro lost (a gap in its stamps, the clock unchanged)
+    p = _profile(camera, GyroStream(gyro.t[keep], gyro.omega[keep], "gyro"))
+    assert p is not None and p.step is None and len(p.t_s) < 12 and not np.any((p.t_s > 28.0) & (p.t_s < 32.0))
+    assert p.windows_left_out >= 1 and len(p.t_s) + p.windows_left_out == 11  # 11 windows of 5.45 s
+
+
+def test_a_step_beyond_the_first_search_is_found_and_one_beyond_the_reach_is_not_a_crash():
+    camera, gyro = _rig(8008)
+    p = _profile(camera, lost(gyro, 30.0, 30))  # 150 ms lost, stamps even
+    assert p.step is not None and p.step.size_s == pytest.approx(-0.150, abs=0.003)
+    far = _profile(camera, lost(gyro, 30.0, 80))  # 400 ms: beyond PROFILE_REACH_S, its windows left out
+    assert far is not None and far.windows_left_out >= 4
+
+
+def _two_steps(seed, bias=0.0):
+    camera, gyro = _rig(seed, bias=bias)
+    return camera, lost(lost(gyro, 40.0, 6), 20.0, 4)  # -20 ms at 20 s, then -30 ms more at 40 s: no stamp skip
+
+
+def test_the_two_steps_threshold_at_its_boundary(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    p = _profile(camera, gyro)
+    c, n = p.chi2, len(p.t_s)
+    rivals = min(c["one offset"], c["drift"], c["drift that bends"], c["step"])
+    s2 = max(1.0, c["two steps"] / (n - 6))
+    gain = min(rivals - c["two steps"], (c["step and drift"] - c["two steps"]) / clock_profile.TWO_STEPS_VS_DRIFT)
+    gain /= s2
+    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * gain)
+    assert len(_profile(camera, gyro).steps) <= 1
+    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * gain)
+    assert [round(s.size_s, 2) for s in _profile(camera, gyro).steps] == [-0.02, -0.03]
+
+
+def test_the_two_steps_size_floor_at_its_boundary(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    least = min(abs(s.size_s) for s in _profile(camera, gyro).steps)
+    monkeypatch.setattr(clock_profile, "TWO_STEPS_MIN_S", 1.01 * least)
+    assert len(_profile(camera, gyro).steps) <= 1
+    monkeypatch.setattr(clock_profile, "TWO_STEPS_MIN_S", 0.99 * least)
+    assert len(_profile(camera, gyro).steps) == 2
+
+
+def test_one_step_and_a_slow_drift_are_not_two_steps():
+    camera, gyro = _rig(8000, bias=0.05)  # a 30 ms step; the offsets after it creep by 3 ms (one step and a drift)
+    p = _cal(camera, lost(gyro, 30.0, 6)).segments["clock_profile"]
+    (step,) = p["steps"]
+    assert step["size_s"] == pytest.approx(-0.030, abs=0.002) and p["chi2"]["two steps"] < p["chi2"]["step"]
+
+
+def test_a_short_skip_is_the_clock_s_at_the_match_boundary(monkeypatch):
+    t = np.concatenate([np.arange(0.0, 30.0, 0.05), np.arange(30.02, 60.0, 0.05)])  # one 70 ms interval
+    share = abs(0.020 - 0.025) / 0.025  # a 20 ms skip read against a 25 ms step
+    monkeypatch.setattr(clock_profile, "SKIP_MATCH", 1.01 * share)
+    assert clock_profile._skip(t, 30.0, 3.0, 0.025)[1] == pytest.approx(0.02)
+    monkeypatch.setattr(clock_profile, "SKIP_MATCH", 0.99 * share)
+    assert clock_profile._skip(t, 30.0, 3.0, 0.025) is None
+    assert clock_profile._skip(t, 30.0, 3.0, -0.02) is None  # the skip says the other clock's sign
+    assert clock_profile._skip(t, 40.0, 3.0, 0.02) is None  # not near the step
+
+
+def _drift_stops(gyro, ppm, stop):
+    return GyroStream(gyro.t + ppm * 1e-6 * (np.minimum(gyro.t, stop) - stop), gyro.omega, gyro.source)
+
+
+def test_a_drift_that_stops_is_no_step():
+    camera, gyro = _rig(8039, bias=0.05)  # before the drift that bends was a rival: a false 11 ms step at 17.6 s
+    r = _cal(camera, _drift_stops(gyro, 500.0, 30.0))
+    p = r.segments["clock_profile"]
+    assert r.segments["clock_jumps"] == [] and p["choice"] == "drift" and p["steps"] == []
+    assert p["chi2"]["drift that bends"] < p["chi2"]["step"] < p["chi2"]["drift"]  # the step only beat the one ramp
+
+
+def test_the_bend_share_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8004)
+    gyro = lost(gyro, 30.0, 2)  # a 10 ms step: it beats the drift that bends by far less than the one ramp
+    p = _profile(camera, gyro)
+    share = (p.chi2["drift that bends"] - p.chi2["step"]) / (p.scale * clock_profile.STEP_LR)
+    assert p.step is not None and share < 1.0
+    monkeypatch.setattr(clock_profile, "BEND_SHARE", 1.01 * share)
+    assert _profile(camera, gyro).step is None
+    monkeypatch.setattr(clock_profile, "BEND_SHARE", 0.99 * share)
+    assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.002)
