@@ -6,6 +6,7 @@ import warnings
 import numpy as np
 import pytest
 
+from replication.core.so3 import matrix_from_rotation_vector
 from replication.rig import clock_profile
 from replication.rig.calibration import calibrate
 from replication.rig.streams import GyroStream, integrate_gyro
@@ -42,14 +43,65 @@ def test_clean_and_drifting_clocks_are_no_step(ppm, choice):
         assert p.drift_ppm == pytest.approx(ppm, rel=0.2)
 
 
+def _gains(p):
+    """The least scaled chi-square gain of the one step and of the step with a drift over the
+    models without a step (the bend's divided by BEND_SHARE), and the second's gain over the first
+    as a share of STEP_LR."""
+    c, n = p.chi2, len(p.t_s)
+    s1, s2 = max(1.0, c["step"] / (n - 4)), max(1.0, c["step and drift"] / (n - 5))
+
+    def over(x, scale):
+        return min(c["drift"] - x, (c["drift that bends"] - x) / clock_profile.BEND_SHARE, c["one offset"] - x) / scale
+    share = (c["step"] - c["step and drift"]) / s2 / clock_profile.STEP_LR
+    return over(c["step"], s1), over(c["step and drift"], s2), share
+
+
 def test_the_step_threshold_at_its_boundary(monkeypatch):
-    camera, gyro = _rig(8004)
-    gyro = lost(gyro, 30.0, 2)  # a 10 ms step
-    ratio = min(_profile(camera, gyro).ratio_drift, _profile(camera, gyro).ratio_one)
-    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * ratio)
+    camera, gyro = _rig(8005)
+    gyro = lost(gyro, 30.0, 2)  # a 10 ms step: the one step gains more than the step with a drift
+    one, with_drift, _ = _gains(_profile(camera, gyro))
+    assert one > with_drift
+    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * one)
     assert _profile(camera, gyro).step is None
-    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * ratio)
+    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * one)
     assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.002)
+
+
+def test_a_step_with_a_drift_is_named_with_its_size_and_the_drift(monkeypatch):
+    camera, gyro = _rig(8002)
+    gyro = clock_drifting(lost(gyro, 30.0, 2), -100.0, 30.0)  # 10 ms lost and a drift the same way
+    p = _profile(camera, gyro)
+    one, with_drift, _ = _gains(p)
+    assert one < clock_profile.STEP_LR < with_drift  # the one step alone was not named (a steep ramp fit as well)
+    assert p.choice == "step" and p.step.size_s == pytest.approx(-0.010, abs=0.0015)
+    assert p.drift_ppm == pytest.approx(-100.0, abs=30.0) and p.ratio_one > p.ratio_drift > clock_profile.STEP_LR
+    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * with_drift)
+    assert _profile(camera, gyro).step is None
+    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * with_drift)
+    assert _profile(camera, gyro).step.size_s == pytest.approx(-0.010, abs=0.0015)
+
+
+def test_the_step_drift_share_at_its_boundary(monkeypatch):
+    camera, gyro = _rig(8001)
+    gyro = clock_drifting(lost(gyro, 30.0, 2), -100.0, 30.0)
+    one, with_drift, share = _gains(_profile(camera, gyro))
+    assert min(one, with_drift) > clock_profile.STEP_LR  # both named: the drift kept where it gains the share
+    monkeypatch.setattr(clock_profile, "STEP_DRIFT_SHARE", 0.99 * share)
+    kept = _profile(camera, gyro)
+    assert kept.step.size_s == pytest.approx(-0.010, abs=0.001) and kept.drift_ppm == pytest.approx(-100.0, abs=20.0)
+    monkeypatch.setattr(clock_profile, "STEP_DRIFT_SHARE", 1.01 * share)
+    alone = _profile(camera, gyro)  # the one step: the drift read into its size, the ramp's slope reported
+    assert alone.step.size_s < -0.0125 and alone.drift_ppm < -250.0
+
+
+def test_the_profile_refits_r0_with_the_windows_offsets():
+    camera, gyro = _two_steps(8011)
+    off = R0 @ matrix_from_rotation_vector(np.radians(0.3) * np.array([0.6, 0.0, 0.8]))  # R0 0.3 deg off
+    sensor = integrate_gyro(gyro)
+    errors = {refit: [abs(s.size_s - t) for s, t in
+                      zip(clock_profile.offset_profile(camera, sensor, off, 0.0, refit=refit).steps, (-0.02, -0.03))]
+              for refit in (False, True)}
+    assert max(errors[False]) > 0.002 and max(errors[True]) < 0.0015
 
 
 def test_the_step_size_floor_at_its_boundary(monkeypatch):
@@ -144,11 +196,13 @@ def test_a_drift_that_stops_is_no_step():
 
 
 def test_the_bend_share_at_its_boundary(monkeypatch):
-    camera, gyro = _rig(8004)
+    camera, gyro = _rig(8006)
     gyro = lost(gyro, 30.0, 2)  # a 10 ms step: it beats the drift that bends by far less than the one ramp
     p = _profile(camera, gyro)
-    share = (p.chi2["drift that bends"] - p.chi2["step"]) / (p.scale * clock_profile.STEP_LR)
-    assert p.step is not None and share < 1.0
+    c, n = p.chi2, len(p.t_s)
+    scales = {"step": max(1.0, c["step"] / (n - 4)), "step and drift": max(1.0, c["step and drift"] / (n - 5))}
+    share = max((c["drift that bends"] - c[m]) / (s * clock_profile.STEP_LR) for m, s in scales.items())
+    assert share < 1.0  # named where either step model beats the bend by the share
     monkeypatch.setattr(clock_profile, "BEND_SHARE", 1.01 * share)
     assert _profile(camera, gyro).step is None
     monkeypatch.setattr(clock_profile, "BEND_SHARE", 0.99 * share)
