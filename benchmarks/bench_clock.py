@@ -38,6 +38,7 @@ from bench_changepoint import rig, wilson
 
 from replication.rig.calibration import calibrate
 from replication.rig.clock_profile import STEP_LR
+from replication.rig.streams import GyroStream
 from replication.testing import camera_clock_jumped, clock_drifting, clock_stepped
 
 STEPS_MS = (5, 10, 20, 30, 50)
@@ -46,22 +47,37 @@ SECONDS, AT = 60.0, 30.0
 
 def case(name: str, seed: int):
     camera, gyro = rig(seed, SECONDS, 0.05, 0.005, bias_rad_s=0.05)
-    if name.startswith("step"):
-        gyro = clock_stepped(gyro, AT, int(name[4:]) // 5)
-    elif name.startswith("ppm"):
-        gyro = clock_drifting(gyro, float(name[3:]), AT)
-    elif name == "camera50":
-        camera = camera_clock_jumped(camera, AT, 0.05)
+    for part in name.split("+"):  # e.g. "step10+ppm-100": a 10 ms step and a -100 ppm drift
+        if part.startswith("step"):
+            gyro = clock_stepped(gyro, AT, int(part[4:]) // 5)
+        elif part.startswith("ppm"):
+            gyro = clock_drifting(gyro, float(part[3:]), AT)
+        elif part.startswith("stop"):  # a drift of this many ppm that stops at AT
+            gyro = GyroStream(gyro.t + float(part[4:]) * 1e-6 * (np.minimum(gyro.t, AT) - AT), gyro.omega, gyro.source)
+        elif part == "two":  # -20 ms at 20 s, then -30 ms more at 40 s
+            gyro = clock_stepped(clock_stepped(gyro, 40.0, 6), 20.0, 4)
+        elif part == "camera50":
+            camera = camera_clock_jumped(camera, AT, 0.05)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, seed=seed)
+
+
+def _truth(name: str) -> list:
+    """The steps of the case: ``(time s, size s)`` each."""
+    if "two" in name:
+        return [(20.0, -0.02), (40.0, -0.03)]
+    if "camera50" in name:
+        return [(AT, -0.05)]
+    step = [p for p in name.split("+") if p.startswith("step")]
+    return [(AT, -int(step[0][4:]) * 1e-3)] if step else []
 
 
 def main(n: int = 40, base: int = 0, cases=None):
     cases = cases or ["clean", "ppm50", "ppm200"] + [f"step{s}" for s in STEPS_MS] + ["camera50"]
     print(f"seeds {base}..{base + n - 1}, STEP_LR = {STEP_LR:g}")
     for name in cases:
-        jump = drift = disagree = 0
+        jump = drift = disagree = found = 0
         errors, ratios = [], []
         for s in range(base, base + n):
             r = case(name, s)
@@ -71,13 +87,14 @@ def main(n: int = 40, base: int = 0, cases=None):
             disagree += "segments_disagree" in checks
             p = r.segments["clock_profile"]
             ratios.append(min(p["ratio_drift"], p["ratio_one"]) if p else np.nan)
-            for j in r.segments["clock_jumps"]:
-                true = -int(name[4:]) * 1e-3 if name.startswith("step") else -0.05 if name == "camera50" else 0.0
-                errors.append((j["time_s"] - AT, 1e3 * (j["size_s"] - true), j["clock"],
-                               abs(j["time_s"] - AT) <= j["time_resolution_s"]))
+            truth = _truth(name)
+            found += "clock_jump" in checks and len(r.segments["clock_jumps"]) == len(truth)
+            for j, (at, true) in zip(r.segments["clock_jumps"], truth or [(AT, 0.0)] * 9):
+                errors.append((j["time_s"] - at, 1e3 * (j["size_s"] - true), j["clock"],
+                               abs(j["time_s"] - at) <= j["time_resolution_s"]))
         ratios = np.array(ratios)
         print(f"{name:9s} clock_jump {wilson(jump, n)}; clock_drift {wilson(drift, n)}; segments_disagree "
-              f"{wilson(disagree, n)}")
+              f"{wilson(disagree, n)}" + (f"; every step found, none more {wilson(found, n)}" if _truth(name) else ""))
         print(f"          ratio min(step vs ramp, vs one): quantiles 5/50/95 % "
               f"{np.round(np.nanpercentile(ratios, [5, 50, 95]), 1).tolist()}, max {np.nanmax(ratios):.1f}")
         if errors:

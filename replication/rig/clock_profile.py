@@ -297,30 +297,41 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     left_out = int(W - good.sum())
     tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
     W = len(tw)
-    c0, c1, slope, ck, (csr, (cut_sd, at_cut, slope_sd)), (c2, (cuts, means)), (c3, two) = _fits(tw, dw, 1 / sw ** 2)
+    chi2, scale, r_drift, r_one, cuts, means, slope = _choice(tw, dw, 1 / sw ** 2)
+    steps = tuple(_step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1)
+                  for cut, m0, m1 in zip(cuts, means[:-1], means[1:])) if cuts else ()
+    choice = "step" if steps else "drift" if (chi2["one offset"] - chi2["drift"]) / scale > STEP_LR else "one offset"
+    return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, scale=float(scale), ratio_drift=float(r_drift), chi2=chi2,
+                         ratio_one=float(r_one), choice=choice, step=steps[0] if steps else None, steps=steps,
+                         drift_ppm=float(1e6 * slope), windows_left_out=left_out, threshold=STEP_LR)
+
+
+def _choice(t, d, w):
+    """The model of the windows' offsets ``d`` (weights ``w``) by the rules of the module notes:
+    ``(chi2, scale, ratio_drift, ratio_one, cuts, means, slope)``, ``cuts`` empty where no step is
+    named (the step models' cuts and the offsets either side where one is, ``slope`` its drift's or
+    the ramp's)."""
+    W = len(d)
+    c0, c1, slope, ck, (csr, (cut_sd, at_cut, slope_sd)), (c2, (cuts, means)), (c3, two) = _fits(t, d, w)
+    chi2 = {"one offset": c0, "drift": c1, "drift that bends": ck, "step": c2, "step and drift": csr,
+            "two steps": c3}
     scale = max(1.0, c2 / max(W - 4, 1))
     r_drift, r_one = min(c1 - c2, (ck - c2) / BEND_SHARE) / scale, (c0 - c2) / scale
     s_sd = max(1.0, csr / max(W - 5, 1))  # a step with a drift: where it alone passes, or its drift is kept
     sd_drift, sd_one = min(c1 - csr, (ck - csr) / BEND_SHARE) / s_sd, (c0 - csr) / s_sd
     keep = min(r_drift, r_one) <= STEP_LR or (c2 - csr) / s_sd > STEP_DRIFT_SHARE * STEP_LR
+    step_slope = slope
     if min(sd_drift, sd_one) > STEP_LR and keep:
-        cuts, means, scale, r_drift, r_one, slope = cut_sd, at_cut, s_sd, sd_drift, sd_one, slope_sd
+        cuts, means, scale, r_drift, r_one, step_slope = cut_sd, at_cut, s_sd, sd_drift, sd_one, slope_sd
     if two is not None:  # two steps: beyond one offset, either ramp and one step, half as far beyond a step and a drift
         s2 = max(1.0, c3 / max(W - 6, 1))
         if (min(c0, c1, ck, c2) - c3) / s2 > STEP_LR and (csr - c3) / s2 > TWO_STEPS_VS_DRIFT * STEP_LR and np.all(
                 np.abs(np.diff(two[1])) > TWO_STEPS_MIN_S):
-            (cuts, means), scale = two, s2
+            (cuts, means), scale, step_slope = two, s2, slope
             r_drift, r_one = (min(c1, ck) - c3) / scale, (c0 - c3) / scale
-    steps = ()
     if min(r_drift, r_one) > STEP_LR and np.all(np.abs(np.diff(means)) > JUMP_MIN_S):
-        steps = tuple(_step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1)
-                      for cut, m0, m1 in zip(cuts, means[:-1], means[1:]))
-    choice = "step" if steps else "drift" if (c0 - c1) / scale > STEP_LR else "one offset"
-    return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, scale=float(scale), ratio_drift=float(r_drift),
-                         chi2={"one offset": c0, "drift": c1, "drift that bends": ck, "step": c2,
-                               "step and drift": csr, "two steps": c3},
-                         ratio_one=float(r_one), choice=choice, step=steps[0] if steps else None, steps=steps,
-                         drift_ppm=float(1e6 * slope), windows_left_out=left_out, threshold=STEP_LR)
+        return chi2, scale, r_drift, r_one, cuts, means, step_slope
+    return chi2, scale, r_drift, r_one, [], [], slope
 
 
 def _step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1):
