@@ -142,18 +142,34 @@ def _two_steps(seed, bias=0.0):
     return camera, lost(lost(gyro, 40.0, 6), 20.0, 4)  # -20 ms at 20 s, then -30 ms more at 40 s: no stamp skip
 
 
+def _two_gains(p):
+    """Two steps' scaled gain over every other model but the step with a drift, and over that; the
+    step with a drift's own gain (it is named, and a rival, above STEP_LR)."""
+    c, n = p.chi2, len(p.t_s)
+    s2 = max(1.0, c["two steps"] / (n - 6))
+    rivals = min(c["one offset"], c["drift"], c["drift that bends"], c["step"])
+    return (rivals - c["two steps"]) / s2, (c["step and drift"] - c["two steps"]) / s2, _gains(p)[1]
+
+
 def test_the_two_steps_threshold_at_its_boundary(monkeypatch):
     camera, gyro = _two_steps(8011)
-    p = _profile(camera, gyro)
-    c, n = p.chi2, len(p.t_s)
-    rivals = min(c["one offset"], c["drift"], c["drift that bends"], c["step"])
-    s2 = max(1.0, c["two steps"] / (n - 6))
-    gain = min(rivals - c["two steps"], (c["step and drift"] - c["two steps"]) / clock_profile.TWO_STEPS_VS_DRIFT)
-    gain /= s2
+    gain, _, with_drift = _two_gains(_profile(camera, gyro))
+    assert with_drift < gain  # no rival near the boundary: the step with a drift is not named there
     monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * gain)
     assert len(_profile(camera, gyro).steps) <= 1
     monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * gain)
     assert [round(s.size_s, 2) for s in _profile(camera, gyro).steps] == [-0.02, -0.03]
+
+
+def test_a_step_with_a_drift_is_a_rival_of_two_steps_only_where_it_is_named(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    gain, over_drift, with_drift = _two_gains(_profile(camera, gyro))
+    assert with_drift < clock_profile.STEP_LR < gain  # two steps named: the step with a drift is no rival
+    monkeypatch.setattr(clock_profile, "TWO_STEPS_VS_DRIFT", 2.0 * over_drift / with_drift)  # it would be, if named
+    monkeypatch.setattr(clock_profile, "STEP_LR", 1.01 * with_drift)
+    assert len(_profile(camera, gyro).steps) == 2
+    monkeypatch.setattr(clock_profile, "STEP_LR", 0.99 * with_drift)  # now named: two steps beat it by too little
+    assert len(_profile(camera, gyro).steps) <= 1
 
 
 def test_the_two_steps_size_floor_at_its_boundary(monkeypatch):
