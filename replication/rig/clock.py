@@ -133,14 +133,18 @@ def corrected_sensor(sensor: OrientationStream, offset: float, *, jumps=(), drif
     """``sensor`` re-stamped so that the one ``offset`` holds throughout: with jumps, its stamps
     before the first shifted by ``offset`` less the offset there and after each further by the
     jump's size, the stamps within the jump's time resolution plus ``interval`` of it cut (a gap, so
-    that pairs across it are dropped); or, without jumps, ``drift = (ppm, t_mid, offset_mid)``
-    removed (the sample stamped ``s`` restamped ``t + offset``, ``t = (s - offset_mid + k t_mid) /
-    (1 + k)``). None where there is nothing to correct."""
+    that pairs across it are dropped), and a ``drift = (ppm, t_mid, offset_mid)`` given with them
+    removed to first order (``k (s - t_mid - offset_mid)`` off the stamp ``s``; ``offset_mid`` the
+    offset before the first jump at ``t_mid``); or, without jumps, the drift removed (the sample
+    stamped ``s`` restamped ``t + offset``, ``t = (s - offset_mid + k t_mid) / (1 + k)``). None
+    where there is nothing to correct."""
     t = sensor.t.astype(float).copy()
     keep = np.ones(len(t), bool)
     if jumps:
         jumps = sorted(jumps, key=lambda j: j.time_s)
         new = t + (offset - jumps[0].offset_before_s)
+        if drift is not None:  # the drift through offset_mid at t_mid (the sensor's stamp t_mid + offset_mid)
+            new = new - drift[0] * 1e-6 * (t - drift[1] - drift[2])
         for j in jumps:
             at = j.time_s + j.offset_before_s
             keep &= np.abs(t - at) > j.time_resolution_s + interval + abs(j.size_s)

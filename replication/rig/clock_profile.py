@@ -101,6 +101,8 @@ class OffsetProfile:
         Windows without enough pairs or motion, or whose offset left :data:`PROFILE_REACH_S`.
     steps : tuple of ClockJump
         Every step chosen (one or two), in time order.
+    step_with_drift : bool
+        The step chosen is a step with a drift (``drift_ppm`` its drift).
     """
 
     t_s: np.ndarray
@@ -116,6 +118,7 @@ class OffsetProfile:
     threshold: float = STEP_LR
     windows_left_out: int = 0
     steps: tuple = ()
+    step_with_drift: bool = False
 
     def to_dict(self, t0: float = 0.0) -> dict:
         return {"t_s": (self.t_s - t0).tolist(), "offset_s": self.offset_s.tolist(), "se_s": self.se_s.tolist(),
@@ -123,7 +126,7 @@ class OffsetProfile:
                 "ratio_one": self.ratio_one, "threshold": self.threshold, "choice": self.choice,
                 "drift_ppm": self.drift_ppm, "windows_left_out": self.windows_left_out,
                 "step": None if self.step is None else self.step.to_dict(t0),
-                "steps": [j.to_dict(t0) for j in self.steps]}
+                "steps": [j.to_dict(t0) for j in self.steps], "step_with_drift": self.step_with_drift}
 
 
 def _residuals(Ai, sensor, ti, tk, d, R):
@@ -300,20 +303,21 @@ def offset_profile(camera, sensor, R, offset, *, interval: float = 1.0, window_s
     left_out = int(W - good.sum())
     tw, dw, sw, edges = tw[good], dw[good], sw[good], np.append(edges[:-1][good], edges[1:][good][-1])
     W = len(tw)
-    chi2, scale, r_drift, r_one, cuts, means, slope = _choice(tw, dw, 1 / sw ** 2)
+    chi2, scale, r_drift, r_one, cuts, means, slope, with_drift = _choice(tw, dw, 1 / sw ** 2)
     steps = tuple(_step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1)
                   for cut, m0, m1 in zip(cuts, means[:-1], means[1:])) if cuts else ()
     choice = "step" if steps else "drift" if (chi2["one offset"] - chi2["drift"]) / scale > STEP_LR else "one offset"
     return OffsetProfile(t_s=tw, offset_s=dw, se_s=sw, scale=float(scale), ratio_drift=float(r_drift), chi2=chi2,
                          ratio_one=float(r_one), choice=choice, step=steps[0] if steps else None, steps=steps,
-                         drift_ppm=float(1e6 * slope), windows_left_out=left_out, threshold=STEP_LR)
+                         drift_ppm=float(1e6 * slope), windows_left_out=left_out, threshold=STEP_LR,
+                         step_with_drift=bool(steps) and with_drift)
 
 
 def _choice(t, d, w):
     """The model of the windows' offsets ``d`` (weights ``w``) by the rules of the module notes:
-    ``(chi2, scale, ratio_drift, ratio_one, cuts, means, slope)``, ``cuts`` empty where no step is
-    named (the step models' cuts and the offsets either side where one is, ``slope`` its drift's or
-    the ramp's)."""
+    ``(chi2, scale, ratio_drift, ratio_one, cuts, means, slope, with_drift)``, ``cuts`` empty where
+    no step is named (the step models' cuts and the offsets either side where one is, ``slope`` its
+    drift's or the ramp's, ``with_drift`` whether it is a step with a drift)."""
     W = len(d)
     c0, c1, slope, ck, (csr, (cut_sd, at_cut, slope_sd)), (c2, (cuts, means)), (c3, two) = _fits(t, d, w)
     chi2 = {"one offset": c0, "drift": c1, "drift that bends": ck, "step": c2, "step and drift": csr,
@@ -323,19 +327,20 @@ def _choice(t, d, w):
     s_sd = max(1.0, csr / max(W - 5, 1))  # a step with a drift: where it alone passes, or its drift is kept
     sd_drift, sd_one = min(c1 - csr, (ck - csr) / BEND_SHARE) / s_sd, (c0 - csr) / s_sd
     keep = min(r_drift, r_one) <= STEP_LR or (c2 - csr) / s_sd > STEP_DRIFT_SHARE * STEP_LR
-    step_slope = slope
+    step_slope, with_drift = slope, False
     if min(sd_drift, sd_one) > STEP_LR and keep:
         cuts, means, scale, r_drift, r_one, step_slope = cut_sd, at_cut, s_sd, sd_drift, sd_one, slope_sd
+        with_drift = True
     if two is not None:  # two steps: beyond one offset, either ramp and one step, and a step and a drift if named
         s2 = max(1.0, c3 / max(W - 6, 1))
         rival = min(sd_drift, sd_one) > STEP_LR and (csr - c3) / s2 <= TWO_STEPS_VS_DRIFT * STEP_LR
         big = np.all(np.abs(np.diff(two[1])) > TWO_STEPS_MIN_S)
         if (min(c0, c1, ck, c2) - c3) / s2 > STEP_LR and not rival and big:
-            (cuts, means), scale, step_slope = two, s2, slope
+            (cuts, means), scale, step_slope, with_drift = two, s2, slope, False
             r_drift, r_one = (min(c1, ck) - c3) / scale, (c0 - c3) / scale
     if min(r_drift, r_one) > STEP_LR and np.all(np.abs(np.diff(means)) > JUMP_MIN_S):
-        return chi2, scale, r_drift, r_one, cuts, means, step_slope
-    return chi2, scale, r_drift, r_one, [], [], slope
+        return chi2, scale, r_drift, r_one, cuts, means, step_slope, with_drift
+    return chi2, scale, r_drift, r_one, [], [], slope, False
 
 
 def _step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1):
@@ -371,7 +376,8 @@ def clock_analysis(camera, oriented, A, B, offset, model=None, *, max_offset: fl
     """``calibrate``'s clock step: the jumps at the sensor's gaps (:func:`clock_segments`), the
     offset profile (:func:`offset_profile`, ``R0`` from the sensor ``model`` or from the pairs
     ``A``, ``B``) and the sensor re-stamped for the change and segment tests
-    (:func:`corrected_sensor`: the jumps, or the model's drift where resolved). Returns ``(parts,
+    (:func:`corrected_sensor`: the jumps, with the profile's drift where its step has one, or the
+    model's drift where resolved). Returns ``(parts,
     jumps, profile, corrected or None)``."""
     from .changepoint import _fit
 
@@ -385,4 +391,7 @@ def clock_analysis(camera, oriented, A, B, offset, model=None, *, max_offset: fl
     profile = offset_profile(camera, oriented, R, offset, sensor_stamps=sensor_stamps)
     jumps = merged_jumps(jumps, profile)
     drift = (model.drift_ppm, model.t_mid_s, model.offset_mid_s) if model is not None and model.drift_resolved else None
+    if jumps:  # the model's drift was fitted without the steps: the profile's, where its step has one
+        s = profile.step if profile is not None and profile.step_with_drift and profile.step in jumps else None
+        drift = None if s is None else (profile.drift_ppm, s.time_s, s.offset_before_s)
     return parts, jumps, profile, corrected_sensor(oriented, offset, jumps=jumps, drift=drift)

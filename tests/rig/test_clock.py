@@ -80,6 +80,20 @@ def test_the_sensor_is_restamped_without_its_drift_and_its_step():
     assert clock.corrected_sensor(OrientationStream(t, Q, "s"), 0.0) is None
 
 
+def test_the_sensor_is_restamped_without_a_step_and_its_drift():
+    t = np.arange(0.0, 40.0, 0.005)
+    Q = np.broadcast_to(np.eye(3), (len(t), 3, 3))
+    k, at, d = -200e-6, 20.0, 0.004  # the offset 4 ms at the step, drifting, 30 ms more after it
+    stamps = t + d + k * (t - at) + 0.03 * (t > at)
+    step = clock.ClockJump(time_s=at, size_s=0.03, offset_before_s=d, offset_after_s=d + 0.03, at_gap=False,
+                           clock="unknown", time_resolution_s=1.0, found_by="profile")
+    fixed = clock.corrected_sensor(OrientationStream(stamps, Q, "s"), 0.0, jumps=[step], drift=(-200.0, at, d))
+    kept = np.abs(stamps - (at + d)) > 1.0 + 1.0 + 0.03  # the cut about the step (its resolution, interval, size)
+    assert np.allclose(fixed.t, t[kept], atol=1e-5)  # first order: k times the offset and step, 6 us here
+    alone = clock.corrected_sensor(OrientationStream(stamps, Q, "s"), 0.0, jumps=[step])
+    assert np.max(np.abs(alone.t - t[kept])) == pytest.approx(200e-6 * 20.0, rel=0.01)  # the drift left in: 4 ms
+
+
 def test_a_drift_is_removed_before_the_segment_test(monkeypatch):
     camera, gyro = _rig(8102, bias=0.05)
     gyro = drifting(gyro, 400.0)  # 24 ms over the minute: the segments' R0 follow the offset's error
@@ -88,6 +102,23 @@ def test_a_drift_is_removed_before_the_segment_test(monkeypatch):
     assert "clock_drift" in checks and "segments_disagree" not in checks
     # the drift left in: the segments disagree
     monkeypatch.setattr(clock_profile, "corrected_sensor", lambda *a, **k: None)
+    assert "segments_disagree" in {x.check for x in _cal(camera, gyro).verdict.reasons}
+
+
+def test_a_step_with_a_drift_is_a_clock_jump_and_both_are_removed_for_the_segment_test(monkeypatch):
+    camera, gyro = _rig(8000, bias=0.05)
+    gyro = drifting(lost(gyro, 30.0, 2), -200.0)  # 10 ms lost, and a drift of 6 ms the same way over the minute
+    r = _cal(camera, gyro)
+    checks = {x.check for x in r.verdict.reasons}
+    assert "clock_jump" in checks and "segments_disagree" not in checks and "clock_drift" not in checks
+    p = r.segments["clock_profile"]
+    assert p["step_with_drift"] and p["drift_ppm"] == pytest.approx(-200.0, abs=80.0)
+    (j,) = r.segments["clock_jumps"]
+    assert j["size_s"] == pytest.approx(-0.010, abs=0.002) and abs(j["time_s"] - 30.0) <= j["time_resolution_s"]
+
+    def without_the_drift(sensor, offset, *, jumps=(), drift=None, interval=1.0):
+        return clock.corrected_sensor(sensor, offset, jumps=jumps, interval=interval)
+    monkeypatch.setattr(clock_profile, "corrected_sensor", without_the_drift)  # the step removed, the drift left in
     assert "segments_disagree" in {x.check for x in _cal(camera, gyro).verdict.reasons}
 
 
