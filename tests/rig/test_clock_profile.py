@@ -172,6 +172,20 @@ def test_a_step_with_a_drift_is_a_rival_of_two_steps_only_where_it_is_named(monk
     assert len(_profile(camera, gyro).steps) <= 1
 
 
+def test_the_refit_leaves_out_the_windows_of_large_error_at_its_boundary(monkeypatch):
+    camera, gyro = _two_steps(8011)
+    off = R0 @ matrix_from_rotation_vector(np.radians(0.3) * np.array([0.6, 0.0, 0.8]))
+    sensor = integrate_gyro(gyro)
+    se = clock_profile.offset_profile(camera, sensor, off, 0.0, refit=False).se_s  # the windows the refit sees
+    ratio = np.max(se) / np.median(se)  # the window across a step
+    assert ratio > clock_profile.REFIT_SE
+    offsets = {}
+    for share in (0.99, 1.01, 2.0):
+        monkeypatch.setattr(clock_profile, "REFIT_SE", share * ratio)
+        offsets[share] = clock_profile.offset_profile(camera, sensor, off, 0.0).offset_s
+    assert np.array_equal(offsets[1.01], offsets[2.0]) and not np.allclose(offsets[0.99], offsets[1.01], atol=1e-6)
+
+
 def test_two_steps_are_named_inside_calibrate_where_its_r0_is_off():
     # calibrate's R0 (the sensor model's, one offset and a drift) was 0.1 deg off: the offsets crept
     # between the steps, a step with a drift came within 17 of two steps (bench seeds 0-29: seed 1)
