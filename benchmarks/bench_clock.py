@@ -29,11 +29,11 @@ and 17/40 [0.29, 0.58] of 40 s, with no false step in 40 clean and 40 50 ppm rig
 (seeds 95000-95039).
 
 With the step with a drift as a model, R0 refitted on the windows' offsets and the step with a
-drift a rival of two steps only where named (the same seeds 90000-90039): 30 and 50 ms steps 40/40 each,
-every step found and none more, the time within its stated resolution in all, the size within 3.0
-ms (30 ms) and 2.7 ms (50 ms). Cases ``step10+ppm-100`` (a step and a drift), ``two``, ``stop500``
-(fresh seeds, calibrate as here; docs/judging.md, section replication.rig.clock_profile): a 10 ms
-step with +-50, +-100 or +-200 ppm 20/20 each [0.84, 1] (seeds 94000-94019), two steps 73/80
+drift a rival of two steps only where named (the same seeds 90000-90039): 30 and 50 ms steps 40/40
+each, every step found and none more, the time within its stated resolution in all, the size within
+3.0 ms (30 ms) and 2.7 ms (50 ms). Cases ``step10+ppm-100`` (a step and a drift), ``two`` and
+``stop500`` (fresh seeds, calibrate as here; docs/judging.md, replication.rig.clock_profile):
+a 10 ms step with +-50, +-100 or +-200 ppm 20/20 each [0.84, 1] (seeds 94000-94019), two steps 73/80
 [0.83, 0.96] (seeds 97000-97039, 98000-98039), no false step in 40 clean, 40 ppm50, 40 ppm200 and
 40 stop500 rigs (0/160 [0, 0.023], seeds 93000-93039).
 
