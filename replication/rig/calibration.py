@@ -413,8 +413,9 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     # --- the change and segment tests: on pairs at segments.ANALYSIS_INTERVAL_S whatever the
     # interval
     from . import clock as clock_mod
+    from . import clock_profile
     from . import segments as seg_mod
-    clock_parts, jumps, profile, fixed = clock_mod.clock_analysis(  # a clock's step or drift removed for the tests
+    clock_parts, jumps, profile, fixed = clock_profile.clock_analysis(  # a clock's step or drift removed for the tests
         camera, oriented, A, B, used, model, max_offset=max_offset, seed=seed)
     As, Bs, ts, bs = _analysis_pairs(camera, fixed or oriented, used, gyro is not None, A, B, t_start, interval,
                                      stride if fixed is None else 0, block)
