@@ -413,6 +413,8 @@ def not_ready_reasons(cal, misfits_withdraw: int) -> list[str]:
     why += detector_reasons(cal._detector, misfits_withdraw)
     if not cal._radius < cal.target_deg:
         why.append(f"{100 * cal.level:g} % radius {cal._radius:.3g} deg >= target {cal.target_deg:g} deg")
+        if cal._creep.found is not None:
+            why.append(cal._creep.describe(cal.target_deg))
     if cal._verdict is not None and cal._verdict.level == "fail":
         why += [r.message for r in cal._verdict.reasons if r.level == "fail"]
     return why
