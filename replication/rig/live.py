@@ -419,7 +419,8 @@ class LiveRig:
                            "angle_deg": ev.angle_deg, "threshold_deg": ev.threshold_deg,
                            "pairs_dropped": ev.pairs_dropped, "message": ev.message, "rate_deg_s": None})
             if ev.kind == "drift":  # deg/s: its rate per pair (the latest measured) x pairs per second since its start
-                span = end - self._event_times.get(ev.onset_pair, (math.nan,))[0]
+                at = end - (end - self.events[0][0]) * (ev.pair - ev.onset_pair) / max(ev.pair, 1)  # pairs even
+                span = end - self._event_times.get(ev.onset_pair, (at,))[0]  # (a creep's start: no event there)
                 events[-1]["rate_deg_s"] = ev.rate_deg_per_pair * (ev.pair - ev.onset_pair) / span if span > 0 else None
         status = cal.status()
         return {

@@ -14,7 +14,7 @@ from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
-from .online_creep import CreepTest
+from .online_creep import CreepTest, follow_creep
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, RepeatFilter, residual_angle_deg
 from .online_guard import drift_lag_deg, follow_drift, not_ready_reasons, recognise_drift, track_drift
 
@@ -417,8 +417,12 @@ class OnlineCalibrator:
         event = decision["event"]
         self.pairs_dropped += event.pairs_dropped - decision["held_before"]
         drift = recognise_drift(self._last_step, event, self._drift_rate) if decision["restart"] else None
+        creep = self._creep.continues(event) if decision["restart"] and drift is None and self._drift_rate is None \
+            else None
         if drift is not None:  # the same cause as the last re-mount: one drift event, followed, no restart
             event = follow_drift(self, event, *drift)
+        elif creep is not None:  # a creep found before the change began: the same cause, followed
+            event = follow_creep(self, event, creep)
         elif decision["restart"]:  # a re-mount (or a jump while following a drift): start over, forget the drift
             self.alarms.append(event.pair)
             self._last_step, self._drift_rate, self.forgetting = (event.pair, event.R_after, event), None, self._fgt

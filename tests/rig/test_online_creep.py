@@ -92,3 +92,45 @@ def test_a_restart_forgets_the_slope():
     oc.restart()
     oc.update_many(*pair_stream(np.random.default_rng(9), 100, Rt(399), noise_deg=0.05))
     assert oc.status()["creep_deg_per_pair"] is None
+
+
+def _stepped(seed, n, at, step_deg, noise_deg=0.05):
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    R1 = R0 @ so3.matrix_from_rotation_vector(np.radians(step_deg) * AXIS)
+    A0, B0 = pair_stream(rng, at, R0, noise_deg=noise_deg)
+    A1, B1 = pair_stream(rng, n - at, R1, noise_deg=noise_deg)
+    return np.concatenate([A0, A1]), np.concatenate([B0, B1])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_step_fits_as_a_step_and_a_creep_as_a_creep(seed):
+    """Both leave a slope over the pairs; the blocks tell them apart: 0.3 deg at pair 300 of 400,
+    and a creep of 0.3 deg over the last 300 (0.001 deg per pair from pair 100)."""
+    A, B = _stepped([6, seed], 400, 300, 0.3)
+    oc = _quiet(target_deg=0.2)
+    oc.update_many(A, B)
+    as_step, as_creep, _ = oc._creep.step_or_creep(oc.R)
+    assert oc.status()["creep_deg_per_pair"] is not None and as_step > as_creep
+    Rt, A, B = _creeping([6, seed], 400, 0.001)
+    A, B = A[:100], B[:100]  # flat for 100 pairs, then the creep
+    R0 = Rt(0)
+    rng = np.random.default_rng([7, seed])
+    A2, B2 = zip(*[[x[0] for x in pair_stream(rng, 1, R0 @ so3.matrix_from_rotation_vector(
+        np.radians(0.001 * j) * AXIS), noise_deg=0.05)] for j in range(300)])
+    oc = _quiet(target_deg=0.2)
+    oc.update_many(np.concatenate([A, A2]), np.concatenate([B, B2]))
+    as_step, as_creep, (first, _, u) = oc._creep.step_or_creep(oc.R)
+    assert as_creep > as_step
+    assert 50 <= first <= 160 and np.degrees(np.linalg.norm(u)) == pytest.approx(0.001, rel=0.2)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_step_after_a_long_steady_stretch_is_a_remount(seed):
+    """A 1 deg re-mount at pair 500 of 800 (0.3 deg of noise): a re-mount, started over, never a
+    drift, even where the pairs after the step leave a slope before it is decided."""
+    A, B = _stepped([8, seed], 800, 500, 1.0, noise_deg=0.3)
+    oc = OnlineCalibrator()
+    oc.update_many(A, B)
+    assert [e.kind for e in oc.events if e.kind != "outliers"] == ["remount"] and len(oc.alarms) == 1
+    assert 500 <= oc.alarms[0] < 560
