@@ -417,7 +417,7 @@ def _drifting(seed, n, total_deg, noise_deg=0.05):
 
 
 def test_the_kinds_and_constants():
-    assert EVENT_KINDS == ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
+    assert EVENT_KINDS == ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end", "clock_jump")
     assert (DRIFT_WITHIN_PAIRS, DRIFT_COS, DRIFT_MAX_STEP_DEG, DRIFT_LAG_SHARE) == (2000, 0.7, 3.0, 0.25)
 
 
