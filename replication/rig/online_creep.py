@@ -117,9 +117,11 @@ class CreepTest:
         if not self.valid:
             return
         tau = np.maximum(np.asarray(T, dtype=float) - self.origin, 0.0)  # a restart's kept pairs: 0
-        self._St += np.einsum("i,iab,icd->acbd", tau, B, A).reshape(9, 9)
-        self._SBt += np.einsum("i,iab->ab", tau, B)
-        self._SBt2 += np.einsum("i,iab->ab", tau * tau, B)
+        M = np.einsum("iab,icd->iacbd", B, A).reshape(len(tau), 81)   # each pair's B_j kron A_j
+        Bf = B.reshape(len(tau), 9)
+        self._St += (tau @ M).reshape(9, 9)
+        self._SBt += (tau @ Bf).reshape(3, 3)
+        self._SBt2 += ((tau * tau) @ Bf).reshape(3, 3)
         self._n += len(tau)
         self._t += float(tau.sum())
         self._t2 += float(tau @ tau)
@@ -130,10 +132,16 @@ class CreepTest:
                 a[:CREEP_MAX_BLOCKS // 2] = half
             self._size *= 2
         k = (tau // self._size).astype(int)
-        np.add.at(self._bS, k, np.einsum("iab,icd->iacbd", B, A).reshape(-1, 9, 9))
-        np.add.at(self._bB, k, B)
-        np.add.at(self._bn, k, 1.0)
-        np.add.at(self._bt, k, tau)
+        if k[0] == k[-1]:  # the batch in one block (mostly): plain sums
+            self._bS[k[0]] += M.sum(axis=0).reshape(9, 9)
+            self._bB[k[0]] += B.sum(axis=0)
+            self._bn[k[0]] += len(tau)
+            self._bt[k[0]] += float(tau.sum())
+        else:
+            np.add.at(self._bS, k, M.reshape(-1, 9, 9))
+            np.add.at(self._bB, k, B)
+            np.add.at(self._bn, k, 1.0)
+            np.add.at(self._bt, k, tau)
 
     def test(self, R, S, SB, s2: float, last: int, following: bool = False):
         """The slope at the estimate ``R`` (the minimiser over the pairs; ``S``, ``SB`` the
