@@ -17,6 +17,8 @@ from ..core import so3
 from ..core.checks import check_number, check_rotation_matrices
 from .online import OnlineCalibrator
 from .online_bias import IDENTITY3, bias_fields, exp3, hold_raw, start_rig_bias
+from .online_causes import run_diagnosis
+from .online_clock import ClockWatch
 from .quality import Verdict
 from .report import RADIUS_COVERS
 
@@ -122,6 +124,7 @@ class LiveRig:
         self._b, self._Ti = (0.0, 0.0, 0.0), IDENTITY3  # its bias and T^-1 (rows): T^-1 (omega - b) of every rate
         self._raw = deque() if gyro_bias else None  # raw gyro samples until the bias is estimated (None: not, done)
         self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
+        self._clock = ClockWatch(self.max_offset)  # the offset measured again after an event (a clock step)
 
     # ------------------------------------------------------------------------------------------------ input
     def _sensor_kind(self, kind: str) -> None:
@@ -182,6 +185,7 @@ class LiveRig:
     def _push(self, t, Q) -> None:
         self._now = max(self._now, t)
         self._gyro.append((t, Q))
+        self._clock.add(self._clock.sensor, t, Q)
         keep = self.interval + 2 * self.max_offset + 1.0 + (self.offset_window if self.offset is None or (
             self._raw is not None and self._kind == "gyro") else 0.0)
         while len(self._gyro) > 2 and self._gyro[0][0] < t - keep:
@@ -198,6 +202,7 @@ class LiveRig:
         self._last_camera_t = float(t)
         self._now = max(self._now, float(t))
         self._camera.append((float(t), C))
+        self._clock.add(self._clock.camera, float(t), C)
         self._keep_early(self._early_camera, float(t), C)
         self._drain()
 
@@ -329,13 +334,16 @@ class LiveRig:
             for k in sorted(self._times)[:len(self._times) // 2]:
                 del self._times[k]
         self.events.append((t, self._now, state))
+        if state.event in ("noise_change", "outliers"):  # a clock step? its offset measured again later
+            self._clock.watch(self._times.get(cal.events[-1].alarm_pair, (t,))[0], len(cal.events) - 1)
+        self._clock.poll(self, OFFSET_RESOLUTION)
         if state.ready and self.ready_at is None:
             self.ready_at = (t, self._now)
         if self.on_pair is not None:
             self.on_pair(t, A, B)
         if self.diagnose and self._diagnosis is None and cal.current_verdict is not None \
                 and cal.current_verdict.level == "fail":
-            self._run_diagnosis()
+            run_diagnosis(self, OFFSET_RESOLUTION)
 
     def _gap_between(self, t0, t1) -> bool:
         if not self._gyro_dt:
@@ -355,36 +363,6 @@ class LiveRig:
         if self._kind == "gyro" and self._gyro_dt:
             e["gyro_rate_hz"] = 1.0 / self._gyro_dt
         return e
-
-    def _run_diagnosis(self) -> None:
-        """The usual input mistakes, tried on the first ``offset_window`` seconds (once)."""
-        import warnings
-
-        from .calibration import calibrate
-        from .diagnose import input_mistakes
-
-        self._diagnosis = []
-        try:
-            camera, sensor = self._streams()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                base = calibrate(camera, sensor, interval=self.interval, max_offset=self.max_offset, n_bootstrap=0,
-                                 diagnose=False)
-        except ValueError:
-            return
-        self._diagnosis = input_mistakes(camera, sensor, base_residual_deg=base.residual_deg["median"],
-                                         motion_deg=base.diagnostics["motion_median_deg"], interval=self.interval,
-                                         max_offset=self.max_offset, calibrate=calibrate)
-        if not self._diagnosis and not self.offset_given:  # a clock offset beyond the search, named if found wider
-            from .online_causes import offset_beyond_search
-            from .streams import integrate_gyro
-
-            wide = offset_beyond_search(camera, integrate_gyro(sensor) if self._kind == "gyro" else sensor,
-                                        max_offset=self.max_offset, window=self.offset_window,
-                                        found_correlation=self.offset_correlation, resolution=OFFSET_RESOLUTION)
-            self._diagnosis = [wide] if wide is not None else []
-        if self._diagnosis:
-            self.calibrator.set_context(extra=tuple(self._causes) + tuple(self._diagnosis))
 
     def verdict(self):
         """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence: clock offset, gaps,
@@ -420,7 +398,8 @@ class LiveRig:
                            "angle_deg": ev.angle_deg, "threshold_deg": ev.threshold_deg,
                            "pairs_dropped": ev.pairs_dropped, "message": ev.message, "rate_deg_s": None})
             if ev.kind == "drift":  # deg/s: its rate per pair (the latest measured) x pairs per second since its start
-                span = end - self._event_times.get(ev.onset_pair, (math.nan,))[0]
+                at = end - (end - self.events[0][0]) * (ev.pair - ev.onset_pair) / max(ev.pair, 1)  # pairs even
+                span = end - self._event_times.get(ev.onset_pair, (at,))[0]  # (a creep's start: no event there)
                 events[-1]["rate_deg_s"] = ev.rate_deg_per_pair * (ev.pair - ev.onset_pair) / span if span > 0 else None
         status = cal.status()
         return {

@@ -14,6 +14,7 @@ from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
+from .online_creep import CreepTest, follow_creep
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, RepeatFilter, residual_angle_deg
 from .online_guard import drift_lag_deg, follow_drift, not_ready_reasons, recognise_drift, track_drift
 
@@ -155,6 +156,7 @@ class OnlineCalibrator:
                                         noise_floor_deg=self.noise_floor_deg, d2_floor=D2_FLOOR)
         self._recent_motion, self._track = deque(maxlen=RECENT_PAIRS), deque(maxlen=400)  # track: (pair, R) of a drift
         self._context: dict = {}
+        self._creep = CreepTest()  # the slope of R0 over the pairs since the last start
         self.restart()
 
     # ----------------------------------------------------------------------------------------------
@@ -181,6 +183,7 @@ class OnlineCalibrator:
         self._next_refine = self.min_pairs
         self._rearm = False
         self._detector.reset()
+        self._creep.reset(self.n_total)
         self._recent_res = deque(maxlen=RECENT_PAIRS)   # residual angles (deg) of pairs on arrival, once armed
         self._verdict, self._refined, self._told = None, False, None  # _told: an event of a refinement, not yet told
 
@@ -202,6 +205,7 @@ class OnlineCalibrator:
         self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
         self._wt = decay * self._wt + float(w @ T)
         self._n_eff = self._w ** 2 / self._w2
+        self._creep.add(T, A, B, self.forgetting == 1.0)
         self._buf.clear()
 
     def _add(self, A, B) -> None:
@@ -382,6 +386,8 @@ class OnlineCalibrator:
             cov = (s2 / 3.0) * Gi @ G2 @ Gi
         self._cov = cov
         self._radius = radius_deg(cov, self.level) if np.all(np.isfinite(cov)) else math.inf
+        if self._creep.test(self._R, self._S, self._SB, s2, self.n_total - 1, self._drift_rate is not None):
+            self._radius += self._creep.found[1]  # a creep: the mounting now is that far from the estimate
         if self._drift_rate is not None:  # following a drift: the estimate lags behind it, along the drift's axis
             lag = drift_lag_deg(self._drift_rate, self.forgetting, self.refine_every)
             self._radius += lag
@@ -411,8 +417,12 @@ class OnlineCalibrator:
         event = decision["event"]
         self.pairs_dropped += event.pairs_dropped - decision["held_before"]
         drift = recognise_drift(self._last_step, event, self._drift_rate) if decision["restart"] else None
+        creep = self._creep.continues(event) if decision["restart"] and drift is None and self._drift_rate is None \
+            else None
         if drift is not None:  # the same cause as the last re-mount: one drift event, followed, no restart
             event = follow_drift(self, event, *drift)
+        elif creep is not None:  # a creep found before the change began: the same cause, followed
+            event = follow_creep(self, event, creep)
         elif decision["restart"]:  # a re-mount (or a jump while following a drift): start over, forget the drift
             self.alarms.append(event.pair)
             self._last_step, self._drift_rate, self.forgetting = (event.pair, event.R_after, event), None, self._fgt
@@ -439,7 +449,8 @@ class OnlineCalibrator:
                 "radius_deg": self._radius, "rms_residual_deg": math.degrees(math.sqrt(self._s2)),
                 "residual_median_deg": float(np.median(res)) if len(res) >= self.min_pairs else None,
                 "motion_median_deg": float(np.median(mot)) if mot else None,
-                "determined": self.determined, "checking": self._detector.checking}
+                "determined": self.determined, "checking": self._detector.checking,
+                "creep_deg_per_pair": None if self._creep.found is None else self._creep.found[0]}
 
     def verdict(self):
         """The online verdict: the batch checks (:func:`replication.rig.quality.judge`, same

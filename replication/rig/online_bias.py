@@ -22,7 +22,10 @@ target or more. Where the scale or the misalignment is what leaves it uncertain,
 for more data (up to :data:`BIAS_WAIT_WINDOWS` windows), as for a bias it could not estimate.
 
 Not done online: a bias or scale that changes later (temperature) is not followed; the window's
-estimate is kept.
+estimate is kept. Measured (120 s, a ramp of 0.01, 0.03 or 0.05 rad/s from 20 s to the end, or a
+step of 0.02 or 0.05 rad/s at 60 s; seeds 14000-14007 each): never ``ready`` at the end with ``R0``
+beyond the target or the radius (0 of 40); the pairs it spoils are seen as a change
+(``noise_change``, ``outliers`` or ``remount``), not named as the bias.
 """
 from __future__ import annotations
 
@@ -262,7 +265,7 @@ def start_rig_bias(rig) -> bool:
     rig.misalignment_effect_deg = effects[3]
     rig._b, rig._Ti = b, Ti = rate_correction(model)
     rebuilt = reintegrate(rig._raw, b, Ti)  # every held pose covered again (the buffer keeps a window only)
-    rig._gyro = deque(rebuilt)
+    rig._gyro, rig._clock.sensor = deque(rebuilt), deque(rebuilt)  # the clock watch's too (bias removed)
     u = [w - c for w, c in zip(rig._raw[-1][1], b)]
     rig._last_gyro = (rebuilt[-1][0], tuple(sum(k * v for k, v in zip(row, u)) for row in Ti), rebuilt[-1][1])
     rig._raw = None

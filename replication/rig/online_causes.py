@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-__all__ = ["constant_speed", "constant_speed_stream", "time_unit_by_rate", "offset_beyond_search",
+__all__ = ["run_diagnosis", "constant_speed", "constant_speed_stream", "time_unit_by_rate", "offset_beyond_search",
            "CONSTANT_SPEED_SPREAD", "CONSTANT_SPEED_MIN_DEG", "PLAUSIBLE_INTERVAL_RATIO", "WIDE_SEARCH_SHARE",
            "WIDE_CORRELATION", "WIDE_GAIN"]
 
@@ -128,3 +128,35 @@ def offset_beyond_search(camera, sensor, *, max_offset: float, window: float, fo
                   f"{offset:+.3f} s (correlation {correlation:.3f}, against {found:.3f} within the search"
                   + (f"; at the bound of a search over +-{wide:g} s: the offset may be larger still" if bound else "")
                   + f"); raise max_offset (--max-offset) above {abs(offset):.3g} s")
+
+
+def run_diagnosis(rig, resolution: float) -> None:
+    """The usual input mistakes, tried on the live rig's (:class:`replication.rig.live.LiveRig`)
+    first ``offset_window`` seconds (once; ``resolution`` that of its offset search); what is found
+    is judged with the estimator's evidence from then on."""
+    import warnings
+
+    from .calibration import calibrate
+    from .diagnose import input_mistakes
+
+    rig._diagnosis = []
+    try:
+        camera, sensor = rig._streams()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            base = calibrate(camera, sensor, interval=rig.interval, max_offset=rig.max_offset, n_bootstrap=0,
+                             diagnose=False)
+    except ValueError:
+        return
+    rig._diagnosis = input_mistakes(camera, sensor, base_residual_deg=base.residual_deg["median"],
+                                     motion_deg=base.diagnostics["motion_median_deg"], interval=rig.interval,
+                                     max_offset=rig.max_offset, calibrate=calibrate)
+    if not rig._diagnosis and not rig.offset_given:  # a clock offset beyond the search, named if found wider
+        from .streams import integrate_gyro
+
+        wide = offset_beyond_search(camera, integrate_gyro(sensor) if rig._kind == "gyro" else sensor,
+                                    max_offset=rig.max_offset, window=rig.offset_window,
+                                    found_correlation=rig.offset_correlation, resolution=resolution)
+        rig._diagnosis = [wide] if wide is not None else []
+    if rig._diagnosis:
+        rig.calibrator.set_context(extra=tuple(rig._causes) + tuple(rig._diagnosis))

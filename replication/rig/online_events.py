@@ -24,8 +24,10 @@ __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL
 #: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them,
 #: ``drift`` (a re-mount that continues the last one:
 #: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a drift followed that
-#: stopped: :func:`replication.rig.online_guard.track_drift`).
-EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end")
+#: stopped: :func:`replication.rig.online_guard.track_drift`), and ``clock_jump`` (a
+#: ``noise_change`` or ``outliers`` after which the live rig measured another clock offset:
+#: :mod:`replication.rig.online_clock`).
+EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end", "clock_jump")
 #: Level of the combined error radius a window's estimate must leave to be a re-mount.
 CONFIRM_LEVEL = 0.999
 #: Level of the test that the window's pairs do not fit the old estimate at the old level (a

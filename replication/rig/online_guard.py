@@ -340,8 +340,10 @@ def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
     lag = drift_lag_deg(rate, lam, cal.refine_every)
     return dataclasses.replace(
         event, kind="drift", onset_pair=first, angle_deg=angle, rate_deg_per_pair=rate,
-        message=f"the frame drifts: {angle:.3g} deg in {event.pair - first} pairs ({rate:.3g} deg per pair) since the "
-                f"re-mount decided at pair {first} (started over once, then followed): forgetting {lam:.4g}, lag "
+        message=f"the frame drifts: {angle:.3g} deg in {event.pair - first} pairs ({rate:.3g} deg per pair) since "
+                + (f"pair {first}, where a creep began (found as a slope; followed, no restart)" if
+                   cal._last_step[2].source == "creep" else f"the re-mount decided at pair {first} (started over "
+                   "once, then followed)") + f": forgetting {lam:.4g}, lag "
                 f"{lag:.3g} deg added to the radius" + (
                     "" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg"))
 
@@ -413,6 +415,8 @@ def not_ready_reasons(cal, misfits_withdraw: int) -> list[str]:
     why += detector_reasons(cal._detector, misfits_withdraw)
     if not cal._radius < cal.target_deg:
         why.append(f"{100 * cal.level:g} % radius {cal._radius:.3g} deg >= target {cal.target_deg:g} deg")
+        if cal._creep.found is not None:
+            why.append(cal._creep.describe(cal.target_deg))
     if cal._verdict is not None and cal._verdict.level == "fail":
         why += [r.message for r in cal._verdict.reasons if r.level == "fail"]
     return why
