@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from .gyro_held import held_reasons
 from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
@@ -79,7 +80,9 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
       large against the pairing interval (warning);
     * a gyro axis's scale resolved, its interval excluding 1 and off by more than the bound
       (warning);
-    * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
+    * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning);
+    * held terms that could move ``R0`` beyond the floor, a triangular ``T_g``'s frame beyond it
+      (warnings, :func:`replication.rig.gyro_held.held_reasons`).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
     """
@@ -132,7 +135,7 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None]
+    return out + [x for x in (_scale_reason(model), _misalignment_reason(model)) if x is not None] + held_reasons(model)
 
 
 def _off(value, ci95, resolved, nominal: float, bound: float):
