@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 __all__ = ["HELD_PRIORS", "HELD_R0_BOUND_DEG", "held_effect_deg", "triangular_frame_deg", "held_reasons",
-           "held_report", "held_lines"]
+           "held_report", "held_lines", "triangular_words"]
 
 #: The plausible size of a held term, per kind: ``scale`` ``|s - 1|``, ``misalignment`` ``|mu|``.
 #: A MEMS gyro's sensitivity (scale) tolerance is +-3 % and its cross-axis sensitivity (an
@@ -109,6 +109,14 @@ def held_report(model) -> dict:
     return {"held_terms": [_TERMS[i - 8] for i in held], "held_R0_deg": float(effect),
             "held_priors": dict(HELD_PRIORS), "triangular_frame_deg": triangular_frame_deg(model.scale,
                                                                                           model.misalignment)}
+
+
+def triangular_words(model) -> str:
+    """The words a misalignment reason ends with: ``R0``'s frame and the triangular ``T_g``'s angle
+    from it (:func:`triangular_frame_deg`, the larger convention's)."""
+    angle = max(triangular_frame_deg(model.scale, model.misalignment).values())
+    return (f"; R0 refers to the gyro's orthogonalised frame, {angle:.2g} deg from the frame of a triangular T_g with "
+            f"these terms (Kalibr's, OpenVINS's convention)")
 
 
 def held_reasons(model) -> list:

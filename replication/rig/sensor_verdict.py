@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .gyro_held import held_reasons
+from .gyro_held import held_reasons, triangular_words
 from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
@@ -183,7 +183,7 @@ def _misalignment_reason(model):
                   f"gyro axes misaligned: symmetric off-diagonal term {terms} (95 % intervals) of {100 * worst:.3g} % "
                   f"> {100 * bound:g} %; {what}: left at 0 it moves R0 by about {model.misalignment_R0_deg:.2g} deg; "
                   f"the gyro's axes are not orthogonal (the off-diagonal of Kalibr's or OpenVINS's T_g): whatever "
-                  f"reads its raw rates with T_g = I inherits the error")
+                  f"reads its raw rates with T_g = I inherits the error" + triangular_words(model))
 
 
 def model_or_note(camera, gyro, interval, max_offset):

@@ -164,3 +164,19 @@ def test_a_triangular_t_g_is_named_with_the_angle_r0_is_off_the_body_frame():
     (reason,) = [x for x in r.verdict.reasons if x.check == "gyro_triangular_frame"]
     assert r.verdict.level == "warning" and reason.measured > HELD_R0_BOUND_DEG
     assert any(line.startswith("R0's sensor frame") for line in r.summary().splitlines())
+
+
+def test_the_misalignment_reason_states_the_triangular_frame_s_angle():
+    """One 1 % term of a triangular T_g: the misalignment reason said R0 moves by about 0.05 deg
+    while R0 is 0.29 deg from the body frame; it now states that angle."""
+    R0, camera, gyro, _ = misaligned_rig(63002, 0.0)
+    T = np.eye(3)
+    T[0, 1] = 0.01
+    bias = np.array([0.03, -0.02, 0.04])
+    r = calibrate(camera, GyroStream(gyro.t, (gyro.omega - bias) @ T.T + bias, "gyro"), n_bootstrap=0,
+                  diagnose=False)
+    (reason,) = [x for x in r.verdict.reasons if x.check == "gyro_misalignment"]
+    words = reason.message.split("R0 refers to the gyro's orthogonalised frame, ")[1]
+    angle = float(words.split(" deg from the frame of a triangular T_g")[0])
+    assert angle == pytest.approx(angle_between_deg(r.R, R0), abs=0.03) and angle < HELD_R0_BOUND_DEG
+    assert not [x for x in r.verdict.reasons if x.check == "gyro_triangular_frame"]  # under the floor
