@@ -15,6 +15,7 @@ import numpy as np
 
 from ..core.motions import MotionObservability
 from .association import offset_in_words
+from .gyro_held import held_lines
 from .quality import Verdict, p_with_level
 
 __all__ = ["CalibrationResult", "OFFSET_CONVENTION", "RADIUS_COVERS", "json_safe"]
@@ -92,6 +93,7 @@ def _scale_lines(model) -> list:
                           for m, ci in zip(model["gyro_misalignment"], model["gyro_misalignment_ci95"]))
         lines.append(f"gyro misalignment (xy, xz, yz; T_g's symmetric off-diagonal) with 95 % intervals: {terms} "
                      f"({applied})")
+    lines += held_lines(model["sensor_model"])
     return lines
 
 

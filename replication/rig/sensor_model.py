@@ -69,6 +69,7 @@ import numpy as np
 
 from ..core.so3 import rotation_vector_from_matrix
 from ..core.stats import radius_deg
+from .gyro_held import held_report
 from .gyro_model import (
     _Z95,
     MISALIGNMENT_AXES,
@@ -197,6 +198,9 @@ class SensorModel:
         axes' scales resolved); the others are held at 0.
     misalignment_R0_deg : float
         How far ``R0`` moves (deg, first order) were the misalignment left at 0.
+    normal_matrix : ndarray (14, 14)
+        ``J^T W J`` of the pairs at the solution over all fourteen parameters, held ones included
+        (what a held term does to ``R0``: :mod:`replication.rig.gyro_held`).
     n_pairs, iterations : int
     span_s : float
         The pairs' span (s, camera time).
@@ -237,6 +241,7 @@ class SensorModel:
     scale_held_ci95: np.ndarray = field(default_factory=lambda: np.full((3, 2), np.nan))
     scale_held_R0_deg: float = 0.0
     scale_spread_R0_deg: float = 0.0
+    normal_matrix: np.ndarray = field(default=None, repr=False)
 
     @property
     def bias_changes(self) -> bool:
@@ -292,7 +297,7 @@ class SensorModel:
                 "scale_spread_R0_deg": float(self.scale_spread_R0_deg),
                 "misalignment_resolved": [bool(v) for v in self.misalignment_resolved],
                 "misalignment_R0_deg": float(self.misalignment_R0_deg),
-                "misalignment_resolution": MISALIGNMENT_RESOLUTION,
+                "misalignment_resolution": MISALIGNMENT_RESOLUTION, **held_report(self),
             },
         }
 
@@ -488,4 +493,4 @@ def estimate_sensor_model(camera: OrientationStream, gyro: GyroStream, *, interv
                 f"{v:.3g}" for v in implausible[1]) + f"] fitted, more than {MAX_SCALE_ERROR:g} off 1 or 0: no "
             "gyro's scale error (units? deg/s read as rad/s is 57.3): every scale held at 1 and term at 0"),
         misalignment=mu, misalignment_ci95=mu_ci, misalignment_resolved=resolved[3:],
-        misalignment_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 8:11] @ mu))))
+        misalignment_R0_deg=float(np.degrees(np.linalg.norm(sensitivity[:, 8:11] @ mu))), normal_matrix=H)

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from .gyro_held import held_reasons, triangular_words
 from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SCALE_RESOLUTION, SensorModel, estimate_sensor_model
 
 __all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
@@ -91,7 +92,9 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
       (warning);
     * the scales the motion does not separate: a held axis (``gyro_scale_held``) or the estimated
       scales' uncertainty (``gyro_scale_spread``) that may move ``R0`` beyond the bound (warning);
-    * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning).
+    * a misalignment term resolved, its interval excluding 0 and beyond the bound (warning);
+    * held terms that could move ``R0`` beyond the floor, a triangular ``T_g``'s frame beyond it
+      (warnings, :func:`replication.rig.gyro_held.held_reasons`).
 
     None where the model's pairs fit worse than :data:`MAX_FIT_RATIO` of their motion.
     """
@@ -144,7 +147,8 @@ def sensor_reasons(model: SensorModel, *, interval: float, motion_median_deg: fl
                           f"so the one offset applied is off by up to {0.5 * change_ms:.3g} ms at the ends, "
                           f"{share:.3g} of the {interval:g} s pairing interval > {warn:g}; re-stamp the sensor "
                           f"(t - drift (t - t_mid)) or calibrate shorter parts"))
-    return out + [x for x in (_scale_reason(model), _held_reason(model), _misalignment_reason(model)) if x is not None]
+    found = (_scale_reason(model), _held_reason(model), _misalignment_reason(model))
+    return out + [x for x in found if x is not None] + held_reasons(model)
 
 
 def _off(value, ci95, resolved, nominal: float, bound: float):
@@ -222,7 +226,7 @@ def _misalignment_reason(model):
                   f"gyro axes misaligned: symmetric off-diagonal term {terms} (95 % intervals) of {100 * worst:.3g} % "
                   f"> {100 * bound:g} %; {what}: left at 0 it moves R0 by about {model.misalignment_R0_deg:.2g} deg; "
                   f"the gyro's axes are not orthogonal (the off-diagonal of Kalibr's or OpenVINS's T_g): whatever "
-                  f"reads its raw rates with T_g = I inherits the error")
+                  f"reads its raw rates with T_g = I inherits the error" + triangular_words(model))
 
 
 def model_or_note(camera, gyro, interval, max_offset):
