@@ -13,7 +13,7 @@ import numpy as np
 from ..core.so3 import rotation_vector_from_matrix
 from .streams import GyroStream, OrientationStream
 
-__all__ = ["BiasChange", "rate_residuals", "fit_bias_change", "MIN_SIDE_S", "CLIP_MAD"]
+__all__ = ["BiasChange", "rate_residuals", "fit_bias_change", "bias_change_of", "named_in", "MIN_SIDE_S", "CLIP_MAD"]
 
 #: A step leaves at least this much of the recording (s) on each side: a shorter side's mean is the
 #: camera's noise.
@@ -111,3 +111,27 @@ def fit_bias_change(camera: OrientationStream, oriented: OrientationStream, R, o
     mean = np.average(e, axis=0, weights=dt)
     return BiasChange("ramp", math.nan, mean + slope * (t0 - np.average(tm, weights=dt)),
                       mean + slope * (t1 - np.average(tm, weights=dt)), t0, t1, float(offset))
+
+
+def named_in(reasons, change: BiasChange | None, t0: float) -> tuple:
+    """``reasons`` with the ``gyro_bias_change`` reason naming ``change`` (times since ``t0``) and
+    what was done with it."""
+    if change is None:
+        return tuple(reasons)
+    import dataclasses
+
+    return tuple(dataclasses.replace(x, message=x.message + f"; the change fits best as {change.words(t0)}, removed "
+                                     "from the rates before the change and segment tests and the fit (not a re-mount)")
+                 if x.check == "gyro_bias_change" else x for x in reasons)
+
+
+def bias_change_of(model, camera: OrientationStream, oriented: OrientationStream) -> BiasChange | None:
+    """:func:`fit_bias_change` about the sensor ``model``'s ``R0`` and offset (``oriented``: its
+    rates integrated), where its halves' biases differ and half the difference moves ``R0`` beyond
+    ``gyro_bias_change``'s floor (:data:`replication.rig.sensor_verdict.SENSOR_THRESHOLDS`); else
+    None."""
+    from .sensor_verdict import SENSOR_THRESHOLDS
+
+    if not (model.bias_changes and model.change_R0_deg > SENSOR_THRESHOLDS["gyro_bias_change_R0_deg"][0]):
+        return None
+    return fit_bias_change(camera, oriented, model.R, model.offset_mid_s)

@@ -15,11 +15,11 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
-from .bias_change import fit_bias_change
-from .camera_jumps import camera_jumps, glued, jump_reasons, spanning
+from .bias_change import bias_change_of, named_in
+from .camera_jumps import found_and_glued, jump_reasons, spanning
 from .quality import THRESHOLDS, Verdict
 from .report import CalibrationResult  # re-exported: a public name here
-from .sensor_verdict import SENSOR_THRESHOLDS, model_or_note, with_sensor_model
+from .sensor_verdict import model_or_note, with_sensor_model
 from .solve_and_judge import (
     Provenance,
     Resampling,
@@ -384,18 +384,20 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
-    jumps_cam = camera_jumps(camera, oriented, max_offset)  # lost tracking: glued, its pairs dropped below
-    camera = glued(camera, jumps_cam) if jumps_cam else camera
+    camera, jumps_cam = found_and_glued(camera, oriented, max_offset)  # lost tracking: its pairs dropped below
     model, model_note = model_or_note(camera, gyro, interval, max_offset) if gyro is not None and gyro_bias else (
         None, None)
+    if model is not None:  # jumps hidden by fast motion: against R0 (then the model again without them)
+        camera, found = found_and_glued(camera, integrate_gyro(model.corrected(gyro)), max_offset, jumps_cam, model.R,
+                                        model.offset_mid_s)
+        model, model_note = model_or_note(camera, gyro, interval, max_offset) if found != jumps_cam else (model, None)
+        jumps_cam = found
     bias_step = None
     if model is not None:  # the sensor model: the rates without the gyro's bias (and its change, where it changes)
         gyro = model.corrected(gyro)
+        bias_step = bias_change_of(model, camera, integrate_gyro(gyro))
+        gyro = bias_step.corrected(gyro) if bias_step else gyro
         oriented = integrate_gyro(gyro)
-        if model.bias_changes and model.change_R0_deg > SENSOR_THRESHOLDS["gyro_bias_change_R0_deg"][0] and (
-                bias_step := fit_bias_change(camera, oriented, model.R, model.offset_mid_s)):
-            gyro = bias_step.corrected(gyro)
-            oriented = integrate_gyro(gyro)
     window = _gap_free_window(camera, oriented, max_offset)
     span = window.t[-1] - window.t[0]
     clock = offset_analysis(window, oriented, max_offset=max_offset, resolution=OFFSET_RESOLUTION,
@@ -475,11 +477,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     if isinstance(sensor, GyroStream):  # the sensor model: its fields and reasons (model off: only where not ok)
         result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
                                    max_offset)
-        if bias_step is not None:  # the change named with its time and size, and what was done with it
-            result = dataclasses.replace(result, verdict=Verdict.of(tuple(dataclasses.replace(
-                x, message=x.message + f"; the change fits best as {bias_step.words(float(camera.t[0]))}, removed "
-                "from the rates before the change and segment tests and the fit (not a re-mount)")
-                if x.check == "gyro_bias_change" else x for x in result.verdict.reasons)))
+        result = dataclasses.replace(result, verdict=Verdict.of(  # the bias change's time and size
+            named_in(result.verdict.reasons, bias_step, float(camera.t[0]))))
         if jumps:  # a step of the clock reads as a drift to the sensor model: named once, as the step
             result = dataclasses.replace(result, verdict=Verdict.of(
                 tuple(x for x in result.verdict.reasons if x.check != "clock_drift")))

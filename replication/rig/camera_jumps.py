@@ -14,8 +14,8 @@ from scipy.ndimage import maximum_filter1d
 from ..core.so3 import rotation_angle_deg
 from .streams import OrientationStream
 
-__all__ = ["CameraJump", "camera_jumps", "glued", "spanning", "jump_reasons", "JUMP_MIN_DEG", "JUMP_FACTOR",
-           "MAX_JUMP_SHARE"]
+__all__ = ["CameraJump", "camera_jumps", "residual_jumps", "found_and_glued", "glued", "spanning", "jump_reasons",
+           "JUMP_MIN_DEG", "JUMP_FACTOR", "MAX_JUMP_SHARE"]
 
 #: A camera step is a jump where it turns more than :data:`JUMP_FACTOR` times the most the sensor
 #: turns in as long a time near it (the clock-offset search on either side) plus this (deg): far
@@ -62,6 +62,33 @@ def camera_jumps(camera: OrientationStream, sensor: OrientationStream, max_offse
     return [CameraJump(float(t[i]), float(t[i + 1]), float(angle[i]), float(bound[i])) for i in np.flatnonzero(jump)]
 
 
+def residual_jumps(camera: OrientationStream, sensor: OrientationStream, R, offset: float) -> list:
+    """The jumps :func:`camera_jumps` cannot tell from fast motion, once ``R`` (camera_from_sensor)
+    and the clock ``offset`` are known: a camera step whose rotation, in the sensor's frame, differs
+    from the sensor's over the same time by more than :data:`JUMP_MIN_DEG` (the same share rule)."""
+    t = camera.t[(camera.t + offset >= sensor.t[0]) & (camera.t + offset <= sensor.t[-1])]
+    if len(t) < 3:
+        return []
+    Q, P, R = camera.at(t), sensor.at(t + offset), np.asarray(R)
+    cam = R.T @ (np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) @ R
+    misfit = rotation_angle_deg(np.swapaxes(np.swapaxes(P[:-1], -1, -2) @ P[1:], -1, -2) @ cam)
+    jump = misfit > JUMP_MIN_DEG
+    if jump.sum() > MAX_JUMP_SHARE * len(jump):
+        return []
+    sensor_deg = rotation_angle_deg(np.swapaxes(P[:-1], -1, -2) @ P[1:])
+    angle = rotation_angle_deg(np.swapaxes(Q[:-1], -1, -2) @ Q[1:])
+    return [CameraJump(float(t[i]), float(t[i + 1]), float(angle[i]), float(sensor_deg[i]))
+            for i in np.flatnonzero(jump)]
+
+
+def found_and_glued(camera: OrientationStream, sensor: OrientationStream, max_offset: float, jumps=(), R=None,
+                    offset: float = 0.0):
+    """``(camera glued, every jump so far)``: :func:`camera_jumps` (``R`` None), or
+    :func:`residual_jumps` with ``R`` and ``offset``, added to ``jumps``."""
+    more = camera_jumps(camera, sensor, max_offset) if R is None else residual_jumps(camera, sensor, R, offset)
+    return (glued(camera, more) if more else camera), sorted([*jumps, *more], key=lambda j: j.start_s)
+
+
 def glued(camera: OrientationStream, jumps) -> OrientationStream:
     """``camera`` with each jump's step replaced by the step before it (the world frame after it
     turned back): the relative rotations that do not span a jump are unchanged."""
@@ -94,6 +121,8 @@ def jump_reasons(jumps, t0: float, dropped: int) -> list:
     worst = max(j.angle_deg for j in jumps)
     return [Reason("camera_jump", "warning", worst, JUMP_MIN_DEG,
                    f"the camera's tracking was lost or its map re-initialised {len(jumps)} time(s), at {named}: "
-                   f"one camera step turns by far more than the sensor turns in as long a time there (at most "
-                   f"{max(j.sensor_deg for j in jumps):.1f} deg); the {dropped} pairs that span them were dropped "
-                   f"and R0 is from the rest (the trajectory glued across each jump)")]
+                   f"in one camera step the camera turns far from what the sensor turns over the same time (the "
+                   f"sensor at most {max(j.sensor_deg for j in jumps):.1f} deg there; more than {JUMP_FACTOR:g} "
+                   f"times its fastest turn nearby plus {JUMP_MIN_DEG:g} deg, or {JUMP_MIN_DEG:g} deg from its "
+                   f"turn given R0); the {dropped} pairs that span them were dropped and R0 is from the rest (the "
+                   f"trajectory glued across each jump)")]

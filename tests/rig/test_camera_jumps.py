@@ -14,10 +14,11 @@ from replication.rig.camera_jumps import (
     camera_jumps,
     glued,
     jump_reasons,
+    residual_jumps,
     spanning,
 )
 from replication.rig.streams import OrientationStream, integrate_gyro
-from replication.testing import noisy_rig, rig_streams
+from replication.testing import RIG_R0, noisy_rig, rig_streams
 
 AXIS = np.array([0.6, 0.0, 0.8])
 
@@ -100,3 +101,19 @@ def test_the_pairs_spanning_a_jump_are_dropped_and_said():
     assert reason.check == "camera_jump" and reason.level == "warning"
     assert "8.00 s (90.0 deg)" in reason.message and "the 20 pairs" in reason.message
     assert jump_reasons([], 0.0, 0) == []
+
+
+@pytest.mark.parametrize("deg, found", [(0.95 * JUMP_MIN_DEG, False), (1.05 * JUMP_MIN_DEG, True)])
+def test_against_r0_a_jump_hidden_by_fast_motion_is_found_above_jump_min_deg(deg, found):
+    """Where the sensor turns fast, camera_jumps cannot see a 20 deg reset; against R0 and the
+    offset the camera step's misfit is the reset's own angle, whatever the motion."""
+    camera, gyro = noisy_rig(8, 30.0, 0.0, 0.0)
+    oriented = integrate_gyro(gyro)
+    i = int(np.argmax(angle_between_deg(camera.R[:-1], camera.R[1:])[20:-20])) + 20
+    at = camera.t[i] + 0.01
+    assert not camera_jumps(_reset(camera, [at], 1.05 * JUMP_MIN_DEG), oriented, 0.2)
+    jumps = residual_jumps(_reset(camera, [at], deg), oriented, RIG_R0, 0.0)
+    assert bool(jumps) is found
+    if found:
+        assert jumps[0].start_s == camera.t[i]
+    assert residual_jumps(camera, oriented, RIG_R0, 0.0) == []
