@@ -1,10 +1,12 @@
 """The gyro bias change (replication.rig.bias_change): a step is found at its time with its size, a
 ramp is told from a step, the shortest side a step may leave is held at its boundary, a badly
 tracked camera pose is clipped, and the change removed leaves the rates unbiased."""
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from replication.rig.bias_change import MIN_SIDE_S, BiasChange, fit_bias_change, rate_residuals
+from replication.rig.bias_change import MIN_SIDE_S, BiasChange, bias_change_of, fit_bias_change, rate_residuals
 from replication.rig.streams import GyroStream, OrientationStream, integrate_gyro
 from replication.testing import RIG_R0, rig_streams
 
@@ -76,3 +78,11 @@ def test_the_change_removed_leaves_no_bias(rig):
 def test_bias_at_holds_a_ramp_at_its_ends():
     change = BiasChange("ramp", float("nan"), np.zeros(3), np.ones(3), 10.0, 20.0, 0.0)
     assert change.bias_at(np.array([0.0, 15.0, 30.0])) == pytest.approx(np.array([[0.0] * 3, [0.5] * 3, [1.0] * 3]))
+
+
+@pytest.mark.parametrize("changes", [False, True])
+def test_the_change_is_fitted_only_where_the_halves_biases_differ(rig, changes):
+    camera, gyro = rig
+    model = SimpleNamespace(bias_changes=changes, R=RIG_R0, offset_mid_s=0.0)
+    found = bias_change_of(model, camera, integrate_gyro(_with(gyro, lambda t: 0.02 * (t >= 20.0))))
+    assert (found is not None) is changes
