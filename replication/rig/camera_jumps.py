@@ -21,7 +21,9 @@ __all__ = ["CameraJump", "camera_jumps", "residual_jumps", "found_and_glued", "g
 #: turns in as long a time near it (the clock-offset search on either side) plus this (deg): far
 #: above any tracker's noise per pose (0.05-1 deg), far below a map re-initialisation's rotation.
 JUMP_MIN_DEG = 5.0
-#: The factor on the sensor's largest turn over the step's time (its fastest rate near the step).
+#: The factor on the sensor's largest turn over the step's time (its fastest rate near the step) and
+#: on the camera's own largest step near it (a fast turn of the camera is no jump, whatever a
+#: sensor out of step with it shows: the clock 10 s off named a jump on TUM-VI without this).
 JUMP_FACTOR = 2.0
 #: More than this share of the camera's steps above the rule: no jumps but an input mistake
 #: (unrelated streams, a time unit): named by the other tests, nothing dropped here.
@@ -55,8 +57,11 @@ def camera_jumps(camera: OrientationStream, sensor: OrientationStream, max_offse
     fastest = maximum_filter1d(speed, size=2 * n + 1, mode="nearest")
     mid = np.clip(np.searchsorted(ts, 0.5 * (t[1:] + t[:-1])), 0, len(speed) - 1)
     bound = fastest[mid] * np.diff(t)
+    k = max(1, int(math.ceil(width / float(np.median(np.diff(t))))))
+    most = np.lib.stride_tricks.sliding_window_view(np.concatenate([np.zeros(k), angle, np.zeros(k)]), k).max(axis=1)
+    around = np.maximum(most[:len(angle)], most[k + 1:])  # the camera's own k steps before and k after
     inside = (t[:-1] >= ts[0]) & (t[1:] <= ts[-1])  # outside the sensor's span nothing is known
-    jump = inside & (angle > JUMP_FACTOR * bound + JUMP_MIN_DEG)
+    jump = inside & (angle > JUMP_FACTOR * np.maximum(bound, around) + JUMP_MIN_DEG)
     if jump.sum() > MAX_JUMP_SHARE * inside.sum():
         return []
     return [CameraJump(float(t[i]), float(t[i + 1]), float(angle[i]), float(bound[i])) for i in np.flatnonzero(jump)]

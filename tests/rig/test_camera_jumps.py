@@ -75,7 +75,7 @@ def test_more_than_max_jump_share_of_the_steps_is_no_jump_but_a_mistake(resting)
     camera, oriented = resting
     steps = int(np.sum((camera.t[:-1] >= oriented.t[0]) & (camera.t[1:] <= oriented.t[-1])))
     allowed = int(MAX_JUMP_SHARE * steps)
-    times = 1.0 + 0.2 * np.arange(allowed + 1) + 0.02
+    times = 1.0 + 1.0 * np.arange(allowed + 1) + 0.02  # further apart than the camera's own window
     assert len(camera_jumps(_reset(camera, times[:allowed], 20.0), oriented, 0.2)) == allowed
     assert camera_jumps(_reset(camera, times, 20.0), oriented, 0.2) == []
 
@@ -117,3 +117,17 @@ def test_against_r0_a_jump_hidden_by_fast_motion_is_found_above_jump_min_deg(deg
     if found:
         assert jumps[0].start_s == camera.t[i]
     assert residual_jumps(camera, oriented, RIG_R0, 0.0) == []
+
+
+def test_a_fast_camera_turn_is_no_jump_against_a_sensor_out_of_step():
+    """The sensor's clock 10 s off: a fast camera step where the sensor rests is not a jump (the
+    camera's own neighbouring steps are as large); a reset there is."""
+    _, camera, gyro, _ = rig_streams(40.0, rest_s=30.0)
+    R = camera.R.copy()
+    fast = matrix_from_rotation_vector(np.radians(8.0) * AXIS)
+    i = int(np.searchsorted(camera.t, 10.0))
+    for j in range(i - 5, i + 6):  # a fast turn, 8 deg per step, in the rest
+        R[j + 1:] = R[j + 1:] @ fast
+    moving = OrientationStream(camera.t, R, "camera")
+    assert camera_jumps(moving, integrate_gyro(gyro), 0.2) == []
+    assert len(camera_jumps(_reset(moving, [20.02], 30.0), integrate_gyro(gyro), 0.2)) == 1
