@@ -15,6 +15,8 @@ from .association import (  # re-exported: public names here
     motion_pairs,
     offset_analysis,
 )
+from .bias_change import bias_change_of, named_in
+from .camera_jumps import found_and_glued, jump_reasons, spanning
 from .quality import THRESHOLDS, Verdict
 from .report import CalibrationResult  # re-exported: a public name here
 from .sensor_verdict import model_or_note, with_sensor_model
@@ -382,10 +384,19 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
+    camera, jumps_cam = found_and_glued(camera, oriented, max_offset)  # lost tracking: its pairs dropped below
     model, model_note = model_or_note(camera, gyro, interval, max_offset) if gyro is not None and gyro_bias else (
         None, None)
-    if model is not None:  # the sensor model: the rates without the gyro's bias
+    if model is not None:  # jumps hidden by fast motion: against R0 (then the model again without them)
+        camera, found = found_and_glued(camera, integrate_gyro(model.corrected(gyro)), max_offset, jumps_cam, model.R,
+                                        model.offset_mid_s)
+        model, model_note = model_or_note(camera, gyro, interval, max_offset) if found != jumps_cam else (model, None)
+        jumps_cam = found
+    bias_step = None
+    if model is not None:  # the sensor model: the rates without the gyro's bias (and its change, where it changes)
         gyro = model.corrected(gyro)
+        bias_step = bias_change_of(model, camera, integrate_gyro(gyro))
+        gyro = bias_step.corrected(gyro) if bias_step else gyro
         oriented = integrate_gyro(gyro)
     window = _gap_free_window(camera, oriented, max_offset)
     span = window.t[-1] - window.t[0]
@@ -396,6 +407,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     A, B, t_start = motion_pairs(camera, oriented, interval, offset=used)
     A, B, t_start = A[::stride], B[::stride], t_start[::stride]
     drop = _pairs_across_gaps(t_start, interval, used, oriented.t, integrated=gyro is not None)
+    cut = spanning(jumps_cam, t_start, interval)
+    drop |= cut
     before = len(A)
     if drop.all():
         raise ValueError(f"every one of the {before} pairs spans a gap in the sensor stream")
@@ -419,6 +432,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         camera, oriented, A, B, used, model, max_offset=max_offset, seed=seed)
     As, Bs, ts, bs = _analysis_pairs(camera, fixed or oriented, used, gyro is not None, A, B, t_start, interval,
                                      stride if fixed is None else 0, block)
+    keep_a = ~spanning(jumps_cam, ts, seg_mod.ANALYSIS_INTERVAL_S)
+    As, Bs, ts = As[keep_a], Bs[keep_a], ts[keep_a]
     segs, segs_note = seg_mod.run(As, Bs, ts, bs) if len(As) else (None, "not run: no pairs")
     if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
         part = seg_mod.consistent_mask(segs, ts, seg_mod.ANALYSIS_INTERVAL_S)
@@ -437,7 +452,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
-                    pairs_dropped_at_gaps=int(drop.sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
+                    pairs_dropped_at_gaps=int((drop & ~cut).sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
     mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
     evidence.update(mirror)
     result = solve_pairs(
@@ -450,16 +465,21 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     result.diagnostics.update(speeds=_speeds(camera, oriented, used, lo, hi), offset_curve=curve, t0=float(camera.t[0]),
                               change=change)
     segs_report = {**seg_mod.report(segs, segs_note, float(camera.t[0]), segs_used),
-                   **clock_mod.clock_report(clock_parts, jumps, float(camera.t[0]), profile)}
+                   **clock_mod.clock_report(clock_parts, jumps, float(camera.t[0]), profile),
+                   "camera_jumps": [j.to_dict(float(camera.t[0])) for j in jumps_cam],
+                   "bias_change": bias_step.to_dict(float(camera.t[0])) if bias_step else None}
     result = with_reasons(dataclasses.replace(result, segments=segs_report),  # the segment test, the clock jumps
                           seg_mod.reasons(segs, float(camera.t[0]), segs_used, segs_note)
-                          + clock_mod.clock_reasons(jumps, float(camera.t[0]), offset))
+                          + clock_mod.clock_reasons(jumps, float(camera.t[0]), offset)
+                          + jump_reasons(jumps_cam, float(camera.t[0]), int(cut.sum())))
     unit = _time_unit_reason(camera, sensor)
     if unit is not None:
         result = with_reasons(result, [unit])
     if isinstance(sensor, GyroStream):  # the sensor model: its fields and reasons (model off: only where not ok)
         result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
                                    max_offset)
+        result = dataclasses.replace(result, verdict=Verdict.of(  # the bias change's time and size
+            named_in(result.verdict.reasons, bias_step, float(camera.t[0]))))
         if jumps:  # a step of the clock reads as a drift to the sensor model: named once, as the step
             result = dataclasses.replace(result, verdict=Verdict.of(
                 tuple(x for x in result.verdict.reasons if x.check != "clock_drift")))

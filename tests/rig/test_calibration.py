@@ -872,6 +872,77 @@ def test_an_input_mistake_is_not_called_a_remount(rng):
     assert r.change_test["sides_fit"] > THRESHOLDS["residual_to_motion"][1]
 
 
+def _bias_stepped_rig(seed, size=0.02, at=30.0, seconds=60.0):
+    """The red team's rig (camera 0.05 deg, gyro 0.2 deg/s, bias (0.03, -0.02, 0.04) rad/s) whose
+    gyro bias steps by ``size`` rad/s along (1, -1, 1) at ``at`` s, the mount fixed."""
+    rng = np.random.default_rng(seed)
+    phase = rng.uniform(0, 2 * np.pi, 3)
+    t_cam = np.arange(0.0, seconds, 0.05)
+    from replication.testing import rig_motion
+
+    C = rig_motion(t_cam, phase) @ so3.matrix_from_rotation_vector(
+        rng.normal(0.0, np.radians(0.05) / np.sqrt(3.0), (len(t_cam), 3)))
+    t_imu = np.arange(-1.0, seconds + 1.0, 0.005)
+    Q = rig_motion(t_imu, phase) @ R0
+    omega = so3.rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
+    t = 0.5 * (t_imu[1:] + t_imu[:-1])
+    omega = omega + [0.03, -0.02, 0.04] + ((t > at) * size)[:, None] * np.array([1, -1, 1]) / np.sqrt(3)
+    omega = omega + rng.normal(0.0, np.radians(0.2), omega.shape)
+    return OrientationStream(t_cam, C, "camera"), GyroStream(t, omega, "gyro")
+
+
+def test_a_gyro_bias_step_is_named_with_its_time_and_size_not_a_remount(monkeypatch):
+    """Seed 64000 (red team 6): left in, the step read as a re-mount at 9.2 s (fail); seed 64029:
+    the whole's R0 moves by less than gyro_bias_change's floor, but a split's short side still
+    took the step for a re-mount."""
+    import replication.rig.calibration as cal
+
+    camera, gyro = _bias_stepped_rig(64000)
+    r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
+    reasons = _reasons(r)
+    assert "remount_deg" not in reasons and "segments_disagree" not in reasons and r.verdict.level == "warning"
+    assert "a step of 1.1" in reasons["gyro_bias_change"].message and "at 30.0 s" in reasons["gyro_bias_change"].message
+    assert "not a re-mount" in reasons["gyro_bias_change"].message
+    change = r.segments["bias_change"]
+    assert change["kind"] == "step" and abs(change["time_s"] - 30.0) <= 0.1
+    assert change["size_rad_s"] == pytest.approx(0.02, rel=0.05)
+    assert so3.angle_between_deg(r.R, R0) < 0.1
+    jsonschema.validate(r.to_dict(), SCHEMA)
+    small = calibrate(*_bias_stepped_rig(64029), n_bootstrap=0, diagnose=False)
+    assert "remount_deg" not in _reasons(small) and abs(small.segments["bias_change"]["time_s"] - 30.0) <= 0.1
+    monkeypatch.setattr(cal, "bias_change_of", lambda *a: None)
+    left = calibrate(camera, gyro, n_bootstrap=0, diagnose=False)
+    assert left.segments["bias_change"] is None and "remount_deg" in _reasons(left)  # the wrong cause, left in
+
+
+def test_use_consistent_drops_nothing_for_a_gyro_bias_step():
+    camera, gyro = _bias_stepped_rig(64007)
+    r = calibrate(camera, gyro, n_bootstrap=0, diagnose=False, use="consistent")
+    assert r.segments["use"]["dropped_s"] == 0.0 and "segments_consistent_part" not in _reasons(r)
+    assert "remount_deg" not in _reasons(r) and so3.angle_between_deg(r.R, R0) < 0.1
+
+
+def test_map_resets_are_named_their_pairs_dropped_and_r0_from_the_rest(rng):
+    """The camera's world frame turns 90 deg three times (a SLAM map re-initialised, no time gap):
+    named with the times, the pairs spanning them dropped, R0 as without them."""
+    _, camera, gyro, _ = rig_streams(60.0, rng=rng, camera_noise_deg=0.05, gyro_noise_deg_s=0.2)
+    R = np.array(camera.R)
+    for k, at in enumerate((15.02, 30.02, 45.02)):
+        R[camera.t > at] = so3.matrix_from_rotation_vector(np.radians(90.0) * np.array([np.cos(k), np.sin(k), 0.5])
+                                                          / np.hypot(1.0, 0.5)) @ R[camera.t > at]
+    r = calibrate(OrientationStream(camera.t, R, "camera"), gyro, n_bootstrap=20)
+    reasons = _reasons(r)
+    assert set(reasons) <= {"camera_jump"} and r.verdict.level == "warning"
+    found = re.findall(r"(\d+\.\d\d) s \((\d+\.\d) deg\)", reasons["camera_jump"].message)
+    assert [t for t, _ in found] == ["15.00", "30.00", "45.00"] and all(85 < float(a) < 95 for _, a in found)
+    assert "the 60 pairs that span them were dropped" in reasons["camera_jump"].message
+    assert [round(j["start_s"], 2) for j in r.segments["camera_jumps"]] == [15.0, 30.0, 45.0]
+    assert so3.angle_between_deg(r.R, R0) < 0.05
+    jsonschema.validate(r.to_dict(), SCHEMA)
+    clean = calibrate(camera, gyro, n_bootstrap=0)
+    assert clean.segments["camera_jumps"] == [] and "camera_jump" not in _reasons(clean)
+
+
 # ------------------------------------------------------------------------------------------------
 # handedness
 
