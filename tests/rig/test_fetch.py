@@ -38,7 +38,8 @@ def _files_the_project_reads():
 #: Names the scanned files write themselves (scratch files of test_realdata.py), not real
 #: recordings.
 SCRATCH_FILES = {"bad.txt", "c.yaml", "cam.txt", "imu.csv", "none.csv", "rep.txt", "robot.txt", "t.txt",
-                 "any.txt", "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv"}
+                 "any.txt", "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv",
+                 "ns.csv", "whole.csv", "half.csv", "gt.csv"}
 
 
 def test_manifest_lists_every_real_data_file_the_project_reads():
