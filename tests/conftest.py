@@ -290,3 +290,50 @@ def one_axis_rig(scale, seed, wobble=0.05, seconds=15.0, bias=(0.03, -0.02, 0.04
     omega = rotation_vector_from_matrix(np.swapaxes(Q[:-1], -1, -2) @ Q[1:]) / 0.005
     omega = omega * np.asarray(scale, float) + np.asarray(bias, float) + rng.normal(0.0, np.radians(0.2), omega.shape)
     return OrientationStream(t_cam, C, "camera"), GyroStream(0.5 * (t[1:] + t[:-1]), omega, "gyro")
+
+
+# --------------------------------------------------------------------------------------------------
+# The paper's simulation at 40 problems (seed 11), with its noise and without: the convexity
+# study's tests (a test file's own fixture of the same name takes precedence).
+
+
+@pytest.fixture(scope="module")
+def noisy():
+    from replication.study.simulation import simulate
+
+    return simulate(11, 40)
+
+
+@pytest.fixture(scope="module")
+def clean():
+    from replication.study.simulation import simulate
+
+    return simulate(11, 40, noise_camera=0.0, noise_sensor=0.0)
+
+
+# --------------------------------------------------------------------------------------------------
+# The clock tests' rig: ``replication.testing``'s noisy rig (60 s, camera noise 0.05 deg, gyro noise
+# 0.005 rad/s), a drift of the sensor's clock from 30 s, and calibrate without bootstrap, diagnosis
+# or warnings.
+
+
+def clock_rig(seed, bias=0.0):
+    from replication.testing import noisy_rig
+
+    return noisy_rig(seed, 60.0, 0.05, 0.005, bias_rad_s=bias)
+
+
+def drifting(gyro, ppm):
+    from replication.testing import clock_drifting
+
+    return clock_drifting(gyro, ppm, 30.0)
+
+
+def quiet_calibrate(camera, gyro, **kw):
+    import warnings
+
+    from replication.rig.calibration import calibrate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)

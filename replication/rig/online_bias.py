@@ -201,16 +201,20 @@ def _start(camera, gyro, interval, max_offset, target_deg):
         f"axis) in the first window, or give a longer offset_window"))
 
 
+def _term_words(names, values, cis, resolved, fmt, held) -> str:
+    """Each term of the gyro model: its value and interval, or that it was held (``held``)."""
+    return "; ".join(f"{n} {v:{fmt}} [{lo:{fmt}}, {hi:{fmt}}]" if ok else f"{n} not resolved ({held})"
+                     for n, v, (lo, hi), ok in zip(names, values, cis, resolved))
+
+
 def _scale_words(model, span, effects, why, target_deg) -> str:
     """Why the gyro's scale leaves ``R0`` uncertain: each axis's scale, its interval or that it was
     held at 1."""
-    axes = []
-    for i, (s, (lo, hi), ok) in enumerate(zip(model.scale, model.scale_ci95, model.scale_resolved)):
-        axes.append(f"{'xyz'[i]} {s:.4f} [{lo:.4f}, {hi:.4f}]" if ok else
-                    f"{'xyz'[i]} not resolved (held at 1, taken as within +-{100 * SCALE_PRIOR:g} %)")
+    axes = _term_words("xyz", model.scale, model.scale_ci95, model.scale_resolved, ".4f",
+                       f"held at 1, taken as within +-{100 * SCALE_PRIOR:g} %")
     note = f"; {model.scale_note}" if model.scale_note else ""
     return (f"the gyro scale per axis, estimated on the first {span:.3g} s and removed from the rates "
-            f"({'; '.join(axes)}{note}), leaves R0 uncertain by {effects[2]:.3g} deg (95 %; with the bias "
+            f"({axes}{note}), leaves R0 uncertain by {effects[2]:.3g} deg (95 %; with the bias "
             f"{effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about every axis in the first window, "
             f"or give a longer offset_window")
 
@@ -218,14 +222,11 @@ def _scale_words(model, span, effects, why, target_deg) -> str:
 def _misalignment_words(model, span, effects, why, target_deg) -> str:
     """Why the gyro's axis misalignment leaves ``R0`` uncertain: each term, its interval or that it
     was held at 0."""
-    terms = []
-    for name, m, (lo, hi), ok in zip(("xy", "xz", "yz"), model.misalignment, model.misalignment_ci95,
-                                     model.misalignment_resolved):
-        terms.append(f"{name} {m:+.4f} [{lo:+.4f}, {hi:+.4f}]" if ok else
-                     f"{name} not resolved (held at 0, taken as within +-{100 * MISALIGNMENT_PRIOR:g} %)")
+    terms = _term_words(("xy", "xz", "yz"), model.misalignment, model.misalignment_ci95, model.misalignment_resolved,
+                        "+.4f", f"held at 0, taken as within +-{100 * MISALIGNMENT_PRIOR:g} %")
     note = f"; {model.scale_note}" if model.scale_note else ""
     return (f"the gyro axes' misalignment (T_g's symmetric off-diagonal), estimated on the first {span:.3g} s and "
-            f"removed from the rates ({'; '.join(terms)}{note}), leaves R0 uncertain by {effects[3]:.3g} deg (95 %; "
+            f"removed from the rates ({terms}{note}), leaves R0 uncertain by {effects[3]:.3g} deg (95 %; "
             f"with the bias and the scale: {effects[0]:.3g} deg){why} >= the target {target_deg:g} deg; turn about "
             f"every axis in the first window, or give a longer offset_window")
 

@@ -3,32 +3,17 @@ of the camera's clock are named clock_jump with their time, size and clock (not 
 and a clean rig are not; the verdict's words; the sensor re-stamped for the segment test
 (a drift or a step removed). Rigs: ``replication.testing``'s noisy rig (60 s, a gyro bias) and its
 clock edits."""
-import warnings
 
 import numpy as np
 import pytest
 
+from conftest import clock_rig as _rig
+from conftest import drifting
+from conftest import quiet_calibrate as _cal
 from replication.rig import clock, clock_profile
-from replication.rig.calibration import calibrate
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.testing import camera_clock_jumped as camera_jump
-from replication.testing import clock_drifting
 from replication.testing import clock_stepped as lost
-from replication.testing import noisy_rig as rig
-
-
-def drifting(gyro, ppm):
-    return clock_drifting(gyro, ppm, 30.0)
-
-
-def _rig(seed, bias=0.0):
-    return rig(seed, 60.0, 0.05, 0.005, bias_rad_s=bias)
-
-
-def _cal(camera, gyro, **kw):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
 
 
 def test_a_step_without_a_stamp_skip_is_a_clock_jump_not_a_drift():

@@ -1,33 +1,20 @@
 """The offset profile (replication.rig.clock_profile): a clean rig and a drift are no step, a step
 and two steps are; each model's decision at its thresholds; windows left out; a stamp skip told the
 clock's. Rigs: ``replication.testing``'s noisy rig (60 s, a gyro bias) and its clock edits."""
-import warnings
 
 import numpy as np
 import pytest
 
+from conftest import clock_rig as _rig
+from conftest import drifting
+from conftest import quiet_calibrate as _cal
 from replication.core.so3 import matrix_from_rotation_vector
 from replication.rig import clock_profile
-from replication.rig.calibration import calibrate
 from replication.rig.streams import GyroStream, integrate_gyro
 from replication.testing import RIG_R0 as R0
 from replication.testing import clock_drifting
 from replication.testing import clock_stepped as lost
 from replication.testing import noisy_rig as rig
-
-
-def drifting(gyro, ppm):
-    return clock_drifting(gyro, ppm, 30.0)
-
-
-def _rig(seed, bias=0.0):
-    return rig(seed, 60.0, 0.05, 0.005, bias_rad_s=bias)
-
-
-def _cal(camera, gyro, **kw):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
 
 
 def _profile(camera, gyro):

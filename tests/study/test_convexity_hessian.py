@@ -7,18 +7,6 @@ import pytest
 from replication.core import handeye, so3
 from replication.core.solvers import chordal_optimal
 from replication.study import convexity as bl
-from replication.study.simulation import simulate
-
-
-@pytest.fixture(scope="module")
-def noisy():
-    return simulate(11, 40)
-
-
-@pytest.fixture(scope="module")
-def clean():
-    return simulate(11, 40, noise_camera=0.0, noise_sensor=0.0)
-
 
 # --- the Hessian of (8) in vec(R)
 # ----------------------------------------------------------------------------------

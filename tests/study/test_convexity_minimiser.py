@@ -1,16 +1,8 @@
 """Answers against the certified minimiser (``replication.study.convexity.minimiser``): the
 certificate under outlier pairs (notebook 06, section 4) and the two-step's fixed point (notebook
 01, section 3d)."""
-import pytest
 
 from replication.study import convexity as bl
-from replication.study.simulation import simulate
-
-
-@pytest.fixture(scope="module")
-def noisy():
-    return simulate(11, 40)
-
 
 # --- outliers, the fixed point
 # ---------------------------------------------------------------------------------------

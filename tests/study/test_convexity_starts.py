@@ -10,18 +10,6 @@ from replication.core.solvers import chordal_optimal
 from replication.core.solvers.certificate import chordal_newton
 from replication.core.stats import wilson_interval
 from replication.study import convexity as bl
-from replication.study.simulation import simulate
-
-
-@pytest.fixture(scope="module")
-def noisy():
-    return simulate(11, 40)
-
-
-@pytest.fixture(scope="module")
-def clean():
-    return simulate(11, 40, noise_camera=0.0, noise_sensor=0.0)
-
 
 
 @pytest.fixture(scope="module")
