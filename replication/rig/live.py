@@ -272,7 +272,7 @@ class LiveRig:
             if unit is None:
                 self._name(Reason("overlap", "fail", None, None, self.offset_note))
             return
-        self.calibrator.set_context(**self._evidence())
+        self.calibrator.set_context(**self.evidence())
 
     def _name(self, reason) -> None:
         """A cause named on the streams: judged with the estimator's evidence from now on."""
@@ -365,8 +365,13 @@ class LiveRig:
         return len(inside) > 1 and np.diff(inside).max() > self.GAP_FACTOR * self._gyro_dt
 
     # -------------------------------------------------------------------------------------- judging
-    def _evidence(self) -> dict:
-        """The front end's part of the verdict's evidence (the batch's fields and thresholds)."""
+    def evidence(self) -> dict:
+        """The front end's part of the verdict's evidence (the batch's fields and thresholds):
+        ``interval_s``, ``pairs_dropped_at_gaps``, ``pairs_before_gaps``; once an offset is
+        estimated (not given) ``offset_s``, ``offset_correlation``, ``max_offset_s``,
+        ``offset_resolution_s``, ``offset_applied``; with a gyro, ``gyro_rate_hz`` (1 / the running
+        typical sample step). Read-only: it changes nothing (:meth:`verdict` passes it to the
+        calibrator)."""
         e = {"interval_s": self.interval, "pairs_dropped_at_gaps": self.pairs_dropped,
              "pairs_before_gaps": max(1, -(-self.pairs_formed // self.stride))}  # pairs 1, 1 + stride, ... used
         if self.offset is not None and not self.offset_given:
@@ -391,7 +396,7 @@ class LiveRig:
                                      span(self._early_sensor[0][0], self._gyro[-1][0]))
             if unit is not None:
                 self._name(unit)
-        self.calibrator.set_context(**self._evidence())
+        self.calibrator.set_context(**self.evidence())
         return self.calibrator.verdict()
 
     def summary(self, t0: float = 0.0) -> dict:
