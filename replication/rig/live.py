@@ -1,9 +1,11 @@
-"""The live front end of :class:`replication.rig.online.OnlineCalibrator`: camera poses and raw gyro samples (or sensor
-orientations) as they arrive, paired on the fly; and :func:`replay`, which feeds recorded streams through it in
-time order, as if live (notebook 08, ``python -m replication calibrate --online``).
+"""The live front end of :class:`replication.rig.online.OnlineCalibrator`: camera poses and raw gyro
+samples (or sensor orientations) as they arrive, paired on the fly; and :func:`replay`, which feeds
+recorded streams through it in time order, as if live (notebook 08, ``python -m replication
+calibrate --online``).
 
-Data model in :mod:`replication.rig.streams`, the clock offset from :mod:`replication.rig.association`, the checks from
-:mod:`replication.rig.quality` and :mod:`replication.rig.diagnose`; conventions: ``docs/conventions.md``.
+Data model in :mod:`replication.rig.streams`, the clock offset from
+:mod:`replication.rig.association`, the checks from :mod:`replication.rig.quality` and
+:mod:`replication.rig.diagnose`; conventions: ``docs/conventions.md``.
 """
 from __future__ import annotations
 
@@ -29,21 +31,24 @@ OFFSET_RESOLUTION = 0.5e-3
 
 
 class LiveRig:
-    """A stream front end for :class:`OnlineCalibrator`: camera poses and raw gyro samples as they arrive.
+    """A stream front end for :class:`OnlineCalibrator`: camera poses and raw gyro samples as they
+    arrive.
 
-    The gyro is integrated as it comes (:func:`replication.rig.streams.integrate_gyro`'s trapezoidal rule) into a
-    buffer that holds only the last ``interval + 2 max_offset + 1`` seconds (O(1) memory in the recording's
-    length). Camera poses form pairs ``interval`` seconds long that share no pose (the radius assumes independent
-    pairs; a pair ending where the next starts would share that pose's noise); each pair's sensor motion is the
-    integrated orientation slerped to the camera times plus the clock offset. The offset is estimated once, on the
-    first ``offset_window`` seconds of both streams (:func:`replication.rig.association.estimate_time_offset`; those
-    samples are held until then), unless given; :meth:`finish` (end of the streams) estimates it on whatever arrived
-    if the streams were shorter. A pair whose sensor interval contains a gap (more than ``GAP_FACTOR`` median sample
-    intervals) is dropped.
+    The gyro is integrated as it comes (:func:`replication.rig.streams.integrate_gyro`'s trapezoidal
+    rule) into a buffer that holds only the last ``interval + 2 max_offset + 1`` seconds (O(1)
+    memory in the recording's length). Camera poses form pairs ``interval`` seconds long that share
+    no pose (the radius assumes independent pairs; a pair ending where the next starts would share
+    that pose's noise); each pair's sensor motion is the integrated orientation slerped to the
+    camera times plus the clock offset. The offset is estimated once, on the first ``offset_window``
+    seconds of both streams (:func:`replication.rig.association.estimate_time_offset`; those samples
+    are held until then), unless given; :meth:`finish` (end of the streams) estimates it on whatever
+    arrived if the streams were shorter. A pair whose sensor interval contains a gap (more than
+    ``GAP_FACTOR`` median sample intervals) is dropped.
 
-    The first ``offset_window`` seconds of both streams are also kept, raw, for :mod:`replication.rig.diagnose`: when
-    the online verdict (:meth:`verdict`: the batch checks and thresholds) first fails, the usual input mistakes
-    (quaternion order, pose direction, gyro units) are tried on that window and the one that fits is named.
+    The first ``offset_window`` seconds of both streams are also kept, raw, for
+    :mod:`replication.rig.diagnose`: when the online verdict (:meth:`verdict`: the batch checks and
+    thresholds) first fails, the usual input mistakes (quaternion order, pose direction, gyro units)
+    are tried on that window and the one that fits is named.
 
     Parameters
     ----------
@@ -51,11 +56,12 @@ class LiveRig:
     interval : float
         Pair length (s), positive.
     offset : float or None
-        Sensor clock offset (s; the sensor sample stamped ``t + offset`` matches the camera's at ``t``); ``None``:
-        estimate it.
+        Sensor clock offset (s; the sensor sample stamped ``t + offset`` matches the camera's at
+        ``t``); ``None``: estimate it.
     offset_window : float or None
-        Seconds of data for the offset estimate (and the diagnosis); default ``max(20, 2 max_offset + 10)``. It must
-        exceed ``2 max_offset`` (the search needs an overlap once shifted both ways).
+        Seconds of data for the offset estimate (and the diagnosis); default
+        ``max(20, 2 max_offset + 10)``. It must exceed ``2 max_offset`` (the search needs an overlap
+        once shifted both ways).
     max_offset : float
         Largest offset searched (s), positive.
     correct_offset : bool
@@ -65,10 +71,12 @@ class LiveRig:
     diagnose : bool
         Run the input-mistake diagnosis when the verdict fails.
     on_pair : callable, optional
-        Called with ``(t, A, B)`` for every pair used (e.g. to feed another estimator the same pairs).
+        Called with ``(t, A, B)`` for every pair used (e.g. to feed another estimator the same
+        pairs).
     gyro_bias : bool
-        A gyro: estimate its bias on the first ``offset_window`` seconds (pairs wait for them, also with a given
-        offset) and remove it from every rate (:mod:`replication.rig.online_bias`; :attr:`bias` the model, or None).
+        A gyro: estimate its bias on the first ``offset_window`` seconds (pairs wait for them, also
+        with a given offset) and remove it from every rate (:mod:`replication.rig.online_bias`;
+        :attr:`bias` the model, or None).
     """
 
     GAP_FACTOR = 5.0
@@ -126,7 +134,7 @@ class LiveRig:
         self._bias_next = self.offset_window   # the held camera span at which the bias is tried (next)
         self._clock = ClockWatch(self.max_offset)  # the offset measured again after an event (a clock step)
 
-    # ------------------------------------------------------------------------------------------------ input
+    # ---------------------------------------------------------------------------------------- input
     def _sensor_kind(self, kind: str) -> None:
         if self._kind is None:
             self._kind = kind
@@ -169,7 +177,8 @@ class LiveRig:
         self._push(t, Q)
 
     def add_orientation(self, t: float, world_from_sensor) -> None:
-        """One sensor orientation (an orientation sensor instead of a gyro): time (s) and ``world_from_sensor``."""
+        """One sensor orientation (an orientation sensor instead of a gyro): time (s) and
+        ``world_from_sensor``."""
         Q = check_rotation_matrices(world_from_sensor, "world_from_sensor")
         if Q.shape != (3, 3) or not math.isfinite(t):
             raise ValueError(f"a sensor pose is a finite time and one 3x3 rotation, got t={float(t)}, shape {Q.shape}")
@@ -207,8 +216,8 @@ class LiveRig:
         self._drain()
 
     def finish(self) -> None:
-        """The streams ended: estimate the clock offset on whatever arrived if it is still unknown, form the last
-        pairs. Idempotent."""
+        """The streams ended: estimate the clock offset on whatever arrived if it is still unknown,
+        form the last pairs. Idempotent."""
         if self._finished:
             return
         self._finished = True
@@ -220,9 +229,10 @@ class LiveRig:
                                     f"({self.offset_note.removeprefix('no clock offset: ')})")
         self._drain()
 
-    # ------------------------------------------------------------------------------------------------ pairing
+    # -------------------------------------------------------------------------------------- pairing
     def _streams(self):
-        """The first ``offset_window`` seconds as streams (camera, sensor) for the offset search and diagnosis."""
+        """The first ``offset_window`` seconds as streams (camera, sensor) for the offset search and
+        diagnosis."""
         from .streams import GyroStream, OrientationStream
 
         cam = OrientationStream(np.array([c[0] for c in self._early_camera]),
@@ -234,9 +244,11 @@ class LiveRig:
         return cam, sensor
 
     def _estimate_offset(self) -> None:
-        """The clock offset on the held samples; where the streams' sample intervals show time stamps in different
-        units, that is named (:func:`replication.rig.online_causes.time_unit_by_rate`); where the search finds no
-        overlap, no pair is formed and the verdict fails naming why (never a raised search error)."""
+        """The clock offset on the held samples; where the streams' sample intervals show time
+        stamps in different units, that is named
+        (:func:`replication.rig.online_causes.time_unit_by_rate`); where the search finds no
+        overlap, no pair is formed and the verdict fails naming why (never a raised search
+        error)."""
         from .association import estimate_time_offset
         from .online_causes import constant_speed_stream, time_unit_by_rate
         from .quality import Reason
@@ -260,7 +272,7 @@ class LiveRig:
             if unit is None:
                 self._name(Reason("overlap", "fail", None, None, self.offset_note))
             return
-        self.calibrator.set_context(**self._evidence())
+        self.calibrator.set_context(**self.evidence())
 
     def _name(self, reason) -> None:
         """A cause named on the streams: judged with the estimator's evidence from now on."""
@@ -275,8 +287,8 @@ class LiveRig:
         return self.offset if (self.offset_given or self.correct_offset) else 0.0
 
     def _sensor_at(self, t):
-        """The integrated gyro at ``t`` (slerp between its neighbours), or None if not yet / no longer buffered or
-        inside a gap."""
+        """The integrated gyro at ``t`` (slerp between its neighbours), or None if not yet / no
+        longer buffered or inside a gap."""
         times = [g[0] for g in self._gyro]
         k = np.searchsorted(times, t)
         if k == 0 or k >= len(times):
@@ -352,9 +364,14 @@ class LiveRig:
         inside = times[(times >= t0) & (times <= t1)]
         return len(inside) > 1 and np.diff(inside).max() > self.GAP_FACTOR * self._gyro_dt
 
-    # ------------------------------------------------------------------------------------------------ judging
-    def _evidence(self) -> dict:
-        """The front end's part of the verdict's evidence (the batch's fields and thresholds)."""
+    # -------------------------------------------------------------------------------------- judging
+    def evidence(self) -> dict:
+        """The front end's part of the verdict's evidence (the batch's fields and thresholds):
+        ``interval_s``, ``pairs_dropped_at_gaps``, ``pairs_before_gaps``; once an offset is
+        estimated (not given) ``offset_s``, ``offset_correlation``, ``max_offset_s``,
+        ``offset_resolution_s``, ``offset_applied``; with a gyro, ``gyro_rate_hz`` (1 / the running
+        typical sample step). Read-only: it changes nothing (:meth:`verdict` passes it to the
+        calibrator)."""
         e = {"interval_s": self.interval, "pairs_dropped_at_gaps": self.pairs_dropped,
              "pairs_before_gaps": max(1, -(-self.pairs_formed // self.stride))}  # pairs 1, 1 + stride, ... used
         if self.offset is not None and not self.offset_given:
@@ -365,9 +382,10 @@ class LiveRig:
         return e
 
     def verdict(self):
-        """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence: clock offset, gaps,
-        gyro rate, and a named input mistake if the diagnosis found one). Time stamps in different units are also
-        looked for in the spans of the streams so far, as the batch does."""
+        """The online verdict (:meth:`OnlineCalibrator.verdict` with this front end's evidence:
+        clock offset, gaps, gyro rate, and a named input mistake if the diagnosis found one). Time
+        stamps in different units are also looked for in the spans of the streams so far, as the
+        batch does."""
         from types import SimpleNamespace
 
         from .calibration import _time_unit_reason
@@ -378,12 +396,13 @@ class LiveRig:
                                      span(self._early_sensor[0][0], self._gyro[-1][0]))
             if unit is not None:
                 self._name(unit)
-        self.calibrator.set_context(**self._evidence())
+        self.calibrator.set_context(**self.evidence())
         return self.calibrator.verdict()
 
     def summary(self, t0: float = 0.0) -> dict:
-        """What the online run found, for the JSON report (times in seconds since ``t0``; ``ready_at_s`` is when the
-        deciding pair was formed, ``ready_pair_end_s`` when its motion ended)."""
+        """What the online run found, for the JSON report (times in seconds since ``t0``;
+        ``ready_at_s`` is when the deciding pair was formed, ``ready_pair_end_s`` when its motion
+        ended)."""
         cal = self.calibrator
         verdict = self.verdict()
         undecided = cal.unresolved_end()
@@ -428,20 +447,20 @@ class LiveRig:
 def replay(camera, sensor, calibrator: OnlineCalibrator, *, interval: float = 1.0, offset: float | None = None,
            max_offset: float = 0.2, correct_offset: bool = True, stride: int = 1, offset_window: float | None = None,
            reference=None, remount=None, on_pair=None, diagnose: bool = True, gyro_bias: bool = True):
-    """Feed two recorded streams (camera poses; gyro samples or sensor orientations) to a :class:`LiveRig` in time
-    order, as if live; one row per pair.
+    """Feed two recorded streams (camera poses; gyro samples or sensor orientations) to a
+    :class:`LiveRig` in time order, as if live; one row per pair.
 
     ``remount = (t, R)``: from time ``t`` on, the sensor is mounted ``R`` further (its rates become
-    ``R^T omega``, its orientations ``Q R``: a synthetic re-mount, for the change detector); the reference is then
-    ``reference @ R``.
-    Returns a :class:`pandas.DataFrame` with ``t`` (s, the pair's end), ``t_seen`` (s, when the pair was formed:
-    later than ``t`` while the first ``offset_window`` seconds are held for the clock offset), ``n_pairs``,
-    ``radius_deg``, ``ready``, ``alarm`` (a re-mount confirmed), ``event`` (the kind of an event decided at that
+    ``R^T omega``, its orientations ``Q R``: a synthetic re-mount, for the change detector); the
+    reference is then ``reference @ R``. Returns a :class:`pandas.DataFrame` with ``t`` (s, the
+    pair's end), ``t_seen`` (s, when the pair was formed: later than ``t`` while the first
+    ``offset_window`` seconds are held for the clock offset), ``n_pairs``, ``radius_deg``,
+    ``ready``, ``alarm`` (a re-mount confirmed), ``event`` (the kind of an event decided at that
     pair, else empty), ``determined``, ``checking``, the estimate as a quaternion ``qw, qx, qy, qz``
-    (camera_from_sensor) and, with a reference, ``error_deg``. Before the first estimate (fewer than ``min_pairs``
-    pairs since a start) the estimate, radius and error are NaN (empty in a CSV). ``attrs``: ``offset_s``,
-    ``pairs_dropped``, ``alarms``, ``events`` and ``summary`` (:meth:`LiveRig.summary`, times since the camera's
-    first sample).
+    (camera_from_sensor) and, with a reference, ``error_deg``. Before the first estimate (fewer than
+    ``min_pairs`` pairs since a start) the estimate, radius and error are NaN (empty in a CSV).
+    ``attrs``: ``offset_s``, ``pairs_dropped``, ``alarms``, ``events`` and ``summary``
+    (:meth:`LiveRig.summary`, times since the camera's first sample).
     """
     pd = require("pandas", "replay (its table of pairs; calibrate --online)")
     rig = LiveRig(calibrator, interval=interval, offset=offset, max_offset=max_offset, correct_offset=correct_offset,

@@ -15,8 +15,9 @@ from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to
 from ..core.stats import radius_deg
 from .online_causes import constant_speed
 from .online_creep import CreepTest, follow_creep
+from .online_drift import drift_lag_deg, follow_drift, recognise_drift, track_drift
 from .online_events import DUPLICATE_DEG, ChangeDetector, OnlineEvent, RepeatFilter, residual_angle_deg
-from .online_guard import drift_lag_deg, follow_drift, not_ready_reasons, recognise_drift, track_drift
+from .online_guard import not_ready_reasons
 
 __all__ = ["OnlineCalibrator", "OnlineState", "MIN_PAIRS", "MIN_EXCITATION_DEG", "NOISE_FLOOR_DEG"]
 

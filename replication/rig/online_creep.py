@@ -14,7 +14,7 @@ import numpy as np
 
 from ..core.so3 import matrix_from_rotation_vector
 from ..core.stats import _normal_quantile
-from .online_guard import DRIFT_COS, DRIFT_MAX_STEP_DEG, drift_lag_deg, drift_step, follow_drift
+from .online_drift import DRIFT_COS, DRIFT_MAX_STEP_DEG, drift_lag_deg, drift_step, follow_drift
 
 __all__ = ["CreepTest", "follow_creep", "CREEP_LEVEL", "CREEP_MIN_PAIRS", "CREEP_BLOCK", "CREEP_MAX_BLOCKS"]
 
@@ -208,8 +208,8 @@ class CreepTest:
     def continues(self, event):
         """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`)
         continues a creep: the last test before the change's onset found a slope, the event's step
-        is small (:data:`replication.rig.online_guard.DRIFT_MAX_STEP_DEG`) and in the slope's
-        direction (a cosine of at least :data:`replication.rig.online_guard.DRIFT_COS`), and the
+        is small (:data:`replication.rig.online_drift.DRIFT_MAX_STEP_DEG`) and in the slope's
+        direction (a cosine of at least :data:`replication.rig.online_drift.DRIFT_COS`), and the
         pairs since the start fit a creep better than a step (:meth:`step_or_creep` at the estimate
         before the event: a step found late also leaves a slope, but a step fits it better). Returns
         None or ``(rate_deg_per_pair, step_deg, first, axis, R_first)``: the best creep's rate, its
@@ -242,7 +242,7 @@ class CreepTest:
 def follow_creep(cal, event, creep):
     """A re-mount that continues a creep (:meth:`CreepTest.continues`) in the calibrator ``cal``:
     one ``drift`` event from the creep's start, followed
-    (:func:`replication.rig.online_guard.follow_drift`), no restart. Returns the event."""
+    (:func:`replication.rig.online_drift.follow_drift`), no restart. Returns the event."""
     rate, step, origin, axis, start = creep
     began = dataclasses.replace(event, pair=origin, source="creep", R_before=start, R_after=start)  # its start
     cal._last_step = (event.pair, event.R_after, began)

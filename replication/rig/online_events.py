@@ -23,8 +23,8 @@ __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL
 
 #: Kinds of :class:`OnlineEvent`: the four :func:`classify` tells apart, in the order it tests them,
 #: ``drift`` (a re-mount that continues the last one:
-#: :func:`replication.rig.online_guard.recognise_drift`) and ``drift_end`` (a drift followed that
-#: stopped: :func:`replication.rig.online_guard.track_drift`), and ``clock_jump`` (a
+#: :func:`replication.rig.online_drift.recognise_drift`) and ``drift_end`` (a drift followed that
+#: stopped: :func:`replication.rig.online_drift.track_drift`), and ``clock_jump`` (a
 #: ``noise_change`` or ``outliers`` after which the live rig measured another clock offset:
 #: :mod:`replication.rig.online_clock`).
 EVENT_KINDS = ("remount", "noise_change", "outliers", "new_information", "drift", "drift_end", "clock_jump")

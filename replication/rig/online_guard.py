@@ -1,6 +1,7 @@
-"""What keeps the online estimator's ``ready`` right between its decisions: the recent pairs tested against the
-estimate and its radius (:func:`misfit_test`, :class:`MisfitGuard`), and a frame that drifts told from a re-mount
-(:func:`recognise_drift`). Theory and measured numbers: ``docs/judging.md``, section
+"""What keeps the online estimator's ``ready`` right between its decisions: the recent pairs
+tested against the estimate and its radius (:func:`misfit_test`, :class:`MisfitGuard`), and the
+sentences of ``not_ready`` (:func:`not_ready_reasons`). A frame that drifts is told from a re-mount
+in :mod:`replication.rig.online_drift`. Theory and measured numbers: ``docs/judging.md``, section
 ``replication.rig.online_guard``."""
 from __future__ import annotations
 
@@ -13,37 +14,39 @@ from ..core.stats import _normal_quantile
 
 _EYE = np.eye(3)
 
-__all__ = ["recognise_drift", "follow_drift", "follow_forgetting", "drift_lag_deg", "drift_step",
-           "DRIFT_WITHIN_PAIRS", "DRIFT_COS", "DRIFT_MAX_STEP_DEG", "DRIFT_LAG_SHARE", "GUARD_LEVEL",
-           "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY", "GUARD_LONG_WINDOWS",
-           "MisfitGuard",
-           "misfit_test", "track_drift", "detector_reasons", "not_ready_reasons", "TRACK_MEMORIES", "TRACK_MIN_PAIRS",
-           "TRACK_Z", "TRACK_APART"]
+__all__ = ["GUARD_LEVEL", "GUARD_CLEAR_LEVEL", "GUARD_MIN_PAIRS", "GUARD_K", "GUARD_WINDOW", "GUARD_EVERY",
+           "GUARD_LONG_WINDOWS", "MisfitGuard", "misfit_test", "detector_reasons", "not_ready_reasons"]
 
-#: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked after every pair of a
-#: suspected change, so stricter than the detector's :data:`replication.rig.online_events.CONFIRM_LEVEL`).
+#: Level of the region the recent pairs' own rotation must leave to withdraw ``ready`` (checked
+#: after every pair of a suspected change, so stricter than the detector's
+#: :data:`replication.rig.online_events.CONFIRM_LEVEL`).
 GUARD_LEVEL = 0.9999
-#: Fewest pairs since the CUSUM last stood at 0 that are tested (3 unknowns; fewer pairs say little about a rotation).
+#: Fewest pairs since the CUSUM last stood at 0 that are tested (3 unknowns; fewer pairs say little
+#: about a rotation).
 GUARD_MIN_PAIRS = 3
-#: The last this many pairs are tested together every :data:`GUARD_EVERY` pairs (a shift too small to show in any
-#: one pair's residual: 1 deg at 0.5 deg of noise needs about 8 pairs at :data:`GUARD_LEVEL`).
+#: The last this many pairs are tested together every :data:`GUARD_EVERY` pairs (a shift too small
+#: to show in any one pair's residual: 1 deg at 0.5 deg of noise needs about 8 pairs at
+#: :data:`GUARD_LEVEL`).
 GUARD_WINDOW = 20
-#: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per pair).
+#: Pairs between two tests of the last :data:`GUARD_WINDOW` (each costs about 100 us: 5 us per
+#: pair).
 GUARD_EVERY = 20
-#: Longer windows: the last 80, 160 and 320 pairs. A re-mount smaller than the pair noise (0.55-0.9 deg at 1 deg of
-#: noise) shows in no 20 pairs: the statistic grows with the window (about ``N angle^2 / s^2``); 0.55 deg at 1 deg of
-#: noise passes :data:`GUARD_LEVEL` in about 120 pairs.
+#: Longer windows: the last 80, 160 and 320 pairs. A re-mount smaller than the pair noise (0.55-0.9
+#: deg at 1 deg of noise) shows in no 20 pairs: the statistic grows with the window (about ``N
+#: angle^2 / s^2``); 0.55 deg at 1 deg of noise passes :data:`GUARD_LEVEL` in about 120 pairs.
 GUARD_LONG_WINDOWS = (80, 160, 320)
-#: The long windows are tested together every this many pairs, on block sums of this many pairs (about 50 us a test,
-#: 100 us after a refinement: 3-5 us a pair).
+#: The long windows are tested together every this many pairs, on block sums of this many pairs
+#: (about 50 us a test, 100 us after a refinement: 3-5 us a pair).
 GUARD_LONG_EVERY = 20
-#: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below this quantile of
-#: ``chi^2_3`` (a window that fits as usual): between the two levels the shift is neither shown nor ruled out (a
-#: 1 deg re-mount at 0.2 deg of camera noise, absorbed by the estimate without an alarm, was ready again 21 s later).
+#: A window that withdrew ``ready`` keeps it withdrawn until a later window's statistic is below
+#: this quantile of ``chi^2_3`` (a window that fits as usual): between the two levels the shift is
+#: neither shown nor ruled out (a 1 deg re-mount at 0.2 deg of camera noise, absorbed by the
+#: estimate without an alarm, was ready again 21 s later).
 GUARD_CLEAR_LEVEL = 0.95
-#: Allowance of the guard's own sum ``max(0, S + z - k)``, ``z = d^2 / (2 s^2)`` (about ``chi^2_3 / 3``, mean 1, while
-#: the estimate holds): its window is the pairs since that sum last stood at 0. Lower than the detector's allowance (2)
-#: so that a change whose residuals are only 1.5-2 times the noise (1 deg at 0.5 deg of noise) keeps the window open.
+#: Allowance of the guard's own sum ``max(0, S + z - k)``, ``z = d^2 / (2 s^2)`` (about ``chi^2_3 /
+#: 3``, mean 1, while the estimate holds): its window is the pairs since that sum last stood at 0.
+#: Lower than the detector's allowance (2) so that a change whose residuals are only 1.5-2 times the
+#: noise (1 deg at 0.5 deg of noise) keeps the window open.
 GUARD_K = 1.5
 
 
@@ -54,17 +57,18 @@ def _chi2_3(level: float) -> float:
 
 
 def _misfit_vectors(R, A, B) -> np.ndarray:
-    """Each pair's misfit of ``R`` as the axial vector of ``E = R^T A R B^T`` (times ``2 sin`` of its angle), (J, 3)."""
+    """Each pair's misfit of ``R`` as the axial vector of ``E = R^T A R B^T`` (times ``2 sin`` of
+    its angle), (J, 3)."""
     E = np.swapaxes(R, -1, -2) @ A @ R @ np.swapaxes(B, -1, -2)
     return np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=-1)
 
 
 def misfit_test(R, cov, s2, A, B) -> tuple[float, float]:
     """The pairs ``(A, B)`` solved on their own by one Gauss-Newton step from ``R`` (as
-    :func:`replication.rig.online_events.drift_test`): ``(statistic, angle_deg)``, the statistic ``w^T (C_w +
-    cov)^{-1} w`` (``C_w = (s^2 / 3) G_w^{-1}``, ``s^2`` the estimate's mean square residual ``s2``, ``cov`` its
-    covariance or None), ``angle_deg = |w|`` in degrees; ``(0, nan)`` where the pairs do not determine a rotation
-    (``G_w`` singular)."""
+    :func:`replication.rig.online_events.drift_test`): ``(statistic, angle_deg)``, the statistic
+    ``w^T (C_w + cov)^{-1} w`` (``C_w = (s^2 / 3) G_w^{-1}``, ``s^2`` the estimate's mean square
+    residual ``s2``, ``cov`` its covariance or None), ``angle_deg = |w|`` in degrees; ``(0, nan)``
+    where the pairs do not determine a rotation (``G_w`` singular)."""
     r = _misfit_vectors(R, A, B)
     SB = B.sum(axis=0)
     H = 2.0 * len(A) * _EYE - SB - SB.T
@@ -73,8 +77,8 @@ def misfit_test(R, cov, s2, A, B) -> tuple[float, float]:
 
 
 def _inv3(m):
-    """Inverse of a 3x3 matrix given as 9 floats, row-major (plain Python: cheaper than numpy at this size); None if
-    singular."""
+    """Inverse of a 3x3 matrix given as 9 floats, row-major (plain Python: cheaper than numpy at
+    this size); None if singular."""
     a, b, c, d, e, f, g, h, i = m
     A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
     det = a * A + b * B + c * C
@@ -91,9 +95,9 @@ def _mul3(m, v):
 
 
 def _share(R, A, B):
-    """A pair's share ``(g_j, H_j)`` of the Gauss-Newton step from ``R``: ``g_j = (I - B_j^T) r_j`` (``r_j`` its
-    residual rotation vector ``vee`` of the antisymmetric part of ``R^T A_j R B_j^T``) and ``H_j = 2I - B_j - B_j^T``,
-    as plain floats (3 and 9, row-major)."""
+    """A pair's share ``(g_j, H_j)`` of the Gauss-Newton step from ``R``: ``g_j = (I - B_j^T) r_j``
+    (``r_j`` its residual rotation vector ``vee`` of the antisymmetric part of ``R^T A_j R B_j^T``)
+    and ``H_j = 2I - B_j - B_j^T``, as plain floats (3 and 9, row-major)."""
     e = (R.T @ A @ R @ B.T).ravel().tolist()
     r = (0.5 * (e[7] - e[5]), 0.5 * (e[2] - e[6]), 0.5 * (e[3] - e[1]))
     b = B.ravel().tolist()
@@ -105,8 +109,9 @@ def _share(R, A, B):
 
 
 def _statistic(g, H, s2, cov) -> tuple[float, float]:
-    """``(w^T (C_w + cov)^{-1} w, |w| in deg)`` for ``w = H^{-1} g`` and ``C_w = (s2 / 3) H^{-1}`` (9-float ``H``,
-    3-float ``g``, ``cov`` a 3x3 array or None); ``(0, nan)`` where ``H`` is singular."""
+    """``(w^T (C_w + cov)^{-1} w, |w| in deg)`` for ``w = H^{-1} g`` and ``C_w = (s2 / 3) H^{-1}``
+    (9-float ``H``, 3-float ``g``, ``cov`` a 3x3 array or None); ``(0, nan)`` where ``H`` is
+    singular."""
     Hi = _inv3(H)
     if Hi is None:
         return 0.0, math.nan
@@ -122,14 +127,16 @@ def _statistic(g, H, s2, cov) -> tuple[float, float]:
 
 
 class MisfitGuard:
-    """Tests the recent pairs against the estimate (see the module notes): the pairs since its own sum last stood at 0
-    after each pair (a run of residuals above the noise), and the last :data:`GUARD_WINDOW` pairs every
-    :data:`GUARD_EVERY` pairs (a shift too small for any one pair's residual to show, seen in its direction).
+    """Tests the recent pairs against the estimate (see the module notes): the pairs since its own
+    sum last stood at 0 after each pair (a run of residuals above the noise), and the last
+    :data:`GUARD_WINDOW` pairs every :data:`GUARD_EVERY` pairs (a shift too small for any one pair's
+    residual to show, seen in its direction).
 
-    The change detector calls :meth:`add` for each pair it adds to the estimate (not the gross misfits it holds
-    out) and :meth:`clear` when it decides or starts over. :attr:`misfit` is None while the pairs fit, else ``(pairs,
-    angle_deg, statistic, threshold)`` of the test that withdrew ``ready``: the run's until its sum returns to 0, the
-    window's until a later window fits as usual (:data:`GUARD_CLEAR_LEVEL`).
+    The change detector calls :meth:`add` for each pair it adds to the estimate (not the gross
+    misfits it holds out) and :meth:`clear` when it decides or starts over. :attr:`misfit` is None
+    while the pairs fit, else ``(pairs, angle_deg, statistic, threshold)`` of the test that withdrew
+    ``ready``: the run's until its sum returns to 0, the window's until a later window fits as usual
+    (:data:`GUARD_CLEAR_LEVEL`).
     """
 
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
@@ -147,12 +154,13 @@ class MisfitGuard:
 
     @property
     def long_misfit(self):
-        """The long window whose test withdrew ``ready`` (of several, the highest statistic), or None."""
+        """The long window whose test withdrew ``ready`` (of several, the highest statistic), or
+        None."""
         return self._long_worst
 
     def widen(self, radius: float) -> float:
-        """The radius to publish: while the recent pairs agree on a rotation the radius does not allow, the estimate
-        may be that far off (their angle added); else ``radius``."""
+        """The radius to publish: while the recent pairs agree on a rotation the radius does not
+        allow, the estimate may be that far off (their angle added); else ``radius``."""
         m = self.misfit
         return radius if m is None or not math.isfinite(m[1]) else radius + m[1]
 
@@ -164,8 +172,8 @@ class MisfitGuard:
                 f"change, not decided yet")
 
     def clear(self) -> None:
-        """Forget the run and the short window (a decision, a start); the long windows keep their pairs (still in
-        the estimate) until :meth:`forget` (a re-mount: a new guard)."""
+        """Forget the run and the short window (a decision, a start); the long windows keep their
+        pairs (still in the estimate) until :meth:`forget` (a re-mount: a new guard)."""
         self._clear_run()
         self.window_misfit, self._since_window = None, 0
 
@@ -193,9 +201,10 @@ class MisfitGuard:
             self.window_misfit = None
 
     def _scan_long(self, R, cov, s2) -> None:
-        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together on block sums of
-        :data:`GUARD_LONG_EVERY` pairs: each block's ``sum B_j`` once, its share of the Gauss-Newton step
-        (:func:`misfit_test`) once per estimate (recomputed only after a refinement); a window sums its blocks."""
+        """The long windows (:data:`GUARD_LONG_WINDOWS`) the ring holds, tested together on block
+        sums of :data:`GUARD_LONG_EVERY` pairs: each block's ``sum B_j`` once, its share of the
+        Gauss-Newton step (:func:`misfit_test`) once per estimate (recomputed only after a
+        refinement); a window sums its blocks."""
         every, count = GUARD_LONG_EVERY, self._count
         blocks = len(self._block_g)
         newest = (count // every - 1) % blocks
@@ -231,8 +240,9 @@ class MisfitGuard:
         self._long_worst = max(held, key=lambda m: m[2]) if held else None
 
     def add(self, A, B, d2: float, R, cov, s2: float, recent=()) -> None:
-        """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's covariance and
-        mean square residual); ``recent``: the last pairs added, this one included (a sequence of ``(A, B)``)."""
+        """One pair added to the estimate (residual ``d2`` at ``R``; ``cov``, ``s2``: the estimate's
+        covariance and mean square residual); ``recent``: the last pairs added, this one included (a
+        sequence of ``(A, B)``)."""
         z = 0.5 * d2 / s2
         self._since_window += 1
         if self._since_window >= GUARD_EVERY and len(recent) >= GUARD_WINDOW:
@@ -270,125 +280,10 @@ class MisfitGuard:
             self.run_misfit = (len(pairs), angle, stat, self.threshold)
 
 
-# ------------------------------------------------------------------------------------------------ drift
-#: A re-mount decided within this many pairs of the last restart, in the same direction (the cosine of the angle
-#: between the two steps at least :data:`DRIFT_COS`) and both steps below :data:`DRIFT_MAX_STEP_DEG`, is the frame
-#: drifting, not a second re-mount: one cause, one event (``drift``), no second restart.
-DRIFT_WITHIN_PAIRS = 2000
-DRIFT_COS = 0.7
-DRIFT_MAX_STEP_DEG = 3.0
-#: While following a drift, the estimate's memory (``2 / (1 - lambda)`` pairs under forgetting ``lambda``) is chosen so
-#: that its lag behind the drift, ``rate x lambda / (1 - lambda)``, is this share of the target; the lag is added to
-#: the radius (``ready`` then means the noise and the lag together stay below the target).
-DRIFT_LAG_SHARE = 0.25
-
-
-def drift_step(R_before, R_after) -> np.ndarray:
-    """The rotation vector ``w`` (rad, sensor frame) with ``R_after = R_before exp([w]x)``."""
-    from ..core.so3 import rotation_vector_from_matrix
-
-    return rotation_vector_from_matrix(np.swapaxes(R_before, -1, -2) @ R_after)
-
-
-def recognise_drift(last, event, following: float | None):
-    """Whether the re-mount ``event`` (an :class:`replication.rig.online_events.OnlineEvent`) continues the last
-    change, ``last = (pair, R_latest, origin)``: the pair and estimate of the last re-mount or drift step, and the
-    re-mount that began it (an event). The step from the estimate before the event to the event's own must be small
-    (:data:`DRIFT_MAX_STEP_DEG`, or twice what the drift followed at rate ``following`` (deg per pair) moves in the
-    pairs between), within :data:`DRIFT_WITHIN_PAIRS`, and in the direction of the movement so far (from the origin's
-    estimate before it to the estimate before this event, ``event.R_before``: the window of the last step is a few
-    pairs, its direction noisy): a cosine of at least :data:`DRIFT_COS`, or (``following`` a drift already,
-    whose small steps are noisy) at least 0. Returns None or ``(rate_deg_per_pair, angle_deg,
-    first_pair, axis)``: the angle between the origin's own estimate and the event's (where the frame was then and
-    is now), its rate over the pairs between them, and the movement's direction (a unit vector, sensor frame)."""
-    if last is None or not 0 < event.pair - last[0] <= DRIFT_WITHIN_PAIRS:
-        return None
-    origin = last[2]  # the movement so far ends at the estimate now (many pairs), not the last window's (a few)
-    so_far = drift_step(origin.R_before, event.R_before)
-    step = drift_step(event.R_before, event.R_after)
-    a, b = float(np.linalg.norm(so_far)), float(np.linalg.norm(step))
-    if a and b and float(np.linalg.norm(so_far + step)) == 0.0:
-        return None
-    bound = DRIFT_MAX_STEP_DEG if following is None else max(DRIFT_MAX_STEP_DEG, 2 * following * (event.pair - last[0]))
-    if not (a and b) or math.degrees(max(b, 0.0 if following is not None else a)) > bound:
-        return None
-    if float(so_far @ step) / (a * b) < (0.0 if following is not None else DRIFT_COS):
-        return None
-    moved = drift_step(origin.R_after, event.R_after)  # between the windows' own estimates: where the frame was
-    angle = math.degrees(float(np.linalg.norm(moved)))
-    return angle / (event.pair - origin.pair), angle, origin.pair, (so_far + step) / np.linalg.norm(so_far + step)
-
-
-def follow_drift(cal, event, rate: float, angle: float, first: int, axis):
-    """Act on a drift recognised by :func:`recognise_drift` in the calibrator ``cal``
-    (:class:`replication.rig.online.OnlineCalibrator`): the drift event (the first re-mount's restart folded into it,
-    one event per cause), forgetting that follows it (:func:`follow_forgetting`), the older pairs' weight cut to the
-    new memory; no restart. Returns the event."""
-    import dataclasses
-
-    if cal._drift_rate is None:  # the first re-mount of this cause becomes the drift's start; its track begins
-        cal._track.clear()
-        cal.events = [e for e in cal.events if not (e.kind == "remount" and e.pair == first)]
-        cal.alarms = [a for a in cal.alarms if a != first]
-    cal._flush()
-    lam = follow_forgetting(rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1), cal.refine_every)
-    c = min(1.0, 1.0 / ((1.0 - lam) * cal._w)) if cal._w else 1.0
-    cal._S, cal._SB, cal._w, cal._SB2, cal._w2 = c * cal._S, c * cal._SB, c * cal._w, c * c * cal._SB2, c * c * cal._w2
-    cal._wt *= c  # the pairs' centroid unchanged
-    cal._last_step, cal._drift_rate, cal.forgetting = (event.pair, event.R_after, cal._last_step[2]), rate, lam
-    cal._drift_axis = axis
-    lag = drift_lag_deg(rate, lam, cal.refine_every)
-    return dataclasses.replace(
-        event, kind="drift", onset_pair=first, angle_deg=angle, rate_deg_per_pair=rate,
-        message=f"the frame drifts: {angle:.3g} deg in {event.pair - first} pairs ({rate:.3g} deg per pair) since "
-                + (f"pair {first}, where a creep began (found as a slope; followed, no restart)" if
-                   cal._last_step[2].source == "creep" else f"the re-mount decided at pair {first} (started over "
-                   "once, then followed)") + f": forgetting {lam:.4g}, lag "
-                f"{lag:.3g} deg added to the radius" + (
-                    "" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg"))
-
-
-def follow_forgetting(rate_deg_per_pair: float, target_deg: float, lowest: float, every: int) -> float:
-    """The forgetting factor that keeps the lag behind a drift (:func:`drift_lag_deg`, refined every ``every``
-    pairs) at :data:`DRIFT_LAG_SHARE` of the target (at least ``lowest``, the factor that still gives the estimator
-    its distinct pairs; below 1)."""
-    memory = DRIFT_LAG_SHARE * target_deg / max(rate_deg_per_pair, 1e-12) - every   # lambda / (1 - lambda)
-    return min(max(memory / (1.0 + memory), lowest), 1.0 - 1e-9) if memory > 0 else lowest
-
-
-def drift_lag_deg(rate_deg_per_pair: float, forgetting: float, every: int) -> float:
-    """The lag (deg) behind a drift of an estimate with forgetting ``lambda`` refined every ``every`` pairs: ``rate x
-    (lambda / (1 - lambda) + every)`` (the weighted mean age of its pairs, and the pairs since its last refinement)."""
-    return rate_deg_per_pair * (forgetting / (1.0 - forgetting) + every)
-
-
-# ------------------------------------------------------------------------------------------------ a drift followed
-#: While following a drift, its rate is measured again on the estimate's own track: the movement along the drift's
-#: axis between the estimate now and the one at least :data:`TRACK_MEMORIES` memories (``(1 + lambda) / (1 - lambda)``
-#: pairs) and :data:`TRACK_MIN_PAIRS` pairs ago (two nearly independent estimates), pairs counted between the
-#: estimates' centroids (the weighted mean index of their pairs, ``OnlineCalibrator.centroid``): a steady drift
-#: moves an estimate as far as its centroid moves, whereas an estimate soon after a restart or a cut of the memory
-#: lags less than a steady one (counted between the pairs received, it moved about half what the rate predicts).
-#: The span is also long enough for none and the rate followed to be :data:`TRACK_APART` ``TRACK_Z`` standard errors
-#: apart, and a drift's end is said only once they are (else the track waits): a drift that goes on, its rate
-#: over-estimated by a quarter and tested every refinement on a short span, was said to stop in 15 of 30 runs (0.002
-#: deg per pair at 0.3 deg of pair noise). A movement that differs from the one the rate followed predicts by more than
-#: :data:`TRACK_Z` standard errors is a new rate (a drift that speeds up or slows down), or, nearer none than that
-#: prediction (below half of it), a drift that stopped: said (``drift_end``), and the estimator returns to its own
-#: memory. Over a memory the rate followed moves the estimate about twice its lag (half the target).
-TRACK_MEMORIES = 1.5
-TRACK_MIN_PAIRS = 100
-TRACK_Z = 3.0
-#: None and the rate followed are this many ``TRACK_Z`` standard errors apart before a drift's end is said. Measured
-#: on 30 runs (0.002 deg per pair for 1500 pairs, then still for 1500, 0.3 deg of pair noise, seeds [41000-41029, 7]
-#: of ``drift_stream``): at 2, an end said during the drift in 9 runs, the stop told within 600 pairs in 29; at 2.5,
-#: 2 and 27; at 3, 0 and 22 (every stop told within 1500 pairs, median 544); at 4, 0 and 15.
-TRACK_APART = 3.0
-
-
 def detector_reasons(detector, misfits_withdraw: int) -> list[str]:
-    """The sentences of ``not_ready`` the change detector (:class:`replication.rig.online_events.ChangeDetector`) and
-    its guard give: a change being confirmed, ``misfits_withdraw`` gross misfits or more, the recent pairs' misfit."""
+    """The sentences of ``not_ready`` the change detector
+    (:class:`replication.rig.online_events.ChangeDetector`) and its guard give: a change being
+    confirmed, ``misfits_withdraw`` gross misfits or more, the recent pairs' misfit."""
     why = []
     if detector.checking:
         why.append(f"a change is being confirmed ({len(detector.window)} of {detector.target} pairs)")
@@ -401,8 +296,8 @@ def detector_reasons(detector, misfits_withdraw: int) -> list[str]:
 
 
 def not_ready_reasons(cal, misfits_withdraw: int) -> list[str]:
-    """The sentences of ``not_ready`` (:meth:`replication.rig.online.OnlineCalibrator.status`): one per unmet condition
-    of ``ready`` of the calibrator ``cal``, with its number."""
+    """The sentences of ``not_ready`` (:meth:`replication.rig.online.OnlineCalibrator.status`): one
+    per unmet condition of ``ready`` of the calibrator ``cal``, with its number."""
     why = []
     if cal._n_eff < cal.min_pairs:
         why.append(f"{cal._n_eff:.1f} effective distinct pairs < {cal.min_pairs}"
@@ -420,62 +315,3 @@ def not_ready_reasons(cal, misfits_withdraw: int) -> list[str]:
     if cal._verdict is not None and cal._verdict.level == "fail":
         why += [r.message for r in cal._verdict.reasons if r.level == "fail"]
     return why
-
-
-def track_drift(cal):
-    """Measure the drift followed by ``cal`` (:class:`replication.rig.online.OnlineCalibrator`) on its track of
-    estimates (see :data:`TRACK_MEMORIES`) and act: a new rate (forgetting and the drift event updated), or the drift's
-    end (event ``drift_end``, forgetting back to the calibrator's own). Returns the kind of event added, or None."""
-    import dataclasses
-
-    now, at, R_now = cal.n_total, cal.centroid, cal._R
-    track = cal._track
-    track.append((at, R_now, cal._cov))
-    lam, rate, axis = cal.forgetting, cal._drift_rate, cal._drift_axis
-    lag = math.radians(drift_lag_deg(rate, lam, cal.refine_every))
-    if cal._cov is None:
-        return None
-    se_now = math.degrees(math.sqrt(2.0 * max(float(axis @ cal._cov @ axis) - lag ** 2, 0.0)))  # two such estimates
-    span_least = max(TRACK_MEMORIES * (1.0 + lam) / (1.0 - lam), TRACK_MIN_PAIRS, TRACK_APART * TRACK_Z * se_now / rate)
-    then = next((t for t in reversed(track) if at - t[0] >= span_least), None)
-    if then is None or then[2] is None:
-        return None
-    span = at - then[0]  # between the centroids: an estimate after a restart lags less than a steady one
-    var = [max(float(axis @ c @ axis) - lag ** 2, 0.0) for c in (then[2], cal._cov)]  # noise along the axis, no lag
-    se = math.degrees(math.sqrt(sum(var)))                         # of the difference of the two estimates
-    whole = drift_step(cal._last_step[2].R_before, R_now) if cal._last_step is not None else np.zeros(3)
-    if math.degrees(float(np.linalg.norm(whole))) > 2 * TRACK_Z * se:  # the whole drift so far: its axis, better
-        cal._drift_axis = axis = whole / np.linalg.norm(whole)        # than the first steps' (55 deg off seen)
-    moved = math.degrees(float(drift_step(then[1], R_now) @ axis))
-    if abs(moved - rate * span) <= TRACK_Z * se:
-        return None
-    if moved < 0.5 * rate * span < 0.5 * TRACK_APART * TRACK_Z * se:  # nearer none, but not far enough apart: wait
-        return None
-    drift = next((e for e in reversed(cal.events) if e.kind == "drift"), None)
-    track.clear()
-    track.append((at, R_now, cal._cov))
-    if moved < 0.5 * rate * span:  # nearer none than the rate followed, and beyond its standard errors: stopped
-        cal._drift_rate, cal._drift_axis, cal.forgetting = None, None, cal._fgt
-        onset = drift.onset_pair if drift is not None else round(then[0])
-        cal.events.append(dataclasses.replace(
-            drift, kind="drift_end", pair=now - 1, alarm_pair=now - 1, source="track", onset_pair=onset,
-            window_pairs=round(span), angle_deg=moved, threshold_deg=TRACK_Z * se, median_z_before=math.nan,
-            median_z_after=math.nan, pairs_dropped=0, R_before=np.array(then[1]), R_after=np.array(R_now),
-            rate_deg_per_pair=0.0,
-            message=f"the drift that began at pair {onset} stopped: the estimate moved {moved:.3g} deg along it in "
-                    f"the last {span:.0f} pairs, where its rate ({rate:.3g} deg per pair) says {rate * span:.3g} deg "
-                    f"(more than {TRACK_Z:g} standard errors, {TRACK_Z * se:.3g} deg, apart); no more forgetting: "
-                    f"full memory"))
-        return "drift_end"
-    new_rate = max(moved / span, 0.0)
-    cal._drift_rate = new_rate
-    cal.forgetting = lam = follow_forgetting(new_rate, cal.target_deg, (cal.min_pairs - 1) / (cal.min_pairs + 1),
-                                             cal.refine_every)
-    if drift is not None:
-        lag = drift_lag_deg(new_rate, lam, cal.refine_every)
-        k = cal.events.index(drift)
-        cal.events[k] = dataclasses.replace(drift, rate_deg_per_pair=new_rate, message=(
-            f"{drift.message.split('; rate now')[0]}; rate now {new_rate:.3g} deg per pair (measured over the last "
-            f"{span:.0f} pairs at pair {now}): forgetting {lam:.4g}, lag {lag:.3g} deg"
-            + ("" if lag < cal.target_deg else f"; too fast to follow within {cal.target_deg:g} deg")))
-    return None

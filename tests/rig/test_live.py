@@ -219,7 +219,7 @@ def test_the_stride_uses_every_other_pair_formed():
     _feed(rig, 3.0)
     assert rig.pairs_formed == 10 and len(pairs) == 5
     assert [t for t, _, _ in pairs] == [(k * 18 + 8) * DT_CAM for k in range(5)]
-    assert rig._evidence()["pairs_before_gaps"] == 5
+    assert rig.evidence()["pairs_before_gaps"] == 5
 
 
 def test_a_pair_across_a_sensor_gap_is_dropped_at_five_typical_steps():
@@ -227,7 +227,7 @@ def test_a_pair_across_a_sensor_gap_is_dropped_at_five_typical_steps():
     rig, pairs = _rig()
     _feed(rig, 1.2, sensor_skip=set(range(50, 55)))  # a 6-step hole: beyond 5 typical steps
     assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
-    assert rig._evidence()["pairs_dropped_at_gaps"] == 1
+    assert rig.evidence()["pairs_dropped_at_gaps"] == 1
     rig, pairs = _rig()
     _feed(rig, 1.2, sensor_skip=set(range(50, 54)))  # a 5-step hole: not a gap
     assert rig.pairs_dropped == 0 and len(pairs) == 4
@@ -256,10 +256,10 @@ def test_gyro_samples_are_integrated_by_the_trapezoidal_rule_and_refused_when_ba
     rig.add_gyro(1.0, w0)
     rig.add_gyro(1.5, w1)
     assert np.allclose(rig._gyro[-1][1], so3.matrix_from_rotation_vector(0.5 * (w0 + w1) * 0.5), rtol=0, atol=1e-15)
-    assert rig._gyro_dt == 0.5
+    assert rig.evidence()["gyro_rate_hz"] == 2.0
     rig.add_gyro(1.75, [0, 0, 0])
-    assert rig._gyro_dt == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
-    assert rig._evidence()["gyro_rate_hz"] == pytest.approx(1 / (0.99 * 0.5 + 0.01 * 0.25))
+    assert 1 / rig.evidence()["gyro_rate_hz"] == pytest.approx(0.99 * 0.5 + 0.01 * 0.25, abs=1e-15)
+    assert rig.evidence()["gyro_rate_hz"] == pytest.approx(1 / (0.99 * 0.5 + 0.01 * 0.25))
     for t in (1.75, 1.5):
         with pytest.raises(ValueError, match=rf"gyro time going backwards.*{t!r} after 1\.75"):
             rig.add_gyro(t, w0)
@@ -333,21 +333,35 @@ def test_used_offset_and_the_evidence():
     rig, _ = _rig(offset=None, correct_offset=False)
     rig.offset = 0.5
     assert rig.used_offset == 0.0
-    assert rig._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1,
+    assert rig.evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1,
                                "offset_s": 0.5, "offset_correlation": None, "max_offset_s": 0.2,
                                "offset_resolution_s": OFFSET_RESOLUTION, "offset_applied": False}
     rig.correct_offset = True
-    assert rig.used_offset == 0.5 and rig._evidence()["offset_applied"] is True
+    assert rig.used_offset == 0.5 and rig.evidence()["offset_applied"] is True
     given, _ = _rig(offset=0.5)
-    assert given._evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1}
+    assert given.evidence() == {"interval_s": 0.25, "pairs_dropped_at_gaps": 0, "pairs_before_gaps": 1}
     gyro, _ = _rig()
     gyro.add_gyro(0.0, np.zeros(3))
     gyro.add_gyro(0.01, np.zeros(3))
-    assert gyro._evidence()["gyro_rate_hz"] == pytest.approx(100.0)
+    assert gyro.evidence()["gyro_rate_hz"] == pytest.approx(100.0)
     ori, _ = _rig()
     ori.add_orientation(0.0, R0)
     ori.add_orientation(0.01, R0)
-    assert "gyro_rate_hz" not in ori._evidence()
+    assert "gyro_rate_hz" not in ori.evidence()
+
+
+def test_the_evidence_is_a_read_only_copy_of_what_the_rig_measured():
+    rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1)
+    _feed(rig, 3.0, offset=0.0123)
+    rig.finish()
+    assert rig.offset is not None and len(pairs) > 0
+    before = (rig.summary(), rig.calibrator.evidence(), rig.pairs_formed, rig.pairs_dropped)
+    first = rig.evidence()
+    first["pairs_before_gaps"] = -1  # a copy: changing it changes nothing in the rig
+    for _ in range(3):
+        assert rig.evidence() == {**first, "pairs_before_gaps": max(1, -(-rig.pairs_formed // rig.stride))}
+    assert (rig.summary(), rig.calibrator.evidence(), rig.pairs_formed, rig.pairs_dropped) == before
+    assert rig.evidence()["offset_s"] == rig.offset and rig.evidence()["offset_correlation"] == rig.offset_correlation
 
 
 @pytest.mark.parametrize("t0", [0.0, 100.0])
@@ -365,7 +379,7 @@ def test_the_offset_is_estimated_once_both_streams_span_the_window(t0):
     rig.add_orientation(t0 + 2.0, motion(2.0) @ R0)
     assert rig.offset == pytest.approx(0.0, abs=2 * OFFSET_RESOLUTION) and rig.offset_correlation > 0.99
     assert len(pairs) > 0
-    assert rig._evidence()["offset_correlation"] == rig.offset_correlation  # the verdict judges the estimate's own
+    assert rig.evidence()["offset_correlation"] == rig.offset_correlation  # the verdict judges the estimate's own
 
 
 def test_finish_estimates_the_offset_on_what_arrived_or_says_why_not():
@@ -865,4 +879,4 @@ def test_the_pairs_before_gaps_count_the_pairs_a_stride_uses_like_the_batch(form
 
     rig = LiveRig(OnlineCalibrator(), stride=3, offset=0.0)
     rig.pairs_formed = formed
-    assert rig._evidence()["pairs_before_gaps"] == used == len(range(formed)[::3])
+    assert rig.evidence()["pairs_before_gaps"] == used == len(range(formed)[::3])
