@@ -33,6 +33,11 @@ def _first_index(mask: np.ndarray) -> tuple:
     return tuple(int(i) for i in np.argwhere(mask)[0]) if mask.ndim else ()
 
 
+def _index_words(idx: tuple) -> str:
+    """An index for a message: ``7`` along one leading dimension, ``(1, 2)`` along several."""
+    return str(idx[0]) if len(idx) == 1 else str(idx)
+
+
 def det3(M) -> np.ndarray:
     """Determinants of 3x3 matrices, batched: (..., 3, 3) -> (...), as the triple product of the
     rows.
@@ -76,7 +81,7 @@ def check_matrices(M, name: str = "M") -> np.ndarray:
         raise ValueError(f"{name} must have shape (..., 3, 3), got {M.shape}")
     if not np.isfinite(M).all():  # one reduction; the per-matrix mask only to name the first offender
         finite = np.isfinite(M).all(axis=(-2, -1))
-        raise ValueError(f"{name} contains NaN or inf (first at index {_first_index(~finite)})")
+        raise ValueError(f"{name} contains NaN or inf (first at index {_index_words(_first_index(~finite))})")
     return M
 
 
@@ -123,7 +128,7 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
     if bad.any():
         idx = _first_index(bad)
         raise ValueError(
-            f"{name} is not a rotation matrix at index {idx}: "
+            f"{name} is not a rotation matrix at index {_index_words(idx)}: "
             f"||R^T R - I||_F = {ortho[idx]:.3g} > {atol:g} ({int(bad.sum())} bad of {bad.size})"
         )
     det = det3(R)
@@ -131,7 +136,7 @@ def check_rotation_matrices(R, name: str = "R", atol: float = ROTATION_ATOL) -> 
     if bad.any():
         idx = _first_index(bad)
         raise ValueError(
-            f"{name} is not a rotation matrix at index {idx}: det = {det[idx]:.6g} "
+            f"{name} is not a rotation matrix at index {_index_words(idx)}: det = {det[idx]:.6g} "
             f"(a reflection; a rotation has det = +1)"
         )
     return R

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import maximum_filter1d
 
-from ..core.so3 import rotation_angle_deg
+from ..core.so3 import nearest_rotation, rotation_angle_deg
 from .streams import OrientationStream
 
 __all__ = ["CameraJump", "camera_jumps", "residual_jumps", "found_and_glued", "glued", "spanning", "jump_reasons",
@@ -96,12 +96,13 @@ def found_and_glued(camera: OrientationStream, sensor: OrientationStream, max_of
 
 def glued(camera: OrientationStream, jumps) -> OrientationStream:
     """``camera`` with each jump's step replaced by the step before it (the world frame after it
-    turned back): the relative rotations that do not span a jump are unchanged."""
+    turned back): the relative rotations that do not span a jump are unchanged, and each pose stays
+    a rotation to rounding however many jumps are glued."""
     Q = np.array(camera.R)
     for j in jumps:
         i = int(np.searchsorted(camera.t, j.start_s))
         before = Q[i - 1].T @ Q[i] if i > 0 else np.eye(3)
-        W = Q[i] @ before @ Q[i + 1].T
+        W = nearest_rotation(Q[i] @ before @ Q[i + 1].T)  # an exact rotation: errors add, not multiply
         Q[i + 1:] = W @ Q[i + 1:]
     return OrientationStream(camera.t, Q, camera.source)
 

@@ -27,7 +27,7 @@ def test_check_rotation_tolerance_boundary(rng, atol):
         if accepted:
             assert np.array_equal(checks.check_rotation_matrices(M, **options), M)
         else:
-            with pytest.raises(ValueError, match=r"not a rotation matrix at index \(1,\)"):
+            with pytest.raises(ValueError, match=r"not a rotation matrix at index 1\b"):
                 checks.check_rotation_matrices(M, **options)
     with pytest.raises(ValueError, match=r"atol must be <= 0.01"):
         checks.check_rotation_matrices(R, atol=1e-2 * (1 + 1e-9))  # MAX_ROTATION_ATOL, just above
@@ -51,7 +51,7 @@ def test_check_rotation_rejects(bad, message):
 def test_check_rotation_names_the_index(rng):
     R = so3.random_rotations(rng, 6)
     R[4] *= 1.01
-    with pytest.raises(ValueError, match=r"index \(4,\)"):
+    with pytest.raises(ValueError, match=r"index 4\b"):
         checks.check_rotation_matrices(R, "R")
 
 

@@ -366,9 +366,9 @@ def _bad_inputs(A, B):
     nan = A.copy()
     nan[3, 0, 0] = np.nan
     return {
-        "not rotations": (2 * A, B, r"A \(camera relative rotations\) is not a rotation matrix at index \(0,\)"),
+        "not rotations": (2 * A, B, r"A \(camera relative rotations\) is not a rotation matrix at index 0\b"),
         "reflections": (A, -B, r"B \(sensor relative rotations\) is not a rotation matrix .* det = -1"),
-        "NaN": (nan, B, r"A \(camera relative rotations\) contains NaN or inf \(first at index \(3,\)\)"),
+        "NaN": (nan, B, r"A \(camera relative rotations\) contains NaN or inf \(first at index 3\)"),
         "shape mismatch": (A, B[:-1], r"must have the same shape; got A \(20, 3, 3\), B \(19, 3, 3\)"),
         "not 3x3": (A[..., :2], B[..., :2], r"must have shape \(\.\.\., 3, 3\), got \(20, 3, 2\)"),
         "one pair": (A[:1], B[:1], r"need at least [23] motion pairs \(J >= [23]\), got J = 1"),

@@ -131,3 +131,20 @@ def test_a_fast_camera_turn_is_no_jump_against_a_sensor_out_of_step():
     moving = OrientationStream(camera.t, R, "camera")
     assert camera_jumps(moving, integrate_gyro(gyro), 0.2) == []
     assert len(camera_jumps(_reset(moving, [20.02], 30.0), integrate_gyro(gyro), 0.2)) == 1
+
+
+def test_glued_poses_stay_rotations_however_many_jumps():
+    """Each glue turns the rest of the trajectory by an exact rotation: after 30 jumps every pose
+    passes the streams' rotation check (an unprojected turn multiplied the rounding by about 5 a
+    jump: 1e-6 after 15, beyond the check's 1e-5 after 20)."""
+    rng = np.random.default_rng(0)
+    t = np.arange(2700) * 0.05
+    R = matrix_from_rotation_vector(np.cumsum(rng.normal(0, 0.05, (len(t), 3)), axis=0))
+    camera = OrientationStream(t, R, "camera")
+    k = np.searchsorted(t, np.linspace(5.0, 130.0, 30))
+    fixed = glued(camera, [CameraJump(float(t[i]), float(t[i + 1]), 30.0, 1.0) for i in k])
+    assert np.linalg.norm(np.swapaxes(fixed.R, -1, -2) @ fixed.R - np.eye(3), axis=(1, 2)).max() < 1e-12
+    steps = np.swapaxes(fixed.R[:-1], -1, -2) @ fixed.R[1:]
+    kept = np.ones(len(t) - 1, bool)
+    kept[k] = False
+    np.testing.assert_allclose(steps[kept], (np.swapaxes(R[:-1], -1, -2) @ R[1:])[kept], atol=1e-12)
