@@ -205,7 +205,7 @@ class OnlineCalibrator:
         self._w = decay * self._w + w.sum()
         self._w2 = decay ** 2 * self._w2 + (w ** 2).sum()
         self._wt = decay * self._wt + float(w @ T)
-        self._n_eff = self._w ** 2 / self._w2
+        self._n_eff = float(self._w ** 2 / self._w2)  # a Python float: the summary and the report print it
         self._creep.add(T, A, B, self.forgetting == 1.0)
         self._buf.clear()
 

@@ -66,6 +66,26 @@ def test_clean_rig_is_ready_at_the_pairs_formation_time(rig):
     assert rows[["qw", "radius_deg", "error_deg"]].iloc[9:].notna().all().all()
 
 
+def test_the_summary_holds_python_numbers_not_numpy_scalars(rig):
+    """What the summary prints and the report writes: every number a Python one (a numpy scalar
+    printed as ``np.float64(57.0)`` in the summary)."""
+    R0, camera, gyro, _ = rig
+    _, summary = _summary(camera, gyro, R0)
+
+    def walk(v, where):
+        if isinstance(v, dict):
+            for k, x in v.items():
+                walk(x, f"{where}.{k}")
+        elif isinstance(v, (list, tuple)):
+            for i, x in enumerate(v):
+                walk(x, f"{where}[{i}]")
+        else:
+            assert not isinstance(v, np.generic), (where, type(v))
+
+    walk(summary, "summary")
+    assert type(summary["effective_pairs"]) is float and "np." not in repr(summary)
+
+
 def test_a_short_recording_is_paired_at_its_end(rig):
     """15 s of both streams, shorter than the 20 s offset window: the offset is estimated when the
     streams end."""
