@@ -19,7 +19,7 @@ from .bias_change import bias_change_of, named_in
 from .camera_jumps import found_and_glued, jump_reasons, spanning
 from .quality import THRESHOLDS, Verdict
 from .report import CalibrationResult  # re-exported: a public name here
-from .sensor_verdict import model_or_note, with_sensor_model
+from .sensor_verdict import drift_beside_steps, model_or_note, with_sensor_model
 from .solve_and_judge import (
     Provenance,
     Resampling,
@@ -481,8 +481,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         result = dataclasses.replace(result, verdict=Verdict.of(  # the bias change's time and size
             named_in(result.verdict.reasons, bias_step, float(camera.t[0]))))
         if jumps:  # a step of the clock reads as a drift to the sensor model: named once, as the step
-            result = dataclasses.replace(result, verdict=Verdict.of(
-                tuple(x for x in result.verdict.reasons if x.check != "clock_drift")))
+            result = drift_beside_steps(result, jumps, profile, float(camera.t[0]))
     if diagnose and result.verdict.level != "ok":
         import functools
 

@@ -68,12 +68,15 @@ def _sensor_lines(model) -> list:
     ci = np.degrees(model["gyro_bias_ci95_rad_s"])
     axes = ", ".join(f"{np.degrees(b):+.3f} [{lo:+.3f}, {hi:+.3f}]" for b, (lo, hi) in zip(model["gyro_bias_rad_s"],
                                                                                            ci))
-    lo, hi = model["clock_drift_ci95_ppm"]
     details = model["sensor_model"]
+    if model.get("clock_drift_ppm") is None:  # beside a clock step (sensor_verdict.drift_beside_steps)
+        drift = f"clock drift: {details.get('drift_note', 'not measured')}"
+    else:
+        lo, hi = model["clock_drift_ci95_ppm"]
+        drift = (f"clock drift: {model['clock_drift_ppm']:+.1f} ppm, 95 % interval [{lo:+.1f}, {hi:+.1f}] ppm"
+                 + ("" if details["drift_resolved"] else " (not resolved: it includes 0)"))
     return [f"gyro bias (x, y, z), deg/s with 95 % intervals: {axes} "
-            f"({'removed' if details['bias_applied'] else 'measured, not removed'})",
-            f"clock drift: {model['clock_drift_ppm']:+.1f} ppm, 95 % interval [{lo:+.1f}, {hi:+.1f}] ppm"
-            + ("" if details["drift_resolved"] else " (not resolved: it includes 0)")] + _scale_lines(model)
+            f"({'removed' if details['bias_applied'] else 'measured, not removed'})", drift] + _scale_lines(model)
 
 
 def _scale_lines(model) -> list:
@@ -195,8 +198,9 @@ class CalibrationResult:
     sensor_model : dict or None
         A gyro sensor: its bias and the clock's drift estimated with ``R0``
         (:mod:`replication.rig.sensor_model`): ``gyro_bias_rad_s`` (3), ``gyro_bias_ci95_rad_s`` (3
-        x 2), ``clock_drift_ppm``, ``clock_drift_ci95_ppm`` (None where not estimated) and the
-        details under ``sensor_model``; None for an orientation sensor.
+        x 2), ``clock_drift_ppm``, ``clock_drift_ci95_ppm`` (None where not estimated, or beside a
+        clock step: ``sensor_model["drift_note"]`` says why) and the details under
+        ``sensor_model``; None for an orientation sensor.
     verdict : Verdict
         ``ok`` / ``warning`` / ``fail`` and every reason with its measured number and threshold
         (:mod:`replication.rig.quality`).

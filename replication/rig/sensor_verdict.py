@@ -12,7 +12,7 @@ import numpy as np
 from .gyro_held import held_reasons, triangular_words
 from .sensor_model import BIAS_CHANGE_LEVEL, MAX_FIT_RATIO, SCALE_RESOLUTION, SensorModel, estimate_sensor_model
 
-__all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model"]
+__all__ = ["SENSOR_THRESHOLDS", "sensor_reasons", "model_or_note", "with_sensor_model", "drift_beside_steps"]
 
 #: ``(warning, fail)`` bounds of the checks on the sensor model (the reasoning in
 #: :func:`sensor_reasons`):
@@ -297,3 +297,34 @@ def _offsets_disagree(model, result, interval):
                   f"{interval:g} s interval > {bound:g}, an error in every pair that R0's radius does not hold; the "
                   f"speeds mislead the search where they barely vary (a steady turn); check the offset (--keep-clock "
                   f"where the clocks are synchronised)")
+
+
+def drift_beside_steps(result, jumps, profile, t0: float):
+    """``result`` where ``calibrate`` found a clock step (``jumps``, times on the camera's clock;
+    ``t0`` the camera's first stamp): the sensor model's drift is the straight line through the
+    step and the drift that may run beside it (a +300 ppm drift with a 20 ms step at 40 s of 60 s
+    reads as about -150 ppm, its interval excluding the truth), so ``clock_drift_ppm`` and its
+    interval are null, ``sensor_model["drift_note"]`` says why and gives the offset profile's
+    drift (a step with a drift: its drift, no interval), and no ``clock_drift`` reason is left."""
+    import dataclasses
+
+    from .quality import Verdict
+
+    result = dataclasses.replace(result, verdict=Verdict.of(
+        tuple(x for x in result.verdict.reasons if x.check != "clock_drift")))
+    fields = result.sensor_model
+    if fields is None or fields.get("clock_drift_ppm") is None:
+        return result
+    at = ", ".join(f"{j.time_s - t0:.1f} s" for j in jumps)
+    line = fields["clock_drift_ppm"]
+    if profile is not None and profile.step_with_drift:
+        beside = (f"the offset profile's step with a drift gives {profile.drift_ppm:+.1f} ppm beside it "
+                  f"(segments.clock_profile; no interval)")
+    else:
+        beside = "the offset profile finds no drift beside it (segments.clock_profile)"
+    note = (f"not measured beside the clock step at {at}: the sensor model's straight line through the step "
+            f"({line:+.1f} ppm) is not the clock's drift; {beside}")
+    details = {**fields["sensor_model"], "drift_resolved": False, "drift_note": note,
+               "drift_through_steps_ppm": float(line)}
+    return dataclasses.replace(result, sensor_model={**fields, "clock_drift_ppm": None, "clock_drift_ci95_ppm": None,
+                                                     "sensor_model": details})

@@ -4,6 +4,10 @@ and a clean rig are not; the verdict's words; the sensor re-stamped for the segm
 (a drift or a step removed). Rigs: ``replication.testing``'s noisy rig (60 s, a gyro bias) and its
 clock edits."""
 
+import json
+import pathlib
+
+import jsonschema
 import numpy as np
 import pytest
 
@@ -27,6 +31,11 @@ def test_a_step_without_a_stamp_skip_is_a_clock_jump_not_a_drift():
     assert j["clock"] == "unknown" and j["found_by"] == "profile" and not j["at_gap"]
     assert abs(j["time_s"] - 30.0) <= j["time_resolution_s"] and j["size_s"] == pytest.approx(-0.030, abs=0.002)
     assert r.segments["clock_profile"]["choice"] == "step"
+    # the sensor model's line through the step is no drift: null, and the summary says why
+    note = r.sensor_model["sensor_model"]["drift_note"]
+    assert r.sensor_model["clock_drift_ppm"] is None and r.sensor_model["clock_drift_ci95_ppm"] is None
+    assert "not measured beside the clock step at" in note and "finds no drift beside it" in note
+    assert f"clock drift: {note}" in r.summary().splitlines()
 
 
 def test_a_jump_of_the_camera_clock_is_named_as_the_camera_s():
@@ -85,6 +94,11 @@ def test_a_drift_is_removed_before_the_segment_test(monkeypatch):
     r = _cal(camera, gyro)
     checks = {x.check for x in r.verdict.reasons}
     assert "clock_drift" in checks and "segments_disagree" not in checks
+    # no step found: the sensor model's drift and its interval are printed
+    assert not r.segments["clock_jumps"] and "drift_note" not in r.sensor_model["sensor_model"]
+    lo, hi = r.sensor_model["clock_drift_ci95_ppm"]
+    assert lo < 400.0 < hi and lo < r.sensor_model["clock_drift_ppm"] < hi
+    assert f"clock drift: {r.sensor_model['clock_drift_ppm']:+.1f} ppm, 95 % interval [{lo:+.1f}" in r.summary()
     # the drift left in: the segments disagree
     monkeypatch.setattr(clock_profile, "corrected_sensor", lambda *a, **k: None)
     assert "segments_disagree" in {x.check for x in _cal(camera, gyro).verdict.reasons}
@@ -100,6 +114,17 @@ def test_a_step_with_a_drift_is_a_clock_jump_and_both_are_removed_for_the_segmen
     assert p["step_with_drift"] and p["drift_ppm"] == pytest.approx(-200.0, abs=80.0)
     (j,) = r.segments["clock_jumps"]
     assert j["size_s"] == pytest.approx(-0.010, abs=0.002) and abs(j["time_s"] - 30.0) <= j["time_resolution_s"]
+    # a step found: no drift printed from the line through the step; the profile's drift in words
+    model = r.sensor_model
+    assert model["clock_drift_ppm"] is None and model["clock_drift_ci95_ppm"] is None
+    assert not model["sensor_model"]["drift_resolved"]
+    said = model["sensor_model"]["drift_note"].split("the offset profile's step with a drift gives ")[1]
+    assert float(said.split(" ppm")[0]) == pytest.approx(p["drift_ppm"], abs=0.05)
+    assert "clock drift: not measured beside the clock step at" in r.summary()
+    assert "95 % interval" not in next(ln for ln in r.summary().splitlines() if ln.startswith("clock drift"))
+    schema = json.loads((pathlib.Path(__file__).resolve().parents[2] / "docs" / "calibration_report.schema.json")
+                        .read_text())
+    jsonschema.validate(r.to_dict(), schema)
 
     def without_the_drift(sensor, offset, *, jumps=(), drift=None, interval=1.0):
         return clock.corrected_sensor(sensor, offset, jumps=jumps, interval=interval)
