@@ -25,21 +25,45 @@ def _noise(n=400, seed=0):
     return np.random.default_rng(seed).normal(0.0, 0.01, (n, 3))
 
 
+def _pin(w, axis, start, count, value, past=0.5):
+    """A turn on ``axis`` pinned at ``value`` for ``count`` samples from ``start``: the two samples
+    either side on a straight line that would reach ``past`` beyond it one sample in."""
+    sign = np.sign(value)
+    step, beyond = sign * (past + 0.5), value + sign * past
+    w[start - 2:start, axis] = beyond - step * np.array([2.0, 1.0])
+    w[start:start + count, axis] = value
+    w[start + count:start + count + 2, axis] = beyond - step * np.array([1.0, 2.0])
+    return w
+
+
 @pytest.mark.parametrize("run, found", [(MIN_RUN - 1, False), (MIN_RUN, True)])
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_a_run_at_the_extreme_is_clipping_at_the_rule(run, found, sign):
-    w = _noise()
-    w[100:100 + run, 1] = sign * 4.0
-    sat = saturation_of(_gyro(w))
+    sat = saturation_of(_gyro(_pin(_noise(), 1, 100, run, sign * 4.0)))
     assert bool(sat.limits) is found
     if found:
         assert sat.limits == (("y", sign * 4.0, run),)
         assert len(sat.t) == run
 
 
+@pytest.mark.parametrize("past, found", [(0.0, False), (0.2, True)])
+def test_only_a_run_entered_steeply_is_clipping(past, found):
+    w = _pin(_noise(), 0, 100, 6, 4.0, past=past)  # past 0: the line reaches the value, no further
+    assert bool(saturation_of(_gyro(w)).limits) is found
+
+
+def test_a_smooth_peak_quantised_coarser_than_its_noise_is_no_clipping():
+    t = np.arange(400) / 200.0
+    w = np.zeros((400, 3))
+    w[:, 2] = np.round(np.sin(2.0 * t) / 0.01) * 0.01  # its top level held 23 samples
+    assert saturation_of(_gyro(w)).limits == ()
+    w[:, 2] = np.minimum(np.round(3.0 * np.sin(20.0 * t) / 0.01) * 0.01, 2.0)  # a fast turn clipped at 2
+    assert saturation_of(_gyro(w)).limits == (("z", 2.0, int(np.sum(w[:, 2] == 2.0))),)
+
+
 def test_every_sample_at_the_limit_is_clipped_both_signs():
-    w = _noise()
-    w[50:55, 0], w[60, 0], w[200:210, 2] = 4.0, 4.0, -4.0  # a lone sample at the limit too
+    w = _pin(_pin(_noise(), 0, 50, 5, 4.0), 2, 200, 10, -4.0)
+    w[60, 0] = 4.0  # a lone sample at the limit too
     sat = saturation_of(_gyro(w))
     assert sorted((a, r, k) for a, r, k in sat.limits) == [("x", 4.0, 6), ("z", -4.0, 10)]
     assert len(sat.t) == 16
@@ -78,9 +102,7 @@ def test_the_reason_warns_then_fails_past_the_share(dropped, level):
 
 
 def test_without_drops_the_clipped_samples_only():
-    w = _noise()
-    w[100:110, 1] = 4.0
-    gyro = _gyro(w)
+    gyro = _gyro(_pin(_noise(), 1, 100, 10, 4.0))
     rest = saturation_of(gyro).without(gyro)
     assert len(rest.t) == len(gyro.t) - 10 and not np.isin(gyro.t[100:110], rest.t).any()
 
