@@ -19,6 +19,7 @@ from .bias_change import bias_change_of, named_in
 from .camera_jumps import found_and_glued, jump_reasons, spanning
 from .quality import THRESHOLDS, Verdict
 from .report import CalibrationResult  # re-exported: a public name here
+from .saturation import saturation_of
 from .sensor_verdict import drift_beside_steps, model_or_note, with_sensor_model
 from .solve_and_judge import (
     Provenance,
@@ -384,13 +385,14 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     gyro = sensor if isinstance(sensor, GyroStream) else None
     oriented = integrate_gyro(sensor) if gyro is not None else sensor
     _check_overlap(camera, oriented, max_offset)
-    camera, jumps_cam = found_and_glued(camera, oriented, max_offset)  # lost tracking: its pairs dropped below
-    model, model_note = model_or_note(camera, gyro, interval, max_offset) if gyro is not None and gyro_bias else (
-        None, None)
+    sat = saturation_of(sensor)  # a clipping gyro: its pairs dropped below, a camera step over it no jump
+    camera, jumps_cam = found_and_glued(camera, oriented, max_offset, excused=sat)  # lost tracking: pairs dropped
+    fit = sat.without(gyro)  # the sensor model's fit: without the clipped samples (their pairs skipped)
+    model, model_note = model_or_note(camera, fit, interval, max_offset) if gyro_bias and fit else (None, None)
     if model is not None:  # jumps hidden by fast motion: against R0 (then the model again without them)
         camera, found = found_and_glued(camera, integrate_gyro(model.corrected(gyro)), max_offset, jumps_cam, model.R,
-                                        model.offset_mid_s)
-        model, model_note = model_or_note(camera, gyro, interval, max_offset) if found != jumps_cam else (model, None)
+                                        model.offset_mid_s, excused=sat)
+        model, model_note = model_or_note(camera, fit, interval, max_offset) if found != jumps_cam else (model, None)
         jumps_cam = found
     bias_step = None
     if model is not None:  # the sensor model: the rates without the gyro's bias (and its change, where it changes)
@@ -407,8 +409,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     A, B, t_start = motion_pairs(camera, oriented, interval, offset=used)
     A, B, t_start = A[::stride], B[::stride], t_start[::stride]
     drop = _pairs_across_gaps(t_start, interval, used, oriented.t, integrated=gyro is not None)
-    cut = spanning(jumps_cam, t_start, interval)
-    drop |= cut
+    cut, clip = spanning(jumps_cam, t_start, interval), sat.pairs(t_start, interval, used)
+    drop |= cut | clip
     before = len(A)
     if drop.all():
         raise ValueError(f"every one of the {before} pairs spans a gap in the sensor stream")
@@ -432,7 +434,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
         camera, oriented, A, B, used, model, max_offset=max_offset, seed=seed)
     As, Bs, ts, bs = _analysis_pairs(camera, fixed or oriented, used, gyro is not None, A, B, t_start, interval,
                                      stride if fixed is None else 0, block)
-    keep_a = ~spanning(jumps_cam, ts, seg_mod.ANALYSIS_INTERVAL_S)
+    keep_a = ~spanning(jumps_cam, ts, seg_mod.ANALYSIS_INTERVAL_S) & ~sat.pairs(ts, seg_mod.ANALYSIS_INTERVAL_S, used)
     As, Bs, ts = As[keep_a], Bs[keep_a], ts[keep_a]
     segs, segs_note = seg_mod.run(As, Bs, ts, bs) if len(As) else (None, "not run: no pairs")
     if use == "consistent" and segs is not None and segs.consistent:  # the change test on the part used
@@ -452,7 +454,7 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
                     second_peak_offset_s=clock.second_peak_offset_s, max_offset_s=max_offset,
                     offset_applied=bool(correct_offset),
                     offset_resolution_s=OFFSET_RESOLUTION, overlap_s=float(hi - lo), interval_s=float(interval),
-                    pairs_dropped_at_gaps=int((drop & ~cut).sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
+                    pairs_dropped_at_gaps=int((drop & ~cut & ~clip).sum()), pairs_before_gaps=before, gyro_rate_hz=rate)
     mirror = _mirror_fit(camera, gyro, A, B, interval, used, stride, ~drop) if gyro is not None else {}
     evidence.update(mirror)
     result = solve_pairs(
@@ -471,10 +473,8 @@ def calibrate(camera: OrientationStream, sensor, *, method: str = "chordal_optim
     result = with_reasons(dataclasses.replace(result, segments=segs_report),  # the segment test, the clock jumps
                           seg_mod.reasons(segs, float(camera.t[0]), segs_used, segs_note)
                           + clock_mod.clock_reasons(jumps, float(camera.t[0]), offset)
-                          + jump_reasons(jumps_cam, float(camera.t[0]), int(cut.sum())))
-    unit = _time_unit_reason(camera, sensor)
-    if unit is not None:
-        result = with_reasons(result, [unit])
+                          + jump_reasons(jumps_cam, float(camera.t[0]), int(cut.sum())) + sat.reasons(clip, before))
+    result = with_reasons(result, [x for x in [_time_unit_reason(camera, sensor)] if x is not None])
     if isinstance(sensor, GyroStream):  # the sensor model: its fields and reasons (model off: only where not ok)
         result = with_sensor_model(result, camera, sensor, model, model_note, gyro_bias or not diagnose, interval,
                                    max_offset)

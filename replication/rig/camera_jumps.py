@@ -87,10 +87,16 @@ def residual_jumps(camera: OrientationStream, sensor: OrientationStream, R, offs
 
 
 def found_and_glued(camera: OrientationStream, sensor: OrientationStream, max_offset: float, jumps=(), R=None,
-                    offset: float = 0.0):
+                    offset: float = 0.0, excused=None):
     """``(camera glued, every jump so far)``: :func:`camera_jumps` (``R`` None), or
-    :func:`residual_jumps` with ``R`` and ``offset``, added to ``jumps``."""
+    :func:`residual_jumps` with ``R`` and ``offset``, added to ``jumps``; ``excused`` (a
+    :class:`~replication.rig.saturation.Saturation`): no jump where the sensor's side of the step
+    (within ``max_offset``, or at ``offset`` given ``R``) holds a clipped sample (reading short)."""
     more = camera_jumps(camera, sensor, max_offset) if R is None else residual_jumps(camera, sensor, R, offset)
+    if excused is not None and more:
+        lo, hi = (-max_offset, max_offset) if R is None else (offset, offset)
+        held = excused.holds([j.start_s + lo for j in more], [j.end_s + hi for j in more])
+        more = [j for j, h in zip(more, held) if not h]
     return (glued(camera, more) if more else camera), sorted([*jumps, *more], key=lambda j: j.start_s)
 
 
