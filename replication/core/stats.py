@@ -15,7 +15,7 @@ import numpy as np
 from .._jitter import guard_failed, margin_scale
 
 __all__ = ["mean_se", "paired_ratio_ci", "z_score", "format_ci", "share_range", "bracket", "declared_bound",
-           "ROUNDING_RUNS", "wilson_interval", "poisson_upper", "radius_deg"]
+           "ROUNDING_RUNS", "wilson_interval", "poisson_upper", "radius_deg", "chi2_quantile"]
 
 
 def mean_se(x, axis=0):
@@ -215,9 +215,13 @@ def radius_deg(cov, level: float = 0.95) -> float:
     if not total > 0:
         return 0.0
     a, nu = squares / total, total ** 2 / squares
+    return math.degrees(math.sqrt(a * chi2_quantile(level, nu)))
+
+
+def chi2_quantile(level: float, dof: float) -> float:
+    """The ``level`` quantile of ``chi^2_dof`` (Wilson-Hilferty; ``dof`` need not be an integer)."""
     z = _normal_quantile(level)
-    q = nu * (1.0 - 2.0 / (9.0 * nu) + z * math.sqrt(2.0 / (9.0 * nu))) ** 3  # chi^2_nu quantile
-    return math.degrees(math.sqrt(a * q))
+    return dof * (1.0 - 2.0 / (9.0 * dof) + z * math.sqrt(2.0 / (9.0 * dof))) ** 3
 
 
 @functools.lru_cache(maxsize=8)

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..core.so3 import matrix_from_rotation_vector
-from ..core.stats import _normal_quantile
+from ..core.stats import chi2_quantile
 from .online_drift import DRIFT_COS, DRIFT_MAX_STEP_DEG, drift_lag_deg, drift_step, follow_drift
 
 __all__ = ["CreepTest", "follow_creep", "CREEP_LEVEL", "CREEP_MIN_PAIRS", "CREEP_BLOCK", "CREEP_MAX_BLOCKS"]
@@ -35,11 +35,6 @@ CREEP_MIN_PAIRS = 40
 #: (:meth:`CreepTest.continues`).
 CREEP_BLOCK = 10
 CREEP_MAX_BLOCKS = 256
-
-
-def _chi2_3(level: float) -> float:
-    """The ``level`` quantile of ``chi^2_3`` (Wilson-Hilferty)."""
-    return 3.0 * (1.0 - 2.0 / 27.0 + _normal_quantile(level) * math.sqrt(2.0 / 27.0)) ** 3
 
 
 def _vec(X) -> np.ndarray:
@@ -94,7 +89,7 @@ class CreepTest:
     followed) makes it :attr:`valid` False until the next start."""
 
     def __init__(self, level: float = CREEP_LEVEL):
-        self.level, self.threshold = level, _chi2_3(level)
+        self.level, self.threshold = level, chi2_quantile(level, 3)
         self.reset(0)
 
     def reset(self, origin: int) -> None:

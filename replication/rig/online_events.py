@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.so3 import angle_between_deg
-from ..core.stats import _normal_quantile, radius_deg
+from ..core.stats import chi2_quantile, radius_deg
 from .online_guard import MisfitGuard
 
 __all__ = ["OnlineEvent", "EVENT_KINDS", "RepeatFilter", "DUPLICATE_DEG", "SMALL_MOTION_DEG", "DUPLICATE_MEMORY",
@@ -220,12 +220,6 @@ def solve_window(A, B, *, min_excitation_deg: float, s2_floor: float, d2_floor: 
         return R, keep, None
     s2 = max(float(np.mean(pair_d2(R, A[keep], B[keep]))) / 2.0 * n / (n - 3.0), s2_floor)
     return R, keep, (s2 / 3.0) * np.linalg.inv(G)
-
-
-def chi2_quantile(level: float, dof: int) -> float:
-    """The ``level`` quantile of ``chi^2_dof`` (Wilson-Hilferty)."""
-    z = _normal_quantile(level)
-    return dof * (1.0 - 2.0 / (9.0 * dof) + z * math.sqrt(2.0 / (9.0 * dof))) ** 3
 
 
 def combined_threshold(cov_a, cov_b) -> float:

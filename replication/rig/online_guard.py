@@ -10,7 +10,7 @@ from collections import deque
 
 import numpy as np
 
-from ..core.stats import _normal_quantile
+from ..core.stats import chi2_quantile
 
 _EYE = np.eye(3)
 
@@ -48,12 +48,6 @@ GUARD_CLEAR_LEVEL = 0.95
 #: Lower than the detector's allowance (2) so that a change whose residuals are only 1.5-2 times the
 #: noise (1 deg at 0.5 deg of noise) keeps the window open.
 GUARD_K = 1.5
-
-
-def _chi2_3(level: float) -> float:
-    """The ``level`` quantile of ``chi^2_3`` (Wilson-Hilferty, as
-    :func:`replication.rig.online_events.chi2_quantile`)."""
-    return 3.0 * (1.0 - 2.0 / 27.0 + _normal_quantile(level) * math.sqrt(2.0 / 27.0)) ** 3
 
 
 def _misfit_vectors(R, A, B) -> np.ndarray:
@@ -140,7 +134,8 @@ class MisfitGuard:
     """
 
     def __init__(self, maxlen: int, level: float = GUARD_LEVEL):
-        self.level, self.threshold, self.clear_threshold = level, _chi2_3(level), _chi2_3(GUARD_CLEAR_LEVEL)
+        self.level, self.threshold = level, chi2_quantile(level, 3)
+        self.clear_threshold = chi2_quantile(GUARD_CLEAR_LEVEL, 3)
         self.pairs = deque(maxlen=maxlen)   # the run's pairs: [A, B, bound_j, (g_j, H_j) once computed]
         self._ring = np.empty((max(GUARD_LONG_WINDOWS), 2, 3, 3))  # the last pairs, for the long windows
         blocks = len(self._ring) // GUARD_LONG_EVERY  # the ring in blocks: their sums of B_j and of the shares g_j

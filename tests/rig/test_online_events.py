@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from replication.core import so3
-from replication.core.stats import radius_deg
+from replication.core.stats import chi2_quantile, radius_deg
+from replication.core.stats import chi2_quantile as _chi2
 from replication.rig.online_events import (
     CONFIRM_LEVEL,
     DUPLICATE_DEG,
@@ -16,14 +17,12 @@ from replication.rig.online_events import (
     ChangeDetector,
     OnlineEvent,
     RepeatFilter,
-    chi2_quantile,
     combined_threshold,
     describe,
     drift_test,
     pair_d2,
     residual_angle_deg,
 )
-from replication.rig.online_events import chi2_quantile as _chi2
 
 
 def _flat(R):

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from replication.core import so3
+from replication.core.stats import chi2_quantile
 from replication.rig.online import OnlineCalibrator
-from replication.rig.online_events import chi2_quantile, pair_d2
+from replication.rig.online_events import pair_d2
 from replication.rig.online_guard import (
     GUARD_EVERY,
     GUARD_K,
