@@ -8,6 +8,7 @@ inside functions; only ``__main__`` imports cli, and only cli imports argparse; 
 anywhere; every name has one home; notebooks call public names in short cells.
 """
 import ast
+import functools
 import importlib
 import json
 import pkgutil
@@ -385,6 +386,298 @@ def test_the_portability_files_share_out_every_notebook_once():
     parts = [p.stem.removeprefix("test_portability_").split("_") for p in files]
     assert len(parts) == 2  # one per xdist worker (scripts/test runs two, --dist loadfile)
     assert sorted(sum(parts, [])) == [p.name[:2] for p in NOTEBOOKS]
+
+
+#: A test reaches its file's unit: of the package's names it uses (functions, classes), itself or
+#: through the functions of its file and of tests/conftest.py it calls or takes as fixtures, one is
+#: defined in the unit or in a module that uses the unit at any remove (its doors: the online
+#: estimator for its parts, ``calibrate`` for the clock). A test that reaches only other units
+#: belongs in their file; one that reaches no name of the package (a subprocess, a file's text) is
+#: not judged. The exceptions, with their reason (``<file>::<test>``):
+STRAYS = {}
+#: Tests that reach only another unit and are still to move to its file.
+NOT_YET_MOVED = {
+    "core/test_so3.py::test_check_rotation_rejects",
+    "core/test_solvers.py::test_every_exported_solver_refuses_bad_input",
+    "core/test_solvers.py::test_singular_values_and_top_vectors_from_one_eigh_match_the_svd",
+    "core/test_solvers.py::test_sym_eigvals_come_from_the_decomposition_made_first",
+    "core/test_solvers.py::test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise",
+    "core/test_solvers.py::test_weighted_kronecker_operator",
+    "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv",
+    "core/test_solvers_optimal.py::test_every_full_output_says_how_its_lower_bound_was_certified",
+    "core/test_solvers_registry.py::test_motions_refuse_a_bad_atol",
+    "core/test_solvers_registry.py::test_motions_accept_an_atol_in_range",
+    "core/test_solvers_registry.py::test_two_turns_or_two_pairs_are_not_one_pair",
+    "core/test_solvers_slsqp.py::test_registered_and_batched",
+    "rig/test_calibration.py::test_static_pose_sets_get_a_verdict_and_name_their_pairs",
+    "rig/test_calibration.py::test_lab_recording_with_times_in_ms_is_refused",
+    "rig/test_calibration.py::test_inverted_pose_sets_are_named",
+    "rig/test_calibration.py::test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius",
+    "rig/test_calibration.py::test_bootstrap_replicates_without_masks_refuse_non_rotations",
+    "rig/test_calibration.py::test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_radius",
+    "rig/test_calibration.py::test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solution",
+    "rig/test_calibration.py::test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs",
+    "rig/test_calibration.py::test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solver",
+    "rig/test_calibration.py::test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it",
+    "rig/test_calibration.py::test_replicates_frozen_at_the_bound",
+    "rig/test_calibration.py::test_pose_sets_resample_stations_not_pairs",
+    "rig/test_calibration.py::test_station_bootstrap_covers_the_error_about_95_percent",
+    "rig/test_calibration.py::test_an_outlying_station_is_named_with_its_index",
+    "rig/test_calibration.py::test_outlying_station_threshold_boundary",
+    "rig/test_calibration.py::test_motion_median_threshold_boundaries",
+    "rig/test_calibration.py::test_excitation_threshold_boundary",
+    "rig/test_calibration.py::test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell",
+    "rig/test_calibration.py::test_remount_threshold_boundaries",
+    "rig/test_calibration.py::test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate",
+    "rig/test_calibration.py::test_the_mirror_ratio_threshold_at_its_boundary",
+    "rig/test_calibration.py::test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed",
+    "rig/test_calibration.py::test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap",
+    "rig/test_calibration.py::test_stations_remeasured_within_the_noise_are_repeats_too",
+    "rig/test_calibration.py::test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides",
+    "rig/test_calibration.py::test_a_chain_of_close_stations_is_not_one_station",
+    "rig/test_calibration.py::test_a_station_joins_a_group_only_if_it_repeats_every_member",
+    "rig/test_calibration.py::test_with_consecutive_pairs_only_the_bad_stations_are_blamed",
+    "rig/test_calibration.py::test_with_consecutive_pairs_a_clean_set_blames_no_station",
+    "rig/test_calibration.py::test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_its_neighbours",
+    "rig/test_calibration.py::test_identical_stations_are_repeats_even_with_no_motion_threshold",
+    "rig/test_calibration.py::test_two_references_for_static_poses_and_bad_shapes",
+    "rig/test_export.py::test_numbers_round_trip_and_always_carry_a_dot",
+    "rig/test_export.py::test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command",
+    "rig/test_export.py::test_reference_files_that_are_not_camera_imu_extrinsics_are_refused",
+    "rig/test_export.py::test_the_export_command_writes_a_copy_and_says_what_changed",
+    "rig/test_export.py::test_the_two_published_references_of_each_rig_disagree_by_the_reference_floor",
+    "rig/test_export.py::test_the_floor_table_reads_within_beyond_and_one_reference",
+    "rig/test_export.py::test_only_a_4x4_matrix_is_read_or_written",
+    "rig/test_export.py::test_euroc_sensor_yaml_without_sensor_type_is_not_taken_for_a_camera",
+    "rig/test_export.py::test_a_camchain_named_txt_is_recognised_by_content",
+    "rig/test_export.py::test_legacy_orbslam3_tbc_is_not_called_vision_only",
+    "rig/test_export.py::test_valid_json_indented_with_tabs_is_read",
+    "rig/test_export.py::test_basalt_quaternion_within_the_documented_norm_tolerance_is_read",
+    "rig/test_fetch.py::test_missing_data_names_the_command",
+    "rig/test_fetch.py::test_stereo_rectification_rotation_of_the_euroc_run",
+    "rig/test_fetch.py::test_stereo_settings_errors_name_the_entry",
+    "rig/test_online.py::test_radius_matches_the_gaussian_quantile",
+    "rig/test_online.py::test_a_rig_at_rest_is_not_a_repeat",
+    "rig/test_online.py::test_the_repeat_tolerance_is_a_tenth_of_the_noise_between_its_bounds",
+    "rig/test_online.py::test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid",
+    "rig/test_realdata.py::test_unknown_policy_is_refused",
+    "rig/test_sensor_model.py::test_the_critical_value_is_student_s_t_of_the_blocks",
+    "rig/test_sensor_model.py::test_the_jackknife_sees_a_block_that_pulls_the_fit",
+    "study/test_book.py::test_summary_gives_the_counts_and_one_row_per_claim",
+    "study/test_book.py::test_counts_name_every_verdict_even_at_zero",
+    "study/test_book.py::test_cli_claims_summary_prints_the_compact_table",
+    "study/test_book.py::test_readme_holds_the_compact_table_and_is_short",
+    "study/test_book.py::test_first_clause_cuts_only_beyond_its_word_limit",
+    "study/test_book.py::test_first_clause_stops_at_a_clause_outside_brackets_only",
+    "study/test_book.py::test_the_front_page_shows_the_counts_of_the_records",
+    "study/test_book.py::test_the_front_page_reads_in_five_minutes_in_a_real_browser",
+    "study/test_convexity_starts.py::test_noise_free_twins_are_exact_half_turns_at_the_predicted_cost",
+    "study/test_figures.py::test_calibration_figure_names_the_recording_and_states_r0_the_radius_and_the_reference",
+    "study/test_figures.py::test_calibration_figure_of_a_pose_set_has_no_empty_panel_and_says_what_it_lacks",
+    "study/test_figures.py::test_headline_without_a_finite_radius_or_a_reference_matrix",
+    "study/test_figures.py::test_cli_names_the_recording_and_the_reference_file_in_the_figure",
+    "study/test_figures.py::test_the_offset_panel_is_zoomed_to_the_interval_with_the_full_search_in_an_inset",
+    "study/test_lab_claims.py::test_transcribed_madgwick_is_ahrs_madgwick",
+    "study/test_lab_claims.py::test_transcribed_madgwick_takes_ahrs_branches",
+    "study/test_lab_claims.py::test_ecompass_on_arrays_is_ahrs_ecompass",
+    "study/test_lab_claims.py::test_projection_and_its_jacobian_are_opencvs",
+    "study/test_lab_claims.py::test_batched_pnp_finds_opencvs_pose",
+    "study/test_lab_claims.py::test_fast_run_is_the_default_run",
+    "study/test_lab_claims.py::test_every_sample_gives_one_motion_per_sample_pair",
+    "study/test_lab_claims.py::test_every_sample_of_an_exact_lab_is_the_mean",
+    "study/test_lab_claims.py::test_seed_study_with_every_sample_and_parts_switched_off",
+    "study/test_lab_claims.py::test_count_text_and_seed_range",
+    "study/test_lab_claims.py::test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_errors",
+    "study/test_lab_claims.py::test_sqp_shares",
+    "study/test_lab_claims.py::test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin",
+    "study/test_lab_claims.py::test_pitch_bias_intervention_is_the_seed_studys",
+    "study/test_lab_claims.py::test_intervention_finding_mean_se_and_interval",
+    "study/test_ledger.py::test_malformed_claims_file_names_line_and_column",
+    "study/test_ledger.py::test_a_well_formed_claims_file_reads_as_text",
+    "study/test_ledger.py::test_a_missing_claims_file_is_named",
+    "study/test_table1_claims.py::test_check_evidence_names_the_claim_and_condition_and_passes_what_holds",
+    "study/test_table2.py::test_parts_of_a_source_switch_off_separately",
+}
+
+
+def _functions(tree) -> dict:
+    """The module-level functions of a test file and the methods of its classes, by name."""
+    found = {}
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            found[node.name] = node
+        elif isinstance(node, ast.ClassDef):
+            found.update({f"{node.name}.{m.name}": m for m in node.body if isinstance(m, ast.FunctionDef)})
+    return found
+
+
+def _package_aliases(tree) -> dict:
+    """What each name a test file imports from the package stands for (a module, function or class),
+    and ``conftest`` imports by the name of their function in tests/conftest.py."""
+    aliases = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module == "conftest":
+            aliases.update({a.asname or a.name: ("conftest", a.name) for a in node.names})
+        elif isinstance(node, ast.ImportFrom) and (node.module or "").split(".")[0] == "replication":
+            module = importlib.import_module(node.module)
+            for a in node.names:
+                found = getattr(module, a.name, None)
+                aliases[a.asname or a.name] = found if found is not None else importlib.import_module(
+                    f"{node.module}.{a.name}")
+        elif isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] == "replication":
+                    aliases[a.asname or "replication"] = importlib.import_module(a.asname and a.name or "replication")
+    return aliases
+
+
+def _dotted(node) -> list | None:
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    return [node.id, *reversed(parts)] if isinstance(node, ast.Name) else None
+
+
+def reached_modules(source: str, conftest: str) -> dict:
+    """For each test function of ``source``: the package modules that define a function or class it
+    names, itself or through the functions of its file and of ``conftest`` it names or takes as
+    fixtures (followed to any depth)."""
+    scopes = {}
+    for text in (conftest, source):  # the file's own functions shadow conftest's
+        tree = ast.parse(text)
+        aliases = _package_aliases(tree)
+        scopes.update({name: (fn, aliases) for name, fn in _functions(tree).items()})
+
+    def named(fn, aliases) -> tuple:
+        modules, local = set(), {a.arg for a in fn.args.args if a.arg in scopes}
+        for node in ast.walk(fn):
+            parts = _dotted(node) if isinstance(node, (ast.Name, ast.Attribute)) else None
+            if not parts:
+                continue
+            if parts[0] in scopes:
+                local.add(parts[0])
+            found = aliases.get(parts[0])
+            if isinstance(found, tuple):  # a conftest function imported by name
+                local.add(found[1])
+                continue
+            for part in parts[1:]:
+                found = getattr(found, part, None) if found is not None else None
+            home = getattr(found, "__module__", None) if not isinstance(found, types.ModuleType) else None
+            if isinstance(home, str) and home.startswith("replication"):
+                modules.add(home)
+        return modules, local
+
+    def reach(name, seen) -> set:
+        if name in seen or name not in scopes:
+            return set()
+        seen.add(name)
+        modules, local = named(*scopes[name])
+        return modules.union(*(reach(other, seen) for other in local))
+
+    tests = [name for name in _functions(ast.parse(source)) if name.split(".")[-1].startswith("test_")]
+    return {name: reach(name, set()) for name in tests}
+
+
+@functools.cache
+def _importers() -> dict:
+    """The modules that import each module directly."""
+    found = {}
+    for module in MODULES:
+        for _, target in imports_of(module):
+            found.setdefault(target, set()).add(module)
+    return found
+
+
+@functools.cache
+def _public_classes(module: str) -> frozenset:
+    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
+    return frozenset(_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_"))
+
+
+def unit_modules(path: Path, doors: bool = True) -> set:
+    """The package modules a test file of core, rig or study is named for: the module or the module
+    of the public class its name names; with ``doors``, also a named package's modules and the
+    modules that import the named ones (the doors through which they are tested)."""
+    room, name = path.parent.name, path.stem.removeprefix("test_")
+    own = set()
+    for module in MODULES:
+        parts = module.split(".")
+        if len(parts) >= 3 and parts[1] == room and (
+                "_".join(p.lstrip("_") for p in parts[2:]) == name or name in _public_classes(module)):
+            own.add(module)
+    if not doors:
+        return own
+    own |= {m for m in MODULES if any(m.startswith(f"{package}.") for package in own)}
+    doors, new = set(own), set(own)
+    while new:  # the modules that import these, at any remove
+        new = set().union(*(_importers().get(m, set()) for m in new)) - doors
+        doors |= new
+    return doors
+
+
+def strays_of(path: Path) -> tuple:
+    """``(tests reaching no module of the file's unit, all tests)`` of a test file of core, rig or
+    study (:func:`reached_modules`, :func:`unit_modules`)."""
+    conftest = (TESTS / "conftest.py").read_text(encoding="utf-8")
+    reached = reached_modules(path.read_text(encoding="utf-8"), conftest)
+    own = unit_modules(path)
+    return sorted(n for n, modules in reached.items() if modules and not modules & own), len(reached)
+
+
+def test_the_reach_finder_follows_helpers_fixtures_and_package_faces():
+    conftest = "from replication.rig.calibration import calibrate\ndef calibrated():\n    return calibrate\n"
+    source = ("from replication.core import so3\nfrom replication.rig import streams as st\n"
+              "from conftest import calibrated as cal\n"
+              "def _helper():\n    return so3.matrix_from_rotation_vector\n"
+              "def test_direct():\n    st.GyroStream\n"
+              "def test_through_a_helper():\n    _helper()\n"
+              "def test_through_a_fixture(calibrated):\n    pass\n"
+              "def test_through_an_import_of_conftest():\n    cal()\n"
+              "def test_nothing():\n    assert 1\n")
+    assert reached_modules(source, conftest) == {
+        "test_direct": {"replication.rig.streams"}, "test_through_a_helper": {"replication.core.so3"},
+        "test_through_a_fixture": {"replication.rig.calibration"},
+        "test_through_an_import_of_conftest": {"replication.rig.calibration"}, "test_nothing": set()}
+
+
+def test_a_unit_is_its_module_its_public_class_and_their_doors():
+    doors = unit_modules(TESTS / "rig" / "test_online_creep.py")
+    assert {"replication.rig.online_creep", "replication.rig.online", "replication.rig.live"} <= doors
+    assert "replication.rig.online" in unit_modules(TESTS / "rig" / "test_online_calibrator.py")
+    assert "replication.study.convexity.claims" in unit_modules(TESTS / "study" / "test_convexity.py")
+    assert unit_modules(TESTS / "study" / "test_convexity.py", doors=False) == {"replication.study.convexity"}
+    assert unit_modules(TESTS / "rig" / "test_online.py", doors=False) == {"replication.rig.online"}
+    assert unit_modules(TESTS / "rig" / "test_online_calibrator.py", doors=False) == {"replication.rig.online"}
+    assert "replication.rig.quality" not in doors
+
+
+TEST_FILES_OF_UNITS = sorted(p for room in ("core", "rig", "study") for p in (TESTS / room).glob("test_*.py"))
+
+
+def test_every_unit_has_one_test_file():
+    homes = {}
+    for path in TEST_FILES_OF_UNITS:
+        for module in unit_modules(path, doors=False):
+            homes.setdefault(module, []).append(path.relative_to(TESTS).as_posix())
+    twice = {m: files for m, files in homes.items() if len(files) > 1}
+    assert not twice, f"units with more than one test file (a module and its class count as one unit): {twice}"
+
+
+@pytest.mark.parametrize("path", TEST_FILES_OF_UNITS, ids=lambda p: p.relative_to(TESTS).as_posix())
+def test_each_test_reaches_its_file_s_unit(path):
+    off, _ = strays_of(path)
+    off = [name for name in off if f"{path.relative_to(TESTS).as_posix()}::{name}" not in {*STRAYS, *NOT_YET_MOVED}]
+    assert not off, (f"{path.relative_to(ROOT)}: these tests reach no name of its unit or of a module that uses it; "
+                     f"move each to the file of the unit it reaches, or list it in STRAYS with its reason: {off}")
+
+
+def test_the_strays_listed_still_exist_and_still_stray():
+    listed = {}
+    for key in {*STRAYS, *NOT_YET_MOVED}:
+        listed.setdefault(key.split("::")[0], set()).add(key.split("::")[1])
+    for file, names in listed.items():
+        assert names <= set(strays_of(TESTS / file)[0]), f"{file}: {names} no longer stray or exist"
 
 
 #: The naming rule for conversions (docs/conventions.md, "Names of conversions"):
