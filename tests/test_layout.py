@@ -539,15 +539,19 @@ def _dotted(node) -> list | None:
     return [node.id, *reversed(parts)] if isinstance(node, ast.Name) else None
 
 
+@functools.cache
+def _scopes(text: str) -> dict:
+    """Each function of a test file's ``text`` and what its imports of the package stand for."""
+    tree = ast.parse(text)
+    aliases = _package_aliases(tree)
+    return {name: (fn, aliases) for name, fn in _functions(tree).items()}
+
+
 def reached_modules(source: str, conftest: str) -> dict:
     """For each test function of ``source``: the package modules that define a function or class it
     names, itself or through the functions of its file and of ``conftest`` it names or takes as
     fixtures (followed to any depth)."""
-    scopes = {}
-    for text in (conftest, source):  # the file's own functions shadow conftest's
-        tree = ast.parse(text)
-        aliases = _package_aliases(tree)
-        scopes.update({name: (fn, aliases) for name, fn in _functions(tree).items()})
+    scopes = {**_scopes(conftest), **_scopes(source)}  # the file's own functions shadow conftest's
 
     def named(fn, aliases) -> tuple:
         modules, local = set(), {a.arg for a in fn.args.args if a.arg in scopes}
