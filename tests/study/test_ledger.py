@@ -10,6 +10,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from replication._io import PROJECT_ROOT
@@ -57,6 +58,15 @@ def test_a_missing_claim_is_refused(tmp_path, collected):
 def test_record_refuses_malformed_verdicts(kwargs, message):
     with pytest.raises(ValueError, match=message):
         ledger.record(**{"evidence": "e 1", "uncertainty": "u", "setting": "s", "section": "S", **kwargs})
+
+
+def test_check_evidence_names_the_claim_and_condition_and_passes_what_holds():
+    assert ledger.check_evidence(True, "cost_to_zero", "x") is None
+    assert ledger.check_evidence(np.bool_(True), "cost_to_zero", "x") is None
+    with pytest.raises(ValueError) as err:
+        ledger.check_evidence(np.bool_(False), "cost_to_zero", "the cost falls (0.5)")
+    assert str(err.value) == ("claim 'cost_to_zero': the evidence does not bear the verdict: expected the cost falls "
+                              "(0.5)")
 
 
 def test_malformed_claims_file_names_line_and_column(tmp_path):
