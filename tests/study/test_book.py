@@ -73,19 +73,6 @@ def test_readme_holds_the_compact_table_and_is_short():
     assert "bash scripts/docs" in text and "python -m replication export report.json --to kalibr --base" in text
 
 
-@pytest.mark.parametrize("words, cut", [(5, False), (4, True)])
-def test_first_clause_cuts_only_beyond_its_word_limit(words, cut):
-    assert ledger.first_clause("one two three four five", max_words=words) == \
-        ("one two three four …" if cut else "one two three four five")
-
-
-def test_first_clause_stops_at_a_clause_outside_brackets_only():
-    assert ledger.first_clause("a (b; c) d; e") == "a (b; c) d …"
-    assert ledger.first_clause("by eq. (8) it holds") == "by eq. (8) it holds"
-    assert ledger.first_clause("it holds. The rest") == "it holds …"
-    assert ledger.first_clause("it holds.") == "it holds."
-
-
 # ---- the generated pages
 # ------------------------------------------------------------------------------------------
 

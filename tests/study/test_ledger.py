@@ -686,6 +686,67 @@ def test_summary_from_ledger_gives_the_counts_and_one_compact_row_per_claim(two_
     assert ledger.verdict_counts(got) == {"holds": 2, "fails": 0, "holds only if": 1, "undecidable from the text": 0}
 
 
+# ---- first_clause: the evidence's first clause (the book's front page)
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("words, cut", [(5, False), (4, True)])
+def test_first_clause_cuts_only_beyond_its_word_limit(words, cut):
+    assert ledger.first_clause("one two three four five", max_words=words) == \
+        ("one two three four …" if cut else "one two three four five")
+
+
+def test_first_clause_stops_at_a_clause_outside_brackets_only():
+    assert ledger.first_clause("a (b; c) d; e") == "a (b; c) d …"
+    assert ledger.first_clause("by eq. (8) it holds") == "by eq. (8) it holds"
+    assert ledger.first_clause("it holds. The rest") == "it holds …"
+    assert ledger.first_clause("it holds.") == "it holds."
+
+
+@pytest.mark.parametrize("text, clause", [
+    ("", ""),
+    ("holds", "holds"),
+    ("  one   two  ", "one two"),  # white space between words as one space, none at the ends
+    ("it holds; the rest", "it holds …"),
+    ("it holds;the rest", "it holds;the rest"),  # a clause ends at "; ", not at ";"
+    ("it holds. The rest", "it holds …"),
+    ("it holds. the rest", "it holds. the rest"),  # ". " ends a clause only before a capital
+    ("by eq. (8) it holds", "by eq. (8) it holds"),  # abbreviations before a bracket, a digit, lower case
+    ("see Fig. 5 and e.g. the rest", "see Fig. 5 and e.g. the rest"),
+    ("at 0.5 deg. Then more", "at 0.5 deg …"),  # a decimal point is no end; the sentence's is
+    ("X; rest", "X …"),
+    ("the R0 estimate holds; rest", "the R0 estimate holds …"),  # a capital after no ". " ends nothing
+    # a clause that ends the text: nothing follows, no mark
+    ("it holds.", "it holds."),
+    ("it holds; ", "it holds"),
+    ("it holds. ", "it holds."),
+    # brackets of each kind, nested, unmatched
+    ("a (b; c) d; e", "a (b; c) d …"),
+    ("a [b. C] {d; e} f; g", "a [b. C] {d; e} f …"),
+    ("f(a (b; c); d) e; g", "f(a (b; c); d) e …"),
+    ("(X; b) c; d", "(X; b) c …"),
+    ("a) b; c", "a) b …"),  # a closing bracket with none open is passed over
+    ("f(a; b", "f(a; b"),  # inside a bracket never closed no clause ends
+])
+def test_first_clause_ends_at_the_first_clause_end_outside_brackets(text, clause):
+    assert ledger.first_clause(text) == clause
+
+
+_WORDS = [f"w{k}" for k in range(31)]
+
+
+@pytest.mark.parametrize("text, max_words, clause", [
+    (" ".join(_WORDS[:30]), None, " ".join(_WORDS[:30])),  # the default limit, 30 words
+    (" ".join(_WORDS), None, " ".join(_WORDS[:30]) + " …"),
+    ("one two three", 3, "one two three"),
+    ("one two three", 2, "one two …"),
+    ("one two three; four", 2, "one two …"),
+    ("one two; three", 2, "one two …"),
+])
+def test_first_clause_keeps_at_most_max_words_words(text, max_words, clause):
+    got = ledger.first_clause(text) if max_words is None else ledger.first_clause(text, max_words=max_words)
+    assert got == clause
+
+
 def test_update_readme_writes_the_counts_between_every_pair_of_counts_markers(tmp_path, two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     readme = tmp_path / "README.md"
