@@ -11,6 +11,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from replication._io import PROJECT_ROOT
@@ -69,66 +70,19 @@ def test_check_evidence_names_the_claim_and_condition_and_passes_what_holds():
                               "(0.5)")
 
 
-def test_malformed_claims_file_names_line_and_column(tmp_path):
-    path = tmp_path / "claims.csv"
-    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,,Sec. II,,\n")
-    with pytest.raises(ValueError, match=r"line 2, column 'statement': empty"):
-        paper.load_claim_table(path)
-    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,s,w,ten,\n")
-    with pytest.raises(ValueError, match=r"line 2, column 'paper_value': not a number"):
-        paper.load_claim_table(path)
-
-
-# ---- the claims file: every problem named with file and line
-# --------------------------------------------------
-
-HEADER = "claim,statement,where,paper_value,unit\n"
+HEADER = ",".join(paper.CLAIM_COLUMNS) + "\n"
 
 
 @pytest.mark.parametrize("text, message", [
     ("", r"claims.csv, line 1: empty; expected the header"),
-    ("claim,statement,where,paper_value\ntheorem1,s,w,\n", r"claims.csv, line 1: columns must be"),
-    ("claim,statement,where,unit,paper_value\ntheorem1,s,w,,\n", r"claims.csv, line 1: columns must be"),
-    (HEADER + ",s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
-    (HEADER + "   ,s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
-    (HEADER + "theorem1,s,   ,,\n", r"claims.csv, line 2, column 'where': empty"),
-    (HEADER + "theorem 1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
-    (HEADER + " theorem1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
     (HEADER + "theorem1,s,w,,\nother,s,w,,\ntheorem1,t,w,,\n",
      r"claims.csv, line 4, column 'claim': claim id 'theorem1' repeated \(first on line 2\)"),
-    (HEADER + "theorem1,s,w,nan,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
-    (HEADER + "theorem1,s,w,inf,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
-    (HEADER + "theorem1,s,w,ten,deg\n", r"claims.csv, line 2, column 'paper_value': not a number"),
-    (HEADER + "theorem1,s,w,1,\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
-    (HEADER + "theorem1,s,w,,deg\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
-    (HEADER + "theorem1,s,w,,,extra\n", r"claims.csv, line 2: expected 5 fields .* got 6"),
-    (HEADER + "theorem1,s,w\n", r"claims.csv, line 2: expected 5 fields .* got 3"),
-    (HEADER + 'theorem1,"s,w,,\n', r"claims.csv, line 2: not a readable CSV"),
-    (HEADER + 'theorem1,"s"x,w,,\n', r"claims.csv, line 2: not a readable CSV"),
-    # a statement over two lines, a blank line: the lines counted are the file's
-    (HEADER + 'theorem1,"two\nlines",w,,\n\nother,s,w,x,deg\n', r"claims.csv, line 5, column 'paper_value'"),
-    (HEADER + 'theorem1,"two\nlines",w,x,deg\n', r"claims.csv, line 2, column 'paper_value'"),  # where it starts
 ])
-def test_malformed_claims_file_is_refused_with_file_and_line(tmp_path, text, message):
-    path = tmp_path / "claims.csv"
+def test_collect_names_a_malformed_claims_file_and_line(tmp_path, text, message):
+    path = tmp_path / "claims.csv"  # every problem of the file itself: tests/study/test_paper.py
     path.write_text(text, encoding="utf-8")
     with pytest.raises(DataFileError, match=message):
-        paper.load_claim_table(path)
-    with pytest.raises(DataFileError, match=message):  # and the ledger, which reads it
         ledger.collect([], claims_path=path)
-
-
-def test_a_well_formed_claims_file_reads_as_text(tmp_path):
-    path = tmp_path / "claims.csv"
-    path.write_text(HEADER + 'theorem1,"two\nlines, a comma",w,,\n\nother,s,w,0.5,deg\n', encoding="utf-8")
-    table = paper.load_claim_table(path)
-    assert list(table.index) == ["theorem1", "other"]
-    assert table.loc["theorem1", "statement"] == "two\nlines, a comma" and table.loc["other", "paper_value"] == "0.5"
-
-
-def test_a_missing_claims_file_is_named(tmp_path):
-    with pytest.raises(DataFileNotFound, match=r"nowhere\.csv: no such file"):
-        paper.load_claim_table(tmp_path / "nowhere.csv")
 
 
 # ---- ledger.record in the notebook: the rules
@@ -241,10 +195,18 @@ def test_collect_refuses_an_edited_stored_record(tmp_path, collected, claim, cha
         ledger.collect([path], complete=False)
 
 
-@pytest.mark.parametrize("stored", ["holds", ["theorem1", "holds"], None])
-def test_collect_refuses_a_stored_record_that_is_not_an_object(tmp_path, stored):
+@pytest.mark.parametrize("stored, got", [("holds", "str"), (["theorem1", "holds"], "list"), (None, "NoneType")])
+def test_collect_refuses_a_stored_record_that_is_not_an_object(tmp_path, stored, got):
     path = _notebook(tmp_path / "01_x.ipynb", stored)
-    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 0: a stored claim record must have the fields"):
+    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 0: a stored claim record must have the fields "
+                                            rf"\[.*\], got {got}$"):
+        ledger.collect([path], complete=False)
+
+
+def test_collect_names_the_fields_a_stored_record_has(tmp_path):
+    path = _notebook(tmp_path / "01_x.ipynb", {**GOOD, "note": "x"})
+    with pytest.raises(DataFileError, match=re.escape(f"must have the fields {list(ledger.RECORD_FIELDS)}, got "
+                                                      f"{sorted([*GOOD, 'note'])}")):
         ledger.collect([path], complete=False)
 
 
@@ -292,6 +254,7 @@ def test_collect_refuses_a_truncated_notebook_naming_file_line_and_column(tmp_pa
     ("[1, 2]", r": not a notebook: no list of 'cells'"),
     ('{"cells": {}}', r": not a notebook: no list of 'cells'"),
     ('{"cells": [{"outputs": {}}]}', r": cell 0: not a notebook cell"),
+    ('{"cells": [{"outputs": []}, 5]}', r": cell 1: not a notebook cell"),
     ('{"cells": [{"outputs": ["text"]}]}', r": cell 0: an output that is not an object"),
 ])
 def test_collect_refuses_what_is_not_a_notebook(tmp_path, text, message):
@@ -302,7 +265,7 @@ def test_collect_refuses_what_is_not_a_notebook(tmp_path, text, message):
 
 
 def test_collect_names_a_missing_notebook(tmp_path):
-    with pytest.raises(DataFileNotFound, match=r"01_gone\.ipynb: no such file"):
+    with pytest.raises(DataFileNotFound, match=r"01_gone\.ipynb: no such file \(a notebook\)"):
         ledger.collect([tmp_path / "01_gone.ipynb"], complete=False)
 
 
@@ -327,6 +290,7 @@ S, E = ledger.README_START, ledger.README_END
     (f"# title\n{E}\n| table |\n{S}\n", rf"README\.md, line 2: the claims marker {E} \(line 2\) comes before {S} "
                                         rf"\(line 4\)"),
     (f"{S}\n{E}\n{S}\n{E}\n", rf"README\.md, line 3: the claims marker {S} appears 2 times \(lines \[1, 3\]\)"),
+    (f"\n{S}\n{E}\n{S}\n", rf"README\.md, line 4: the claims marker {S} appears 2 times \(lines \[2, 4\]\)"),
     (f"{S}\n{E}\ntext {E}\n", rf"README\.md, line 3: the claims marker {E} appears 2 times"),
 ])
 def test_readme_markers_missing_repeated_or_out_of_order_are_named(tmp_path, collected, text, message):
@@ -626,6 +590,34 @@ def test_record_messages_name_the_known_claims_and_verdicts():
         ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s", section="S")
 
 
+def test_an_unknown_claim_names_the_claims_file_it_was_checked_against(tmp_path, claims_path):
+    fields = dict(verdict="holds", evidence="e", uncertainty="u", setting="s", section="S")
+    with pytest.raises(ValueError, match=re.escape(f"(not an id of {claims_path})")):
+        ledger.check_record("nope", **fields, claims_path=claims_path)
+    with pytest.raises(ValueError, match=re.escape(f"(not an id of {paper.data_dir() / 'paper' / 'claims.csv'})")):
+        ledger.check_record("nope", **fields)
+    nb = _notebook_ml(tmp_path / "01_a.ipynb", [[_out(_record("nope"))]])
+    named = re.escape(f"(not an id of {claims_path})")
+    with pytest.raises(DataFileError, match=r"cell 0: unknown claim 'nope' " + named):
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+
+
+def test_check_record_reads_the_claims_it_is_given_else_its_claims_file(claims_path):
+    fields = dict(verdict="holds", evidence="e", uncertainty="u", setting="s", section="S")
+    assert ledger.check_record("zeta", **fields, claims_path=claims_path).claim == "zeta"  # not in the project's
+    assert ledger.check_record("zeta", **fields, claims=paper.load_claim_table(claims_path)).claim == "zeta"
+
+
+def test_an_unknown_claim_names_at_most_five_close_ids(tmp_path):
+    ids = [f"claim_{c}" for c in "abcdef"]  # six ids, all as close to 'claim_x'
+    path = tmp_path / "claims.csv"
+    path.write_text(HEADER + "".join(f"{i},s,w,,\n" for i in ids), encoding="utf-8")
+    with pytest.raises(ValueError, match="close known ids: ") as err:
+        ledger.check_record("claim_x", "holds", "e", "u", "s", "S", claims_path=path)
+    named = str(err.value).split("close known ids: ")[1].split(", ")
+    assert len(named) == 5 and set(named) <= set(ids)
+
+
 def test_collect_reads_every_record_with_its_notebook_and_cell_in_the_claims_order(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "section",
@@ -684,6 +676,12 @@ def test_summary_from_ledger_gives_the_counts_and_one_compact_row_per_claim(two_
     assert md[6] == "| `mid` | a third claim | holds only if | [02, § S](notebooks/02_b.ipynb#s) |"
     assert len(md) == 7 and ledger.summary_from_ledger(got).endswith(" |\n")
     assert ledger.verdict_counts(got) == {"holds": 2, "fails": 0, "holds only if": 1, "undecidable from the text": 0}
+
+
+def test_verdict_counts_counts_each_claim_once_however_many_its_rows():
+    rows = pd.DataFrame({"claim": ["a", "a", "b"], "verdict": ["holds", "holds", "fails"],
+                         "notebook": ["01_x", "02_y", "01_x"]})
+    assert ledger.verdict_counts(rows) == {"holds": 1, "fails": 1, "holds only if": 0, "undecidable from the text": 0}
 
 
 # ---- first_clause: the evidence's first clause (the book's front page)
@@ -787,6 +785,40 @@ def test_a_section_that_is_no_heading_of_the_notebook_is_refused_naming_the_clos
     with pytest.raises(ValueError, match=r"the section 'S\.' is not a heading of this notebook; close headings: "
                                          r"\['S'\]"):
         ledger.collect([near], claims_path=claims_path, complete=False)
+
+
+def test_notebook_headings_passes_over_a_markdown_source_that_is_no_text():
+    nb = {"cells": [{"cell_type": "markdown", "source": None}, {"cell_type": "markdown", "source": 5},
+                    {"cell_type": "markdown"}, {"cell_type": "markdown", "source": "# One"}]}
+    assert ledger.notebook_headings(nb) == ["One"]
+
+
+def _headed_notebook(path, section, headings):
+    """A notebook with one record of 'alpha' measured in ``section`` and a Markdown cell per
+    heading."""
+    cells = [{"cell_type": "code", "source": "", "outputs": [_out(_record("alpha", section=section))]}]
+    path.write_text(json.dumps({"cells": cells + [{"cell_type": "markdown", "source": f"## {h}"} for h in headings]}),
+                    encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("section, close", [
+    ("Noise and bias.", True),  # similarity to 'Noise' 2 * 5 / (5 + 15) = 0.5: close
+    ("Noise and biases", False),  # 2 * 5 / (5 + 16) = 0.48: not close
+])
+def test_a_section_names_the_headings_at_least_half_alike(tmp_path, claims_path, section, close):
+    nb = _headed_notebook(tmp_path / "01_a.ipynb", section, ["Noise"])
+    names = r"close headings: \['Noise'\]" if close else r"its headings: \['Noise'\]"
+    with pytest.raises(DataFileError, match=rf"is not a heading of this notebook; {names}"):
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+
+
+def test_a_section_names_at_most_three_close_headings(tmp_path, claims_path):
+    nb = _headed_notebook(tmp_path / "01_a.ipynb", "Noise 5", ["Noise 1", "Noise 2", "Noise 3", "Noise 4"])
+    with pytest.raises(DataFileError, match="close headings: ") as err:
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+    named = ast.literal_eval(str(err.value).split("close headings: ")[1])
+    assert len(named) == 3 and set(named) < {"Noise 1", "Noise 2", "Noise 3", "Noise 4"}
 
 
 @pytest.mark.parametrize("heading, anchor", [
