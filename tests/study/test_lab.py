@@ -29,6 +29,15 @@ def test_switching_a_source_off_keeps_every_other_draw():
     assert all(getattr(SMALL.exact(), f) in (0.0, (0.0, 0.0, 0.0)) for s in lab.SOURCES.values() for f in s)
 
 
+def test_parts_of_a_source_switch_off_separately():
+    s = lab.LabSettings()
+    noise_off, cal_off = s.without("magnetometer noise"), s.without("magnetometer calibration errors")
+    assert noise_off.mag_noise_ut == 0 and noise_off.mag_hard_iron_ut == s.mag_hard_iron_ut
+    assert cal_off.mag_noise_ut == s.mag_noise_ut and cal_off.mag_soft_iron == 0 and cal_off.mag_misalignment_deg == 0
+    with pytest.raises(ValueError, match="unknown error source"):
+        s.without("magnetometer")
+
+
 def test_dynamic_trial_that_loses_the_wand_is_refused():
     with pytest.raises(ValueError, match="wand leaves the image"):
         lab.simulate_lab(dataclasses.replace(SMALL, dynamic_amplitude_deg=(40.0, 30.0, 40.0)))

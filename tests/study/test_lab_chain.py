@@ -117,3 +117,15 @@ def test_every_sample_of_an_exact_lab_is_the_mean():
     np.testing.assert_allclose(B, np.repeat(Bm, j, axis=0), atol=1e-12)
     with pytest.raises(ValueError, match="'mean', 'single' or 'all'"):
         chain.static_motions(rec, sample="median")
+
+
+def test_single_sample_protocol_equals_the_mean_without_noise_and_is_validated(small_recording):
+    rec = lab.simulate_lab(dataclasses.replace(lab.LabSettings().exact(), n_sets=2, poses_per_set=(4, 4),
+                                               dynamic_seconds=4.0))
+    mean, single = chain.static_motions(rec), chain.static_motions(rec, sample="single")
+    for k in mean:
+        assert np.abs(mean[k][0] - single[k][0]).max() < 1e-12 and np.abs(mean[k][1] - single[k][1]).max() < 1e-12
+    noisy = small_recording
+    assert np.abs(chain.static_motions(noisy)[0][1] - chain.static_motions(noisy, sample="single")[0][1]).max() > 1e-5
+    with pytest.raises(ValueError, match="sample"):
+        chain.static_motions(rec, sample="median")

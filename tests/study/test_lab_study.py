@@ -164,3 +164,19 @@ def test_intervention_finding_mean_se_and_interval():
 def test_sensitivity_names_its_field():
     with pytest.raises(ValueError, match="not a LabSettings field"):
         sensitivity("gremlins", [0])
+
+
+def test_seed_study_rows_and_interventions():
+    study = seed_study([1, 2], SMALL, sqp_runs={"3": {"max_iterations": 3}, "100": {}}, turned_deg=(10.0,),
+                       single_sample=True)
+    assert list(study.index) == [1, 2]
+    for col in ("shared_bias_ours_right", "true_ours_right", "spread_optimization", "failed_ours_left", "rms_true_R0",
+                "pitch_bias_true_R0", "corr_roll_ours_right", "rms_turned_10", "failed_sqp_3", "limit_sqp_3",
+                "failed_sqp_100", "limit_sqp_100", "true_single_ours_right", "rms_reversed_ours_right"):
+        assert col in study.columns, col
+    assert (study["rms_turned_10"] > study["rms_true_R0"]).all()       # a 10 deg error is visible in Table II
+    assert (study["limit_sqp_3"] <= study["failed_sqp_3"]).all() and study["limit_sqp_3"].sum() >= 1
+    assert study["failed_sqp_3"].sum() >= study["failed_sqp_100"].sum()
+    assert (study["failed_sqp_100"] == study["failed_optimization"]).all()  # run_lab's SQP is the 100-iteration one
+    assert (study["true_single_ours_right"] > 0).all()
+    assert (study["rms_reversed_ours_right"] != study["rms_ours_right"]).all()
