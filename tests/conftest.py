@@ -337,3 +337,19 @@ def quiet_calibrate(camera, gyro, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
+
+
+def _drawn(ax) -> int:
+    """The data an axes shows: lines, collections, patches, images, texts, error bars."""
+    return len(ax.lines) + len(ax.collections) + len(ax.patches) + len(ax.images) + len(ax.texts) + len(ax.containers)
+
+
+def _texts(fig) -> str:
+    """Every text of a figure: its title, each axes' title, labels, texts, annotations and legend
+    entries."""
+    out = [fig.get_suptitle()] + [t.get_text() for t in fig.texts]
+    for ax in fig.axes:
+        out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
+        if ax.get_legend():
+            out += [t.get_text() for t in ax.get_legend().get_texts()]
+    return "\n".join(out)
