@@ -54,13 +54,6 @@ def test_counts_name_every_verdict_even_at_zero(collected):
     assert ledger.counts_in_words(one) == "1 claims: 1 hold, 0 hold only if, 0 fail, 0 undecidable from the text"
 
 
-def test_cli_claims_summary_prints_the_compact_table(collected, capsys):
-    from replication.cli import main
-
-    assert main(["claims", "--summary"]) == 0
-    assert capsys.readouterr().out == ledger.summary_from_ledger(collected)
-
-
 def test_readme_holds_the_compact_table_and_is_short():
     text = (PROJECT_ROOT / "README.md").read_text(encoding="utf-8")
     assert ledger.update_readme(ledger.collect(), check=True)
