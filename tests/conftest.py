@@ -1,4 +1,5 @@
 import dataclasses
+import json
 import re
 import shutil
 from pathlib import Path
@@ -6,8 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from replication._io import PROJECT_ROOT
 from replication.core.so3 import random_rotations
 from replication.rig.realdata import real_data_available
+from replication.study import ledger
 from replication.study.lab.settings import LabSettings
 
 
@@ -337,3 +340,53 @@ def quiet_calibrate(camera, gyro, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
+
+
+def _drawn(ax) -> int:
+    """The data an axes shows: lines, collections, patches, images, texts, error bars."""
+    return len(ax.lines) + len(ax.collections) + len(ax.patches) + len(ax.images) + len(ax.texts) + len(ax.containers)
+
+
+def _texts(fig) -> str:
+    """Every text of a figure: its title, each axes' title, labels, texts, annotations and legend
+    entries."""
+    out = [fig.get_suptitle()] + [t.get_text() for t in fig.texts]
+    for ax in fig.axes:
+        out += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()] + [t.get_text() for t in ax.texts]
+        if ax.get_legend():
+            out += [t.get_text() for t in ax.get_legend().get_texts()]
+    return "\n".join(out)
+
+
+#: A field of a stored claim record that :func:`_edit` deletes.
+_DROP = object()
+
+
+def _where(collected, claim):
+    """The notebook (in the project) and the cell of claim ``claim``'s record in the ledger
+    ``collected``."""
+    row = collected.loc[collected["claim"] == claim].iloc[0]
+    return PROJECT_ROOT / "notebooks" / f"{row.notebook}.ipynb", int(row.cell)
+
+
+def _copy(path, folder, name=None):
+    """A copy of the file ``path`` in ``folder`` (under ``name``, or its own)."""
+    target = folder / (name or Path(path).name)
+    shutil.copyfile(path, target)
+    return target
+
+
+def _edit(path, which, **changes):
+    """Change the stored record of claim ``which`` in the notebook ``path`` (a copy); ``_DROP``
+    deletes a field."""
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    for cell in nb["cells"]:
+        for out in cell.get("outputs", []):
+            rec = out.get("data", {}).get(ledger.CLAIM_MIME)
+            if rec is not None and rec["claim"] == which:
+                rec.update(changes)
+                for key in [k for k, v in changes.items() if v is _DROP]:
+                    del rec[key]
+                path.write_text(json.dumps(nb, indent=1, ensure_ascii=False), encoding="utf-8")
+                return
+    raise AssertionError(f"no record of {which} in {path}")

@@ -4,6 +4,7 @@ of a command said once on one line, only while it runs (``__main__``, only the e
 tests/test_main.py)."""
 import argparse
 import importlib
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -101,3 +102,20 @@ def test_the_warning_formatter_is_installed_only_while_a_command_runs(tmp_path):
     code = ("import warnings; before = warnings.showwarning; import replication.__main__, "
             "replication.cli.calibrate; print(warnings.showwarning is before)")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout == "True\n"
+
+
+def test_a_reader_that_stops_early_ends_the_output_quietly():
+    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback, exit 141
+    (SIGPIPE's). The output (1 MB) is larger than a pipe's buffer, so the pipe does break; without
+    the wrapper it prints a traceback."""
+    script = ("import sys, replication.cli as m\n"
+              "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
+              "sys.exit(m.main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
+    runs = {}
+    for how in ("wrapped", "bare"):
+        runs[how] = subprocess.run(f"'{sys.executable}' -c \"$S\" {how} | head -n 1; exit ${{PIPESTATUS[0]}}",
+                                   shell=True, executable="/bin/bash", capture_output=True, text=True, timeout=60,
+                                   env={**os.environ, "S": script})
+    assert runs["bare"].returncode != 0 and "BrokenPipeError" in runs["bare"].stderr  # the pipe did break
+    out = runs["wrapped"]
+    assert out.stdout == "| claim |\n" and out.stderr == "" and out.returncode == 141

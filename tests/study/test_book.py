@@ -35,57 +35,6 @@ def collected():
 # ---- the compact ledger (README, claims --summary)
 # ----------------------------------------------------------------
 
-def test_summary_gives_the_counts_and_one_row_per_claim(collected):
-    summary = ledger.summary_from_ledger(collected)
-    per_claim = collected.drop_duplicates("claim")
-    counts = {v: int((per_claim["verdict"] == v).sum()) for v in ledger.VERDICTS}
-    assert summary.splitlines()[0] == (
-        f"**{len(per_claim)} claims: {counts['holds']} hold, {counts[ledger.HOLDS_ONLY_IF]} hold only if, "
-        f"{counts['fails']} fail, {counts['undecidable from the text']} undecidable from the text.**")
-    rows = [line for line in summary.splitlines() if line.startswith("| `")]
-    assert len(rows) == len(per_claim) == sum(counts.values())
-    for line, rec in zip(rows, per_claim.itertuples()):
-        assert line.startswith(f"| `{rec.claim}` |") and f"| {rec.verdict} |" in line
-        assert f"(notebooks/{rec.notebook}.ipynb#{ledger.heading_anchor(rec.section)})" in line
-
-
-def test_counts_name_every_verdict_even_at_zero(collected):
-    one = collected[collected["claim"] == "eq7_relative"]
-    assert ledger.counts_in_words(one) == "1 claims: 1 hold, 0 hold only if, 0 fail, 0 undecidable from the text"
-
-
-def test_cli_claims_summary_prints_the_compact_table(collected, capsys):
-    from replication.cli import main
-
-    assert main(["claims", "--summary"]) == 0
-    assert capsys.readouterr().out == ledger.summary_from_ledger(collected)
-
-
-def test_readme_holds_the_compact_table_and_is_short():
-    text = (PROJECT_ROOT / "README.md").read_text(encoding="utf-8")
-    assert ledger.update_readme(ledger.collect(), check=True)
-    lines = text.splitlines()
-    assert len(lines) <= 150, len(lines)
-    assert max(len(line) for line in lines) <= 400
-    first_screen = "\n".join(lines[:40])
-    assert ledger.counts_in_words(ledger.collect()) in first_screen
-    assert "bash scripts/reproduce" in first_screen and "bash scripts/test" in first_screen
-    assert "bash scripts/docs" in text and "python -m replication export report.json --to kalibr --base" in text
-
-
-@pytest.mark.parametrize("words, cut", [(5, False), (4, True)])
-def test_first_clause_cuts_only_beyond_its_word_limit(words, cut):
-    assert ledger.first_clause("one two three four five", max_words=words) == \
-        ("one two three four …" if cut else "one two three four five")
-
-
-def test_first_clause_stops_at_a_clause_outside_brackets_only():
-    assert ledger.first_clause("a (b; c) d; e") == "a (b; c) d …"
-    assert ledger.first_clause("by eq. (8) it holds") == "by eq. (8) it holds"
-    assert ledger.first_clause("it holds. The rest") == "it holds …"
-    assert ledger.first_clause("it holds.") == "it holds."
-
-
 # ---- the generated pages
 # ------------------------------------------------------------------------------------------
 

@@ -30,20 +30,6 @@ def test_newton_from_starts_finds_strict_half_turn_twins(runs):
     assert runs["certified"].all() and (bad["cost"] > 1000 * bad["global cost"]).all()
 
 
-def test_noise_free_twins_are_exact_half_turns_at_the_predicted_cost(clean):
-    """Noise-free, a twin is R0 Rot(n, 180 deg), whose cost is 8 sum_j (1 - (n^T B_j n)^2)."""
-    starts = so3.random_rotations(np.random.default_rng(2), 40)
-    R = chordal_newton(handeye.kronecker_operator(clean.A, clean.B), starts, max_iterations=100)[0]
-    cost = handeye.handeye_cost(R, clean.A, clean.B)
-    twin = cost > 1.0
-    assert twin.sum() >= 10
-    w = so3.rotation_vector_from_matrix(np.swapaxes(clean.R0, -1, -2) @ R)[twin]
-    np.testing.assert_allclose(np.linalg.norm(w, axis=-1), np.pi, atol=1e-6)
-    n = w / np.linalg.norm(w, axis=-1, keepdims=True)
-    nbn = np.einsum("pa,pjab,pb->pj", n, clean.B[twin], n)
-    np.testing.assert_allclose(cost[twin], 8 * np.sum(1 - nbn ** 2, axis=-1), rtol=1e-8)
-
-
 def test_newton_from_the_global_minimiser_or_its_twin(noisy, runs):
     best = chordal_optimal(noisy.A, noisy.B).R
     at_best = bl.newton_from_starts(noisy.A, noisy.B, best)

@@ -1,72 +1,21 @@
-"""The simulated lab: generator, the PnP / ecompass / Madgwick chain, Table II
-statistics, the committed recordings, and the loader's rejection of malformed files."""
+"""The simulated lab (``replication.study.lab``): the generator, Table II's statistics, the
+committed recordings, and the loader's rejection of malformed files. The chain: test_lab_chain.py
+and test_lab_fastchain.py; the studies: test_lab_study.py."""
 import dataclasses
 import json
 
-import cv2
 import numpy as np
 import pandas as pd
 import pytest
 
 from conftest import SMALL_LAB
-from replication.core import so3
-from replication.core.handeye import relative_rotations
 from replication.rig.datafile import DataFileError
 from replication.study import lab
-from replication.study.lab.simulate import _look_at
 
 SMALL = SMALL_LAB
 
 
-# ----------------------------------------------------------------------------- the chain
-
-def test_exact_lab_recovers_r0_and_the_camera_attitude():
-    """With every error source off, the chain is exact up to the AHRS filter's lag."""
-    rec = lab.simulate_lab(dataclasses.replace(lab.LabSettings().exact(), n_sets=3))
-    res = lab.run_lab(rec, {k: v for k, v in lab.TABLE2_SOLVERS.items() if k != "optimization"})
-    assert res.per_set["true_error_deg"].max() < 1e-3
-    t2 = res.table2.xs("ours_right", level="method")
-    assert t2["rms_deg"].max() < 0.3 and t2["correlation"].min() > 0.999
-    assert res.table2.xs("sensor_frame", level="method")["rms_deg"].min() > 5  # R0 is far from identity
-
-
-def test_pnp_recovers_camera_from_wand_exactly():
-    rig = {"camera_matrix": [[450.0, 0, 320], [0, 450.0, 240], [0, 0, 1]],
-           "dist_coeffs": [-0.25, 0.08, 0.001, -0.001, 0], "wand_points": lab.WAND_POINTS}
-    C = _look_at(np.array([[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]), np.zeros((2, 3)), np.array([30.0, -20.0]))
-    uv = []
-    for Cp, p in zip(C, [[0.5, 0.3, 2.0], [-0.6, -0.2, 1.8]]):
-        pts, _ = cv2.projectPoints(lab.WAND_POINTS, cv2.Rodrigues(Cp)[0], -Cp @ np.array(p),
-                                   np.array(rig["camera_matrix"]), np.array(rig["dist_coeffs"]))
-        uv.append(pts[:, 0])
-    np.testing.assert_allclose(lab.camera_orientations(np.array(uv), rig), C, atol=1e-7)
-    with pytest.raises(ValueError, match="image 0: PnP failed .*marker order"):
-        lab.camera_orientations(np.array(uv)[:, [1, 0, 2, 3, 4, 5, 6, 7, 8]], rig)  # two markers swapped
-
-
-def test_ecompass_gives_body_from_world_and_madgwick_a_world_from_body_stream():
-    rng = np.random.default_rng(1)
-    I = so3.random_rotations(rng, 2)  # sensor_from_world
-    up, b = np.array([0, 0, 1.0]), np.array([0.0, 20.0, -44.0])
-    est = lab.static_sensor_orientations((I @ (lab.GRAVITY * up)), I @ b)
-    np.testing.assert_allclose(relative_rotations(est), relative_rotations(I), atol=1e-12)
-    # Madgwick on a noise-free constant-rate rotation about the sensor's x axis
-    rate, n = np.deg2rad(20.0), 400
-    t = np.arange(n) / 100.0
-    Q = so3.matrix_from_rotation_vector(np.outer(rate * t, [1.0, 0, 0]))  # world_from_sensor
-    acc = np.einsum("nji,j->ni", Q, lab.GRAVITY * up)
-    mag = np.einsum("nji,j->ni", Q, b)
-    imu = pd.DataFrame(np.hstack([t[:, None], acc, np.tile([rate, 0, 0], (n, 1)), mag]),
-                       columns=["t"] + lab.IMU_COLUMNS)
-    est = lab.dynamic_sensor_orientations(imu, 100.0)
-    assert np.array_equal(est.t, t)
-    truth = relative_rotations(Q, reference=0, convention="world_from_body")
-    err = so3.angle_between_deg(relative_rotations(est.world_from_body, reference=0, convention="world_from_body"),
-                                truth)
-    assert err.max() < 0.5
-    # read in the other convention, the motions would be off by up to 2 x 80 deg
-    assert so3.angle_between_deg(relative_rotations(est.world_from_body, reference=0), truth).max() > 90
-
+# ----------------------------------------------------------------------------- the generator
 
 def test_switching_a_source_off_keeps_every_other_draw():
     a, b = lab.simulate_lab(SMALL), lab.simulate_lab(SMALL.without("pixel noise"))
@@ -80,14 +29,18 @@ def test_switching_a_source_off_keeps_every_other_draw():
     assert all(getattr(SMALL.exact(), f) in (0.0, (0.0, 0.0, 0.0)) for s in lab.SOURCES.values() for f in s)
 
 
+def test_parts_of_a_source_switch_off_separately():
+    s = lab.LabSettings()
+    noise_off, cal_off = s.without("magnetometer noise"), s.without("magnetometer calibration errors")
+    assert noise_off.mag_noise_ut == 0 and noise_off.mag_hard_iron_ut == s.mag_hard_iron_ut
+    assert cal_off.mag_noise_ut == s.mag_noise_ut and cal_off.mag_soft_iron == 0 and cal_off.mag_misalignment_deg == 0
+    with pytest.raises(ValueError, match="unknown error source"):
+        s.without("magnetometer")
+
+
 def test_dynamic_trial_that_loses_the_wand_is_refused():
     with pytest.raises(ValueError, match="wand leaves the image"):
         lab.simulate_lab(dataclasses.replace(SMALL, dynamic_amplitude_deg=(40.0, 30.0, 40.0)))
-
-
-def test_sensitivity_names_its_field():
-    with pytest.raises(ValueError, match="not a LabSettings field"):
-        lab.sensitivity("gremlins", [0])
 
 
 # ----------------------------------------------------------------------------- files

@@ -1,213 +1,25 @@
-"""Notebook 05's seed study over two sets of seeds and the pieces it rests on: the faster
-equivalents of the lab's chain (each against the original), the all-sample calibration, the
-interventions with the camera reused, the findings with their intervals, and each check of the lab's
-claims (:mod:`replication.study.lab.claims`) raising just past its threshold (on the fresh seeds
-too) and not just before it."""
-import dataclasses
+"""The lab's ledger records of notebook 05 (``replication.study.lab.claims``), built from the
+synthetic seed studies of ``tests/study/lab_inputs.py`` on two sets of seeds: the claim ids,
+verdicts and numbers, both seed sets named, the fresh seeds disjoint from the first, and each check
+raising just past its threshold (on the fresh seeds too) and not just before it. The seed study and
+its findings: test_lab_study.py; the chain: test_lab_chain.py, test_lab_fastchain.py."""
 import re
 
-import cv2
 import numpy as np
 import pandas as pd
 import pytest
+from lab_inputs import CAL, NOISE, SQP_RUNS, lab_study, pitch_frame
 
-from conftest import SMALL_LAB, _valid
-from replication.core import so3
-from replication.core.stats import wilson_interval
-from replication.study import lab
-from replication.study.lab import chain, claims, count_text, fastchain, seed_findings, seed_range, sqp_shares
-from replication.study.lab.recording import marker_pixels
+from conftest import _valid
+from replication.study.lab import claims
 from replication.study.lab.seed_sets import LAB_SETTING, found_setting
-from replication.study.lab.study import seed_spread
+from replication.study.lab.study import seed_findings, seed_spread
 
-SQP_RUNS = ["100 iterations", "1000 iterations", "cost (8) / 2J"]
 #: Notebook 05's declared bounds of SQP's failure shares.
 BOUNDS = {"failed": 0.1, "at limit": 0.75, "seeds": 0.5, "failed, 1000": 0.15, "failed, per pair": 0.05}
-NOISE, CAL = "_without_magnetometer_noise", "_without_magnetometer_calibration_errors"
 
 
-# ----------------------------------------------------------------------------- the faster chain
-
-@pytest.fixture(scope="module")
-def small_recording():
-    return lab.simulate_lab(SMALL_LAB)
-
-
-def test_transcribed_madgwick_is_ahrs_madgwick(small_recording):
-    imu = small_recording.dynamic_imu
-    a = chain.dynamic_sensor_orientations(imu, 100.0)
-    b = chain.dynamic_sensor_orientations(imu, 100.0, madgwick="transcribed")
-    assert np.array_equal(a.t, b.t) and so3.angle_between_deg(a.R, b.R).max() < 1e-9
-    with pytest.raises(ValueError, match="madgwick must be"):
-        chain.dynamic_sensor_orientations(imu, 100.0, madgwick="fast")
-
-
-def test_transcribed_madgwick_takes_ahrs_branches():
-    """A still gyroscope keeps the quaternion, a zero magnetometer falls back to the IMU update, a
-    zero accelerometer skips the correction: as in ``ahrs``."""
-    from ahrs.filters import Madgwick
-
-    rng = np.random.default_rng(3)
-    n = 60
-    gyr = rng.normal(0, 0.3, (n, 3))
-    acc = np.array([0.0, 0.0, 9.8]) + rng.normal(0, 0.3, (n, 3))
-    mag = np.array([20.0, 0.0, -40.0]) + rng.normal(0, 1.0, (n, 3))
-    gyr[10] = 0.0
-    mag[20:25] = 0.0
-    acc[30] = 0.0
-    ours = fastchain.madgwick_marg(gyr, acc, mag, 100.0)
-    theirs = Madgwick(gyr=gyr, acc=acc, mag=mag, frequency=100.0).Q
-    np.testing.assert_allclose(ours, theirs, atol=1e-12)
-    with pytest.raises(ValueError, match="same shape"):
-        fastchain.madgwick_marg(gyr, acc[:-1], mag, 100.0)
-
-
-def test_ecompass_on_arrays_is_ahrs_ecompass(small_recording):
-    im = small_recording.static_imu.iloc[::37]
-    acc, mag = im[lab.ACC_COLUMNS].to_numpy(), im[lab.MAG_COLUMNS].to_numpy()
-    np.testing.assert_allclose(fastchain.ecompass_attitudes(acc, mag), chain.static_sensor_orientations(acc, mag),
-                               atol=1e-13)
-
-
-def test_projection_and_its_jacobian_are_opencvs():
-    rng = np.random.default_rng(0)
-    C = so3.matrix_from_rotation_vector(rng.normal(size=(4, 3)) * 0.3)
-    t = np.tile([0.1, -0.1, 2.0], (4, 1))
-    K = np.array([[450.0, 0, 320], [0, 452.0, 240], [0, 0, 1]])
-    dist = np.array([-0.25, 0.08, 0.001, -0.001, 0.01])
-    uv, J = fastchain._project(lab.WAND_POINTS, C, t, K, dist, jacobian=True)
-    for m in range(4):
-        pts, _ = cv2.projectPoints(lab.WAND_POINTS, cv2.Rodrigues(C[m])[0], t[m], K, dist)
-        np.testing.assert_allclose(uv[m], pts[:, 0], atol=1e-9)
-    h, numeric = 1e-6, np.empty_like(J)
-    for k in range(6):
-        d = h * np.eye(6)[k]
-        plus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(d[:3]) @ C, t + d[3:], K, dist)
-        minus = fastchain._project(lab.WAND_POINTS, so3.matrix_from_rotation_vector(-d[:3]) @ C, t - d[3:], K, dist)
-        numeric[:, k] = np.swapaxes((plus - minus) / (2 * h), -1, -2)
-    assert np.abs(J - numeric).max() < 1e-6 * np.abs(J).max()
-
-
-def test_batched_pnp_finds_opencvs_pose(small_recording):
-    rig, markers = small_recording.rig, small_recording.static_markers.iloc[::5]
-    uv = marker_pixels(markers, len(rig["wand_points"]))
-    opencv = chain.camera_orientations(uv, rig)
-    assert so3.angle_between_deg(chain.camera_orientations(uv, rig, refine="batched"), opencv).max() < 1e-5
-    # from each static orientation's mean pose, as the all-sample calibration starts
-    keys = markers.groupby(["set", "pose"]).ngroup().to_numpy()
-    C0, t0 = chain.camera_poses(marker_pixels(markers.groupby(["set", "pose"]).mean(), len(rig["wand_points"])), rig)
-    refined = fastchain.refine_camera_orientations(uv, rig, C0[keys], t0[keys])
-    assert so3.angle_between_deg(refined, opencv).max() < 1e-5
-    assert so3.angle_between_deg(C0[keys], opencv).max() > 1e-3          # the start is not already the answer
-    with pytest.raises(ValueError, match="image 0: PnP failed"):
-        fastchain.refine_camera_orientations(uv[:, [1, 0, 2, 3, 4, 5, 6, 7, 8]], rig, C0[keys], t0[keys])
-    with pytest.raises(ValueError, match="refine must be"):
-        chain.camera_orientations(uv, rig, refine="lm")
-
-
-def test_fast_run_is_the_default_run(small_recording):
-    slow, fast = lab.run_lab(small_recording), lab.run_lab(small_recording, fast=True)
-    assert np.abs((fast.table2 - slow.table2).to_numpy()).max() < 1e-6
-    reused = lab.run_lab(small_recording, fast=True, dynamic_camera=fast.dynamic["camera_from_world"])
-    pd.testing.assert_frame_equal(reused.table2, fast.table2)
-    with pytest.raises(ValueError, match="dynamic_camera must have shape"):
-        lab.run_lab(small_recording, dynamic_camera=fast.dynamic["camera_from_world"][1:])
-
-
-# ----------------------------------------------------------------- every sample of each orientation
-
-def test_every_sample_gives_one_motion_per_sample_pair(small_recording):
-    mean, every = lab.static_motions(small_recording), lab.static_motions(small_recording, sample="all")
-    per_pose = small_recording.static_imu.groupby(["set", "pose"]).size()
-    for k, (A, B) in every.items():
-        n = per_pose.loc[k].to_numpy()
-        assert A.shape == B.shape == (int(np.minimum(n[:-1], n[1:]).sum()), 3, 3)
-        # the first orientation pair's motions scatter (one sample's noise) about its mean motion,
-        # not about the identity (a motion within one orientation)
-        j = int(n[0])
-        for per_sample, of_means in ((A[:j], mean[k][0][0]), (B[:j], mean[k][1][0])):
-            centre = so3.nearest_rotation(per_sample.sum(axis=0))
-            assert so3.angle_between_deg(centre, of_means) < 0.5 < so3.rotation_angle_deg(of_means)
-            assert np.median(so3.angle_between_deg(per_sample, of_means)) > 1e-3
-
-
-def test_every_sample_of_an_exact_lab_is_the_mean():
-    rec = lab.simulate_lab(dataclasses.replace(SMALL_LAB.exact(), n_sets=1))
-    (A, B), = lab.static_motions(rec, sample="all").values()
-    (Am, Bm), = lab.static_motions(rec).values()
-    j = len(A) // len(Am)
-    np.testing.assert_allclose(A, np.repeat(Am, j, axis=0), atol=1e-9)
-    np.testing.assert_allclose(B, np.repeat(Bm, j, axis=0), atol=1e-12)
-    with pytest.raises(ValueError, match="'mean', 'single' or 'all'"):
-        lab.static_motions(rec, sample="median")
-
-
-def test_seed_study_with_every_sample_and_parts_switched_off():
-    study = lab.seed_study([1], SMALL_LAB, all_samples=True, without=list(lab.PARTS))
-    for col in ("true_all_ours_right", "shared_bias_ours_right" + NOISE, "pitch_bias_true_R0" + CAL,
-                "rms_true_R0" + NOISE, "true_ours_right" + CAL, "rms_ours_right" + CAL):
-        assert col in study.columns, col
-    assert study["true_all_ours_right"].iloc[0] > 0
-    # the same seed with the ahrs filter and OpenCV's PnP frame by frame: the same numbers
-    slow = lab.seed_study([1], SMALL_LAB, fast=False)
-    assert np.abs((slow - study[slow.columns]).to_numpy()).max() < 1e-6
-    # the camera is reused only where switching a source off leaves the pixels as they were
-    with pytest.raises(ValueError, match="changed the marker pixels"):
-        lab.seed_study([1], SMALL_LAB, without=["pixel noise"])
-
-
-# --------------------------------------------------------------------- findings and their intervals
-
-def test_count_text_and_seed_range():
-    low, high = wilson_interval(15, 20)
-    assert count_text(15, 20) == f"15 of 20 ({100 * low:.0f}-{100 * high:.0f} %)" == "15 of 20 (53-89 %)"
-    assert count_text(0, 20) == "0 of 20 (0-16 %)"
-    assert seed_range(pd.DataFrame(index=range(21, 41))) == "seeds 21-40"
-    with pytest.raises(ValueError, match="consecutive"):
-        seed_range(pd.DataFrame(index=[1, 2, 4]))
-
-
-def lab_study(seeds):
-    """A synthetic :func:`seed_study` frame whose findings pass every check of the lab's claims,
-    each with a margin the threshold tests below compute."""
-    seeds = pd.Index(list(seeds), name="seed")
-    n = len(seeds)
-    r, alt = np.linspace(0.0, 1.0, n), np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
-    rms_true = 1.2 + 0.2 * r
-    shared = 1.8 + 0.5 * r
-    frame = {
-        "rms_true_R0": rms_true, "rms_ours_right": rms_true - 0.01 + 0.01 * alt,
-        "rms_reversed_ours_right": rms_true + 0.2 + 0.1 * alt, "rms_turned_2": rms_true + 0.2 + 0.02 * alt,
-        "rms_turned_5": rms_true + 0.5, "rms_turned_10": rms_true + 1.4, "rms_sensor_frame": 24.0 + r,
-        "shared_bias_ours_right": shared, "spread_ours_right": np.full(n, 1.5),
-        "pitch_bias_true_R0": -(1.8 + 0.4 * r),
-        "true_ours_right": 2.3 + 0.2 * r, "corr_roll_ours_right": 0.998 + 0.0005 * r,
-        "corr_pitch_ours_right": 0.993 + 0.005 * r, "corr_yaw_ours_right": 0.9995 + 0.0004 * r,
-        "failed_sqp_100 iterations": np.where(np.arange(n) < n - 2, 2, 0),
-        "failed_sqp_1000 iterations": np.where(np.arange(n) < 8, 1, 0), "failed_sqp_cost (8) / 2J": np.zeros(n),
-    }
-    frame["true_all_ours_right"] = frame["true_ours_right"] - 0.002 + 0.001 * alt
-    frame["true_single_ours_right"] = frame["true_ours_right"] + 0.35 + 0.1 * alt
-    frame["limit_sqp_100 iterations"] = frame["failed_sqp_100 iterations"]
-    frame["corr_ours_right"] = np.minimum.reduce([frame[f"corr_{a}_ours_right"] for a in ("roll", "pitch", "yaw")])
-    for tag, shared_off, pitch_off in ((NOISE, shared + 0.004 * alt, 0.4 + 0.1 * r),
-                                       (CAL, 0.65 + 0.1 * r, 1.8 + 0.4 * r + 0.05 * alt)):
-        frame["shared_bias_ours_right" + tag], frame["pitch_bias_true_R0" + tag] = shared_off, pitch_off
-        frame["rms_ours_right" + tag], frame["rms_true_R0" + tag] = rms_true, rms_true + 0.01
-        frame["true_ours_right" + tag] = frame["true_ours_right"]
-    return pd.DataFrame(frame, index=seeds)
-
-
-def pitch_frame(seeds, mean=0.02, half_width=0.06, base=1.9):
-    """A synthetic :func:`replication.study.lab.pitch_bias_intervention` frame: the change of |pitch
-    bias| alternates about ``mean`` so that its 95 % half-width (1.96 SE) is ``half_width``."""
-    seeds = pd.Index(list(seeds), name="seed")
-    n = len(seeds)
-    alt = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
-    sd = half_width / 1.96 * np.sqrt(n)
-    change = mean + alt * sd * np.sqrt((n - 1) / n)   # sample SD (ddof=1) exactly sd
-    return pd.DataFrame({"pitch_bias": -np.full(n, base), "pitch_bias_without": -(base + change)}, index=seeds)
-
+# --------------------------------------------------------------------- the records and their checks
 
 def lab_claims_inputs():
     """The keyword arguments of :func:`lab_claims` (the notebook's calls above): synthetic seed
@@ -249,34 +61,6 @@ def lab_claims(study, fresh, *, poses, held, summary, ablation_table, sensitivit
                                            true_r0_pitch=frames.loc["true R0", "pitch mean"], pitch_cal=pitch_cal),
     ]
     return sorted(records, key=lambda r: list(claims.SECTIONS).index(r["claim"]))
-
-
-def test_seed_findings_counts_with_wilson_intervals_and_means_with_standard_errors():
-    study = lab_study(range(1, 21))
-    f = seed_findings(study)
-    row = f.loc["reversed_loses"]
-    assert (row["kind"], row["value"], row["n"], row["text"]) == ("count", 20, 20, "20 of 20 (84-100 %)")
-    assert (row["low"], row["high"]) == pytest.approx(wilson_interval(20, 20))
-    diff = study["true_all_ours_right"] - study["true_ours_right"]
-    row = f.loc["all_minus_mean"]
-    assert row["kind"] == "mean" and row["value"] == pytest.approx(diff.mean())
-    assert row["se"] == pytest.approx(diff.std(ddof=1) / np.sqrt(20))
-    assert row["text"] == "-0.005 to 0"  # a bound declared in advance: the change moves between machines
-    change = study["pitch_bias_true_R0" + NOISE].abs() - study["pitch_bias_true_R0"].abs()
-    assert f.loc["abs_pitch_bias_change" + NOISE, "value"] == pytest.approx(change.mean())
-    assert f.loc["shared_ratio_median", "value"] == pytest.approx(
-        (study["shared_bias_ours_right"] / (1.5 / np.sqrt(10))).median())
-    assert {"turned_2_loses", "turned_5_loses", "turned_10_loses", "single_minus_mean",
-            "estimate_beats_truth" + CAL, "corr_yaw_at_paper"} <= set(f.index)
-    assert "all_minus_mean" not in seed_findings(study.drop(columns="true_all_ours_right")).index
-
-
-def test_sqp_shares():
-    shares = sqp_shares(lab_study(range(1, 21)), SQP_RUNS)
-    counts = shares.pop("counts")
-    assert shares == pytest.approx({"failed, 100 iterations": 36 / 200, "failed, 1000 iterations": 8 / 200,
-                                    "failed, cost (8) / 2J": 0.0, "at limit": 1.0, "seeds": 0.9})
-    assert counts == {"data sets": 200, "failed": 36, "seeds": 20}
 
 
 def test_lab_claims_name_both_seed_sets_and_the_fresh_section():
@@ -445,37 +229,8 @@ def test_each_sqp_bound_raises_just_past_it(which, case):
             assert len(lab_claims(**inputs)) == 10
 
 
-@pytest.mark.parametrize("mean_change, ok", [(-0.0008, True), (-0.0042, True), (-0.0007, False), (-0.0043, False)])
-def test_the_change_with_every_sample_is_a_declared_bound_kept_by_its_margin(mean_change, ok):
-    study = lab_study(range(1, 21))
-    study["true_all_ours_right"] = study["true_ours_right"] + mean_change
-    if ok:
-        assert seed_findings(study).loc["all_minus_mean", "text"] == "-0.005 to 0"
-    else:
-        with pytest.raises(ValueError, match="every sample of each orientation.*inside its declared bound"):
-            seed_findings(study)
-
-
 # ------------------------------------------------------------- the calibration errors' share of the
 # pitch bias: resolved to 0.1 deg, many seeds, the words follow the intervals
-
-def test_pitch_bias_intervention_is_the_seed_studys():
-    part = "magnetometer calibration errors"
-    fast = lab.pitch_bias_intervention([3], part)
-    full = lab.seed_study([3], without=[part])
-    assert fast.loc[3, "pitch_bias"] == pytest.approx(full.loc[3, "pitch_bias_true_R0"], abs=1e-12)
-    assert fast.loc[3, "pitch_bias_without"] == pytest.approx(full.loc[3, "pitch_bias_true_R0" + CAL], abs=1e-12)
-    with pytest.raises(ValueError, match="unknown error source or part 'magnetometer'"):
-        lab.pitch_bias_intervention([3], "magnetometer")
-
-
-def test_intervention_finding_mean_se_and_interval():
-    f = lab.intervention_finding(pitch_frame(range(1, 121), mean=-0.2, half_width=0.07))
-    assert f["value"] == pytest.approx(-0.2) and 1.96 * f["se"] == pytest.approx(0.07)
-    assert (f["low"], f["high"]) == pytest.approx((-0.27, -0.13)) and f["resolved"] and f["fine"]
-    assert f["n"] == 120 and f["abs_pitch_bias"] == pytest.approx(1.9)
-    assert f["text"] == "-0.200 ± 0.036 [-0.270, -0.130]"
-
 
 @pytest.mark.parametrize("which", [0, 1])
 @pytest.mark.parametrize("frame, ok, words", [

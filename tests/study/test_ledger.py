@@ -2,16 +2,16 @@
 and README agrees."""
 import ast
 import json
-import os
 import re
-import shutil
-import subprocess
 import sys
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 
+from conftest import _DROP, _copy, _edit, _where
 from replication._io import PROJECT_ROOT
 from replication.rig.datafile import DataFileError, DataFileNotFound
 from replication.study import ledger, paper
@@ -59,66 +59,28 @@ def test_record_refuses_malformed_verdicts(kwargs, message):
         ledger.record(**{"evidence": "e 1", "uncertainty": "u", "setting": "s", "section": "S", **kwargs})
 
 
-def test_malformed_claims_file_names_line_and_column(tmp_path):
-    path = tmp_path / "claims.csv"
-    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,,Sec. II,,\n")
-    with pytest.raises(ValueError, match=r"line 2, column 'statement': empty"):
-        paper.load_claim_table(path)
-    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,s,w,ten,\n")
-    with pytest.raises(ValueError, match=r"line 2, column 'paper_value': not a number"):
-        paper.load_claim_table(path)
+def test_check_evidence_names_the_claim_and_condition_and_passes_what_holds():
+    assert ledger.check_evidence(True, "cost_to_zero", "x") is None
+    assert ledger.check_evidence(np.bool_(True), "cost_to_zero", "x") is None
+    with pytest.raises(ValueError) as err:
+        ledger.check_evidence(np.bool_(False), "cost_to_zero", "the cost falls (0.5)")
+    assert str(err.value) == ("claim 'cost_to_zero': the evidence does not bear the verdict: expected the cost falls "
+                              "(0.5)")
 
 
-# ---- the claims file: every problem named with file and line
-# --------------------------------------------------
-
-HEADER = "claim,statement,where,paper_value,unit\n"
+HEADER = ",".join(paper.CLAIM_COLUMNS) + "\n"
 
 
 @pytest.mark.parametrize("text, message", [
     ("", r"claims.csv, line 1: empty; expected the header"),
-    ("claim,statement,where,paper_value\ntheorem1,s,w,\n", r"claims.csv, line 1: columns must be"),
-    ("claim,statement,where,unit,paper_value\ntheorem1,s,w,,\n", r"claims.csv, line 1: columns must be"),
-    (HEADER + ",s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
-    (HEADER + "   ,s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
-    (HEADER + "theorem1,s,   ,,\n", r"claims.csv, line 2, column 'where': empty"),
-    (HEADER + "theorem 1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
-    (HEADER + " theorem1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
     (HEADER + "theorem1,s,w,,\nother,s,w,,\ntheorem1,t,w,,\n",
      r"claims.csv, line 4, column 'claim': claim id 'theorem1' repeated \(first on line 2\)"),
-    (HEADER + "theorem1,s,w,nan,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
-    (HEADER + "theorem1,s,w,inf,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
-    (HEADER + "theorem1,s,w,ten,deg\n", r"claims.csv, line 2, column 'paper_value': not a number"),
-    (HEADER + "theorem1,s,w,1,\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
-    (HEADER + "theorem1,s,w,,deg\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
-    (HEADER + "theorem1,s,w,,,extra\n", r"claims.csv, line 2: expected 5 fields .* got 6"),
-    (HEADER + "theorem1,s,w\n", r"claims.csv, line 2: expected 5 fields .* got 3"),
-    (HEADER + 'theorem1,"s,w,,\n', r"claims.csv, line 2: not a readable CSV"),
-    (HEADER + 'theorem1,"s"x,w,,\n', r"claims.csv, line 2: not a readable CSV"),
-    # a statement over two lines, a blank line: the lines counted are the file's
-    (HEADER + 'theorem1,"two\nlines",w,,\n\nother,s,w,x,deg\n', r"claims.csv, line 5, column 'paper_value'"),
-    (HEADER + 'theorem1,"two\nlines",w,x,deg\n', r"claims.csv, line 2, column 'paper_value'"),  # where it starts
 ])
-def test_malformed_claims_file_is_refused_with_file_and_line(tmp_path, text, message):
-    path = tmp_path / "claims.csv"
+def test_collect_names_a_malformed_claims_file_and_line(tmp_path, text, message):
+    path = tmp_path / "claims.csv"  # every problem of the file itself: tests/study/test_paper.py
     path.write_text(text, encoding="utf-8")
     with pytest.raises(DataFileError, match=message):
-        paper.load_claim_table(path)
-    with pytest.raises(DataFileError, match=message):  # and the ledger, which reads it
         ledger.collect([], claims_path=path)
-
-
-def test_a_well_formed_claims_file_reads_as_text(tmp_path):
-    path = tmp_path / "claims.csv"
-    path.write_text(HEADER + 'theorem1,"two\nlines, a comma",w,,\n\nother,s,w,0.5,deg\n', encoding="utf-8")
-    table = paper.load_claim_table(path)
-    assert list(table.index) == ["theorem1", "other"]
-    assert table.loc["theorem1", "statement"] == "two\nlines, a comma" and table.loc["other", "paper_value"] == "0.5"
-
-
-def test_a_missing_claims_file_is_named(tmp_path):
-    with pytest.raises(DataFileNotFound, match=r"nowhere\.csv: no such file"):
-        paper.load_claim_table(tmp_path / "nowhere.csv")
 
 
 # ---- ledger.record in the notebook: the rules
@@ -164,39 +126,6 @@ def test_the_vocabulary_is_the_documented_one():
 # ---- collecting: stored outputs checked again (they could have been edited)
 # --------------------------------------
 
-NOTEBOOKS = sorted((PROJECT_ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
-
-
-def _where(collected, claim):
-    row = collected.loc[collected["claim"] == claim].iloc[0]
-    return PROJECT_ROOT / "notebooks" / f"{row.notebook}.ipynb", int(row.cell)
-
-
-def _copy(path, folder, name=None):
-    target = folder / (name or Path(path).name)
-    shutil.copyfile(path, target)
-    return target
-
-
-def _edit(path, which, **changes):
-    """Change the stored record of claim ``which`` in the notebook ``path`` (a copy); ``_DROP``
-    deletes a field."""
-    nb = json.loads(path.read_text(encoding="utf-8"))
-    for cell in nb["cells"]:
-        for out in cell.get("outputs", []):
-            rec = out.get("data", {}).get(ledger.CLAIM_MIME)
-            if rec is not None and rec["claim"] == which:
-                rec.update(changes)
-                for key in [k for k, v in changes.items() if v is _DROP]:
-                    del rec[key]
-                path.write_text(json.dumps(nb, indent=1, ensure_ascii=False), encoding="utf-8")
-                return
-    raise AssertionError(f"no record of {which} in {path}")
-
-
-_DROP = object()
-
-
 def _notebook(path, *records):
     """A minimal notebook at ``path`` with one cell per stored record (a dict, or any JSON
     value)."""
@@ -231,10 +160,18 @@ def test_collect_refuses_an_edited_stored_record(tmp_path, collected, claim, cha
         ledger.collect([path], complete=False)
 
 
-@pytest.mark.parametrize("stored", ["holds", ["theorem1", "holds"], None])
-def test_collect_refuses_a_stored_record_that_is_not_an_object(tmp_path, stored):
+@pytest.mark.parametrize("stored, got", [("holds", "str"), (["theorem1", "holds"], "list"), (None, "NoneType")])
+def test_collect_refuses_a_stored_record_that_is_not_an_object(tmp_path, stored, got):
     path = _notebook(tmp_path / "01_x.ipynb", stored)
-    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 0: a stored claim record must have the fields"):
+    with pytest.raises(DataFileError, match=r"01_x\.ipynb: cell 0: a stored claim record must have the fields "
+                                            rf"\[.*\], got {got}$"):
+        ledger.collect([path], complete=False)
+
+
+def test_collect_names_the_fields_a_stored_record_has(tmp_path):
+    path = _notebook(tmp_path / "01_x.ipynb", {**GOOD, "note": "x"})
+    with pytest.raises(DataFileError, match=re.escape(f"must have the fields {list(ledger.RECORD_FIELDS)}, got "
+                                                      f"{sorted([*GOOD, 'note'])}")):
         ledger.collect([path], complete=False)
 
 
@@ -282,6 +219,7 @@ def test_collect_refuses_a_truncated_notebook_naming_file_line_and_column(tmp_pa
     ("[1, 2]", r": not a notebook: no list of 'cells'"),
     ('{"cells": {}}', r": not a notebook: no list of 'cells'"),
     ('{"cells": [{"outputs": {}}]}', r": cell 0: not a notebook cell"),
+    ('{"cells": [{"outputs": []}, 5]}', r": cell 1: not a notebook cell"),
     ('{"cells": [{"outputs": ["text"]}]}', r": cell 0: an output that is not an object"),
 ])
 def test_collect_refuses_what_is_not_a_notebook(tmp_path, text, message):
@@ -292,7 +230,7 @@ def test_collect_refuses_what_is_not_a_notebook(tmp_path, text, message):
 
 
 def test_collect_names_a_missing_notebook(tmp_path):
-    with pytest.raises(DataFileNotFound, match=r"01_gone\.ipynb: no such file"):
+    with pytest.raises(DataFileNotFound, match=r"01_gone\.ipynb: no such file \(a notebook\)"):
         ledger.collect([tmp_path / "01_gone.ipynb"], complete=False)
 
 
@@ -317,6 +255,7 @@ S, E = ledger.README_START, ledger.README_END
     (f"# title\n{E}\n| table |\n{S}\n", rf"README\.md, line 2: the claims marker {E} \(line 2\) comes before {S} "
                                         rf"\(line 4\)"),
     (f"{S}\n{E}\n{S}\n{E}\n", rf"README\.md, line 3: the claims marker {S} appears 2 times \(lines \[1, 3\]\)"),
+    (f"\n{S}\n{E}\n{S}\n", rf"README\.md, line 4: the claims marker {S} appears 2 times \(lines \[2, 4\]\)"),
     (f"{S}\n{E}\ntext {E}\n", rf"README\.md, line 3: the claims marker {E} appears 2 times"),
 ])
 def test_readme_markers_missing_repeated_or_out_of_order_are_named(tmp_path, collected, text, message):
@@ -341,170 +280,6 @@ def test_readme_table_is_written_between_the_markers(tmp_path, collected):
     assert readme.read_text(encoding="utf-8") == f"head\n{S}\n{ledger.summary_from_ledger(collected)}{E} tail\n"
     assert ledger.update_readme(collected, readme, check=True)
 
-
-# ---- the command line: exit 2 and the message on stderr, never a traceback
-# --------------------------------------
-
-@pytest.fixture
-def project(tmp_path, monkeypatch):
-    """A copy of the project's notebooks, README and claims file; ``python -m replication claims``
-    reads it."""
-    (tmp_path / "notebooks").mkdir()
-    for path in NOTEBOOKS:
-        _copy(path, tmp_path / "notebooks")
-    _copy(PROJECT_ROOT / "README.md", tmp_path)
-    (tmp_path / "data" / "paper").mkdir(parents=True)
-    _copy(PROJECT_ROOT / "data" / "paper" / "claims.csv", tmp_path / "data" / "paper")
-    monkeypatch.setattr(ledger, "PROJECT_ROOT", tmp_path)
-    monkeypatch.setenv("REPLICATION_DATA_DIR", str(tmp_path / "data"))
-    return tmp_path
-
-
-def _claims_cli(*args):
-    from replication.cli import main
-
-    return main(["claims", *args])
-
-
-def _in_copy(project, collected, claim):
-    source, cell = _where(collected, claim)
-    return project / "notebooks" / source.name, cell
-
-
-def test_cli_check_passes_on_a_copy_and_fails_on_a_stale_readme(project, capsys):
-    assert _claims_cli("--check") == 0
-    assert "matches" in capsys.readouterr().out
-    readme = project / "README.md"
-    text = readme.read_text(encoding="utf-8")
-    readme.write_text(text.replace("| `theorem1` |", "| `theorem1 (edited)` |"), encoding="utf-8")
-    assert _claims_cli("--check") == 1
-    assert "out of date: run 'python -m replication claims --readme'" in capsys.readouterr().err
-    assert _claims_cli("--readme") == 0
-    assert readme.read_text(encoding="utf-8") == text
-    assert _claims_cli("--check") == 0
-
-
-@pytest.mark.parametrize("readme_text, message", [
-    (None, r"README\.md: no such file"),
-    ("# no markers\n", rf"README\.md: no claims marker {S} and no {E}"),
-    (f"{S}\n", rf"README\.md: no claims marker {E}"),
-    (f"{E}\n{S}\n", rf"README\.md, line 1: the claims marker {E} \(line 1\) comes before"),
-])
-@pytest.mark.parametrize("flag", ["--check", "--readme"])
-def test_cli_names_a_missing_or_unmarked_readme(project, capsys, readme_text, message, flag):
-    readme = project / "README.md"
-    if readme_text is None:
-        readme.unlink()
-    else:
-        readme.write_text(readme_text, encoding="utf-8")
-    assert _claims_cli(flag) == 2
-    err = capsys.readouterr().err
-    assert re.match(r"error: .*" + message, err), err
-    assert not readme.exists() if readme_text is None else readme.read_text(encoding="utf-8") == readme_text
-
-
-@pytest.mark.parametrize("claim, changes, message", [
-    ("fig5_resilience", dict(verdict="probably"), r"cell {cell}: claim 'fig5_resilience': verdict must be one of"),
-    ("fig5_resilience", dict(evidence=""), r"cell {cell}: claim 'fig5_resilience': evidence is blank"),
-    ("fig5_resilience", dict(evidence=" \t"), r"cell {cell}: claim 'fig5_resilience': evidence is blank"),
-    ("fig5_resilience", dict(claim="theorem_1"),
-     r"cell {cell}: unknown claim 'theorem_1' .*close known ids: theorem1"),
-    ("convex_problem", dict(claim="theorem1", verdict="holds"),
-     r"cell {cell}: a second record of claim 'theorem1' \('holds'\) contradicts the one in 01_derivation_check"),
-])
-@pytest.mark.parametrize("flag", ["--check", "--readme"])
-def test_cli_refuses_edited_records_and_leaves_readme_alone(project, collected, capsys, claim, changes, message,
-                                                            flag):
-    path, cell = _in_copy(project, collected, claim)
-    _edit(path, claim, **changes)
-    before = (project / "README.md").read_text(encoding="utf-8")
-    assert _claims_cli(flag) == 2
-    err = capsys.readouterr().err
-    assert re.match("error: " + re.escape(str(path)) + ": " + message.format(cell=cell), err), err
-    assert (project / "README.md").read_text(encoding="utf-8") == before
-
-
-def test_cli_reports_a_readme_it_cannot_write(project, capsys, monkeypatch):
-    readme = project / "README.md"
-    before = readme.read_text(encoding="utf-8").replace("| `theorem1` |", "| `x` |")
-    readme.write_text(before, encoding="utf-8")
-    import replication._io as io
-
-    def refuse(src, dst):
-        raise PermissionError(13, "Permission denied", str(dst))
-
-    monkeypatch.setattr(io.os, "replace", refuse)  # the atomic write's rename fails, as in a read-only folder
-    assert _claims_cli("--readme") == 2
-    assert capsys.readouterr().err.startswith("error: ")
-    assert readme.read_text(encoding="utf-8") == before and not list(project.glob("README.md.*.part"))
-
-
-def test_cli_names_a_truncated_notebook(project, collected, capsys):
-    path, _ = _in_copy(project, collected, "theorem1")
-    path.write_bytes(path.read_bytes()[:-100])
-    assert _claims_cli("--check") == 2
-    assert re.match("error: " + re.escape(str(path)) + r", line \d+, column \d+: not a notebook: not valid JSON",
-                    capsys.readouterr().err)
-
-
-def test_cli_names_a_malformed_claims_file_in_a_fresh_process(tmp_path):
-    """In a subprocess: exit 2 and one line on stderr, no traceback."""
-    (tmp_path / "paper").mkdir()
-    (tmp_path / "paper" / "claims.csv").write_text(HEADER + "theorem1,s,w,,\ntheorem1,t,w,,\n", encoding="utf-8")
-    env = {**os.environ, "REPLICATION_DATA_DIR": str(tmp_path)}
-    out = subprocess.run([sys.executable, "-m", "replication", "claims", "--check"], capture_output=True, text=True,
-                         timeout=120, env=env, cwd=PROJECT_ROOT)
-    assert out.returncode == 2, out.stderr
-    assert "Traceback" not in out.stderr
-    assert re.fullmatch(r"error: .*claims\.csv, line 3, column 'claim': claim id 'theorem1' repeated "
-                        r"\(first on line 2\)\n", out.stderr), out.stderr
-
-
-def test_the_repository_ledger_passes_check():
-    out = subprocess.run([sys.executable, "-m", "replication", "claims", "--check"], capture_output=True, text=True,
-                         timeout=120, cwd=PROJECT_ROOT, env={k: v for k, v in os.environ.items()
-                                                            if k != "REPLICATION_DATA_DIR"})
-    assert out.returncode == 0, out.stderr
-    assert out.stdout == ("README's claims table matches the records stored in the executed notebooks (that each "
-                          "record is what its cell computes is checked by strict nbval: bash scripts/test)\n")
-
-
-def test_a_reader_that_stops_early_ends_the_output_quietly():
-    """``python -m replication ... | head -n 1``: no BrokenPipeError traceback, exit 141
-    (SIGPIPE's). The output (1 MB) is larger than a pipe's buffer, so the pipe does break; without
-    the wrapper it prints a traceback."""
-    script = ("import sys, replication.cli as m\n"
-              "m.main = lambda argv=None: print('| claim |\\n' + 'x' * 100 + '\\n' * 1000000) or 0\n"
-              "sys.exit(m.main_closing_pipes() if sys.argv[1] == 'wrapped' else m.main())\n")
-    runs = {}
-    for how in ("wrapped", "bare"):
-        runs[how] = subprocess.run(f"'{sys.executable}' -c \"$S\" {how} | head -n 1; exit ${{PIPESTATUS[0]}}",
-                                   shell=True, executable="/bin/bash", capture_output=True, text=True, timeout=60,
-                                   env={**os.environ, "S": script})
-    assert runs["bare"].returncode != 0 and "BrokenPipeError" in runs["bare"].stderr  # the pipe did break
-    out = runs["wrapped"]
-    assert out.stdout == "| claim |\n" and out.stderr == "" and out.returncode == 141
-
-
-@pytest.mark.parametrize("flags", [("--summary", "--readme"), ("--readme", "--summary"), ("--check", "--readme"),
-                                   ("--check", "--summary"), ("--check", "--readme", "--summary")])
-def test_conflicting_claims_flags_are_refused_naming_them_before_any_work(flags, capsys, monkeypatch):
-    from replication.study import ledger as ledger_module
-
-    monkeypatch.setattr(ledger_module, "collect", lambda *a, **k: pytest.fail("work done despite the conflict"))
-    assert _claims_cli(*flags) == 2
-    err = capsys.readouterr().err
-    ordered = [f for f in ("--check", "--readme", "--summary") if f in flags]
-    assert f"error: {' and '.join(ordered)} cannot be used together" in err and "give one of them" in err
-
-
-@pytest.mark.parametrize("flag", ["--summary", "--readme", "--check"])
-def test_each_claims_flag_alone_is_not_refused_as_a_conflict(flag, capsys, monkeypatch):
-    from replication.study import ledger as ledger_module
-
-    monkeypatch.setattr(ledger_module, "collect", lambda *a, **k: (_ for _ in ()).throw(ValueError("collected")))
-    assert _claims_cli(flag) == 2  # it reached the work (which this test makes fail), not the conflict check
-    assert "error: collected" in capsys.readouterr().err
 
 # --------------------------------------------------------------------------------------------------
 # The claims ledger's rules that mutation testing found unguarded (scripts/mutation): what
@@ -616,6 +391,34 @@ def test_record_messages_name_the_known_claims_and_verdicts():
         ledger.record("theorem1", "maybe", evidence="e", uncertainty="u", setting="s", section="S")
 
 
+def test_an_unknown_claim_names_the_claims_file_it_was_checked_against(tmp_path, claims_path):
+    fields = dict(verdict="holds", evidence="e", uncertainty="u", setting="s", section="S")
+    with pytest.raises(ValueError, match=re.escape(f"(not an id of {claims_path})")):
+        ledger.check_record("nope", **fields, claims_path=claims_path)
+    with pytest.raises(ValueError, match=re.escape(f"(not an id of {paper.data_dir() / 'paper' / 'claims.csv'})")):
+        ledger.check_record("nope", **fields)
+    nb = _notebook_ml(tmp_path / "01_a.ipynb", [[_out(_record("nope"))]])
+    named = re.escape(f"(not an id of {claims_path})")
+    with pytest.raises(DataFileError, match=r"cell 0: unknown claim 'nope' " + named):
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+
+
+def test_check_record_reads_the_claims_it_is_given_else_its_claims_file(claims_path):
+    fields = dict(verdict="holds", evidence="e", uncertainty="u", setting="s", section="S")
+    assert ledger.check_record("zeta", **fields, claims_path=claims_path).claim == "zeta"  # not in the project's
+    assert ledger.check_record("zeta", **fields, claims=paper.load_claim_table(claims_path)).claim == "zeta"
+
+
+def test_an_unknown_claim_names_at_most_five_close_ids(tmp_path):
+    ids = [f"claim_{c}" for c in "abcdef"]  # six ids, all as close to 'claim_x'
+    path = tmp_path / "claims.csv"
+    path.write_text(HEADER + "".join(f"{i},s,w,,\n" for i in ids), encoding="utf-8")
+    with pytest.raises(ValueError, match="close known ids: ") as err:
+        ledger.check_record("claim_x", "holds", "e", "u", "s", "S", claims_path=path)
+    named = str(err.value).split("close known ids: ")[1].split(", ")
+    assert len(named) == 5 and set(named) <= set(ids)
+
+
 def test_collect_reads_every_record_with_its_notebook_and_cell_in_the_claims_order(two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     assert list(got.columns) == ["claim", "verdict", "condition", "evidence", "uncertainty", "setting", "section",
@@ -676,6 +479,106 @@ def test_summary_from_ledger_gives_the_counts_and_one_compact_row_per_claim(two_
     assert ledger.verdict_counts(got) == {"holds": 2, "fails": 0, "holds only if": 1, "undecidable from the text": 0}
 
 
+def test_summary_gives_the_counts_and_one_row_per_claim(collected):
+    summary = ledger.summary_from_ledger(collected)
+    per_claim = collected.drop_duplicates("claim")
+    counts = {v: int((per_claim["verdict"] == v).sum()) for v in ledger.VERDICTS}
+    assert summary.splitlines()[0] == (
+        f"**{len(per_claim)} claims: {counts['holds']} hold, {counts[ledger.HOLDS_ONLY_IF]} hold only if, "
+        f"{counts['fails']} fail, {counts['undecidable from the text']} undecidable from the text.**")
+    rows = [line for line in summary.splitlines() if line.startswith("| `")]
+    assert len(rows) == len(per_claim) == sum(counts.values())
+    for line, rec in zip(rows, per_claim.itertuples()):
+        assert line.startswith(f"| `{rec.claim}` |") and f"| {rec.verdict} |" in line
+        assert f"(notebooks/{rec.notebook}.ipynb#{ledger.heading_anchor(rec.section)})" in line
+
+
+
+def test_counts_name_every_verdict_even_at_zero(collected):
+    one = collected[collected["claim"] == "eq7_relative"]
+    assert ledger.counts_in_words(one) == "1 claims: 1 hold, 0 hold only if, 0 fail, 0 undecidable from the text"
+
+
+
+def test_readme_holds_the_compact_table_and_is_short():
+    text = (PROJECT_ROOT / "README.md").read_text(encoding="utf-8")
+    assert ledger.update_readme(ledger.collect(), check=True)
+    lines = text.splitlines()
+    assert len(lines) <= 150, len(lines)
+    assert max(len(line) for line in lines) <= 400
+    first_screen = "\n".join(lines[:40])
+    assert ledger.counts_in_words(ledger.collect()) in first_screen
+    assert "bash scripts/reproduce" in first_screen and "bash scripts/test" in first_screen
+    assert "bash scripts/docs" in text and "python -m replication export report.json --to kalibr --base" in text
+
+
+def test_verdict_counts_counts_each_claim_once_however_many_its_rows():
+    rows = pd.DataFrame({"claim": ["a", "a", "b"], "verdict": ["holds", "holds", "fails"],
+                         "notebook": ["01_x", "02_y", "01_x"]})
+    assert ledger.verdict_counts(rows) == {"holds": 1, "fails": 1, "holds only if": 0, "undecidable from the text": 0}
+
+
+# ---- first_clause: the evidence's first clause (the book's front page)
+# ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("words, cut", [(5, False), (4, True)])
+def test_first_clause_cuts_only_beyond_its_word_limit(words, cut):
+    assert ledger.first_clause("one two three four five", max_words=words) == \
+        ("one two three four …" if cut else "one two three four five")
+
+
+def test_first_clause_stops_at_a_clause_outside_brackets_only():
+    assert ledger.first_clause("a (b; c) d; e") == "a (b; c) d …"
+    assert ledger.first_clause("by eq. (8) it holds") == "by eq. (8) it holds"
+    assert ledger.first_clause("it holds. The rest") == "it holds …"
+    assert ledger.first_clause("it holds.") == "it holds."
+
+
+@pytest.mark.parametrize("text, clause", [
+    ("", ""),
+    ("holds", "holds"),
+    ("  one   two  ", "one two"),  # white space between words as one space, none at the ends
+    ("it holds; the rest", "it holds …"),
+    ("it holds;the rest", "it holds;the rest"),  # a clause ends at "; ", not at ";"
+    ("it holds. The rest", "it holds …"),
+    ("it holds. the rest", "it holds. the rest"),  # ". " ends a clause only before a capital
+    ("by eq. (8) it holds", "by eq. (8) it holds"),  # abbreviations before a bracket, a digit, lower case
+    ("see Fig. 5 and e.g. the rest", "see Fig. 5 and e.g. the rest"),
+    ("at 0.5 deg. Then more", "at 0.5 deg …"),  # a decimal point is no end; the sentence's is
+    ("X; rest", "X …"),
+    ("the R0 estimate holds; rest", "the R0 estimate holds …"),  # a capital after no ". " ends nothing
+    # a clause that ends the text: nothing follows, no mark
+    ("it holds.", "it holds."),
+    ("it holds; ", "it holds"),
+    ("it holds. ", "it holds."),
+    # brackets of each kind, nested, unmatched
+    ("a (b; c) d; e", "a (b; c) d …"),
+    ("a [b. C] {d; e} f; g", "a [b. C] {d; e} f …"),
+    ("f(a (b; c); d) e; g", "f(a (b; c); d) e …"),
+    ("(X; b) c; d", "(X; b) c …"),
+    ("a) b; c", "a) b …"),  # a closing bracket with none open is passed over
+    ("f(a; b", "f(a; b"),  # inside a bracket never closed no clause ends
+])
+def test_first_clause_ends_at_the_first_clause_end_outside_brackets(text, clause):
+    assert ledger.first_clause(text) == clause
+
+
+_WORDS = [f"w{k}" for k in range(31)]
+
+
+@pytest.mark.parametrize("text, max_words, clause", [
+    (" ".join(_WORDS[:30]), None, " ".join(_WORDS[:30])),  # the default limit, 30 words
+    (" ".join(_WORDS), None, " ".join(_WORDS[:30]) + " …"),
+    ("one two three", 3, "one two three"),
+    ("one two three", 2, "one two …"),
+    ("one two three; four", 2, "one two …"),
+    ("one two; three", 2, "one two …"),
+])
+def test_first_clause_keeps_at_most_max_words_words(text, max_words, clause):
+    got = ledger.first_clause(text) if max_words is None else ledger.first_clause(text, max_words=max_words)
+    assert got == clause
+
+
 def test_update_readme_writes_the_counts_between_every_pair_of_counts_markers(tmp_path, two_notebooks, claims_path):
     got = ledger.collect(two_notebooks, claims_path=claims_path)
     readme = tmp_path / "README.md"
@@ -716,6 +619,40 @@ def test_a_section_that_is_no_heading_of_the_notebook_is_refused_naming_the_clos
     with pytest.raises(ValueError, match=r"the section 'S\.' is not a heading of this notebook; close headings: "
                                          r"\['S'\]"):
         ledger.collect([near], claims_path=claims_path, complete=False)
+
+
+def test_notebook_headings_passes_over_a_markdown_source_that_is_no_text():
+    nb = {"cells": [{"cell_type": "markdown", "source": None}, {"cell_type": "markdown", "source": 5},
+                    {"cell_type": "markdown"}, {"cell_type": "markdown", "source": "# One"}]}
+    assert ledger.notebook_headings(nb) == ["One"]
+
+
+def _headed_notebook(path, section, headings):
+    """A notebook with one record of 'alpha' measured in ``section`` and a Markdown cell per
+    heading."""
+    cells = [{"cell_type": "code", "source": "", "outputs": [_out(_record("alpha", section=section))]}]
+    path.write_text(json.dumps({"cells": cells + [{"cell_type": "markdown", "source": f"## {h}"} for h in headings]}),
+                    encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("section, close", [
+    ("Noise and bias.", True),  # similarity to 'Noise' 2 * 5 / (5 + 15) = 0.5: close
+    ("Noise and biases", False),  # 2 * 5 / (5 + 16) = 0.48: not close
+])
+def test_a_section_names_the_headings_at_least_half_alike(tmp_path, claims_path, section, close):
+    nb = _headed_notebook(tmp_path / "01_a.ipynb", section, ["Noise"])
+    names = r"close headings: \['Noise'\]" if close else r"its headings: \['Noise'\]"
+    with pytest.raises(DataFileError, match=rf"is not a heading of this notebook; {names}"):
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+
+
+def test_a_section_names_at_most_three_close_headings(tmp_path, claims_path):
+    nb = _headed_notebook(tmp_path / "01_a.ipynb", "Noise 5", ["Noise 1", "Noise 2", "Noise 3", "Noise 4"])
+    with pytest.raises(DataFileError, match="close headings: ") as err:
+        ledger.collect([nb], claims_path=claims_path, complete=False)
+    named = ast.literal_eval(str(err.value).split("close headings: ")[1])
+    assert len(named) == 3 and set(named) < {"Noise 1", "Noise 2", "Noise 3", "Noise 4"}
 
 
 @pytest.mark.parametrize("heading, anchor", [

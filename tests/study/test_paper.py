@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from replication.core import checks
+from replication.rig.datafile import DataFileError, DataFileNotFound
 from replication.study import paper
 
 
@@ -51,3 +52,63 @@ def test_missing_row_and_column(data_copy):
     (data_copy / "r0.csv").write_text("row,col0,col1\n0,1,0\n")
     with pytest.raises(ValueError, match="missing columns"):
         paper.load_r0()
+
+
+# ---- the claims file: every problem named with file and line
+# --------------------------------------------------
+
+def test_malformed_claims_file_names_line_and_column(tmp_path):
+    path = tmp_path / "claims.csv"
+    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,,Sec. II,,\n")
+    with pytest.raises(ValueError, match=r"line 2, column 'statement': empty"):
+        paper.load_claim_table(path)
+    path.write_text("claim,statement,where,paper_value,unit\ntheorem1,s,w,ten,\n")
+    with pytest.raises(ValueError, match=r"line 2, column 'paper_value': not a number"):
+        paper.load_claim_table(path)
+
+
+HEADER = ",".join(paper.CLAIM_COLUMNS) + "\n"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", r"claims.csv, line 1: empty; expected the header"),
+    ("claim,statement,where,paper_value\ntheorem1,s,w,\n", r"claims.csv, line 1: columns must be"),
+    ("claim,statement,where,unit,paper_value\ntheorem1,s,w,,\n", r"claims.csv, line 1: columns must be"),
+    (HEADER + ",s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
+    (HEADER + "   ,s,w,,\n", r"claims.csv, line 2, column 'claim': empty"),
+    (HEADER + "theorem1,s,   ,,\n", r"claims.csv, line 2, column 'where': empty"),
+    (HEADER + "theorem 1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
+    (HEADER + " theorem1,s,w,,\n", r"claims.csv, line 2, column 'claim': not a claim id"),
+    (HEADER + "theorem1,s,w,,\nother,s,w,,\ntheorem1,t,w,,\n",
+     r"claims.csv, line 4, column 'claim': claim id 'theorem1' repeated \(first on line 2\)"),
+    (HEADER + "theorem1,s,w,nan,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
+    (HEADER + "theorem1,s,w,inf,deg\n", r"claims.csv, line 2, column 'paper_value': not a finite number"),
+    (HEADER + "theorem1,s,w,ten,deg\n", r"claims.csv, line 2, column 'paper_value': not a number"),
+    (HEADER + "theorem1,s,w,1,\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
+    (HEADER + "theorem1,s,w,,deg\n", r"claims.csv, line 2, column 'unit': a unit goes with, and only with"),
+    (HEADER + "theorem1,s,w,,,extra\n", r"claims.csv, line 2: expected 5 fields .* got 6"),
+    (HEADER + "theorem1,s,w\n", r"claims.csv, line 2: expected 5 fields .* got 3"),
+    (HEADER + 'theorem1,"s,w,,\n', r"claims.csv, line 2: not a readable CSV"),
+    (HEADER + 'theorem1,"s"x,w,,\n', r"claims.csv, line 2: not a readable CSV"),
+    # a statement over two lines, a blank line: the lines counted are the file's
+    (HEADER + 'theorem1,"two\nlines",w,,\n\nother,s,w,x,deg\n', r"claims.csv, line 5, column 'paper_value'"),
+    (HEADER + 'theorem1,"two\nlines",w,x,deg\n', r"claims.csv, line 2, column 'paper_value'"),  # where it starts
+])
+def test_malformed_claims_file_is_refused_with_file_and_line(tmp_path, text, message):
+    path = tmp_path / "claims.csv"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(DataFileError, match=message):
+        paper.load_claim_table(path)
+
+
+def test_a_well_formed_claims_file_reads_as_text(tmp_path):
+    path = tmp_path / "claims.csv"
+    path.write_text(HEADER + 'theorem1,"two\nlines, a comma",w,,\n\nother,s,w,0.5,deg\n', encoding="utf-8")
+    table = paper.load_claim_table(path)
+    assert list(table.index) == ["theorem1", "other"]
+    assert table.loc["theorem1", "statement"] == "two\nlines, a comma" and table.loc["other", "paper_value"] == "0.5"
+
+
+def test_a_missing_claims_file_is_named(tmp_path):
+    with pytest.raises(DataFileNotFound, match=r"nowhere\.csv: no such file"):
+        paper.load_claim_table(tmp_path / "nowhere.csv")
