@@ -397,7 +397,6 @@ def test_the_portability_files_share_out_every_notebook_once():
 STRAYS = {}
 #: Tests that reach only another unit and are still to move to its file.
 NOT_YET_MOVED = {
-    "core/test_so3.py::test_check_rotation_rejects",
     "core/test_solvers.py::test_every_exported_solver_refuses_bad_input",
     "core/test_solvers.py::test_singular_values_and_top_vectors_from_one_eigh_match_the_svd",
     "core/test_solvers.py::test_sym_eigvals_come_from_the_decomposition_made_first",
