@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from replication.core import so3
 from replication.core.so3 import random_rotations
 from replication.rig.realdata import real_data_available
 from replication.study.lab.settings import LabSettings
@@ -337,3 +338,12 @@ def quiet_calibrate(camera, gyro, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return calibrate(camera, gyro, n_bootstrap=0, diagnose=False, **kw)
+
+
+def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
+    """``(A, B)``: ``n`` problems of ``J`` Haar camera motions and the sensor motions they imply,
+    each with up to ``noise_deg`` of noise."""
+    R0 = so3.random_rotations(rng, (n,))
+    A = so3.random_rotations(rng, (n, J))
+    B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
+    return A, B @ so3.random_rotations(rng, (n, J), angle_range_deg=(0.0, noise_deg))

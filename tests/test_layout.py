@@ -394,14 +394,12 @@ def test_the_portability_files_share_out_every_notebook_once():
 #: estimator for its parts, ``calibrate`` for the clock). A test that reaches only other units
 #: belongs in their file; one that reaches no name of the package (a subprocess, a file's text) is
 #: not judged. The exceptions, with their reason (``<file>::<test>``):
-STRAYS = {}
+STRAYS = {
+    "core/test_solvers.py::test_every_exported_solver_refuses_bad_input":
+        "calls each solver through the dict EXPORTED, whose values the rule does not follow",
+}
 #: Tests that reach only another unit and are still to move to its file.
 NOT_YET_MOVED = {
-    "core/test_solvers.py::test_every_exported_solver_refuses_bad_input",
-    "core/test_solvers.py::test_singular_values_and_top_vectors_from_one_eigh_match_the_svd",
-    "core/test_solvers.py::test_sym_eigvals_come_from_the_decomposition_made_first",
-    "core/test_solvers.py::test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise",
-    "core/test_solvers.py::test_weighted_kronecker_operator",
     "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv",
     "core/test_solvers_optimal.py::test_every_full_output_says_how_its_lower_bound_was_certified",
     "core/test_solvers_registry.py::test_motions_refuse_a_bad_atol",
