@@ -397,15 +397,17 @@ def test_the_portability_files_share_out_every_notebook_once():
 STRAYS = {
     "core/test_solvers.py::test_every_exported_solver_refuses_bad_input":
         "calls each solver through the dict EXPORTED, whose values the rule does not follow",
+    "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv":
+        'calls the OpenCV wrappers through solve("opencv_park") and its twins, by name',
+    "core/test_solvers_slsqp.py::test_registered_and_batched":
+        'calls SQP through solve("sqp"), by name',
 }
 #: Tests that reach only another unit and are still to move to its file.
 NOT_YET_MOVED = {
-    "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv",
     "core/test_solvers_optimal.py::test_every_full_output_says_how_its_lower_bound_was_certified",
     "core/test_solvers_registry.py::test_motions_refuse_a_bad_atol",
     "core/test_solvers_registry.py::test_motions_accept_an_atol_in_range",
     "core/test_solvers_registry.py::test_two_turns_or_two_pairs_are_not_one_pair",
-    "core/test_solvers_slsqp.py::test_registered_and_batched",
     "rig/test_calibration.py::test_static_pose_sets_get_a_verdict_and_name_their_pairs",
     "rig/test_calibration.py::test_lab_recording_with_times_in_ms_is_refused",
     "rig/test_calibration.py::test_inverted_pose_sets_are_named",
