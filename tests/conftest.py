@@ -347,3 +347,18 @@ def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
     A = so3.random_rotations(rng, (n, J))
     B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
     return A, B @ so3.random_rotations(rng, (n, J), angle_range_deg=(0.0, noise_deg))
+
+
+def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn_deg=0.0):
+    """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one
+    before it ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
+    R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.3, 0.8]))
+    w = np.zeros((J, 3))
+    w[:, 2] = np.radians(rng.uniform(10.0, 40.0, J))
+    w[-1] = np.radians([turn_deg, 0.0, 0.0])
+    if second_turn_deg:
+        w[-2] = np.radians([0.0, second_turn_deg, 0.0])
+    B = so3.matrix_from_rotation_vector(w)
+    sd = np.radians(noise_deg) / np.sqrt(3)
+    A = so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
+    return R0, A, so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ B

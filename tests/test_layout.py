@@ -404,10 +404,6 @@ STRAYS = {
 }
 #: Tests that reach only another unit and are still to move to its file.
 NOT_YET_MOVED = {
-    "core/test_solvers_optimal.py::test_every_full_output_says_how_its_lower_bound_was_certified",
-    "core/test_solvers_registry.py::test_motions_refuse_a_bad_atol",
-    "core/test_solvers_registry.py::test_motions_accept_an_atol_in_range",
-    "core/test_solvers_registry.py::test_two_turns_or_two_pairs_are_not_one_pair",
     "rig/test_calibration.py::test_static_pose_sets_get_a_verdict_and_name_their_pairs",
     "rig/test_calibration.py::test_lab_recording_with_times_in_ms_is_refused",
     "rig/test_calibration.py::test_inverted_pose_sets_are_named",
