@@ -452,7 +452,6 @@ NOT_YET_MOVED = {
     "rig/test_online.py::test_a_rig_at_rest_is_not_a_repeat",
     "rig/test_online.py::test_the_repeat_tolerance_is_a_tenth_of_the_noise_between_its_bounds",
     "rig/test_online.py::test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid",
-    "rig/test_realdata.py::test_unknown_policy_is_refused",
     "rig/test_sensor_model.py::test_the_critical_value_is_student_s_t_of_the_blocks",
     "rig/test_sensor_model.py::test_the_jackknife_sees_a_block_that_pulls_the_fit",
     "study/test_book.py::test_summary_gives_the_counts_and_one_row_per_claim",

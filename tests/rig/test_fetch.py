@@ -38,7 +38,7 @@ def _files_the_project_reads():
 #: Names the scanned files write themselves (scratch files of test_realdata.py), not real
 #: recordings.
 SCRATCH_FILES = {"bad.txt", "c.yaml", "cam.txt", "imu.csv", "none.csv", "rep.txt", "robot.txt", "t.txt",
-                 "any.txt", "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv",
+                 "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv",
                  "ns.csv", "whole.csv", "half.csv", "gt.csv", "s.yaml", "none.yaml"}
 
 
