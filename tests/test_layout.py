@@ -448,8 +448,6 @@ NOT_YET_MOVED = {
     "rig/test_export.py::test_legacy_orbslam3_tbc_is_not_called_vision_only",
     "rig/test_export.py::test_valid_json_indented_with_tabs_is_read",
     "rig/test_export.py::test_basalt_quaternion_within_the_documented_norm_tolerance_is_read",
-    "rig/test_sensor_model.py::test_the_critical_value_is_student_s_t_of_the_blocks",
-    "rig/test_sensor_model.py::test_the_jackknife_sees_a_block_that_pulls_the_fit",
     "study/test_book.py::test_summary_gives_the_counts_and_one_row_per_claim",
     "study/test_book.py::test_counts_name_every_verdict_even_at_zero",
     "study/test_book.py::test_cli_claims_summary_prints_the_compact_table",
