@@ -8,7 +8,7 @@ import pytest
 
 from replication.core import so3
 from replication.core.so3 import random_rotations
-from replication.rig.realdata import real_data_available
+from replication.rig.realdata import data_root, real_data_available
 from replication.study.lab.settings import LabSettings
 
 
@@ -362,3 +362,25 @@ def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn
     sd = np.radians(noise_deg) / np.sqrt(3)
     A = so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
     return R0, A, so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ B
+
+
+#: Each rig's published calibrations, as files: the dataset's own (Kalibr), and Basalt's.
+_REFERENCES = {"euroc_mh01_orbslam3": ("euroc_cam0_sensor.yaml", "openvins_euroc_kalibr_imucam_chain.yaml",
+                                       "basalt_euroc_eucm_calib.json", "basalt_euroc_ds_calib.json"),
+               "tumvi_room1_orbslam3mono": ("camchain.yaml", "openvins_tum_vi_kalibr_imucam_chain.yaml",
+                                            "basalt_tumvi_512_eucm_calib.json", "basalt_tumvi_512_ds_calib.json")}
+
+#: Two real reference files (Basalt's EuRoC calibration, TUM-VI's camchain) and the mark of
+#: the tests that read them.
+REAL = data_root() if real_data_available() else Path("/nonexistent")
+BASALT = REAL / "euroc_mh01_orbslam3" / "basalt_euroc_ds_calib.json"
+CAMCHAIN = REAL / "tumvi_room1_orbslam3mono" / "camchain.yaml"
+needs_real_ea = pytest.mark.skipif(not (BASALT.exists() and CAMCHAIN.exists()), reason="real files not available")
+
+#: A 4x4 transform (no rotation, a translation of 0.1, 0.2, 0.3) as an OpenCV matrix's 16 numbers.
+I16 = "1.,0.,0.,0.1, 0.,1.,0.,0.2, 0.,0.,1.,0.3, 0.,0.,0.,1."
+
+
+def _angle(A, B):
+    """The angle between two rotations (deg)."""
+    return np.degrees(np.linalg.norm(so3.rotation_vector_from_matrix(np.asarray(A) @ np.asarray(B).T)))
