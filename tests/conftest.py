@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 
 from replication._io import PROJECT_ROOT
+from replication.core import so3
 from replication.core.so3 import random_rotations
-from replication.rig.realdata import real_data_available
+from replication.rig.realdata import data_root, real_data_available
 from replication.study import ledger
 from replication.study.lab.settings import LabSettings
+from replication.testing import rig_streams
 
 
 @pytest.fixture
@@ -390,3 +392,140 @@ def _edit(path, which, **changes):
                 path.write_text(json.dumps(nb, indent=1, ensure_ascii=False), encoding="utf-8")
                 return
     raise AssertionError(f"no record of {which} in {path}")
+
+
+def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
+    """``(A, B)``: ``n`` problems of ``J`` Haar camera motions and the sensor motions they imply,
+    each with up to ``noise_deg`` of noise."""
+    R0 = so3.random_rotations(rng, (n,))
+    A = so3.random_rotations(rng, (n, J))
+    B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
+    return A, B @ so3.random_rotations(rng, (n, J), angle_range_deg=(0.0, noise_deg))
+
+
+def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn_deg=0.0):
+    """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one
+    before it ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
+    R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.3, 0.8]))
+    w = np.zeros((J, 3))
+    w[:, 2] = np.radians(rng.uniform(10.0, 40.0, J))
+    w[-1] = np.radians([turn_deg, 0.0, 0.0])
+    if second_turn_deg:
+        w[-2] = np.radians([0.0, second_turn_deg, 0.0])
+    B = so3.matrix_from_rotation_vector(w)
+    sd = np.radians(noise_deg) / np.sqrt(3)
+    A = so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
+    return R0, A, so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ B
+
+
+#: Each rig's published calibrations, as files: the dataset's own (Kalibr), and Basalt's.
+_REFERENCES = {"euroc_mh01_orbslam3": ("euroc_cam0_sensor.yaml", "openvins_euroc_kalibr_imucam_chain.yaml",
+                                       "basalt_euroc_eucm_calib.json", "basalt_euroc_ds_calib.json"),
+               "tumvi_room1_orbslam3mono": ("camchain.yaml", "openvins_tum_vi_kalibr_imucam_chain.yaml",
+                                            "basalt_tumvi_512_eucm_calib.json", "basalt_tumvi_512_ds_calib.json")}
+
+#: Two real reference files (Basalt's EuRoC calibration, TUM-VI's camchain) and the mark of
+#: the tests that read them.
+REAL = data_root() if real_data_available() else Path("/nonexistent")
+BASALT = REAL / "euroc_mh01_orbslam3" / "basalt_euroc_ds_calib.json"
+CAMCHAIN = REAL / "tumvi_room1_orbslam3mono" / "camchain.yaml"
+needs_real_ea = pytest.mark.skipif(not (BASALT.exists() and CAMCHAIN.exists()), reason="real files not available")
+
+#: A 4x4 transform (no rotation, a translation of 0.1, 0.2, 0.3) as an OpenCV matrix's 16 numbers.
+I16 = "1.,0.,0.,0.1, 0.,1.,0.,0.2, 0.,0.,1.,0.3, 0.,0.,0.,1."
+
+
+def _angle(A, B):
+    """The angle between two rotations (deg)."""
+    return np.degrees(np.linalg.norm(so3.rotation_vector_from_matrix(np.asarray(A) @ np.asarray(B).T)))
+
+
+#: The calibration report's JSON schema (docs/calibration_report.schema.json).
+SCHEMA = json.loads((Path(__file__).resolve().parents[1] / "docs" / "calibration_report.schema.json").read_text())
+
+
+def _rig(seconds=60.0, phase=0.0):
+    """``(camera, gyro, sensor)`` of the synthetic rig (:func:`replication.testing.rig_streams`),
+    noise-free."""
+    return rig_streams(seconds, phase=phase)[1:]
+
+
+@pytest.fixture(scope="module")
+def rig():
+    """The noise-free synthetic rig of :func:`_rig`, once per test module."""
+    return _rig()
+
+
+def _reasons(result):
+    """A result's verdict reasons by check."""
+    return {r.check: r for r in result.verdict.reasons}
+
+
+@pytest.fixture
+def door_solver(monkeypatch):
+    """``make(answer) -> name``: registers a solver whose core returns ``answer(R, call)`` (``R``
+    the certified minimiser, ``call`` 0 for the calibration's own solve, then 1, 2, ... for each
+    later call: the replicates)."""
+    from replication.core.solvers import _registry, register, solver_info
+
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    core = solver_info("chordal_optimal").core
+
+    def make(answer):
+        calls = []
+
+        def bad(motions):
+            calls.append(1)
+            return answer(core(motions), len(calls) - 1)
+
+        name = f"door_test_{len(_registry._REGISTRY)}"
+        register(name, reference="test: a solver bad on some calls")(bad)
+        return name
+
+    return make
+
+
+def _poses(rig, step=60):
+    """Static pose sets ``(C, S)`` (``body_from_world``) taken from a rig's streams at every
+    ``step``-th camera sample."""
+    camera, _, sensor = rig
+    return np.swapaxes(camera.R[::step], -1, -2), np.swapaxes(sensor.at(camera.t[::step]), -1, -2)
+
+
+def _nan_like(R):
+    """A solver's declared failure: NaN shaped like ``R``."""
+    return np.full_like(R, np.nan)
+
+
+def _random_rotation(R, call):
+    """A rotation that is no solution: random (seeded by ``call``), batched like ``R``."""
+    return so3.random_rotations(np.random.default_rng(call), 1)[0] if R.ndim == 2 else so3.random_rotations(
+        np.random.default_rng(call), R.shape[0])
+
+
+def _stations(rng, N=30, *, station_noise_deg=0.3, bad=None, bad_deg=3.0):
+    """Static stations of a robot and a camera rigidly linked by R0 (``C_k = R0 S_k``, both
+    ``body_from_world``), each station's two attitudes with independent noise (``bad``: one
+    station's camera attitude turned by ``bad_deg``)."""
+    R0 = so3.random_rotations(rng, ())
+    W = so3.random_rotations(rng, ())  # the target's frame in the robot base's
+    S = so3.random_rotations(rng, N, angle_range_deg=(5.0, 60.0))
+    C = R0 @ S @ W
+    sd = np.radians(station_noise_deg) / np.sqrt(3)
+    C = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ C
+    S = so3.matrix_from_rotation_vector(rng.normal(0, sd, (N, 3))) @ S
+    if bad is not None:
+        C[bad] = so3.matrix_from_rotation_vector(np.radians(bad_deg) * np.array([0.0, 0.6, 0.8])) @ C[bad]
+    return R0, C, S
+
+
+def _turned(R, deg, axis=(1.0, 0.0, 0.0)):
+    """``R`` turned by ``deg`` about ``axis`` of its own frame."""
+    return R @ so3.matrix_from_rotation_vector(np.radians(deg) * np.asarray(axis))
+
+
+@pytest.fixture(scope="module")
+def rig_tr():
+    """``(R0, camera, gyro)``: a 40 s synthetic rig with camera noise (the two-reference tests)."""
+    R0, camera, gyro, _ = rig_streams(40.0, rng=np.random.default_rng(35), camera_noise_deg=0.02)
+    return R0, camera, gyro

@@ -395,79 +395,20 @@ def test_the_portability_files_share_out_every_notebook_once():
 #: belongs in their file; one that reaches no name of the package (a subprocess, a file's text) is
 #: not judged. The exceptions, with their reason (``<file>::<test>``):
 STRAYS = {
+    "core/test_solvers.py::test_every_exported_solver_refuses_bad_input":
+        "calls each solver through the dict EXPORTED, whose values the rule does not follow",
+    "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv":
+        'calls the OpenCV wrappers through solve("opencv_park") and its twins, by name',
+    "core/test_solvers_slsqp.py::test_registered_and_batched":
+        'calls SQP through solve("sqp"), by name',
+    "rig/test_export.py::test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command":
+        "runs rig.export through its command in a subprocess; the rule sees only read_vio_file reading the output",
+    "rig/test_export.py::test_the_export_command_writes_a_copy_and_says_what_changed":
+        "runs rig.export through its command in a subprocess; the rule sees only read_vio_file reading the output",
     "study/test_book.py::test_the_front_page_reads_in_five_minutes_in_a_real_browser":
         "the book is built in a subprocess and read in a browser; the ledger gives the counts it is checked against",
     "study/test_book.py::test_the_front_page_shows_the_counts_of_the_records":
         "the book is built in a subprocess; the test reads its HTML and the ledger it shows",
-}
-#: Tests that reach only another unit and are still to move to its file.
-NOT_YET_MOVED = {
-    "core/test_so3.py::test_check_rotation_rejects",
-    "core/test_solvers.py::test_every_exported_solver_refuses_bad_input",
-    "core/test_solvers.py::test_singular_values_and_top_vectors_from_one_eigh_match_the_svd",
-    "core/test_solvers.py::test_sym_eigvals_come_from_the_decomposition_made_first",
-    "core/test_solvers.py::test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise",
-    "core/test_solvers.py::test_weighted_kronecker_operator",
-    "core/test_solvers_opencv.py::test_opencv_wrappers_refuse_long_chains_before_calling_opencv",
-    "core/test_solvers_optimal.py::test_every_full_output_says_how_its_lower_bound_was_certified",
-    "core/test_solvers_registry.py::test_motions_refuse_a_bad_atol",
-    "core/test_solvers_registry.py::test_motions_accept_an_atol_in_range",
-    "core/test_solvers_registry.py::test_two_turns_or_two_pairs_are_not_one_pair",
-    "core/test_solvers_slsqp.py::test_registered_and_batched",
-    "rig/test_calibration.py::test_static_pose_sets_get_a_verdict_and_name_their_pairs",
-    "rig/test_calibration.py::test_lab_recording_with_times_in_ms_is_refused",
-    "rig/test_calibration.py::test_inverted_pose_sets_are_named",
-    "rig/test_calibration.py::test_replicates_that_are_no_rotations_fail_naming_the_solver_and_give_no_radius",
-    "rig/test_calibration.py::test_bootstrap_replicates_without_masks_refuse_non_rotations",
-    "rig/test_calibration.py::test_replicates_that_are_no_solutions_fail_naming_the_solver_and_give_no_radius",
-    "rig/test_calibration.py::test_an_outlying_station_drawn_often_does_not_make_the_optimum_a_non_solution",
-    "rig/test_calibration.py::test_a_replicate_is_judged_at_the_factor_times_the_answers_fit_on_the_same_pairs",
-    "rig/test_calibration.py::test_bootstrap_replicates_without_masks_refuse_no_solutions_naming_the_solver",
-    "rig/test_calibration.py::test_a_solver_that_returns_its_first_answer_on_every_replicate_fails_naming_it",
-    "rig/test_calibration.py::test_replicates_frozen_at_the_bound",
-    "rig/test_calibration.py::test_pose_sets_resample_stations_not_pairs",
-    "rig/test_calibration.py::test_station_bootstrap_covers_the_error_about_95_percent",
-    "rig/test_calibration.py::test_an_outlying_station_is_named_with_its_index",
-    "rig/test_calibration.py::test_outlying_station_threshold_boundary",
-    "rig/test_calibration.py::test_motion_median_threshold_boundaries",
-    "rig/test_calibration.py::test_excitation_threshold_boundary",
-    "rig/test_calibration.py::test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell",
-    "rig/test_calibration.py::test_remount_threshold_boundaries",
-    "rig/test_calibration.py::test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate",
-    "rig/test_calibration.py::test_the_mirror_ratio_threshold_at_its_boundary",
-    "rig/test_calibration.py::test_a_static_pose_report_has_no_clock_offset_and_the_schema_says_null_is_allowed",
-    "rig/test_calibration.py::test_stations_given_twice_are_named_and_counted_once_in_the_bootstrap",
-    "rig/test_calibration.py::test_stations_remeasured_within_the_noise_are_repeats_too",
-    "rig/test_calibration.py::test_a_repeat_is_within_the_motion_a_pair_needs_on_both_sides",
-    "rig/test_calibration.py::test_a_chain_of_close_stations_is_not_one_station",
-    "rig/test_calibration.py::test_a_station_joins_a_group_only_if_it_repeats_every_member",
-    "rig/test_calibration.py::test_with_consecutive_pairs_only_the_bad_stations_are_blamed",
-    "rig/test_calibration.py::test_with_consecutive_pairs_a_clean_set_blames_no_station",
-    "rig/test_calibration.py::test_a_stations_own_residual_is_its_error_and_the_pairs_median_would_blame_its_neighbours",
-    "rig/test_calibration.py::test_identical_stations_are_repeats_even_with_no_motion_threshold",
-    "rig/test_calibration.py::test_two_references_for_static_poses_and_bad_shapes",
-    "rig/test_export.py::test_numbers_round_trip_and_always_carry_a_dot",
-    "rig/test_export.py::test_a_hand_made_static_pose_report_keeps_kalibrs_timeshift_through_the_command",
-    "rig/test_export.py::test_reference_files_that_are_not_camera_imu_extrinsics_are_refused",
-    "rig/test_export.py::test_the_export_command_writes_a_copy_and_says_what_changed",
-    "rig/test_export.py::test_the_two_published_references_of_each_rig_disagree_by_the_reference_floor",
-    "rig/test_export.py::test_the_floor_table_reads_within_beyond_and_one_reference",
-    "rig/test_export.py::test_only_a_4x4_matrix_is_read_or_written",
-    "rig/test_export.py::test_euroc_sensor_yaml_without_sensor_type_is_not_taken_for_a_camera",
-    "rig/test_export.py::test_a_camchain_named_txt_is_recognised_by_content",
-    "rig/test_export.py::test_legacy_orbslam3_tbc_is_not_called_vision_only",
-    "rig/test_export.py::test_valid_json_indented_with_tabs_is_read",
-    "rig/test_export.py::test_basalt_quaternion_within_the_documented_norm_tolerance_is_read",
-    "rig/test_fetch.py::test_missing_data_names_the_command",
-    "rig/test_fetch.py::test_stereo_rectification_rotation_of_the_euroc_run",
-    "rig/test_fetch.py::test_stereo_settings_errors_name_the_entry",
-    "rig/test_online.py::test_radius_matches_the_gaussian_quantile",
-    "rig/test_online.py::test_a_rig_at_rest_is_not_a_repeat",
-    "rig/test_online.py::test_the_repeat_tolerance_is_a_tenth_of_the_noise_between_its_bounds",
-    "rig/test_online.py::test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid",
-    "rig/test_realdata.py::test_unknown_policy_is_refused",
-    "rig/test_sensor_model.py::test_the_critical_value_is_student_s_t_of_the_blocks",
-    "rig/test_sensor_model.py::test_the_jackknife_sees_a_block_that_pulls_the_fit",
 }
 
 
@@ -642,14 +583,14 @@ def test_every_unit_has_one_test_file():
 @pytest.mark.parametrize("path", TEST_FILES_OF_UNITS, ids=lambda p: p.relative_to(TESTS).as_posix())
 def test_each_test_reaches_its_file_s_unit(path):
     off, _ = strays_of(path)
-    off = [name for name in off if f"{path.relative_to(TESTS).as_posix()}::{name}" not in {*STRAYS, *NOT_YET_MOVED}]
+    off = [name for name in off if f"{path.relative_to(TESTS).as_posix()}::{name}" not in STRAYS]
     assert not off, (f"{path.relative_to(ROOT)}: these tests reach no name of its unit or of a module that uses it; "
                      f"move each to the file of the unit it reaches, or list it in STRAYS with its reason: {off}")
 
 
 def test_the_strays_listed_still_exist_and_still_stray():
     listed = {}
-    for key in {*STRAYS, *NOT_YET_MOVED}:
+    for key in STRAYS:
         listed.setdefault(key.split("::")[0], set()).add(key.split("::")[1])
     for file, names in listed.items():
         assert names <= set(strays_of(TESTS / file)[0]), f"{file}: {names} no longer stray or exist"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import NUMPY_REPR
-from replication.core import so3
+from replication.core import checks, so3
 from replication.core.checks import (
     MAX_ROTATION_ATOL,
     ROTATION_ATOL,
@@ -210,3 +210,18 @@ def test_parameter_refusals_show_numpy_scalars_as_plain_numbers():
         with pytest.raises(ValueError) as err:
             build()
         assert phrase in str(err.value) and not NUMPY_REPR.search(str(err.value)), str(err.value)
+
+
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        (np.zeros((3, 4)), r"shape \(\.\.\., 3, 3\)"),
+        (np.full((2, 3, 3), np.nan), "NaN or inf"),
+        (np.diag([1.0, 1.0, 1.1]), "not a rotation matrix"),
+        (np.diag([1.0, 1.0, -1.0]), "reflection"),
+        ("abc", "numeric"),
+    ],
+)
+def test_check_rotation_rejects(bad, message):
+    with pytest.raises(ValueError, match=message):
+        checks.check_rotation_matrices(bad)

@@ -5,6 +5,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from replication.core import handeye, motions, so3
+from replication.core.solvers import pair_residual_deg
 
 
 @settings(max_examples=30, deadline=None)
@@ -141,3 +142,22 @@ def test_relative_rotations_of_chosen_pairs_follow_eq_3_in_both_conventions(rng)
         handeye.relative_rotations(C, pairs=([0, 1], [-1, 2]))
     with pytest.raises(ValueError, match="t_index must be a 1-D array of integers"):
         handeye.relative_rotations(C, pairs=([0.5], [1]))
+
+
+def test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise(problem):
+    R0, A, B = problem
+    assert pair_residual_deg(R0, A, B).max() < 1e-12  # measured 3e-14
+    tilt = Rotation.from_rotvec([0, 0, np.radians(10)]).as_matrix()
+    r = pair_residual_deg(R0, A, B @ tilt)
+    np.testing.assert_allclose(r, 10.0, rtol=0, atol=1e-12)  # measured 5e-15
+
+
+
+def test_weighted_kronecker_operator(problem):
+    _, A, B = problem
+    K = handeye.kronecker_operator(A, B)
+    np.testing.assert_allclose(handeye.kronecker_operator(A, B, weights=np.full(20, 3.0)), K)
+    w = np.ones(20)
+    w[:5] = 0
+    np.testing.assert_allclose(handeye.kronecker_operator(A, B, weights=w),
+                               handeye.kronecker_operator(A[5:], B[5:]), atol=1e-15)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from conftest import _noisy_batch
 from replication.core import checks, handeye, motions, so3
 from replication.core.solvers import (
     GAP_TOL,
@@ -33,7 +34,6 @@ from replication.core.solvers import (
     chordal_optimal,
     global_certificate,
     horaud_dornaika,
-    pair_residual_deg,
     park_martin,
     robust,
     solve,
@@ -422,42 +422,6 @@ def test_motions_object_is_read_only_and_caches_K(problem):
         solve("andreff", m, B)
 
 
-def _noisy_batch(rng, n=300, J=10, noise_deg=1.0):
-    R0 = so3.random_rotations(rng, (n,))
-    A = so3.random_rotations(rng, (n, J))
-    B = np.swapaxes(R0, -1, -2)[:, None] @ A @ R0[:, None]
-    return A, B @ so3.random_rotations(rng, (n, J), angle_range_deg=(0.0, noise_deg))
-
-
-def test_singular_values_and_top_vectors_from_one_eigh_match_the_svd(rng):
-    """One eigh of K^T K stands for the SVD of K: the top pair to rounding, the small values within
-    eps sigma_1^2 / sigma_k (what their docstring states), the limit's vectors paired as K v1 =
-    sigma_1 u1."""
-    m = Motions(*_noisy_batch(rng, J=3))  # J = 3: small singular values down to about 1e-5
-    U, s, Vt = np.linalg.svd(m.K)
-    sv = m.singular_values
-    assert np.max(np.abs(sv[..., :2] - s[..., :2]) / s[..., :2]) <= 1e-14
-    assert np.all(np.abs(sv - s) <= 8 * np.finfo(float).eps * s[..., :1] ** 2 / np.maximum(s, 1e-300) + 1e-15)
-    assert m.observability.kron_singular_values is sv
-    u1, s1, v1 = m.top_singular_vectors
-    sign = np.sign(np.einsum("...i,...i->...", v1, Vt[..., 0, :]))[..., None]
-    assert np.max(np.abs(v1 - sign * Vt[..., 0, :])) <= 1e-12
-    assert np.max(np.abs(u1 - sign * U[..., :, 0])) <= 1e-12
-    assert np.max(np.abs(np.einsum("...ab,...b->...a", m.K, v1) - s1[..., None] * u1)) <= 1e-14
-    assert np.max(np.abs(s1 - s[..., 0])) <= 1e-14
-
-
-def test_sym_eigvals_come_from_the_decomposition_made_first(rng):
-    A, B = _noisy_batch(rng)
-    fresh = Motions(A, B)
-    want = np.linalg.eigvalsh(fresh.sym)[..., ::-1]
-    assert np.array_equal(fresh.sym_eigvals, want)  # eigvalsh when nothing asked for the vectors
-    primed = Motions(A, B)
-    _ = primed.sym_eigh
-    assert primed.sym_eigvals is primed.sym_eigh[0]
-    assert np.max(np.abs(primed.sym_eigvals - want)) <= 1e-14
-
-
 @pytest.mark.parametrize("method, decompositions", [
     ("chordal_optimal", {"eigh": 1, "eigvalsh": 1}),  # sym(K): start and checks; the Lagrangian certificate
     ("andreff", {"eigh": 1}),  # sym(K): start and checks
@@ -716,14 +680,6 @@ def test_robust_survives_outlier_pairs_that_break_least_squares(rng):
     assert np.median(err_ls) > 10 * np.median(err_robust)
 
 
-def test_pair_residual_is_zero_for_exact_pairs_and_the_motion_angle_otherwise(problem):
-    R0, A, B = problem
-    assert pair_residual_deg(R0, A, B).max() < 1e-12  # measured 3e-14
-    tilt = Rotation.from_rotvec([0, 0, np.radians(10)]).as_matrix()
-    r = pair_residual_deg(R0, A, B @ tilt)
-    np.testing.assert_allclose(r, 10.0, rtol=0, atol=1e-12)  # measured 5e-15
-
-
 def test_opencv_pose_chain_reproduces_the_pairs(problem):
     _, A, B = problem
     Hg, Hc = _chain(A, B)
@@ -761,16 +717,6 @@ def test_nearly_single_axis_motion_warns(rng):
     A = Rotation.from_rotvec(w).as_matrix()
     with pytest.warns(ObservabilityWarning, match="nearly single-axis motion"):
         solve("park_martin", A, R0.T @ A @ R0)
-
-
-def test_weighted_kronecker_operator(problem):
-    _, A, B = problem
-    K = handeye.kronecker_operator(A, B)
-    np.testing.assert_allclose(handeye.kronecker_operator(A, B, weights=np.full(20, 3.0)), K)
-    w = np.ones(20)
-    w[:5] = 0
-    np.testing.assert_allclose(handeye.kronecker_operator(A, B, weights=w),
-                               handeye.kronecker_operator(A[5:], B[5:]), atol=1e-15)
 
 
 @pytest.mark.parametrize("cv_name, ours", [("opencv_park", park_martin), ("opencv_horaud", horaud_dornaika)])

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from conftest import exact_problem
+from conftest import _one_axis_plus_one_turn, exact_problem, noisy_problem
 from replication.core import checks, so3, solvers
-from replication.core.handeye import handeye_cost, relative_rotations
+from replication.core.handeye import handeye_cost
 from replication.core.motions import Motions, prepare_motions
 from replication.core.solvers import (
     AccuracyWarning,
@@ -186,32 +186,6 @@ def test_a_core_answer_is_returned_as_floats(bad_core, two_noisy):
 
 # ---------------------------------------------------- the tolerance of the rotation test is checked
 
-@pytest.mark.parametrize("atol, match", [
-    (float("nan"), r"atol must be a finite number, got nan"),
-    (float("inf"), r"atol must be a finite number, got inf"),
-    (-1.0, r"atol must be > 0, got -1.0"),
-    (0.0, r"atol must be > 0, got 0.0"),
-    (0.5, r"atol must be <= 0.01 \(MAX_ROTATION_ATOL.*got 0.5"),
-    ("1e-6", r"atol must be a finite number, got '1e-6'"),
-    (True, r"atol must be a finite number, got True"),
-], ids=["nan", "inf", "negative", "zero", "too-loose", "str", "bool"])
-def test_motions_refuse_a_bad_atol(problem, atol, match):
-    _, A, B = problem
-    with pytest.raises(ValueError, match=match):
-        Motions(2 * A, B, atol=atol)  # a NaN tolerance used to accept these non-rotations
-    with pytest.raises(ValueError, match=match):
-        Motions(A, B, atol=atol)
-    with pytest.raises(ValueError, match=match):
-        relative_rotations(A, atol=atol)
-
-
-@pytest.mark.parametrize("atol", [1e-12, 1e-4, np.float64(1e-2)])
-def test_motions_accept_an_atol_in_range(problem, atol):
-    _, A, B = problem
-    assert Motions(A, B, atol=atol).J == 20
-    with pytest.raises(ValueError, match="not a rotation matrix"):
-        Motions(2 * A, B, atol=atol)
-
 
 # --------------------------------------------------------------- the same checks for every re-solve
 
@@ -244,20 +218,6 @@ def test_checked_core_returns_the_masks_of_non_rotations(bad_core, two_noisy):
 
 # ------------------------------------------------ one axis plus a single turn: every solver warns
 
-def _one_axis_plus_one_turn(rng, J=20, turn_deg=30.0, noise_deg=0.1, second_turn_deg=0.0):
-    """``J`` motions about z (10-40 deg) but the last, ``turn_deg`` about x (and, if given, the one
-    before it ``second_turn_deg`` about y), with ``noise_deg`` on each side."""
-    R0 = so3.matrix_from_rotation_vector(np.array([0.4, -0.3, 0.8]))
-    w = np.zeros((J, 3))
-    w[:, 2] = np.radians(rng.uniform(10.0, 40.0, J))
-    w[-1] = np.radians([turn_deg, 0.0, 0.0])
-    if second_turn_deg:
-        w[-2] = np.radians([0.0, second_turn_deg, 0.0])
-    B = so3.matrix_from_rotation_vector(w)
-    sd = np.radians(noise_deg) / np.sqrt(3)
-    A = so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ R0 @ B @ R0.T
-    return R0, A, so3.matrix_from_rotation_vector(rng.normal(0, sd, (J, 3))) @ B
-
 
 @pytest.mark.parametrize("method", sorted(available()))
 def test_every_registered_solver_warns_when_one_pair_carries_the_dominant_axis(rng, method):
@@ -289,15 +249,6 @@ def test_the_one_pair_warning_at_its_boundary(rng):
             solve("chordal_optimal", A, B)
         assert any(issubclass(w.category, ObservabilityWarning) and "rest on one pair" in str(w.message)
                    for w in caught) is warned
-
-
-def test_two_turns_or_two_pairs_are_not_one_pair(rng):
-    from replication.core.motions import Motions
-
-    _, A, B = _one_axis_plus_one_turn(rng, noise_deg=0.0, second_turn_deg=30.0)
-    assert Motions(A, B).leave_one_out_spread_deg[0] > 5.0
-    _, A, B = _one_axis_plus_one_turn(rng, J=2, noise_deg=0.0)
-    assert np.isnan(Motions(A, B).leave_one_out_spread_deg[0])  # J = 2 has no redundancy to speak of
 
 
 def test_opencvs_own_door_warns_too(rng):
@@ -841,3 +792,16 @@ def test_solve_decomposes_sym_k_once_for_a_relaxed_start_solver(monkeypatch, rel
     # with the flag, the checks' eigenvalues are those of the one decomposition with vectors (the
     # same array)
     assert (m.sym_eigvals is m.sym_eigh[0]) is relaxed_start
+
+
+@pytest.mark.parametrize("method", ["park_martin", "sqp", "two_step_left"])
+def test_every_full_output_says_how_its_lower_bound_was_certified(method):
+    from replication.core.motions import motion_observability
+
+    R0, A, B = noisy_problem(6, J=12)
+    sol = solve(method, A, B, full_output=True, **({"init": R0} if method == "sqp" else {}))
+    assert sol.method == method and sol.certificate == "lagrangian" and not sol.sdp_used
+    expected = motion_observability(A, B)  # computed when read, the same numbers
+    assert sol.observability.spectral_ratio == expected.spectral_ratio
+    np.testing.assert_array_equal(sol.observability.kron_singular_values, expected.kron_singular_values)
+    assert sol.duality_gap >= 0 and sol.cost >= sol.lower_bound

@@ -2,7 +2,16 @@
 import numpy as np
 import pytest
 
-from replication.core.stats import bracket, declared_bound, format_ci, mean_se, paired_ratio_ci, share_range, z_score
+from replication.core.stats import (
+    bracket,
+    declared_bound,
+    format_ci,
+    mean_se,
+    paired_ratio_ci,
+    radius_deg,
+    share_range,
+    z_score,
+)
 
 
 def test_mean_se_and_z():
@@ -102,3 +111,11 @@ def test_a_margin_scale_below_one_is_refused(monkeypatch, text):
     monkeypatch.setenv("REPLICATION_MARGIN_SCALE", text)
     with pytest.raises(ValueError, match="REPLICATION_MARGIN_SCALE must be a number >= 1"):
         declared_bound(1.0, 0, margin=0.1)
+
+
+def test_radius_matches_the_gaussian_quantile():
+    cov = np.diag([1.0, 1.0, 1.0]) * np.radians(0.1) ** 2
+    # |w| / 0.1 deg is chi with 3 degrees of freedom: its 95 % quantile is 2.7955
+    assert radius_deg(cov) == pytest.approx(0.1 * 2.7955, rel=0.01)
+    # nu = 1: the worst case
+    assert radius_deg(np.diag([1.0, 0.0, 0.0]) * np.radians(0.1) ** 2) == pytest.approx(0.1 * 1.96, rel=0.02)

@@ -282,3 +282,8 @@ def test_a_fractional_csv_stamp_is_quoted_as_written(tmp_path):
     path.write_text("\n".join([IMU_HEAD, "1520530308.181901469,0,0,0,0,0,9.8", "1520530308.186917469,0,0,0,0,0,9.8"]))
     with pytest.raises(DataFileError, match=r"line 2, column 1: the time stamp 1520530308.181901469 has a fraction"):
         rd.load_euroc_imu(path)
+
+
+def test_unknown_policy_is_refused():
+    with pytest.raises(ValueError, match=r"repeated must be one of 'refuse', 'keep-first'.*got 'first'"):
+        read_table("any.txt", ("t", "x"), repeated="first")

@@ -1,13 +1,15 @@
 """Input mistakes that only a reference shows: the IMU's own trajectory given as the camera file,
 and the camera and sensor files swapped, named where the reference check would otherwise blame
 permuted gyro axes or a reference for another rig; at the bounds of
-:data:`replication.rig.diagnose.IMU_AS_CAMERA_DEG`."""
+:data:`replication.rig.diagnose.IMU_AS_CAMERA_DEG`; static pose sets with the camera's or the
+robot's poses inverted, named (both, in a fixed order, when the data cannot tell)."""
 import warnings
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from conftest import _reasons, _stations
 from replication import calibrate
 from replication.core import so3
 from replication.rig import diagnose
@@ -22,9 +24,11 @@ from replication.rig.diagnose import (
     _one_finding,
     reference_mistakes,
 )
+from replication.rig.poses import calibrate_poses
 from replication.rig.quality import THRESHOLDS
 from replication.rig.streams import GyroStream, OrientationStream
 from replication.testing import RIG_R0, rig_motion
+from replication.testing import RIG_R0 as R0
 
 #: A camera-IMU rotation far from the identity (a camera's reference).
 R_CAM = RIG_R0
@@ -341,3 +345,32 @@ def test_a_reference_tells_tied_hypotheses_apart():
 
 def test_hypotheses_are_listed_once_each():
     assert len(set(HYPOTHESES)) == len(HYPOTHESES)
+
+
+def test_inverted_pose_sets_are_named(rig):
+    camera, _, sensor = rig
+    C, S = np.swapaxes(camera.R[::40], -1, -2), np.swapaxes(sensor.at(camera.t[::40]), -1, -2)
+    noise = so3.matrix_from_rotation_vector(np.random.default_rng(2).normal(size=(len(C), 3)) * np.radians(0.1))
+    C = noise @ C  # a little camera noise, as on a real robot set
+    for name, c, s in (("camera poses inverted", np.swapaxes(C, -1, -2), S),
+                       ("robot poses inverted", C, np.swapaxes(S, -1, -2))):
+        r = calibrate_poses(c, s, n_bootstrap=0)
+        assert r.verdict.level == "fail" and name in _reasons(r)["input_mistake"].message, name
+    assert calibrate_poses(C, S, n_bootstrap=0, reference=R0).verdict.level == "ok"
+    # both inverted is a consistent problem for another unknown (the world-to-world rotation): the
+    # rotations alone cannot show it; a reference does
+    both = calibrate_poses(np.swapaxes(C, -1, -2), np.swapaxes(S, -1, -2), n_bootstrap=0, reference=R0)
+    assert both.verdict.level == "fail" and "reference_error_deg" in _reasons(both)
+
+
+
+def test_inverted_pose_sets_are_both_named_when_the_data_cannot_tell(rng):
+    R0, C, S = _stations(rng)
+    r = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0)
+    message = _reasons(r)["input_mistake"].message
+    # both fit equally: named together (the branch this test is about was conditional; it always
+    # holds here), camera first, and the reference decides
+    assert "camera poses inverted" in message and "robot poses inverted" in message and "cannot tell" in message
+    assert message.index("camera poses") < message.index("robot poses")
+    decided = calibrate_poses(np.swapaxes(C, -1, -2), S, n_bootstrap=0, reference=R0)
+    assert "robot poses inverted" not in _reasons(decided)["input_mistake"].message.split(";")[0]

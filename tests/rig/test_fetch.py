@@ -38,8 +38,8 @@ def _files_the_project_reads():
 #: Names the scanned files write themselves (scratch files of test_realdata.py), not real
 #: recordings.
 SCRATCH_FILES = {"bad.txt", "c.yaml", "cam.txt", "imu.csv", "none.csv", "rep.txt", "robot.txt", "t.txt",
-                 "any.txt", "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv",
-                 "ns.csv", "whole.csv", "half.csv", "gt.csv"}
+                 "b.csv", "data.csv", "flip.csv", "m.csv", "mocap.csv", "rep.csv", "s.csv", "x.csv",
+                 "ns.csv", "whole.csv", "half.csv", "gt.csv", "s.yaml", "none.yaml"}
 
 
 def test_manifest_lists_every_real_data_file_the_project_reads():
@@ -141,30 +141,6 @@ def test_cli_help_check_and_bad_arguments(tmp_path):
     assert out.returncode == 1 and "missing" in out.stdout
     out = run(str(tmp_path), "--only", "nope")
     assert out.returncode == 2 and "no such folder" in out.stderr
-
-
-def test_missing_data_names_the_command(tmp_path):
-    with pytest.raises(FileNotFoundError, match="python -m replication fetch-data DEST"):
-        rd.data_root(tmp_path / "nowhere")
-
-
-@needs_real
-def test_stereo_rectification_rotation_of_the_euroc_run():
-    cfg = rd.load_orbslam3_stereo(rd.data_root() / "euroc_mh01_orbslam3" / "orbslam3_Stereo_EuRoC.yaml")
-    from replication.core.so3 import rotation_angle_deg
-    assert abs(float(rotation_angle_deg(cfg.rectification_rotation())) - 0.620) < 0.002  # the shared README's
-
-
-def test_stereo_settings_errors_name_the_entry(tmp_path):
-    path = tmp_path / "s.yaml"
-    path.write_text('%YAML:1.0\nCamera.type: "PinHole"\nCamera1.fx: 1.0\n')
-    with pytest.raises(ValueError, match="entry 'Camera1.cx' missing"):
-        rd.load_orbslam3_stereo(path)
-    path.write_text('%YAML:1.0\nCamera.type: "KannalaBrandt8"\n')
-    with pytest.raises(ValueError, match="only 'PinHole'"):
-        rd.load_orbslam3_stereo(path)
-    with pytest.raises(FileNotFoundError, match="no such file"):
-        rd.load_orbslam3_stereo(tmp_path / "none.yaml")
 
 
 def _unreachable(error):

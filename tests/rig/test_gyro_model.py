@@ -1,8 +1,10 @@
 """The numerical core of the gyro's sensor model: the axes' matrix and the misalignment's
-Jacobian."""
+Jacobian, the block jackknife and its Student's t critical value."""
 import numpy as np
+import pytest
 
 from replication.rig import gyro_model as gm
+from replication.rig.gyro_model import critical_value
 from replication.rig.sensor_model import _pairs, estimate_sensor_model
 from replication.rig.streams import GyroStream
 from replication.testing import rig_streams
@@ -54,3 +56,25 @@ def test_the_held_account_recovers_a_linear_problem_s_truth_and_moves():
     step, cov, moves = gm._held_account(r, jac, np.ones(300), 30, F, h)
     assert np.allclose(p + step, truth) and cov.shape == (4, 4) and moves.shape == (3, 1)
     assert np.allclose(free + moves[:, 0] * (truth[3] - 0.0), truth[:3])
+
+
+def test_the_critical_value_is_student_s_t_of_the_blocks():
+    assert critical_value(7) == pytest.approx(2.447, abs=1e-3)  # 15 s at 20 Hz: 280 pairs, blocks of 40
+    assert critical_value(29) == pytest.approx(2.048, abs=1e-3)  # 60 s
+    assert critical_value(10 ** 6) == pytest.approx(1.96, abs=1e-3)
+
+
+
+def test_the_jackknife_sees_a_block_that_pulls_the_fit():
+    """Doubling one block's residuals along a parameter's gradient widens that parameter's jackknife
+    deviation."""
+    from replication.rig.gyro_model import _block_jackknife
+
+    rng = np.random.default_rng(9)
+    jac = rng.normal(size=(400, 3, 2))
+    r = rng.normal(size=(400, 3))
+    base = _block_jackknife(r, jac, np.ones(400), 40, np.arange(2))
+    assert base[1] == 10 and base[0].shape == (2, 2) and np.all(np.linalg.eigvalsh(base[0]) > 0)
+    r2 = r.copy()
+    r2[:40] *= 5.0
+    assert _block_jackknife(r2, jac, np.ones(400), 40, np.arange(2))[0][0, 0] > 2 * base[0][0, 0]

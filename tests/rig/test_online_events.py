@@ -825,3 +825,41 @@ def test_a_pair_exactly_the_tolerance_away_is_a_repeat():
     near = _flat(B)
     near[2] += tol
     assert abs(near[2] - _flat(B)[2]) == tol and f.seen(_flat(A), near) is True
+
+
+@pytest.mark.parametrize("angle, small", [(0.9 * SMALL_MOTION_DEG, True), (1.1 * SMALL_MOTION_DEG, False)])
+def test_a_rig_at_rest_is_not_a_repeat(angle, small):
+    A = so3.matrix_from_rotation_vector(np.radians(angle) * np.array([1.0, 0.0, 0.0]))
+    f = RepeatFilter()
+    flat = A.ravel().tolist()
+    assert not f.seen(flat, flat)
+    assert f.seen(flat, flat) is (not small)  # below SMALL_MOTION_DEG never a repeat
+
+
+
+@pytest.mark.parametrize("rms, tol", [(0.05, DUPLICATE_DEG), (0.2, 0.02), (0.4, 0.04), (0.6, 0.05), (math.inf, 0.05)])
+def test_the_repeat_tolerance_is_a_tenth_of_the_noise_between_its_bounds(rms, tol):
+    from replication.rig.online_events import REPEAT_MAX_FACTOR, REPEAT_NOISE_SHARE
+
+    assert (REPEAT_NOISE_SHARE, REPEAT_MAX_FACTOR) == (0.1, 5.0)
+    f = RepeatFilter()
+    f.set_noise(rms)
+    assert f.tolerance_deg == pytest.approx(tol, rel=1e-12)
+    g = RepeatFilter(0.0)
+    g.set_noise(rms)
+    assert g.tolerance_deg == 0.0  # exact repeats stay exact
+
+
+
+@pytest.mark.parametrize("share, repeat", [(0.99, True), (1.01, False)])
+def test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid(share, repeat):
+    rng = np.random.default_rng(61)
+    for _ in range(100):
+        A, B = so3.random_rotations(rng, 2)
+        f = RepeatFilter()
+        f.set_noise(0.3)
+        tol = math.radians(f.tolerance_deg)
+        assert f.tolerance_deg == pytest.approx(0.03)
+        f.seen(A.ravel().tolist(), B.ravel().tolist())
+        near = (B.ravel() + share * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
+        assert f.seen(A.ravel().tolist(), near) is repeat

@@ -584,3 +584,70 @@ def test_judge_tolerates_missing_residuals():
                             radius_kind="curvature")
     # nothing to judge but the count of pairs: no error, and only that warning
     assert [(r.check, r.level) for r in judge(e).reasons] == [("n_pairs", "warning")]
+
+
+class _Change:
+    significant, split_time, n_before, n_after, p_value, difference_radius_deg = True, 10.0, 500, 500, 1e-6, 0.05
+    level = 0.01
+    R_before = R_after = np.eye(3)
+
+    def __init__(self, angle_deg, significant=True):
+        self.angle_deg, self.significant = angle_deg, significant
+
+
+
+@pytest.mark.parametrize("ratio, flagged", [(2.99, False), (3.01, True)])
+def test_outlying_station_threshold_boundary(ratio, flagged):
+    medians = np.full(20, 0.4)
+    medians[3] = ratio * 0.4
+    e = Evidence(n_pairs=190, residual_median_deg=0.4, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0, pose_residual_medians_deg=tuple(medians))
+    assert ("pose_outliers" in {r.check for r in judge(e).reasons}) is flagged
+
+
+
+@pytest.mark.parametrize("motion, level", [(1.01, None), (0.99, "warning"), (0.51, "warning"), (0.49, "fail")])
+def test_motion_median_threshold_boundaries(motion, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.001, motion_median_deg=motion, bootstrap_deg=0.1,
+                 axis_spread_deg=10.0)
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("motion_median_deg") == level
+
+
+
+@pytest.mark.parametrize("excitation, level", [(1.01, None), (0.99, "warning")])
+def test_excitation_threshold_boundary(excitation, level):
+    e = Evidence(n_pairs=100, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.1,
+                 excitation_deg=excitation, radius_kind="curvature")
+    found = {r.check: r.level for r in judge(e).reasons}
+    assert found.get("excitation_deg") == level
+
+
+
+@pytest.mark.parametrize("angle, significant, level", [
+    (0.49, True, None), (0.51, True, "warning"), (0.74, True, "warning"), (0.76, True, "fail"), (5.0, False, None)])
+def test_remount_threshold_boundaries(angle, significant, level):
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(angle, significant))
+    assert {r.check: r.level for r in judge(e).reasons}.get("remount_deg") == level
+
+
+
+@pytest.mark.parametrize("fit, reported", [(0.29, True), (0.31, False)])
+def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, reported):
+    """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount
+    (the residual reasons say what it is); the bound is residual_to_motion's fail bound."""
+    e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
+                 axis_spread_deg=10.0, change=_Change(2.0), change_sides_fit=fit)
+    assert ("remount_deg" in {r.check for r in judge(e).reasons}) is reported
+    assert THRESHOLDS["residual_to_motion"][1] == 0.3
+
+
+
+def test_the_mirror_ratio_threshold_at_its_boundary():
+    bound = THRESHOLDS["mirror_fit_ratio"][0]
+    kw = dict(n_pairs=100, residual_median_deg=0.1, motion_median_deg=20.0, bootstrap_deg=0.05)
+    below = judge(Evidence(**kw, mirror_fit_ratio=bound * (1 - 1e-9), mirror_normal=(0.0, 0.0, 1.0)))
+    assert [(x.check, x.level) for x in below.reasons] == [("mirror_fit_ratio", "warning")]
+    assert "[0.0, 0.0, 1.0], sensor frame" in below.reasons[0].message
+    assert judge(Evidence(**kw, mirror_fit_ratio=bound)).reasons == ()

@@ -1,6 +1,7 @@
 """The loaders of real recordings and references (``replication/rig/realdata.py``): formats,
 malformed lines named, dataset files as shipped (EuRoC's 17 columns, repeated time stamps by
-policy); the shared real recordings are used where present (``needs_real``, which the command's
+policy), ORB-SLAM3's stereo settings, a missing data folder naming ``fetch-data``; the shared real
+recordings are used where present (``needs_real``, which the command's
 end-to-end tests in tests/cli/test_calibrate.py import with the files below)."""
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from conftest import GT_HEADER, NUMPY_REPR, TUM_LINES, _write, needs_real, write
 from replication.core import so3
 from replication.rig import realdata as rd
-from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError, read_table
+from replication.rig.datafile import MEAN_MAX_DEG, ColumnCountError, DataFileError
 
 
 def test_tum_trajectory_reads_nanoseconds_and_world_from_body(tmp_path):
@@ -227,11 +228,6 @@ def test_tum_trajectory_and_imu_take_the_same_policies(tmp_path):
     assert rd.load_euroc_imu(imu, repeated="mean").omega[0, 0] == pytest.approx(0.2)
 
 
-def test_unknown_policy_is_refused():
-    with pytest.raises(ValueError, match=r"repeated must be one of 'refuse', 'keep-first'.*got 'first'"):
-        read_table("any.txt", ("t", "x"), repeated="first")
-
-
 def test_going_back_in_time_is_not_a_repeat_and_says_so_with_plain_numbers(tmp_path):
     rows = _gt_rows()
     rows[3][0] = rows[1][0]
@@ -263,3 +259,27 @@ def test_the_mean_of_poses_far_apart_is_refused_naming_the_other_policies(tmp_pa
         s = rd.load_euroc_mocap(path, repeated="mean")
         assert so3.angle_between_deg(s.R[2], _rotations(6)[2]) == pytest.approx(angle / 2, abs=1e-5)
     assert rd.load_euroc_mocap(path, repeated="keep-first").t.size == 6
+
+
+def test_missing_data_names_the_command(tmp_path):
+    with pytest.raises(FileNotFoundError, match="python -m replication fetch-data DEST"):
+        rd.data_root(tmp_path / "nowhere")
+
+
+@needs_real
+def test_stereo_rectification_rotation_of_the_euroc_run():
+    cfg = rd.load_orbslam3_stereo(rd.data_root() / "euroc_mh01_orbslam3" / "orbslam3_Stereo_EuRoC.yaml")
+    from replication.core.so3 import rotation_angle_deg
+    assert abs(float(rotation_angle_deg(cfg.rectification_rotation())) - 0.620) < 0.002  # the shared README's
+
+
+def test_stereo_settings_errors_name_the_entry(tmp_path):
+    path = tmp_path / "s.yaml"
+    path.write_text('%YAML:1.0\nCamera.type: "PinHole"\nCamera1.fx: 1.0\n')
+    with pytest.raises(ValueError, match="entry 'Camera1.cx' missing"):
+        rd.load_orbslam3_stereo(path)
+    path.write_text('%YAML:1.0\nCamera.type: "KannalaBrandt8"\n')
+    with pytest.raises(ValueError, match="only 'PinHole'"):
+        rd.load_orbslam3_stereo(path)
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        rd.load_orbslam3_stereo(tmp_path / "none.yaml")

@@ -350,27 +350,6 @@ def test_an_axis_the_motion_does_not_turn_about_keeps_scale_1_and_says_so():
     assert angle_between_deg(r.R, R0) < 0.1
 
 
-def test_the_critical_value_is_student_s_t_of_the_blocks():
-    assert critical_value(7) == pytest.approx(2.447, abs=1e-3)  # 15 s at 20 Hz: 280 pairs, blocks of 40
-    assert critical_value(29) == pytest.approx(2.048, abs=1e-3)  # 60 s
-    assert critical_value(10 ** 6) == pytest.approx(1.96, abs=1e-3)
-
-
-def test_the_jackknife_sees_a_block_that_pulls_the_fit():
-    """Doubling one block's residuals along a parameter's gradient widens that parameter's jackknife
-    deviation."""
-    from replication.rig.gyro_model import _block_jackknife
-
-    rng = np.random.default_rng(9)
-    jac = rng.normal(size=(400, 3, 2))
-    r = rng.normal(size=(400, 3))
-    base = _block_jackknife(r, jac, np.ones(400), 40, np.arange(2))
-    assert base[1] == 10 and base[0].shape == (2, 2) and np.all(np.linalg.eigvalsh(base[0]) > 0)
-    r2 = r.copy()
-    r2[:40] *= 5.0
-    assert _block_jackknife(r2, jac, np.ones(400), 40, np.arange(2))[0][0, 0] > 2 * base[0][0, 0]
-
-
 def test_the_model_intervals_use_the_critical_value():
     _, camera, gyro = _scaled([1.0, 1.0, 1.0], seed=6, seconds=15.0)
     m = sm.estimate_sensor_model(camera, gyro)

@@ -219,3 +219,13 @@ def test_table2_is_rounding_sensitive_only_without_accelerometer_and_magnetomete
         assert change < 1e-8
     else:
         assert change > 1e-6
+
+
+def test_lab_recording_with_times_in_ms_is_refused(lab_dir):
+    path = lab_dir / "dynamic_imu.csv"
+    lines = path.read_text().splitlines()
+    out = [lines[0]] + [",".join([f"{1e3 * float(x.split(',')[0]):.3f}"] + x.split(",")[1:]) for x in lines[1:]]
+    path.write_text("\n".join(out) + "\n")
+    with pytest.raises(DataFileError, match="look like ms") as err:
+        lab.load_lab(lab_dir)
+    assert err.value.column == "t"

@@ -1,5 +1,7 @@
 """The studies of the real recordings (replication.study.real_study) on a synthetic rig whose R0
 is known."""
+import math
+
 import numpy as np
 import pytest
 
@@ -48,3 +50,25 @@ def test_real_studies_recover_a_known_r0_and_shape_their_tables(synthetic_rig):
     sens = sensitivity_table(camera, sensor, R0, intervals=(0.5,), shares=(0.5,), methods=("chordal_optimal",),
                              n_bootstrap=5, seed=1)
     assert len(sens) == 2 and (sens["error_deg"] < 1e-5).all()
+
+
+def test_the_floor_table_reads_within_beyond_and_one_reference():
+    from types import SimpleNamespace
+
+    from replication.study.real_study import reference_floor_table
+
+    ref_a, ref_b = np.eye(3), so3.matrix_from_rotation_vector(np.radians([0.0, 0.0, 0.3]))  # 0.3 deg apart: the floor
+
+    def at(deg):  # an estimate turned about x, off both references' z-axis disagreement
+        return SimpleNamespace(R=so3.matrix_from_rotation_vector(np.radians([deg, 0.0, 0.15])))
+
+    results = {("inside", "m"): at(0.25), ("outside", "m"): at(0.27), ("robot", "m"): at(0.0)}
+    table = reference_floor_table(results, {"inside": "rig", "outside": "rig", "robot": "arm"},
+                                  {"rig": {"a": ref_a, "b": ref_b}, "arm": {"a": ref_a}})
+    assert table.loc[("inside", "m"), "references apart (deg)"] == pytest.approx(0.3)
+    assert table.loc[("inside", "m"), "to a (deg)"] == pytest.approx(math.hypot(0.25, 0.15), rel=1e-4)
+    assert table.loc[("inside", "m"), "reading"] == "within the floor"  # 0.2915 deg from each, below 0.3
+    assert table.loc[("outside", "m"), "reading"] == "beyond the floor"  # 0.3089 deg from each, above 0.3
+    assert table.loc[("robot", "m"), "reading"] == "one reference"
+    assert math.isnan(table.loc[("robot", "m"), "to b (deg)"]) and math.isnan(table.loc[("robot", "m"),
+                                                                                         "references apart (deg)"])
