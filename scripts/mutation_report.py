@@ -105,10 +105,30 @@ def rerun_names() -> list[str]:
     return names
 
 
+def pending_names() -> list[str]:
+    """What a resumed run tests: each target (a pattern) of a module without results or whose source
+    changed since its last result, and in every other module the target mutants without a result
+    (a stopped run's rest). Empty when every target mutant has a result."""
+    names = []
+    for target in TARGETS:
+        module = re.split(r"\.(?:x_|\*)", target)[0]
+        source = ROOT / (module.replace(".", "/") + ".py")
+        meta = ROOT / "mutants" / (module.replace(".", "/") + ".py.meta")
+        if not meta.exists() or source.stat().st_mtime > meta.stat().st_mtime:
+            names.append(target)
+            continue
+        codes = json.loads(meta.read_text())["exit_code_by_key"]
+        names += [key for key, code in codes.items() if code is None and fnmatch.fnmatch(key, target)]
+    return list(dict.fromkeys(names))
+
+
 def main() -> int:
     sys.path.insert(0, str(ROOT))
     if sys.argv[1:] == ["--rerun-names"]:
         print("\n".join(rerun_names()))
+        return 0
+    if sys.argv[1:] == ["--pending-names"]:
+        print("\n".join(pending_names()))
         return 0
     equivalent = equivalent_ids()
     counts: dict[str, Counter] = defaultdict(Counter)
