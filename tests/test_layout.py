@@ -8,6 +8,7 @@ inside functions; only ``__main__`` imports cli, and only cli imports argparse; 
 anywhere; every name has one home; notebooks call public names in short cells.
 """
 import ast
+import functools
 import importlib
 import json
 import pkgutil
@@ -47,6 +48,13 @@ def _module_name(path: Path) -> str:
 MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The syntax tree of a file of the package, parsed once per session (the rules only read it):
+    the test-file rule would otherwise parse every module again for each of about 100 test files."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _room(module: str) -> str:
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else "__init__"
@@ -66,7 +74,7 @@ def imports_of(module: str):
     (functions included) and of every name that is itself a module (``from . import so3``); ``if
     TYPE_CHECKING:`` blocks left out."""
     path = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = _type_checking_lines(tree)
     package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
     for node in ast.walk(tree):
@@ -234,7 +242,7 @@ def _defined_names(tree) -> set:
 def test_every_public_name_has_one_home(module):
     """A module (not a package's face) exports only what it defines, and has no module
     ``__getattr__``: no alias of a name that lives elsewhere."""
-    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
+    tree = _tree(MODULES[module])
     defined = _defined_names(tree)
     assert "__getattr__" not in defined, f"{module} answers names it does not define (__getattr__)"
     exported = next((ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign)
@@ -302,12 +310,13 @@ def _snake(name: str) -> str:
 def _commands(path: Path) -> list:
     """The names of the commands a module of the command line adds (``sub.add_parser("fetch-data",
     ...)``), with ``_`` for ``-``."""
-    calls = [n for n in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if isinstance(n, ast.Call)
+    calls = [n for n in ast.walk(_tree(path)) if isinstance(n, ast.Call)
              and getattr(n.func, "attr", None) == "add_parser" and n.args and isinstance(n.args[0], ast.Constant)]
     return [c.args[0].value.replace("-", "_") for c in calls]
 
 
-def unit_names(room: str) -> set:
+@functools.cache
+def unit_names(room: str) -> frozenset:
     """The names a test file of ``room`` may take: each module's path below the room, its parts
     joined by ``_`` without their leading underscores (``core/solvers/_registry.py``:
     ``solvers_registry``; a package: its own name), each public class of the room in snake case
@@ -327,9 +336,9 @@ def unit_names(room: str) -> set:
         names.add("_".join(p.lstrip("_") for p in parts[2:]))
         if room == "cli":  # a command by its name (``fetch-data``: ``fetch_data``)
             names |= set(_commands(path))
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         names |= {_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
-    return names
+    return frozenset(names)
 
 
 def misnamed_test_file(path: Path) -> str | None:
@@ -425,7 +434,7 @@ def test_conversions_are_named_to_from_from(module):
 
 
 def test_the_exceptions_to_the_naming_rule_still_exist():
-    defined = set().union(*(_defined_names(ast.parse(p.read_text(encoding="utf-8"))) for p in MODULES.values()))
+    defined = set().union(*(_defined_names(_tree(p)) for p in MODULES.values()))
     assert set(NOT_CONVERSIONS) <= defined, set(NOT_CONVERSIONS) - defined
 
 
@@ -454,7 +463,7 @@ def _names_in_code() -> set:
     names = set()
     for path in MODULES.values():
         names.update({path.stem, *path.relative_to(ROOT).parent.parts})
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_tree(path)):
             names.update({getattr(node, key) for key in ("name", "id", "attr", "arg")
                           if isinstance(getattr(node, key, None), str)})
     return names
