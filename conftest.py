@@ -3,6 +3,8 @@
 * Notebooks run under nbval write results/ into a temporary folder.
 * Under pytest-xdist, ``scripts/test`` runs two workers with ``--dist loadfile``: every cell of a
   notebook goes to the same worker, in order, so one kernel runs the notebook from top to bottom.
+  The workers take the files in the order sorted here, the longest first (xdist's own reordering,
+  by number of tests, is turned off).
   (``loadgroup`` with ``xdist_group`` marks does not group with pytest 9, whose node ids xdist 3.8
   cannot suffix.)
 * Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
@@ -18,6 +20,11 @@ import pytest
 def pytest_configure(config):
     if "REPLICATION_RESULTS_DIR" not in os.environ:
         os.environ["REPLICATION_RESULTS_DIR"] = tempfile.mkdtemp(prefix="replication-results-")
+    # xdist 3.x hands out the files by their number of tests, most first, unless told not to: it
+    # undid the sort below, and the portability re-runs (4 and 5 tests, 5-6 min each) started after
+    # 1500 s of other files and ran alone at the end
+    if getattr(config.option, "loadscopereorder", False):
+        config.option.loadscopereorder = False
 
 
 def pytest_collection_modifyitems(config, items):

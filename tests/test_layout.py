@@ -396,6 +396,13 @@ def test_the_portability_files_share_out_every_notebook_once():
     assert sorted(sum(parts, [])) == [p.name[:2] for p in NOTEBOOKS]
 
 
+def test_the_workers_take_the_files_in_the_conftests_order(pytestconfig):
+    """conftest.py sorts the longest files (the portability re-runs, the notebooks) first; xdist's
+    own reordering by number of tests, on by default, would start the re-runs last."""
+    assert pytestconfig.pluginmanager.hasplugin("xdist")  # the test extra installs it
+    assert pytestconfig.option.loadscopereorder is False
+
+
 #: The naming rule for conversions (docs/conventions.md, "Names of conversions"):
 #: ``<to>_from_<from>``. A module-level public function named like another rule's conversion is
 #: refused; the exceptions, with their reason:
