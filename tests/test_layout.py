@@ -397,10 +397,14 @@ def test_the_portability_files_share_out_every_notebook_once():
 
 
 def test_the_workers_take_the_files_in_the_conftests_order(pytestconfig):
-    """conftest.py sorts the longest files (the portability re-runs, the notebooks) first; xdist's
-    own reordering by number of tests, on by default, would start the re-runs last."""
+    """conftest.py sorts the longest files (the portability re-runs, the notebooks, the unit files
+    it names) first; xdist's own reordering by number of tests, on by default, would start the
+    re-runs last."""
     assert pytestconfig.pluginmanager.hasplugin("xdist")  # the test extra installs it
     assert pytestconfig.option.loadscopereorder is False
+    root_conftest = next(p for p in pytestconfig.pluginmanager.get_plugins()
+                         if getattr(p, "__file__", None) == str(ROOT / "conftest.py"))
+    assert root_conftest.LONG_UNIT_FILES and all((ROOT / name).is_file() for name in root_conftest.LONG_UNIT_FILES)
 
 
 #: The naming rule for conversions (docs/conventions.md, "Names of conversions"):
