@@ -3,6 +3,8 @@
 * Notebooks run under nbval write results/ into a temporary folder.
 * Under pytest-xdist, ``scripts/test`` runs two workers with ``--dist loadfile``: every cell of a
   notebook goes to the same worker, in order, so one kernel runs the notebook from top to bottom.
+  The workers take the files in the order sorted here, the longest first (xdist's own reordering,
+  by number of tests, is turned off).
   (``loadgroup`` with ``xdist_group`` marks does not group with pytest 9, whose node ids xdist 3.8
   cannot suffix.)
 * Notebooks that declare ``metadata.replication.requires_real_data`` are skipped, with the
@@ -14,22 +16,32 @@ import tempfile
 
 import pytest
 
+#: Unit-test files with one long test, started first among the unit tests so that no worker ends
+#: the run alone with it: the wheel built and installed in a fresh venv (21 s on an idle machine).
+LONG_UNIT_FILES = ("tests/test_extras.py",)
+
 
 def pytest_configure(config):
     if "REPLICATION_RESULTS_DIR" not in os.environ:
         os.environ["REPLICATION_RESULTS_DIR"] = tempfile.mkdtemp(prefix="replication-results-")
+    # xdist 3.x hands out the files by their number of tests, most first, unless told not to: it
+    # undid the sort below, and the portability re-runs (4 and 5 tests, 9-12 min each on a loaded
+    # machine) started 1495 and 1538 s into a 2198 s run, their imbalance the run's tail
+    if getattr(config.option, "loadscopereorder", False):
+        config.option.loadscopereorder = False
 
 
 def pytest_collection_modifyitems(config, items):
     from replication.cli.reproduce import needs_real_data
     from replication.rig.realdata import data_root, real_data_available
 
-    # the longest files first (the portability re-run, then the notebooks), so that two xdist
-    # workers finish together (in collection order the portability re-run started last and ran alone
-    # for minutes); the order within a file is kept (a stable sort), and nothing depends on the
-    # order between files
+    # the longest files first (the portability re-run, then the notebooks, then LONG_UNIT_FILES), so
+    # that two xdist workers finish together (in collection order the portability re-run started
+    # last and ran alone for minutes); the order within a file is kept (a stable sort), and nothing
+    # depends on the order between files
+    long_units = {config.rootpath / name for name in LONG_UNIT_FILES}
     items.sort(key=lambda item: 0 if item.get_closest_marker("portability") else 1 if item.path.suffix == ".ipynb"
-               else 2)
+               else 2 if item.path in long_units else 3)
     if real_data_available():
         return
     try:

@@ -48,6 +48,13 @@ def _module_name(path: Path) -> str:
 MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The syntax tree of a file of the package, parsed once per session (the rules only read it):
+    the test-file rule would otherwise parse every module again for each of about 100 test files."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _room(module: str) -> str:
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else "__init__"
@@ -67,7 +74,7 @@ def imports_of(module: str):
     (functions included) and of every name that is itself a module (``from . import so3``); ``if
     TYPE_CHECKING:`` blocks left out."""
     path = MODULES[module]
-    tree = ast.parse(path.read_text(encoding="utf-8"))
+    tree = _tree(path)
     skip = _type_checking_lines(tree)
     package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
     for node in ast.walk(tree):
@@ -235,7 +242,7 @@ def _defined_names(tree) -> set:
 def test_every_public_name_has_one_home(module):
     """A module (not a package's face) exports only what it defines, and has no module
     ``__getattr__``: no alias of a name that lives elsewhere."""
-    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
+    tree = _tree(MODULES[module])
     defined = _defined_names(tree)
     assert "__getattr__" not in defined, f"{module} answers names it does not define (__getattr__)"
     exported = next((ast.literal_eval(n.value) for n in tree.body if isinstance(n, ast.Assign)
@@ -303,12 +310,13 @@ def _snake(name: str) -> str:
 def _commands(path: Path) -> list:
     """The names of the commands a module of the command line adds (``sub.add_parser("fetch-data",
     ...)``), with ``_`` for ``-``."""
-    calls = [n for n in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if isinstance(n, ast.Call)
+    calls = [n for n in ast.walk(_tree(path)) if isinstance(n, ast.Call)
              and getattr(n.func, "attr", None) == "add_parser" and n.args and isinstance(n.args[0], ast.Constant)]
     return [c.args[0].value.replace("-", "_") for c in calls]
 
 
-def unit_names(room: str) -> set:
+@functools.cache
+def unit_names(room: str) -> frozenset:
     """The names a test file of ``room`` may take: each module's path below the room, its parts
     joined by ``_`` without their leading underscores (``core/solvers/_registry.py``:
     ``solvers_registry``; a package: its own name), each public class of the room in snake case
@@ -328,9 +336,9 @@ def unit_names(room: str) -> set:
         names.add("_".join(p.lstrip("_") for p in parts[2:]))
         if room == "cli":  # a command by its name (``fetch-data``: ``fetch_data``)
             names |= set(_commands(path))
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = _tree(path)
         names |= {_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
-    return names
+    return frozenset(names)
 
 
 def misnamed_test_file(path: Path) -> str | None:
@@ -507,8 +515,8 @@ def _importers() -> dict:
 
 @functools.cache
 def _public_classes(module: str) -> frozenset:
-    tree = ast.parse(MODULES[module].read_text(encoding="utf-8"))
-    return frozenset(_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_"))
+    body = _tree(MODULES[module]).body
+    return frozenset(_snake(n.name) for n in body if isinstance(n, ast.ClassDef) and not n.name.startswith("_"))
 
 
 def unit_modules(path: Path, doors: bool = True) -> set:
@@ -596,6 +604,17 @@ def test_the_strays_listed_still_exist_and_still_stray():
         assert names <= set(strays_of(TESTS / file)[0]), f"{file}: {names} no longer stray or exist"
 
 
+def test_the_workers_take_the_files_in_the_conftests_order(pytestconfig):
+    """conftest.py sorts the longest files (the portability re-runs, the notebooks, the unit files
+    it names) first; xdist's own reordering by number of tests, on by default, would start the
+    re-runs last."""
+    assert pytestconfig.pluginmanager.hasplugin("xdist")  # the test extra installs it
+    assert pytestconfig.option.loadscopereorder is False
+    root_conftest = next(p for p in pytestconfig.pluginmanager.get_plugins()
+                         if getattr(p, "__file__", None) == str(ROOT / "conftest.py"))
+    assert root_conftest.LONG_UNIT_FILES and all((ROOT / name).is_file() for name in root_conftest.LONG_UNIT_FILES)
+
+
 #: The naming rule for conversions (docs/conventions.md, "Names of conversions"):
 #: ``<to>_from_<from>``. A module-level public function named like another rule's conversion is
 #: refused; the exceptions, with their reason:
@@ -634,7 +653,7 @@ def test_conversions_are_named_to_from_from(module):
 
 
 def test_the_exceptions_to_the_naming_rule_still_exist():
-    defined = set().union(*(_defined_names(ast.parse(p.read_text(encoding="utf-8"))) for p in MODULES.values()))
+    defined = set().union(*(_defined_names(_tree(p)) for p in MODULES.values()))
     assert set(NOT_CONVERSIONS) <= defined, set(NOT_CONVERSIONS) - defined
 
 
@@ -663,7 +682,7 @@ def _names_in_code() -> set:
     names = set()
     for path in MODULES.values():
         names.update({path.stem, *path.relative_to(ROOT).parent.parts})
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_tree(path)):
             names.update({getattr(node, key) for key in ("name", "id", "attr", "arg")
                           if isinstance(getattr(node, key, None), str)})
     return names
