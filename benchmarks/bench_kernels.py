@@ -103,7 +103,7 @@ def kernel_table(rng, reps, sim):
 
     e = np.ascontiguousarray(S4.reshape(-1, 16).T)
     e /= np.sqrt(np.einsum("kn,kn->n", e, e))
-    sent = np.mean(~(kernels._bottom_eigenvector4_block(e)[1] <= kernels.EIG4_SAFE))
+    sent = np.mean(~(kernels.bottom_eigenvector4_block(e)[1] <= kernels.EIG4_SAFE))
     print(f"  bottom eigenvector 4x4: {100 * sent:.1f} % of the {len(S4)} matrices go to LAPACK (EIG4_SAFE)")
 
 

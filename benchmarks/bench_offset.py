@@ -36,11 +36,11 @@ ISSUE_MS = (0.13, 0.37, 1.71, 2.29, -3.43)
 def old_search(camera, sensor, max_offset=0.2, resolution=0.5e-3):
     """The search of before (10 ms grid, then the ``resolution`` grid; its maximum), for timing and
     'before'."""
-    t, cam = offset_search._overlap(camera, sensor, max_offset)
+    t, cam = offset_search.overlap(camera, sensor, max_offset)
     coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
-    best = coarse[np.argmax(offset_search._correlations(cam, sensor, t, coarse))]
+    best = coarse[np.argmax(offset_search.correlations(cam, sensor, t, coarse))]
     fine = np.clip(np.arange(best - 0.01, best + 0.01 + 1e-12, resolution), -max_offset, max_offset)
-    return float(fine[np.argmax(offset_search._correlations(cam, sensor, t, fine))])
+    return float(fine[np.argmax(offset_search.correlations(cam, sensor, t, fine))])
 
 
 def recordings():

@@ -8,7 +8,7 @@ import numpy as np
 
 __all__ = ["POLAR_SAFE", "EIG3_SAFE", "SOLVE3_SAFE", "EIG4_SAFE", "TOP3_SAFE", "MIN_BATCH", "MIN_BATCH_LARGE",
            "polar_factor", "eigvalsh3", "top_eigenvector3", "solve3", "bottom_eigenvector4", "rotation_violation",
-           "lapack_reference"]
+           "lapack_reference", "cofactors", "bottom_eigenvector4_block"]
 
 #: Lower bound on ``sigma_min / sigma_max`` (``>= 2 |det M| / ||M||_F^3``) below which
 #: :func:`polar_factor` hands a matrix to LAPACK: the polar factor's condition number is ``sigma_max
@@ -80,14 +80,30 @@ _P1, _P2 = np.array([4, 5, 3, 2, 0, 1, 1, 2, 0]), np.array([8, 6, 7, 7, 8, 6, 5,
 _P3, _P4 = np.array([5, 3, 4, 1, 2, 0, 2, 0, 1]), np.array([7, 8, 6, 8, 6, 7, 4, 5, 3])
 
 
-def _cofactors(x, rows: int = 9):
+def cofactors(x, rows: int = 9):
     """Cofactor matrix (9, n) and determinant (n) of the matrices whose row-major entries are ``x``
     (9, n).
 
+    Parameters
+    ----------
+    x : (9, n) ndarray
+        Row-major entries of n 3x3 matrices.
+    rows : int
+        9 for every cofactor, 3 for the first three only (enough for the determinant).
+
+    Returns
+    -------
+    C : (rows, n) ndarray
+        Row-major cofactors.
+    det : (n,) ndarray
+        Determinants.
+
+    Notes
+    -----
     Nine cofactors in seven NumPy passes over (9, n) (four gathers, two products, a difference)
     rather than 27 over (n,) and a stack; each entry is still ``p q - r s`` in that order, and the
-    determinant ``(a C_0 + b C_1) + c C_2``, so the result is the same to the last bit. ``rows=3``:
-    the first three cofactors only (enough for the determinant)."""
+    determinant ``(a C_0 + b C_1) + c C_2``, so the result is the same to the last bit.
+    """
     C = x[_P1[:rows]] * x[_P2[:rows]]
     C -= x[_P3[:rows]] * x[_P4[:rows]]
     t = x[:3] * C[:3]
@@ -152,7 +168,7 @@ def polar_factor(M, mode: str = "rotation", *, method: str = "auto") -> np.ndarr
     if not _use_kernel(n, method):
         return _lapack_polar(M, mode)
     x = _entries(M)
-    _, det = _cofactors(x, rows=3)
+    _, det = cofactors(x, rows=3)
     norm2 = np.einsum("kn,kn->n", x, x)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         safe = 2.0 * np.abs(det) > POLAR_SAFE * norm2 * np.sqrt(norm2)
@@ -191,7 +207,7 @@ def _newton_polar(x: np.ndarray, det: np.ndarray):
     step = np.full(X.shape[1], np.inf)
     scaled = True
     for _ in range(_POLAR_MAX_ITERATIONS):
-        C, d = _cofactors(X)
+        C, d = cofactors(X)
         if scaled:  # X <- (zeta X + C / (zeta d)) / 2, C / d = X^{-T}
             zeta = np.abs(d) ** (-1.0 / 3.0)
             alpha, beta = 0.5 * zeta, 0.5 / (zeta * d)
@@ -314,7 +330,7 @@ def solve3(A, b, *, method: str = "auto") -> np.ndarray:
         return np.linalg.solve(A, b[..., None])[..., 0]
     x = _entries(A)
     rhs = np.ascontiguousarray(b.reshape(-1, 3).T)
-    C, det = _cofactors(x)
+    C, det = cofactors(x)
     norm2 = np.einsum("kn,kn->n", x, x)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         safe = np.abs(det) > SOLVE3_SAFE * norm2 * np.sqrt(norm2)
@@ -353,10 +369,24 @@ def _matvec4(e, x):
                      for i in range(4)])
 
 
-def _bottom_eigenvector4_block(e):
-    """:func:`bottom_eigenvector4` on row-major entries ``e`` (16, n) of ``S / ||S||_F``: ``x`` (4,
-    n) and the bound ``||r|| / (mu - rho)`` on ``sin`` of its angle to the eigenvector (inf where
-    ``mu <= rho``)."""
+def bottom_eigenvector4_block(e):
+    """:func:`bottom_eigenvector4`'s kernel on one block, with the bound on its error that decides
+    the fallback to LAPACK (:data:`EIG4_SAFE`).
+
+    Parameters
+    ----------
+    e : (16, n) ndarray
+        Row-major entries of ``S / ||S||_F``, n symmetric 4x4 matrices.
+
+    Returns
+    -------
+    x : (4, n) ndarray
+        Unit vectors near each bottom eigenvector (three power steps on the adjugate).
+    bound : (n,) ndarray
+        ``||r|| / (mu - rho)``, a bound on ``sin`` of ``x``'s angle to the eigenvector, with ``rho =
+        x^T S x``, ``r = S x - rho x`` and ``mu`` the least eigenvalue of ``S`` on the complement of
+        ``x`` (inf where ``mu <= rho``).
+    """
     adj = _adjugate4(e)
     k = np.argmax(adj[[0, 5, 10, 15]], axis=0)  # the largest diagonal entry's column
     x = adj.reshape(4, 4, -1)[:, k, np.arange(e.shape[1])]
@@ -411,7 +441,7 @@ def bottom_eigenvector4(S, *, method: str = "auto") -> np.ndarray:
         bound = np.empty(e.shape[1])
         for start in range(0, e.shape[1], _CHUNK):
             block = slice(start, start + _CHUNK)
-            out[:, block], bound[block] = _bottom_eigenvector4_block(e[:, block])
+            out[:, block], bound[block] = bottom_eigenvector4_block(e[:, block])
         safe = (bound <= EIG4_SAFE) & ~empty
     out = out.T
     rest = np.flatnonzero(~safe)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..core.checks import check_number
 from ..core.handeye import relative_rotations
-from .offset_search import PEAK_SEPARATION_S, _bootstrap_offsets, _overlap, _search
+from .offset_search import PEAK_SEPARATION_S, _search, bootstrap_offsets, overlap
 from .streams import GyroStream, OrientationStream, integrate_gyro
 
 __all__ = ["OffsetEstimate", "estimate_time_offset", "offset_analysis", "offset_in_words", "motion_pairs",
@@ -28,7 +28,7 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
     searched on a 10 ms grid in ``[-max_offset, max_offset]``, then on a ``resolution`` grid within
     10 ms of the coarse maximum, then on the sub-grid ``h = resolution / SUBGRID_STEPS`` within one
     ``resolution`` of the fine maximum, and refined there by the parabola through the maximum and
-    its two neighbours (:func:`~replication.rig.offset_search._vertex`; for a smooth peak its error
+    its two neighbours (:func:`~replication.rig.offset_search.vertex`; for a smooth peak its error
     is ``O(h^2 r'''/r'')``, at most 0.0011 ms on the recordings of
     :data:`~replication.rig.offset_search.SUBGRID_STEPS`). Other local maxima of the coarse curve
     within :data:`~replication.rig.offset_search.RIVAL_REFINED_WITHIN` of its maximum (periodic
@@ -40,7 +40,7 @@ def estimate_time_offset(camera: OrientationStream, sensor: OrientationStream, *
     none on the recordings measured); memory bounded by
     :data:`~replication.rig.offset_search.OFFSET_BLOCK_SAMPLES` interpolated samples (~80 MB) plus 8
     bytes per candidate offset, whatever ``max_offset`` is (the candidates are evaluated block by
-    block, see :func:`~replication.rig.offset_search._correlations`).
+    block, see :func:`~replication.rig.offset_search.correlations`).
 
     Parameters
     ----------
@@ -140,7 +140,7 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
       recomputed for each replicate at every fine and sub-grid offset and at the coarse ones within
       :data:`~replication.rig.offset_search.BOOTSTRAP_SPAN_S`, and its maximum refined the same way;
       the interval is the 2.5 and 97.5 percentiles of the replicates' offsets
-      (:func:`~replication.rig.offset_search._bootstrap_offsets`). It describes the spread due to
+      (:func:`~replication.rig.offset_search.bootstrap_offsets`). It describes the spread due to
       the samples; an error every sample shares (a latency of the SLAM front end, a mis-stamped
       stream) is invisible to it.
     * ``peak_margin``: the correlation at the peak minus the highest other local maximum of the 10
@@ -180,7 +180,7 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
     seed = int(check_number("seed", seed, minimum=0, integer=True, strict=False))
     block_s = float(check_number("block_s", block_s, minimum=0))
     check_number("resolution", resolution, minimum=0)
-    t, _ = _overlap(camera, sensor, float(check_number("max_offset", max_offset, minimum=0)))
+    t, _ = overlap(camera, sensor, float(check_number("max_offset", max_offset, minimum=0)))
     block = max(1, int(round(block_s / np.median(np.diff(t)))))
     if 2 * block > len(t) - 1:
         raise ValueError(f"block_s={block_s!r} s makes blocks of {block} camera speeds, more than half of the "
@@ -188,7 +188,7 @@ def offset_analysis(camera: OrientationStream, sensor: OrientationStream, *, max
     s = _search(camera, sensor, max_offset, resolution, keep_rows=n_bootstrap > 0)
     ci = (float("nan"), float("nan"))
     if n_bootstrap and s["rows"] is not None:
-        boot = _bootstrap_offsets(s["a"], s["rows"], s["boot_x"], n_bootstrap, block, np.random.default_rng(seed))
+        boot = bootstrap_offsets(s["a"], s["rows"], s["boot_x"], n_bootstrap, block, np.random.default_rng(seed))
         ci = (float(np.nanpercentile(boot, 2.5, method="lower")), float(np.nanpercentile(boot, 97.5, method="higher")))
     second = s["second"]
     return OffsetEstimate(s["offset"], s["corr"], s["grid"], ci, second[0], second[1], s["corr"] - second[1],

@@ -16,7 +16,8 @@ from ..core.solvers.certificate import chordal_newton, relaxed_rotation
 from ..core.stats import radius_deg
 from .streams import GyroStream, OrientationStream
 
-__all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS"]
+__all__ = ["ChangeTest", "two_segment_test", "threshold", "p_value", "remounted", "MIN_EFFECTIVE_BLOCKS",
+           "tail", "false_alarm"]
 
 #: Fewest independent stretches (``(J - block) / (2 block + 1)``) the test needs: the inflation and
 #: the threshold rest on them.
@@ -171,9 +172,22 @@ def _long_run(A, B, R, m: int):
     return u.T @ window
 
 
-def _tail(c, lam1: float, lam2: float):
+def tail(c, lam1: float, lam2: float):
     """P(sup over [lam1, lam2] of |B(lam)|^2 / (lam (1 - lam)) > c), B a 3-dim Brownian bridge, for
-    large c."""
+    large c (1 at or below 3, the degrees of freedom).
+
+    Parameters
+    ----------
+    c : array_like
+        Statistics, any shape.
+    lam1, lam2 : float
+        The range of split fractions searched, ``0 < lam1 < lam2 < 1``.
+
+    Returns
+    -------
+    ndarray
+        The tail probability of each statistic, in ``[0, 1]``.
+    """
     c = np.asarray(c, dtype=float)
     span = math.log(lam2 * (1.0 - lam1) / (lam1 * (1.0 - lam2)))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -187,28 +201,43 @@ def _tail(c, lam1: float, lam2: float):
 _Z = np.array([statistics.NormalDist().inv_cdf((i + 0.5) / 200) for i in range(200)])
 
 
-def _false_alarm(c, n_eff: float, lam1: float, lam2: float):
-    """False-alarm probability of ``max_k W_k > c`` (module notes): the tail at the threshold the
-    test puts on the statistic against the true inflation, averaged over the sampling error of the
-    measured one."""
+def false_alarm(c, n_eff: float, lam1: float, lam2: float):
+    """False-alarm probability of ``max_k W_k > c`` (module notes): the tail (:func:`tail`) at the
+    threshold the test puts on the statistic against the true inflation, averaged over the sampling
+    error of the measured one.
+
+    Parameters
+    ----------
+    c : array_like
+        Statistics, any shape.
+    n_eff : float
+        Effective number of independent stretches behind the measured inflation.
+    lam1, lam2 : float
+        The range of split fractions searched.
+
+    Returns
+    -------
+    ndarray
+        The false-alarm probability of each statistic (the shape of ``c``).
+    """
     nu = n_eff
     # chi2_nu / nu (Wilson-Hilferty)
     x = np.clip(1.0 - 2.0 / (9.0 * nu) + _Z * math.sqrt(2.0 / (9.0 * nu)), 0.0, None) ** 3
     cx = np.asarray(c, dtype=float)[..., None] * x
     # V where W / phi_hat = c x: phi_hat = phi (1 - (1 + V/3)/n_eff) x
     v = cx * (1.0 - 1.0 / n_eff) / (1.0 + cx / (_DOF * n_eff))
-    return _tail(v, lam1, lam2).mean(axis=-1)
+    return tail(v, lam1, lam2).mean(axis=-1)
 
 
 def threshold(level: float, n_eff: float, lam1: float, lam2: float) -> float:
     """The threshold on ``max_k W_k`` for false-alarm probability ``level`` (module notes), by
     bisection."""
     lo, hi = float(_DOF), 1e3
-    if _false_alarm(hi, n_eff, lam1, lam2) > level:
+    if false_alarm(hi, n_eff, lam1, lam2) > level:
         return math.inf
     for _ in range(100):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _false_alarm(mid, n_eff, lam1, lam2) > level else (lo, mid)
+        lo, hi = (mid, hi) if false_alarm(mid, n_eff, lam1, lam2) > level else (lo, mid)
         if hi - lo < 1e-6:
             break
     return hi
@@ -217,7 +246,7 @@ def threshold(level: float, n_eff: float, lam1: float, lam2: float) -> float:
 def p_value(statistic: float, n_eff: float, lam1: float, lam2: float) -> float:
     """The false-alarm probability of a statistic at least ``statistic`` (the approximation of
     :func:`threshold`)."""
-    return float(_false_alarm(statistic, n_eff, lam1, lam2))
+    return float(false_alarm(statistic, n_eff, lam1, lam2))
 
 
 def two_segment_test(A, B, t, *, block: int = 1, min_share: float = 0.15, level: float = 0.01) -> ChangeTest:

@@ -15,7 +15,7 @@ from .clock import JUMP_GAP_FACTOR, JUMP_MIN_S, ClockJump, clock_segments, corre
 
 __all__ = ["OffsetProfile", "offset_profile", "merged_jumps", "clock_analysis", "PROFILE_WINDOW_S", "STEP_LR",
            "BEND_SHARE", "TWO_STEPS_VS_DRIFT", "TWO_STEPS_MIN_S", "SKIP_MATCH",
-           "STEP_DRIFT_SHARE", "REFIT_SE"]
+           "STEP_DRIFT_SHARE", "REFIT_SE", "skip"]
 
 #: Length of a window of the offset profile (s): 5 s of 1 s pairs at 20 Hz are 80 pairs.
 PROFILE_WINDOW_S = 5.0
@@ -217,11 +217,25 @@ def _split(Ai, sensor, ti, tk, m0, m1, R, m):
     return float(ti[min(best, len(ti) - 1)])
 
 
-def _skip(t, near, width, expect=0.0):
-    """The largest stamp skip of ``t`` within ``width`` of ``near``, or None: ``(time, skipped
-    beyond one interval)``; a skip is an interval over ``JUMP_GAP_FACTOR`` median intervals or one
-    whose excess over the median is ``expect`` (s, the step's size with the clock's sign; within
-    :data:`SKIP_MATCH` of it, and over :data:`JUMP_MIN_S`)."""
+def skip(t, near, width, expect=0.0):
+    """The largest stamp skip of ``t`` within ``width`` of ``near``: an interval over
+    ``JUMP_GAP_FACTOR`` median intervals, or one whose excess over the median is ``expect`` (within
+    :data:`SKIP_MATCH` of it, and over :data:`JUMP_MIN_S`).
+
+    Parameters
+    ----------
+    t : array_like (N,)
+        One stream's time stamps (s), increasing.
+    near, width : float
+        Where the skip is looked for (s): intervals starting within ``width`` of ``near``.
+    expect : float
+        The step's size with the clock's sign (s); 0 matches only the long intervals.
+
+    Returns
+    -------
+    (float, float) or None
+        The skip's start and its excess over one median interval (s); None where there is none.
+    """
     dt = np.diff(t)
     step = float(np.median(dt))
     fits = (dt - step > JUMP_MIN_S) & (np.abs(dt - step - expect) <= SKIP_MATCH * abs(expect))
@@ -351,7 +365,7 @@ def _step(camera, sensor, Ai, i, k, m, R, edges, W, interval, ts, cut, m0, m1):
     at = _split(Ai[j], sensor, tc[i[j]], tc[k[j]], m0, m1, R, m)
     res = 2.0 * interval  # the split's error reached 1.4 s for 5 ms steps (bench_clock.py, seeds 0-39)
     width = res + interval
-    cam, sen = _skip(tc, at, width, m0 - m1), _skip(ts, at + m0, width, m1 - m0)
+    cam, sen = skip(tc, at, width, m0 - m1), skip(ts, at + m0, width, m1 - m0)
     clock = "camera" if cam is not None else "sensor" if sen is not None else "unknown"
     if cam is not None:
         at, res = cam[0], float(np.median(np.diff(tc)))

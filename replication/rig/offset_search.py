@@ -12,12 +12,25 @@ from ..core.so3 import rotation_vector_from_matrix
 from .streams import OrientationStream, time_unit_mismatch
 
 __all__ = ["OFFSET_BLOCK_SAMPLES", "SUBGRID_STEPS", "BOOTSTRAP_SPAN_S", "PEAK_SEPARATION_S", "RIVAL_REFINED_WITHIN",
-           "RIVALS_REFINED"]
+           "RIVALS_REFINED", "speed", "correlations", "overlap", "vertex", "local_maxima", "bootstrap_offsets"]
 
 
-def _speed(Q, times) -> np.ndarray:
+def speed(Q, times) -> np.ndarray:
     """Angular speed (rad/s) between consecutive orientations along axis -3, batched over leading
-    axes."""
+    axes.
+
+    Parameters
+    ----------
+    Q : array_like (..., N, 3, 3)
+        Rotation matrices at ``times``.
+    times : array_like (N,)
+        Their time stamps (s), increasing.
+
+    Returns
+    -------
+    (..., N - 1) ndarray
+        The angle of ``Q[k]^T Q[k + 1]`` over ``times[k + 1] - times[k]``.
+    """
     rel = np.swapaxes(Q[..., :-1, :, :], -1, -2) @ Q[..., 1:, :, :]
     return np.linalg.norm(rotation_vector_from_matrix(rel), axis=-1) / np.diff(times)
 
@@ -30,12 +43,32 @@ def _speed(Q, times) -> np.ndarray:
 OFFSET_BLOCK_SAMPLES = 2 ** 19
 
 
-def _correlations(cam, sensor: OrientationStream, t, offsets, block_samples: int | None = None) -> np.ndarray:
-    """Correlation of the camera's angular speeds ``cam`` with the sensor's at each of ``offsets``.
+def correlations(cam, sensor: OrientationStream, t, offsets, block_samples: int | None = None) -> np.ndarray:
+    """Correlation of the camera's angular speeds ``cam`` with the sensor's at each of ``offsets``,
+    evaluated in blocks of at most ``block_samples`` interpolated samples, so memory does not grow
+    with the number of offsets.
 
-    The offsets are evaluated in blocks of at most ``block_samples`` (default
-    :data:`OFFSET_BLOCK_SAMPLES`) interpolated samples, so memory does not grow with the number of
-    offsets. Every step is per offset (slerp, speeds, centring, norms: each row's arithmetic is the
+    Parameters
+    ----------
+    cam : array_like (N - 1,)
+        The camera's angular speeds between the camera times ``t`` (:func:`overlap`).
+    sensor : OrientationStream
+        Slerped at ``t + offset``.
+    t : array_like (N,)
+        Camera times whose shifted intervals stay inside the sensor stream.
+    offsets : array_like (M,)
+        Candidate clock offsets (s).
+    block_samples : int, optional
+        Most interpolated samples held at once; default :data:`OFFSET_BLOCK_SAMPLES`.
+
+    Returns
+    -------
+    (M,) ndarray
+        Pearson correlation at each offset (NaN where either speed is constant).
+
+    Notes
+    -----
+    Every step is per offset (slerp, speeds, centring, norms: each row's arithmetic is the
     same in any block) except the product of the centred speeds with the camera's: BLAS's
     matrix-vector product rounds a row differently depending on how many rows it is given (OpenBLAS
     groups rows by 4 and splits them over threads). So:
@@ -51,7 +84,7 @@ def _correlations(cam, sensor: OrientationStream, t, offsets, block_samples: int
     for k in range(0, len(offsets), per):
         o = offsets[k:k + per]
         Qs = sensor.at((t[None, :] + o[:, None]).ravel()).reshape(len(o), len(t), 3, 3)
-        sen = _speed(Qs, t)
+        sen = speed(Qs, t)
         b = sen - sen.mean(axis=1, keepdims=True)
         dot = b @ a if per >= len(offsets) else np.add.reduce(b * a, axis=1)
         out[k:k + per] = dot / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
@@ -87,9 +120,28 @@ RIVAL_REFINED_WITHIN = 0.1
 RIVALS_REFINED = 4
 
 
-def _overlap(camera, sensor, max_offset):
+def overlap(camera, sensor, max_offset):
     """Camera times whose shifted intervals stay inside the sensor stream, and the camera's angular
-    speeds."""
+    speeds between them.
+
+    Parameters
+    ----------
+    camera, sensor : OrientationStream
+    max_offset : float
+        Largest offset searched (s): a kept time ``t`` has ``t +- max_offset`` in the sensor's span.
+
+    Returns
+    -------
+    t : (N,) ndarray
+        The camera times kept (at least 10).
+    speeds : (N - 1,) ndarray
+        The camera's angular speeds between them (rad/s, :func:`speed`).
+
+    Raises
+    ------
+    ValueError
+        Fewer than 10 camera times are kept (naming a time-unit mistake when the spans show one).
+    """
     lo = max(camera.t[0], sensor.t[0] + max_offset)
     hi = min(camera.t[-1], sensor.t[-1] - max_offset)
     keep = (camera.t >= lo) & (camera.t <= hi)
@@ -98,7 +150,7 @@ def _overlap(camera, sensor, max_offset):
         unit = time_unit_mismatch(camera, sensor)  # a time-unit mistake is named, with the spans that show it
         raise ValueError(f"the streams overlap in fewer than 10 camera samples (overlap {lo:.3f}..{hi:.3f} s)"
                          + ("" if unit is None else "; " + unit[2]))
-    return t, _speed(camera.R[keep], t)
+    return t, speed(camera.R[keep], t)
 
 
 def _row_correlations(a, sensor, t, offsets, keep_rows: bool):
@@ -106,7 +158,7 @@ def _row_correlations(a, sensor, t, offsets, keep_rows: bool):
     ``keep_rows`` also the centred sensor speeds, one row per offset (8 bytes per offset per camera
     time).
 
-    In blocks of :data:`OFFSET_BLOCK_SAMPLES` as :func:`_correlations`, but always as a per-row
+    In blocks of :data:`OFFSET_BLOCK_SAMPLES` as :func:`correlations`, but always as a per-row
     pairwise sum ``sum(b * a)``: the values, hence the refined offset, do not depend on the block
     size.
     """
@@ -114,7 +166,7 @@ def _row_correlations(a, sensor, t, offsets, keep_rows: bool):
     out, rows = np.empty(len(offsets)), np.empty((len(offsets), len(a)) if keep_rows else (0, 0))
     for k in range(0, len(offsets), per):
         o = offsets[k:k + per]
-        sen = _speed(sensor.at((t[None, :] + o[:, None]).ravel()).reshape(len(o), len(t), 3, 3), t)
+        sen = speed(sensor.at((t[None, :] + o[:, None]).ravel()).reshape(len(o), len(t), 3, 3), t)
         b = sen - sen.mean(axis=1, keepdims=True)
         out[k:k + per] = np.add.reduce(b * a, axis=1) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
         if keep_rows:
@@ -122,10 +174,24 @@ def _row_correlations(a, sensor, t, offsets, keep_rows: bool):
     return out, rows
 
 
-def _vertex(x, y) -> np.ndarray:
+def vertex(x, y) -> np.ndarray:
     """Offset of the maximum of each curve ``y[..., :]`` over the sorted offsets ``x``, refined by
     the parabola through the maximum and its two neighbours.
 
+    Parameters
+    ----------
+    x : array_like (M,)
+        Offsets, increasing (not necessarily evenly spaced).
+    y : array_like (..., M)
+        One curve per leading index; non-finite values are never the maximum.
+
+    Returns
+    -------
+    ndarray (...)
+        The refined offset of each curve's maximum.
+
+    Notes
+    -----
     With ``d1 = (y1 - y0) / (x1 - x0)`` and ``c = ((y2 - y1) / (x2 - x1) - d1) / (x2 - x0)`` the
     parabola is ``y0 + d1 (x - x0) + c (x - x0)(x - x1)``, its vertex ``(x0 + x1) / 2 - d1 / (2 c)``
     when ``c < 0``, clipped to ``[x0, x2]``. A maximum at either end of ``x``, or where the curve is
@@ -155,16 +221,27 @@ def _refine(a, sensor, t, best, max_offset, resolution, keep_rows: bool) -> dict
     c_sub, rows_sub = _row_correlations(a, sensor, t, sub, keep_rows)
     order = np.argsort(np.concatenate([fine, sub]), kind="stable")
     x, y = np.concatenate([fine, sub])[order], np.concatenate([c_fine, c_sub])[order]
-    offset = float(_vertex(x, y))
+    offset = float(vertex(x, y))
     corr = float(_row_correlations(a, sensor, t, np.array([offset]), False)[0][0])
     return dict(best=best, fine=fine, x=np.append(x, offset), y=np.append(y, corr), grid=float(grid), offset=offset,
                 corr=corr, rows=np.concatenate([rows_fine, rows_sub])[order] if keep_rows else None,
                 rows_x=np.concatenate([fine, sub])[order])
 
 
-def _local_maxima(corr) -> np.ndarray:
-    """Indices of the interior local maxima of a curve (higher than the left neighbour, not lower
-    than the right)."""
+def local_maxima(corr) -> np.ndarray:
+    """Indices of the interior local maxima of a curve: higher than the left neighbour, not lower
+    than the right (of a plateau, its first point only).
+
+    Parameters
+    ----------
+    corr : array_like (M,)
+        The curve.
+
+    Returns
+    -------
+    ndarray of int
+        The indices, increasing; never ``0`` nor ``M - 1``.
+    """
     return np.flatnonzero((corr[1:-1] > corr[:-2]) & (corr[1:-1] >= corr[2:])) + 1
 
 
@@ -173,18 +250,18 @@ def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
     ``corr``, ``grid``, ``curve`` and the rival peak ``second`` (offset, correlation). With
     ``keep_rows`` also ``boot_x``, the fine and sub-grid offsets and the coarse ones within
     :data:`BOOTSTRAP_SPAN_S` of the peak's coarse maximum (sorted), and ``rows``, the centred sensor
-    speeds there (for :func:`_bootstrap_offsets`)."""
+    speeds there (for :func:`bootstrap_offsets`)."""
     max_offset = float(check_number("max_offset", max_offset, minimum=0))
     resolution = float(check_number("resolution", resolution, minimum=0))
-    t, cam = _overlap(camera, sensor, max_offset)
+    t, cam = overlap(camera, sensor, max_offset)
     a = cam - cam.mean()
     coarse = np.arange(-max_offset, max_offset + 1e-12, 0.01)
-    c_coarse = _correlations(cam, sensor, t, coarse)
+    c_coarse = correlations(cam, sensor, t, coarse)
     if not np.isfinite(c_coarse).any():  # a stream whose angular speed does not vary (a rig at rest): no information
         return dict(t=t, a=a, grid=0.0, offset=0.0, corr=float("nan"), second=(float("nan"), float("nan")),
                     curve=(coarse, c_coarse), rows=None)
     top = int(np.argmax(c_coarse))
-    rivals = [i for i in _local_maxima(c_coarse) if abs(coarse[i] - coarse[top]) > PEAK_SEPARATION_S]
+    rivals = [i for i in local_maxima(c_coarse) if abs(coarse[i] - coarse[top]) > PEAK_SEPARATION_S]
     close = sorted((i for i in rivals if c_coarse[top] - c_coarse[i] < RIVAL_REFINED_WITHIN),
                    key=lambda i: -c_coarse[i])[:RIVALS_REFINED]
     refined = [_refine(a, sensor, t, coarse[top], max_offset, resolution, keep_rows)]
@@ -193,7 +270,7 @@ def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
     if keep_rows and peak["rows"] is None:
         peak = _refine(a, sensor, t, peak["best"], max_offset, resolution, True)
     far = [(r["offset"], r["corr"]) for r in refined if abs(r["offset"] - peak["offset"]) > PEAK_SEPARATION_S]
-    far += [(coarse[i], c_coarse[i]) for i in _local_maxima(c_coarse)
+    far += [(coarse[i], c_coarse[i]) for i in local_maxima(c_coarse)
             if abs(coarse[i] - peak["best"]) > PEAK_SEPARATION_S and i not in close and i != top]
     second = max(far, key=lambda p: p[1]) if far else (float("nan"), float("nan"))
     curve_x, first = np.unique(np.concatenate([coarse] + [r["x"] for r in refined]), return_index=True)
@@ -210,10 +287,33 @@ def _search(camera, sensor, max_offset, resolution, keep_rows: bool) -> dict:
     return out
 
 
-def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndarray:
+def bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndarray:
     """The refined offset of each of ``n_bootstrap`` circular block-bootstrap replicates of the
     camera speeds.
 
+    Parameters
+    ----------
+    a : array_like (n,)
+        The camera's angular speeds, centred.
+    rows : array_like (J, n)
+        The sensor's angular speeds at each offset of ``x``, centred.
+    x : array_like (J,)
+        The offsets (s), increasing.
+    n_bootstrap : int
+        Number of replicates.
+    block : int
+        Block length (samples).
+    rng : numpy.random.Generator
+        Draws the blocks' starts.
+
+    Returns
+    -------
+    (n_bootstrap,) ndarray
+        Each replicate's refined offset; -inf or +inf when its maximum is at the first or last
+        offset.
+
+    Notes
+    -----
     A replicate draws ``ceil(n / block)`` blocks of ``block`` consecutive speeds (indices modulo
     ``n``, uniform starts: Politis & Romano's circular block bootstrap, every sample equally
     likely); ``w_i`` counts the draws of speed ``i``. With ``a`` the camera's and ``b_j`` the
@@ -224,7 +324,7 @@ def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndar
 
     for all replicates at once by matrix products (replicates and samples in chunks of at most
     :data:`OFFSET_BLOCK_SAMPLES` weights or products' terms); its maximum is refined as the
-    estimate's (:func:`_vertex`), and is -inf or +inf at the first or last offset (the replicate's
+    estimate's (:func:`vertex`), and is -inf or +inf at the first or last offset (the replicate's
     peak may lie beyond). The starts are drawn all at once, so the chunking changes the result only
     by rounding (BLAS's products round by shape).
     """
@@ -245,5 +345,5 @@ def _bootstrap_offsets(a, rows, x, n_bootstrap: int, block: int, rng) -> np.ndar
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = (sab - sa * sb / W) / np.sqrt((saa - sa * sa / W) * (sbb - sb * sb / W))
         ends = np.argmax(np.where(np.isfinite(corr), corr, -np.inf), axis=1)
-        out[r] = np.where(ends == 0, -np.inf, np.where(ends == len(x) - 1, np.inf, _vertex(x, corr)))
+        out[r] = np.where(ends == 0, -np.inf, np.where(ends == len(x) - 1, np.inf, vertex(x, corr)))
     return out

@@ -53,10 +53,10 @@ def _robust_before(motions, threshold_deg=5.0, max_hypotheses=200, seed=0, irls_
 def test_sample_positions_decode_to_the_itertools_order():
     for J in (3, 4, 17, 200, 1001):
         k = np.arange(J * (J - 1) // 2)
-        np.testing.assert_array_equal(msac._pair_at(k, J), np.array(list(combinations(range(J), 2))))
+        np.testing.assert_array_equal(msac.pair_at(k, J), np.array(list(combinations(range(J), 2))))
     J = 1_000_000  # the last pairs of the largest J of the benchmark
     n = J * (J - 1) // 2
-    np.testing.assert_array_equal(msac._pair_at([0, J - 2, J - 1, n - 2, n - 1], J),
+    np.testing.assert_array_equal(msac.pair_at([0, J - 2, J - 1, n - 2, n - 1], J),
                                   [[0, 1], [0, J - 1], [1, 2], [J - 3, J - 1], [J - 2, J - 1]])
 
 
@@ -73,17 +73,17 @@ def test_robust_below_the_cap_is_bit_identical_to_before(options, monkeypatch):
 def test_robust_above_the_cap_draws_the_same_samples_and_agrees(monkeypatch):
     _, A, B = _outlier_problem(60, seed=1)
     m = prepare_motions(np.stack([A, A[::-1]]), np.stack([B, B[::-1]]))
-    exact_idx, exact_R = msac._hypotheses(60, 200, 0), msac.robust.core(m)
+    exact_idx, exact_R = msac.hypotheses(60, 200, 0), msac.robust.core(m)
     monkeypatch.setattr(msac, "MAX_ENUMERATED_PAIRS", 10)  # 1770 pairs: drawn, not listed
-    np.testing.assert_array_equal(msac._hypotheses(60, 200, 0), exact_idx)
-    np.testing.assert_array_equal(msac._hypotheses(60, 5000, 0), np.array(list(combinations(range(60), 2))))
+    np.testing.assert_array_equal(msac.hypotheses(60, 200, 0), exact_idx)
+    np.testing.assert_array_equal(msac.hypotheses(60, 5000, 0), np.array(list(combinations(range(60), 2))))
     # the blocked 81-vector scores equal pair_residual_deg's to rounding
     R_h = so3.random_rotations(np.random.default_rng(2), (2, 30))
     flat = m.A.reshape(-1, 60, 3, 3), m.B.reshape(-1, 60, 3, 3)
-    np.testing.assert_allclose(msac._scores_blocked(R_h, *flat, 5.0), msac._scores_exact(R_h, *flat, 5.0),
+    np.testing.assert_allclose(msac.scores_blocked(R_h, *flat, 5.0), msac.scores_exact(R_h, *flat, 5.0),
                                rtol=1e-10)
     monkeypatch.setattr(msac, "SCORE_BLOCK", 70)  # several blocks of pairs and of hypotheses
-    np.testing.assert_allclose(msac._scores_blocked(R_h, *flat, 5.0), msac._scores_exact(R_h, *flat, 5.0),
+    np.testing.assert_allclose(msac.scores_blocked(R_h, *flat, 5.0), msac.scores_exact(R_h, *flat, 5.0),
                                rtol=1e-10)
     np.testing.assert_allclose(msac.robust.core(m), exact_R, rtol=0, atol=1e-12)
 

@@ -401,7 +401,7 @@ def replicates(monkeypatch):
         state["blocks"].append(block)
         return state["boot"][:n_bootstrap]
 
-    monkeypatch.setattr(association, "_bootstrap_offsets", fake)
+    monkeypatch.setattr(association, "bootstrap_offsets", fake)
     return state
 
 

@@ -354,7 +354,7 @@ def test_threshold_and_p_value_agree():
         c = threshold(level, 40.0, lam1, lam2)
         assert p_value(c, 40.0, lam1, lam2) == pytest.approx(level, rel=1e-3)
         assert p_value(c * 1.01, 40.0, lam1, lam2) < level < p_value(c * 0.99, 40.0, lam1, lam2)
-    assert changepoint._tail(np.array([2.0, 3.0]), lam1, lam2).tolist() == [1.0, 1.0]  # at or below 3 dof: certain
+    assert changepoint.tail(np.array([2.0, 3.0]), lam1, lam2).tolist() == [1.0, 1.0]  # at or below 3 dof: certain
     assert p_value(1e3, 40.0, lam1, lam2) < 1e-15
     assert threshold(1e-300, 11.0, lam1, lam2) == math.inf
 
@@ -424,10 +424,10 @@ def test_the_numbers_of_two_seeded_tests():
 def test_the_false_alarm_formula():
     assert threshold(0.01, 40.0, 0.15, 0.85) == pytest.approx(26.361175277270377, rel=1e-6)
     assert p_value(12.0, 40.0, 0.15, 0.85) == pytest.approx(0.23699144885006215, rel=1e-9)
-    assert changepoint._tail(np.array([5.0, 12.0]), 0.2, 0.8).tolist() == pytest.approx(
+    assert changepoint.tail(np.array([5.0, 12.0]), 0.2, 0.8).tolist() == pytest.approx(
         [0.6989447861244862, 0.09918176789611755], rel=1e-12)
     # batched over the statistic
-    assert changepoint._false_alarm(np.array([8.0, 15.0]), 20.0, 0.2, 0.8).tolist() == pytest.approx(
+    assert changepoint.false_alarm(np.array([8.0, 15.0]), 20.0, 0.2, 0.8).tolist() == pytest.approx(
         [0.517878604071865, 0.18213156507180198], rel=1e-12)
 
 
@@ -436,7 +436,7 @@ def test_the_tail_is_quiet_at_zero_and_at_tiny_statistics():
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert changepoint._tail(np.array([0.0, 1e-310, 3.0]), 0.2, 0.8).tolist() == [1.0, 1.0, 1.0]
+        assert changepoint.tail(np.array([0.0, 1e-310, 3.0]), 0.2, 0.8).tolist() == [1.0, 1.0, 1.0]
 
 
 def test_the_degenerate_side_message():

@@ -201,11 +201,11 @@ def test_a_short_skip_is_the_clock_s_at_the_match_boundary(monkeypatch):
     t = np.concatenate([np.arange(0.0, 30.0, 0.05), np.arange(30.02, 60.0, 0.05)])  # one 70 ms interval
     share = abs(0.020 - 0.025) / 0.025  # a 20 ms skip read against a 25 ms step
     monkeypatch.setattr(clock_profile, "SKIP_MATCH", 1.01 * share)
-    assert clock_profile._skip(t, 30.0, 3.0, 0.025)[1] == pytest.approx(0.02)
+    assert clock_profile.skip(t, 30.0, 3.0, 0.025)[1] == pytest.approx(0.02)
     monkeypatch.setattr(clock_profile, "SKIP_MATCH", 0.99 * share)
-    assert clock_profile._skip(t, 30.0, 3.0, 0.025) is None
-    assert clock_profile._skip(t, 30.0, 3.0, -0.02) is None  # the skip says the other clock's sign
-    assert clock_profile._skip(t, 40.0, 3.0, 0.02) is None  # not near the step
+    assert clock_profile.skip(t, 30.0, 3.0, 0.025) is None
+    assert clock_profile.skip(t, 30.0, 3.0, -0.02) is None  # the skip says the other clock's sign
+    assert clock_profile.skip(t, 40.0, 3.0, 0.02) is None  # not near the step
 
 
 def _drift_stops(gyro, ppm, stop):

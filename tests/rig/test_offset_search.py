@@ -23,32 +23,32 @@ from replication.rig.streams import GyroStream, OrientationStream, integrate_gyr
 def test_vertex_of_the_parabola_through_the_maximum_and_its_neighbours():
     x = np.array([0.0, 1.0, 2.0, 4.0, 5.0])
     y = -(x - 2.3) ** 2  # a parabola: its vertex exactly, though the points are unequally spaced
-    assert offset_search._vertex(x, y) == pytest.approx(2.3, abs=1e-12)
+    assert offset_search.vertex(x, y) == pytest.approx(2.3, abs=1e-12)
     ys = np.stack([y, -(x - 0.8) ** 2, -(x - 4.4) ** 2])
-    assert offset_search._vertex(x, ys) == pytest.approx([2.3, 0.8, 4.4], abs=1e-12)
+    assert offset_search.vertex(x, ys) == pytest.approx([2.3, 0.8, 4.4], abs=1e-12)
     # a maximum at either end is not refined; nor a flat (non-concave) top; no finite value: NaN
-    assert offset_search._vertex(x, x) == 5.0 and offset_search._vertex(x, -x) == 0.0
+    assert offset_search.vertex(x, x) == 5.0 and offset_search.vertex(x, -x) == 0.0
     lone = np.array([np.nan, 1.0, np.nan, 0.0, 0.0])  # no finite neighbours: no parabola
-    assert offset_search._vertex(x, lone) == 1.0
-    assert math.isnan(offset_search._vertex(x, np.full(5, np.nan)))
+    assert offset_search.vertex(x, lone) == 1.0
+    assert math.isnan(offset_search.vertex(x, np.full(5, np.nan)))
     with_nan = np.array([np.nan, 1.0, 3.0, 2.0, np.nan])
-    assert 1.0 < offset_search._vertex(x, with_nan) < 4.0
+    assert 1.0 < offset_search.vertex(x, with_nan) < 4.0
     # the vertex is clipped to the three points' span
     skew = np.array([0.0, 0.0, 1.0, 0.999, 0.0])
-    v = offset_search._vertex(x, skew)
+    v = offset_search.vertex(x, skew)
     assert 1.0 <= v <= 4.0 and v == pytest.approx(
         0.5 * (1 + 2) - (1.0 / 1.0) / (2 * ((0.999 - 1.0) / 2.0 - 1.0) / 3.0))
 
 
 def test_local_maxima_are_interior_strict_on_the_left():
     c = np.array([0.0, 1.0, 0.5, 0.5, 0.7, 0.7, 0.2, 0.9])
-    assert offset_search._local_maxima(c).tolist() == [1, 4]  # 5 ties 4 from the left: not a maximum; 7 is an end
-    assert offset_search._local_maxima(np.array([3.0, 2.0, 1.0])).tolist() == []
+    assert offset_search.local_maxima(c).tolist() == [1, 4]  # 5 ties 4 from the left: not a maximum; 7 is an end
+    assert offset_search.local_maxima(np.array([3.0, 2.0, 1.0])).tolist() == []
 
 
 def test_the_overlap_needs_ten_camera_samples_inside_the_shifted_sensor_stream():
     cam, sen = turning_streams(n_cam=40)
-    t, speed = offset_search._overlap(cam, sen, 0.2)
+    t, speed = offset_search.overlap(cam, sen, 0.2)
     assert np.array_equal(t, cam.t) and speed.shape == (39,)
     assert np.allclose(speed, np.linalg.norm([0.4, 0.9, -0.3]))
     # the sensor covers camera times 0 .. 0.45 + 0.2 exactly: ten samples (0 .. 0.45), inclusive at
@@ -56,14 +56,14 @@ def test_the_overlap_needs_ten_camera_samples_inside_the_shifted_sensor_stream()
     sen10 = OrientationStream(np.linspace(-0.2, 0.65, 86), so3.matrix_from_rotation_vector(np.linspace(-0.2, 0.65,
                                                                                                        86)[:, None]
                                                                          * np.array([0.4, 0.9, -0.3])))
-    t, _ = offset_search._overlap(cam, sen10, 0.2)
+    t, _ = offset_search.overlap(cam, sen10, 0.2)
     assert len(t) == 10 and t[0] == 0.0 and t[-1] == pytest.approx(0.45)
     sen9 = OrientationStream(np.linspace(-0.2, 0.6, 81), so3.matrix_from_rotation_vector(np.linspace(-0.2, 0.6,
                                                                                                      81)[:, None]
                                                                         * np.array([0.4, 0.9, -0.3])))
     with pytest.raises(ValueError, match=r"the streams overlap in fewer than 10 camera samples \(overlap "
                                          r"0\.000\.\.0\.400 s\)$"):
-        offset_search._overlap(cam, sen9, 0.2)
+        offset_search.overlap(cam, sen9, 0.2)
 
 
 # ------------------------------------------------------------------ the bootstrap's replicates
@@ -84,7 +84,7 @@ def test_a_replicate_peaking_at_the_first_or_last_offset_is_minus_or_plus_infini
     a, rows, x = _spike()
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a replicate without the spike has a constant first row: 0/0, silently
-        out = offset_search._bootstrap_offsets(a, rows, x, 200, 1, np.random.default_rng(0))
+        out = offset_search.bootstrap_offsets(a, rows, x, 200, 1, np.random.default_rng(0))
     # with the spike drawn the first offset matches best (-inf), without it the last (+inf); every
     # sample, the first too, is drawn with probability 1 - 0.9^10 = 65 % per replicate
     assert np.all(np.isinf(out))
@@ -98,7 +98,7 @@ def test_a_replicate_peaking_inside_is_refined_near_that_offset():
     x = np.arange(5) * 0.001
     for k in (1, 2, 3):
         rows = np.stack([a + 0.2 * abs(j - k) * z for j in range(5)])
-        out = offset_search._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
+        out = offset_search.bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
         assert np.all(np.abs(out - x[k]) < 0.001), (k, out)
 
 
@@ -107,8 +107,8 @@ def test_the_replicates_do_not_depend_on_the_speeds_scale():
     a = rng.standard_normal(40)
     x = np.arange(5) * 0.001
     rows = np.stack([a + 0.3 * abs(j - 2.4) * rng.standard_normal(40) for j in range(5)])
-    out = offset_search._bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
-    small = offset_search._bootstrap_offsets(1e-3 * a, 1e-3 * rows, x, 30, 4, np.random.default_rng(0))
+    out = offset_search.bootstrap_offsets(a, rows, x, 30, 4, np.random.default_rng(0))
+    small = offset_search.bootstrap_offsets(1e-3 * a, 1e-3 * rows, x, 30, 4, np.random.default_rng(0))
     assert np.allclose(small, out, rtol=0, atol=1e-12)
 
 
@@ -135,7 +135,7 @@ def _offset_streams(seconds=30.0, offset=0.0123):
 def _correlations_before(cam, sensor, t, offsets):
     """The correlation of before (all offsets in one array)."""
     Qs = sensor.at((t[None, :] + offsets[:, None]).ravel()).reshape(len(offsets), len(t), 3, 3)
-    sen = offset_search._speed(Qs, t)
+    sen = offset_search.speed(Qs, t)
     a = cam - cam.mean()
     b = sen - sen.mean(axis=1, keepdims=True)
     return (b @ a) / (np.linalg.norm(a) * np.linalg.norm(b, axis=1))
@@ -146,15 +146,15 @@ def offset_problem():
     camera, sensor = _offset_streams()
     keep = (camera.t >= sensor.t[0] + 1.0) & (camera.t <= sensor.t[-1] - 1.0)
     t = camera.t[keep]
-    return camera, sensor, t, offset_search._speed(camera.R[keep], t)
+    return camera, sensor, t, offset_search.speed(camera.R[keep], t)
 
 
 def test_offset_blocks_are_bit_identical(offset_problem):
     _, sensor, t, cam = offset_problem
     offsets = np.arange(-0.3, 0.3 + 1e-12, 0.01)  # 61 offsets
-    one = offset_search._correlations(cam, sensor, t, offsets, block_samples=len(offsets) * len(t))
+    one = offset_search.correlations(cam, sensor, t, offsets, block_samples=len(offsets) * len(t))
     np.testing.assert_array_equal(one, _correlations_before(cam, sensor, t, offsets))  # one block: as before
-    blocked = [offset_search._correlations(cam, sensor, t, offsets, block_samples=per * len(t))
+    blocked = [offset_search.correlations(cam, sensor, t, offsets, block_samples=per * len(t))
                for per in (1, 4, 7, 60)]
     for other in blocked[1:]:
         np.testing.assert_array_equal(other, blocked[0])  # the block size does not touch an offset's arithmetic

@@ -22,6 +22,12 @@ from replication.rig.online_guard import (
 from replication.study.live_study import pair_stream
 
 AXIS = np.array([0.6, 0.0, 0.8])
+GUARD_SAYS = "beyond what its radius allows"  # the guard's sentence in not_ready (MisfitGuard.describe)
+
+
+def _guard_said(oc):
+    """``not_ready`` holds the guard's sentence: its recent pairs misfit."""
+    return any(GUARD_SAYS in m for m in oc.status()["not_ready"])
 
 
 def _remounted(seed, step_deg, noise_deg, before=200, after=100):
@@ -59,9 +65,9 @@ def test_a_1_deg_remount_withdraws_ready_within_a_few_pairs_before_the_detector_
         assert oc.ready and oc.error_deg(R1) > 0.9
         k, state = _first_withdrawal(oc, A2, B2)
         assert k is not None and k <= 5
-        said = [m for m in oc.status()["not_ready"] if "beyond what its radius allows" in m]
-        assert len(said) == (oc._detector.guard.misfit is not None)
-        alone += (bool(said) and "agree on a rotation" in said[0] and not oc.checking and oc._detector.misfits < 2
+        said = [m for m in oc.status()["not_ready"] if GUARD_SAYS in m]
+        assert len(said) == (oc.radius != oc.status()["radius_deg"])  # said exactly when the radius is widened
+        alone += (bool(said) and "agree on a rotation" in said[0] and oc.unresolved_end() is None
                   and oc.status()["radius_deg"] < oc.target_deg and oc.determined
                   and oc.current_verdict.level != "fail")
     assert alone >= 3
@@ -79,7 +85,7 @@ def test_a_shift_too_small_for_any_residual_is_seen_by_the_guard():
         assert oc.ready
         k, state = _first_withdrawal(oc, A2, B2)
         guard = oc._detector.guard
-        assert k is not None and k < 30 and not oc.checking and oc._detector.misfits < 2
+        assert k is not None and k < 30 and oc.unresolved_end() is None  # no alarm, fewer than 2 gross misfits
         assert oc.status()["radius_deg"] < 0.5 and oc.radius == pytest.approx(oc.status()["radius_deg"]
                                                                               + guard.misfit[1])  # widened
         by.append("window" if guard.run_misfit is None else "run")
@@ -209,8 +215,8 @@ def test_the_window_is_tested_every_guard_every_pairs_on_the_last_guard_window(r
 # (::test_ready_needs_the_verdict_not_to_fail) are guarded there, the guard above.
 
 def _others_hold(oc, *, determined=True):
-    return (oc.radius < oc.target_deg and not oc.checking and oc._detector.misfits < 2
-            and oc._detector.guard.misfit is None and oc.current_verdict.level != "fail"
+    return (oc.radius < oc.target_deg and oc.unresolved_end() is None  # no alarm, fewer than 2 gross misfits
+            and not _guard_said(oc) and oc.current_verdict.level != "fail"
             and oc.determined is determined)
 
 
@@ -266,7 +272,7 @@ def test_ready_waits_while_a_change_is_being_confirmed(rng):
     oc._detector._alarm(oc.n_total - 1, "cusum")
     states = oc.update_many(A[200:205], B[200:205])
     assert oc.checking and not any(s.ready for s in states) and _others_hold(oc) is False
-    assert oc.radius < oc.target_deg and oc._detector.guard.misfit is None and oc._detector.misfits < 2
+    assert oc.radius < oc.target_deg and not _guard_said(oc) and oc._detector.misfits < 2
     assert any("a change is being confirmed" in m for m in oc.status()["not_ready"])
     oc.update_many(A[205:260], B[205:260])
     assert not oc.checking and oc.ready and [e.kind for e in oc.events] != ["remount"]
@@ -339,7 +345,7 @@ def test_a_long_window_alone_keeps_ready_false_and_widens_the_radius():
     n, angle, stat, threshold = guard.long_misfit
     assert n in (80, 160, 320) and stat > threshold == guard.threshold
     assert not state.ready and not oc.ready
-    assert (oc.determined and not oc.checking and oc._detector.misfits < 2 and oc.current_verdict.level != "fail"
+    assert (oc.determined and oc.unresolved_end() is None and oc.current_verdict.level != "fail"
             and oc.status()["radius_deg"] < oc.target_deg)
     assert any(f"the last {n} pairs agree on a rotation" in m for m in oc.status()["not_ready"])
     assert oc.radius == pytest.approx(oc.status()["radius_deg"] + angle) and state.radius_deg == oc.radius

@@ -11,7 +11,7 @@ from ..so3 import angle_deg_from_chordal, nearest_rotation, rotation_vector_from
 from ._registry import register
 from .certificate import chordal_newton
 
-__all__ = ["robust", "MAX_ENUMERATED_PAIRS", "SCORE_BLOCK"]
+__all__ = ["robust", "MAX_ENUMERATED_PAIRS", "SCORE_BLOCK", "hypotheses", "pair_at", "scores_exact", "scores_blocked"]
 
 REFERENCE = (
     "MSAC (P. H. S. Torr and A. Zisserman, 'MLESAC: a new robust estimator with application to "
@@ -24,8 +24,8 @@ REFERENCE = (
 #: measured: 2.3 MB and 0.04 s at J = 201, 1.9 GB at J = 6000), so the cap keeps it below ~2.5 MB
 #: while covering every problem of the paper's simulation and notebook 06 (J <= 50) on the exact
 #: code path of before. Above it the samples are drawn by their position in the same lexicographic
-#: order (:func:`_pair_at`) from the same generator call, so the hypotheses are the same ones; only
-#: the scoring arithmetic differs (see :func:`_scores_blocked`).
+#: order (:func:`pair_at`) from the same generator call, so the hypotheses are the same ones; only
+#: the scoring arithmetic differs (see :func:`scores_blocked`).
 MAX_ENUMERATED_PAIRS = 20_000
 #: Most residuals (hypotheses x pairs) held at once while scoring. Below
 #: :data:`MAX_ENUMERATED_PAIRS` a block of ``pair_residual_deg`` costs about 220 bytes per residual
@@ -37,14 +37,30 @@ SCORE_BLOCK = 2 ** 20
 _EXACT_BLOCK = 2 ** 17
 
 
-def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
+def hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
     """Index pairs (H, 2) in lexicographic order: all ``J (J - 1) / 2`` pairs, or a seeded subset of
     ``max_hypotheses``.
 
+    Parameters
+    ----------
+    J : int
+        Number of motion pairs.
+    max_hypotheses : int
+        Most two-pair samples.
+    seed : int
+        Seeds the subset (``numpy.random.default_rng(seed)``).
+
+    Returns
+    -------
+    (H, 2) ndarray of int
+        The samples ``(i, j)``, ``i < j``, in the order of ``itertools.combinations``.
+
+    Notes
+    -----
     Up to :data:`MAX_ENUMERATED_PAIRS` pairs the list is built and indexed (the code of before, bit
     for bit); above it the same positions are drawn from the same generator call,
     ``default_rng(seed).choice(n_pairs, max_hypotheses, replace=False)`` (which needs
-    ``O(max_hypotheses)`` memory), and turned into pairs by :func:`_pair_at`, so no ``O(J^2)`` list
+    ``O(max_hypotheses)`` memory), and turned into pairs by :func:`pair_at`, so no ``O(J^2)`` list
     is built.
     """
     n_pairs = J * (J - 1) // 2
@@ -55,15 +71,29 @@ def _hypotheses(J: int, max_hypotheses: int, seed) -> np.ndarray:
         rng = np.random.default_rng(seed)
         return pairs[np.sort(rng.choice(len(pairs), size=max_hypotheses, replace=False))]
     if n_pairs <= max_hypotheses:
-        return _pair_at(np.arange(n_pairs, dtype=np.int64), J)
+        return pair_at(np.arange(n_pairs, dtype=np.int64), J)
     rng = np.random.default_rng(seed)
-    return _pair_at(np.sort(rng.choice(n_pairs, size=max_hypotheses, replace=False)), J)
+    return pair_at(np.sort(rng.choice(n_pairs, size=max_hypotheses, replace=False)), J)
 
 
-def _pair_at(k, J: int) -> np.ndarray:
-    """The pairs ``(i, j)`` at positions ``k`` of ``itertools.combinations(range(J), 2)``, shape
-    (len(k), 2).
+def pair_at(k, J: int) -> np.ndarray:
+    """The pairs ``(i, j)`` at positions ``k`` of ``itertools.combinations(range(J), 2)``, without
+    building that list.
 
+    Parameters
+    ----------
+    k : array_like of int
+        Positions, ``0 <= k < J (J - 1) / 2``.
+    J : int
+        Number of motion pairs.
+
+    Returns
+    -------
+    (len(k), 2) ndarray of int
+        The pair at each position.
+
+    Notes
+    -----
     Row ``i`` starts at position ``i (2 J - i - 1) / 2``; ``i`` is the largest row starting at or
     before ``k`` (from the quadratic formula, then corrected in integers for rounding).
     """
@@ -80,10 +110,26 @@ def _pair_at(k, J: int) -> np.ndarray:
     return np.stack([i, k - start(i) + i + 1], axis=-1)
 
 
-def _scores_exact(R_h, A, B, threshold_deg: float) -> np.ndarray:
+def scores_exact(R_h, A, B, threshold_deg: float) -> np.ndarray:
     """MSAC scores (P, H) with the arithmetic of before: ``pair_residual_deg`` on blocks of problems
     x hypotheses.
 
+    Parameters
+    ----------
+    R_h : (P, H, 3, 3) array
+        Hypotheses per problem.
+    A, B : (P, J, 3, 3) arrays
+        The problems' motion pairs.
+    threshold_deg : float
+        Residuals are capped here (MSAC).
+
+    Returns
+    -------
+    (P, H) ndarray
+        ``sum_j min(r_j, threshold_deg)^2`` per hypothesis.
+
+    Notes
+    -----
     Each residual and each row sum is computed exactly as in one (P, H, J) evaluation (the block
     only selects rows), so the scores are bit-identical to it; at most :data:`_EXACT_BLOCK`
     residuals exist at once (plus one row of ``J``).
@@ -102,9 +148,21 @@ def _scores_exact(R_h, A, B, threshold_deg: float) -> np.ndarray:
     return score
 
 
-def _scores_blocked(R_h, A, B, threshold_deg: float) -> np.ndarray:
+def scores_blocked(R_h, A, B, threshold_deg: float) -> np.ndarray:
     """MSAC scores (P, H) in ``O(SCORE_BLOCK)`` memory from one matrix product per block of pairs.
 
+    Parameters
+    ----------
+    R_h, A, B, threshold_deg
+        As in :func:`scores_exact`.
+
+    Returns
+    -------
+    (P, H) ndarray
+        The scores of :func:`scores_exact`, to rounding.
+
+    Notes
+    -----
     Term ``j`` of eq. (8) at a rotation ``R`` is ``||A_j R - R B_j||_F^2 = 6 - 2 <A_j, R B_j R^T>``
     and ``vec(R B_j R^T) = (R kron R) vec(B_j)`` (row-major ``vec``), so ``<A_j, R B_j R^T> =
     <vec(A_j) vec(B_j)^T, R kron R>``: a (pairs, 81) @ (81, hypotheses) product. The residual angle
@@ -184,12 +242,12 @@ def robust(motions, *, threshold_deg: float = 5.0, max_hypotheses: int = 200, se
         raise ValueError(f"irls_iterations must be a non-negative integer, got {irls_iterations!r}")
     A, B, J = motions.A, motions.B, motions.J
     lead = A.shape[:-3]
-    idx = _hypotheses(J, int(max_hypotheses), seed)  # (H, 2)
+    idx = hypotheses(J, int(max_hypotheses), seed)  # (H, 2)
     alpha, beta = rotation_vector_from_matrix(A), rotation_vector_from_matrix(B)  # Park & Martin: alpha_j = R0 beta_j
     M = np.einsum("...hka,...hkb->...hab", alpha[..., idx, :], beta[..., idx, :])
     R_h = nearest_rotation(M)  # (..., H, 3, 3): one hypothesis per sample
     flat = (-1, J, 3, 3)
-    scores = _scores_exact if J * (J - 1) // 2 <= MAX_ENUMERATED_PAIRS else _scores_blocked
+    scores = scores_exact if J * (J - 1) // 2 <= MAX_ENUMERATED_PAIRS else scores_blocked
     score = scores(R_h.reshape((-1,) + R_h.shape[-3:]), A.reshape(flat), B.reshape(flat), threshold_deg)
     best = np.argmin(score.reshape(lead + score.shape[-1:]), axis=-1)
     R = np.take_along_axis(R_h, best[..., None, None, None], axis=-3)[..., 0, :, :]
