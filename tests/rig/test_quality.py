@@ -10,6 +10,7 @@ threshold added to ``THRESHOLDS`` without a driver fails
 """
 import dataclasses
 import math
+import warnings
 from types import SimpleNamespace
 
 import numpy as np
@@ -256,6 +257,68 @@ def test_the_iteration_cap_is_named_by_its_measured_cause_and_what_to_do(ratio, 
     else:  # not slow by the ratio: the start, or a cap the caller set; no claim that the ratio is over the bound
         assert "> 0.9863" not in r.message and "did not reach its limit within its iterations" in r.message
         assert "its start was orthogonal to the limit" in r.message
+
+
+@pytest.mark.parametrize("ratio, slow", [(CAP_RATIO, False), (CAP_RATIO * (1 + EPS), True), (1 - EPS, True),
+                                         (1.0, False), (1 + EPS, False), (0.5, False)])
+def test_the_iteration_cap_ratio_rule_at_its_bounds(ratio, slow):
+    """The ratio says "too slow" strictly between the cap's ratio and 1: at the cap's ratio 1000
+    iterations just reach the precision, at 1 and above the iteration does not converge at all (no
+    count to name); otherwise the measured ratio is still given, against the same threshold."""
+    e = dataclasses.replace(CLEAN, warnings=("IterationCapWarning",), spectral_ratio=ratio, method="two_step_left")
+    (r,) = judge(e).reasons
+    assert (r.check, r.level, r.measured, r.threshold) == ("solver_warning", "warning", ratio, CAP_RATIO)
+    assert ("for the two-step iteration" in r.message) is slow
+    if not slow:
+        assert r.message.startswith(f"solver 'two_step_left' did not reach its limit within its iterations (sigma_2 "
+                                    f"/ sigma_1 of K {ratio:.4f}, camera axis spread 20 deg, median motion per pair "
+                                    f"30 deg; or its start was orthogonal")
+
+
+@pytest.mark.parametrize("ratio", [CAP_RATIO * (1 + EPS), 0.9975, 0.99999])
+def test_the_iterations_needed_reach_the_precision_and_no_fewer(ratio):
+    """The count named is the n with ratio ** (2 n) = 1e-12 (the two-step error shrinks by the
+    ratio squared per iteration), rounded: n - 1 iterations leave more than 1e-12, n + 1 less."""
+    e = dataclasses.replace(CLEAN, warnings=("IterationCapWarning",), spectral_ratio=ratio, method="two_step_left")
+    (r,) = judge(e).reasons
+    n = int(r.message.split("would need about ")[1].split(" iterations")[0])
+    assert n >= 1000 and ratio ** (2 * (n - 1)) > 1e-12 > ratio ** (2 * (n + 1))
+
+
+def test_an_unmeasured_iteration_cap_names_the_motion_alone():
+    e = dataclasses.replace(CLEAN, warnings=("IterationCapWarning",), spectral_ratio=None)
+    (r,) = judge(e).reasons
+    assert (r.check, r.measured, r.threshold) == ("solver_warning", None, None)
+    assert ("did not reach its limit within its iterations (camera axis spread 20 deg, median motion per pair 30 "
+            "deg; or its start" in r.message)
+
+
+def test_the_default_methods_remedy_is_checking_the_pairs():
+    e = dataclasses.replace(CLEAN, warnings=("LocalMinimumWarning",), method="chordal_optimal")
+    (r,) = judge(e).reasons
+    assert r.message.endswith("(it stopped early or on another stationary point): check the pairs (outliers, "
+                              "mismatched streams)")
+
+
+def test_an_unknown_solver_warning_is_named_with_its_solver():
+    e = dataclasses.replace(CLEAN, warnings=("NewSolverWarning",), method="svd")
+    (r,) = judge(e).reasons
+    assert (r.check, r.level, r.measured, r.threshold) == ("solver_warning", "warning", None, None)
+    assert r.message == "solver 'svd' warned (NewSolverWarning; its words in the result's warnings)"
+
+
+@pytest.mark.parametrize("spread, motion, words", [
+    (20.0, 30.0, "camera axis spread 20 deg, median motion per pair 30 deg"),
+    (None, 30.0, "median motion per pair 30 deg"),
+    (20.0, None, "camera axis spread 20 deg"),
+    (None, None, "no motion measure"),
+])
+def test_the_motion_words_are_those_measured(spread, motion, words):
+    """A certificate warning names the motions' measured shape: each measure that is known, and
+    "no motion measure" when neither is."""
+    e = dataclasses.replace(CLEAN, warnings=("CertificateWarning",), axis_spread_deg=spread, motion_median_deg=motion)
+    (r,) = judge(e).reasons
+    assert f"close to one axis cause ({words}): add motion" in r.message
 
 
 def test_a_solver_warning_with_the_default_method_says_to_check_the_pairs():
@@ -529,6 +592,19 @@ def test_outlying_poses_beyond_three_times_the_median():
     # a zero or undefined median of the stations: nothing to compare with
     assert "pose_outliers" not in _reasons(dataclasses.replace(CLEAN, pose_residual_medians_deg=(0.0, 0.0, 5.0)))
     assert "pose_outliers" not in _reasons(dataclasses.replace(CLEAN, pose_residual_medians_deg=(math.nan,) * 3))
+
+
+def test_outlying_poses_default_words_and_no_station_without_a_numpy_warning():
+    """The default kind of a station's residual is its pairs' median; no finite station is no
+    reason, without numpy's "Mean of empty slice" warning."""
+    from replication.rig.quality import _outlying_poses
+
+    r = _outlying_poses(np.array([1.0, 1.0, 1.0, 4.0]))
+    assert r.message.startswith("outlying pose (0-based index, median residual of its pairs): 3 (4 deg)")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _outlying_poses(np.full(3, np.nan)) is None
+        assert "pose_outliers" not in _reasons(dataclasses.replace(CLEAN, pose_residual_medians_deg=(math.nan,) * 3))
 
 
 def test_extra_reasons_join_and_the_worst_level_wins():
