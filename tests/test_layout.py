@@ -315,6 +315,18 @@ def _commands(path: Path) -> list:
     return [c.args[0].value.replace("-", "_") for c in calls]
 
 
+def _unit(module: str) -> str:
+    """A module's unit: its path below the room, parts joined by ``_`` without leading ``_``."""
+    return "_".join(p.lstrip("_") for p in module.split(".")[2:])
+
+
+@functools.cache
+def _public_classes(module: str) -> frozenset:
+    """A module's public classes in snake case (``OnlineCalibrator``: ``online_calibrator``)."""
+    body = _tree(MODULES[module]).body
+    return frozenset(_snake(n.name) for n in body if isinstance(n, ast.ClassDef) and not n.name.startswith("_"))
+
+
 @functools.cache
 def unit_names(room: str) -> frozenset:
     """The names a test file of ``room`` may take: each module's path below the room, its parts
@@ -333,11 +345,10 @@ def unit_names(room: str) -> frozenset:
             continue
         if len(parts) < 3 or parts[1] != room:
             continue
-        names.add("_".join(p.lstrip("_") for p in parts[2:]))
+        names.add(_unit(module))
         if room == "cli":  # a command by its name (``fetch-data``: ``fetch_data``)
             names |= set(_commands(path))
-        tree = _tree(path)
-        names |= {_snake(n.name) for n in tree.body if isinstance(n, ast.ClassDef) and not n.name.startswith("_")}
+        names |= _public_classes(module)
     return frozenset(names)
 
 
@@ -513,12 +524,6 @@ def _importers() -> dict:
     return found
 
 
-@functools.cache
-def _public_classes(module: str) -> frozenset:
-    body = _tree(MODULES[module]).body
-    return frozenset(_snake(n.name) for n in body if isinstance(n, ast.ClassDef) and not n.name.startswith("_"))
-
-
 def unit_modules(path: Path, doors: bool = True) -> set:
     """The package modules a test file of core, rig or study is named for: the module or the module
     of the public class its name names; with ``doors``, also a named package's modules and the
@@ -528,7 +533,7 @@ def unit_modules(path: Path, doors: bool = True) -> set:
     for module in MODULES:
         parts = module.split(".")
         if len(parts) >= 3 and parts[1] == room and (
-                "_".join(p.lstrip("_") for p in parts[2:]) == name or name in _public_classes(module)):
+                _unit(module) == name or name in _public_classes(module)):
             own.add(module)
     if not doors:
         return own
