@@ -231,3 +231,95 @@ def test_summary_of_use_consistent_says_when_nothing_was_left_out():
     text = "\n".join(_result(segments=_segments(0.87, True)).summary().split("\n"))
     assert "use='consistent': R0 from 0.0-10.0 s, 20.0-40.0 s (7 pairs; the majority, not known to be right" in text
     assert "nothing left out" not in text
+
+
+def _sensor_model(**details):
+    """A gyro's sensor-model fields as the report holds them: bias 0.01, -0.02, 0.03 rad/s, drift
+    12.34 ppm, scale and misalignment resolved on x and xy only."""
+    base = {"note": "n", "drift_resolved": True, "bias_applied": True,
+            "scale_held_ci95": [None, [0.98765, 1.01234], None], "scale_note": None}
+    base.update(details)
+    return {"gyro_bias_rad_s": [0.01, -0.02, 0.03],
+            "gyro_bias_ci95_rad_s": [[0.009, 0.011], [-0.021, -0.019], [0.029, 0.031]],
+            "clock_drift_ppm": 12.34, "clock_drift_ci95_ppm": [-1.26, 25.74],
+            "gyro_scale": [1.00123, 1.0, 1.0], "gyro_scale_ci95": [[0.99987, 1.00259], None, None],
+            "gyro_misalignment": [0.00456, 0.0, 0.0], "gyro_misalignment_ci95": [[-0.00111, 0.01023], None, None],
+            "sensor_model": base}
+
+
+def _lines(**kw):
+    return _result(**kw).summary().split("\n")
+
+
+def _line(lines, start):
+    return next(x for x in lines if x.startswith(start))
+
+
+def test_summary_of_a_gyros_bias_drift_and_scale_per_axis():
+    lines = _lines(sensor_model=_sensor_model())
+    bias = _line(lines, "gyro bias (x, y, z)")
+    assert "deg/s with 95 % intervals: +0.573 [+0.516, +0.630], -1.146 [-1.203, -1.089], +1.719 [+1.662, +1.776] " \
+           "(removed)" in bias
+    assert _line(lines, "clock drift:") == "clock drift: +12.3 ppm, 95 % interval [-1.3, +25.7] ppm"
+    scale = _line(lines, "gyro scale")
+    assert ("with 95 % intervals: 1.0012 [0.9999, 1.0026], 1 (held: not resolved; fitted free, it "
+            "lies in [0.9877, 1.0123]), 1 (held: not resolved) (removed)") in scale and scale.endswith("(removed)")
+    mis = _line(lines, "gyro misalignment (xy, xz, yz")
+    assert ("with 95 % intervals: +0.0046 [-0.0011, +0.0102], 0 (held: not resolved), 0 (held: not resolved) "
+            "(removed)") in mis
+
+
+def test_summary_of_a_sensor_model_says_measured_not_removed_and_unresolved_drift():
+    lines = _lines(sensor_model=_sensor_model(bias_applied=False, drift_resolved=False, scale_note="motion too slow"))
+    assert _line(lines, "gyro bias (x, y, z)").endswith("(measured, not removed)")
+    assert _line(lines, "clock drift:").endswith("[-1.3, +25.7] ppm (not resolved: it includes 0)")
+    assert _line(lines, "gyro scale").endswith("(measured, not removed; motion too slow)")
+    assert _line(lines, "gyro misalignment").endswith("(measured, not removed)")
+    assert not any("removed)" in x and "(removed" in x for x in lines)
+
+
+def test_summary_of_a_sensor_model_without_bias_drift_scale_or_held_intervals():
+    model = _sensor_model()
+    model["gyro_bias_rad_s"] = None
+    assert _lines(sensor_model=model)[-1] == "gyro bias: not estimated (n)"
+    model = _sensor_model(drift_note="beside a clock step")
+    model["clock_drift_ppm"] = None
+    lines = _lines(sensor_model=model)
+    assert "clock drift: beside a clock step" in lines
+    del model["sensor_model"]["drift_note"]
+    assert "clock drift: not measured" in _lines(sensor_model=model)
+    model = _sensor_model(scale_held_ci95=None)
+    model["gyro_misalignment"] = None
+    lines = _lines(sensor_model=model)
+    assert _line(lines, "gyro scale").endswith("1 (held: not resolved), 1 (held: not resolved) (removed)")
+    assert not any(x.startswith("gyro misalignment") for x in lines)
+    model["gyro_scale"] = None
+    assert not any(x.startswith("gyro scale") for x in _lines(sensor_model=model))
+    assert not any(x.startswith("gyro") for x in _lines(sensor_model=None))
+
+
+def _two_disagreeing_segments(**extra):
+    segs = [{"start_s": 10.0 * i, "end_s": 10.0 * (i + 1), "p_value": p} for i, p in enumerate((0.5, 1e-9, 0.4, 2e-7))]
+    return {"run": True, "segments": segs, "disagreeing": [1, 3], "p_value": 0.0123, "pairs_radius_deg": 0.1234,
+            "between_radius_deg": 0.5678, **extra}
+
+
+def test_summary_names_every_disagreeing_segment_and_each_clock_jump():
+    lines = _lines(segments=_two_disagreeing_segments(
+        clock_jumps=[{"time_s": 12.34, "size_s": 0.1234, "clock": "camera"}, {"time_s": 30.0, "size_s": -0.004}]))
+    assert ("segments: 4 of about 10 s (1 s pairs) disagree: 10.0-20.0 s, 30.0-40.0 s (each by its own test, "
+            "p = 1e-09, 2e-07; all the segments together p = 0.012); 95 % radius from the pairs 0.123 deg, from the "
+            "spread between segments 0.568 deg") in lines
+    assert lines[-2:] == ["clock jump at 12.3 s: +123.4 ms (clock: camera)",
+                          "clock jump at 30.0 s: -4.0 ms (clock: sensor)"]
+
+
+def test_summary_of_use_consistent_gives_the_angle_if_the_part_left_out_is_right():
+    used = {"kept_s": 20.0, "pairs_kept": 9, "left_out_spans_s": [[10.0, 20.0]]}
+    line = _lines(segments=_two_disagreeing_segments(use={**used, "R0_moves_deg_if_left_out_part_is_right": 1.234},
+                                                     consistent_spans_s=[[0.0, 10.0], [20.0, 30.0]]))[-1]
+    assert line == ("use='consistent': R0 from 0.0-10.0 s, 20.0-30.0 s (9 pairs; the majority, not known to be right: "
+                    "1.23 deg away if the part left out is)")
+    line = _lines(segments=_two_disagreeing_segments(use=used))[-1]
+    assert line.startswith("use='consistent': R0 from  (9 pairs;") and "right: nan deg away" in line
+    assert _lines(segments=_two_disagreeing_segments(use={"kept_s": None}))[-1].startswith("segments: 4 of")
