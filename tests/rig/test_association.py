@@ -187,6 +187,15 @@ def test_offset_in_words(offset_s, words):
     assert offset_in_words(offset_s) == words
 
 
+def test_offset_in_words_gives_an_interval_end_that_would_print_as_0_to_two_significant_digits():
+    words = offset_in_words(0.0123, decimals=1, ci95_s=(0.04449e-3, 0.02))
+    assert "95 % interval [+0.044, +20.0] ms excludes 0" in words  # 1e3 x 0.04449 ms, not 1001 x
+    words = offset_in_words(0.0123, decimals=1, ci95_s=(-0.04449e-3, 0.02))
+    assert words.startswith("no offset resolved: +12.3 ms, its 95 % interval [-0.044, +20.0] ms includes 0")
+    assert "interval [+0.0, +20.0] ms includes 0" in offset_in_words(0.0123, decimals=1, ci95_s=(0.0, 0.02))
+    assert "[+0.1, +20.0] ms" in offset_in_words(0.0123, decimals=1, ci95_s=(0.1e-3, 0.02))
+
+
 def test_offset_in_words_to_more_decimals_and_on_the_estimate():
     assert offset_in_words(-0.00015594, decimals=3).startswith("-0.156 ms: the sensor sample stamped t - 0.156 ms")
     found = offset_analysis(*_rig(12.3e-3), n_bootstrap=0)  # no interval: no direction claimed
@@ -355,8 +364,14 @@ def test_stream_pairs_integrates_a_gyro_and_applies_the_offset_unless_told_not_t
     assert np.max(so3.angle_between_deg(A, B)) < 0.05
     A2, B2, offset2, _ = stream_pairs(cam, gyro, interval=0.5, correct_offset=False)
     assert offset2 == offset and np.max(so3.angle_between_deg(A2, B2)) > 0.1
+    _, B0, _ = motion_pairs(cam, Q, 0.5)  # not corrected: the pairs at offset 0
+    assert len(B2) == len(B0) and np.allclose(B2, B0, atol=1e-12)
     _, _, offset3, _ = stream_pairs(cam, Q, interval=0.5, max_offset=0.1)
     assert offset3 == pytest.approx(offset, abs=1e-9)
+    _, _, offset4, _ = stream_pairs(cam, Q, interval=0.5, max_offset=0.02)  # the search ends before the offset
+    assert abs(offset4) <= 0.02 + 1e-12
+    A5, _, _, _ = stream_pairs(cam, gyro)  # pairs 1 s apart by default
+    assert len(A5) == len(motion_pairs(cam, Q, 1.0, offset=offset)[0]) != len(motion_pairs(cam, Q, 2.0)[0])
     with pytest.raises(ValueError, match=r"camera must be an OrientationStream and sensor an OrientationStream or "
                                          r"GyroStream$"):
         stream_pairs(gyro, Q)
