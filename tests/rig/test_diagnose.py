@@ -98,6 +98,30 @@ def test_a_reference_near_the_identity_does_not_make_an_identity_estimate_suspec
     assert [r.check for r in found] == (["imu_as_camera"] if named else [])
 
 
+def _angles(monkeypatch, error, to_identity, reference_to_identity):
+    """``reference_mistakes`` with its three angles set exactly (R0 to the reference, R0 and the
+    reference to the identity), to test its rules at their bounds."""
+    R, reference = _turn(1.0), _turn(2.0)
+    by_pair = {(id(R), id(reference)): error, (id(R), None): to_identity, (id(reference), None): reference_to_identity}
+    monkeypatch.setattr(diagnose, "angle_between_deg",
+                        lambda a, b: by_pair[(id(a), id(b) if b is reference else None)])
+    return reference_mistakes(R, reference)
+
+
+@pytest.mark.parametrize("error, named", [(FAIL, False), (np.nextafter(FAIL, np.inf), True)])
+def test_the_reference_check_names_a_mistake_only_beyond_its_fail_bound(monkeypatch, error, named):
+    found = _angles(monkeypatch, error, 1.0, 3 * IMU_AS_CAMERA_DEG)
+    assert [r.check for r in found] == (["imu_as_camera"] if named else [])
+
+
+@pytest.mark.parametrize("to_identity, named", [(IMU_AS_CAMERA_DEG, True),
+                                                (np.nextafter(IMU_AS_CAMERA_DEG, np.inf), False)])
+def test_an_estimate_within_the_imu_as_camera_bound_of_the_identity_counts_at_the_bound(monkeypatch, to_identity,
+                                                                                          named):
+    found = _angles(monkeypatch, 3 * FAIL + 50.0, to_identity, 3 * IMU_AS_CAMERA_DEG)
+    assert ("imu_as_camera" in [r.check for r in found]) == named
+
+
 def test_an_estimate_that_agrees_with_the_reference_names_nothing():
     assert reference_mistakes(_turn(1.0), _turn(1.0 + FAIL - 0.1)) == []
     assert reference_mistakes(R_CAM @ _turn(FAIL - 0.1), R_CAM) == []
