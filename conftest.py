@@ -31,8 +31,37 @@ def pytest_configure(config):
         config.option.loadscopereorder = False
 
 
+def unit_test_files(rootpath, mutant):
+    """The test files named for the module of a mutmut mutant (``replication.rig.online.x...``):
+    ``tests/<room>/test_<module>.py`` and ``test_<module>_*.py`` (``solvers/_registry.py``:
+    ``test_solvers_registry``); ``None`` for a name that is not a mutant's."""
+    if "__mutmut_" not in mutant:
+        return None
+    module = mutant.split(".x_")[0].split(".x\u01c1")[0].split(".")
+    stem = "_".join(part.strip("_") for part in module[2:])
+    folder = rootpath / "tests" / module[1]
+    return {folder / f"test_{stem}.py", *folder.glob(f"test_{stem}_*.py")}
+
+
+def _unit_tests_only(config, items):
+    """Under ``scripts/mutation --unit`` (``REPLICATION_MUTATION_TESTS=unit``), a mutant runs only
+    the tests of its module's own test files: a kill there is a kill by the whole selection, and
+    the mutants left are re-run against every test (``--survivors``)."""
+    if os.environ.get("REPLICATION_MUTATION_TESTS") != "unit":
+        return
+    files = unit_test_files(config.rootpath, os.environ.get("MUTANT_UNDER_TEST", ""))
+    if files is None:
+        return
+    dropped = [item for item in items if item.path not in files]
+    if dropped:
+        config.hook.pytest_deselected(items=dropped)
+        items[:] = [item for item in items if item.path in files]
+
+
 def pytest_collection_modifyitems(config, items):
     from replication.cli.reproduce import needs_real_data
+
+    _unit_tests_only(config, items)
     from replication.rig.realdata import data_root, real_data_available
 
     # the longest files first (the portability re-run, then the notebooks, then LONG_UNIT_FILES), so

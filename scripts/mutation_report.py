@@ -37,6 +37,11 @@ TARGETS = [
     "replication.core.checks.x_check_rotation_flat__mutmut_*",
 ]
 
+#: Written by ``scripts/mutation --unit`` under mutants/: the mutants (names or patterns) last run
+#: against their module's own test files only; one not killed there has not yet met every test
+#: (``--survivors`` runs it against them all and removes this file).
+UNIT_ONLY = "unit-only.txt"
+
 STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", None: "not checked",
           36: "timeout", -24: "timeout", 24: "timeout", 152: "timeout", 255: "timeout", -11: "segfault", -9: "segfault"}
 
@@ -105,6 +110,12 @@ def rerun_names() -> list[str]:
     return names
 
 
+def unit_only_patterns() -> list[str]:
+    """The names and patterns of :data:`UNIT_ONLY` (none without the file)."""
+    path = ROOT / "mutants" / UNIT_ONLY
+    return path.read_text().split() if path.exists() else []
+
+
 def pending_names() -> list[str]:
     """What a resumed run tests: each target (a pattern) of a module without results or whose source
     changed since its last result, and in every other module the target mutants without a result
@@ -131,6 +142,7 @@ def main() -> int:
         print("\n".join(pending_names()))
         return 0
     equivalent = equivalent_ids()
+    unit_only = unit_only_patterns()
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors = []
     for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
@@ -144,14 +156,17 @@ def main() -> int:
             status = STATUS.get(code, "suspicious")
             if status == "survived" and key in equivalent:
                 status = "equivalent"
+            elif status in ("survived", "no tests") and any(fnmatch.fnmatch(key, p) for p in unit_only):
+                status = "unit only"
             counts[module][status] += 1
-            if status in ("survived", "equivalent"):
+            if status in ("survived", "equivalent", "unit only"):
                 survivors.append((module, key, path, source, status))
     if not counts:
         print("no mutmut results under mutants/: run scripts/mutation first")
         return 1
 
-    cols = ["killed", "survived", "equivalent", "timeout", "suspicious", "segfault", "no tests", "not checked"]
+    cols = ["killed", "survived", "equivalent", "unit only", "timeout", "suspicious", "segfault", "no tests",
+            "not checked"]
     print(f"{'module':36} {'total':>6} " + " ".join(f"{c:>11}" for c in cols) + f" {'score':>7} {'non-eq':>7}")
     total = Counter()
     for module in sorted(counts):
@@ -164,14 +179,19 @@ def main() -> int:
         nonequiv = c["killed"] / (n - c["equivalent"]) if n > c["equivalent"] else float("nan")
         print(f"{module:36} {n:>6} " + " ".join(f"{c[k]:>11}" for k in cols) + f" {score:>7.1%} {nonequiv:>7.1%}")
 
+    if total["unit only"]:
+        print(f"\n{total['unit only']} mutants were run against their module's own test files only (--unit) and "
+              f"not killed there; until `bash scripts/mutation --survivors` runs them against every test, each "
+              f"score is a lower bound")
     print(f"\nsurvivors ({sum(1 for s in survivors if s[4] == 'survived')} surviving, "
+          f"{sum(1 for s in survivors if s[4] == 'unit only')} not killed by their unit's tests alone, "
           f"{sum(1 for s in survivors if s[4] == 'equivalent')} declared equivalent in docs/mutation_survivors.md):")
     for _module, key, path, source, status in sorted(survivors, key=lambda s: (s[0], s[1])):
         try:
             line, old, new = describe(key, path, source)
         except Exception as exc:  # a report line, never a crash of the report
             line, old, new = 0, f"(diff unavailable: {exc})", ""
-        mark = " [equivalent]" if status == "equivalent" else ""
+        mark = {"equivalent": " [equivalent]", "unit only": " [unit tests only]"}.get(status, "")
         print(f"{path}:{line}  {key.rpartition('.')[2]}{mark}\n    - {old}\n    + {new}")
     return 0
 

@@ -49,3 +49,38 @@ def test_a_module_without_results_or_changed_since_runs_as_a_whole(tmp_path, mon
 def test_every_result_in_means_nothing_is_pending(tmp_path, monkeypatch):
     _project(tmp_path, monkeypatch, {"done": {"replication.rig.done.x_f__mutmut_1": 33}})
     assert report.pending_names() == []
+
+
+_conftest_spec = importlib.util.spec_from_file_location("root_conftest", ROOT / "conftest.py")
+root_conftest = importlib.util.module_from_spec(_conftest_spec)
+_conftest_spec.loader.exec_module(root_conftest)
+
+
+def test_a_mutant_meets_the_test_files_named_for_its_module_under_unit():
+    mutant = "replication.rig.online.x\u01c1OnlineCalibrator\u01c1_decide__mutmut_23"
+    files = root_conftest.unit_test_files(ROOT, mutant)
+    names = {f.name for f in files}
+    assert {"test_online.py", "test_online_drift.py", "test_online_guard.py"} <= names
+    assert all(f.parent == ROOT / "tests" / "rig" for f in files) and "test_live.py" not in names
+    registry = root_conftest.unit_test_files(ROOT, "replication.core.solvers._registry.x_check_answer__mutmut_1")
+    assert registry == {ROOT / "tests" / "core" / "test_solvers_registry.py"}
+    assert root_conftest.unit_test_files(ROOT, "replication.study.ledger.x_first_clause__mutmut_3") == {
+        ROOT / "tests" / "study" / "test_ledger.py"}
+    for not_a_mutant in ("", "stats", "fail", "list_all_tests"):
+        assert root_conftest.unit_test_files(ROOT, not_a_mutant) is None
+
+
+def test_survivors_of_a_unit_only_run_are_marked_and_the_scores_called_lower_bounds(tmp_path, monkeypatch, capsys):
+    a = "replication.rig.a."
+    root = _project(tmp_path, monkeypatch, {"a": {f"{a}x_f__mutmut_1": 1, f"{a}x_f__mutmut_2": 0,
+                                                  f"{a}x_f__mutmut_3": 33}})
+    assert report.main() == 0
+    out = capsys.readouterr().out
+    assert "lower bound" not in out and "[unit tests only]" not in out
+    (root / "mutants" / report.UNIT_ONLY).write_text("replication.rig.a.x_f__mutmut_2\nreplication.rig.a.x_f__*\n")
+    assert report.main() == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("replication.rig.a "))
+    assert row.split()[1:6] == ["3", "1", "0", "0", "2"]  # total, killed, survived, equivalent, unit only
+    assert "2 mutants were run against their module's own test files only" in out and "lower bound" in out
+    assert "x_f__mutmut_2 [unit tests only]" in out
