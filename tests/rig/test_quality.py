@@ -635,6 +635,10 @@ def test_verdict_of_lines_and_dicts():
     (1e-4, 0.01, True, "p = 0.0001 < the test's level 0.01"),
     (0.25, None, False, "p = 0.25"),                                # an old report without the level
     (0.0100001, 0.01, True, "p = 0.0100001, at the test's level 0.01 (its threshold decided)"),  # never "p > level"
+    (0.01234, 0.01, False, "p = 0.012 >= the test's level 0.01"),   # two digits where they tell p from the level
+    (0.01034, 0.01, False, "p = 0.0103 >= the test's level 0.01"),  # one more digit at a time, no more
+    (0.01, 0.01, False, "p = 0.01 >= the test's level 0.01"),       # p at the level is not below it
+    (0.01000004, 0.01, False, "p = 0.01 >= the test's level 0.01"),  # six digits at most
 ])
 def test_a_p_value_is_printed_with_the_tests_level(p, level, significant, words):
     from replication.rig.quality import p_with_level

@@ -323,3 +323,11 @@ def test_summary_of_use_consistent_gives_the_angle_if_the_part_left_out_is_right
     line = _lines(segments=_two_disagreeing_segments(use=used))[-1]
     assert line.startswith("use='consistent': R0 from  (9 pairs;") and "right: nan deg away" in line
     assert _lines(segments=_two_disagreeing_segments(use={"kept_s": None}))[-1].startswith("segments: 4 of")
+
+
+def test_summary_with_two_references_gives_both_angles_their_disagreement_and_the_reading():
+    lines = _lines(reference_errors_deg=(0.75, 0.5), reference_disagreement_deg=0.3, reference_error_deg=0.75,
+                   reference_reading="both agree with R0 within their floor")
+    assert lines[-2:] == ["angle to reference 1: 0.750 deg, to reference 2: 0.500 deg; the references disagree by "
+                          "0.300 deg (the reference floor)", "reading: both agree with R0 within their floor"]
+    assert not any(x.startswith("angle to the reference:") for x in lines)
