@@ -1,5 +1,7 @@
+import functools
 import inspect
 import math
+import types
 import uuid
 import warnings
 
@@ -9,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from conftest import _one_axis_plus_one_turn, exact_problem, noisy_problem
 from replication.core import checks, so3, solvers
-from replication.core.handeye import handeye_cost
+from replication.core.handeye import handeye_cost, vec
 from replication.core.motions import Motions, prepare_motions
 from replication.core.solvers import (
     AccuracyWarning,
@@ -268,10 +270,10 @@ def test_opencvs_own_door_warns_too(rng):
 J = 10
 
 
-def _motions(batch=(), noise_deg=0.0, seed=7):
+def _motions(batch=(), noise_deg=0.0, seed=7, pairs=J):
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, batch)
-    A = so3.random_rotations(rng, batch + (J,))
+    A = so3.random_rotations(rng, batch + (pairs,))
     B = np.swapaxes(R0, -1, -2)[..., None, :, :] @ A @ R0[..., None, :, :]
     if noise_deg:
         B = B @ so3.matrix_from_rotation_vector(np.radians(noise_deg) * rng.standard_normal(B.shape[:-2] + (3,)))
@@ -602,6 +604,147 @@ def test_the_gradient_quoted_is_the_largest_over_problems_off_and_moving_only(cr
     assert [c for c, _ in caught] == [LocalMinimumWarning, ConvergenceWarning]
     assert f"1 where eq. (8) still has a gradient (up to {4 * stat:.3g} J)" in caught[0][1]
     assert "; 1 at another stationary point of (8)" in caught[0][1]
+
+
+@pytest.fixture
+def certified(monkeypatch):
+    """A spy on the certificate the gross screen computes: ``calls`` lists how many problems each
+    call certified; ``cost``, when set, stands in for their certified minimum of eq. (8)."""
+    real = _registry.global_certificate
+    spy = types.SimpleNamespace(calls=[], cost=None)
+
+    def certificate_of(motions):
+        cert = real(motions)
+        spy.calls.append(int(np.prod(motions.batch_shape)))
+        return cert if spy.cost is None else types.SimpleNamespace(R=cert.R, cost=np.full(cert.cost.shape, spy.cost))
+
+    monkeypatch.setattr(_registry, "global_certificate", certificate_of)
+    return spy
+
+
+def _screen_cost(m, R):
+    """Cost (8) of each answer as the gross screen computes it: the same operations, so the same
+    bits."""
+    x = vec(np.reshape(R, (-1, 3, 3)))
+    return 2.0 * m.J * (3.0 - np.einsum("na,nab,nb->n", x, m.sym.reshape(-1, 9, 9), x))
+
+
+def _one_ulp(value, ulps):
+    return {-1: np.nextafter(value, -np.inf), 0: value, 1: np.nextafter(value, np.inf)}[ulps]
+
+
+def test_the_screen_bound_is_ten_times_the_relaxation_bound_plus_the_absolute_tolerance(certified):
+    """Only answers whose cost (8) exceeds ``GROSS_FACTOR 6 J (1 - lambda_1) + LOCAL_ATOL J`` are
+    certified: the minimiser itself costs no certificate; answers 1e-7 below and above that bound
+    (relative) fall either side."""
+    m, cert, far, _, cost = _gross_case()
+    lower = 6.0 * J * max(1.0 - float(m.sym_eigvals[..., 0]), 0.0)
+    bound = _registry.GROSS_FACTOR * lower + _registry.LOCAL_ATOL * J
+    assert lower < float(cert.cost) < (1 - 1e-7) * bound < cost(far)
+    for R, screened in ((cert.R, False),
+                        (_geodesic(cert.R, far, _bisect(cert, far, cost, (1 - 1e-7) * bound)[0]), False),
+                        (_geodesic(cert.R, far, _bisect(cert, far, cost, (1 + 1e-7) * bound)[1]), True)):
+        certified.calls.clear()
+        flagged, caught = _warned(_registry.check_answer, m, R, "fake")
+        assert certified.calls == ([1] if screened else [])
+        assert not flagged and caught == []  # below ten times the certified minimum: not gross
+
+
+@pytest.mark.parametrize("ulps, screened", [(-1, True), (0, False), (1, False)], ids=["below", "at", "above"])
+def test_the_screen_certifies_only_an_answer_strictly_above_its_bound(certified, monkeypatch, ulps, screened):
+    """The screen's bound set one ulp below, at and one ulp above the answer's cost (8)
+    (GROSS_FACTOR 0, and J = 8 so that the bound LOCAL_ATOL J is exact)."""
+    m = _motions(noise_deg=3.0, pairs=8)
+    R = _rotated(certificate.global_certificate(m).R, 30.0, (1.0, 2.0, 0.5))
+    bound = _one_ulp(float(_screen_cost(m, R)[0]), ulps)
+    monkeypatch.setattr(_registry, "GROSS_FACTOR", 0.0)
+    monkeypatch.setattr(_registry, "LOCAL_ATOL", bound / 8)
+    assert _registry.LOCAL_ATOL * m.J == bound
+    flagged, caught = _warned(_registry.check_answer, m, R, "fake")
+    assert certified.calls == ([1] if screened else [])
+    assert bool(flagged) is screened and len(caught) == screened  # the gross bound is the same here
+
+
+@pytest.mark.parametrize("ulps, gross", [(-1, True), (0, False), (1, False)], ids=["below", "at", "above"])
+def test_the_gross_test_flags_only_an_answer_strictly_above_its_bound(certified, monkeypatch, ulps, gross):
+    """The certified minimum set one ulp below, at and one ulp above the answer's cost (8)
+    (GROSS_FACTOR 1 and LOCAL_ATOL 0: the bound is that minimum exactly)."""
+    m = _motions(noise_deg=3.0)
+    R = _rotated(certificate.global_certificate(m).R, 120.0, (1.0, 2.0, 0.5))
+    monkeypatch.setattr(_registry, "GROSS_FACTOR", 1.0)
+    monkeypatch.setattr(_registry, "LOCAL_ATOL", 0.0)
+    certified.cost = _one_ulp(float(_screen_cost(m, R)[0]), ulps)
+    flagged, caught = _warned(_registry.check_answer, m, R, "fake")
+    assert certified.calls == [1]
+    assert bool(flagged) is gross and [c for c, _ in caught] == [AccuracyWarning] * gross
+
+
+# ------------------------------------------- a warning about an answer points at the caller's line
+# Each test calls the door itself, in the test function: one frame too many or too few and the
+# warning would name pytest's file or the registry's.
+
+
+def _categories(caught, *categories):
+    return [w for w in caught if issubclass(w.category, categories)]
+
+
+@pytest.mark.parametrize("door", ["solve", "registered"])
+def test_solve_s_warnings_about_an_answer_point_at_the_caller_s_line(monkeypatch, door):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    m = _motions((2,), noise_deg=3.0)
+    X = certificate.global_certificate(m).R
+    gross = _rotated(X, 150.0, (1.0, 0.0, 0.0))
+    local = np.stack([_rotated(X[0], 3.0), _rotated(X[1], 0.3)])  # another minimum; stopped short
+    doors = {}
+    for name, is_local, answer in (("test_gross_door", False, gross), ("test_local_door", True, local)):
+        public = register(name, reference="test", local=is_local)(lambda motions, a=answer, **_: a.copy())
+        doors[name] = functools.partial(solve, name) if door == "solve" else public  # a partial adds no frame
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        doors["test_gross_door"](m)
+        doors["test_local_door"](m)
+    said = _categories(caught, AccuracyWarning, LocalMinimumWarning, ConvergenceWarning)
+    assert [w.category for w in said] == [AccuracyWarning, LocalMinimumWarning, ConvergenceWarning]
+    assert "far from the certified minimiser" in str(said[0].message)
+    assert [w.filename for w in said] == [__file__] * 3
+
+
+def test_check_answer_s_warnings_point_at_the_line_calling_its_door(monkeypatch):
+    """OpenCV's door calls check_answer with its default stacklevel: a singular answer, a reflection
+    and a gross answer are each said at the caller's line (OpenCV's answer replaced)."""
+    from replication.core.solvers import calibrate_hand_eye, opencv
+
+    m = _motions((4,), noise_deg=3.0)
+    R = certificate.global_certificate(m).R.copy()
+    R[0] = np.diag([1.0, 1.0, 0.0])
+    R[1] = -R[1]
+    R[2] = _rotated(R[2], 150.0, (1.0, 0.0, 0.0))
+    monkeypatch.setattr(opencv, "_calibrate_hand_eye", lambda motions, method, **_: R.copy())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        calibrate_hand_eye(m.A, m.B, "CALIB_HAND_EYE_PARK")
+    said = _categories(caught, AccuracyWarning)
+    assert [w.filename for w in said] == [__file__] * 3
+    assert ["singular matrix" in str(said[0].message), "reflection" in str(said[1].message),
+            "far from the certified" in str(said[2].message)] == [True] * 3
+
+
+def _local_door(m, R):
+    """A solver's own door, as sqp's: it checks its answer with check_local_answer's default
+    stacklevel."""
+    return _registry.check_local_answer(m, R, "fake")
+
+
+def test_check_local_answer_s_warnings_point_at_the_line_calling_its_door():
+    m = _motions((2,), noise_deg=3.0)
+    X = certificate.global_certificate(m).R
+    R = np.stack([_rotated(X[0], 3.0), _rotated(X[1], 0.3)])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        line = inspect.currentframe().f_lineno + 1
+        _local_door(m, R)
+    assert [w.category for w in caught] == [LocalMinimumWarning, ConvergenceWarning]
+    assert [(w.filename, w.lineno) for w in caught] == [(__file__, line)] * 2
 
 # --------------------------------------------------------------------------------------------------
 # The contract every registered solver must meet, parametrised over ``available()``.
