@@ -98,13 +98,20 @@ def test_a_reference_near_the_identity_does_not_make_an_identity_estimate_suspec
     assert [r.check for r in found] == (["imu_as_camera"] if named else [])
 
 
-def _angles(monkeypatch, error, to_identity, reference_to_identity):
-    """``reference_mistakes`` with its three angles set exactly (R0 to the reference, R0 and the
-    reference to the identity), to test its rules at their bounds."""
+def _angles(monkeypatch, error, to_identity, reference_to_identity, swapped=90.0):
+    """``reference_mistakes`` with its angles set exactly (R0 to the reference, R0 and the reference
+    to the identity, R0 to the reference's inverse), to test its rules at their bounds."""
     R, reference = _turn(1.0), _turn(2.0)
-    by_pair = {(id(R), id(reference)): error, (id(R), None): to_identity, (id(reference), None): reference_to_identity}
-    monkeypatch.setattr(diagnose, "angle_between_deg",
-                        lambda a, b: by_pair[(id(a), id(b) if b is reference else None)])
+
+    def angle(a, b):
+        if b is reference:
+            return error
+        if np.array_equal(b, np.eye(3)):
+            return to_identity if a is R else reference_to_identity
+        assert a is R and np.array_equal(b, reference.T)
+        return swapped
+
+    monkeypatch.setattr(diagnose, "angle_between_deg", angle)
     return reference_mistakes(R, reference)
 
 
@@ -114,12 +121,25 @@ def test_the_reference_check_names_a_mistake_only_beyond_its_fail_bound(monkeypa
     assert [r.check for r in found] == (["imu_as_camera"] if named else [])
 
 
-@pytest.mark.parametrize("to_identity, named", [(IMU_AS_CAMERA_DEG, True),
-                                                (np.nextafter(IMU_AS_CAMERA_DEG, np.inf), False)])
-def test_an_estimate_within_the_imu_as_camera_bound_of_the_identity_counts_at_the_bound(monkeypatch, to_identity,
-                                                                                          named):
-    found = _angles(monkeypatch, 3 * FAIL + 50.0, to_identity, 3 * IMU_AS_CAMERA_DEG)
+@pytest.mark.parametrize("to_identity, reference_to_identity, named", [
+    (IMU_AS_CAMERA_DEG, 3 * IMU_AS_CAMERA_DEG, True),                         # R0 at the bound: within
+    (np.nextafter(IMU_AS_CAMERA_DEG, np.inf), 3 * IMU_AS_CAMERA_DEG, False),  # just beyond it
+    (1.0, 2 * IMU_AS_CAMERA_DEG, False),                                      # the reference at twice the bound
+    (1.0, np.nextafter(2 * IMU_AS_CAMERA_DEG, np.inf), True),                 # just beyond twice
+])
+def test_the_imu_as_camera_rule_at_its_bounds(monkeypatch, to_identity, reference_to_identity, named):
+    found = _angles(monkeypatch, 3 * FAIL + 50.0, to_identity, reference_to_identity)
     assert ("imu_as_camera" in [r.check for r in found]) == named
+    if named:
+        assert (found[0].level, found[0].measured, found[0].threshold) == ("fail", to_identity, IMU_AS_CAMERA_DEG)
+
+
+@pytest.mark.parametrize("swapped, named", [(FAIL, True), (np.nextafter(FAIL, np.inf), False)])
+def test_swapped_files_are_named_where_r0_lies_within_the_fail_bound_of_the_inverse(monkeypatch, swapped, named):
+    found = _angles(monkeypatch, 3 * FAIL + 50.0, 90.0, 90.0, swapped=swapped)
+    assert [r.check for r in found] == (["files_swapped"] if named else [])
+    if named:
+        assert (found[0].level, found[0].measured, found[0].threshold) == ("fail", swapped, FAIL)
 
 
 def test_an_estimate_that_agrees_with_the_reference_names_nothing():
