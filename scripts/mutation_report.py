@@ -101,11 +101,13 @@ def describe(key: str, path: Path, source: str) -> tuple[int, str, str]:
 
 def rerun_names() -> list[str]:
     """The target mutants of the last run that were not killed (survivors, untested, timeouts,
-    suspicious, not run)."""
+    suspicious, not run), but those declared equivalent (a re-run cannot kill them, and each
+    costs every test that calls its function)."""
+    equivalent = equivalent_ids()
     names = []
     for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
         for key, code in json.loads(meta.read_text())["exit_code_by_key"].items():
-            if targeted(key) and STATUS.get(code, "suspicious") != "killed":
+            if targeted(key) and STATUS.get(code, "suspicious") != "killed" and key not in equivalent:
                 names.append(key)
     return names
 

@@ -84,3 +84,12 @@ def test_survivors_of_a_unit_only_run_are_marked_and_the_scores_called_lower_bou
     assert row.split()[1:6] == ["3", "1", "0", "0", "2"]  # total, killed, survived, equivalent, unit only
     assert "2 mutants were run against their module's own test files only" in out and "lower bound" in out
     assert "x_f__mutmut_2 [unit tests only]" in out
+
+
+def test_survivors_re_run_all_but_those_declared_equivalent(tmp_path, monkeypatch):
+    a = "replication.rig.a."
+    root = _project(tmp_path, monkeypatch, {"a": {f"{a}x_f__mutmut_{i}": code
+                                                  for i, code in enumerate((1, 0, 0, 33, None, 36), start=1)}})
+    (root / "docs").mkdir()
+    (root / "docs" / "mutation_survivors.md").write_text(f"| {a}x_f__mutmut_3 | a.py:2 | x | y |\n")
+    assert report.rerun_names() == [f"{a}x_f__mutmut_{i}" for i in (2, 4, 5, 6)]
