@@ -94,6 +94,21 @@ def test_a_restart_forgets_the_slope():
     assert oc.status()["creep_deg_per_pair"] is None
 
 
+@pytest.mark.parametrize("rate", [0.0008, 0.0011])
+def test_an_outlier_burst_during_a_creep_is_outliers_not_the_creeps_step(rate):
+    """Eight random camera motions at pairs 140-147 of a creep (its slope found before, at 0.05 deg
+    of noise): the burst's window lies ahead of the lagging estimate, in the creep's direction, yet
+    it is no re-mount (outliers: nothing restarts), so not the creep's next step; the creep's own
+    re-mount later is (one drift)."""
+    Rt, A, B = _creeping([5, 0], 260, rate)
+    A[140:148] = so3.random_rotations(np.random.default_rng(3), 8)
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, B)
+    assert [(e.kind, e.pair, e.onset_pair) for e in oc.events][0] == ("outliers", 153, 140)
+    assert [e.kind for e in oc.events] == ["outliers", "drift"] and oc.events[1].pair > 153 and oc.alarms == []
+    assert [s.event for s in states if s.event] == ["outliers", "drift"]
+
+
 def _stepped(seed, n, at, step_deg, noise_deg=0.05):
     rng = np.random.default_rng(seed)
     R0 = so3.random_rotations(rng, ())

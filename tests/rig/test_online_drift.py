@@ -83,6 +83,43 @@ def test_while_following_the_radius_holds_the_lag():
     assert lag == pytest.approx(DRIFT_LAG_SHARE * oc.target_deg, rel=1e-6)  # the memory chosen for a quarter
 
 
+def test_an_outlier_burst_while_a_drift_is_followed_is_its_own_event_and_the_drift_event_stays():
+    """Eight random camera motions at pairs 800-807 of a drift followed since pair 117, decided at
+    pair 813: not a re-mount (today ``new_information``: the window's pairs that fit, fit the frame
+    now better than the lagging estimate; see the strict xfail below), so not the drift's next step
+    (the drift checks read re-mounts only); another onset, so the drift event stays; and after it
+    the detector's reference restarts at the refined estimate, so the pairs after it raise no more
+    alarms. The radius covers the error the burst leaves and nothing is ready while wrong."""
+    Rt, A, B = _drifting([42, 0], 900, 2.0)
+    A[800:808] = so3.random_rotations(np.random.default_rng(3), 8)
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, B)
+    (drift, burst) = oc.events
+    assert (drift.kind, drift.pair, drift.onset_pair) == ("drift", 117, 4)
+    assert (burst.pair, burst.onset_pair) == (813, 800) and burst.kind in ("new_information", "outliers")
+    assert [s.event for s in states if s.event] == ["drift", burst.kind] and oc.alarms == []
+    assert oc.forgetting < 1.0 and oc.events[0].rate_deg_per_pair > 0  # the drift still followed
+    assert states[-1].radius_deg >= oc.error_deg(Rt(899))
+    assert not any(s.ready and so3.angle_between_deg(s.R, Rt(j)) > oc.target_deg for j, s in enumerate(states))
+
+
+@pytest.mark.xfail(strict=True, reason="classify: gross pairs in a window whose other pairs misfit a lagging "
+                   "estimate are new_information, and new_information adds every pair, the gross ones too")
+def test_an_outlier_burst_while_a_drift_is_followed_is_kept_out():
+    """The burst above: its eight random camera motions fit neither the estimate nor the window's
+    own rotation (``d^2`` far above cap times the level at both), yet today they are added as new
+    information and knock the estimate 8.3 deg off (1.2 deg at the end). Bursts of 8 random camera
+    motions at pairs 500-799 of this drift (``_drifting([90, s], 900, 2.0)``): new_information in 1
+    of 30 (s = 0-29), confirmed on fresh seeds s = 30-89: 1 of 60 (Wilson 95 % 0.3-8.9 %), the
+    estimate then 2.4 and 3.6 deg off; the radius covered it and nothing was ready while wrong."""
+    Rt, A, B = _drifting([42, 0], 900, 2.0)
+    A[800:808] = so3.random_rotations(np.random.default_rng(3), 8)
+    oc = OnlineCalibrator()
+    oc.update_many(A, B)
+    assert oc.events[-1].kind == "outliers" and oc.pairs_dropped >= 8
+    assert oc.error_deg(Rt(899)) < oc.target_deg
+
+
 def test_a_drift_too_fast_to_follow_is_said_and_not_ready():
     """60 deg over 600 pairs (0.1 deg per pair): the shortest memory lags more than the target."""
     Rt, A, B = _drifting([43, 0], 600, 60.0, noise_deg=0.2)

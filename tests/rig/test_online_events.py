@@ -863,3 +863,58 @@ def test_near_copies_at_the_widened_tolerance_wherever_they_fall_in_the_grid(sha
         f.seen(A.ravel().tolist(), B.ravel().tolist())
         near = (B.ravel() + share * tol * rng.choice([-1.0, 1.0], 9)).tolist()  # every entry moved
         assert f.seen(A.ravel().tolist(), near) is repeat
+
+
+# ------------------------------------------------------------- the re-mount threshold, exactly met
+def _remount_window():
+    """20 pairs of a 5 deg re-mount of ``_rot(30)`` at 0.2 deg, and the window's angle to the old
+    estimate (the window's solve is seeded: the same on every call)."""
+    rng = np.random.default_rng(11)
+    R_old = _rot(30.0)
+    A, B = _window(R_old @ _rot(5.0, (0, 0, 1)), 20, 0.2, rng)
+    return R_old, A, B, _classify_m(R_old, A, B, 3 * math.radians(0.2) ** 2)["angle_deg"]
+
+
+@pytest.mark.parametrize("where, remount, undecided", [
+    ("below", True, False),             # the angle beyond the threshold: a re-mount
+    ("at", False, True),                # exactly at it: not beyond, so more pairs may decide
+    ("twice_below", False, True),       # just above half the threshold: undecided
+    ("twice", False, False),            # exactly at half the threshold: not above it, decided
+])
+def test_classify_a_remount_needs_the_angle_strictly_beyond_the_threshold_and_undecided_strictly_above_half(
+        monkeypatch, where, remount, undecided):
+    import replication.rig.online_events as events
+
+    R_old, A, B, angle = _remount_window()
+    threshold = {"below": np.nextafter(angle, -math.inf), "at": angle,
+                 "twice_below": np.nextafter(2 * angle, -math.inf), "twice": 2 * angle}[where]
+    monkeypatch.setattr(events, "combined_threshold", lambda cov_a, cov_b: float(threshold))
+    info = _classify_m(R_old, A, B, 3 * math.radians(0.2) ** 2)
+    assert info["angle_deg"] == angle and info["threshold_deg"] == threshold
+    assert (info["kind"] == "remount") is remount and info["undecided"] is undecided
+    if where == "twice":
+        assert 0.5 * info["threshold_deg"] == info["angle_deg"]  # exactly at half: no more pairs wanted
+
+
+def test_decide_a_remount_keeps_a_pair_exactly_at_cap_times_the_new_level():
+    rng = np.random.default_rng(21)
+    R_old = _rot(30.0)
+    s2, m, cov = _old_estimate(0.2, 0.05)
+    A, B = _window(R_old @ _rot(5.0, (0, 0, 1)), 20, 0.2, rng)
+    B[6] = B[6] @ _rot(30.0, (1, 0, 0))  # far from the new estimate: dropped at cap = 10
+    d = _armed(m)
+    k = _fill(d, R_old, A, B, cov, s2)
+    info = classify(R_old, cov, s2, m, A[4:k + 1], B[4:k + 1], cap=d.cap, min_excitation_deg=1.0,
+                    d2_floor=d.d2_floor)  # the decision's own solve (seeded: the same)
+    assert info["kind"] == "remount" and not info["keep"][2]
+    d2 = float(pair_d2(info["R_new"], A[6][None], B[6][None])[0])
+    level = info["level_new"]
+    cap = d2 / level
+    for _ in range(100):  # the cap at which that pair is exactly at cap times the window's level
+        if cap * level == d2:
+            break
+        cap = np.nextafter(cap, math.inf if cap * level < d2 else -math.inf)
+    assert cap * level == d2 and cap > 10.0
+    d.cap = float(cap)
+    out = d.decide(R_old, cov, s2, k)
+    assert out["event"].kind == "remount" and out["event"].pairs_dropped == 0 and len(out["kept"]) == 14
