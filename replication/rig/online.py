@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..core.checks import check_number, check_range, check_rotation_flat, check_rotation_matrices
+from ..core.checks import check_matrices, check_number, check_range, check_rotation_flat, check_rotation_matrices
 from ..core.handeye import unvec, vec
 from ..core.so3 import angle_between_deg, canonical_axis, nearest_rotation_up_to_sign
 from ..core.stats import radius_deg
@@ -405,7 +405,7 @@ class OnlineCalibrator:
 
     def error_deg(self, R0) -> float:
         """Angle (degrees) between the current estimate and ``R0``."""
-        return float(angle_between_deg(self._R, np.asarray(R0, dtype=float)))
+        return float(angle_between_deg(self._R, check_matrices(R0, "R0")))
 
     # ----------------------------------------------------------------------------------------------
     # changes
