@@ -319,9 +319,11 @@ def describe(kind: str, info: dict, n_window: int, dropped: int) -> str:
                         f"changed",
         "outliers": f"no new R0 ({a:.3g} deg <= {t:.3g} deg) and most of the {n_window} pairs still fit the estimate "
                     f"(median d^2/m {info['median_z_before']:.3g} <= {NOISE_Z:g}): outlier pairs, {dropped} kept out",
-        "new_information": f"the {n_window} pairs fit a rotation {a:.3g} deg away, within the combined radius {t:.3g} "
-                           f"deg, better than the estimate (median d^2/m {info['median_z_after']:.3g} vs "
-                           f"{info['median_z_before']:.3g}): new information (typically better-excited motion), added",
+        "new_information": f"{'at least half of ' if dropped else ''}the {n_window} pairs fit a rotation {a:.3g} deg "
+                           f"away, within the combined radius {t:.3g} deg, better than the estimate (median d^2/m "
+                           f"{info['median_z_after']:.3g} vs {info['median_z_before']:.3g}): new information "
+                           f"(typically better-excited motion), added"
+                           + (f"; {dropped} pairs that fit neither it nor the estimate kept out" if dropped else ""),
     }[kind]
 
 
@@ -455,10 +457,9 @@ class ChangeDetector:
         else:
             level = info["level_new"] if kind == "noise_change" else m
             candidates = held + list(zip(A, B))
-            if kind == "new_information":
-                fits = lambda a, b: True  # noqa: E731
-            else:
-                fits = lambda a, b: pair_d2(R_old, a[None], b[None])[0] <= self.cap * level  # noqa: E731
+            # new information: the pairs that fit the window's own estimate (a gross pair fits none)
+            R_fit = R_new if kind == "new_information" else R_old
+            fits = lambda a, b: pair_d2(R_fit, a[None], b[None])[0] <= self.cap * level  # noqa: E731
         kept = [(a, b) for a, b in candidates if fits(a, b)]
         dropped = len(candidates) - len(kept)
         event = OnlineEvent(kind, index, self.alarm_pair, self.source, self.onset, len(A), info["angle_deg"],

@@ -132,9 +132,13 @@ def test_describe_says_each_kind_with_its_numbers():
                                                      "changed")
     assert describe("outliers", info, 10, 2) == ("no new R0 (1.23 deg <= 0.5 deg) and most of the 10 pairs still fit "
                                                  "the estimate (median d^2/m 3.5 <= 2): outlier pairs, 2 kept out")
-    assert describe("new_information", info, 10, 2) == (
+    assert describe("new_information", info, 10, 0) == (
         "the 10 pairs fit a rotation 1.23 deg away, within the combined radius 0.5 deg, better than the estimate "
         "(median d^2/m 0.75 vs 3.5): new information (typically better-excited motion), added")
+    assert describe("new_information", info, 10, 2) == (
+        "at least half of the 10 pairs fit a rotation 1.23 deg away, within the combined radius 0.5 deg, better than "
+        "the estimate (median d^2/m 0.75 vs 3.5): new information (typically better-excited motion), added; 2 pairs "
+        "that fit neither it nor the estimate kept out")
 
 
 def test_an_event_record_holds_every_field():
