@@ -323,7 +323,7 @@ def describe(kind: str, info: dict, n_window: int, dropped: int) -> str:
                            f"away, within the combined radius {t:.3g} deg, better than the estimate (median d^2/m "
                            f"{info['median_z_after']:.3g} vs {info['median_z_before']:.3g}): new information "
                            f"(typically better-excited motion), added"
-                           + (f"; {dropped} pairs that fit neither it nor the estimate kept out" if dropped else ""),
+                           + (f"; {dropped} pairs that do not fit it kept out" if dropped else ""),
     }[kind]
 
 

@@ -117,7 +117,7 @@ def test_an_outlier_burst_while_a_drift_is_followed_is_kept_out():
     burst = oc.events[-1]
     assert burst.pairs_dropped >= 8 and oc.pairs_dropped >= 8
     if burst.kind == "new_information":
-        assert f"added; {burst.pairs_dropped} pairs that fit neither it nor the estimate kept out" in burst.message
+        assert f"added; {burst.pairs_dropped} pairs that do not fit it kept out" in burst.message
     assert max(so3.angle_between_deg(s.R, Rt(j)) for j, s in enumerate(states) if j >= 800) < oc.target_deg
 
 
