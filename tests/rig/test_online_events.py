@@ -138,7 +138,7 @@ def test_describe_says_each_kind_with_its_numbers():
     assert describe("new_information", info, 10, 2) == (
         "at least half of the 10 pairs fit a rotation 1.23 deg away, within the combined radius 0.5 deg, better than "
         "the estimate (median d^2/m 0.75 vs 3.5): new information (typically better-excited motion), added; 2 pairs "
-        "that fit neither it nor the estimate kept out")
+        "that do not fit it kept out")
 
 
 def test_an_event_record_holds_every_field():
