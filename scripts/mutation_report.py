@@ -41,6 +41,9 @@ TARGETS = [
 #: against their module's own test files only; one not killed there has not yet met every test
 #: (``--survivors`` runs it against them all and removes this file).
 UNIT_ONLY = "unit-only.txt"
+#: Written by a run against every test after ``--unit`` (a GLOB's mutants): those no longer count
+#: as met by their unit's tests only.
+FULL_AFTER_UNIT = "full-after-unit.txt"
 
 STATUS = {1: "killed", 3: "killed", 0: "survived", 5: "no tests", 33: "no tests", None: "not checked",
           36: "timeout", -24: "timeout", 24: "timeout", 152: "timeout", 255: "timeout", -11: "segfault", -9: "segfault"}
@@ -112,10 +115,15 @@ def rerun_names() -> list[str]:
     return names
 
 
-def unit_only_patterns() -> list[str]:
-    """The names and patterns of :data:`UNIT_ONLY` (none without the file)."""
-    path = ROOT / "mutants" / UNIT_ONLY
+def _patterns(name: str) -> list[str]:
+    path = ROOT / "mutants" / name
     return path.read_text().split() if path.exists() else []
+
+
+def unit_only(key: str, unit: list[str], full: list[str]) -> bool:
+    """Whether mutant ``key`` was last run against its unit's tests only: it matches one of
+    :data:`UNIT_ONLY`'s ``unit`` patterns and none of :data:`FULL_AFTER_UNIT`'s ``full``."""
+    return any(fnmatch.fnmatch(key, p) for p in unit) and not any(fnmatch.fnmatch(key, p) for p in full)
 
 
 def pending_names() -> list[str]:
@@ -144,7 +152,7 @@ def main() -> int:
         print("\n".join(pending_names()))
         return 0
     equivalent = equivalent_ids()
-    unit_only = unit_only_patterns()
+    unit, full = _patterns(UNIT_ONLY), _patterns(FULL_AFTER_UNIT)
     counts: dict[str, Counter] = defaultdict(Counter)
     survivors = []
     for meta in sorted((ROOT / "mutants").rglob("*.py.meta")):
@@ -158,7 +166,7 @@ def main() -> int:
             status = STATUS.get(code, "suspicious")
             if status == "survived" and key in equivalent:
                 status = "equivalent"
-            elif status in ("survived", "no tests") and any(fnmatch.fnmatch(key, p) for p in unit_only):
+            elif status in ("survived", "no tests") and unit_only(key, unit, full):
                 status = "unit only"
             counts[module][status] += 1
             if status in ("survived", "equivalent", "unit only"):

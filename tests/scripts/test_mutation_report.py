@@ -93,3 +93,11 @@ def test_survivors_re_run_all_but_those_declared_equivalent(tmp_path, monkeypatc
     (root / "docs").mkdir()
     (root / "docs" / "mutation_survivors.md").write_text(f"| {a}x_f__mutmut_3 | a.py:2 | x | y |\n")
     assert report.rerun_names() == [f"{a}x_f__mutmut_{i}" for i in (2, 4, 5, 6)]
+
+
+def test_a_mutant_re_run_against_every_test_after_unit_is_no_longer_unit_only():
+    key = "replication.rig.a.x_f__mutmut_2"
+    assert report.unit_only(key, ["replication.rig.a.*"], [])
+    assert not report.unit_only(key, ["replication.rig.a.*"], [key])
+    assert report.unit_only(key, ["replication.rig.a.*"], ["replication.rig.a.x_f__mutmut_1"])
+    assert not report.unit_only(key, ["replication.rig.b.*"], [])
