@@ -1001,6 +1001,22 @@ def test_the_creep_test_is_told_the_latest_pair_and_whether_a_drift_is_followed(
     assert [(last, told) for last, told, _, _ in calls] == [(pair, following) for _, _, pair, following in calls]
 
 
+@pytest.mark.parametrize("noise_floor_deg, finite_cov", [(1e140, True), (1e154, False)])
+def test_a_covariance_beyond_the_floats_gives_an_infinite_radius_not_an_error(noise_floor_deg, finite_cov):
+    """A noise floor of 1e154 deg about an axis excited by microradians (``lambda_min ~ 3e-13``):
+    the covariance overflows; the radius is infinite, as it is while the covariance is finite but
+    its eigenvalues' sums overflow."""
+    rng = np.random.default_rng(5)
+    axes = np.tile([0.0, 0.0, 1.0], (10, 1))
+    axes[:, :2] += 3e-6 * rng.standard_normal((10, 2))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    B = so3.matrix_from_rotation_vector(np.radians(np.linspace(1.0, 3.0, 10))[:, None] * axes)
+    c = OnlineCalibrator(noise_floor_deg=noise_floor_deg)
+    with np.errstate(over="ignore"):
+        c.update_many(R0_MO @ B @ R0_MO.T, B)
+    assert c.effective_pairs == 10 and c.radius == math.inf and bool(np.all(np.isfinite(c._cov))) is finite_cov
+
+
 @pytest.mark.parametrize("lag", [0.0, 0.3])
 def test_a_creep_found_adds_its_lag_to_the_radius(monkeypatch, lag):
     from replication.rig.online_creep import CreepTest
