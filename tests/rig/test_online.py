@@ -950,6 +950,142 @@ def test_the_estimate_is_refined_on_the_documented_schedule():
     assert refined == [10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 121, 133, 146]
 
 
+# ------------------------------------------------------------------------------------------------
+# the radius's rules (the unexcited-axis bound, a creep's lag), the two-step schedule between
+# refinements and the recent residuals, each at its boundary
+
+
+class _NumpyWithEigh:
+    """numpy, with ``linalg.eigh`` replaced (patched into the online module only)."""
+
+    def __init__(self, eigh):
+        self.linalg = type("linalg", (), {"eigh": staticmethod(eigh)})
+
+    def __getattr__(self, name):
+        return getattr(np, name)
+
+
+@pytest.mark.parametrize("above, finite", [(False, False), (True, True)], ids=["at", "just-above"])
+def test_the_radius_is_infinite_while_lambda_min_is_at_most_1e_12_lambda_max(monkeypatch, above, finite):
+    """``lambda_min(G)`` set to exactly ``1e-12 lambda_max`` (the other eigenvalues unchanged): no
+    radius; the next float up: a finite one."""
+    from replication.rig import online
+
+    def eigh(G):
+        lam, V = np.linalg.eigh(G)
+        bound = 1e-12 * float(lam[-1])
+        assert 1e-12 * float(lam[1]) < bound  # the rule reads lambda_max, not the middle eigenvalue
+        return np.r_[np.nextafter(bound, np.inf) if above else bound, lam[1:]], V
+
+    monkeypatch.setattr(online, "np", _NumpyWithEigh(eigh))
+    A, B = _pairs(30, np.random.default_rng(40), 0.3)
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    assert c.effective_pairs == 30 and math.isfinite(c.radius) is finite
+
+
+def test_the_creep_test_is_told_the_latest_pair_and_whether_a_drift_is_followed(monkeypatch):
+    from replication.rig.online_creep import CreepTest
+
+    test, calls = CreepTest.test, []
+
+    def spy(self, R, S, SB, s2, last, following=False):
+        calls.append((last, following, c.n_total - 1, c.forgetting < 1.0))  # forgetting < 1: a drift followed
+        return test(self, R, S, SB, s2, last, following)
+
+    monkeypatch.setattr(CreepTest, "test", spy)
+    A, B = drift_pairs(0, n_before=100, n_drift=800, rate_deg=0.0025, noise_deg=0.05)
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    assert [e.kind for e in c.events] == ["drift"] and 20 < sum(told for _, told, _, _ in calls) < len(calls)
+    assert [(last, told) for last, told, _, _ in calls] == [(pair, following) for _, _, pair, following in calls]
+
+
+@pytest.mark.parametrize("noise_floor_deg, finite_cov", [(1e140, True), (1e154, False)])
+def test_a_covariance_beyond_the_floats_gives_an_infinite_radius_not_an_error(noise_floor_deg, finite_cov):
+    """A noise floor of 1e154 deg about an axis excited by microradians (``lambda_min ~ 3e-13``):
+    the covariance overflows; the radius is infinite, as it is while the covariance is finite but
+    its eigenvalues' sums overflow."""
+    rng = np.random.default_rng(5)
+    axes = np.tile([0.0, 0.0, 1.0], (10, 1))
+    axes[:, :2] += 3e-6 * rng.standard_normal((10, 2))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    B = so3.matrix_from_rotation_vector(np.radians(np.linspace(1.0, 3.0, 10))[:, None] * axes)
+    c = OnlineCalibrator(noise_floor_deg=noise_floor_deg)
+    with np.errstate(over="ignore"):
+        c.update_many(R0_MO @ B @ R0_MO.T, B)
+    assert c.effective_pairs == 10 and c.radius == math.inf and bool(np.all(np.isfinite(c._cov))) is finite_cov
+
+
+@pytest.mark.parametrize("lag", [0.0, 0.3])
+def test_a_creep_found_adds_its_lag_to_the_radius(monkeypatch, lag):
+    from replication.rig.online_creep import CreepTest
+
+    def found(self, R, S, SB, s2, last, following=False):
+        self.found = (0.01, lag, 99.0, 30, np.array([1.0, 0.0, 0.0])) if lag else None
+        return self.found
+
+    A, B = _pairs(30, np.random.default_rng(41), 0.3)
+    plain = OnlineCalibrator()
+    plain.update_many(A, B)
+    monkeypatch.setattr(CreepTest, "test", found)
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    assert 0.05 < plain.radius < 1.0 and c.radius == pytest.approx(plain.radius + lag, rel=1e-12)
+
+
+@pytest.mark.parametrize("axes, steps", [
+    ([[0.0, 0.0, 1.0]], [5, 15, 25, 35]),  # one axis: the detector never starts, a step between refinements
+    (None, [5]),                           # determined at the first refinement (10 pairs): the detector starts
+], ids=["undetermined", "determined"])
+def test_a_two_step_step_runs_every_step_every_pairs_until_the_detector_starts(monkeypatch, axes, steps):
+    from replication.rig import online
+
+    project, seen = online.nearest_rotation_up_to_sign, []
+
+    def spy(M):
+        seen.append(c.n_pairs)
+        return project(M)
+
+    monkeypatch.setattr(online, "nearest_rotation_up_to_sign", spy)
+    A, B = _pairs(40, np.random.default_rng(42), 0.2, axes=axes)
+    c = OnlineCalibrator()
+    states = c.update_many(A, B)
+    assert c.determined is (axes is None) and [s.n_pairs for s in states][-1] == 40
+    assert seen == [n for n in steps for _ in range(2)]  # eqs. (14) and (15): two projections a step
+
+
+def test_estimate_runs_newton_to_convergence_and_a_refinement_30_iterations(monkeypatch):
+    from replication.core.solvers import certificate
+
+    newton, asked = certificate.chordal_newton, []
+
+    def spy(K, init, *, max_iterations=30, **kw):
+        asked.append(max_iterations)
+        return newton(K, init, max_iterations=max_iterations, **kw)
+
+    monkeypatch.setattr(certificate, "chordal_newton", spy)
+    A, B = _pairs(12, np.random.default_rng(43), 0.2)
+    c = OnlineCalibrator()
+    c.update_many(A, B)
+    c.estimate()
+    assert asked == [30, 100]
+
+
+def test_the_residual_median_reads_the_last_recent_pairs_only():
+    """300 pairs at 0.6 deg of noise, then 200 at 0.05 deg: the median over the last 200 residuals
+    is that of the quiet pairs (a noise drop raises no alarm)."""
+    from replication.rig.online import RECENT_PAIRS
+
+    rng = np.random.default_rng(44)
+    R0 = so3.random_rotations(rng, ())
+    loud, quiet = pair_stream(rng, 300, R0, noise_deg=0.6), pair_stream(rng, RECENT_PAIRS, R0, noise_deg=0.05)
+    c = OnlineCalibrator()
+    c.update_many(np.concatenate([loud[0], quiet[0]]), np.concatenate([loud[1], quiet[1]]))
+    assert c.events == [] and c.n_total == 500
+    assert c.evidence()["residual_median_deg"] < 0.1
+
+
 def test_update_takes_the_same_array_likes_as_update_many():
     rng = np.random.default_rng(29)
     A, B = _pairs(12, rng, 0.2)

@@ -9,6 +9,7 @@ import pytest
 from replication.core import so3
 from replication.core.stats import chi2_quantile
 from replication.rig.online import OnlineCalibrator
+from replication.rig.online_causes import constant_speed
 from replication.rig.online_events import pair_d2
 from replication.rig.online_guard import (
     GUARD_EVERY,
@@ -19,6 +20,7 @@ from replication.rig.online_guard import (
     MisfitGuard,
     misfit_test,
 )
+from replication.rig.quality import Reason
 from replication.study.live_study import pair_stream
 
 AXIS = np.array([0.6, 0.0, 0.8])
@@ -406,3 +408,36 @@ def test_a_long_window_withdraws_just_past_the_threshold(rng, just, withdrawn):
     for a, b in zip(A, B):
         guard.add(a, b, 0.0, R, None, s2)
     assert (guard.long_misfit is not None) is withdrawn
+
+
+# ------------------------------------------------------------------------------------------------
+# the online verdict names a rig turning at constant speed once: from its own motions, with the
+# unexcited axis, or from a front end's reason (``extra``) in its place
+
+
+def _steady(seed=3, n=60):
+    """``n`` pairs turning 29.5-30.5 deg about one axis (0.5 deg of noise: none refused as a
+    repeat)."""
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    return pair_stream(rng, n, R0, noise_deg=0.5, motion_deg=(29.5, 30.5), axis=[0.0, 0.6, 0.8])
+
+
+@pytest.mark.parametrize("extra, own", [
+    ((), True),
+    ((Reason("time_unit", "fail", 1e-3, 1e3, "a cause named by the front end"),), True),  # another cause: its own too
+    ((constant_speed(np.full(10, 30.0), 0.0, 1.0, None),), False),  # the front end's sentence, not a second one
+], ids=["alone", "beside-another-cause", "named-by-the-front-end"])
+def test_the_online_verdict_names_constant_speed_once(extra, own):
+    A, B = _steady()
+    oc = OnlineCalibrator()
+    oc.update_many(A, B)
+    oc.set_context(extra=extra)
+    assert oc.excitation_deg < oc.min_excitation_deg and oc.n_pairs == 60 and oc.duplicates == 0
+    verdict = oc.verdict()
+    named = [r for r in verdict.reasons if r.check == "constant_speed"]
+    assert len(named) == 1 and verdict.level == "fail" and oc.current_verdict == verdict
+    axis = f"(sensor frame {np.round(oc.status()['least_excited_axis_sensor'], 3).tolist()})"
+    assert (axis in named[0].message) is own and "turns at a constant speed" in named[0].message
+    assert [r.check for r in verdict.reasons if r.check == "time_unit"] == [r.check for r in extra
+                                                                             if r.check == "time_unit"]
