@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from conftest import _one_axis_plus_one_turn, exact_problem, noisy_problem
+from conftest import _one_axis_plus_one_turn, exact_problem, noisy_problem, sees_stacklevel
 from replication.core import checks, so3, solvers
 from replication.core.handeye import handeye_cost, vec
 from replication.core.motions import Motions, prepare_motions
@@ -688,6 +688,7 @@ def _categories(caught, *categories):
     return [w for w in caught if issubclass(w.category, categories)]
 
 
+@sees_stacklevel
 @pytest.mark.parametrize("door", ["solve", "registered"])
 def test_solve_s_warnings_about_an_answer_point_at_the_caller_s_line(monkeypatch, door):
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
@@ -709,6 +710,7 @@ def test_solve_s_warnings_about_an_answer_point_at_the_caller_s_line(monkeypatch
     assert [w.filename for w in said] == [__file__] * 3
 
 
+@sees_stacklevel
 def test_check_answer_s_warnings_point_at_the_line_calling_its_door(monkeypatch):
     """OpenCV's door calls check_answer with its default stacklevel: a singular answer, a reflection
     and a gross answer are each said at the caller's line (OpenCV's answer replaced)."""
@@ -735,6 +737,7 @@ def _local_door(m, R):
     return _registry.check_local_answer(m, R, "fake")
 
 
+@sees_stacklevel
 def test_check_local_answer_s_warnings_point_at_the_line_calling_its_door():
     m = _motions((2,), noise_deg=3.0)
     X = certificate.global_certificate(m).R
