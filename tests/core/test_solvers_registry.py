@@ -218,6 +218,17 @@ def test_checked_core_returns_the_masks_of_non_rotations(bad_core, two_noisy):
     assert np.array_equal(R, X) and not failed.any() and not reflection.any()
 
 
+def test_a_singular_answer_is_not_in_the_reflection_mask(bad_core, two_noisy, monkeypatch):
+    # the reflection mask is det < 0 strictly; a det-0 block passes the door only with a tolerance
+    # of sqrt(3) or more (||R^T R - I||_F of the zero matrix), the one way to reach the boundary
+    A, B, X = two_noisy
+    monkeypatch.setattr(_registry, "ANSWER_ATOL", 2.0)
+    name = bad_core(lambda motions: _edited(X, 1, 0.0))
+    R, failed, reflection = _registry.checked_core(name, Motions(A, B))
+    assert checks.det3(R).tolist() == [pytest.approx(1.0), 0.0]
+    assert (failed.tolist(), reflection.tolist()) == ([False, False], [False, False])
+
+
 # ------------------------------------------------ one axis plus a single turn: every solver warns
 
 
@@ -729,6 +740,23 @@ def test_check_answer_s_warnings_point_at_the_line_calling_its_door(monkeypatch)
     assert [w.filename for w in said] == [__file__] * 3
     assert ["singular matrix" in str(said[0].message), "reflection" in str(said[1].message),
             "far from the certified" in str(said[2].message)] == [True] * 3
+
+
+@pytest.mark.parametrize("door", ["solve", "registered"])
+def test_solve_s_warnings_about_failures_and_reflections_point_at_the_caller_s_line(monkeypatch, door):
+    monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
+    m = _motions((3,), noise_deg=3.0)
+    answer = certificate.global_certificate(m).R.copy()
+    answer[0] = np.nan
+    answer[2] = -answer[2]
+    public = register("test_nan_door", reference="test")(lambda motions, **_: answer.copy())
+    call = functools.partial(solve, "test_nan_door") if door == "solve" else public  # a partial adds no frame
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        call(m)
+    said = _categories(caught, AccuracyWarning)
+    assert ["declared a failure" in str(said[0].message), "reflection" in str(said[1].message)] == [True, True]
+    assert [w.filename for w in said] == [__file__] * 2
 
 
 def _local_door(m, R):

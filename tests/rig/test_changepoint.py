@@ -476,3 +476,87 @@ def test_too_few_pairs_at_two_per_block_says_how_many_are_needed():
     with pytest.raises(ValueError, match=r"too few pairs.*40 pairs at 2 per block.*7\.6 independent stretches"
                                          r".*fewer than 10.*need 52 pairs"):
         two_segment_test(A, B, t, block=2)
+
+
+def test_the_time_message_names_t_first():
+    A, B, t = _pairs_mc(40, np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"^t must be finite and non-decreasing \(pairs in time order\)$"):
+        two_segment_test(A, B, t[::-1])
+
+
+def _exact_pairs(J, rng, one_axis=0):
+    """Noise-free pairs of ``R0_MC``; the first ``one_axis`` sensor motions turn about z exactly."""
+    B = so3.random_rotations(rng, J)
+    B[:one_axis] = so3.matrix_from_rotation_vector(rng.uniform(0.2, 0.9, (one_axis, 1)) * np.array([0.0, 0.0, 1.0]))
+    return R0_MC @ B @ R0_MC.T, B, np.arange(J, dtype=float)
+
+
+def test_a_cost_above_zero_by_rounding_only_counts_as_zero(monkeypatch):
+    # g above 3 by rounding (exact pairs) is a cost of 0, not below: every split of exact pairs
+    # ties at 0 and the first candidate is taken; a negative cost would pull the split to wherever
+    # the rounding is largest (here the last split)
+    newton = changepoint.chordal_newton
+
+    def rounded_up(K, init, **kwargs):
+        R, g, *rest = newton(K, init, **kwargs)
+        return (R, np.maximum(g, 3.0) + 1e-12 * np.arange(1, len(g) + 1), *rest)
+
+    monkeypatch.setattr(changepoint, "chordal_newton", rounded_up)
+    r = two_segment_test(*_exact_pairs(60, np.random.default_rng(7)))
+    assert r.split_time == r.split_times[0] and not r.significant
+
+
+def test_a_side_turning_about_one_axis_exactly_is_degenerate_at_zero_tolerance(monkeypatch):
+    # about z exactly, G's smallest eigenvalue is exactly 0: degenerate at a tolerance of 0 too
+    # (the rule is lambda_min <= DEGENERATE_TOL lambda_max)
+    monkeypatch.setattr(changepoint, "DEGENERATE_TOL", 0.0)
+    with pytest.raises(ValueError, match=r"degenerate motion on one side of a split"):
+        two_segment_test(*_exact_pairs(60, np.random.default_rng(3), one_axis=30))
+
+
+def test_each_side_is_refined_by_newton_iterations_newton_steps(monkeypatch):
+    # with 0 steps each side's rotation is the relaxed start from its mean of B_j kron A_j
+    A, B, t = _pairs_mc(60, np.random.default_rng(9), noise_deg=5.0)
+    monkeypatch.setattr(changepoint, "NEWTON_ITERATIONS", 0)
+    r = two_segment_test(A, B, t)
+    k = r.split_index
+    kron = np.einsum("jab,jcd->jacbd", B, A).reshape(-1, 9, 9)
+    relaxed = changepoint.relaxed_rotation(kron[:k - 1].mean(axis=0))
+    assert np.allclose(r.R_before, relaxed, atol=1e-12)
+    assert not np.allclose(relaxed, chordal_optimal(A[:k - 1], B[:k - 1]).R, atol=1e-7)  # Newton would move it
+
+
+@pytest.mark.parametrize("n_eff", [1.5, 2.0])
+def test_two_or_fewer_stretches_never_give_a_false_alarm_below_one(n_eff):
+    # W / phi_hat saturates at 3 (n_eff - 1) <= 3 degrees of freedom; where Wilson-Hilferty's
+    # cube root goes negative (the lowest nodes) the chi2 draw is 0, not negative
+    c = np.logspace(0.0, 9.0, 50)
+    assert changepoint.false_alarm(c, n_eff, 0.15, 0.85).tolist() == [1.0] * 50
+    assert threshold(0.49, n_eff, 0.15, 0.85) == math.inf
+
+
+@pytest.mark.parametrize("step_at, expected", [(50.0, 50.0), (1000.0, 1000.0), (1000.5, math.inf)])
+def test_the_threshold_is_the_least_statistic_whose_false_alarm_meets_the_level(monkeypatch, step_at, expected):
+    # a false alarm equal to the level meets it; no threshold above 1000 (inf); the bisection stops
+    # at a bracket below 1e-6 (log2(1e3 / 1e-6) ~ 30 evaluations)
+    calls = []
+
+    def step(c, n_eff, lam1, lam2):
+        calls.append(c)
+        return 0.01 if c >= step_at else 0.5
+
+    monkeypatch.setattr(changepoint, "false_alarm", step)
+    c = threshold(0.01, 40.0, 0.15, 0.85)
+    if expected == math.inf:
+        assert c == math.inf
+    else:
+        assert expected <= c < expected + 1e-6
+        assert len(calls) <= 35
+
+
+def test_a_statistic_equal_to_the_threshold_is_not_significant(monkeypatch):
+    A, B, t = _pairs_mc(60, np.random.default_rng(2))
+    top = two_segment_test(A, B, t).statistic
+    monkeypatch.setattr(changepoint, "threshold", lambda *args: top)
+    r = two_segment_test(A, B, t)
+    assert r.statistic == r.threshold == top and not r.significant
