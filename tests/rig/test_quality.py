@@ -172,7 +172,8 @@ def test_a_peak_margin_without_the_second_peak_offset_is_judged():
     comparing, and raised TypeError for any margin, even one far above the bound."""
     assert judge(dataclasses.replace(GOOD, second_peak_offset_s=None)).reasons == ()
     reason, = judge(dataclasses.replace(GOOD, offset_peak_margin=0.005, second_peak_offset_s=None)).reasons
-    assert (reason.check, reason.level) == ("offset_peak_margin", "fail") and "another clock offset" in reason.message
+    assert (reason.check, reason.level) == ("offset_peak_margin", "fail")
+    assert "another clock offset matches the angular speeds" in reason.message
     reason, = judge(dataclasses.replace(GOOD, offset_peak_margin=0.005)).reasons
     assert "another clock offset (+400.0 ms)" in reason.message
 
@@ -348,7 +349,9 @@ def test_the_remedies_are_for_static_poses_or_for_streams(poses):
     reasons = {r.check: r.message for r in judge(e).reasons}
     stream_words = ("stride", "recording", "overlap", "interval")
     if poses:
-        assert "more static poses" in reasons["n_pairs"] and "more distinct stations" in reasons["blocks"]
+        assert reasons["n_pairs"].endswith("(3 unknowns; more static poses, each turned from the others by more than "
+                                           "min_motion_deg)")
+        assert reasons["blocks"].endswith("bootstrap radius (more distinct stations)")
         assert not any(w in reasons["n_pairs"] + reasons["blocks"] for w in stream_words)
     else:
         assert "a longer recording" in reasons["n_pairs"] and "a shorter interval" in reasons["blocks"]
@@ -373,45 +376,61 @@ def test_good_evidence_gives_ok_and_no_reason():
 
 
 #: check, the Evidence field(s) a value sets, "below" or "above", the unit printed, the name
-#: printed.
+#: printed, and what the reason says of its cause: the words right after ": " and the words it
+#: ends with (each across the joins of the message's pieces).
 CHECKS = [
-    ("n_pairs", lambda v: dict(n_pairs=v), "below", "", "motion pairs"),
-    ("offset_correlation", lambda v: dict(offset_correlation=v), "below", "", "time-offset correlation"),
+    ("n_pairs", lambda v: dict(n_pairs=v), "below", "", "motion pairs",
+     ("too few for R0 and a check of it (3 unknowns; a smaller stride", "or interval, or a longer recording)")),
+    ("offset_correlation", lambda v: dict(offset_correlation=v), "below", "", "time-offset correlation",
+     ("the two streams' angular speeds do not match", "wrong units or columns, or a clock offset beyond the search)")),
     ("offset_peak_margin", lambda v: dict(offset_peak_margin=v, second_peak_offset_s=0.25), "below", "",
-     "margin of the time-offset correlation peak over the next one"),
-    ("blocks", lambda v: dict(blocks=v), "below", "", "independent bootstrap blocks"),
+     "margin of the time-offset correlation peak over the next one",
+     ("another clock offset (+250.0 ms) matches the angular speeds", "record motion that is not periodic")),
+    ("blocks", lambda v: dict(blocks=v), "below", "", "independent bootstrap blocks",
+     ("too few for a meaningful bootstrap radius (a longer", "(a longer overlap or a shorter interval)")),
     ("overlap_intervals", lambda v: dict(overlap_s=v * 0.5, interval_s=0.5), "below", "",
-     "overlap of the streams in pairing intervals"),
+     "overlap of the streams in pairing intervals", ("the streams overlap ", " s only")),
     ("motion_median_deg", lambda v: dict(motion_median_deg=v, residual_median_deg=v * 0.01), "below", " deg",
-     "median motion per pair"),
+     "median motion per pair", ("the rig barely moves over a pairing interval", "too short): the pairs carry noise, "
+                                                                                 "not motion")),
     ("residual_to_motion", lambda v: dict(residual_median_deg=v * 10.0, motion_median_deg=10.0), "above", "",
-     "median pair residual / median motion"),
+     "median pair residual / median motion", ("R0 does not map", "one stream's motions onto the other's")),
     ("residual_median_deg", lambda v: dict(residual_median_deg=v, motion_median_deg=1000.0), "above", " deg",
-     "median pair residual"),
-    ("bootstrap_deg", lambda v: dict(bootstrap_deg=v), "above", " deg", "bootstrap 95 % radius"),
-    ("axis_spread_deg", lambda v: dict(axis_spread_deg=v), "below", " deg", "camera axis spread"),
-    ("excitation_deg", lambda v: dict(excitation_deg=v), "below", " deg", "RMS rotation about the least-excited axes"),
-    ("gyro_rate_hz", lambda v: dict(gyro_rate_hz=v), "below", " Hz", "gyro rate"),
+     "median pair residual", ("far above what stream noise", "leaves with the right R0")),
+    ("bootstrap_deg", lambda v: dict(bootstrap_deg=v), "above", " deg", "bootstrap 95 % radius",
+     ("the pairs disagree", "on R0")),
+    ("axis_spread_deg", lambda v: dict(axis_spread_deg=v), "below", " deg", "camera axis spread",
+     ("nearly single-axis motion", "the rotation about that axis is poorly determined")),
+    ("excitation_deg", lambda v: dict(excitation_deg=v), "below", " deg", "RMS rotation about the least-excited axes",
+     ("the motion so far does not determine R0", "(rotate about other axes)")),
+    ("gyro_rate_hz", lambda v: dict(gyro_rate_hz=v), "below", " Hz", "gyro rate",
+     ("integrating a slow gyro", "leaves an error in every pair")),
     ("gyro_samples_per_interval", lambda v: dict(gyro_rate_hz=100.0, interval_s=v / 100.0), "below", "",
-     "gyro samples per pairing interval"),
-    ("reference_error_deg", lambda v: dict(reference_error_deg=v), "above", " deg", "angle to the given reference"),
+     "gyro samples per pairing interval", ("too few to integrate", "the motion of one pair")),
+    ("reference_error_deg", lambda v: dict(reference_error_deg=v), "above", " deg", "angle to the given reference",
+     ("the data agree with another R0 than the reference: gyro axes permuted or sign-flipped (a fixed rotation",
+      "cannot show), or a reference for another rig or camera")),
     ("offset_left_ms", lambda v: dict(offset_s=-v / 1e3, offset_applied=False), "above", " ms",
-     "clock offset measured but not removed"),
+     "clock offset measured but not removed", ("the pairs were formed", "with the clocks as recorded (keep-clock)")),
     ("gap_share_dropped", lambda v: dict(pairs_dropped_at_gaps=round(v * 1000), pairs_before_gaps=1000), "above", "",
-     "share of pairs dropped across stream gaps"),
+     "share of pairs dropped across stream gaps", ("", " pairs spanned a gap in a stream and were dropped")),
+    ("mirror_fit_ratio", lambda v: dict(mirror_fit_ratio=v), "below", "",
+     "median residual with the sensor's frame mirrored / this fit's",
+     ("a sensor with one axis's sign flipped", "and little about its normal; rotate about that axis too, or check the "
+                                               "sensor's axes")),  # no normal given: none named
 ]
 
 
 def _cases():
-    for check, make, side, unit, name in CHECKS:
+    for check, make, side, unit, name, why in CHECKS:
         warn, fail = THRESHOLDS[check]
         for level, bound in (("warning", warn), ("fail", fail)):
             if bound is not None:
-                yield pytest.param(check, make, side, unit, name, level, bound, id=f"{check}-{level}")
+                yield pytest.param(check, make, side, unit, name, why, level, bound, id=f"{check}-{level}")
 
 
-@pytest.mark.parametrize("check, make, side, unit, name, level, bound", list(_cases()))
-def test_each_threshold_at_its_boundary(check, make, side, unit, name, level, bound):
+@pytest.mark.parametrize("check, make, side, unit, name, why, level, bound", list(_cases()))
+def test_each_threshold_at_its_boundary(check, make, side, unit, name, why, level, bound):
     warn, fail = THRESHOLDS[check]
     integer = check in ("n_pairs",)
     step = 1 if integer else (1e-3 if check == "gap_share_dropped" else EPS * max(1.0, abs(bound)))
@@ -429,7 +448,9 @@ def test_each_threshold_at_its_boundary(check, make, side, unit, name, level, bo
     assert r.threshold == pytest.approx(bound) and isinstance(r.threshold, float)
     assert r.measured == pytest.approx(beyond, rel=1e-6) and isinstance(r.measured, float)
     sign = "<" if side == "below" else ">"
-    assert r.message.startswith(f"{name} {beyond:.3g}{unit} {sign} {bound:g}{unit}: ")
+    first, last = why
+    assert r.message.startswith(f"{name} {beyond:.3g}{unit} {sign} {bound:g}{unit}: {first}")
+    assert r.message.endswith(last)
     assert judge(dataclasses.replace(CLEAN, **make(beyond))).level == level
     if level == "warning" and fail is not None:
         # between the warning and fail bounds: a warning
@@ -441,6 +462,7 @@ def test_nonfinite_offset_correlation_fails_without_a_number():
     r = _reasons(dataclasses.replace(CLEAN, offset_correlation=math.nan))["offset_correlation"]
     assert (r.level, r.measured, r.threshold) == ("fail", None, THRESHOLDS["offset_correlation"][1])
     assert r.message.startswith("no time-offset correlation: ")
+    assert r.message.endswith("(a rig at rest, or a constant stream), so no clock offset could be estimated")
 
 
 def test_nonfinite_peak_margin_is_no_reason_and_the_second_peak_is_named():
@@ -471,11 +493,17 @@ def test_offset_left_in_is_said_only_when_not_applied():
     assert _reasons(dataclasses.replace(CLEAN, offset_s=0.05, offset_applied=False))["offset_left_ms"].measured == 50.0
 
 
-def test_residual_to_motion_needs_a_positive_motion():
-    e = dataclasses.replace(CLEAN, motion_median_deg=0.0, residual_median_deg=0.5)
-    assert "residual_to_motion" not in _reasons(e)
-    assert "residual_to_motion" not in _reasons(dataclasses.replace(CLEAN, motion_median_deg=None))
-    assert "residual_to_motion" not in _reasons(dataclasses.replace(CLEAN, residual_median_deg=None))
+@pytest.mark.parametrize("motion, residual, level", [
+    (0.0, 0.5, None),         # no motion: no ratio
+    (None, 0.5, None), (30.0, None, None),
+    (EPS, 0.5 * EPS, "fail"),  # any positive motion, however small, gives the ratio (here 0.5)
+    (1.0, 0.5, "fail"),
+])
+def test_residual_to_motion_needs_a_positive_motion(motion, residual, level):
+    found = _reasons(dataclasses.replace(CLEAN, motion_median_deg=motion, residual_median_deg=residual))
+    assert (found["residual_to_motion"].level if "residual_to_motion" in found else None) == level
+    if level:
+        assert found["residual_to_motion"].measured == pytest.approx(residual / motion)
 
 
 def test_overlap_needs_an_interval_and_gyro_samples_need_one_too():
@@ -542,6 +570,15 @@ def test_observability_warning_is_said_once_with_the_spread_when_low():
     assert "another rotation fits eq. (8) almost as well" in at.reasons[0].message
     none = judge(dataclasses.replace(CLEAN, axis_spread_deg=None, warnings=("ObservabilityWarning",)))
     assert [r.check for r in none.reasons] == ["observability"]
+    unmeasured = dataclasses.replace(CLEAN, axis_spread_deg=None, motion_median_deg=None,
+                                     warnings=("ObservabilityWarning",))
+    assert judge(unmeasured).reasons[0].message.startswith("the motions barely determine R0 (no motion measure; the ")
+    # the warnings after it (in name order) are still judged, whether it or the spread says it
+    later = ("ObservabilityWarning", "TranslationNotEstimatedWarning")
+    for value, first in ((spread - 0.01, "axis_spread_deg"), (spread, "observability")):
+        v = judge(dataclasses.replace(CLEAN, axis_spread_deg=value, warnings=later))
+        assert [r.check for r in v.reasons] == [first, "solver_warning"]
+        assert "(TranslationNotEstimatedWarning; its words" in v.reasons[1].message
 
 
 def _change_mq(angle, significant=True):
@@ -601,6 +638,13 @@ def test_outlying_poses_default_words_and_no_station_without_a_numpy_warning():
 
     r = _outlying_poses(np.array([1.0, 1.0, 1.0, 4.0]))
     assert r.message.startswith("outlying pose (0-based index, median residual of its pairs): 3 (4 deg)")
+    own = _reasons(dataclasses.replace(CLEAN, pose_residual_medians_deg=(1.0, 1.0, 1.0, 4.0),
+                                       pose_residual_kind="its own residual"))["pose_outliers"]
+    assert own.message.startswith("outlying pose (0-based index, its own residual): 3 (4 deg)")
+    # a station without a measure (None) is left out of the stations' median, as a NaN one is
+    r = _reasons(dataclasses.replace(CLEAN, pose_residual_medians_deg=(1.0, None, 1.0, 1.0, 4.0)))["pose_outliers"]
+    assert r.measured == 4.0 and r.message.startswith("outlying pose (0-based index, median residual of its pairs): "
+                                                      "4 (4 deg) > 3 x the stations' median 1 deg")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert _outlying_poses(np.full(3, np.nan)) is None
@@ -713,10 +757,11 @@ def test_remount_threshold_boundaries(angle, significant, level):
 
 
 
-@pytest.mark.parametrize("fit, reported", [(0.29, True), (0.31, False)])
+@pytest.mark.parametrize("fit, reported", [(0.29, True), (0.3, True), (0.31, False)])
 def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, reported):
     """An input mistake leaves both halves unfit and their estimates apart: that is not a re-mount
-    (the residual reasons say what it is); the bound is residual_to_motion's fail bound."""
+    (the residual reasons say what it is); the bound is residual_to_motion's fail bound, which still
+    fits."""
     e = Evidence(n_pairs=1000, residual_median_deg=0.1, motion_median_deg=30.0, bootstrap_deg=0.05,
                  axis_spread_deg=10.0, change=_Change(2.0), change_sides_fit=fit)
     assert ("remount_deg" in {r.check for r in judge(e).reasons}) is reported
@@ -727,7 +772,7 @@ def test_a_change_is_a_remount_only_where_each_side_fits_its_own_estimate(fit, r
 def test_the_mirror_ratio_threshold_at_its_boundary():
     bound = THRESHOLDS["mirror_fit_ratio"][0]
     kw = dict(n_pairs=100, residual_median_deg=0.1, motion_median_deg=20.0, bootstrap_deg=0.05)
-    below = judge(Evidence(**kw, mirror_fit_ratio=bound * (1 - 1e-9), mirror_normal=(0.0, 0.0, 1.0)))
+    below = judge(Evidence(**kw, mirror_fit_ratio=bound * (1 - 1e-9), mirror_normal=(0.0, 0.352, 0.936)))
     assert [(x.check, x.level) for x in below.reasons] == [("mirror_fit_ratio", "warning")]
-    assert "[0.0, 0.0, 1.0], sensor frame" in below.reasons[0].message
+    assert "little about its normal (about [0.0, 0.35, 0.94], sensor frame); rotate" in below.reasons[0].message
     assert judge(Evidence(**kw, mirror_fit_ratio=bound)).reasons == ()
