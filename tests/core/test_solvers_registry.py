@@ -742,6 +742,7 @@ def test_check_answer_s_warnings_point_at_the_line_calling_its_door(monkeypatch)
             "far from the certified" in str(said[2].message)] == [True] * 3
 
 
+@sees_stacklevel
 @pytest.mark.parametrize("door", ["solve", "registered"])
 def test_solve_s_warnings_about_failures_and_reflections_point_at_the_caller_s_line(monkeypatch, door):
     monkeypatch.setattr(_registry, "_REGISTRY", dict(_registry._REGISTRY))
