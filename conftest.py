@@ -12,6 +12,7 @@
   is absent.
 """
 import os
+import re
 import tempfile
 
 import pytest
@@ -32,15 +33,20 @@ def pytest_configure(config):
 
 
 def unit_test_files(rootpath, mutant):
-    """The test files named for the module of a mutmut mutant (``replication.rig.online.x...``):
-    ``tests/<room>/test_<module>.py`` and ``test_<module>_*.py`` (``solvers/_registry.py``:
-    ``test_solvers_registry``); ``None`` for a name that is not a mutant's."""
+    """The test files of the unit of a mutmut mutant (``replication.rig.online.x...``): those named
+    for its module, ``tests/<room>/test_<module>.py`` and ``test_<module>_*.py``
+    (``solvers/_registry.py``: ``test_solvers_registry``), and those named for its doors, the
+    modules of its package that import it (``offset_search``'s tests run through ``association``);
+    ``None`` for a name that is not a mutant's."""
     if "__mutmut_" not in mutant:
         return None
     module = mutant.split(".x_")[0].split(".x\u01c1")[0].split(".")
-    stem = "_".join(part.strip("_") for part in module[2:])
     folder = rootpath / "tests" / module[1]
-    return {folder / f"test_{stem}.py", *folder.glob(f"test_{stem}_*.py")}
+    stems = {"_".join(part.strip("_") for part in module[2:])}
+    imports = re.compile(rf"^from \.{module[-1]} import |^from \. import .*\b{module[-1]}\b", re.M)
+    stems |= {source.stem for source in rootpath.joinpath(*module[:-1]).glob("*.py")
+              if source.stem != "__init__" and imports.search(source.read_text())}
+    return {path for stem in stems for path in (folder / f"test_{stem}.py", *folder.glob(f"test_{stem}_*.py"))}
 
 
 def _unit_tests_only(config, items):
