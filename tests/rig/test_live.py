@@ -3,6 +3,7 @@ recordings handled, the usual input mistakes named online, ready at the pair's f
 the online results in the report."""
 import json
 import math
+import re
 
 import jsonschema
 import numpy as np
@@ -913,3 +914,312 @@ def test_the_pairs_before_gaps_count_the_pairs_a_stride_uses_like_the_batch(form
     rig = LiveRig(OnlineCalibrator(), stride=3, offset=0.0)
     rig.pairs_formed = formed
     assert rig.evidence()["pairs_before_gaps"] == used == len(range(formed)[::3])
+
+
+# ------------------------------------------------------------------ rules pinned at their values
+# The summary's drift rate, the clock watch after an event, the gyro correction, the time units
+# named on the rates and on the spans, the no-overlap note, replay's options and its radius column:
+# each rule at the values where a changed sign, index, bound or name would show.
+def _event(kind, pair, alarm_pair=0, onset_pair=0, rate=None):
+    from replication.rig.online_events import OnlineEvent
+
+    return OnlineEvent(kind, pair, alarm_pair, "cusum", onset_pair, 10, 1.0, 0.5, 1.0, 1.0, 0, np.eye(3), np.eye(3),
+                       f"a {kind}", rate)
+
+
+@pytest.mark.parametrize("pair, onset, onset_times, rate", [
+    (10, 4, None, 0.25 * 6 / 7.2),        # no event at the onset: the pairs taken as even from the first pair's end
+    (1, 0, None, 0.25 * 1 / 12.0),        # one pair since the first: the span is all of it
+    (10, 4, (9.0, 11.0), 0.25 * 6 / 5.0),  # the onset's own pair end: a span of 5 s
+    (10, 4, (13.5, 20.0), 0.25 * 6 / 0.5),  # half a second: still a rate
+    (10, 4, (14.0, 20.0), None),          # no time between them: no rate
+    (10, 4, (15.0, 20.0), None),          # the onset after the end: no rate
+])
+def test_the_summary_gives_a_drifts_rate_per_second_over_the_span_since_its_onset(pair, onset, onset_times, rate):
+    """A drift of 0.25 deg per pair decided at the pair ending at 14 s, the first pair ending at 2 s
+    (formed at 3 s): its rate per second is the rate per pair times the pairs since its onset over
+    the seconds since then (the onset's pair end where an event was decided there, else the pairs
+    taken as evenly spaced since the first one)."""
+    cal = OnlineCalibrator()
+    rig = LiveRig(cal, offset=0.0, diagnose=False)
+    cal.events = [_event("drift", pair, onset_pair=onset, rate=0.25), _event("remount", 3, alarm_pair=2)]
+    rig.events = [(2.0, 3.0, None), (2.5, 3.5, None)]
+    rig._event_times = {3: (4.0, 5.0), pair: (14.0, 15.0)}
+    if onset_times is not None:
+        rig._event_times[onset] = onset_times
+    drift, remount = rig.summary(t0=1.0)["events"]
+    assert remount["rate_deg_s"] is None and "rate_deg_s" in remount and remount["kind"] == "remount"
+    assert (drift["kind"], drift["t_s"], drift["pair_end_s"]) == ("drift", 14.0, 13.0)
+    if rate is None:
+        assert drift["rate_deg_s"] is None
+    else:
+        assert drift["rate_deg_s"] == pytest.approx(rate, rel=1e-12)
+
+
+def test_a_stream_ending_undecided_withholds_ready_and_says_so(monkeypatch):
+    from replication.rig.quality import Reason
+
+    cal = OnlineCalibrator()
+    rig = LiveRig(cal, offset=0.0, diagnose=False)
+    end = Reason("end_undecided", "warning", 3.0, 5.0, "the stream ended while an alarm was being confirmed")
+    monkeypatch.setattr(cal, "unresolved_end", lambda: end)
+    s = rig.summary()
+    assert not s["ready"] and end.to_dict() in s["verdict"]["reasons"]
+    assert [r["check"] for r in s["verdict"]["reasons"]].count("end_undecided") == 1
+
+
+@pytest.mark.parametrize("kind, watched", [("noise_change", True), ("outliers", True), ("remount", False),
+                                           (None, False)])
+@pytest.mark.parametrize("alarm_formed", [True, False])
+def test_an_event_that_may_be_a_clock_step_is_watched_from_its_alarm_pairs_end(kind, watched, alarm_formed,
+                                                                              monkeypatch):
+    """A ``noise_change`` or ``outliers`` event (a clock step?) is checked from the end of its alarm
+    pair (the pair's end, not when it was formed; the pair just formed where the rig formed no such
+    pair), with its index in the calibrator's events."""
+    from replication.rig.online import OnlineState
+
+    cal = OnlineCalibrator()
+    rig = LiveRig(cal, offset=0.0, diagnose=False)
+    rig._times.update({3: (5.0, 7.5), 4: (6.0, 8.5)})
+    cal.events = [_event("remount", 1, alarm_pair=3), _event("outliers", 2, alarm_pair=4)]
+    last = _event(kind or "none", 5, alarm_pair=3 if alarm_formed else 99)
+
+    def update(A, B):
+        if kind is not None:
+            cal.events.append(last)
+        return OnlineState(1, np.eye(3), math.inf, False, False, kind)
+
+    monkeypatch.setattr(cal, "update", update)
+    rig._now = 12.0
+    rig._pair(10.0, np.eye(3), np.eye(3))
+    assert rig._clock.pending == ([(5.0 if alarm_formed else 10.0, 2)] if watched else [])
+
+
+def test_the_clock_watch_measures_its_baseline_on_what_both_streams_gave():
+    """With a given offset (0) and a sensor 12.3 ms late, the clock watch's starting offset is
+    measured on the held orientations of both streams at the rig's offset resolution (a failed
+    measurement would fall back on the given 0)."""
+    rig, pairs = _rig(interval=2.0, gyro_bias=False)  # the first pair (its first poll) at 2 s
+    for k in range(-16, int(3.0 / DT_SEN)):
+        t = k * DT_SEN
+        rig.add_orientation(t + 0.0123, _motion(t) @ R0)
+        if k % 4 == 0 and k >= 0:
+            rig.add_camera(t, _motion(t))
+    assert pairs and rig._clock.baseline == pytest.approx(0.0123, abs=1e-3)
+
+
+def test_the_offset_search_and_the_diagnosis_run_at_the_resolution_the_evidence_reports(monkeypatch):
+    from replication.rig import association, live
+
+    monkeypatch.setattr(live, "OFFSET_RESOLUTION", 4e-3)
+    real, used = association.estimate_time_offset, []
+
+    def spy(camera, sensor, **kw):
+        used.append(kw.get("resolution", "the default"))
+        return real(camera, sensor, **kw)
+
+    monkeypatch.setattr(association, "estimate_time_offset", spy)
+    rig, _ = _rig(offset=None, offset_window=2.0, max_offset=0.1)
+    _feed(rig, 2.5, offset=0.0123)
+    assert used[0] == 4e-3 and rig.evidence()["offset_resolution_s"] == 4e-3
+    diagnosed = []
+    monkeypatch.setattr(live, "run_diagnosis", lambda r, resolution: diagnosed.append(resolution))
+    cam, gyro = _gyro_in_deg_per_s()
+    replay(cam, gyro, OnlineCalibrator(), interval=0.25, offset=0.0, offset_window=2.5, max_offset=0.05)
+    assert diagnosed and set(diagnosed) == {4e-3}
+
+
+def test_gyro_rates_are_corrected_by_the_models_bias_and_inverse_axes():
+    """Each rate becomes ``T^-1 (omega - b)`` (binary fractions: exact)."""
+    rig, _ = _rig(gyro_bias=False)
+    rig._b = (0.5, -0.25, 0.125)
+    rig._Ti = ((1.0, 0.5, 0.25), (-0.5, 2.0, 0.75), (0.125, -0.375, 1.5))
+    rig.add_gyro(0.0, [1.0, 2.0, 3.0])
+    u = np.array([0.5, 2.25, 2.875])
+    assert rig._last_gyro[1] == tuple(np.array(rig._Ti) @ u) == (2.34375, 6.406250, 3.53125)
+    assert np.array_equal(rig._early_sensor[-1][1], [2.34375, 6.40625, 3.53125])
+
+
+@pytest.mark.parametrize("omega, shown", [
+    ([0.0, 0.0], r"omega=\[0\.0, 0\.0\]"),                  # not 3 rates
+    ([1e308, 1e308, 0.0], r"omega=\[1e\+308, 1e\+308, 0\.0\]"),  # finite rates whose sum with the time overflows
+    ([1e308, 0.0, 1e308], r"omega=\[1e\+308, 0\.0, 1e\+308\]"),
+    ([0.0, 1e308, 1e308], r"omega=\[0\.0, 1e\+308, 1e\+308\]"),
+])
+def test_a_refused_gyro_sample_is_shown_as_given(omega, shown):
+    rig, _ = _rig()
+    with pytest.raises(ValueError, match=r"a gyro sample is a finite time and 3 finite rates, got t=2\.0, " + shown):
+        rig.add_gyro(2.0, omega)
+    assert rig._last_gyro is None
+
+
+def test_the_time_units_are_named_once_on_the_spans_of_both_streams():
+    """Camera poses over 10 s, sensor orientations over 10000 s (ms read as s): the verdict names
+    the time unit once, with the ratio of the spans from each stream's first sample to its latest
+    (exactly 1000)."""
+    rig, _ = _rig(interval=1.0, gyro_bias=False)
+    rig.add_orientation(0.0, R0)
+    for t in (0.0, 5.0, 10.0):
+        rig.add_camera(t, _C(t))
+    assert not any(r["check"] == "time_unit" for r in rig.verdict().to_dict()["reasons"])  # the sensor: one sample
+    for t in (5000.0, 9999.0, 9999.5, 10000.0):
+        rig.add_orientation(t, R0)
+    for _ in range(2):
+        units = [r for r in rig.verdict().to_dict()["reasons"] if r["check"] == "time_unit"]
+    assert len(units) == 1 and (units[0]["level"], units[0]["measured"], units[0]["threshold"]) == (
+        "fail", 1000.0, 1000.0)
+    assert "the camera stream spans 10 s and the sensor stream 1e+04 s" in units[0]["message"]
+
+
+def test_without_sensor_samples_the_verdict_names_no_time_unit():
+    rig, _ = _rig(interval=1.0)
+    for t in (0.0, 5.0, 10.0):
+        rig.add_camera(t, _C(t))
+    assert not any(r["check"] == "time_unit" for r in rig.verdict().to_dict()["reasons"])
+
+
+def _no_overlap(sensor_dt):
+    """Two camera poses 0.05 s apart and 20 sensor orientations ``sensor_dt`` apart, then the
+    end: too little for the offset search."""
+    rig, _ = _rig(offset=None, offset_window=30.0, gyro_bias=False)
+    for k in range(20):
+        rig.add_orientation(k * sensor_dt, _motion(k * 0.05) @ R0)
+        if k < 2:
+            rig.add_camera(k * 0.05, _motion(k * 0.05))
+    rig.finish()
+    return rig, {r["check"]: r for r in rig.verdict().to_dict()["reasons"]}
+
+
+def test_no_overlap_with_sample_rates_in_different_units_names_the_unit_not_the_overlap():
+    rig, reasons = _no_overlap(5.0)  # a sensor every 5 s, the camera every 0.05 s: ms read as s
+    unit = reasons["time_unit"]
+    assert (unit["level"], unit["measured"], unit["threshold"]) == ("fail", 100.0, 1000.0)
+    assert "overlap" not in reasons and rig.offset is None
+    assert rig.offset_note.startswith("no clock offset: the streams ended after 95.0 s of camera data, before the "
+                                      "30 s offset window (the streams overlap in fewer than 10 camera samples")
+    assert rig.offset_note.endswith(f"; {unit['message']})") and rig.offset_note.count("no clock offset") == 1
+
+
+def test_no_overlap_at_plausible_rates_names_the_overlap():
+    rig, reasons = _no_overlap(0.05)
+    assert "time_unit" not in reasons
+    overlap = reasons["overlap"]
+    assert overlap["level"] == "fail" and re.fullmatch(
+        r"no clock offset: the streams overlap in fewer than 10 camera samples \(overlap [0-9.]+\.\.[0-9.]+ s\)",
+        overlap["message"])
+    err = overlap["message"].removeprefix("no clock offset: ")
+    assert rig.offset_note == ("no clock offset: the streams ended after 1.0 s of camera data, before the 30 s offset "
+                               f"window ({err})")
+
+
+def test_a_camera_turning_at_constant_speed_is_named_when_the_offset_is_sought():
+    rig, _ = _rig(offset=None, offset_window=2.0, max_offset=0.1, interval=0.125)
+    _feed(rig, 3.0)
+    assert "constant_speed" in {r["check"] for r in rig.verdict().to_dict()["reasons"]}
+
+
+class _Scripted(OnlineCalibrator):
+    """A calibrator whose states after each pair are given (its own work done, then replaced)."""
+
+    def __init__(self, states):
+        super().__init__()
+        self.script = iter(states)
+
+    def update(self, A, B):
+        super().update(A, B)
+        return next(self.script)
+
+
+def test_replay_gives_a_radius_only_for_an_estimate_and_only_when_finite():
+    from replication.rig.online import OnlineState
+
+    states = [OnlineState(1, R0, 1.5, False, False, estimated=False), OnlineState(2, R0, math.inf, False, False,
+                                                                                   estimated=True),
+              OnlineState(3, R0, 1.5, False, False, estimated=True)]
+    cam, sen = _streams(1.0)
+    out = replay(cam, sen, _Scripted(states), interval=0.25, offset=0.0, reference=R0)
+    assert len(out) == 3 and out["radius_deg"].isna().tolist() == [True, True, False]
+    assert out["radius_deg"].iloc[2] == 1.5
+
+
+def test_replay_without_pandas_names_what_needs_it(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    cam, sen = _streams(1.0)
+    with pytest.raises(ImportError, match=r"^replay \(its table of pairs; calibrate --online\) needs pandas"):
+        replay(cam, sen, OnlineCalibrator(), interval=0.25, offset=0.0)
+
+
+@pytest.mark.parametrize("kw, estimated", [({}, True), ({"gyro_bias": False}, False)])
+def test_replay_estimates_the_gyros_bias_by_default_and_not_when_told(kw, estimated):
+    cam, gyro = _gyro_rig_streams()
+    out = replay(cam, gyro, OnlineCalibrator(), interval=0.25, offset=0.0, offset_window=2.5, max_offset=0.05,
+                 diagnose=False, **kw)
+    assert (out.attrs["summary"]["gyro_bias_rad_s"] is not None) is estimated
+
+
+@pytest.mark.xfail(strict=True, raises=ValueError, reason="finish after a single camera pose raises ValueError "
+                   "': need at least 2 samples, got 1' from the offset search's camera stream")
+def test_finish_after_a_single_camera_pose_names_no_offset_and_raises_nothing():
+    """A live camera that gave one pose before the end: no offset, said in the note, no exception
+    (the offset search's own errors never raise) and no warning (no median of an empty step
+    list)."""
+    import warnings
+
+    rig, pairs = _rig(offset=None, offset_window=30.0, gyro_bias=False)
+    for k in range(20):
+        rig.add_orientation(k * 0.05, _motion(k * 0.05) @ R0)
+    rig.add_camera(0.1, _motion(0.1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rig.finish()
+    assert rig.offset is None and rig.offset_note.startswith("no clock offset") and pairs == []
+
+
+def _gyro_rig_streams(seconds=5.0):
+    """Camera poses at 8 Hz and a 32 Hz gyro (rad/s) of the same motion."""
+    tc, ts = np.arange(0.0, seconds, 1 / 8), np.arange(-0.5, seconds + 0.5, 1 / 32)
+    S = np.array([_motion(t) @ R0 for t in ts])
+    w = so3.rotation_vector_from_matrix(np.swapaxes(S[:-1], -1, -2) @ S[1:]) * 32
+    return OrientationStream(tc, np.array([_motion(t) for t in tc]), "cam"), GyroStream(ts[:-1] + 1 / 64, w, "gyro")
+
+
+def test_a_gyros_bias_is_estimated_by_default_while_streaming_and_pairs_wait_for_it():
+    """A gyro, a given offset, a 2.5 s window: the integrated buffer holds the window until the bias
+    is estimated (on it, while the streams run, not at their end), and the pairs wait for it."""
+    cam, gyro = _gyro_rig_streams()
+    pairs = []
+    rig = LiveRig(OnlineCalibrator(), interval=0.25, offset=0.0, offset_window=2.5, max_offset=0.05, diagnose=False,
+                  on_pair=lambda t, A, B: pairs.append(t))
+    for t, kind, k in sorted([(t, 1, k) for k, t in enumerate(cam.t)] + [(t, 0, k) for k, t in enumerate(gyro.t)]):
+        if kind:
+            rig.add_camera(t, cam.world_from_body[k])
+        else:
+            rig.add_gyro(t, gyro.omega[k])
+    assert rig.bias is not None and rig._raw is None and np.abs(rig.bias.bias_rad_s).max() < 0.01
+    assert pairs and pairs[0] < 2.5 <= rig.events[0][1]  # the first pair formed once the window was held
+
+
+@pytest.mark.parametrize("name", ["correct_offset", "diagnose", "gyro_bias"])
+def test_the_rigs_flags_are_named_when_not_booleans(name):
+    with pytest.raises(ValueError, match=rf"^{name} must be True or False, got 1$"):
+        LiveRig(OnlineCalibrator(), **{name: 1})
+
+
+def test_no_overlap_found_on_a_full_window_is_named_once_and_not_sought_again():
+    """The sensor stamped 1000 s after the camera: the search on the first window finds no overlap;
+    the later samples do not search again (one ``overlap`` reason, no pair)."""
+    rig, pairs = _rig(offset=None, offset_window=2.0, max_offset=0.1)
+    for t in np.arange(0.0, 3.0, DT_CAM):
+        rig.add_camera(t, _C(t))
+    for t in np.arange(1000.0, 1003.0, DT_SEN):
+        rig.add_orientation(t, _C(t - 1000.0) @ R0)
+    checks = [r["check"] for r in rig.verdict().to_dict()["reasons"]]
+    assert checks.count("overlap") == 1 and rig.offset is None and pairs == []
+
+
+def test_a_pair_whose_start_falls_inside_a_sensor_gap_is_dropped():
+    rig, pairs = _rig()
+    _feed(rig, 1.2, sensor_skip=set(range(34, 42)))  # pair 2 starts at 9/32 = 36/128, inside the hole 33 -> 42
+    assert rig.pairs_dropped == 1 and [round(t / DT_CAM) for t, _, _ in pairs] == [8, 26, 35]
