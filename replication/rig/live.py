@@ -156,6 +156,8 @@ class LiveRig:
                              f"got t={t!r}, omega={np.asarray(omega).tolist()!r}") from None
         if not math.isfinite(t + wx + wy + wz):
             raise ValueError(f"a gyro sample is a finite time and 3 finite rates, got t={t}, omega={[wx, wy, wz]}")
+        if not math.isfinite(wx * wx + wy * wy + wz * wz):  # finite, but no rotation can be formed from it
+            raise ValueError(f"gyro rates too large to integrate (|omega|^2 overflows): omega={[wx, wy, wz]} rad/s")
         self._sensor_kind("gyro")
         if self._raw is not None:
             hold_raw(self._raw, t, (wx, wy, wz), self.offset_window)
@@ -261,9 +263,10 @@ class LiveRig:
         steady = constant_speed_stream(t_cam, np.array([c[1] for c in self._camera]), self.interval)
         if steady is not None:  # the camera turns at constant speed: no offset can be measured, nor R0 about its axis
             self._name(steady)
-        cam = OrientationStream(np.array([c[0] for c in self._camera]), np.array([c[1] for c in self._camera]))
-        sen = OrientationStream(np.array([g[0] for g in self._gyro]), np.array([g[1] for g in self._gyro]))
-        try:
+        try:  # a stream too short for the search (one camera pose) is a search error too
+            cam = OrientationStream(t_cam, np.array([c[1] for c in self._camera]), "camera")
+            sen = OrientationStream(np.array([g[0] for g in self._gyro]), np.array([g[1] for g in self._gyro]),
+                                    "sensor")
             self.offset, self.offset_correlation = estimate_time_offset(cam, sen, max_offset=self.max_offset,
                                                                         resolution=OFFSET_RESOLUTION)
         except ValueError as err:
