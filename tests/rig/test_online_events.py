@@ -228,6 +228,69 @@ def test_the_level_follows_exactly_at_a_third_of_h():
     assert d.cusum == 10.0 and d.level == pytest.approx(1.0 + 0.25 * 9.0)
 
 
+def _held_pairs(d, n, *, first_d2=None):
+    """``n`` gross misfits (``d^2`` far above ``cap`` times the level) observed by ``d`` armed at
+    level 1, after one pair of ``d^2 = first_d2`` if given."""
+    d.arm(1.0, 0)
+    A = B = np.eye(3)
+    pairs = [first_d2] if first_d2 is not None else []
+    for j, d2 in enumerate(pairs + [1e6] * n):
+        d.observe(A, B, d2, j, None, None, None)
+
+
+def test_undecided_while_an_alarm_is_being_confirmed_says_how_far_the_window_is():
+    d = _detector()  # h = 30, cap = 10, k = 2: each gross misfit adds 8, the fourth (pair 3) alarms
+    _held_pairs(d, 4)
+    assert d.checking and d.alarm_pair == 3 and d.target == 10 and d.misfits == 4
+    for j in range(3):
+        d.observe(np.eye(3), np.eye(3), 1.0, 4 + j, None, None, None)
+    why = d.undecided(1)  # the confirmation comes first, whatever the misfits
+    assert (why.check, why.level, why.measured, why.threshold) == ("end_undecided", "warning", 3.0, 10.0)
+    assert type(why.measured) is float and type(why.threshold) is float
+    assert why.message.startswith("the stream ended while an alarm (pair 3) was being confirmed, 3 of 10 pairs: ")
+    assert why.message.endswith("the estimate is the one before the alarm (record longer)")
+    assert d.undecided(100) == why
+
+
+@pytest.mark.parametrize("misfits, undecided", [(2, True), (3, True), (4, False)])
+def test_undecided_at_the_end_with_at_least_the_given_number_of_gross_misfits(misfits, undecided):
+    d = _detector()
+    _held_pairs(d, 3, first_d2=5.0)  # cusum 3 (the level follows to 2), then 11, 19, 27 < h: no alarm
+    assert not d.checking and d.cusum == 27.0 and d.misfits == 3 and len(d.since_onset) == 4
+    why = d.undecided(misfits)
+    if not undecided:
+        assert why is None
+        return
+    assert (why.check, why.level, why.measured, why.threshold) == ("end_undecided", "warning", 3.0, float(misfits))
+    assert type(why.measured) is float and type(why.threshold) is float
+    assert why.message.startswith("the last 4 pairs include 3 that do not fit the estimate (d^2 above 10 x its "
+                                  "level; CUSUM 27 of 30) when the stream ended: ")
+    assert why.message.endswith("neither confirmed nor ruled out (record longer)")
+
+
+def test_the_guard_tests_each_added_pair_against_the_estimate_and_its_covariance():
+    rng = np.random.default_rng(31)
+    R = _rot(30.0)
+    s2, m, cov = _old_estimate(0.2, 0.05)
+    A, B = _window(R @ _rot(1.0, (0, 0, 1)), 20, 0.2, rng)  # 1 deg off the estimate, d^2 given as 0: no CUSUM
+    for c, misfit in ((cov, True), (np.eye(3), False)):  # an estimate 1 rad uncertain allows the shift
+        d = _detector()
+        d.arm(m, 0)
+        for j in range(19):
+            d.observe(A[j], B[j], 0.0, j, R, c, s2)
+        assert d.guard.window_misfit is None  # the guard's window is the last 20 pairs added
+        d.observe(A[19], B[19], 0.0, 19, R, c, s2)
+        assert (d.guard.window_misfit is not None) is misfit and d.cusum == 0.0 and not d.checking
+        if misfit:
+            assert d.guard.window_misfit[0] == 20 and d.guard.window_misfit[1] == pytest.approx(1.0, abs=0.1)
+    d = _detector()
+    d.arm(m, 0)
+    d.observe(A[0], B[0], 1e3 * m, 0, R, cov, s2)  # a gross misfit is held out: not in the guard's sum
+    assert d.guard.sum == 0.0 and len(d.guard.pairs) == 0
+    d.observe(A[1], B[1], 2.5 * m, 1, R, cov, s2)  # added: its z = d^2 / (2 s2) = 2.5 less the guard's k = 1.5
+    assert d.guard.sum == pytest.approx(2.5 * m / (2 * s2) - 1.5) and len(d.guard.pairs) == 1
+
+
 def test_a_drift_alarm_waits_for_half_the_drift_window_and_confirms_on_more_pairs():
     rng = np.random.default_rng(9)
     R = _rot(30.0)
