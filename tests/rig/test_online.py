@@ -1205,12 +1205,13 @@ def test_the_motion_median_reads_the_last_recent_pairs_only():
     assert c.evidence()["motion_median_deg"] < 12.0  # the last 200: 110 of about 10 deg, 90 of about 50
 
 
-def test_a_complex_pair_is_refused_by_update_as_by_update_many():
-    A = np.eye(3) + 0j
-    with pytest.raises(ValueError, match="real-valued; got a complex array"):
-        OnlineCalibrator().update(A, np.eye(3))
+@pytest.mark.parametrize("complex_side", ["A", "B"])
+def test_a_complex_pair_is_refused_by_update_as_by_update_many(complex_side):
+    A, B = (np.eye(3) + 0j, np.eye(3)) if complex_side == "A" else (np.eye(3), np.eye(3) + 0j)
+    with pytest.raises(ValueError, match=r"^a pair is two 3x3 rotations, real-valued; got a complex array$"):
+        OnlineCalibrator().update(A, B)
     with pytest.raises(ValueError, match="real-valued"):
-        OnlineCalibrator().update_many(A[None], np.eye(3)[None])
+        OnlineCalibrator().update_many(A[None], B[None])
 
 
 @pytest.mark.parametrize("R0", [np.eye(3) * (1 + 1e-3j), (np.eye(3) + 0j).tolist()], ids=["array", "list"])
