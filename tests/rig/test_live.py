@@ -1055,6 +1055,7 @@ def test_a_refused_gyro_sample_is_shown_as_given(omega, shown):
 
 @pytest.mark.parametrize("first", [True, False])
 @pytest.mark.parametrize("omega, refused", [([1e200, 0.0, 0.0], True), ([0.0, 0.0, 1.4e154], True),
+                                            ([1.3e154, 1.3e154, 0.0], True), ([1.3e154, 0.0, 1.3e154], True),
                                             ([1.3e154, 0.0, 0.0], False)])
 def test_rates_whose_square_overflows_are_refused_naming_them(first, omega, refused):
     """Finite rates whose rotation cannot be formed (|omega|^2 beyond the floats) are refused with
@@ -1190,6 +1191,16 @@ def test_finish_after_a_single_camera_pose_names_no_offset_and_raises_nothing():
         rig.finish()
     assert rig.offset is None and rig.offset_note.startswith("no clock offset") and pairs == []
     assert "(camera: need at least 2 samples, got 1)" in rig.offset_note
+
+
+def test_finish_after_a_single_sensor_sample_names_the_sensor_stream():
+    """The mirror of the single camera pose: one sensor orientation before the end."""
+    rig, pairs = _rig(offset=None, offset_window=30.0, gyro_bias=False)
+    rig.add_orientation(0.0, _motion(0.0) @ R0)
+    for k in range(20):
+        rig.add_camera(k * 0.05, _motion(k * 0.05))
+    rig.finish()
+    assert rig.offset is None and "(sensor: need at least 2 samples, got 1)" in rig.offset_note and pairs == []
 
 
 def _gyro_rig_streams(seconds=5.0):
