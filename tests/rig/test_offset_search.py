@@ -288,3 +288,56 @@ def test_a_refined_rival_exactly_the_separation_away_is_not_the_second(monkeypat
 def test_a_coarse_maximum_exactly_the_separation_from_the_peak_is_not_the_second(monkeypatch):
     out, _, _ = _designed_search(monkeypatch, False, {TOP: 0.2, PEAK: 0.9, RIVAL: 0.1}, peak_best=COARSE[TOP])
     assert out["second"] == (COARSE[LOW], 0.25)  # EDGE is exactly PEAK_SEPARATION_S from the peak's coarse offset
+
+
+def _parabola_rows(monkeypatch, top):
+    """``_row_correlations`` faked: the curve ``-(x - top)^2``, rows tagged by their offset; its
+    calls."""
+    calls = []
+
+    def rows(a, sensor, t, offsets, keep):
+        calls.append((np.array(offsets), keep))
+        return -(offsets - top) ** 2, np.outer(offsets, np.ones(3)) if keep else np.empty((0, 0))
+
+    monkeypatch.setattr(offset_search, "_row_correlations", rows)
+    return calls
+
+
+@pytest.mark.parametrize("keep_rows", [True, False])
+@pytest.mark.parametrize("best, top", [(0.0, 0.00123), (-0.2, -0.19988), (0.2, 0.19991)])
+def test_the_refinement_searches_one_coarse_step_then_one_fine_step_around_the_peak(monkeypatch, keep_rows, best,
+                                                                                     top):
+    calls = _parabola_rows(monkeypatch, top)
+    r = offset_search._refine(np.zeros(3), None, None, best, 0.2, 0.5e-3, keep_rows)
+    fine, sub = calls[0][0], calls[1][0]
+    # fine: every resolution within 10 ms of the coarse offset (both ends included), inside
+    # +-max_offset
+    inside = np.arange(best - 0.01, best + 0.01 + 1e-12, 0.5e-3)
+    inside = inside[np.abs(inside) <= 0.2 + 1e-12]
+    assert np.array_equal(r["fine"], fine) and len(fine) == len(inside) and np.allclose(fine, inside, atol=1e-12)
+    assert fine.min() >= -0.2 and fine.max() <= 0.2
+    # the sub-grid: resolution / SUBGRID_STEPS apart within one fine step of the fine maximum, not
+    # on the fine grid
+    assert r["grid"] == fine[np.argmax(-(fine - top) ** 2)] and abs(r["grid"] - top) <= 0.25e-3
+    steps = [k for k in range(-9, 10) if k and abs(r["grid"] + k * 0.5e-4) <= 0.2 + 1e-12]
+    assert len(sub) == len(steps) and np.allclose(sub, r["grid"] + np.array(steps) * 0.5e-4, rtol=0, atol=1e-12)
+    assert sub.min() >= -0.2 and sub.max() <= 0.2
+    # the parabola's vertex through the three highest (the curve is a parabola: its top), then its
+    # correlation
+    assert r["offset"] == pytest.approx(top, abs=1e-12) and calls[2][1] is False and len(calls) == 3
+    assert calls[2][0].tolist() == [r["offset"]] and r["corr"] == -(r["offset"] - top) ** 2
+    x = np.sort(np.concatenate([fine, sub]))
+    assert np.array_equal(r["x"], np.append(x, r["offset"])) and np.array_equal(r["rows_x"], x)
+    assert np.array_equal(r["y"], np.append(-(x - top) ** 2, r["corr"])) and r["best"] == best
+    assert r["rows"] is None if not keep_rows else np.array_equal(r["rows"], np.outer(x, np.ones(3)))
+    assert [k for _, k in calls[:2]] == [keep_rows, keep_rows]
+
+
+@pytest.mark.parametrize("keep_rows", [True, False])
+def test_the_rows_are_kept_only_when_asked(offset_problem, keep_rows):
+    _, sensor, t, cam = offset_problem
+    offsets = np.array([-0.01, 0.0, 0.0123, 0.02])
+    a = cam - cam.mean()
+    c, rows = offset_search._row_correlations(a, sensor, t, offsets, keep_rows)
+    np.testing.assert_allclose(c, offset_search.correlations(cam, sensor, t, offsets), rtol=0, atol=1e-14)
+    assert rows.shape == ((4, len(a)) if keep_rows else (0, 0))
