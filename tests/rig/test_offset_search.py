@@ -341,3 +341,21 @@ def test_the_rows_are_kept_only_when_asked(offset_problem, keep_rows):
     c, rows = offset_search._row_correlations(a, sensor, t, offsets, keep_rows)
     np.testing.assert_allclose(c, offset_search.correlations(cam, sensor, t, offsets), rtol=0, atol=1e-14)
     assert rows.shape == ((4, len(a)) if keep_rows else (0, 0))
+
+
+def test_vertex_keeps_a_maximum_at_the_first_offset_and_each_curve_apart():
+    x = np.array([0.0, 1.0, 2.0, 4.0, 5.0])
+    # the first offset highest: not refined (the neighbours are not wrapped around from the end)
+    assert offset_search.vertex(x, np.array([1.0, 0.9, 0.0, 0.0, -10.0])) == 0.0
+    # a curve with no finite value is NaN beside finite ones
+    out = offset_search.vertex(x, np.stack([np.full(5, np.nan), -(x - 2.3) ** 2]))
+    assert math.isnan(out[0]) and out[1] == pytest.approx(2.3, abs=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a straight top (no parabola's vertex) is silent
+        assert offset_search.vertex(x, x) == 5.0 and offset_search.vertex(x, 3 - x) == 0.0
+
+
+def test_the_overlap_starts_max_offset_after_the_sensor():
+    cam, sen = turning_streams(n_cam=40, sensor_span=(-0.1, 3.0))
+    t, _ = offset_search.overlap(cam, sen, 0.2)
+    assert t[0] == pytest.approx(0.1) and t[0] >= sen.t[0] + 0.2 - 1e-12 and t[-1] == cam.t[-1]
