@@ -359,3 +359,17 @@ def test_the_overlap_starts_max_offset_after_the_sensor():
     cam, sen = turning_streams(n_cam=40, sensor_span=(-0.1, 3.0))
     t, _ = offset_search.overlap(cam, sen, 0.2)
     assert t[0] == pytest.approx(0.1) and t[0] >= sen.t[0] + 0.2 - 1e-12 and t[-1] == cam.t[-1]
+
+
+def test_the_correlations_hold_at_most_block_samples_at_once(offset_problem):
+    _, sensor, t, cam = offset_problem
+    offsets = np.arange(-0.3, 0.3 + 1e-12, 0.01)  # 61 offsets x ~480 times: one default block
+    peaks = []
+    for block in (None, 2 * len(t)):
+        tracemalloc.start()
+        try:
+            offset_search.correlations(cam, sensor, t, offsets, block_samples=block)
+            peaks.append(tracemalloc.get_traced_memory()[1])
+        finally:
+            tracemalloc.stop()
+    assert peaks[1] < 0.2 * peaks[0], peaks
