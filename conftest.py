@@ -51,8 +51,8 @@ def unit_test_files(rootpath, mutant):
 
 def _unit_tests_only(config, items):
     """Under ``scripts/mutation --unit`` (``REPLICATION_MUTATION_TESTS=unit``), a mutant runs only
-    the tests of its module's own test files: a kill there is a kill by the whole selection, and
-    the mutants left are re-run against every test (``--survivors``)."""
+    the tests of its unit's files (:func:`unit_test_files`): a kill there is a kill by the whole
+    selection, and the mutants left are re-run against every test (``--survivors``)."""
     if os.environ.get("REPLICATION_MUTATION_TESTS") != "unit":
         return
     files = unit_test_files(config.rootpath, os.environ.get("MUTANT_UNDER_TEST", ""))
@@ -66,9 +66,9 @@ def _unit_tests_only(config, items):
 
 def pytest_collection_modifyitems(config, items):
     from replication.cli.reproduce import needs_real_data
+    from replication.rig.realdata import data_root, real_data_available
 
     _unit_tests_only(config, items)
-    from replication.rig.realdata import data_root, real_data_available
 
     # the longest files first (the portability re-run, then the notebooks, then LONG_UNIT_FILES), so
     # that two xdist workers finish together (in collection order the portability re-run started

@@ -38,7 +38,7 @@ TARGETS = [
 ]
 
 #: Written by ``scripts/mutation --unit`` under mutants/: the mutants (names or patterns) last run
-#: against their module's own test files only; one not killed there has not yet met every test
+#: against their unit's test files only; one not killed there has not yet met every test
 #: (``--survivors`` runs it against them all and removes this file).
 UNIT_ONLY = "unit-only.txt"
 #: Written by a run against every test after ``--unit`` (a GLOB's mutants): those no longer count
@@ -190,7 +190,7 @@ def main() -> int:
         print(f"{module:36} {n:>6} " + " ".join(f"{c[k]:>11}" for k in cols) + f" {score:>7.1%} {nonequiv:>7.1%}")
 
     if total["unit only"]:
-        print(f"\n{total['unit only']} mutants were run against their module's own test files only (--unit) and "
+        print(f"\n{total['unit only']} mutants were run against their unit's test files only (--unit) and "
               f"not killed there; until `bash scripts/mutation --survivors` runs them against every test, each "
               f"score is a lower bound")
     print(f"\nsurvivors ({sum(1 for s in survivors if s[4] == 'survived')} surviving, "

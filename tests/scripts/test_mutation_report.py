@@ -85,7 +85,7 @@ def test_survivors_of_a_unit_only_run_are_marked_and_the_scores_called_lower_bou
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("replication.rig.a "))
     assert row.split()[1:6] == ["3", "1", "0", "0", "2"]  # total, killed, survived, equivalent, unit only
-    assert "2 mutants were run against their module's own test files only" in out and "lower bound" in out
+    assert "2 mutants were run against their unit's test files only" in out and "lower bound" in out
     assert "x_f__mutmut_2 [unit tests only]" in out
 
 
