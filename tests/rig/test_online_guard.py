@@ -441,3 +441,27 @@ def test_the_online_verdict_names_constant_speed_once(extra, own):
     assert (axis in named[0].message) is own and "turns at a constant speed" in named[0].message
     assert [r.check for r in verdict.reasons if r.check == "time_unit"] == [r.check for r in extra
                                                                              if r.check == "time_unit"]
+
+
+def _noise_with_the_motion(seed, frac=0.03):
+    """150 weak (1-3 deg) then 250 rich (5-60 deg) pairs of one R0, each side turned by noise whose
+    sd is ``frac`` of the pair's motion angle (at least 0.01 deg): a noise level that changes."""
+    rng = np.random.default_rng(seed)
+    R0 = so3.random_rotations(rng, ())
+    A, B = [], []
+    for n, lo, hi in ((150, 1, 3), (250, 5, 60)):
+        clean = [pair_stream(rng, 1, R0, noise_deg=0.0, motion_deg=(lo, hi)) for _ in range(n)]
+        for a, b in ((x[0][0], x[1][0]) for x in clean):
+            sd = np.radians(max(frac * float(so3.rotation_angle_deg(a)), 0.01)) / np.sqrt(6)
+            A.append(so3.matrix_from_rotation_vector(rng.normal(0, sd, 3)) @ a)
+            B.append(so3.matrix_from_rotation_vector(rng.normal(0, sd, 3)) @ b)
+    return R0, np.array(A), np.array(B)
+
+
+@pytest.mark.xfail(strict=True, reason="after a noise_change with noise that grows with the motion, the estimator "
+                   "says ready while 0.94 deg off (target 0.5, radius 0.28): 4 of 20 seeds (9, 12, 14, 19)")
+def test_no_ready_while_wrong_when_the_noise_grows_with_the_motion():
+    R0, A, B = _noise_with_the_motion(9)
+    oc = OnlineCalibrator()
+    states = oc.update_many(A, B)
+    assert not [j for j, s in enumerate(states) if s.ready and so3.angle_between_deg(s.R, R0) > oc.target_deg]
